@@ -1,0 +1,212 @@
+#pragma once
+// The runtime every sarmap process shares: typed, defensive publish/subscribe over LCM, a
+// main loop with timers, clean shutdown on SIGINT/SIGTERM, and per-channel receive
+// statistics published on NODE_STATUS once a second.
+//
+//   Node node("sarmap-slam", url);
+//   node.Subscribe<sarmap::laser_scan_t>("SCAN", [&](const sarmap::laser_scan_t& scan,
+//                                                    const ReceiveInfo& info) { ... });
+//   auto pose_pub = node.Advertise<sarmap::pose_t>("POSE");
+//   pose_pub.Publish(&pose);   // fills header.seq
+//   return node.Run();         // until SIGINT/SIGTERM or Stop()
+//
+// A malformed, truncated or wrong-type message, or one that fails CheckMessage(), is counted
+// and dropped with a (rate-limited) log line; an exception from a callback is counted and
+// logged. Neither stops the node.
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/logging.h"
+#include "common/message_checks.h"
+#include "common/sequence.h"
+#include "common/time.h"
+
+namespace sarmap {
+namespace common {
+
+// LCM URL used when none is given: $SARMAP_LCM_URL, else $LCM_DEFAULT_URL, else
+// kDefaultLcmUrl (host-local: ttl=0, and a large receive buffer for images).
+std::string DefaultLcmUrl();
+constexpr const char* kDefaultLcmUrl =
+    "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+
+struct ReceiveInfo {
+  std::string channel;
+  double receive_time_s = 0;  // steady clock, for latency statistics only
+  int64_t missed_before = 0;  // messages lost on this channel just before this one
+};
+
+struct ChannelStats {
+  std::string type_name;
+  int64_t received = 0;
+  int64_t dropped_malformed = 0;
+  int64_t handler_errors = 0;
+  SequenceTracker sequence;
+  int64_t last_utime = 0;
+};
+
+class Node {
+ public:
+  // Throws std::runtime_error when LCM cannot be initialised on `lcm_url`.
+  Node(const std::string& name, const std::string& lcm_url = "");
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  const std::string& name() const { return name_; }
+  lcm::LCM& lcm() { return *lcm_; }
+
+  template <class T>
+  using Callback = std::function<void(const T&, const ReceiveInfo&)>;
+
+  // queue_capacity: messages LCM buffers for this subscription before dropping the oldest;
+  // 1 for "latest frame only" consumers.
+  template <class T>
+  void Subscribe(const std::string& channel, Callback<T> callback, int queue_capacity = 30);
+
+  template <class T>
+  class Publisher {
+   public:
+    // Sets msg->header.seq to this publisher's counter, then publishes.
+    void Publish(T* msg) {
+      msg->header.seq = seq_++;
+      lcm_->publish(channel_, msg);
+    }
+    const std::string& channel() const { return channel_; }
+
+   private:
+    friend class Node;
+    Publisher(lcm::LCM* lcm, std::string channel) : lcm_(lcm), channel_(std::move(channel)) {}
+    lcm::LCM* lcm_;
+    std::string channel_;
+    int64_t seq_ = 0;
+  };
+  template <class T>
+  Publisher<T> Advertise(const std::string& channel) {
+    return Publisher<T>(lcm_.get(), channel);
+  }
+
+  // Calls `callback` every `period_s` of wall-clock time (scheduling only; results must use
+  // message time).
+  void AddTimer(double period_s, std::function<void()> callback);
+
+  // Handles messages and timers until Stop(), SIGINT or SIGTERM. Returns 0, or 1 if LCM
+  // failed.
+  int Run();
+  // Handles what arrives within `timeout_s`; false once the node should stop.
+  bool SpinOnce(double timeout_s);
+  void Stop() { stop_ = true; }
+  bool stopping() const;
+
+  // Free text reported in NODE_STATUS.message.
+  void SetStatusMessage(std::string text) { status_message_ = std::move(text); }
+  // Channel that status goes to ("" disables); NODE_STATUS by default.
+  void SetStatusChannel(std::string channel) { status_channel_ = std::move(channel); }
+  void PublishStatus();
+
+  const std::map<std::string, ChannelStats>& stats() const { return stats_; }
+  int64_t total_dropped() const;
+
+ private:
+  class SubscriptionBase {
+   public:
+    virtual ~SubscriptionBase() = default;
+    virtual void Handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) = 0;
+  };
+  template <class T>
+  class TypedSubscription;
+
+  void Dropped(const std::string& channel, ChannelStats* stats, const std::string& why);
+  void HandlerError(const std::string& channel, ChannelStats* stats, const std::string& what);
+
+  std::string name_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
+  std::map<std::string, ChannelStats> stats_;
+  std::map<std::string, RateLimiter> drop_log_limit_;
+  struct Timer {
+    double period_s;
+    double next_s;
+    std::function<void()> callback;
+  };
+  std::vector<Timer> timers_;
+  bool stop_ = false;
+  double start_s_;
+  std::string status_message_;
+  std::string status_channel_ = "NODE_STATUS";
+  Publisher<sarmap::node_status_t> status_pub_;
+};
+
+template <class T>
+class Node::TypedSubscription : public Node::SubscriptionBase {
+ public:
+  TypedSubscription(Node* node, Callback<T> callback, ChannelStats* stats)
+      : node_(node), callback_(std::move(callback)), stats_(stats) {}
+
+  void Handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) override {
+    T msg;
+    int decoded = -1;
+    const int size = static_cast<int>(rbuf->data_size);
+    try {
+      decoded = msg.decode(rbuf->data, 0, size);
+    } catch (const std::exception&) {  // absurd array sizes make the decoder throw
+      decoded = -1;
+    }
+    if (decoded < 0) {
+      node_->Dropped(channel, stats_,
+                     size < 8 ? "truncated (" + std::to_string(size) + " bytes)"
+                              : "not a valid " + std::string(T::getTypeName()) +
+                                    " (wrong type, truncated or corrupt; " + std::to_string(size) +
+                                    " bytes)");
+      return;
+    }
+    if (decoded != size) {
+      node_->Dropped(channel, stats_, std::to_string(size - decoded) + " trailing bytes");
+      return;
+    }
+    const std::string problem = CheckMessage(msg);
+    if (!problem.empty()) {
+      node_->Dropped(channel, stats_, problem);
+      return;
+    }
+    ReceiveInfo info;
+    info.channel = channel;
+    info.receive_time_s = SteadySeconds();
+    info.missed_before = stats_->sequence.Observe(msg.header.seq);
+    ++stats_->received;
+    stats_->last_utime = msg.header.utime;
+    try {
+      callback_(msg, info);
+    } catch (const std::exception& e) {
+      node_->HandlerError(channel, stats_, e.what());
+    }
+  }
+
+ private:
+  Node* node_;
+  Callback<T> callback_;
+  ChannelStats* stats_;
+};
+
+template <class T>
+void Node::Subscribe(const std::string& channel, Callback<T> callback, int queue_capacity) {
+  ChannelStats& stats = stats_[channel];
+  stats.type_name = T::getTypeName();
+  auto sub = std::make_unique<TypedSubscription<T>>(this, std::move(callback), &stats);
+  // LCM treats the channel as a regular expression; anchor it so "AUDIO" is not "AUDIO_X".
+  lcm::Subscription* s =
+      lcm_->subscribe("^" + channel + "$", &SubscriptionBase::Handle,
+                      static_cast<SubscriptionBase*>(sub.get()));
+  if (s) s->setQueueCapacity(queue_capacity);
+  subscriptions_.push_back(std::move(sub));
+}
+
+}  // namespace common
+}  // namespace sarmap

@@ -1,0 +1,235 @@
+#include "common/options.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <fstream>
+
+namespace sarmap {
+namespace common {
+namespace options_internal {
+namespace {
+
+std::string Location(const YAML::Mark& mark, const std::string& source) {
+  if (mark.is_null()) return source;
+  return source + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
+template <class T>
+T Scalar(const YAML::Node& node, const std::string& key, const std::string& where) {
+  if (!node.IsScalar()) {
+    throw OptionsError(where + ": key '" + key + "': expected " + TypeName(static_cast<T*>(nullptr)) +
+                       ", got a " + (node.IsSequence() ? "list" : node.IsMap() ? "mapping" : "null"));
+  }
+  try {
+    T value = node.as<T>();
+    if constexpr (std::is_floating_point_v<T>) {
+      if (!std::isfinite(value)) throw YAML::Exception(YAML::Mark::null_mark(), "not finite");
+    }
+    return value;
+  } catch (const YAML::Exception&) {
+    throw OptionsError(where + ": key '" + key + "': expected " +
+                       TypeName(static_cast<T*>(nullptr)) + ", got '" + node.Scalar() + "'");
+  }
+}
+
+template <class T>
+void ReadList(const YAML::Node& node, const std::string& key, const std::string& where,
+              std::vector<T>* out) {
+  if (!node.IsSequence()) {
+    throw OptionsError(where + ": key '" + key + "': expected a list");
+  }
+  std::vector<T> values;
+  for (size_t i = 0; i < node.size(); ++i) {
+    values.push_back(Scalar<T>(node[i], key + "[" + std::to_string(i) + "]", where));
+  }
+  *out = std::move(values);
+}
+
+template <class T>
+void ReadNode(const YAML::Node& node, const std::string& key, const std::string& where, T* out) {
+  if constexpr (std::is_same_v<T, std::vector<double>> || std::is_same_v<T, std::vector<int>> ||
+                std::is_same_v<T, std::vector<std::string>>) {
+    ReadList(node, key, where, out);
+  } else {
+    *out = Scalar<T>(node, key, where);
+  }
+}
+
+}  // namespace
+
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, bool* out) {
+  *out = Scalar<bool>(map.Get(key), full_key, map.Where(key));
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, int* out) {
+  *out = Scalar<int>(map.Get(key), full_key, map.Where(key));
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, int64_t* out) {
+  *out = Scalar<int64_t>(map.Get(key), full_key, map.Where(key));
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, double* out) {
+  *out = Scalar<double>(map.Get(key), full_key, map.Where(key));
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::string* out) {
+  *out = Scalar<std::string>(map.Get(key), full_key, map.Where(key));
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::vector<double>* out) {
+  ReadList(map.Get(key), full_key, map.Where(key), out);
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::vector<int>* out) {
+  ReadList(map.Get(key), full_key, map.Where(key), out);
+}
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::vector<std::string>* out) {
+  ReadList(map.Get(key), full_key, map.Where(key), out);
+}
+
+template <class T>
+void ParseOverride(const std::string& text, const std::string& key, T* out) {
+  YAML::Node node;
+  try {
+    node = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw OptionsError("--set " + key + "=" + text + ": not valid YAML: " + e.msg);
+  }
+  if constexpr (std::is_same_v<T, std::string>) {
+    *out = text;  // a string override is taken literally
+  } else {
+    ReadNode(node, key, "--set " + key, out);
+  }
+}
+template void ParseOverride(const std::string&, const std::string&, bool*);
+template void ParseOverride(const std::string&, const std::string&, int*);
+template void ParseOverride(const std::string&, const std::string&, int64_t*);
+template void ParseOverride(const std::string&, const std::string&, double*);
+template void ParseOverride(const std::string&, const std::string&, std::string*);
+template void ParseOverride(const std::string&, const std::string&, std::vector<double>*);
+template void ParseOverride(const std::string&, const std::string&, std::vector<int>*);
+template void ParseOverride(const std::string&, const std::string&, std::vector<std::string>*);
+
+template <class T>
+std::string Format(const T& value) {
+  YAML::Emitter out;
+  out << YAML::Flow << value;
+  return out.c_str();
+}
+template std::string Format(const bool&);
+template std::string Format(const int&);
+template std::string Format(const int64_t&);
+template std::string Format(const double&);
+template std::string Format(const std::string&);
+template std::string Format(const std::vector<double>&);
+template std::string Format(const std::vector<int>&);
+template std::string Format(const std::vector<std::string>&);
+
+std::string TypeName(const bool*) { return "a boolean"; }
+std::string TypeName(const int*) { return "an integer"; }
+std::string TypeName(const int64_t*) { return "an integer"; }
+std::string TypeName(const double*) { return "a number"; }
+std::string TypeName(const std::string*) { return "a string"; }
+std::string TypeName(const std::vector<double>*) { return "a list of numbers"; }
+std::string TypeName(const std::vector<int>*) { return "a list of integers"; }
+std::string TypeName(const std::vector<std::string>*) { return "a list of strings"; }
+
+YamlMap::YamlMap() : node_(std::make_unique<YAML::Node>(YAML::NodeType::Map)) {}
+YamlMap::YamlMap(const YamlMap& other)
+    : node_(std::make_unique<YAML::Node>(*other.node_)), source_(other.source_) {}
+YamlMap& YamlMap::operator=(const YamlMap& other) {
+  node_ = std::make_unique<YAML::Node>(*other.node_);
+  source_ = other.source_;
+  return *this;
+}
+YamlMap::~YamlMap() = default;
+
+YamlMap YamlMap::FromFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw OptionsError(path + ": cannot open the configuration file");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return FromString(text, path);
+}
+
+YamlMap YamlMap::FromString(const std::string& text, const std::string& name) {
+  YamlMap map;
+  map.source_ = name;
+  try {
+    *map.node_ = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw OptionsError(Location(e.mark, name) + ": YAML syntax error: " + e.msg);
+  }
+  if (map.node_->IsNull()) {
+    *map.node_ = YAML::Node(YAML::NodeType::Map);
+  } else if (!map.node_->IsMap()) {
+    throw OptionsError(name + ": the top level must be a mapping of keys to values");
+  }
+  return map;
+}
+
+bool YamlMap::Has(const std::string& key) const { return (*node_)[key].IsDefined(); }
+
+YamlMap YamlMap::Child(const std::string& key, const std::string& full_key) const {
+  const YAML::Node child = Get(key);
+  YamlMap map;
+  map.source_ = source_;
+  if (child.IsNull()) return map;
+  if (!child.IsMap()) {
+    throw OptionsError(Location(child.Mark(), source_) + ": key '" + full_key +
+                       "': expected a mapping of keys to values");
+  }
+  *map.node_ = child;
+  return map;
+}
+
+YAML::Node YamlMap::Get(const std::string& key) const {
+  for (auto it = node_->begin(); it != node_->end(); ++it) {
+    if (it->first.Scalar() == key) return it->second;
+  }
+  throw OptionsError(source_ + ": no key '" + key + "'");
+}
+
+std::string YamlMap::Where(const std::string& key) const {
+  for (auto it = node_->begin(); it != node_->end(); ++it) {
+    if (it->first.Scalar() == key) return Location(it->first.Mark(), source_);
+  }
+  return source_;
+}
+
+std::vector<std::string> YamlMap::Keys() const {
+  std::vector<std::string> keys;
+  for (auto it = node_->begin(); it != node_->end(); ++it) keys.push_back(it->first.Scalar());
+  return keys;
+}
+
+void Reader::CheckUnknown() const {
+  std::vector<std::string> errors;
+  for (const auto& key : map_.Keys()) {
+    if (std::find(seen_.begin(), seen_.end(), key) == seen_.end()) {
+      std::string known;
+      for (const auto& s : seen_) known += (known.empty() ? "" : ", ") + s;
+      errors.push_back(map_.Where(key) + ": unknown key '" + prefix_ + key + "' (known here: " +
+                       known + ")");
+    }
+  }
+  if (!errors.empty()) ThrowErrors("bad configuration", errors);
+}
+
+std::vector<std::pair<std::string, std::string>> SplitOverrides(
+    const std::vector<std::string>& overrides) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& o : overrides) {
+    const auto eq = o.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw OptionsError("--set '" + o + "': expected key=value (e.g. --set max_range_m=4.0)");
+    }
+    out.emplace_back(o.substr(0, eq), o.substr(eq + 1));
+  }
+  return out;
+}
+
+void ThrowErrors(const std::string& what, const std::vector<std::string>& errors) {
+  std::string text = what + ":";
+  for (const auto& e : errors) text += "\n  " + e;
+  throw OptionsError(text);
+}
+
+}  // namespace options_internal
+}  // namespace common
+}  // namespace sarmap

@@ -1,0 +1,273 @@
+#pragma once
+// Options structs: one per component, loaded from YAML with `--set key=value` overrides and
+// validated once, with errors that name the bad key (and file:line:col when it came from a
+// file).
+//
+// An options struct lists its fields in Visit() and checks them in Validate():
+//
+//   struct ScanOptions {
+//     double max_range_m = 4.5;
+//     GridOptions grid;                                  // nested options struct
+//     template <class V> void Visit(V& v) {
+//       v("max_range_m", max_range_m, "Ranges beyond this are no return");
+//       v("grid", grid, "Grid settings");
+//     }
+//     void Validate(Validator& check) const {
+//       check.Positive("max_range_m", max_range_m);
+//     }
+//   };
+//   ScanOptions opt = LoadOptions<ScanOptions>("config/scan.yaml", {"max_range_m=3"});
+//
+// Supported field types: bool, int, int64_t, double, std::string, std::vector of
+// double/int/std::string, and nested structs with Visit() (and optionally Validate()).
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace YAML {
+class Node;
+}
+
+namespace sarmap {
+namespace common {
+
+class OptionsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Collects validation failures; each names its key.
+class Validator {
+ public:
+  explicit Validator(std::string prefix = "") : prefix_(std::move(prefix)) {}
+  void That(bool ok, const std::string& key, const std::string& what) {
+    if (!ok) errors_.push_back(prefix_ + key + ": " + what);
+  }
+  void Positive(const std::string& key, double value) {
+    That(std::isfinite(value) && value > 0, key, "must be > 0, is " + Str(value));
+  }
+  void NonNegative(const std::string& key, double value) {
+    That(std::isfinite(value) && value >= 0, key, "must be >= 0, is " + Str(value));
+  }
+  void InRange(const std::string& key, double value, double lo, double hi) {
+    That(std::isfinite(value) && value >= lo && value <= hi, key,
+         "must be in [" + Str(lo) + ", " + Str(hi) + "], is " + Str(value));
+  }
+  void OneOf(const std::string& key, const std::string& value,
+             const std::vector<std::string>& allowed) {
+    bool ok = false;
+    std::string list;
+    for (const auto& a : allowed) {
+      ok = ok || a == value;
+      list += (list.empty() ? "" : ", ") + a;
+    }
+    That(ok, key, "must be one of {" + list + "}, is '" + value + "'");
+  }
+  const std::vector<std::string>& errors() const { return errors_; }
+  std::vector<std::string>& mutable_errors() { return errors_; }
+  const std::string& prefix() const { return prefix_; }
+
+ private:
+  static std::string Str(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+  std::string prefix_;
+  std::vector<std::string> errors_;
+};
+
+namespace options_internal {
+
+template <class T, class = void>
+struct IsOptionsStruct : std::false_type {};
+template <class T>
+struct IsOptionsStruct<T, std::void_t<decltype(&T::template Visit<int>)>> : std::true_type {};
+
+template <class T, class = void>
+struct HasValidate : std::false_type {};
+template <class T>
+struct HasValidate<T, std::void_t<decltype(std::declval<const T&>().Validate(
+                          std::declval<Validator&>()))>> : std::true_type {};
+
+class YamlMap;
+// Reads map[key] into *out (implemented in options.cc for the supported types).
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, bool* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, int* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, int64_t* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, double* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::string* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::vector<double>* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::vector<int>* out);
+void ReadKey(const YamlMap& map, const std::string& key, const std::string& full_key, std::vector<std::string>* out);
+template <class T>
+void ParseOverride(const std::string& text, const std::string& key, T* out);
+template <class T>
+std::string Format(const T& value);
+std::string TypeName(const bool*);
+std::string TypeName(const int*);
+std::string TypeName(const int64_t*);
+std::string TypeName(const double*);
+std::string TypeName(const std::string*);
+std::string TypeName(const std::vector<double>*);
+std::string TypeName(const std::vector<int>*);
+std::string TypeName(const std::vector<std::string>*);
+
+// A YAML mapping with the location it came from; wraps yaml-cpp so this header stays light.
+class YamlMap {
+ public:
+  YamlMap();  // empty mapping
+  YamlMap(const YamlMap&);
+  YamlMap& operator=(const YamlMap&);
+  ~YamlMap();
+  static YamlMap FromFile(const std::string& path);
+  static YamlMap FromString(const std::string& text, const std::string& name);
+  bool Has(const std::string& key) const;
+  YamlMap Child(const std::string& key, const std::string& full_key) const;
+  YAML::Node Get(const std::string& key) const;
+  std::string Where(const std::string& key) const;  // "file:line:col"
+  std::vector<std::string> Keys() const;
+  const std::string& source() const { return source_; }
+
+ private:
+  std::unique_ptr<YAML::Node> node_;
+  std::string source_;
+};
+
+class Reader {
+ public:
+  Reader(YamlMap map, std::vector<std::pair<std::string, std::string>>* overrides,
+         std::string prefix)
+      : map_(std::move(map)), overrides_(overrides), prefix_(std::move(prefix)) {}
+
+  template <class T>
+  void operator()(const char* key, T& value, const char* /*help*/) {
+    seen_.emplace_back(key);
+    const std::string full = prefix_ + key;
+    if constexpr (IsOptionsStruct<T>::value) {
+      Reader child(map_.Has(key) ? map_.Child(key, full) : YamlMap(), overrides_, full + ".");
+      value.Visit(child);
+      child.CheckUnknown();
+    } else {
+      if (map_.Has(key)) ReadKey(map_, key, full, &value);
+      for (auto it = overrides_->begin(); it != overrides_->end();) {
+        if (it->first == full) {
+          ParseOverride(it->second, full, &value);
+          it = overrides_->erase(it);
+        } else {
+          ++it;
+        }
+      }
+    }
+  }
+  void CheckUnknown() const;
+
+ private:
+  YamlMap map_;
+  std::vector<std::pair<std::string, std::string>>* overrides_;
+  std::string prefix_;
+  std::vector<std::string> seen_;
+};
+
+class Writer {
+ public:
+  Writer(std::ostream* out, int indent, bool with_help)
+      : out_(out), indent_(indent), with_help_(with_help) {}
+  template <class T>
+  void operator()(const char* key, const T& value, const char* help) {
+    const std::string pad(indent_, ' ');
+    if (with_help_ && help && *help) *out_ << pad << "# " << help << "\n";
+    if constexpr (IsOptionsStruct<T>::value) {
+      *out_ << pad << key << ":\n";
+      Writer child(out_, indent_ + 2, with_help_);
+      const_cast<T&>(value).Visit(child);
+    } else {
+      *out_ << pad << key << ": " << Format(value);
+      if (with_help_) *out_ << "  # " << TypeName(&value);
+      *out_ << "\n";
+    }
+  }
+
+ private:
+  std::ostream* out_;
+  int indent_;
+  bool with_help_;
+};
+
+struct ValidateVisitor {
+  Validator* check;
+  template <class T>
+  void operator()(const char* key, const T& value, const char*) {
+    if constexpr (IsOptionsStruct<T>::value) {
+      Validator child(check->prefix() + key + ".");
+      if constexpr (HasValidate<T>::value) value.Validate(child);
+      ValidateVisitor nested{&child};
+      const_cast<T&>(value).Visit(nested);
+      for (auto& e : child.errors()) check->mutable_errors().push_back(e);
+    }
+  }
+};
+
+std::vector<std::pair<std::string, std::string>> SplitOverrides(
+    const std::vector<std::string>& overrides);
+[[noreturn]] void ThrowErrors(const std::string& what, const std::vector<std::string>& errors);
+
+}  // namespace options_internal
+
+// Validates `options` (and every nested options struct); throws OptionsError naming every
+// bad key.
+template <class Options>
+void ValidateOptions(const Options& options) {
+  Validator check;
+  if constexpr (options_internal::HasValidate<Options>::value) options.Validate(check);
+  options_internal::ValidateVisitor nested{&check};
+  const_cast<Options&>(options).Visit(nested);
+  if (!check.errors().empty()) options_internal::ThrowErrors("invalid options", check.errors());
+}
+
+// Loads options: defaults from the struct, then `yaml_path` (if not empty; `section` selects
+// a top-level key of the file, "" for the whole file), then `overrides` ("a.b=value").
+// Unknown keys, type errors and failed validation throw OptionsError.
+template <class Options>
+Options LoadOptions(const std::string& yaml_path, const std::vector<std::string>& overrides,
+                    const std::string& section = "") {
+  using namespace options_internal;
+  Options options;
+  YamlMap map = yaml_path.empty() ? YamlMap() : YamlMap::FromFile(yaml_path);
+  if (!section.empty()) {
+    if (!map.Has(section)) {
+      throw OptionsError(yaml_path + ": no top-level key '" + section + "'");
+    }
+    map = map.Child(section, section);
+  }
+  auto pending = SplitOverrides(overrides);
+  Reader reader(map, &pending, "");
+  options.Visit(reader);
+  reader.CheckUnknown();
+  if (!pending.empty()) {
+    std::vector<std::string> errors;
+    for (auto& p : pending) errors.push_back("--set " + p.first + ": unknown key");
+    ThrowErrors("bad overrides", errors);
+  }
+  ValidateOptions(options);
+  return options;
+}
+
+// Options as YAML, e.g. for --print-config; with_help adds each field's help and type.
+template <class Options>
+std::string OptionsToYaml(const Options& options, bool with_help) {
+  std::ostringstream out;
+  options_internal::Writer writer(&out, 0, with_help);
+  const_cast<Options&>(options).Visit(writer);
+  return out.str();
+}
+
+}  // namespace common
+}  // namespace sarmap

@@ -1,0 +1,125 @@
+#include "common/options.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace sarmap {
+namespace common {
+namespace {
+
+struct GridOptions {
+  double resolution_m = 0.05;
+  int width = 100;
+  template <class V>
+  void Visit(V& v) {
+    v("resolution_m", resolution_m, "cell size");
+    v("width", width, "cells");
+  }
+  void Validate(Validator& check) const {
+    check.Positive("resolution_m", resolution_m);
+    check.That(width > 0, "width", "must be > 0");
+  }
+};
+
+struct TestOptions {
+  double max_range_m = 4.5;
+  bool enabled = true;
+  std::string mode = "fast";
+  std::vector<double> weights = {1.0, 2.0};
+  GridOptions grid;
+  template <class V>
+  void Visit(V& v) {
+    v("max_range_m", max_range_m, "max range");
+    v("enabled", enabled, "on/off");
+    v("mode", mode, "fast or exact");
+    v("weights", weights, "weights");
+    v("grid", grid, "grid");
+  }
+  void Validate(Validator& check) const {
+    check.Positive("max_range_m", max_range_m);
+    check.OneOf("mode", mode, {"fast", "exact"});
+  }
+};
+
+std::string WriteTemp(const std::string& text) {
+  const std::string path = ::testing::TempDir() + "/options_test.yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string ErrorOf(const std::string& yaml, const std::vector<std::string>& overrides = {}) {
+  try {
+    LoadOptions<TestOptions>(yaml.empty() ? "" : WriteTemp(yaml), overrides);
+  } catch (const OptionsError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(OptionsTest, DefaultsFileAndOverridesApplyInOrder) {
+  const auto path = WriteTemp("max_range_m: 3.0\ngrid:\n  width: 7\nweights: [0.5]\n");
+  const auto o = LoadOptions<TestOptions>(path, {"grid.resolution_m=0.1", "mode=exact"});
+  EXPECT_DOUBLE_EQ(o.max_range_m, 3.0);
+  EXPECT_EQ(o.grid.width, 7);
+  EXPECT_DOUBLE_EQ(o.grid.resolution_m, 0.1);
+  EXPECT_EQ(o.mode, "exact");
+  EXPECT_EQ(o.weights, std::vector<double>({0.5}));
+  EXPECT_TRUE(o.enabled);
+}
+
+TEST(OptionsTest, UnknownKeyIsNamedWithItsLine) {
+  const std::string e = ErrorOf("max_range_m: 3\ngrid:\n  widht: 7\n");
+  EXPECT_NE(e.find("grid.widht"), std::string::npos) << e;
+  EXPECT_NE(e.find(":3:3"), std::string::npos) << e;  // line 3, column 3
+}
+
+TEST(OptionsTest, WrongTypeIsNamed) {
+  const std::string e = ErrorOf("max_range_m: far\n");
+  EXPECT_NE(e.find("max_range_m"), std::string::npos) << e;
+  EXPECT_NE(e.find("'far'"), std::string::npos) << e;
+}
+
+TEST(OptionsTest, ValidationNamesEveryBadKeyIncludingNested) {
+  const std::string e = ErrorOf("", {"max_range_m=-1", "grid.width=0", "mode=slow"});
+  EXPECT_NE(e.find("max_range_m: must be > 0"), std::string::npos) << e;
+  EXPECT_NE(e.find("grid.width: must be > 0"), std::string::npos) << e;
+  EXPECT_NE(e.find("mode: must be one of"), std::string::npos) << e;
+}
+
+TEST(OptionsTest, BadOverridesAreRejected) {
+  EXPECT_NE(ErrorOf("", {"nope=1"}).find("--set nope: unknown key"), std::string::npos);
+  EXPECT_NE(ErrorOf("", {"novalue"}).find("key=value"), std::string::npos);
+  EXPECT_NE(ErrorOf("", {"max_range_m=nan"}).find("max_range_m"), std::string::npos);
+}
+
+TEST(OptionsTest, SyntaxErrorsAndMissingFilesAreClear) {
+  EXPECT_NE(ErrorOf("a: [1, 2\n").find("YAML syntax error"), std::string::npos);
+  try {
+    LoadOptions<TestOptions>("/nonexistent/x.yaml", {});
+    FAIL();
+  } catch (const OptionsError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos);
+  }
+}
+
+TEST(OptionsTest, PrintedYamlLoadsBackToTheSameOptions) {
+  TestOptions o;
+  o.max_range_m = 2.25;
+  o.grid.width = 9;
+  o.mode = "exact";
+  const auto back = LoadOptions<TestOptions>(WriteTemp(OptionsToYaml(o, true)), {});
+  EXPECT_DOUBLE_EQ(back.max_range_m, 2.25);
+  EXPECT_EQ(back.grid.width, 9);
+  EXPECT_EQ(back.mode, "exact");
+}
+
+TEST(OptionsTest, SectionSelectsATopLevelKey) {
+  const auto path = WriteTemp("slam:\n  max_range_m: 1.5\nother: 3\n");
+  EXPECT_DOUBLE_EQ(LoadOptions<TestOptions>(path, {}, "slam").max_range_m, 1.5);
+  EXPECT_THROW(LoadOptions<TestOptions>(path, {}, "missing"), OptionsError);
+}
+
+}  // namespace
+}  // namespace common
+}  // namespace sarmap

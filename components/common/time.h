@@ -1,0 +1,74 @@
+#pragma once
+// Time in sarmap: int64 microseconds ("utime") since the Unix epoch, taken from message
+// headers. The wall clock is only for scheduling (timers, status), never for results.
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace sarmap {
+namespace common {
+
+using Utime = int64_t;
+
+constexpr double UtimeToSeconds(Utime utime) { return static_cast<double>(utime) * 1e-6; }
+constexpr Utime SecondsToUtime(double seconds) {
+  return static_cast<Utime>(seconds * 1e6 + (seconds >= 0 ? 0.5 : -0.5));
+}
+
+// Wall-clock utime, for stamping data at capture by drivers.
+Utime WallClockUtime();
+// Monotonic seconds, for timers and rate limiting only.
+double SteadySeconds();
+
+// A small time-ordered queue in front of an estimator: inputs may arrive out of order (from
+// several processes or a replay); they are released in utime order once they are older than
+// the newest input by `delay_us`, or on Flush(). An input older than the last released one
+// is too late: it is dropped and counted.
+template <class T>
+class TimeOrderedQueue {
+ public:
+  explicit TimeOrderedQueue(Utime delay_us) : delay_us_(delay_us) {}
+
+  // Returns false (and counts) when the item is too late to be released in order.
+  bool Push(Utime utime, T item) {
+    if (utime < last_released_) {
+      ++dropped_late_;
+      return false;
+    }
+    if (utime < newest_) ++reordered_;
+    newest_ = std::max(newest_, utime);
+    items_.emplace(utime, std::move(item));
+    return true;
+  }
+
+  // Calls `sink(utime, item)` for every item ready for release, oldest first.
+  void Release(const std::function<void(Utime, T&)>& sink) { ReleaseUntil(newest_ - delay_us_, sink); }
+  void Flush(const std::function<void(Utime, T&)>& sink) { ReleaseUntil(newest_, sink); }
+
+  size_t size() const { return items_.size(); }
+  int64_t dropped_late() const { return dropped_late_; }
+  int64_t reordered() const { return reordered_; }
+
+ private:
+  void ReleaseUntil(Utime until, const std::function<void(Utime, T&)>& sink) {
+    while (!items_.empty() && items_.begin()->first <= until) {
+      auto node = items_.extract(items_.begin());
+      last_released_ = node.key();
+      sink(node.key(), node.mapped());
+    }
+  }
+
+  Utime delay_us_;
+  Utime newest_ = INT64_MIN / 2;
+  Utime last_released_ = INT64_MIN;
+  int64_t dropped_late_ = 0;
+  int64_t reordered_ = 0;
+  std::multimap<Utime, T> items_;
+};
+
+}  // namespace common
+}  // namespace sarmap
