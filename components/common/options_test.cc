@@ -123,3 +123,27 @@ TEST(OptionsTest, SectionSelectsATopLevelKey) {
 }  // namespace
 }  // namespace common
 }  // namespace sarmap
+
+#include "common/robot_config.h"
+
+namespace sarmap {
+namespace common {
+namespace {
+
+TEST(RobotConfigTest, ShippedConfigsLoadAndCameraLooksForward) {
+  const auto robot = LoadRobot(std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml");
+  // The optical axis (camera +z) points along base +x; camera +y (down) along base -z.
+  const Rigid3d base_from_camera = robot.base_from_camera.ToRigid3d();
+  EXPECT_NEAR((base_from_camera.rotation() * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitX()).norm(), 0, 1e-9);
+  EXPECT_NEAR((base_from_camera.rotation() * Eigen::Vector3d::UnitY() + Eigen::Vector3d::UnitZ()).norm(), 0, 1e-9);
+  for (const char* name : {"kinect", "respeaker4"}) {
+    const auto array = LoadMicArray(std::string(SARMAP_SOURCE_DIR) + "/config/arrays/" + name + ".yaml");
+    EXPECT_EQ(array.num_mics(), 4) << name;
+  }
+  EXPECT_THROW(LoadMicArray(std::string(SARMAP_SOURCE_DIR) + "/config/arrays/kinect.yaml",
+                            {"channel_map=[0, 1]"}), OptionsError);
+}
+
+}  // namespace
+}  // namespace common
+}  // namespace sarmap
