@@ -22,9 +22,27 @@ double EyringRt60(double volume_m3, double surface_m2, double absorption) {
   return 0.161 * volume_m3 / (-surface_m2 * std::log(1.0 - absorption));
 }
 
-void SetUniformRt60(ShoeboxRoom* room, double rt60_s) {
-  const double alpha = EyringAbsorptionForRt60(room->Volume(), room->Surface(), rt60_s);
+double SetUniformRt60(ShoeboxRoom* room, double rt60_s, double sample_rate_hz, double speed_of_sound_mps) {
+  double alpha = EyringAbsorptionForRt60(room->Volume(), room->Surface(), rt60_s);
   room->beta.fill(std::sqrt(1.0 - alpha));
+  RirOptions options;
+  options.sample_rate_hz = sample_rate_hz;
+  options.speed_of_sound_mps = speed_of_sound_mps;
+  options.max_length_s = 1.1 * rt60_s;
+  options.exact_order = 0;  // the decay does not need exact early delays
+  const Eigen::Vector3d size = room->max - room->min;
+  const Eigen::Vector3d source = room->min + size.cwiseProduct(Eigen::Vector3d(0.31, 0.43, 0.55));
+  const Eigen::Vector3d mic = room->min + size.cwiseProduct(Eigen::Vector3d(0.67, 0.61, 0.37));
+  double measured = 0;
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    measured = SchroederRt60(ImageSourceRir(*room, source, mic, options), sample_rate_hz, -5, -25);
+    if (measured <= 0 || std::abs(measured - rt60_s) < 0.02 * rt60_s) break;
+    // Decay rate ~ -ln(1 - alpha): scale it by how much too slow (or fast) the decay is.
+    const double log_keep = std::log(1.0 - alpha) * measured / rt60_s;
+    alpha = std::clamp(1.0 - std::exp(log_keep), 1e-4, 0.999);
+    room->beta.fill(std::sqrt(1.0 - alpha));
+  }
+  return measured;
 }
 
 void SetAbsorption(ShoeboxRoom* room, const std::vector<double>& absorption) {

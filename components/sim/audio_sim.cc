@@ -42,7 +42,7 @@ AudioSim::AudioSim(const AudioOptions& options, const common::MicArrayOptions& a
   const bool reverb = options.reverb && world.acoustics.reverb;
   double rt60 = 0;
   if (world.acoustics.rt60_s > 0 && world.acoustics.absorption.empty()) {
-    SetUniformRt60(&room_, world.acoustics.rt60_s);
+    SetUniformRt60(&room_, world.acoustics.rt60_s, rate_, array.speed_of_sound_mps);
     rt60 = world.acoustics.rt60_s;
   } else if (!world.acoustics.absorption.empty()) {
     SetAbsorption(&room_, world.acoustics.absorption);
