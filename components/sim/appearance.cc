@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace sarmap {
@@ -68,34 +69,48 @@ std::vector<Appearance> LoadAppearances(const std::string& data_dir, int max_cou
                                         std::string* warning) {
   std::vector<Appearance> out;
   const std::string tud = data_dir + "/vision/rgb/tud_campus";
-  // TUD-Campus: the tallest unclipped box of each track (tall people crop sharpest).
+  // TUD-Campus: per track, the tallest unclipped box whose crop holds no other person
+  // (a crop showing two people would be two detections).
   std::ifstream gt(tud + "/gt/gt.txt");
   if (gt) {
-    struct Best {
-      int frame = 0;
+    struct Box {
+      int frame, id;
       cv::Rect2d box;
     };
-    std::map<int, Best> best;
+    std::vector<Box> boxes;
+    std::map<int, std::vector<cv::Rect2d>> by_frame;
     std::string line;
     while (std::getline(gt, line)) {
       int frame = 0, id = 0;
       double x = 0, y = 0, w = 0, h = 0;
       if (std::sscanf(line.c_str(), "%d,%d,%lf,%lf,%lf,%lf", &frame, &id, &x, &y, &w, &h) != 6) continue;
-      if (x < 2 || y < 2 || x + w > 638 || y + h > 478 || h < 150) continue;
-      if (!best.count(id) || h > best[id].box.height) best[id] = Best{frame, cv::Rect2d(x, y, w, h)};
+      by_frame[frame].emplace_back(x, y, w, h);
+      if (x < 2 || y < 2 || x + w > 638 || y + h > 478 || h < 200) continue;  // big, sharp crops
+      boxes.push_back({frame, id, cv::Rect2d(x, y, w, h)});
     }
-    std::vector<std::pair<int, Best>> tracks(best.begin(), best.end());
-    std::sort(tracks.begin(), tracks.end(),
-              [](const auto& a, const auto& b) { return a.second.box.height > b.second.box.height; });
-    for (const auto& [id, b] : tracks) {
+    std::stable_sort(boxes.begin(), boxes.end(),
+                     [](const Box& a, const Box& b) { return a.box.height > b.box.height; });
+    std::set<int> used_tracks;
+    for (const Box& b : boxes) {
       if (static_cast<int>(out.size()) >= max_count) break;
+      if (used_tracks.count(b.id)) continue;
+      const double crop_h = b.box.height / kPersonFraction;
+      const cv::Rect2d crop(b.box.x + b.box.width / 2 - crop_h / 4, b.box.y - (crop_h - b.box.height) / 2,
+                            crop_h / 2, crop_h);
+      bool alone = true;
+      for (const cv::Rect2d& other : by_frame[b.frame]) {
+        if (other == b.box) continue;
+        alone = alone && (other & crop).area() < 0.1 * other.area();
+      }
+      if (!alone) continue;
       char name[32];
       std::snprintf(name, sizeof(name), "/img1/%06d.jpg", b.frame);
       const cv::Mat img = cv::imread(tud + name, cv::IMREAD_COLOR);
       if (img.empty()) continue;
       Appearance a;
-      if (Crop(img, b.box, "tud_campus" + std::string(name) + " track " + std::to_string(id), &a)) {
+      if (Crop(img, b.box, "tud_campus" + std::string(name) + " track " + std::to_string(b.id), &a)) {
         out.push_back(std::move(a));
+        used_tracks.insert(b.id);
       }
     }
   }

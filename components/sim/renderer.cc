@@ -117,6 +117,11 @@ void Renderer::SetWorld(const World& world, const std::vector<Appearance>* appea
   polygons_.clear();
   vertices_.clear();
   lights_on_ = world.lights_on;
+  if (world.ceiling_height_m > 0) {
+    background_[0] = 0.08f, background_[1] = 0.08f, background_[2] = 0.09f;
+  } else {
+    background_[0] = 0.62f, background_[1] = 0.68f, background_[2] = 0.76f;  // overcast sky
+  }
   appearances_ = appearances;
   people_ = world.people;
   // Floor (and ceiling) over everything, with a wide margin for open areas.
@@ -366,7 +371,7 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   for (int j = 0; j < H; ++j) {
     for (int i = 0; i < W; ++i) {
       const size_t p = static_cast<size_t>(j) * W + i;
-      float c[3] = {0.08f, 0.08f, 0.09f};  // nothing: a dim far background
+      float c[3] = {background_[0], background_[1], background_[2]};  // nothing hit: sky or far dark
       const int id = color_id_[p];
       if (id >= 0) {
         const Polygon& poly = polygons_[id];
@@ -391,9 +396,9 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
         }
       }
       for (int g = 0; g < glass_layers_[p]; ++g) {  // each pane face: a faint blue-green tint
-        c[0] = 0.88f * c[0] + 0.12f * 0.70f;
-        c[1] = 0.88f * c[1] + 0.12f * 0.82f;
-        c[2] = 0.88f * c[2] + 0.12f * 0.88f;
+        c[0] = 0.84f * c[0] + 0.16f * 0.70f;
+        c[1] = 0.84f * c[1] + 0.16f * 0.82f;
+        c[2] = 0.84f * c[2] + 0.16f * 0.88f;
       }
       for (int ch = 0; ch < 3; ++ch) {
         table_pos = table_pos * 6364136223846793005ull + 1442695040888963407ull;

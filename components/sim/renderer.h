@@ -63,6 +63,7 @@ class Renderer {
   CameraOptions options_;
   Intrinsics intrinsics_;
   bool lights_on_ = true;
+  float background_[3] = {0.08f, 0.08f, 0.09f};
   std::vector<Polygon> polygons_;
   std::vector<Eigen::Vector3f> vertices_;  // map frame, 4 per polygon
   std::vector<Person> people_;

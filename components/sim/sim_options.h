@@ -31,7 +31,7 @@ struct CameraOptions {
   double depth_fx_px = 580.0;     // IR camera focal length (disparity quantisation)
   int disparity_subpixel = 8;     // disparity steps per pixel
   double dropout = 0.003;         // random invalid pixels
-  double grazing_limit_deg = 80;  // no return beyond this incidence angle
+  double grazing_limit_deg = 84;  // no return beyond this incidence angle
   bool shadows = true;            // projector shadows beside foreground edges
   double color_noise = 0.008;     // colour noise sigma (fraction of full scale), lit
   double dark_gain = 0.04;        // lights off: fraction of the lit brightness reaching the sensor
