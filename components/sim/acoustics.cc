@@ -119,6 +119,10 @@ std::vector<float> ImageSourceRir(const ShoeboxRoom& room, const Eigen::Vector3d
     }
   }
   const double max_d2 = max_dist * max_dist;
+  // Late images (order > exact_order): linear interpolation, in a tight loop.
+  const float samples_per_m = static_cast<float>(fs / c);
+  const int last_tap = static_cast<int>(h.size()) - 2;
+  float* out = h.data();
   for (size_t i = 0; i < axes[0].offset.size(); ++i) {
     const double dx2 = axes[0].offset[i] * axes[0].offset[i];
     if (dx2 > max_d2) continue;
@@ -127,12 +131,25 @@ std::vector<float> ImageSourceRir(const ShoeboxRoom& room, const Eigen::Vector3d
       if (dxy2 > max_d2) continue;
       const double gxy = axes[0].gain[i] * axes[1].gain[j];
       const int oxy = axes[0].order[i] + axes[1].order[j];
-      for (size_t k = 0; k < axes[2].offset.size(); ++k) {
-        const double d2 = dxy2 + axes[2].offset[k] * axes[2].offset[k];
+      const size_t nz = axes[2].offset.size();
+      const double* oz = axes[2].offset.data();
+      const double* gz = axes[2].gain.data();
+      const int* ordz = axes[2].order.data();
+      for (size_t k = 0; k < nz; ++k) {
+        const double d2 = dxy2 + oz[k] * oz[k];
         if (d2 > max_d2) continue;
-        const double g = gxy * axes[2].gain[k];
-        if (g < 1e-7) continue;
-        add(std::sqrt(d2), g, oxy + axes[2].order[k] <= options.exact_order);
+        const double g = gxy * gz[k];
+        if (oxy + ordz[k] <= options.exact_order) {
+          add(std::sqrt(d2), g, true);
+          continue;
+        }
+        const float r = std::max(static_cast<float>(std::sqrt(d2)), 0.05f);
+        const float delay = r * samples_per_m;
+        const int n = static_cast<int>(delay);
+        if (n > last_tap) continue;
+        const float f = delay - n, a = static_cast<float>(g) / r;
+        out[n] += (1 - f) * a;
+        out[n + 1] += f * a;
       }
     }
   }

@@ -12,6 +12,7 @@ namespace {
 enum Flags { kIr = 1, kColour = 2, kGlass = 4, kTwoSided = 8, kBillboard = 16, kLyingBillboard = 32 };
 constexpr float kNear = 0.05f;
 constexpr int kNormalTableSize = 1 << 16;
+constexpr size_t kNoiseSlack = 1 << 14;
 
 inline uint64_t XorShift(uint64_t* s) {
   uint64_t x = *s;
@@ -71,6 +72,13 @@ Renderer::Renderer(const CameraOptions& options, uint64_t seed)
   std::normal_distribution<float> normal(0.0f, 1.0f);
   normal_table_.resize(kNormalTableSize);
   for (float& v : normal_table_) v = normal(gen);
+  // Noise read sequentially from a random offset each frame: far cheaper than drawing
+  // 1.2 million normal samples per frame, and still different from frame to frame.
+  noise_i8_.resize(3 * n + kNoiseSlack);
+  for (int8_t& v : noise_i8_) v = static_cast<int8_t>(std::clamp(std::lround(normal(gen) * 32.0f), -127L, 127L));
+  std::uniform_int_distribution<int> uniform16(0, 65535);
+  uniform_u16_.resize(n + kNoiseSlack);
+  for (uint16_t& v : uniform_u16_) v = static_cast<uint16_t>(uniform16(gen));
 }
 
 Renderer::~Renderer() = default;
@@ -362,13 +370,16 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   const float fx = static_cast<float>(intrinsics_.fx), fy = static_cast<float>(intrinsics_.fy);
   const float cx = static_cast<float>(intrinsics_.cx), cy = static_cast<float>(intrinsics_.cy);
 
-  // Colour.
+  // Colour (deferred shading: one polygon lookup per pixel).
   out->rgb.resize(N * 3);
-  const float gain = lights_on_ ? 1.0f : static_cast<float>(options_.dark_gain);
-  const float noise = static_cast<float>(lights_on_ ? options_.color_noise : options_.dark_noise);
-  uint64_t table_pos = XorShift(&rng_state_);
-  const float* table = normal_table_.data();
+  const float gain = (lights_on_ ? 1.0f : static_cast<float>(options_.dark_gain)) * 255.0f;
+  const float noise = static_cast<float>(lights_on_ ? options_.color_noise : options_.dark_noise) * 255.0f;
+  const float noise_per_unit = noise / 32.0f;  // the int8 noise holds N(0,1) * 32
+  const int8_t* colour_noise = noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
+  const int8_t* depth_noise = noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
+  const uint16_t* uniform = uniform_u16_.data() + XorShift(&rng_state_) % kNoiseSlack;
   for (int j = 0; j < H; ++j) {
+    const float ry = (j - cy) / fy;
     for (int i = 0; i < W; ++i) {
       const size_t p = static_cast<size_t>(j) * W + i;
       float c[3] = {background_[0], background_[1], background_[2]};  // nothing hit: sky or far dark
@@ -378,7 +389,7 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
         if ((poly.flags & kBillboard) && appearances_ && !appearances_->empty()) {
           const Appearance& app = (*appearances_)[poly.appearance];
           const float z = 1.0f / color_z_[p];
-          const Eigen::Vector3f X((i - cx) / fx * z, (j - cy) / fy * z, z);
+          const Eigen::Vector3f X((i - cx) / fx * z, ry * z, z);
           const Eigen::Vector3f rel = X - poly.tex_origin;
           const float s = std::clamp(rel.dot(poly.tex_s), 0.0f, 1.0f) * (app.width - 1);
           const float t = std::clamp(rel.dot(poly.tex_t), 0.0f, 1.0f) * (app.height - 1);
@@ -400,46 +411,63 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
         c[1] = 0.84f * c[1] + 0.16f * 0.82f;
         c[2] = 0.84f * c[2] + 0.16f * 0.88f;
       }
+      uint8_t* dst = &out->rgb[p * 3];
+      const int8_t* nz = colour_noise + p * 3;
       for (int ch = 0; ch < 3; ++ch) {
-        table_pos = table_pos * 6364136223846793005ull + 1442695040888963407ull;
-        const float v = c[ch] * gain + noise * table[(table_pos >> 48) & (kNormalTableSize - 1)];
-        out->rgb[p * 3 + ch] = static_cast<uint8_t>(std::clamp(v * 255.0f + 0.5f, 0.0f, 255.0f));
+        const int v = static_cast<int>(c[ch] * gain + noise_per_unit * nz[ch] + 0.5f);
+        dst[ch] = static_cast<uint8_t>(std::min(255, std::max(0, v)));
       }
     }
   }
 
-  // Depth.
+  // Depth, and which people are in view (body pixels in the IR buffer).
   out->depth_mm.assign(N, 0);
   out->true_depth_m.resize(N);
-  const double bf = options_.baseline_m * options_.depth_fx_px;
+  out->person_pixels.assign(people_.size(), 0);
+  out->person_box.assign(people_.size(), {W, H, -1, -1});
+  const float bf = static_cast<float>(options_.baseline_m * options_.depth_fx_px);
   const float sub = static_cast<float>(options_.disparity_subpixel);
   const float cos_limit = static_cast<float>(std::cos(options_.grazing_limit_deg * M_PI / 180.0));
   const float zmin = static_cast<float>(options_.min_range_m), zmax = static_cast<float>(options_.max_range_m);
   const float k = static_cast<float>(options_.depth_noise_k);
-  const uint32_t drop_threshold = static_cast<uint32_t>(options_.dropout * 4294967295.0);
-  for (size_t p = 0; p < N; ++p) {
-    const int id = ir_id_[p];
-    if (id < 0) {
-      out->true_depth_m[p] = std::numeric_limits<float>::infinity();
-      continue;
+  const int drop_threshold = static_cast<int>(std::lround(options_.dropout * 65536.0));
+  const float k32 = k / 32.0f;
+  std::vector<float> rx(W);
+  for (int i = 0; i < W; ++i) rx[i] = (i - cx) / fx;
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int j = 0; j < H; ++j) {
+    const float ry = (j - cy) / fy;
+    for (int i = 0; i < W; ++i) {
+      const size_t p = static_cast<size_t>(j) * W + i;
+      const int id = ir_id_[p];
+      if (id < 0) {
+        out->true_depth_m[p] = inf;
+        continue;
+      }
+      const float z = 1.0f / ir_z_[p];
+      out->true_depth_m[p] = z;
+      const Polygon& poly = polygons_[id];
+      if (poly.person >= 0) {
+        ++out->person_pixels[poly.person];
+        auto& b = out->person_box[poly.person];
+        b[0] = std::min(b[0], i);
+        b[1] = std::min(b[1], j);
+        b[2] = std::max(b[2], i);
+        b[3] = std::max(b[3], j);
+      }
+      if (!depth_fov_[p] || z < zmin || z > zmax) continue;
+      const float ndotr = poly.n_cam.x() * rx[i] + poly.n_cam.y() * ry + poly.n_cam.z();
+      if (std::abs(ndotr) * ray_inv_norm_[p] < cos_limit) continue;
+      if (uniform[p] < drop_threshold) continue;
+      float zn = z + k32 * z * z * depth_noise[p];
+      if (sub > 0) {
+        const float disparity = std::floor(bf / zn * sub + 0.5f) / sub;
+        if (disparity <= 0) continue;
+        zn = bf / disparity;
+      }
+      if (zn < zmin || zn > zmax) continue;
+      out->depth_mm[p] = static_cast<uint16_t>(zn * 1000.0f + 0.5f);
     }
-    const float z = 1.0f / ir_z_[p];
-    out->true_depth_m[p] = z;
-    if (!depth_fov_[p] || z < zmin || z > zmax) continue;
-    const int i = static_cast<int>(p % W), j = static_cast<int>(p / W);
-    const Polygon& poly = polygons_[id];
-    const float ndotr = poly.n_cam.x() * (i - cx) / fx + poly.n_cam.y() * (j - cy) / fy + poly.n_cam.z();
-    if (std::abs(ndotr) * ray_inv_norm_[p] < cos_limit) continue;
-    const uint64_t r = XorShift(&rng_state_);
-    if (static_cast<uint32_t>(r) < drop_threshold) continue;
-    float zn = z + k * z * z * table[(r >> 40) & (kNormalTableSize - 1)];
-    if (sub > 0) {
-      const float disparity = std::round(static_cast<float>(bf) / zn * sub) / sub;
-      if (disparity <= 0) continue;
-      zn = static_cast<float>(bf) / disparity;
-    }
-    if (zn < zmin || zn > zmax) continue;
-    out->depth_mm[p] = static_cast<uint16_t>(std::lround(zn * 1000.0f));
   }
   if (options_.shadows) {
     // The projector sits beside the camera: a background point is dark when a nearer
@@ -459,22 +487,6 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
     }
   }
 
-  // People in view (body pixels in the IR buffer).
-  out->person_pixels.assign(people_.size(), 0);
-  out->person_box.assign(people_.size(), {W, H, -1, -1});
-  for (size_t p = 0; p < N; ++p) {
-    const int id = ir_id_[p];
-    if (id < 0) continue;
-    const int person = polygons_[id].person;
-    if (person < 0) continue;
-    ++out->person_pixels[person];
-    const int i = static_cast<int>(p % W), j = static_cast<int>(p / W);
-    auto& b = out->person_box[person];
-    b[0] = std::min(b[0], i);
-    b[1] = std::min(b[1], j);
-    b[2] = std::max(b[2], i);
-    b[3] = std::max(b[3], j);
-  }
 }
 
 }  // namespace sim

@@ -77,6 +77,8 @@ class Renderer {
   std::vector<float> ray_inv_norm_;
   // Fast noise: a table of N(0,1) samples read at random offsets.
   std::vector<float> normal_table_;
+  std::vector<int8_t> noise_i8_;      // N(0,1) * 32
+  std::vector<uint16_t> uniform_u16_;  // uniform 0..65535
   uint64_t rng_state_;
 };
 

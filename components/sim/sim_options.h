@@ -90,7 +90,7 @@ struct AudioOptions {
   bool enabled = true;
   std::string mic_array;            // config/arrays/<name>.yaml; "" = the robot's array
   int block_samples = 512;          // samples per published frame (per channel)
-  int convolve_block_samples = 1024;
+  int convolve_block_samples = 2048;
   double full_scale_db_spl = 100.0; // sound pressure level that reads int16 full scale (RMS of a sine)
   double sensor_noise_db_spl = 28.0;
   bool reverb = true;               // image-source reverberation (world acoustics)

@@ -127,15 +127,16 @@ SourceSignal::SourceSignal(const SoundSource& source, std::vector<std::vector<fl
     : source_(source), clips_(std::move(clips)), rate_(sample_rate_hz), rng_(seed) {
   for (const auto& c : clips_) cycle_s_ += static_cast<double>(c.size()) / rate_ + source_.gap_s;
   // Normalise the synthetic signals to unit RMS over a few seconds.
-  double m = 0, a = 0;
-  const int n = 4 * rate_;
-  for (int k = 0; k < n; ++k) {
-    const double t = static_cast<double>(k) / rate_;
-    m += Music(t) * Music(t);
-    a += Alarm(t) * Alarm(t);
+  if (source_.kind == SourceKind::kMusic || source_.kind == SourceKind::kAlarm) {
+    double energy = 0;
+    const int n = 4 * rate_;  // the tune repeats every 1.76 s, the alarm every 1 s
+    for (int k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / rate_;
+      const double v = source_.kind == SourceKind::kMusic ? Music(t) : Alarm(t);
+      energy += v * v;
+    }
+    (source_.kind == SourceKind::kMusic ? music_norm_ : alarm_norm_) = 1.0 / std::sqrt(energy / n);
   }
-  music_norm_ = 1.0 / std::sqrt(m / n);
-  alarm_norm_ = 1.0 / std::sqrt(a / n);
 }
 
 bool SourceSignal::ScheduledAt(double t) const {
