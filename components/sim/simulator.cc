@@ -29,8 +29,12 @@ double ThreadCpuSeconds() {
   return ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-std::string Resolve(const std::string& path, const std::string& root) {
+// Relative paths: from the repository root; files (not the data dir) may also be given
+// relative to the working directory.
+std::string Resolve(const std::string& path, const std::string& root, bool try_cwd = true) {
   if (path.empty() || fs::path(path).is_absolute() || root.empty()) return path;
+  std::error_code ec;
+  if (try_cwd && fs::is_regular_file(path, ec)) return path;
   return (fs::path(root) / path).lexically_normal().string();
 }
 
@@ -67,7 +71,7 @@ SimSetup LoadSetup(const SimOptions& options, const std::string& repo_root) {
     array = Resolve(array, repo_root);
   }
   setup.array = common::LoadMicArray(array);
-  setup.data_dir = Resolve(options.data_dir, repo_root);
+  setup.data_dir = Resolve(options.data_dir, repo_root, false);
   return setup;
 }
 

@@ -132,6 +132,33 @@ TEST(SimulatorTest, LabTruthShowsTheHiddenPersonCallingAndTheOthersInView) {
   EXPECT_EQ(static_cast<int>(people["carol"].posture), static_cast<int>(sarmap::sim_person_t::POSTURE_SITTING));
 }
 
+TEST(SimulatorTest, OtherArraysAndAnAsynchronousArray) {
+  SimOptions o = Options("lab_lit.yaml");
+  o.camera.enabled = false;
+  o.audio.mic_array = std::string(SARMAP_SOURCE_DIR) + "/config/arrays/cube8.yaml";
+  {
+    Simulator sim(LoadSetup(o, ""));
+    CollectingSink sink;
+    sim.AdvanceTo(1.0, &sink);
+    ExpectChannel(sink, "AUDIO", "mic_array", 31.25, 1.0);
+  }
+  // Each microphone its own sound card: AUDIO_<DEVICE> channels.
+  o.audio.mic_array = std::string(SARMAP_SOURCE_DIR) + "/config/arrays/async6.yaml";
+  o.audio.asynchronous = true;
+  Simulator sim(LoadSetup(o, ""));
+  CollectingSink sink;
+  sim.AdvanceTo(1.5, &sink);
+  for (int m = 0; m < 6; ++m) {
+    const std::string channel = "AUDIO_ASYNC6" + std::to_string(m);
+    ASSERT_TRUE(sink.channels.count(channel)) << channel;
+    const ChannelLog& log = sink.channels.at(channel);
+    EXPECT_GE(log.utimes.size(), 40u) << channel;  // 1.5 s minus its start offset, at 31.25 Hz
+    EXPECT_TRUE(log.problems.empty()) << channel;
+    for (size_t k = 0; k < log.seqs.size(); ++k) EXPECT_EQ(log.seqs[k], static_cast<int64_t>(k));
+  }
+  EXPECT_FALSE(sink.channels.count("AUDIO"));
+}
+
 TEST(SimulatorTest, SameSeedSameRunOtherSeedOtherRun) {
   auto run = [](int64_t seed) {
     SimOptions o = Options("lab_lit.yaml");
