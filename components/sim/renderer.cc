@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <time.h>
 
 namespace sarmap {
 namespace sim {
@@ -13,6 +14,12 @@ enum Flags { kIr = 1, kColour = 2, kGlass = 4, kTwoSided = 8, kBillboard = 16, k
 constexpr float kNear = 0.05f;
 constexpr int kNormalTableSize = 1 << 16;
 constexpr size_t kNoiseSlack = 1 << 14;
+
+double CpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
 
 inline uint64_t XorShift(uint64_t* s) {
   uint64_t x = *s;
@@ -345,6 +352,7 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
     poly.tex_t = cam_R_map * down / static_cast<float>(tex_h);
   }
 
+  const double t0 = CpuSeconds();
   std::vector<Eigen::Vector3f> cam(vertices_.size());
   for (size_t k = 0; k < vertices_.size(); ++k) cam[k] = cam_R_map * (vertices_[k] - cam_pos);
   std::fill(ir_z_.begin(), ir_z_.end(), 0.0f);
@@ -370,6 +378,8 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   const float fx = static_cast<float>(intrinsics_.fx), fy = static_cast<float>(intrinsics_.fy);
   const float cx = static_cast<float>(intrinsics_.cx), cy = static_cast<float>(intrinsics_.cy);
 
+  const double t1 = CpuSeconds();
+  timing_.raster_s += t1 - t0;
   // Colour (deferred shading: one polygon lookup per pixel).
   out->rgb.resize(N * 3);
   const float gain = (lights_on_ ? 1.0f : static_cast<float>(options_.dark_gain)) * 255.0f;
@@ -378,6 +388,20 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   const int8_t* colour_noise = noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
   const int8_t* depth_noise = noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
   const uint16_t* uniform = uniform_u16_.data() + XorShift(&rng_state_) % kNoiseSlack;
+  std::vector<float> rx(W);
+  for (int i = 0; i < W; ++i) rx[i] = (i - cx) / fx;
+  const bool textured = appearances_ && !appearances_->empty();
+  // Texture coordinates of a billboard pixel: with the pixel ray r = (rx, ry, 1) and depth z,
+  // s = z (S . r) - S . O (and t likewise), S the scaled column axis and O the corner.
+  struct Tex {
+    Eigen::Vector3f s, t;
+    float s0, t0;
+  };
+  std::vector<Tex> tex(polygons_.size());
+  for (size_t k = first_billboard_; k < polygons_.size(); ++k) {
+    const Polygon& poly = polygons_[k];
+    tex[k] = {poly.tex_s, poly.tex_t, poly.tex_origin.dot(poly.tex_s), poly.tex_origin.dot(poly.tex_t)};
+  }
   for (int j = 0; j < H; ++j) {
     const float ry = (j - cy) / fy;
     for (int i = 0; i < W; ++i) {
@@ -386,20 +410,20 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
       const int id = color_id_[p];
       if (id >= 0) {
         const Polygon& poly = polygons_[id];
-        if ((poly.flags & kBillboard) && appearances_ && !appearances_->empty()) {
+        if ((poly.flags & kBillboard) && textured) {
           const Appearance& app = (*appearances_)[poly.appearance];
+          const Tex& tx = tex[id];
           const float z = 1.0f / color_z_[p];
-          const Eigen::Vector3f X((i - cx) / fx * z, ry * z, z);
-          const Eigen::Vector3f rel = X - poly.tex_origin;
-          const float s = std::clamp(rel.dot(poly.tex_s), 0.0f, 1.0f) * (app.width - 1);
-          const float t = std::clamp(rel.dot(poly.tex_t), 0.0f, 1.0f) * (app.height - 1);
-          const int s0 = std::min(static_cast<int>(s), app.width - 2), t0 = std::min(static_cast<int>(t), app.height - 2);
-          const float fs = s - s0, ft = t - t0;
+          const float su = z * (tx.s.x() * rx[i] + tx.s.y() * ry + tx.s.z()) - tx.s0;
+          const float tv = z * (tx.t.x() * rx[i] + tx.t.y() * ry + tx.t.z()) - tx.t0;
+          const float sf = std::min(std::max(su, 0.0f), 1.0f) * (app.width - 1);
+          const float tf = std::min(std::max(tv, 0.0f), 1.0f) * (app.height - 1);
+          const int s0 = std::min(static_cast<int>(sf), app.width - 2), t0 = std::min(static_cast<int>(tf), app.height - 2);
+          const float fs = sf - s0, ft = tf - t0;
           const float* r0 = &app.rgb[(static_cast<size_t>(t0) * app.width + s0) * 3];
           const float* r1 = r0 + static_cast<size_t>(app.width) * 3;
-          for (int ch = 0; ch < 3; ++ch) {
-            c[ch] = (1 - ft) * ((1 - fs) * r0[ch] + fs * r0[ch + 3]) + ft * ((1 - fs) * r1[ch] + fs * r1[ch + 3]);
-          }
+          const float w00 = (1 - ft) * (1 - fs), w01 = (1 - ft) * fs, w10 = ft * (1 - fs), w11 = ft * fs;
+          for (int ch = 0; ch < 3; ++ch) c[ch] = w00 * r0[ch] + w01 * r0[ch + 3] + w10 * r1[ch] + w11 * r1[ch + 3];
         } else {
           c[0] = poly.shade[0];
           c[1] = poly.shade[1];
@@ -420,6 +444,8 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
     }
   }
 
+  const double t2 = CpuSeconds();
+  timing_.colour_s += t2 - t1;
   // Depth, and which people are in view (body pixels in the IR buffer).
   out->depth_mm.assign(N, 0);
   out->true_depth_m.resize(N);
@@ -432,8 +458,6 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   const float k = static_cast<float>(options_.depth_noise_k);
   const int drop_threshold = static_cast<int>(std::lround(options_.dropout * 65536.0));
   const float k32 = k / 32.0f;
-  std::vector<float> rx(W);
-  for (int i = 0; i < W; ++i) rx[i] = (i - cx) / fx;
   const float inf = std::numeric_limits<float>::infinity();
   for (int j = 0; j < H; ++j) {
     const float ry = (j - cy) / fy;
@@ -487,6 +511,8 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
     }
   }
 
+  timing_.depth_s += CpuSeconds() - t2;
+  ++timing_.frames;
 }
 
 }  // namespace sim

@@ -51,6 +51,12 @@ class Renderer {
   void Render(const common::Rigid3d& map_from_camera, RenderOutput* out);
 
   const Intrinsics& intrinsics() const { return intrinsics_; }
+  // CPU seconds spent in the rasteriser and the colour and depth passes (benchmark).
+  struct Timing {
+    double raster_s = 0, colour_s = 0, depth_s = 0;
+    long frames = 0;
+  };
+  const Timing& timing() const { return timing_; }
 
  private:
   struct Polygon;
@@ -80,6 +86,7 @@ class Renderer {
   std::vector<int8_t> noise_i8_;      // N(0,1) * 32
   std::vector<uint16_t> uniform_u16_;  // uniform 0..65535
   uint64_t rng_state_;
+  Timing timing_;
 };
 
 }  // namespace sim

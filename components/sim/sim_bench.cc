@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "sim/renderer.h"
 #include "sim/simulator.h"
 
 namespace {
@@ -50,6 +51,12 @@ int main(int argc, char** argv) {
   std::printf("  render %.3f  encode %.3f  audio %.3f  physics+rest %.3f  (per simulated s)\n",
               t.render_s / seconds, t.encode_s / seconds, t.audio_s / seconds,
               (cpu - t.render_s - t.encode_s - t.audio_s) / seconds);
+  if (const Renderer* r = sim.renderer()) {
+    const auto& rt = r->timing();
+    std::printf("  per frame: raster %.2f ms, colour pass %.2f ms, depth pass %.2f ms (%ld frames)\n",
+                1e3 * rt.raster_s / rt.frames, 1e3 * rt.colour_s / rt.frames, 1e3 * rt.depth_s / rt.frames,
+                rt.frames);
+  }
   std::printf("  messages: %ld images (%.1f kB avg), %ld audio frames, %ld odom, %ld truth\n", sink.images,
               sink.images ? sink.bytes / 1024.0 / sink.images : 0.0, sink.audio, sink.odom, sink.truth);
   return 0;

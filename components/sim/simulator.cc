@@ -182,6 +182,8 @@ int Simulator::appearance_count() const { return static_cast<int>(impl_->appeara
 
 AudioSim* Simulator::audio() { return impl_->audio.get(); }
 
+const Renderer* Simulator::renderer() const { return impl_->renderer.get(); }
+
 Simulator::View Simulator::RenderView() {
   View view;
   if (!impl_->renderer) return view;

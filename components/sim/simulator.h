@@ -83,6 +83,7 @@ class Simulator {
   void SetRobotPose(const common::Rigid2d& map_from_base);
   int appearance_count() const;
   class AudioSim* audio();
+  const class Renderer* renderer() const;
 
  private:
   struct Impl;
