@@ -40,7 +40,7 @@ bool Crop(const cv::Mat& bgr, const cv::Rect2d& box, const std::string& origin, 
   out->rgb.resize(static_cast<size_t>(rgb.cols) * rgb.rows * 3);
   for (int y = 0; y < rgb.rows; ++y) {
     const uint8_t* row = rgb.ptr<uint8_t>(y);
-    for (int x = 0; x < rgb.cols * 3; ++x) out->rgb[static_cast<size_t>(y) * rgb.cols * 3 + x] = row[x] / 255.0f;
+    for (int x = 0; x < rgb.cols * 3; ++x) out->rgb[static_cast<size_t>(y) * rgb.cols * 3 + x] = row[x];
   }
   out->person_top = (box.y - top) / crop_h;
   out->person_bottom = (box.y + box.height - top) / crop_h;

@@ -132,6 +132,12 @@ void Renderer::SetWorld(const World& world, const std::vector<Appearance>* appea
   polygons_.clear();
   vertices_.clear();
   lights_on_ = world.lights_on;
+  // Colour noise in 8-bit units for this lighting: N(0,1) * sigma * 255.
+  const float sigma = static_cast<float>((lights_on_ ? options_.color_noise : options_.dark_noise) * 255.0);
+  colour_noise_i8_.resize(noise_i8_.size());
+  for (size_t q = 0; q < noise_i8_.size(); ++q) {
+    colour_noise_i8_[q] = static_cast<int8_t>(std::clamp(std::lround(noise_i8_[q] / 32.0f * sigma), -127L, 127L));
+  }
   if (world.ceiling_height_m > 0) {
     background_[0] = 0.08f, background_[1] = 0.08f, background_[2] = 0.09f;
   } else {
@@ -383,9 +389,7 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   // Colour (deferred shading: one polygon lookup per pixel).
   out->rgb.resize(N * 3);
   const float gain = (lights_on_ ? 1.0f : static_cast<float>(options_.dark_gain)) * 255.0f;
-  const float noise = static_cast<float>(lights_on_ ? options_.color_noise : options_.dark_noise) * 255.0f;
-  const float noise_per_unit = noise / 32.0f;  // the int8 noise holds N(0,1) * 32
-  const int8_t* colour_noise = noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
+  const int8_t* colour_noise = colour_noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
   const int8_t* depth_noise = noise_i8_.data() + XorShift(&rng_state_) % kNoiseSlack;
   const uint16_t* uniform = uniform_u16_.data() + XorShift(&rng_state_) % kNoiseSlack;
   std::vector<float> rx(W);
@@ -420,9 +424,11 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
           const float tf = std::min(std::max(tv, 0.0f), 1.0f) * (app.height - 1);
           const int s0 = std::min(static_cast<int>(sf), app.width - 2), t0 = std::min(static_cast<int>(tf), app.height - 2);
           const float fs = sf - s0, ft = tf - t0;
-          const float* r0 = &app.rgb[(static_cast<size_t>(t0) * app.width + s0) * 3];
-          const float* r1 = r0 + static_cast<size_t>(app.width) * 3;
-          const float w00 = (1 - ft) * (1 - fs), w01 = (1 - ft) * fs, w10 = ft * (1 - fs), w11 = ft * fs;
+          const uint8_t* r0 = &app.rgb[(static_cast<size_t>(t0) * app.width + s0) * 3];
+          const uint8_t* r1 = r0 + static_cast<size_t>(app.width) * 3;
+          constexpr float kByte = 1.0f / 255.0f;
+          const float w00 = (1 - ft) * (1 - fs) * kByte, w01 = (1 - ft) * fs * kByte, w10 = ft * (1 - fs) * kByte,
+                      w11 = ft * fs * kByte;
           for (int ch = 0; ch < 3; ++ch) c[ch] = w00 * r0[ch] + w01 * r0[ch + 3] + w10 * r1[ch] + w11 * r1[ch + 3];
         } else {
           c[0] = poly.shade[0];
@@ -436,40 +442,47 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
         c[2] = 0.84f * c[2] + 0.16f * 0.88f;
       }
       uint8_t* dst = &out->rgb[p * 3];
-      const int8_t* nz = colour_noise + p * 3;
       for (int ch = 0; ch < 3; ++ch) {
-        const int v = static_cast<int>(c[ch] * gain + noise_per_unit * nz[ch] + 0.5f);
+        const int v = static_cast<int>(c[ch] * gain + 0.5f);
         dst[ch] = static_cast<uint8_t>(std::min(255, std::max(0, v)));
       }
+    }
+  }
+  // Sensor noise, pre-scaled for the lighting, in one vectorisable saturating pass.
+  {
+    uint8_t* rgb = out->rgb.data();
+    const int8_t* nz = colour_noise;
+    for (size_t q = 0; q < 3 * N; ++q) {
+      const int v = rgb[q] + nz[q];
+      rgb[q] = static_cast<uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
     }
   }
 
   const double t2 = CpuSeconds();
   timing_.colour_s += t2 - t1;
-  // Depth, and which people are in view (body pixels in the IR buffer).
+  // Depth, and which people are in view (body pixels in the IR buffer). The noise is added
+  // in disparity, where the Kinect makes it: d = b f / z + N(0, (k b f)^2) gives
+  // sigma_z = z^2 sigma_d / (b f) = k z^2 to first order; the buffer already holds 1/z, so
+  // the only division per pixel is the quantised disparity's back to depth.
   out->depth_mm.assign(N, 0);
-  out->true_depth_m.resize(N);
+  if (out->fill_true_depth) out->true_depth_m.assign(N, std::numeric_limits<float>::infinity());
   out->person_pixels.assign(people_.size(), 0);
   out->person_box.assign(people_.size(), {W, H, -1, -1});
   const float bf = static_cast<float>(options_.baseline_m * options_.depth_fx_px);
   const float sub = static_cast<float>(options_.disparity_subpixel);
   const float cos_limit = static_cast<float>(std::cos(options_.grazing_limit_deg * M_PI / 180.0));
-  const float zmin = static_cast<float>(options_.min_range_m), zmax = static_cast<float>(options_.max_range_m);
-  const float k = static_cast<float>(options_.depth_noise_k);
+  const float iz_min = static_cast<float>(1.0 / options_.max_range_m), iz_max = static_cast<float>(1.0 / options_.min_range_m);
+  const float d_min = bf * iz_min, d_max = bf * iz_max;
+  const float sigma_d32 = static_cast<float>(options_.depth_noise_k) * bf / 32.0f;  // noise int8 = N(0,1) * 32
   const int drop_threshold = static_cast<int>(std::lround(options_.dropout * 65536.0));
-  const float k32 = k / 32.0f;
-  const float inf = std::numeric_limits<float>::infinity();
   for (int j = 0; j < H; ++j) {
     const float ry = (j - cy) / fy;
     for (int i = 0; i < W; ++i) {
       const size_t p = static_cast<size_t>(j) * W + i;
       const int id = ir_id_[p];
-      if (id < 0) {
-        out->true_depth_m[p] = inf;
-        continue;
-      }
-      const float z = 1.0f / ir_z_[p];
-      out->true_depth_m[p] = z;
+      if (id < 0) continue;
+      const float iz = ir_z_[p];
+      if (out->fill_true_depth) out->true_depth_m[p] = 1.0f / iz;
       const Polygon& poly = polygons_[id];
       if (poly.person >= 0) {
         ++out->person_pixels[poly.person];
@@ -479,18 +492,14 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
         b[2] = std::max(b[2], i);
         b[3] = std::max(b[3], j);
       }
-      if (!depth_fov_[p] || z < zmin || z > zmax) continue;
+      if (!depth_fov_[p] || iz < iz_min || iz > iz_max) continue;
       const float ndotr = poly.n_cam.x() * rx[i] + poly.n_cam.y() * ry + poly.n_cam.z();
       if (std::abs(ndotr) * ray_inv_norm_[p] < cos_limit) continue;
       if (uniform[p] < drop_threshold) continue;
-      float zn = z + k32 * z * z * depth_noise[p];
-      if (sub > 0) {
-        const float disparity = std::floor(bf / zn * sub + 0.5f) / sub;
-        if (disparity <= 0) continue;
-        zn = bf / disparity;
-      }
-      if (zn < zmin || zn > zmax) continue;
-      out->depth_mm[p] = static_cast<uint16_t>(zn * 1000.0f + 0.5f);
+      float disparity = bf * iz + sigma_d32 * depth_noise[p];
+      if (sub > 0) disparity = std::floor(disparity * sub + 0.5f) / sub;
+      if (disparity < d_min || disparity > d_max) continue;
+      out->depth_mm[p] = static_cast<uint16_t>(bf * 1000.0f / disparity + 0.5f);
     }
   }
   if (options_.shadows) {
@@ -502,9 +511,8 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
       float reach = -1e9f;
       for (int i = 0; i < W; ++i) {
         const size_t p = static_cast<size_t>(j) * W + i;
-        const float z = out->true_depth_m[p];
-        if (!std::isfinite(z)) continue;
-        const float x = i + bfc / z;
+        if (ir_id_[p] < 0) continue;
+        const float x = i + bfc * ir_z_[p];
         if (x < reach - 1.0f) out->depth_mm[p] = 0;
         reach = std::max(reach, x);
       }

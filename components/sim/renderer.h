@@ -7,8 +7,8 @@
 // depth and a polygon index per pixel, so overdraw costs little.
 //
 // Depth model (per valid pixel, z along the optical axis):
-//   z_noisy = z + N(0, (k z^2)^2)                        axial noise growing with range^2
-//   d = b f / z_noisy, d_q = round(d * s) / s, z_q = b f / d_q   disparity quantisation (1/s px)
+//   d = b f / z + N(0, (k b f)^2)       noise in disparity: sigma_z = k z^2 (growing with range^2)
+//   d_q = round(d * s) / s, z_q = b f / d_q   disparity quantisation (1/s px)
 // and 0 (invalid) outside [min_range, max_range], outside the depth field of view, beyond the
 // grazing-angle limit, in projector shadows and for a random `dropout` fraction.
 
@@ -33,6 +33,7 @@ struct RenderOutput {
   std::vector<uint16_t> depth_mm;  // width*height, 0 = invalid
   std::vector<uint8_t> rgb;        // width*height*3
   std::vector<float> true_depth_m; // noise-free depth of the IR buffer (inf: nothing), for tests
+  bool fill_true_depth = true;     // false skips true_depth_m
   // Per person (world order): visible body pixels and their bounding box (x0, y0, x1, y1),
   // from the IR buffer (the body, not the photo margin).
   std::vector<int> person_pixels;
@@ -84,6 +85,7 @@ class Renderer {
   // Fast noise: a table of N(0,1) samples read at random offsets.
   std::vector<float> normal_table_;
   std::vector<int8_t> noise_i8_;      // N(0,1) * 32
+  std::vector<int8_t> colour_noise_i8_;  // N(0,1) * colour sigma, 8-bit units
   std::vector<uint16_t> uniform_u16_;  // uniform 0..65535
   uint64_t rng_state_;
   Timing timing_;

@@ -187,6 +187,7 @@ const Renderer* Simulator::renderer() const { return impl_->renderer.get(); }
 Simulator::View Simulator::RenderView() {
   View view;
   if (!impl_->renderer) return view;
+  impl_->render.fill_true_depth = true;
   impl_->renderer->Render(map_from_camera(), &impl_->render);
   view.width = impl_->renderer->intrinsics().width;
   view.height = impl_->renderer->intrinsics().height;
@@ -240,6 +241,7 @@ void Simulator::AdvanceTo(double target_s, SimSink* sink) {
     if (m.renderer && t_ + 1e-9 >= m.next_cam) {
       m.next_cam += 1.0 / o.camera.rate_hz;
       c = ThreadCpuSeconds();
+      m.render.fill_true_depth = false;
       m.renderer->Render(map_from_camera(), &m.render);
       const double c2 = ThreadCpuSeconds();
       timing_.render_s += c2 - c;
