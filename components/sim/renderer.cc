@@ -83,6 +83,10 @@ Renderer::Renderer(const CameraOptions& options, uint64_t seed)
   // 1.2 million normal samples per frame, and still different from frame to frame.
   noise_i8_.resize(3 * n + kNoiseSlack);
   for (int8_t& v : noise_i8_) v = static_cast<int8_t>(std::clamp(std::lround(normal(gen) * 32.0f), -127L, 127L));
+  colour_noise_i8_.resize(noise_i8_.size());  // lit until SetWorld says otherwise
+  for (size_t q = 0; q < noise_i8_.size(); ++q) {
+    colour_noise_i8_[q] = static_cast<int8_t>(std::lround(noise_i8_[q] / 32.0f * options.color_noise * 255.0f));
+  }
   std::uniform_int_distribution<int> uniform16(0, 65535);
   uniform_u16_.resize(n + kNoiseSlack);
   for (uint16_t& v : uniform_u16_) v = static_cast<uint16_t>(uniform16(gen));
@@ -397,14 +401,23 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
   const bool textured = appearances_ && !appearances_->empty();
   // Texture coordinates of a billboard pixel: with the pixel ray r = (rx, ry, 1) and depth z,
   // s = z (S . r) - S . O (and t likewise), S the scaled column axis and O the corner.
+  // Bilinear filtering only where the photo is magnified (nearest is as good at ~1:1).
   struct Tex {
     Eigen::Vector3f s, t;
     float s0, t0;
+    bool bilinear;
   };
   std::vector<Tex> tex(polygons_.size());
   for (size_t k = first_billboard_; k < polygons_.size(); ++k) {
     const Polygon& poly = polygons_[k];
-    tex[k] = {poly.tex_s, poly.tex_t, poly.tex_origin.dot(poly.tex_s), poly.tex_origin.dot(poly.tex_t)};
+    bool bilinear = true;
+    if (textured) {
+      const Appearance& app = (*appearances_)[poly.appearance];
+      const float depth = std::max(0.1f, poly.tex_origin.z());  // the top corner's depth
+      const float texel_m = 1.0f / (poly.tex_t.norm() * app.height);  // metres per texel (rows)
+      bilinear = fy * texel_m / depth > 1.5f;                         // pixels per texel
+    }
+    tex[k] = {poly.tex_s, poly.tex_t, poly.tex_origin.dot(poly.tex_s), poly.tex_origin.dot(poly.tex_t), bilinear};
   }
   for (int j = 0; j < H; ++j) {
     const float ry = (j - cy) / fy;
@@ -422,14 +435,21 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
           const float tv = z * (tx.t.x() * rx[i] + tx.t.y() * ry + tx.t.z()) - tx.t0;
           const float sf = std::min(std::max(su, 0.0f), 1.0f) * (app.width - 1);
           const float tf = std::min(std::max(tv, 0.0f), 1.0f) * (app.height - 1);
-          const int s0 = std::min(static_cast<int>(sf), app.width - 2), t0 = std::min(static_cast<int>(tf), app.height - 2);
-          const float fs = sf - s0, ft = tf - t0;
-          const uint8_t* r0 = &app.rgb[(static_cast<size_t>(t0) * app.width + s0) * 3];
-          const uint8_t* r1 = r0 + static_cast<size_t>(app.width) * 3;
-          constexpr float kByte = 1.0f / 255.0f;
-          const float w00 = (1 - ft) * (1 - fs) * kByte, w01 = (1 - ft) * fs * kByte, w10 = ft * (1 - fs) * kByte,
-                      w11 = ft * fs * kByte;
-          for (int ch = 0; ch < 3; ++ch) c[ch] = w00 * r0[ch] + w01 * r0[ch + 3] + w10 * r1[ch] + w11 * r1[ch + 3];
+          if (!tx.bilinear) {
+            const uint8_t* texel = &app.rgb[(static_cast<size_t>(tf + 0.5f) * app.width + static_cast<size_t>(sf + 0.5f)) * 3];
+            c[0] = texel[0] * (1.0f / 255.0f);
+            c[1] = texel[1] * (1.0f / 255.0f);
+            c[2] = texel[2] * (1.0f / 255.0f);
+          } else {
+            const int s0 = std::min(static_cast<int>(sf), app.width - 2), t0 = std::min(static_cast<int>(tf), app.height - 2);
+            const float fs = sf - s0, ft = tf - t0;
+            const uint8_t* r0 = &app.rgb[(static_cast<size_t>(t0) * app.width + s0) * 3];
+            const uint8_t* r1 = r0 + static_cast<size_t>(app.width) * 3;
+            constexpr float kByte = 1.0f / 255.0f;
+            const float w00 = (1 - ft) * (1 - fs) * kByte, w01 = (1 - ft) * fs * kByte, w10 = ft * (1 - fs) * kByte,
+                        w11 = ft * fs * kByte;
+            for (int ch = 0; ch < 3; ++ch) c[ch] = w00 * r0[ch] + w01 * r0[ch + 3] + w10 * r1[ch] + w11 * r1[ch + 3];
+          }
         } else {
           c[0] = poly.shade[0];
           c[1] = poly.shade[1];
