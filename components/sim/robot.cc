@@ -132,14 +132,18 @@ void Robot::Step(double t_s, double dt) {
 
 void Robot::UpdateOdometry() {
   const OdometryOptions& o = options_.odometry;
-  const double ds = wheel_ds_ * (1 + o.trans_noise * normal_(rng_));
-  const double sigma_rot = o.rot_noise * std::abs(wheel_dtheta_) + o.rot_per_trans_rad_per_m * std::abs(wheel_ds_);
-  const double dtheta = wheel_dtheta_ + sigma_rot * normal_(rng_);
+  // Random-walk errors: variances grow with the distance driven and the angle turned, so the
+  // result does not depend on the ODOM rate.
+  const double var_ds = o.trans_noise * o.trans_noise * std::abs(wheel_ds_);
+  const double var_dtheta = o.rot_noise * o.rot_noise * std::abs(wheel_dtheta_) +
+                            o.rot_per_trans_rad_per_m * o.rot_per_trans_rad_per_m * std::abs(wheel_ds_);
+  const double ds = wheel_ds_ + std::sqrt(var_ds) * normal_(rng_);
+  const double dtheta = wheel_dtheta_ + std::sqrt(var_dtheta) * normal_(rng_);
   // Midpoint integration of the increment.
   odom_from_base_ = odom_from_base_ * common::Rigid2d(0.0, 0.0, dtheta / 2) *
                     common::Rigid2d(ds, 0.0, dtheta / 2);
-  var_xy_ += std::pow(o.trans_noise * wheel_ds_, 2) + std::pow(wheel_ds_, 2) * 1e-6;
-  var_yaw_ += sigma_rot * sigma_rot;
+  var_xy_ += var_ds + 1e-6 * wheel_ds_ * wheel_ds_;
+  var_yaw_ += var_dtheta;
   wheel_ds_ = 0;
   wheel_dtheta_ = 0;
 }

@@ -2,9 +2,10 @@
 // A differential-drive base: follows velocity commands or a scripted waypoint path, stops at
 // obstacles, slips, and reports noisy odometry.
 //
-// Odometry model, per ODOM interval with true motion (ds, dtheta) of the wheels:
-//   ds_odo     = ds (1 + N(0, trans_noise^2))
-//   dtheta_odo = dtheta + N(0, (rot_noise |dtheta| + rot_per_trans |ds|)^2)
+// Odometry model, per ODOM interval with wheel motion (ds, dtheta), a random walk so the
+// error does not depend on the ODOM rate:
+//   ds_odo     = ds + N(0, trans_noise^2 |ds|)                       (std trans_noise after 1 m)
+//   dtheta_odo = dtheta + N(0, rot_noise^2 |dtheta| + rot_per_trans^2 |ds|)
 // Slip: the base really moves (1 - s) of what the wheels turn, s ~ N(slip, slip_noise^2)
 // clipped to [0, 1]; odometry sees the wheels, not the slip.
 

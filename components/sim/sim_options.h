@@ -135,17 +135,20 @@ struct AudioOptions {
 
 struct OdometryOptions {
   double rate_hz = 20.0;
-  double trans_noise = 0.02;      // sigma of the distance error, fraction of distance
-  double rot_noise = 0.02;        // sigma of the heading error, fraction of the turn
-  double rot_per_trans_rad_per_m = 0.005;  // heading sigma per metre driven
+  // Random walks: the error std after driving d metres is trans_noise * sqrt(d / 1 m) metres
+  // (a fraction trans_noise of the first metre); likewise per radian turned, and heading
+  // drift per metre driven.
+  double trans_noise = 0.02;
+  double rot_noise = 0.02;
+  double rot_per_trans_rad_per_m = 0.005;
   double slip = 0.0;              // mean fraction of commanded motion lost to slip (unseen by odometry)
   double slip_noise = 0.0;        // sigma of that fraction
   template <class V>
   void Visit(V& v) {
     v("rate_hz", rate_hz, "ODOM rate");
-    v("trans_noise", trans_noise, "distance error sigma as a fraction of distance");
-    v("rot_noise", rot_noise, "heading error sigma as a fraction of the turn");
-    v("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m, "heading error sigma per metre");
+    v("trans_noise", trans_noise, "distance error: std after 1 m as a fraction (grows with sqrt(distance))");
+    v("rot_noise", rot_noise, "heading error: std after turning 1 rad as a fraction (grows with sqrt(angle))");
+    v("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m, "heading drift std after driving 1 m (rad)");
     v("slip", slip, "mean fraction of motion lost to wheel slip");
     v("slip_noise", slip_noise, "sigma of the slip fraction");
   }

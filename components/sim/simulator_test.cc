@@ -201,6 +201,43 @@ TEST(SimulatorTest, FollowsVelocityCommandsAndStopsWhenTheyStop) {
   EXPECT_FALSE(odom.utimes.empty());
 }
 
+// Translational noise: the odometry's distance error after d metres has std
+// trans_noise * sqrt(d), whatever the ODOM rate.
+TEST(SimulatorTest, OdometryNoiseGrowsAsConfigured) {
+  for (double rate : {10.0, 50.0}) {
+    double sum2 = 0;
+    const int runs = 60;
+    for (int seed = 1; seed <= runs; ++seed) {
+      SimOptions o = Options("open_area_sound.yaml");
+      o.drive = "cmd_vel";
+      o.camera.enabled = false;
+      o.audio.enabled = false;
+      o.seed = seed;
+      o.odometry.rate_hz = rate;
+      o.odometry.trans_noise = 0.05;
+      o.odometry.rot_noise = 0;
+      o.odometry.rot_per_trans_rad_per_m = 0;
+      Simulator sim(LoadSetup(o, ""));
+      struct LastOdom : SimSink {
+        sarmap::odometry_t last;
+        void Publish(const std::string&, const sarmap::odometry_t& m) override { last = m; }
+        void Publish(const std::string&, const sarmap::image_t&) override {}
+        void Publish(const std::string&, const sarmap::audio_frame_t&) override {}
+        void Publish(const std::string&, const sarmap::sim_truth_t&) override {}
+      } sink;
+      for (int k = 1; k <= 40; ++k) {  // 0.5 m/s for 4 s: 2 m
+        sim.SetVelocityCommand(0.5, 0.0);
+        sim.AdvanceTo(0.1 * k, &sink);
+      }
+      const double error = sink.last.position_m[0] - sim.map_from_base().translation().x();
+      sum2 += error * error;
+    }
+    const double std_dev = std::sqrt(sum2 / runs), expected = 0.05 * std::sqrt(2.0);
+    std::printf("ODOM %.0f Hz: distance error std after 2 m %.4f m (model %.4f)\n", rate, std_dev, expected);
+    EXPECT_NEAR(std_dev, expected, 0.3 * expected);
+  }
+}
+
 TEST(SimulatorTest, OdometryNoiseAndSlipMakeOdometryDrift) {
   SimOptions o = Options("open_area_sound.yaml");
   o.camera.enabled = false;
