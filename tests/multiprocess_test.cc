@@ -251,7 +251,7 @@ TEST_F(MultiProcessTest, SaneInstancesOfEveryTypeRoundTrip) {
 }
 
 TEST_F(MultiProcessTest, DepthAndRgbAt30HzFor10sArriveWithZeroLoss) {
-  Process sink({"sarmap-test-peer", "sink", "--seconds", "16"}, dir_ + "/sink.log");
+  Process sink({"sarmap-test-peer", "sink", "--seconds", "30"}, dir_ + "/sink.log");
   for (int i = 0; i < 200 && sink.Output().find("ready") == std::string::npos; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }

@@ -102,8 +102,18 @@ int Sink(double seconds, const std::string& url) {
   }, 300);
   printf("ready\n");
   fflush(stdout);
+  // Ends after `seconds`, or 1.5 s after the stream stopped.
   const double end = sarmap::common::SteadySeconds() + seconds;
+  double last_message_s = sarmap::common::SteadySeconds();
+  int64_t last_total = 0;
   while (sarmap::common::SteadySeconds() < end && node.SpinOnce(0.1)) {
+    const int64_t total = depth_count + rgb_count + decode_errors;
+    if (total != last_total) {
+      last_total = total;
+      last_message_s = sarmap::common::SteadySeconds();
+    } else if (total > 0 && sarmap::common::SteadySeconds() - last_message_s > 1.5) {
+      break;
+    }
   }
   const auto& stats = node.stats();
   printf("depth %lld rgb %lld depth_gaps %lld rgb_gaps %lld decode_errors %lld dropped %lld\n",
