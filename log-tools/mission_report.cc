@@ -14,7 +14,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "common/compression.h"
+#include "common/image_messages.h"
 #include "log-tools/lcm_log_reader.h"
 
 namespace sarmap {
@@ -181,11 +181,8 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     grow(m.origin_x_m + 1, m.origin_y_m + 1);
     grow(m.origin_x_m + m.width * m.resolution_m - 1, m.origin_y_m + m.height * m.resolution_m - 1);
     std::string error;
-    if (m.compression == sarmap::occupancy_grid_t::COMPRESSION_ZSTD) {
-      common::DecompressBytes(m.data.data(), m.data.size(), static_cast<size_t>(m.width) * m.height, &cells, &error);
-    } else {
-      cells = m.data;
-    }
+    std::vector<int8_t> decoded;
+    if (common::DecodeOccupancyGrid(m, &decoded, &error)) cells.assign(decoded.begin(), decoded.end());
   }
   for (const auto& p : data.trail) grow(p.first, p.second);
   if (data.people) for (const auto& p : data.people->people) grow(p.position_m[0], p.position_m[1]);

@@ -1,8 +1,8 @@
 // sarmap-explore: SCAN, MAP, POSE and TELEOP in; CMD_VEL out, one command per scan.
 #include <cstdio>
 
-#include "common/args.h"
-#include "common/compression.h"
+#include "common/node_main.h"
+#include "common/image_messages.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
 #include "common/robot_config.h"
@@ -40,15 +40,9 @@ int main(int argc, char** argv) {
         "(with an emergency stop that holds until released).\n"
         "In: SCAN, MAP, POSE, TELEOP.  Out: CMD_VEL.");
     common::NodeArgs args;
-    parser.AddNodeOptions(&args, "config/explore.yaml");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options =
-        common::LoadOptions<NodeOptions>(common::ResolveConfigPath(args.config_path), args.overrides);
-    if (args.print_config) {
-      fputs(common::OptionsToYaml(options, true).c_str(), stdout);
-      return 0;
-    }
-    common::SetLogLevel(common::ParseLogLevel(args.log_level));
+    const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/explore.yaml");
+    if (!parsed) return 0;
+    const NodeOptions& options = *parsed;
     common::Node node("sarmap-explore", args.lcm_url);
     explore::ExploreController controller(options.explore);
     auto publisher = node.Advertise<velocity_command_t>(options.command_channel);
@@ -77,18 +71,11 @@ int main(int argc, char** argv) {
       grid.resolution_m = m.resolution_m;
       grid.origin_x_m = m.origin_x_m;
       grid.origin_y_m = m.origin_y_m;
-      const size_t n = static_cast<size_t>(m.width) * m.height;
-      std::vector<uint8_t> bytes;
       std::string error;
-      if (m.compression == occupancy_grid_t::COMPRESSION_ZSTD) {
-        if (!common::DecompressBytes(m.data.data(), m.data.size(), n, &bytes, &error)) {
-          SARMAP_LOG(WARN) << "bad MAP: " << error;
-          return;
-        }
-      } else {
-        bytes = m.data;
+      if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
+        SARMAP_LOG(WARN) << "bad MAP: " << error;
+        return;
       }
-      grid.cells.assign(bytes.begin(), bytes.end());
       controller.OnMap(std::move(grid));
     }, 1);
     node.Subscribe<laser_scan_t>(options.scan_channel, [&](const laser_scan_t& m, const common::ReceiveInfo&) {

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <regex>
 
-#include "common/args.h"
+#include "common/node_main.h"
 #include "common/channels.h"
 #include "common/node.h"
 #include "common/options.h"
@@ -59,14 +59,10 @@ int main(int argc, char** argv) {
         "prints rates, sequence gaps and malformed-message counts. NODE_STATUS carries the\n"
         "same counts for other tools.");
     sarmap::common::NodeArgs node_args;
-    parser.AddNodeOptions(&node_args);
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options = sarmap::common::LoadOptions<MonitorOptions>(node_args.config_path, node_args.overrides);
-    if (node_args.print_config) {
-      fputs(sarmap::common::OptionsToYaml(options, true).c_str(), stdout);
-      return 0;
-    }
-    sarmap::common::SetLogLevel(sarmap::common::ParseLogLevel(node_args.log_level));
+    const auto parsed =
+        sarmap::common::ParseNodeOptions<MonitorOptions>(&parser, &node_args, argc, argv, "");
+    if (!parsed) return 0;
+    const MonitorOptions& options = *parsed;
     sarmap::common::Node node("sarmap-monitor", node_args.lcm_url);
     sarmap::monitor::ChannelMonitor monitor(options.window_s);
     const std::regex select(options.channels);

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <functional>
 
-#include "common/args.h"
+#include "common/node_main.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
 #include "common/pose_history.h"
@@ -88,15 +88,9 @@ int main(int argc, char** argv) {
         "confidence that grows with evidence and decays without it.\n"
         "In: PEOPLE_VISUAL, PEOPLE_AUDIO, SOUND_MAP, POSE.  Out: PEOPLE_MAP.");
     common::NodeArgs args;
-    parser.AddNodeOptions(&args, "config/people_map.yaml");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options =
-        common::LoadOptions<NodeOptions>(common::ResolveConfigPath(args.config_path), args.overrides);
-    if (args.print_config) {
-      fputs(common::OptionsToYaml(options, true).c_str(), stdout);
-      return 0;
-    }
-    common::SetLogLevel(common::ParseLogLevel(args.log_level));
+    const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/people_map.yaml");
+    if (!parsed) return 0;
+    const NodeOptions& options = *parsed;
     const common::RobotOptions robot = common::LoadRobot(options.robot_config);
     const common::Rigid3d base_from_camera = robot.base_from_camera.ToRigid3d();
     const common::Rigid3d base_from_mic = robot.base_from_mic_array.ToRigid3d();

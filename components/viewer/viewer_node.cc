@@ -2,8 +2,8 @@
 // sound sources, camera and launcher status; serves them over HTTP (read-only).
 #include <cstdio>
 
-#include "common/args.h"
-#include "common/compression.h"
+#include "common/node_main.h"
+#include "common/image_messages.h"
 #include "common/image_codec.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
@@ -54,15 +54,9 @@ int main(int argc, char** argv) {
         "process status from the launcher. Read-only.\n"
         "In: MAP, POSE, SCAN, PEOPLE_MAP, SOUND_MAP, RGB, PM_INFO, NODE_STATUS.  Out: HTTP.");
     common::NodeArgs args;
-    parser.AddNodeOptions(&args, "config/viewer.yaml");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options =
-        common::LoadOptions<NodeOptions>(common::ResolveConfigPath(args.config_path), args.overrides);
-    if (args.print_config) {
-      fputs(common::OptionsToYaml(options, true).c_str(), stdout);
-      return 0;
-    }
-    common::SetLogLevel(common::ParseLogLevel(args.log_level));
+    const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/viewer.yaml");
+    if (!parsed) return 0;
+    const NodeOptions& options = *parsed;
     viewer::ServerOptions server_options;
     server_options.bind_address = options.bind_address;
     server_options.port = options.port;
@@ -79,18 +73,11 @@ int main(int argc, char** argv) {
       grid.resolution_m = m.resolution_m;
       grid.origin_x_m = m.origin_x_m;
       grid.origin_y_m = m.origin_y_m;
-      std::vector<uint8_t> bytes;
       std::string error;
-      const size_t n = static_cast<size_t>(m.width) * m.height;
-      if (m.compression == occupancy_grid_t::COMPRESSION_ZSTD) {
-        if (!common::DecompressBytes(m.data.data(), m.data.size(), n, &bytes, &error)) {
-          SARMAP_LOG(WARN) << "bad MAP: " << error;
-          return;
-        }
-      } else {
-        bytes = m.data;
+      if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
+        SARMAP_LOG(WARN) << "bad MAP: " << error;
+        return;
       }
-      grid.cells.assign(bytes.begin(), bytes.end());
       state.SetMap(std::move(grid));
     }, 1);
     node.Subscribe<pose_t>("POSE", [&](const pose_t& m, const common::ReceiveInfo&) {
