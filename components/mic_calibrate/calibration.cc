@@ -197,6 +197,12 @@ Problem Build(const TdoaData& data, const SolverOptions& o, int gx, int gp, Stat
       problem.SetManifold(&state->mics[3 * ip], new ceres::SubsetManifold(3, {2}));
     }
   }
+  if (!linear && D == 3 && o.sources_in_gauge_plane) {
+    for (int k = 0; k < K; ++k) {
+      state->sources[3 * k + 2] = 0;
+      problem.SetManifold(&state->sources[3 * k], new ceres::SubsetManifold(3, {2}));
+    }
+  }
   if (!o.synchronous && !o.estimate_drift) {
     for (int n = 1; n < N; ++n) {
       if (problem.HasParameterBlock(&state->clocks[2 * n])) {
@@ -285,19 +291,6 @@ void CheckObservability(const TdoaData& data, const SolverOptions& o, std::vecto
     warnings->push_back(std::to_string(missing) + " of " + std::to_string(K * (N - 1)) +
                         " TDOAs are missing (NaN/inf) and were left out");
   }
-  const int clock_params = o.synchronous ? 0 : (o.estimate_drift ? 2 : 1);
-  const int min_per_mic = std::max(clock_params + (linear ? 0 : D), 1) + 1;
-  for (int n = 1; n < N; ++n) {
-    if (finite_per_mic[n] < min_per_mic) {
-      why << MicName(n) << " has " << finite_per_mic[n] << " finite TDOAs; at least "
-          << min_per_mic << " are needed to determine its "
-          << (linear ? "" : "position") << (linear || o.synchronous ? "" : ", ")
-          << (o.synchronous ? "" : (o.estimate_drift ? "start offset and drift" : "start offset"))
-          << " (NaN TDOAs carry no information). ";
-    }
-  }
-  if (!why.str().empty()) throw UnobservableError(why.str());
-
   if (!linear) {
     if (N < D + 1) {
       throw UnobservableError("a " + std::to_string(D) + "D array needs at least " +
@@ -316,14 +309,15 @@ void CheckObservability(const TdoaData& data, const SolverOptions& o, std::vecto
           std::to_string(D + 2) + " microphones)");
     }
   }
+  const int clock_params = o.synchronous ? 0 : (o.estimate_drift ? 2 : 1);
   // Counting: unknowns vs independent measurements (the prior adds no absolute information).
   const int gauge = linear ? 0 : (D == 2 ? 3 : 6);
-  const int mic_unknowns = (N - 1) * ((linear ? 0 : D) + clock_params) - gauge + (linear ? 0 : 0);
+  const int mic_unknowns = (N - 1) * ((linear ? 0 : D) + clock_params) - gauge;
   const int src_unknowns = K * (linear ? 1 : D);
   const int num_obs = K * (N - 1) - missing;
   if (num_obs <= mic_unknowns + src_unknowns) {
     const int per_emission = (N - 1) - (linear ? 1 : D);
-    const int k_min = per_emission > 0 ? mic_unknowns / per_emission + 2 : -1;
+    const int k_min = per_emission > 0 ? mic_unknowns / per_emission + 1 : -1;
     std::ostringstream s;
     s << "too few emissions: " << K << " emissions give " << num_obs << " TDOAs for "
       << mic_unknowns << " array unknowns + " << src_unknowns
@@ -331,6 +325,18 @@ void CheckObservability(const TdoaData& data, const SolverOptions& o, std::vecto
     if (k_min > 0) s << " (need at least " << k_min << " source positions)";
     throw UnobservableError(s.str());
   }
+  const int min_per_mic = std::max(clock_params + (linear ? 0 : D), 1) + 1;
+  for (int n = 1; n < N; ++n) {
+    if (finite_per_mic[n] < min_per_mic) {
+      why << MicName(n) << " has " << finite_per_mic[n] << " finite TDOAs; at least "
+          << min_per_mic << " are needed to determine its "
+          << (linear ? "" : "position") << (linear || o.synchronous ? "" : ", ")
+          << (o.synchronous ? "" : (o.estimate_drift ? "start offset and drift" : "start offset"))
+          << " (NaN TDOAs carry no information). ";
+    }
+  }
+  if (!why.str().empty()) throw UnobservableError(why.str());
+
   if (!o.synchronous && o.estimate_drift) {
     double tmin = 1e300, tmax = -1e300;
     for (double t : data.times_s) {
@@ -442,18 +448,19 @@ void ChooseGauge(int num_mics, int dim, const std::vector<Eigen::Vector3d>& nomi
     return;
   }
   const Eigen::Vector3d o = nominal[0];
+  // The lowest-numbered mic scoring at least half the best (the thesis' habit of using low
+  // mic numbers), so that well-separated mics define the axes.
   auto best = [&](auto score, std::initializer_list<int> exclude) {
-    int arg = 0;
-    double s_best = -1;
+    double s_best = 0;
     for (int n = 1; n < N; ++n) {
       if (std::find(exclude.begin(), exclude.end(), n + 1) != exclude.end()) continue;
-      const double s = score(nominal[n] - o);
-      if (s > s_best + 1e-9) {
-        s_best = s;
-        arg = n + 1;
-      }
+      s_best = std::max(s_best, score(nominal[n] - o));
     }
-    return arg;
+    for (int n = 1; n < N; ++n) {
+      if (std::find(exclude.begin(), exclude.end(), n + 1) != exclude.end()) continue;
+      if (score(nominal[n] - o) >= 0.5 * s_best && s_best > 0) return n + 1;
+    }
+    return 0;
   };
   Eigen::Vector3d proj(1, 1, dim == 3 ? 1 : 0);
   if (*x_mic <= 0) *x_mic = best([&](const Eigen::Vector3d& p) { return p.cwiseProduct(proj).norm(); }, {});
@@ -616,7 +623,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
               o.num_starts, ss.final_cost, ss.iterations, ss.normalised_rms,
               ss.converged ? "" : " (not converged)");
     }
-    const bool agrees = std::abs(summary.final_cost - best_cost) <=
+    const bool agrees = std::isfinite(best_cost) && std::abs(summary.final_cost - best_cost) <=
                         o.agree_tolerance * std::max(best_cost, 1e-12);
     if (std::isfinite(summary.final_cost) && summary.final_cost < best_cost) {
       best_cost = summary.final_cost;

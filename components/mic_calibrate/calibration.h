@@ -47,6 +47,9 @@ struct SolverOptions {
   double random_walk_sigma_m = 0.333;       // planar/3d: source random-walk prior
   double random_walk_sigma_rad = 50.0 * M_PI / 180.0;  // linear: source-angle random walk
   double linear_spacing_m = 0.05;   // linear: distance between adjacent microphones
+  // 3d: the source moved in the plane z = 0 of the gauge frame (the plane of mic 1, the x mic
+  // and the plane mic), e.g. carried around a table the array partly stands on.
+  bool sources_in_gauge_plane = false;
   // Gauge microphones, 1-based as in the thesis (0 = choose automatically).
   int gauge_x_mic = 0;
   int gauge_plane_mic = 0;
@@ -54,7 +57,7 @@ struct SolverOptions {
   // Multi-start random initialisation.
   int num_starts = 6;
   double init_extent_m = 1.5;       // mics and sources drawn uniformly in [-e, e]^D
-  uint64_t seed = 1;
+  int64_t seed = 1;
   // Stop trying new starts once two starts have reached the same lowest cost (relative
   // difference below this): that minimum has been found twice from random points.
   double agree_tolerance = 1e-3;
@@ -79,6 +82,8 @@ struct SolverOptions {
     v("random_walk_sigma_m", random_walk_sigma_m, "source random-walk prior std (planar/3d)");
     v("random_walk_sigma_rad", random_walk_sigma_rad, "source-angle random-walk std (linear)");
     v("linear_spacing_m", linear_spacing_m, "linear: known adjacent-microphone spacing");
+    v("sources_in_gauge_plane", sources_in_gauge_plane,
+      "3d: the source moved in the z = 0 plane of mic 1, the x mic and the plane mic");
     v("gauge_x_mic", gauge_x_mic, "1-based mic on +x (0: automatic)");
     v("gauge_plane_mic", gauge_plane_mic, "1-based mic with y > 0 (3d: and z = 0) (0: automatic)");
     v("gauge_z_mic", gauge_z_mic, "3d: 1-based mic with z > 0 (0: automatic)");

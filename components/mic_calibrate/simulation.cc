@@ -157,7 +157,7 @@ MonteCarloSummary RunMonteCarlo(const SimScenario& sc, int runs, uint64_t first_
   for (int i = 0; i < runs; ++i) {
     const SimData sim = Simulate(sc, first_seed + i);
     SolverOptions o = SolverOptionsFor(sc, sim);
-    o.seed = 1000 + first_seed + i;
+    o.seed = static_cast<int64_t>(1000 + first_seed + i);
     if (configure) configure(&o);
     ++m.runs;
     try {

@@ -192,7 +192,7 @@ TdoaData ExtractTdoas(const Recording& rec, const ExtractionOptions& o, Extracti
         if (std::abs(den) > 1e-30) delta = std::clamp(0.5 * (ym - yp) / den, -0.5, 0.5);
       }
       const double lag = best - L + delta;  // samples of channel n after the reference
-      row[n - 1] = (lag - frac_shift) / fs;
+      row[n - 1] = (lag + frac_shift) / fs;
     }
     data.times_s.push_back(r0 / fs + pre / fs);
     rows.push_back(row);
