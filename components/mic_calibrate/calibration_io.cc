@@ -157,6 +157,25 @@ void WriteTdoaCsv(const std::string& path, const TdoaData& d) {
   }
 }
 
+TdoaData SelectMics(const TdoaData& d, const std::vector<int>& mics) {
+  if (mics.size() < 2) throw std::invalid_argument("select at least 2 microphones");
+  for (size_t i = 0; i < mics.size(); ++i) {
+    if (mics[i] < 1 || mics[i] > d.num_mics) {
+      throw std::invalid_argument("microphone " + std::to_string(mics[i]) + " not in 1.." +
+                                  std::to_string(d.num_mics));
+    }
+    for (size_t j = 0; j < i; ++j)
+      if (mics[j] == mics[i]) throw std::invalid_argument("microphone listed twice");
+  }
+  auto z = [&](int k, int mic) { return mic == 1 ? 0.0 : d.tdoa_s(k, mic - 2); };
+  TdoaData out = d;
+  out.num_mics = static_cast<int>(mics.size());
+  out.tdoa_s.resize(d.num_emissions(), out.num_mics - 1);
+  for (int k = 0; k < d.num_emissions(); ++k)
+    for (int j = 1; j < out.num_mics; ++j) out.tdoa_s(k, j - 1) = z(k, mics[j]) - z(k, mics[0]);
+  return out;
+}
+
 MicsCsv ReadMicsCsv(const std::string& path) {
   const Table t = ReadTable(path);
   MicsCsv m;
@@ -215,7 +234,7 @@ common::MicArrayOptions ToArrayOptions(const CalibrationResult& r, const SolverO
   const int N = static_cast<int>(r.mic_positions_m.size());
   for (int n = 0; n < N; ++n) {
     a.channel_map.push_back(n);
-    for (int i = 0; i < 3; ++i) a.mic_positions_m.push_back(r.mic_positions_m[n][i]);
+    for (int i = 0; i < 3; ++i) a.mic_positions_m.push_back(r.mic_positions_m[n][i] + 0.0);  // no -0
     a.mic_position_std_m.push_back(
         r.has_covariance ? std::sqrt(std::max(0.0, r.mic_position_cov[n].trace())) : 0.0);
   }

@@ -25,6 +25,10 @@ struct TdoaCsv {
 TdoaCsv ReadTdoaCsv(const std::string& path, double step_s);
 void WriteTdoaCsv(const std::string& path, const TdoaData& data);
 
+// Keeps the microphones `mics` (1-based, in that order; the first becomes the reference):
+// z'_j = z_{mics[j]} - z_{mics[0]} with z_1 = 0. Throws on a bad list.
+TdoaData SelectMics(const TdoaData& data, const std::vector<int>& mics);
+
 // Mic CSV: columns mic, gt_x, gt_y, gt_z [, init_x, init_y, init_z, init_offset, init_drift].
 struct MicsCsv {
   std::vector<Eigen::Vector3d> truth_m;

@@ -2,7 +2,9 @@
 // from a recording of a sound source moving around it (Su 2017 ch. 3) and writes the array
 // YAML that LoadMicArray() / sarmap-sound-localisation read, plus a report.
 #include <cstdio>
+#include <algorithm>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,7 @@ int Run(int argc, char** argv) {
   std::string input, input_type = "auto", output, report, nominal_path, mics_csv, motion_csv,
               write_tdoa, config_path;
   std::vector<std::string> overrides;
+  std::string mic_list;
   bool print_config = false, init_from_nominal = false, quiet = false;
   common::ArgParser args("sarmap-mic-calibrate",
                          "Calibrate a microphone array (positions, start offsets, clock drift) "
@@ -68,6 +71,8 @@ int Run(int argc, char** argv) {
                "nominal/measured positions to compare with: array YAML or mic CSV (gt_x,...)");
   args.AddSwitch("--init-from-nominal", &init_from_nominal,
                  "first start from the nominal positions (mic CSV: its init_* columns)");
+  args.AddFlag("--mics", &mic_list,
+               "use only these microphones, e.g. 1,2,3,4 (the first is the reference)");
   args.AddFlag("--motion-csv", &motion_csv, "source motion prior edges (k_from,k_to,dx,..,info_x,..)");
   args.AddFlag("--write-tdoa", &write_tdoa, "also write the extracted TDOAs as CSV");
   args.AddFlag("--config", &config_path, "options YAML (config/mic_calibrate.yaml)");
@@ -140,6 +145,25 @@ int Run(int argc, char** argv) {
     progress("TDOAs written to " + write_tdoa);
   }
   if (!motion_csv.empty()) ReadMotionCsv(motion_csv, &data);
+  std::vector<int> selected;
+  if (!mic_list.empty()) {
+    std::stringstream ss(mic_list);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      try {
+        selected.push_back(std::stoi(item));
+      } catch (const std::exception&) {
+        throw common::ArgError("--mics: not a number: '" + item + "'");
+      }
+    }
+    try {
+      data = SelectMics(data, selected);
+    } catch (const std::invalid_argument& e) {
+      throw common::ArgError(std::string("--mics: ") + e.what());
+    }
+    progress("using microphones " + mic_list + " (mic " + std::to_string(selected[0]) +
+             " is the reference)");
+  }
 
   // Nominal positions (comparison, gauge choice, optional initial guess).
   std::vector<Eigen::Vector3d> nominal;
@@ -154,6 +178,17 @@ int Run(int argc, char** argv) {
     } else {
       nominal = PositionsOf(common::LoadMicArray(nominal_path));
       guess.mic_positions_m = nominal;
+    }
+    if (!selected.empty() && static_cast<int>(nominal.size()) >= *std::max_element(selected.begin(), selected.end())) {
+      std::vector<Eigen::Vector3d> n2, g2;
+      for (int m : selected) {
+        n2.push_back(nominal[m - 1]);
+        if (static_cast<int>(guess.mic_positions_m.size()) >= m) g2.push_back(guess.mic_positions_m[m - 1]);
+      }
+      nominal = n2;
+      guess.mic_positions_m = g2;
+      guess.start_offsets_s.clear();  // re-referenced: the file's offsets no longer apply
+      guess.clock_drift.clear();
     }
     if (static_cast<int>(nominal.size()) != data.num_mics) {
       throw common::ArgError("--nominal has " + std::to_string(nominal.size()) +
