@@ -44,6 +44,44 @@ struct TdoaResidual {
   double z_s, t_s, inv_sigma, inv_c;
 };
 
+// The same edge with the analytic Jacobians of eqs. 3.21-3.23 / 3.33-3.36 (in our units):
+//   dr/dm = (m - s) / (|m - s| c sigma),  dr/ds = (-(m - s)/|m - s| - s/|s|) / (c sigma),
+//   dr/dtau = 1 / (1000 sigma),  dr/ddelta = t / (10^6 sigma).
+template <int D>
+class TdoaCost : public ceres::SizedCostFunction<1, D, 2, D> {
+ public:
+  TdoaCost(double z_s, double t_s, double sigma_s, double c)
+      : z_s_(z_s), t_s_(t_s), inv_sigma_(1.0 / sigma_s), inv_c_(1.0 / c) {}
+  bool Evaluate(double const* const* p, double* residual, double** jac) const override {
+    const double* mic = p[0];
+    const double* clock = p[1];
+    const double* src = p[2];
+    double d_mic2 = 1e-12, d_ref2 = 1e-12;
+    for (int i = 0; i < D; ++i) {
+      d_mic2 += (mic[i] - src[i]) * (mic[i] - src[i]);
+      d_ref2 += src[i] * src[i];
+    }
+    const double d_mic = std::sqrt(d_mic2), d_ref = std::sqrt(d_ref2);
+    residual[0] = ((d_mic - d_ref) * inv_c_ + clock[0] / kMsPerS + t_s_ * clock[1] / kPpm - z_s_) *
+                  inv_sigma_;
+    if (jac) {
+      const double g = inv_c_ * inv_sigma_;
+      if (jac[0])
+        for (int i = 0; i < D; ++i) jac[0][i] = g * (mic[i] - src[i]) / d_mic;
+      if (jac[1]) {
+        jac[1][0] = inv_sigma_ / kMsPerS;
+        jac[1][1] = inv_sigma_ * t_s_ / kPpm;
+      }
+      if (jac[2])
+        for (int i = 0; i < D; ++i) jac[2][i] = g * (-(mic[i] - src[i]) / d_mic - src[i] / d_ref);
+    }
+    return true;
+  }
+
+ private:
+  double z_s_, t_s_, inv_sigma_, inv_c_;
+};
+
 // Synchronous array: no clock block.
 template <int D>
 struct SyncTdoaResidual {
@@ -150,11 +188,9 @@ Problem Build(const TdoaData& data, const SolverOptions& o, int gx, int gp, Stat
         problem.AddResidualBlock(cost, make_loss(), mic, src);
       } else {
         if (D == 2) {
-          cost = new ceres::AutoDiffCostFunction<TdoaResidual<2>, 1, 2, 2, 2>(
-              new TdoaResidual<2>(z, t, sigma, o.speed_of_sound_mps));
+          cost = new TdoaCost<2>(z, t, sigma, o.speed_of_sound_mps);
         } else {
-          cost = new ceres::AutoDiffCostFunction<TdoaResidual<3>, 1, 3, 2, 3>(
-              new TdoaResidual<3>(z, t, sigma, o.speed_of_sound_mps));
+          cost = new TdoaCost<3>(z, t, sigma, o.speed_of_sound_mps);
         }
         problem.AddResidualBlock(cost, make_loss(), mic, clock, src);
       }
@@ -780,6 +816,40 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
   }
   return result;
 }
+
+namespace internal_testing {
+
+template <int D>
+bool CheckTdoaJacobianD() {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  TdoaCost<D> analytic(0.012, 37.5, 3e-4, 340);
+  ceres::AutoDiffCostFunction<TdoaResidual<D>, 1, D, 2, D> autodiff(
+      new TdoaResidual<D>(0.012, 37.5, 3e-4, 340));
+  for (int trial = 0; trial < 20; ++trial) {
+    double mic[3], clock[2] = {u(rng) * 50, u(rng) * 60}, src[3];
+    for (int i = 0; i < 3; ++i) {
+      mic[i] = u(rng);
+      src[i] = u(rng);
+    }
+    const double* params[3] = {mic, clock, src};
+    double ra, rb, ja[3][3], jb[3][3];
+    double* jpa[3] = {ja[0], ja[1], ja[2]};
+    double* jpb[3] = {jb[0], jb[1], jb[2]};
+    analytic.Evaluate(params, &ra, jpa);
+    autodiff.Evaluate(params, &rb, jpb);
+    if (std::abs(ra - rb) > 1e-9 * std::max(1.0, std::abs(ra))) return false;
+    const int sizes[3] = {D, 2, D};
+    for (int b = 0; b < 3; ++b)
+      for (int i = 0; i < sizes[b]; ++i)
+        if (std::abs(ja[b][i] - jb[b][i]) > 1e-9 * std::max(1.0, std::abs(jb[b][i]))) return false;
+  }
+  return true;
+}
+
+bool CheckTdoaJacobian(int dim) { return dim == 3 ? CheckTdoaJacobianD<3>() : CheckTdoaJacobianD<2>(); }
+
+}  // namespace internal_testing
 
 }  // namespace mic_calibrate
 }  // namespace sarmap

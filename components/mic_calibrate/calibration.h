@@ -193,5 +193,10 @@ std::vector<Eigen::Vector3d> ToGaugeFrame(const std::vector<Eigen::Vector3d>& po
 void ChooseGauge(int num_mics, int dim, const std::vector<Eigen::Vector3d>& nominal, int* x_mic,
                  int* plane_mic, int* z_mic);
 
+namespace internal_testing {
+// Compares the analytic TDOA cost with the autodiff functor at random points (dim 2 or 3).
+bool CheckTdoaJacobian(int dim);
+}  // namespace internal_testing
+
 }  // namespace mic_calibrate
 }  // namespace sarmap

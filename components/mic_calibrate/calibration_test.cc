@@ -279,3 +279,15 @@ TEST(Calibration, ArrayYamlLoadsWithLoadMicArray) {
 }  // namespace
 }  // namespace mic_calibrate
 }  // namespace sarmap
+
+namespace sarmap {
+namespace mic_calibrate {
+namespace {
+// The analytic TDOA Jacobian (used in the solve) must match the autodiff'd functor.
+TEST(Calibration, AnalyticJacobianMatchesAutodiff) {
+  EXPECT_TRUE(internal_testing::CheckTdoaJacobian(2));
+  EXPECT_TRUE(internal_testing::CheckTdoaJacobian(3));
+}
+}  // namespace
+}  // namespace mic_calibrate
+}  // namespace sarmap
