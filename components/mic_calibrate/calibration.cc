@@ -610,6 +610,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
 
   CalibrationResult result;
   result.dim = linear ? 1 : D;
+  CheckObservability(data, o, &result.warnings);
   int gx = o.gauge_x_mic, gp = o.gauge_plane_mic, gz = o.gauge_z_mic;
   ChooseGauge(N, D, {}, &gx, &gp, &gz);
   if (!linear) {
@@ -624,7 +625,6 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
   result.gauge_x = gx;
   result.gauge_plane = gp;
   result.gauge_z = D == 3 ? gz : 0;
-  CheckObservability(data, o, &result.warnings);
 
   // Multi-start: random positions, clocks from a line fit; the best final cost wins.
   std::mt19937_64 rng(o.seed);
@@ -761,7 +761,11 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
       throw UnobservableError(
           "the Jacobian at the solution is rank deficient (Ceres covariance failed): some "
           "microphone positions, offsets or drifts are not determined by these TDOAs "
-          "(source motion too small or too few positions for the unknowns)");
+          "(source motion too small or too few positions for the unknowns), or the gauge "
+          "microphones (x " + std::to_string(gx) + ", plane " + std::to_string(gp) +
+          (D == 3 ? ", z " + std::to_string(gz) : std::string()) +
+          ") are collinear/coplanar with mic 1 and cannot fix the frame: choose others with "
+          "solver.gauge_*_mic or give --nominal");
     }
     const int pd = linear ? 0 : D;
     std::ostringstream bad;
@@ -809,9 +813,12 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     result.covariance_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count();
     if (!bad.str().empty()) {
-      throw UnobservableError("calibration too uncertain to use: " + bad.str() +
-                              "(the data do not constrain these; more source positions spread "
-                              "around the array are needed)");
+      throw UnobservableError(
+          "calibration too uncertain to use: " + bad.str() +
+          "(the data do not constrain these: more source positions spread around and through "
+          "the array are needed; or the gauge microphones (x " + std::to_string(gx) +
+          ", plane " + std::to_string(gp) + (D == 3 ? ", z " + std::to_string(gz) : std::string()) +
+          ") are (nearly) collinear/coplanar with mic 1 and do not fix the frame)");
     }
   }
   return result;

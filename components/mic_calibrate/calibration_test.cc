@@ -291,3 +291,27 @@ TEST(Calibration, AnalyticJacobianMatchesAutodiff) {
 }  // namespace
 }  // namespace mic_calibrate
 }  // namespace sarmap
+
+namespace sarmap {
+namespace mic_calibrate {
+namespace {
+// A plane microphone on the x axis cannot fix the rotation about x: the null space is found
+// at the solution and explained.
+TEST(Calibration, CollinearGaugeIsRefused) {
+  SimScenario sc;
+  sc.layers = 2;
+  sc.num_positions = 120;
+  const SimData sim = Simulate(sc, 8);
+  SolverOptions o = SolverOptionsFor(sc, sim);
+  o.gauge_plane_mic = 2;  // (0.5, 0, 0): on the line of mic 1 and mic 3
+  o.num_starts = 2;
+  try {
+    Calibrate(sim.data, o);
+    FAIL() << "a collinear gauge must be refused";
+  } catch (const UnobservableError& e) {
+    EXPECT_NE(std::string(e.what()).find("plane 2"), std::string::npos) << e.what();
+  }
+}
+}  // namespace
+}  // namespace mic_calibrate
+}  // namespace sarmap
