@@ -28,10 +28,10 @@ struct Thesis {
 void Row(const char* name, const SimScenario& sc, int runs, const Thesis* thesis,
          void (*configure)(SolverOptions*) = nullptr) {
   const MonteCarloSummary m = RunMonteCarlo(sc, runs, 1, configure);
-  printf("%-22s K=%-4d pos %8.4f m  tau %8.4f ms  delta %8.4f us/s  | fails %d/%d  "
-         "solve %.3f s  it %.1f (all starts %.1f)  res %.4f ms\n",
+  printf("%-22s K=%-4d pos %8.4f m  tau %8.4f ms  delta %8.4f us/s  | per-coordinate pos "
+         "%.4f m | fails %d/%d  solve %.3f s  it %.1f (all starts %.1f)  res %.4f ms\n",
          name, sc.num_positions, m.mean.position_rms_m, m.mean.offset_rms_s * 1e3,
-         m.mean.drift_rms * 1e6, m.failures, m.runs, m.mean_solve_time_s, m.mean_iterations,
+         m.mean.drift_rms * 1e6, m.mean.position_rms_per_coordinate_m, m.failures, m.runs, m.mean_solve_time_s, m.mean_iterations,
          m.mean_total_iterations, m.mean_residual_rms_s * 1e3);
   if (thesis) {
     const bool ok = m.failures == 0 && m.mean.position_rms_m <= thesis->pos_m &&

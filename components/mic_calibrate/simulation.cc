@@ -146,6 +146,8 @@ Errors CompareToTruth(const CalibrationResult& r, const SimData& sim) {
     sd += std::pow(r.clock_drift[n] - sim.clock_drift[n], 2);
   }
   e.position_rms_m = std::sqrt(sp / (N - 1));
+  const int dim = r.dim == 3 ? 3 : 2;
+  e.position_rms_per_coordinate_m = std::sqrt(sp / (N * dim));
   e.offset_rms_s = std::sqrt(so / (N - 1));
   e.drift_rms = std::sqrt(sd / (N - 1));
   return e;
@@ -164,6 +166,7 @@ MonteCarloSummary RunMonteCarlo(const SimScenario& sc, int runs, uint64_t first_
       const CalibrationResult r = Calibrate(sim.data, o);
       const Errors e = CompareToTruth(r, sim);
       m.mean.position_rms_m += e.position_rms_m;
+      m.mean.position_rms_per_coordinate_m += e.position_rms_per_coordinate_m;
       m.mean.offset_rms_s += e.offset_rms_s;
       m.mean.drift_rms += e.drift_rms;
       m.mean_solve_time_s += r.solve_time_s;
@@ -178,6 +181,7 @@ MonteCarloSummary RunMonteCarlo(const SimScenario& sc, int runs, uint64_t first_
   const int ok = m.runs - m.failures;
   if (ok > 0) {
     m.mean.position_rms_m /= ok;
+    m.mean.position_rms_per_coordinate_m /= ok;
     m.mean.offset_rms_s /= ok;
     m.mean.drift_rms /= ok;
     m.mean_solve_time_s /= ok;

@@ -70,7 +70,10 @@ SimData Simulate(const SimScenario& scenario, uint64_t seed);
 SolverOptions SolverOptionsFor(const SimScenario& scenario, const SimData& sim);
 
 struct Errors {
-  double position_rms_m = 0;  // over the non-reference mics
+  double position_rms_m = 0;  // Euclidean per-mic error, RMS over the non-reference mics
+  // The same errors as an RMS over every coordinate of every mic (reference included), as a
+  // MATLAB rms(est(:) - truth(:)) would give; reported for comparison only.
+  double position_rms_per_coordinate_m = 0;
   double offset_rms_s = 0;
   double drift_rms = 0;
 };
