@@ -81,15 +81,16 @@ int Run(int argc, char** argv) {
   args.AddSwitch("--quiet", &quiet, "no progress output");
   args.SetEpilog(
       "Examples:\n"
-      "  sarmap-mic-calibrate shared/data/audio/calibration/fig8a_tdoa.csv --config "
-      "config/mic_calibrate.yaml \\\n"
-      "      --set solver.geometry=3d --nominal shared/data/audio/calibration/fig8a_mics.csv \\\n"
-      "      --output config/arrays/fig8a.yaml --report /tmp/fig8a\n"
+      "  sarmap-mic-calibrate ../shared/data/audio/calibration/fig8a_tdoa.csv --config "
+      "mic_calibrate.yaml \\\n"
+      "      --mics 1,2,3,4 --nominal ../shared/data/audio/calibration/fig8a_mics.csv \\\n"
+      "      --output /tmp/fig8a.yaml --report /tmp/fig8a\n"
       "  sarmap-mic-calibrate recording.lcmlog --output config/arrays/cards.yaml --report /tmp/cards\n"
       "Exit codes: 0 calibrated, 2 bad arguments/options/input, 3 refused (unobservable: the "
       "message says what the data cannot determine).\n");
   if (!args.Parse(argc, argv)) return 0;
-  const MicCalibrateOptions opt = common::LoadOptions<MicCalibrateOptions>(config_path, overrides);
+  const MicCalibrateOptions opt = common::LoadOptions<MicCalibrateOptions>(
+      config_path.empty() ? config_path : common::ResolveConfigPath(config_path), overrides);
   if (print_config) {
     printf("%s", common::OptionsToYaml(opt, true).c_str());
     return 0;
