@@ -8,6 +8,7 @@
 
 #include "common/image_codec.h"
 #include "common/image_messages.h"
+#include <opencv2/imgcodecs.hpp>
 
 namespace {
 
@@ -82,5 +83,33 @@ void BM_ColourJpegEncodeDecode(benchmark::State& state) {
   state.counters["wire_kB"] = bytes / 1000.0;
 }
 BENCHMARK(BM_ColourJpegEncodeDecode)->Unit(benchmark::kMillisecond);
+
+// Real Kinect frames (shared/data/depth/kinect_slambook2_ch5), when present.
+void BM_DepthRealKinectFrames(benchmark::State& state) {
+  std::vector<cv::Mat> frames;
+  for (int i = 1; i <= 5; ++i) {
+    cv::Mat m = cv::imread(std::string(SARMAP_DATA_DIR) + "/depth/kinect_slambook2_ch5/depth/" +
+                           std::to_string(i) + ".pgm", cv::IMREAD_ANYDEPTH);
+    if (!m.empty() && m.type() == CV_16UC1 && m.isContinuous()) frames.push_back(m);
+  }
+  if (frames.empty()) {
+    state.SkipWithError("shared data missing: depth/kinect_slambook2_ch5");
+    return;
+  }
+  sarmap::header_t header{};
+  std::vector<uint16_t> back;
+  std::string error;
+  size_t bytes = 0, raw = 0, i = 0;
+  for (auto _ : state) {
+    const cv::Mat& f = frames[i++ % frames.size()];
+    auto msg = sarmap::common::MakeDepthImage(header, {}, f.ptr<uint16_t>(), f.cols, f.rows);
+    if (!sarmap::common::DecodeDepthImage(msg, &back, &error)) state.SkipWithError(error.c_str());
+    bytes += msg.data.size();
+    raw += f.total() * 2;
+  }
+  state.counters["ratio"] = static_cast<double>(raw) / bytes;
+  state.counters["wire_kB"] = bytes / 1000.0 / state.iterations();
+}
+BENCHMARK(BM_DepthRealKinectFrames)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -58,5 +58,25 @@ bool DecodeDepthImage(const sarmap::image_t& image, std::vector<uint16_t>* depth
   }
 }
 
+bool DecodeOccupancyGrid(const sarmap::occupancy_grid_t& grid, std::vector<int8_t>* cells,
+                         std::string* error) {
+  if (grid.width <= 0 || grid.height <= 0) {
+    *error = "bad grid size";
+    return false;
+  }
+  const size_t n = static_cast<size_t>(grid.width) * grid.height;
+  std::vector<uint8_t> bytes;
+  if (grid.compression == sarmap::occupancy_grid_t::COMPRESSION_ZSTD) {
+    if (!DecompressBytes(grid.data.data(), grid.data.size(), n, &bytes, error)) return false;
+  } else if (grid.data.size() == n) {
+    bytes = grid.data;
+  } else {
+    *error = "grid data of wrong size";
+    return false;
+  }
+  cells->assign(bytes.begin(), bytes.end());
+  return true;
+}
+
 }  // namespace common
 }  // namespace sarmap

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sarmap/image_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
 
 namespace sarmap {
 namespace common {
@@ -21,6 +22,11 @@ sarmap::image_t MakeDepthImage(const sarmap::header_t& header,
 // on a malformed image.
 bool DecodeDepthImage(const sarmap::image_t& image, std::vector<uint16_t>* depth,
                       std::string* error);
+
+// The cells of an occupancy grid (-1 unknown, 0..100), decompressed when needed; false with
+// `error` set when the data does not match the grid's size.
+bool DecodeOccupancyGrid(const sarmap::occupancy_grid_t& grid, std::vector<int8_t>* cells,
+                         std::string* error);
 
 }  // namespace common
 }  // namespace sarmap

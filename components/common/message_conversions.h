@@ -29,17 +29,20 @@ inline Eigen::Matrix<double, 6, 6> ToCovariance6(const double (&cov)[36]) {
   return Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(cov);
 }
 inline void FromCovariance6(const Eigen::Matrix<double, 6, 6>& m, double (&cov)[36]) {
-  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(cov) = m;
+  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> out(cov);
+  out = m;
 }
 
 // The planar (x, y, yaw) block of a 6x6 covariance, and back (other entries zero).
-inline Eigen::Matrix3d PlanarCovariance(const double (&cov)[36]) {
-  const Eigen::Matrix<double, 6, 6> full = ToCovariance6(cov);
+inline Eigen::Matrix3d PlanarCovariance(const Eigen::Matrix<double, 6, 6>& full) {
   const int idx[3] = {0, 1, 5};
   Eigen::Matrix3d out;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) out(r, c) = full(idx[r], idx[c]);
   return out;
+}
+inline Eigen::Matrix3d PlanarCovariance(const double (&cov)[36]) {
+  return PlanarCovariance(ToCovariance6(cov));
 }
 inline void SetPlanarCovariance(const Eigen::Matrix3d& planar, double (&cov)[36]) {
   Eigen::Matrix<double, 6, 6> full = Eigen::Matrix<double, 6, 6>::Zero();

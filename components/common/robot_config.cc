@@ -1,5 +1,9 @@
 #include "common/robot_config.h"
 
+#include <unistd.h>
+
+#include <cstdlib>
+
 namespace sarmap {
 namespace common {
 
@@ -32,12 +36,26 @@ void MicArrayOptions::Validate(Validator& check) const {
              "needed when sensor_model is gp");
 }
 
+std::string ResolveConfigPath(const std::string& path) {
+  if (path.empty() || path[0] == '/' || access(path.c_str(), R_OK) == 0) return path;
+  std::string relative = path;
+  if (relative.rfind("config/", 0) == 0) relative = relative.substr(7);
+  std::vector<std::string> roots;
+  if (const char* dir = getenv("SARMAP_CONFIG_DIR")) roots.push_back(dir);
+  roots.push_back(SARMAP_DEFAULT_CONFIG_DIR);
+  for (const auto& root : roots) {
+    const std::string candidate = root + "/" + relative;
+    if (access(candidate.c_str(), R_OK) == 0) return candidate;
+  }
+  return path;
+}
+
 RobotOptions LoadRobot(const std::string& path, const std::vector<std::string>& overrides) {
-  return LoadOptions<RobotOptions>(path, overrides);
+  return LoadOptions<RobotOptions>(ResolveConfigPath(path), overrides);
 }
 
 MicArrayOptions LoadMicArray(const std::string& path, const std::vector<std::string>& overrides) {
-  return LoadOptions<MicArrayOptions>(path, overrides);
+  return LoadOptions<MicArrayOptions>(ResolveConfigPath(path), overrides);
 }
 
 }  // namespace common

@@ -1,0 +1,202 @@
+#pragma once
+// Microphone-array calibration by graph least squares (Su 2017, ch. 3).
+//
+// Unknowns: every microphone's position m_n, start offset tau_n and clock drift delta_n
+// (relative to microphone 1, the reference), and the sound-source position s_k at each
+// emission k = 1..K. Measurements: the TDOA of every microphone against the reference,
+//
+//   z_n(k) = (|m_n - s_k| - |s_k|) / c + tau_n + t_k * delta_n          (thesis eq. 3.18/3.30)
+//
+// (microphone 1 sits at the origin, so |m_1 - s_k| = |s_k|; t_k = k * dt in the thesis),
+// with noise sigma_tdoa, and a random-walk prior between consecutive source positions,
+//
+//   s_k - s_{k-1} ~ N(0, sigma_rw^2 I)                                  (eq. 3.5/3.6)
+//
+// The maximum-likelihood estimate minimises the sum of squared whitened residuals, solved by
+// Ceres (Levenberg-Marquardt, SPARSE_NORMAL_CHOLESKY with SuiteSparse) from several random
+// initialisations; the best final cost wins.
+//
+// Gauge (what the TDOAs cannot see: a rigid motion and a mirror of everything):
+//   mic `ref` at the origin with tau = delta = 0; mic `x_axis` on +x (y = z = 0);
+//   2D: mic `plane` has y > 0; 3D: mic `plane` has z = 0 and y > 0, mic `z_axis` has z > 0.
+// The signs are fixed after the solve by mirroring the whole solution (a mirror leaves every
+// distance, hence the cost, unchanged).
+//
+// Variants: planar (2D), 3d, linear (known spacing along x, far-field source angle beta_k,
+// z_n(k) = -x_n cos(beta_k) / c + tau_n + t_k delta_n, eq. 3.49; offsets and drift only),
+// and synchronous arrays (tau = delta = 0, positions only). `estimate_drift = false` is the
+// "ignore the clock difference" ablation of the thesis (Fig. 3.13).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/options.h"
+
+namespace sarmap {
+namespace mic_calibrate {
+
+struct SolverOptions {
+  std::string geometry = "planar";  // planar | 3d | linear
+  bool synchronous = false;         // true: tau = delta = 0, positions only
+  bool estimate_drift = true;       // false: delta held at 0 (thesis Fig. 3.13 ablation)
+  double speed_of_sound_mps = 340.0;
+  double tdoa_sigma_s = 0.333e-3;   // used where the input gives no per-row sigma
+  double random_walk_sigma_m = 0.333;       // planar/3d: source random-walk prior
+  double random_walk_sigma_rad = 50.0 * M_PI / 180.0;  // linear: source-angle random walk
+  double linear_spacing_m = 0.05;   // linear: distance between adjacent microphones
+  // 3d: the source moved in the plane z = 0 of the gauge frame (the plane of mic 1, the x mic
+  // and the plane mic), e.g. carried around a table the array partly stands on.
+  bool sources_in_gauge_plane = false;
+  // Gauge microphones, 1-based as in the thesis (0 = choose automatically).
+  int gauge_x_mic = 0;
+  int gauge_plane_mic = 0;
+  int gauge_z_mic = 0;
+  // Multi-start random initialisation.
+  int num_starts = 6;
+  double init_extent_m = 1.5;       // mics and sources drawn uniformly in [-e, e]^D
+  int64_t seed = 1;
+  // Stop trying new starts once two starts have reached the same lowest cost (relative
+  // difference below this): that minimum has been found twice from random points.
+  double agree_tolerance = 1e-3;
+  int max_iterations = 50;          // Table 3.1
+  double parameter_tolerance = 1e-4;  // Table 3.1 epsilon for delta x (relative, Ceres)
+  double function_tolerance = 1e-10;
+  std::string loss = "huber";       // none | huber | cauchy (on whitened TDOA residuals)
+  double loss_scale = 3.0;          // in sigmas
+  bool compute_covariance = true;
+  double max_position_std_m = 0.5;  // refuse: a mic this uncertain is not calibrated
+  double max_offset_std_s = 0.05;
+  int num_threads = 1;
+  bool verbose = false;             // per-start progress lines on stderr
+
+  template <class V>
+  void Visit(V& v) {
+    v("geometry", geometry, "planar, 3d or linear (known spacing: offsets and drift only)");
+    v("synchronous", synchronous, "synchronous array: estimate positions only (tau = delta = 0)");
+    v("estimate_drift", estimate_drift, "estimate clock drift (false: thesis Fig. 3.13 ablation)");
+    v("speed_of_sound_mps", speed_of_sound_mps, "speed of sound c");
+    v("tdoa_sigma_s", tdoa_sigma_s, "TDOA noise std where the input has none");
+    v("random_walk_sigma_m", random_walk_sigma_m, "source random-walk prior std (planar/3d)");
+    v("random_walk_sigma_rad", random_walk_sigma_rad, "source-angle random-walk std (linear)");
+    v("linear_spacing_m", linear_spacing_m, "linear: known adjacent-microphone spacing");
+    v("sources_in_gauge_plane", sources_in_gauge_plane,
+      "3d: the source moved in the z = 0 plane of mic 1, the x mic and the plane mic");
+    v("gauge_x_mic", gauge_x_mic, "1-based mic on +x (0: automatic)");
+    v("gauge_plane_mic", gauge_plane_mic, "1-based mic with y > 0 (3d: and z = 0) (0: automatic)");
+    v("gauge_z_mic", gauge_z_mic, "3d: 1-based mic with z > 0 (0: automatic)");
+    v("num_starts", num_starts, "random initialisations tried (best cost kept)");
+    v("init_extent_m", init_extent_m, "random initialisation box half-size");
+    v("seed", seed, "random seed of the initialisations");
+    v("agree_tolerance", agree_tolerance, "stop once two starts reach the same lowest cost (relative)");
+    v("max_iterations", max_iterations, "solver iterations per start");
+    v("parameter_tolerance", parameter_tolerance, "relative step size that ends a start");
+    v("function_tolerance", function_tolerance, "relative cost decrease that ends a start");
+    v("loss", loss, "robust loss on TDOA residuals: none, huber or cauchy");
+    v("loss_scale", loss_scale, "robust loss scale in TDOA sigmas");
+    v("compute_covariance", compute_covariance, "marginal covariances of every estimate");
+    v("max_position_std_m", max_position_std_m, "refuse when a mic position std exceeds this");
+    v("max_offset_std_s", max_offset_std_s, "refuse when a start-offset std exceeds this");
+    v("num_threads", num_threads, "Ceres threads");
+    v("verbose", verbose, "progress per start on stderr");
+  }
+  void Validate(common::Validator& check) const;
+  int dim() const { return geometry == "3d" ? 3 : 2; }
+};
+
+// The TDOA data of one recording. tdoa_s(k, n - 2) is z_n(k), n = 2..N; NaN = missing.
+struct TdoaData {
+  int num_mics = 0;
+  std::vector<double> times_s;  // t_k of each emission (seconds since the reference start)
+  Eigen::MatrixXd tdoa_s;       // K x (N - 1)
+  std::vector<double> sigma_s;  // per emission TDOA std, or empty (use the options')
+  // Optional per-edge motion prior (edge k links k and k+1): displacement and std; empty =
+  // the zero-mean random walk of the options.
+  std::vector<Eigen::Vector3d> motion_m;
+  std::vector<Eigen::Vector3d> motion_sigma_m;
+  int num_emissions() const { return static_cast<int>(tdoa_s.rows()); }
+};
+
+// Refusal: the data cannot determine the requested unknowns; `what()` says which and why.
+class UnobservableError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct StartSummary {
+  int start = 0;
+  double final_cost = 0;
+  int iterations = 0;
+  double normalised_rms = 0;
+  bool converged = false;
+};
+
+struct CalibrationResult {
+  int dim = 2;
+  std::vector<Eigen::Vector3d> mic_positions_m;  // z = 0 in 2D; linear: known positions
+  std::vector<double> start_offsets_s;           // tau_n, tau_1 = 0
+  std::vector<double> clock_drift;               // delta_n (s per s), delta_1 = 0
+  std::vector<Eigen::Vector3d> source_positions_m;  // planar/3d
+  std::vector<double> source_angles_rad;            // linear
+  // Marginal covariances (ambient coordinates; fixed gauge components are 0).
+  std::vector<Eigen::Matrix3d> mic_position_cov;
+  std::vector<Eigen::Matrix2d> clock_cov;  // (tau [s], delta [s/s])
+  std::vector<Eigen::Matrix3d> source_cov;
+  bool has_covariance = false;
+  // TDOA residuals z_hat - z (seconds), K x (N-1), NaN where the input was missing.
+  Eigen::MatrixXd tdoa_residual_s;
+  double residual_rms_s = 0, residual_std_s = 0, residual_max_abs_s = 0;
+  double final_cost = 0;
+  int best_start = 0;
+  int iterations = 0;         // of the best start
+  int total_iterations = 0;   // over all starts tried
+  double solve_time_s = 0;    // all starts
+  double covariance_time_s = 0;
+  std::vector<StartSummary> starts;
+  std::vector<std::string> warnings;
+  int gauge_ref = 1, gauge_x = 0, gauge_plane = 0, gauge_z = 0;  // 1-based
+};
+
+// An initial guess for the first start (the others stay random): e.g. nominal positions.
+// Empty vectors = not given (offsets/drifts then come from a line fit, sources random).
+struct InitialGuess {
+  std::vector<Eigen::Vector3d> mic_positions_m;  // N, in the gauge frame
+  std::vector<double> start_offsets_s, clock_drift;  // N
+  std::vector<Eigen::Vector3d> source_positions_m;   // K
+  std::vector<double> source_angles_rad;             // K (linear)
+};
+
+// Checks what the data can determine (refuses with UnobservableError), solves, fixes the
+// gauge signs, computes covariances. Throws std::invalid_argument on malformed input.
+CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
+                            const InitialGuess* guess = nullptr);
+
+// The rigid motion (plus mirror) that puts known positions (measured/nominal, any frame) into
+// the calibration gauge frame: mic 1 at the origin, mic x on +x, (3d) mic plane in z = 0 with
+// y > 0 and mic z with z > 0; (planar) mic plane with y > 0. Apply it to the microphones
+// and to any source truth before comparing with an estimate.
+struct GaugeTransform {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // may include a mirror
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d Apply(const Eigen::Vector3d& p) const { return rotation * (p - origin); }
+};
+GaugeTransform GaugeFrameOf(const std::vector<Eigen::Vector3d>& positions, int dim, int x_mic,
+                            int plane_mic, int z_mic);
+std::vector<Eigen::Vector3d> ToGaugeFrame(const std::vector<Eigen::Vector3d>& positions,
+                                          int dim, int x_mic, int plane_mic, int z_mic);
+
+// Gauge microphones (1-based). With nominal positions: x = the mic farthest from mic 1,
+// plane = farthest from the mic1-x line, z = farthest from that plane; without: 2, 3, 4.
+// Entries already > 0 are kept.
+void ChooseGauge(int num_mics, int dim, const std::vector<Eigen::Vector3d>& nominal, int* x_mic,
+                 int* plane_mic, int* z_mic);
+
+namespace internal_testing {
+// Compares the analytic TDOA cost with the autodiff functor at random points (dim 2 or 3).
+bool CheckTdoaJacobian(int dim);
+}  // namespace internal_testing
+
+}  // namespace mic_calibrate
+}  // namespace sarmap

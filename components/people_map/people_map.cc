@@ -1,0 +1,424 @@
+#include "people_map/people_map.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+namespace sarmap {
+namespace people_map {
+namespace {
+
+using common::Utime;
+
+// Clamps the eigenvalues of a covariance from below (repeated detections share the pose
+// error, so fusion must not make a person arbitrarily certain).
+Eigen::Matrix3d Floor(const Eigen::Matrix3d& cov, double min_variance) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(0.5 * (cov + cov.transpose()));
+  const Eigen::Vector3d values = eig.eigenvalues().cwiseMax(min_variance);
+  return eig.eigenvectors() * values.asDiagonal() * eig.eigenvectors().transpose();
+}
+
+// Information-form fusion of two Gaussian estimates.
+void Fuse(const Eigen::Vector3d& xa, const Eigen::Matrix3d& Pa, const Eigen::Vector3d& xb,
+          const Eigen::Matrix3d& Pb, Eigen::Vector3d* x, Eigen::Matrix3d* P) {
+  const Eigen::Matrix3d Ia = Pa.inverse(), Ib = Pb.inverse();
+  *P = (Ia + Ib).inverse();
+  *x = *P * (Ia * xa + Ib * xb);
+}
+
+double PlanarMahalanobis2(const Eigen::Vector3d& a, const Eigen::Matrix3d& Pa,
+                          const Eigen::Vector3d& b, const Eigen::Matrix3d& Pb) {
+  const Eigen::Vector2d d = (a - b).head<2>();
+  const Eigen::Matrix2d S = Pa.topLeftCorner<2, 2>() + Pb.topLeftCorner<2, 2>();
+  return d.dot(S.ldlt().solve(d));
+}
+
+YAML::Node Vec(const Eigen::Vector3d& v) {
+  YAML::Node n;
+  for (int i = 0; i < 3; ++i) n.push_back(v[i]);
+  n.SetStyle(YAML::EmitterStyle::Flow);
+  return n;
+}
+YAML::Node Mat(const Eigen::Matrix3d& m) {
+  YAML::Node n;
+  for (int i = 0; i < 9; ++i) n.push_back(m(i / 3, i % 3));
+  n.SetStyle(YAML::EmitterStyle::Flow);
+  return n;
+}
+Eigen::Vector3d ToVec(const YAML::Node& n) {
+  if (!n.IsSequence() || n.size() != 3) throw std::runtime_error("expected 3 numbers");
+  return Eigen::Vector3d(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());
+}
+Eigen::Matrix3d ToMat(const YAML::Node& n) {
+  if (!n.IsSequence() || n.size() != 9) throw std::runtime_error("expected 9 numbers");
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = n[i].as<double>();
+  return m;
+}
+
+}  // namespace
+
+double PeopleMap::DecayedConfidence(const Person& p, Utime utime) const {
+  const double age_s = std::max<double>(0.0, common::UtimeToSeconds(utime - p.last_detected_utime));
+  return p.confidence * std::pow(0.5, age_s / options_.confidence_half_life_s);
+}
+
+void PeopleMap::AddEvidence(Person* p, Utime utime, double detection_confidence) const {
+  const double c = DecayedConfidence(*p, utime);
+  const double cd = std::clamp(detection_confidence, 0.0, 1.0);
+  p->confidence = 1.0 - (1.0 - c) * (1.0 - options_.confidence_gain * cd);
+  p->last_detected_utime = std::max(p->last_detected_utime, utime);
+  ++p->num_detections;
+}
+
+void PeopleMap::Refuse(Person* p) const {
+  if (p->has_seen && p->has_heard) {
+    Fuse(p->seen_position_m, p->seen_covariance, p->heard_position_m, p->heard_covariance,
+         &p->position_m, &p->covariance);
+  } else if (p->has_seen) {
+    p->position_m = p->seen_position_m;
+    p->covariance = p->seen_covariance;
+  } else if (p->has_heard) {
+    p->position_m = p->heard_position_m;
+    p->covariance = p->heard_covariance;
+  }
+}
+
+Person* PeopleMap::NearestSeen(const Eigen::Vector3d& position_m, double radius_m) {
+  Person* best = nullptr;
+  double best_d = radius_m;
+  for (auto& [id, p] : people_) {
+    if (!p.has_seen) continue;
+    const double d = (p.seen_position_m - position_m).head<2>().norm();
+    if (d <= best_d) {
+      best_d = d;
+      best = &p;
+    }
+  }
+  return best;
+}
+
+void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detections,
+                        const common::Rigid3d& map_from_camera, const Eigen::Matrix3d& pose_covariance,
+                        const Eigen::Vector2d& robot_xy) {
+  const Eigen::Matrix3d R = map_from_camera.rotation().toRotationMatrix();
+  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
+  std::map<int64_t, int> count_this_frame;
+  for (const auto& d : detections) {
+    const Eigen::Vector3d z = map_from_camera * d.position_camera_m;
+    // d z / d (x, y, yaw) of the robot pose.
+    Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+    J(0, 0) = 1;
+    J(1, 1) = 1;
+    J(0, 2) = -(z.y() - robot_xy.y());
+    J(1, 2) = z.x() - robot_xy.x();
+    const Eigen::Matrix3d Pz =
+        Floor(R * d.covariance_camera * R.transpose() + J * pose_covariance * J.transpose(), min_var);
+
+    Person* p = NearestSeen(z, options_.merge_radius_m);
+    if (p) {
+      Eigen::Vector3d x;
+      Eigen::Matrix3d P;
+      Fuse(p->seen_position_m, p->seen_covariance, z, Pz, &x, &P);
+      p->seen_position_m = x;
+      p->seen_covariance = Floor(P, min_var);
+    } else {
+      // A heard-only person this seen one agrees with: one person, both cues.
+      for (auto& [id, q] : people_) {
+        if (q.has_seen || !q.has_heard) continue;
+        if ((q.heard_position_m - z).head<2>().norm() <= options_.fuse_max_distance_m &&
+            PlanarMahalanobis2(q.heard_position_m, q.heard_covariance, z, Pz) <= options_.fuse_gate_chi2) {
+          p = &q;
+          break;
+        }
+      }
+      if (!p) {
+        Person fresh;
+        fresh.id = next_id_++;
+        fresh.first_detected_utime = utime;
+        fresh.last_detected_utime = utime;
+        p = &people_.emplace(fresh.id, fresh).first->second;
+      }
+      p->has_seen = true;
+      p->seen_position_m = z;
+      p->seen_covariance = Pz;
+    }
+    p->cues |= d.cue;
+    AddEvidence(p, utime, d.confidence);
+    p->people_count = std::max(p->people_count, ++count_this_frame[p->id]);
+    Refuse(p);
+  }
+  MergeCloseSeenPeople();
+}
+
+void PeopleMap::MergeCloseSeenPeople() {
+  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
+  for (auto a = people_.begin(); a != people_.end(); ++a) {
+    if (!a->second.has_seen) continue;
+    for (auto b = std::next(a); b != people_.end();) {
+      Person& pa = a->second;
+      Person& pb = b->second;
+      if (!pb.has_seen || (pa.seen_position_m - pb.seen_position_m).head<2>().norm() > options_.merge_radius_m ||
+          (pa.has_heard && pb.has_heard && pa.sound_source_id != pb.sound_source_id)) {
+        ++b;
+        continue;
+      }
+      Eigen::Vector3d x;
+      Eigen::Matrix3d P;
+      Fuse(pa.seen_position_m, pa.seen_covariance, pb.seen_position_m, pb.seen_covariance, &x, &P);
+      pa.seen_position_m = x;
+      pa.seen_covariance = Floor(P, min_var);
+      pa.cues |= pb.cues;
+      pa.num_detections += pb.num_detections;
+      pa.people_count = std::max(pa.people_count, pb.people_count);
+      pa.confidence = std::max(pa.confidence, pb.confidence);
+      pa.first_detected_utime = std::min(pa.first_detected_utime, pb.first_detected_utime);
+      pa.last_detected_utime = std::max(pa.last_detected_utime, pb.last_detected_utime);
+      if (!pa.has_heard && pb.has_heard) {
+        pa.has_heard = true;
+        pa.heard_position_m = pb.heard_position_m;
+        pa.heard_covariance = pb.heard_covariance;
+        pa.sound_source_id = pb.sound_source_id;
+        pa.keyword = pb.keyword;
+      }
+      Refuse(&pa);
+      b = people_.erase(b);
+    }
+  }
+}
+
+int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detections,
+                        const common::Rigid3d& map_from_mic) {
+  const Eigen::Vector3d origin = map_from_mic.translation();
+  const common::Rigid3d mic_from_map = map_from_mic.inverse();
+  int associated = 0;
+  for (const auto& d : detections) {
+    const double sigma_det = std::max(d.azimuth_sigma_rad, options_.min_direction_sigma_rad);
+    const SoundSource* best = nullptr;
+    double best_score = options_.heard_gate_chi2;
+    for (const auto& [id, s] : sources_) {
+      const Eigen::Vector3d v = mic_from_map * s.position_m;
+      const double range = v.head<2>().norm();
+      if (range < 1e-3) continue;
+      const double error = common::NormalizeAngle(d.azimuth_rad - std::atan2(v.y(), v.x()));
+      // Source uncertainty across the bearing, as an angle.
+      const Eigen::Vector3d across_map =
+          map_from_mic.rotation() * Eigen::Vector3d(-v.y(), v.x(), 0.0).normalized();
+      const double var_across = across_map.dot(s.covariance * across_map);
+      const double variance = sigma_det * sigma_det + var_across / (range * range);
+      const double score = error * error / variance;
+      if (score <= best_score) {
+        best_score = score;
+        best = &s;
+      }
+    }
+    (void)origin;
+    if (!best) continue;
+    ++associated;
+    source_heard_utime_[best->id] = utime;
+    if (!d.keyword.empty()) source_keyword_[best->id] = d.keyword;
+    // The person this source is, found or made.
+    Person* p = nullptr;
+    for (auto& [id, q] : people_) {
+      if (q.sound_source_id == best->id) p = &q;
+    }
+    if (!p) {
+      for (auto& [id, q] : people_) {
+        if (q.has_heard || !q.has_seen) continue;
+        if ((q.seen_position_m - best->position_m).head<2>().norm() <= options_.fuse_max_distance_m &&
+            PlanarMahalanobis2(q.seen_position_m, q.seen_covariance, best->position_m, best->covariance) <=
+                options_.fuse_gate_chi2) {
+          p = &q;
+          break;
+        }
+      }
+    }
+    if (!p) {
+      Person fresh;
+      fresh.id = next_id_++;
+      fresh.first_detected_utime = utime;
+      fresh.last_detected_utime = utime;
+      p = &people_.emplace(fresh.id, fresh).first->second;
+    }
+    p->sound_source_id = best->id;
+    p->has_heard = true;
+    p->heard_position_m = best->position_m;
+    p->heard_covariance = best->covariance;
+    p->cues |= kHeard;
+    if (!d.keyword.empty()) p->keyword = d.keyword;
+    AddEvidence(p, utime, d.confidence);
+    Refuse(p);
+  }
+  return associated;
+}
+
+void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& sources) {
+  sources_.clear();
+  for (const auto& s : sources) sources_[s.id] = s;
+  for (const auto& s : sources) {
+    const auto heard = source_heard_utime_.find(s.id);
+    const bool recently_heard =
+        heard != source_heard_utime_.end() &&
+        common::UtimeToSeconds(utime - heard->second) <= options_.heard_person_window_s;
+    Person* linked = nullptr;
+    for (auto& [id, q] : people_) {
+      if (q.sound_source_id == s.id) linked = &q;
+    }
+    if (linked) {
+      // The sound map refines the position as the robot moves.
+      linked->heard_position_m = s.position_m;
+      linked->heard_covariance = s.covariance;
+      Refuse(linked);
+    } else if (s.is_person || recently_heard) {
+      Person fresh;
+      fresh.id = next_id_++;
+      fresh.first_detected_utime = utime;
+      fresh.last_detected_utime = utime;
+      fresh.sound_source_id = s.id;
+      fresh.has_heard = true;
+      fresh.heard_position_m = s.position_m;
+      fresh.heard_covariance = s.covariance;
+      fresh.cues = kHeard;
+      if (source_keyword_.count(s.id)) fresh.keyword = source_keyword_[s.id];
+      Person& p = people_.emplace(fresh.id, fresh).first->second;
+      AddEvidence(&p, utime, 0.8);
+      Refuse(&p);
+    }
+  }
+  // A heard-only person that now agrees with a seen-only one: one person, both cues.
+  for (auto h = people_.begin(); h != people_.end();) {
+    Person& heard = h->second;
+    bool merged = false;
+    if (heard.has_heard && !heard.has_seen) {
+      for (auto& [id, seen] : people_) {
+        if (!seen.has_seen || seen.has_heard) continue;
+        if ((seen.seen_position_m - heard.heard_position_m).head<2>().norm() <= options_.fuse_max_distance_m &&
+            PlanarMahalanobis2(seen.seen_position_m, seen.seen_covariance, heard.heard_position_m,
+                               heard.heard_covariance) <= options_.fuse_gate_chi2) {
+          seen.has_heard = true;
+          seen.heard_position_m = heard.heard_position_m;
+          seen.heard_covariance = heard.heard_covariance;
+          seen.sound_source_id = heard.sound_source_id;
+          seen.cues |= heard.cues;
+          if (!heard.keyword.empty()) seen.keyword = heard.keyword;
+          seen.num_detections += heard.num_detections;
+          seen.confidence = std::max(seen.confidence, heard.confidence);
+          seen.first_detected_utime = std::min(seen.first_detected_utime, heard.first_detected_utime);
+          seen.last_detected_utime = std::max(seen.last_detected_utime, heard.last_detected_utime);
+          Refuse(&seen);
+          merged = true;
+          break;
+        }
+      }
+    }
+    h = merged ? people_.erase(h) : std::next(h);
+  }
+}
+
+std::vector<Person> PeopleMap::Report(Utime utime) const {
+  std::vector<Person> out;
+  for (const auto& [id, p] : people_) {
+    Person copy = p;
+    copy.confidence = DecayedConfidence(p, utime);
+    if (copy.confidence >= options_.min_report_confidence) out.push_back(copy);
+  }
+  return out;
+}
+
+void PeopleMap::Save(const std::string& path) const {
+  YAML::Node root;
+  root["version"] = 1;
+  root["next_id"] = next_id_;
+  for (const auto& [id, p] : people_) {
+    YAML::Node n;
+    n["id"] = p.id;
+    n["position_m"] = Vec(p.position_m);
+    n["covariance"] = Mat(p.covariance);
+    n["confidence"] = p.confidence;
+    n["cues"] = static_cast<int>(p.cues);
+    n["num_detections"] = p.num_detections;
+    n["people_count"] = p.people_count;
+    n["first_detected_utime"] = p.first_detected_utime;
+    n["last_detected_utime"] = p.last_detected_utime;
+    n["keyword"] = p.keyword;
+    n["sound_source_id"] = p.sound_source_id;
+    n["has_seen"] = p.has_seen;
+    n["seen_position_m"] = Vec(p.seen_position_m);
+    n["seen_covariance"] = Mat(p.seen_covariance);
+    n["has_heard"] = p.has_heard;
+    n["heard_position_m"] = Vec(p.heard_position_m);
+    n["heard_covariance"] = Mat(p.heard_covariance);
+    root["people"].push_back(n);
+  }
+  for (const auto& [id, t] : source_heard_utime_) {
+    YAML::Node n;
+    n["source_id"] = id;
+    n["heard_utime"] = t;
+    n["keyword"] = source_keyword_.count(id) ? source_keyword_.at(id) : "";
+    root["heard_sources"].push_back(n);
+  }
+  YAML::Emitter out;
+  out << root;
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream file(tmp, std::ios::trunc);
+    if (!file) throw std::runtime_error(tmp + ": cannot write the people-map state");
+    file << out.c_str() << "\n";
+    file.flush();
+    if (!file) throw std::runtime_error(tmp + ": write failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    throw std::runtime_error(path + ": cannot replace the people-map state");
+  }
+}
+
+bool PeopleMap::Load(const std::string& path) {
+  std::ifstream probe(path);
+  if (!probe) return false;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+    std::map<int64_t, Person> people;
+    for (const auto& n : root["people"]) {
+      Person p;
+      p.id = n["id"].as<int64_t>();
+      p.position_m = ToVec(n["position_m"]);
+      p.covariance = ToMat(n["covariance"]);
+      p.confidence = n["confidence"].as<double>();
+      p.cues = static_cast<uint8_t>(n["cues"].as<int>());
+      p.num_detections = n["num_detections"].as<int>();
+      p.people_count = n["people_count"].as<int>();
+      p.first_detected_utime = n["first_detected_utime"].as<int64_t>();
+      p.last_detected_utime = n["last_detected_utime"].as<int64_t>();
+      p.keyword = n["keyword"].as<std::string>();
+      p.sound_source_id = n["sound_source_id"].as<int64_t>();
+      p.has_seen = n["has_seen"].as<bool>();
+      p.seen_position_m = ToVec(n["seen_position_m"]);
+      p.seen_covariance = ToMat(n["seen_covariance"]);
+      p.has_heard = n["has_heard"].as<bool>();
+      p.heard_position_m = ToVec(n["heard_position_m"]);
+      p.heard_covariance = ToMat(n["heard_covariance"]);
+      people[p.id] = p;
+    }
+    std::map<int64_t, Utime> heard;
+    std::map<int64_t, std::string> keywords;
+    for (const auto& n : root["heard_sources"]) {
+      heard[n["source_id"].as<int64_t>()] = n["heard_utime"].as<int64_t>();
+      keywords[n["source_id"].as<int64_t>()] = n["keyword"].as<std::string>();
+    }
+    next_id_ = root["next_id"].as<int64_t>();
+    people_ = std::move(people);
+    source_heard_utime_ = std::move(heard);
+    source_keyword_ = std::move(keywords);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": corrupt people-map state (" + e.what() + ")");
+  }
+  return true;
+}
+
+}  // namespace people_map
+}  // namespace sarmap

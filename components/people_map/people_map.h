@@ -1,0 +1,159 @@
+#pragma once
+// The people map (Sales 2014 §4.1.6, and beyond): people found by sight and by sound, in the
+// map frame, merged, fused across cues, with a confidence that grows with evidence and decays
+// without it. Free of LCM: the node feeds it detections already paired with the sensor pose
+// at their capture time.
+//
+// Seen people: a 3D position in the camera frame with covariance, moved into the map with
+//   p_map = R p_cam + t,   P_map = R P_cam R^T + J P_pose J^T
+// where J = d p_map / d (x, y, yaw) of the robot pose (planar pose uncertainty).
+// Detections within merge_radius_m (45 cm) of a person update it by information fusion
+//   P = (P_old^-1 + P_z^-1)^-1,  x = P (P_old^-1 x_old + P_z^-1 z),
+// with a floor on P because repeated detections share the pose error.
+// Heard people: a direction only. A heard direction is associated with the SOUND_MAP source it
+// points at (angle within a chi-square gate); a source so marked (or flagged is_person by the
+// sound map) becomes a heard person at the source's position and covariance — the range comes
+// from the robot's motion, not from an assumed 0.95 m. A heard person and a seen person whose
+// positions agree (Mahalanobis gate in x, y) are one person with both cues.
+// Confidence: each detection of confidence c_d gives c <- 1 - (1 - c)(1 - gain c_d); without
+// evidence it halves every confidence_half_life_s.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/options.h"
+#include "common/time.h"
+#include "common/transform.h"
+
+namespace sarmap {
+namespace people_map {
+
+struct PeopleMapOptions {
+  double merge_radius_m = 0.45;
+  double fuse_gate_chi2 = 9.21;         // 99 % for 2 dof: heard and seen agree
+  double fuse_max_distance_m = 1.5;     // and never further apart than this
+  double heard_gate_chi2 = 6.63;        // 99 % for 1 dof: a heard direction points at a source
+  double min_direction_sigma_rad = 0.05;
+  double min_position_sigma_m = 0.05;   // floor of a seen person's position std
+  double confidence_gain = 0.5;
+  double confidence_half_life_s = 300.0;
+  double min_report_confidence = 0.25;  // below this a person is kept but not reported
+  double heard_person_window_s = 30.0;  // a source counts as a person this long after a heard detection
+  template <class V>
+  void Visit(V& v) {
+    v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
+    v("fuse_gate_chi2", fuse_gate_chi2, "Mahalanobis gate (2 dof) for a heard and a seen person to be one");
+    v("fuse_max_distance_m", fuse_max_distance_m, "a heard and a seen person further apart are never fused");
+    v("heard_gate_chi2", heard_gate_chi2, "gate (1 dof) for a heard direction to point at a sound source");
+    v("min_direction_sigma_rad", min_direction_sigma_rad, "floor of a heard direction's std");
+    v("min_position_sigma_m", min_position_sigma_m, "floor of a seen person's position std");
+    v("confidence_gain", confidence_gain, "how fast confidence grows with each detection (0..1)");
+    v("confidence_half_life_s", confidence_half_life_s, "confidence halves after this long without evidence");
+    v("min_report_confidence", min_report_confidence, "people below this confidence are not reported");
+    v("heard_person_window_s", heard_person_window_s, "a sound source stays a person this long after being heard calling");
+  }
+  void Validate(common::Validator& check) const {
+    check.Positive("merge_radius_m", merge_radius_m);
+    check.Positive("fuse_gate_chi2", fuse_gate_chi2);
+    check.Positive("fuse_max_distance_m", fuse_max_distance_m);
+    check.Positive("heard_gate_chi2", heard_gate_chi2);
+    check.Positive("min_direction_sigma_rad", min_direction_sigma_rad);
+    check.Positive("min_position_sigma_m", min_position_sigma_m);
+    check.InRange("confidence_gain", confidence_gain, 0.0, 1.0);
+    check.Positive("confidence_half_life_s", confidence_half_life_s);
+    check.InRange("min_report_confidence", min_report_confidence, 0.0, 1.0);
+    check.Positive("heard_person_window_s", heard_person_window_s);
+  }
+};
+
+enum Cue : uint8_t { kSeenRgbd = 1, kSeenDepth = 2, kHeard = 4 };  // as mapped_person_t
+
+struct SeenDetection {
+  Eigen::Vector3d position_camera_m;
+  Eigen::Matrix3d covariance_camera;
+  double confidence = 1.0;
+  Cue cue = kSeenRgbd;
+};
+
+struct HeardDetection {
+  double azimuth_rad = 0;  // in the mic_array frame
+  double elevation_rad = 0;
+  double azimuth_sigma_rad = 0.1;
+  double confidence = 1.0;
+  std::string keyword;
+};
+
+struct SoundSource {
+  int64_t id = -1;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // map frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  bool is_person = false;
+  bool converged = false;
+};
+
+struct Person {
+  int64_t id = -1;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // fused estimate, map frame
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double confidence = 0;                // at last_detected_utime
+  uint8_t cues = 0;
+  int num_detections = 0;
+  int people_count = 1;
+  common::Utime first_detected_utime = 0;
+  common::Utime last_detected_utime = 0;
+  std::string keyword;
+  int64_t sound_source_id = -1;
+  // The two estimates behind the fused one.
+  bool has_seen = false;
+  Eigen::Vector3d seen_position_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d seen_covariance = Eigen::Matrix3d::Identity();
+  bool has_heard = false;
+  Eigen::Vector3d heard_position_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d heard_covariance = Eigen::Matrix3d::Identity();
+};
+
+class PeopleMap {
+ public:
+  explicit PeopleMap(const PeopleMapOptions& options) : options_(options) {}
+
+  // One frame of seen people. map_from_camera: camera pose at capture time;
+  // pose_covariance: (x, y, yaw) covariance of the robot pose in the map.
+  void AddSeen(common::Utime utime, const std::vector<SeenDetection>& detections,
+               const common::Rigid3d& map_from_camera, const Eigen::Matrix3d& pose_covariance,
+               const Eigen::Vector2d& robot_xy);
+  // Heard people from one analysis block; map_from_mic: array pose at capture time.
+  // Returns how many were associated with a sound source.
+  int AddHeard(common::Utime utime, const std::vector<HeardDetection>& detections,
+               const common::Rigid3d& map_from_mic);
+  // The latest sound-source map.
+  void UpdateSoundSources(common::Utime utime, const std::vector<SoundSource>& sources);
+
+  // People to report at `utime` (confidence decayed to that time), sorted by id.
+  std::vector<Person> Report(common::Utime utime) const;
+  const std::map<int64_t, Person>& people() const { return people_; }
+  double DecayedConfidence(const Person& p, common::Utime utime) const;
+
+  // Crash-safe state: written to a temporary file, then renamed over `path`.
+  void Save(const std::string& path) const;
+  // Returns false (state unchanged) when the file does not exist; throws on a corrupt file.
+  bool Load(const std::string& path);
+
+ private:
+  void AddEvidence(Person* p, common::Utime utime, double detection_confidence) const;
+  void Refuse(Person* p) const;  // recompute the fused estimate from seen and heard
+  void MergeCloseSeenPeople();
+  Person* NearestSeen(const Eigen::Vector3d& position_m, double radius_m);
+
+  PeopleMapOptions options_;
+  std::map<int64_t, Person> people_;
+  std::map<int64_t, SoundSource> sources_;
+  std::map<int64_t, common::Utime> source_heard_utime_;  // source -> last heard calling
+  std::map<int64_t, std::string> source_keyword_;
+  int64_t next_id_ = 1;
+};
+
+}  // namespace people_map
+}  // namespace sarmap

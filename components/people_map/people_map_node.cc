@@ -1,0 +1,225 @@
+// sarmap-people-map: PEOPLE_VISUAL, PEOPLE_AUDIO, SOUND_MAP and POSE in; PEOPLE_MAP out.
+// Inputs pass through a time-ordered queue and are applied in capture-time order with the
+// robot pose interpolated at each detection's capture time, so replaying a log gives the same
+// people map every time. The state is saved crash-safe and resumed after a restart.
+#include <cstdio>
+#include <functional>
+
+#include "common/node_main.h"
+#include "common/message_conversions.h"
+#include "common/node.h"
+#include "common/pose_history.h"
+#include "common/robot_config.h"
+#include "people_map/people_map.h"
+
+namespace {
+
+using sarmap::common::Utime;
+
+struct NodeOptions {
+  std::string robot_config = "config/robot.yaml";
+  std::string state_file = "";  // "" = no persistence
+  double save_period_s = 1.0;
+  double publish_period_s = 1.0;
+  double reorder_delay_s = 0.5;  // inputs are held this long to be applied in time order
+  double max_pose_gap_s = 0.5;
+  std::string visual_channel = "PEOPLE_VISUAL";
+  std::string audio_channel = "PEOPLE_AUDIO";
+  std::string sound_map_channel = "SOUND_MAP";
+  std::string pose_channel = "POSE";
+  std::string output_channel = "PEOPLE_MAP";
+  sarmap::people_map::PeopleMapOptions map;
+  template <class V>
+  void Visit(V& v) {
+    v("robot_config", robot_config, "robot extrinsics YAML (camera and array on the base)");
+    v("state_file", state_file, "where the people map is saved and resumed from (\"\": nowhere)");
+    v("save_period_s", save_period_s, "seconds between state saves (when changed)");
+    v("publish_period_s", publish_period_s, "PEOPLE_MAP is also republished this often");
+    v("reorder_delay_s", reorder_delay_s, "inputs wait this long to be applied in capture-time order");
+    v("max_pose_gap_s", max_pose_gap_s, "largest gap to a known pose accepted for a detection");
+    v("visual_channel", visual_channel, "people seen");
+    v("audio_channel", audio_channel, "people heard");
+    v("sound_map_channel", sound_map_channel, "sound-source map");
+    v("pose_channel", pose_channel, "robot pose in the map");
+    v("output_channel", output_channel, "the people map");
+    v("map", map, "people map");
+  }
+  void Validate(sarmap::common::Validator& check) const {
+    check.Positive("save_period_s", save_period_s);
+    check.Positive("publish_period_s", publish_period_s);
+    check.NonNegative("reorder_delay_s", reorder_delay_s);
+    check.Positive("max_pose_gap_s", max_pose_gap_s);
+  }
+};
+
+sarmap::people_map_t ToMessage(const std::vector<sarmap::people_map::Person>& people, Utime utime) {
+  sarmap::people_map_t msg;
+  msg.header.utime = utime;
+  msg.header.frame = "map";
+  for (const auto& p : people) {
+    sarmap::mapped_person_t m;
+    m.id = p.id;
+    for (int i = 0; i < 3; ++i) m.position_m[i] = p.position_m[i];
+    for (int i = 0; i < 9; ++i) m.covariance[i] = p.covariance(i / 3, i % 3);
+    m.confidence = static_cast<float>(p.confidence);
+    m.cues = static_cast<int8_t>(p.cues);
+    m.num_detections = p.num_detections;
+    m.people_count = p.people_count;
+    m.first_detected_utime = p.first_detected_utime;
+    m.last_detected_utime = p.last_detected_utime;
+    m.keyword = p.keyword;
+    m.sound_source_id = p.sound_source_id;
+    msg.people.push_back(m);
+  }
+  msg.num_people = static_cast<int32_t>(msg.people.size());
+  return msg;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return sarmap::common::RunMain("sarmap-people-map", [&] {
+    using namespace sarmap;
+    common::ArgParser parser(
+        "sarmap-people-map",
+        "The people map: moves each person seen or heard into the map frame with the robot pose\n"
+        "at the detection's capture time, merges detections within 45 cm, fuses a heard person\n"
+        "with a seen one, places heard-only people at their sound-map position, and keeps a\n"
+        "confidence that grows with evidence and decays without it.\n"
+        "In: PEOPLE_VISUAL, PEOPLE_AUDIO, SOUND_MAP, POSE.  Out: PEOPLE_MAP.");
+    common::NodeArgs args;
+    const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/people_map.yaml");
+    if (!parsed) return 0;
+    const NodeOptions& options = *parsed;
+    const common::RobotOptions robot = common::LoadRobot(options.robot_config);
+    const common::Rigid3d base_from_camera = robot.base_from_camera.ToRigid3d();
+    const common::Rigid3d base_from_mic = robot.base_from_mic_array.ToRigid3d();
+
+    people_map::PeopleMap map(options.map);
+    if (!options.state_file.empty() && map.Load(options.state_file)) {
+      SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from " << options.state_file;
+    }
+
+    common::Node node("sarmap-people-map", args.lcm_url);
+    auto publisher = node.Advertise<people_map_t>(options.output_channel);
+    common::PoseHistory poses(common::SecondsToUtime(60.0), common::SecondsToUtime(options.max_pose_gap_s));
+    common::TimeOrderedQueue<std::function<void()>> queue(common::SecondsToUtime(options.reorder_delay_s));
+    Utime latest_utime = 0;
+    bool dirty = false;
+    int64_t without_pose = 0;
+
+    const auto publish = [&](Utime utime) {
+      auto msg = ToMessage(map.Report(utime), utime);
+      publisher.Publish(&msg);
+    };
+    const auto pose_at = [&](Utime utime) -> std::optional<common::StampedPose> {
+      auto pose = poses.At(utime);
+      if (!pose) {
+        ++without_pose;
+        SARMAP_LOG(WARN) << "no robot pose within " << options.max_pose_gap_s << " s of a detection at "
+                         << utime << "; dropped (" << without_pose << " so far)";
+      }
+      return pose;
+    };
+    const auto release = [&] {
+      queue.Release([&](Utime utime, std::function<void()>& apply) {
+        apply();
+        latest_utime = std::max(latest_utime, utime);
+        dirty = true;
+        publish(utime);
+      });
+    };
+
+    node.Subscribe<pose_t>(options.pose_channel, [&](const pose_t& m, const common::ReceiveInfo&) {
+      common::StampedPose p;
+      p.utime = m.header.utime;
+      p.pose = common::ToRigid3d(m.position_m, m.orientation);
+      p.covariance = common::ToCovariance6(m.covariance);
+      poses.Add(p);
+      release();
+    });
+    node.Subscribe<people_detections_t>(options.visual_channel, [&](const people_detections_t& m,
+                                                                    const common::ReceiveInfo&) {
+      const Utime utime = m.header.utime;
+      std::vector<people_map::SeenDetection> seen;
+      for (const auto& d : m.detections) {
+        if (!d.has_range || d.cue == person_detection_t::CUE_HEARD) continue;
+        people_map::SeenDetection s;
+        s.position_camera_m = Eigen::Vector3d(d.position_m[0], d.position_m[1], d.position_m[2]);
+        s.covariance_camera = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d.position_covariance);
+        s.confidence = d.confidence;
+        s.cue = d.cue == person_detection_t::CUE_SEEN_DEPTH ? people_map::kSeenDepth : people_map::kSeenRgbd;
+        seen.push_back(s);
+      }
+      if (seen.empty()) return;
+      queue.Push(utime, [&, utime, seen] {
+        if (auto pose = pose_at(utime)) {
+          const Eigen::Matrix3d planar = common::PlanarCovariance(pose->covariance);
+          map.AddSeen(utime, seen, pose->pose * base_from_camera, planar,
+                      pose->pose.translation().head<2>());
+        }
+      });
+      release();
+    });
+    node.Subscribe<people_detections_t>(options.audio_channel, [&](const people_detections_t& m,
+                                                                   const common::ReceiveInfo&) {
+      const Utime utime = m.header.utime;
+      std::vector<people_map::HeardDetection> heard;
+      for (const auto& d : m.detections) {
+        people_map::HeardDetection h;
+        h.azimuth_rad = d.azimuth_rad;
+        h.elevation_rad = d.elevation_rad;
+        h.azimuth_sigma_rad = std::sqrt(std::max(0.0, d.direction_covariance[0]));
+        h.confidence = d.confidence;
+        h.keyword = d.keyword;
+        heard.push_back(h);
+      }
+      if (heard.empty()) return;
+      queue.Push(utime, [&, utime, heard] {
+        if (auto pose = pose_at(utime)) map.AddHeard(utime, heard, pose->pose * base_from_mic);
+      });
+      release();
+    });
+    node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m, const common::ReceiveInfo&) {
+      std::vector<people_map::SoundSource> sources;
+      for (const auto& s : m.sources) {
+        people_map::SoundSource src;
+        src.id = s.id;
+        src.position_m = Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);
+        src.covariance = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(s.covariance);
+        src.is_person = s.is_person;
+        src.converged = s.state == sound_source_t::STATE_CONVERGED;
+        sources.push_back(src);
+      }
+      const Utime utime = m.header.utime;
+      queue.Push(utime, [&, utime, sources] { map.UpdateSoundSources(utime, sources); });
+      release();
+    });
+
+    node.AddTimer(options.publish_period_s, [&] {
+      release();
+      if (latest_utime > 0) publish(latest_utime);
+      node.SetStatusMessage(std::to_string(map.people().size()) + " people, " +
+                            std::to_string(without_pose) + " detections without pose");
+    });
+    const auto save = [&] {
+      if (options.state_file.empty() || !dirty) return;
+      try {
+        map.Save(options.state_file);
+        dirty = false;
+      } catch (const std::exception& e) {
+        SARMAP_LOG(ERROR) << e.what();
+      }
+    };
+    node.AddTimer(options.save_period_s, save);
+    const int code = node.Run();
+    queue.Flush([&](Utime utime, std::function<void()>& apply) {
+      apply();
+      latest_utime = std::max(latest_utime, utime);
+      dirty = true;
+    });
+    if (latest_utime > 0) publish(latest_utime);
+    save();
+    return code;
+  });
+}

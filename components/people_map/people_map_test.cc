@@ -1,0 +1,166 @@
+#include "people_map/people_map.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "common/robot_config.h"
+
+namespace sarmap {
+namespace people_map {
+namespace {
+
+using common::Rigid2d;
+using common::Rigid3d;
+
+// The default robot: camera optical frame 0.55 m up, looking along base +x.
+Rigid3d MapFromCamera(const Rigid2d& map_from_base) {
+  return Rigid3d::FromRigid2d(map_from_base) * common::RobotOptions().base_from_camera.ToRigid3d();
+}
+
+SeenDetection PersonAhead(double forward_m, double right_m) {
+  SeenDetection d;
+  // Camera optical frame: z forward, x right, y down; the person's centre 0.85 m above the floor.
+  d.position_camera_m = Eigen::Vector3d(right_m, 0.55 - 0.85, forward_m);
+  d.covariance_camera = Eigen::Vector3d(0.01, 0.01, 0.03).asDiagonal();
+  d.confidence = 0.9;
+  return d;
+}
+
+TEST(PeopleMapTest, SeenPersonLandsInTheMapFrame) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d map_from_base(2.0, 1.0, M_PI / 2);  // facing +y
+  map.AddSeen(1'000'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(map_from_base), Eigen::Matrix3d::Zero(),
+              map_from_base.translation());
+  ASSERT_EQ(map.people().size(), 1u);
+  const Person& p = map.people().begin()->second;
+  EXPECT_NEAR(p.position_m.x(), 2.0, 1e-9);
+  EXPECT_NEAR(p.position_m.y(), 1.0 + 0.1 + 2.0, 1e-9);  // camera 0.10 m ahead of the base
+  EXPECT_NEAR(p.position_m.z(), 0.85, 1e-9);
+  EXPECT_EQ(p.cues, kSeenRgbd);
+}
+
+TEST(PeopleMapTest, MergesWithin45cmAndCountsPeoplePerPlace) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d a(0, 0, 0), b(1.0, 0.5, 0.2);
+  // The same person seen from two poses, 20 cm of error between them.
+  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(a), Eigen::Matrix3d::Zero(), a.translation());
+  const Eigen::Vector3d first = map.people().begin()->second.position_m;
+  const Eigen::Vector3d target_in_b = (MapFromCamera(b).inverse() * (first + Eigen::Vector3d(0.2, 0, 0)));
+  SeenDetection again = PersonAhead(0, 0);
+  again.position_camera_m = target_in_b;
+  map.AddSeen(2'000'000, {again}, MapFromCamera(b), Eigen::Matrix3d::Zero(), b.translation());
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.num_detections, 2);
+  // Two people 1 m apart are two; two within 30 cm in one frame are one place with a count of 2.
+  map.AddSeen(3'000'000, {PersonAhead(3.0, 1.2)}, MapFromCamera(a), Eigen::Matrix3d::Zero(), a.translation());
+  EXPECT_EQ(map.people().size(), 2u);
+  map.AddSeen(4'000'000, {PersonAhead(2.0, -2.0), PersonAhead(2.0, -2.3)}, MapFromCamera(a),
+              Eigen::Matrix3d::Zero(), a.translation());
+  ASSERT_EQ(map.people().size(), 3u);
+  EXPECT_EQ(map.people().rbegin()->second.people_count, 2);
+}
+
+TEST(PeopleMapTest, PoseUncertaintyGrowsTheCovarianceAcrossTheBearing) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d pose(0, 0, 0);
+  Eigen::Matrix3d pose_cov = Eigen::Matrix3d::Zero();
+  pose_cov(2, 2) = 0.05 * 0.05;  // yaw only
+  map.AddSeen(1, {PersonAhead(4.0, 0.0)}, MapFromCamera(pose), pose_cov, pose.translation());
+  const Eigen::Matrix3d& P = map.people().begin()->second.covariance;
+  // Along the bearing (x): camera range noise 0.03; across (y): 0.01 + (4.1 * 0.05)^2.
+  EXPECT_NEAR(P(0, 0), 0.03, 1e-6);
+  EXPECT_NEAR(P(1, 1), 0.01 + std::pow(4.1 * 0.05, 2), 1e-6);
+}
+
+TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne) {
+  PeopleMapOptions options;
+  PeopleMap map(options);
+  SoundSource hidden;  // behind furniture: never seen
+  hidden.id = 7;
+  hidden.position_m = Eigen::Vector3d(4.0, 3.0, 0.5);
+  hidden.covariance = Eigen::Vector3d(0.04, 0.04, 0.1).asDiagonal();
+  SoundSource visible;
+  visible.id = 8;
+  visible.position_m = Eigen::Vector3d(3.1, -0.1, 1.0);
+  visible.covariance = Eigen::Vector3d(0.09, 0.09, 0.2).asDiagonal();
+  map.UpdateSoundSources(1'000'000, {hidden, visible});
+  EXPECT_TRUE(map.people().empty());  // sources are not people until heard calling
+
+  // The array at the origin hears "help" in the direction of the hidden source.
+  HeardDetection call;
+  call.azimuth_rad = std::atan2(3.0, 4.0) + 0.02;
+  call.azimuth_sigma_rad = 0.05;
+  call.keyword = "help";
+  call.confidence = 0.8;
+  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  const Person& heard = map.people().begin()->second;
+  EXPECT_EQ(heard.sound_source_id, 7);
+  EXPECT_EQ(heard.keyword, "help");
+  EXPECT_NEAR((heard.position_m - hidden.position_m).norm(), 0.0, 1e-9);  // not 0.95 m away
+
+  // A direction that points at nothing is not placed.
+  HeardDetection stray = call;
+  stray.azimuth_rad = -2.0;
+  EXPECT_EQ(map.AddHeard(2'100'000, {stray}, Rigid3d()), 0);
+
+  // Seen and heard agree about the visible one: one person with both cues, fused in between.
+  const Rigid2d pose(0, 0, 0);
+  map.AddSeen(3'000'000, {PersonAhead(2.9, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+  HeardDetection talk;
+  talk.azimuth_rad = std::atan2(-0.1, 3.1);
+  talk.confidence = 0.7;
+  map.AddHeard(3'100'000, {talk}, Rigid3d());
+  ASSERT_EQ(map.people().size(), 2u);
+  const Person& both = map.people().rbegin()->second;
+  EXPECT_EQ(both.cues, kSeenRgbd | kHeard);
+  EXPECT_EQ(both.sound_source_id, 8);
+  EXPECT_GT(both.position_m.x(), 3.0 - 1e-9);  // seen at 3.0, heard at 3.1
+  EXPECT_LT(both.position_m.x(), 3.05);        // the seen estimate is the more certain
+}
+
+TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
+  PeopleMapOptions options;
+  options.confidence_half_life_s = 10;
+  PeopleMap map(options);
+  const Rigid2d pose(0, 0, 0);
+  double last = 0;
+  for (int i = 0; i < 4; ++i) {
+    map.AddSeen(1'000'000 * (i + 1), {PersonAhead(2.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+    const double c = map.people().begin()->second.confidence;
+    EXPECT_GT(c, last);
+    last = c;
+  }
+  const Person& p = map.people().begin()->second;
+  EXPECT_NEAR(map.DecayedConfidence(p, p.last_detected_utime + 10'000'000), last / 2, 1e-9);
+  EXPECT_EQ(map.Report(p.last_detected_utime).size(), 1u);
+  EXPECT_TRUE(map.Report(p.last_detected_utime + 100'000'000).empty());
+}
+
+TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d pose(0.5, 0.2, 0.3);
+  map.AddSeen(5'000'000, {PersonAhead(2.0, 0.0), PersonAhead(3.0, 1.0)}, MapFromCamera(pose),
+              Eigen::Matrix3d::Zero(), pose.translation());
+  const std::string path = ::testing::TempDir() + "/people_state.yaml";
+  map.Save(path);
+  PeopleMap back{PeopleMapOptions()};
+  ASSERT_TRUE(back.Load(path));
+  ASSERT_EQ(back.people().size(), 2u);
+  for (const auto& [id, p] : map.people()) {
+    EXPECT_NEAR((back.people().at(id).position_m - p.position_m).norm(), 0, 1e-9);
+    EXPECT_EQ(back.people().at(id).num_detections, p.num_detections);
+  }
+  // New people continue the id sequence.
+  back.AddSeen(6'000'000, {PersonAhead(2.0, -3.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+  EXPECT_EQ(back.people().rbegin()->first, 3);
+  EXPECT_FALSE(back.Load(path + ".missing"));
+  std::ofstream(path + ".bad") << "people: [{id: x}]\n";
+  EXPECT_THROW(back.Load(path + ".bad"), std::runtime_error);
+  EXPECT_EQ(back.people().size(), 3u);  // unchanged by the failed load
+}
+
+}  // namespace
+}  // namespace people_map
+}  // namespace sarmap

@@ -1,0 +1,31 @@
+// sarmap-log report LOG: the mission report (HTML, PNG map, JSON) and a summary on stdout.
+#include <cstdio>
+
+#include "common/args.h"
+#include "log-tools/mission_report.h"
+
+int main(int argc, char** argv) {
+  return sarmap::common::RunMain("sarmap-log report", [&] {
+    sarmap::common::ArgParser parser(
+        "sarmap-log report",
+        "Writes the mission report of a log: report.html, map.png (map, robot path, people seen and\n"
+        "heard with their uncertainty, sound sources with 3-sigma ellipses) and report.json. With\n"
+        "SIM_TRUTH in the log it also says who was found against the simulator's truth, how, and\n"
+        "with what position error. Prints a summary.");
+    std::string log, output;
+    double match_radius_m = 0.5;
+    parser.AddPositional("LOG", &log, "LCM log of the mission");
+    parser.AddFlag("-o", &output, "output directory (default: LOG without extension + -report)");
+    parser.AddFlag("--match-radius", &match_radius_m, "a reported person within this of a true one found them (m)");
+    if (!parser.Parse(argc, argv)) return 0;
+    if (output.empty()) output = log.substr(0, log.rfind('.')) + "-report";
+    std::vector<std::string> problems;
+    const auto data = sarmap::logtools::LoadMission(log, &problems);
+    for (const auto& p : problems) fprintf(stderr, "warning: %s\n", p.c_str());
+    const auto summary = sarmap::logtools::Summarise(data, match_radius_m);
+    sarmap::logtools::WriteReport(data, summary, output);
+    fputs(sarmap::logtools::SummaryText(data, summary).c_str(), stdout);
+    printf("report: %s/report.html\n", output.c_str());
+    return 0;
+  });
+}

@@ -1,0 +1,397 @@
+#include "log-tools/mission_report.h"
+
+#include "sarmap/pose_t.hpp"
+
+#include <nlohmann/json.hpp>
+#include <sys/stat.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "common/image_messages.h"
+#include "log-tools/lcm_log_reader.h"
+
+namespace sarmap {
+namespace logtools {
+
+namespace {
+
+template <class T>
+bool Decode(const std::vector<uint8_t>& data, T* out) {
+  try {
+    return out->decode(data.data(), 0, static_cast<int>(data.size())) == static_cast<int>(data.size());
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems) {
+  MissionData data;
+  data.log_path = log_path;
+  LcmLogReader reader(log_path);
+  LogEvent event;
+  int64_t first_us = -1, last_us = 0;
+  while (reader.Next(&event)) {
+    ++data.messages;
+    if (first_us < 0) first_us = event.timestamp_us;
+    last_us = std::max(last_us, event.timestamp_us);
+    const std::string type = SarmapTypeName(event.data);
+    if (type == "occupancy_grid_t") {
+      sarmap::occupancy_grid_t m;
+      if (Decode(event.data, &m)) data.map = std::move(m);
+    } else if (type == "pose_t" && event.channel == "POSE") {
+      sarmap::pose_t m;
+      if (Decode(event.data, &m) &&
+          (data.trail.empty() || std::hypot(data.trail.back().first - m.position_m[0],
+                                            data.trail.back().second - m.position_m[1]) > 0.05)) {
+        data.trail.emplace_back(m.position_m[0], m.position_m[1]);
+      }
+    } else if (type == "people_map_t") {
+      sarmap::people_map_t m;
+      if (Decode(event.data, &m)) data.people = std::move(m);
+    } else if (type == "sound_map_t") {
+      sarmap::sound_map_t m;
+      if (Decode(event.data, &m)) data.sources = std::move(m);
+    } else if (type == "sim_truth_t") {
+      sarmap::sim_truth_t m;
+      if (Decode(event.data, &m)) {
+        if (data.truth_trail.empty() || std::hypot(data.truth_trail.back().first - m.robot_position_m[0],
+                                                   data.truth_trail.back().second - m.robot_position_m[1]) > 0.05) {
+          data.truth_trail.emplace_back(m.robot_position_m[0], m.robot_position_m[1]);
+        }
+        data.truth = std::move(m);
+      }
+    }
+  }
+  data.duration_s = first_us < 0 ? 0.0 : (last_us - first_us) * 1e-6;
+  if (problems) {
+    for (const auto& p : reader.problems()) {
+      problems->push_back("log damaged at byte " + std::to_string(p.file_offset) + ": " + p.what);
+    }
+  }
+  return data;
+}
+
+std::string HowFound(int cues) {
+  const bool rgbd = cues & sarmap::mapped_person_t::CUE_SEEN_RGBD;
+  const bool depth = cues & sarmap::mapped_person_t::CUE_SEEN_DEPTH;
+  const bool heard = cues & sarmap::mapped_person_t::CUE_HEARD;
+  std::string seen = rgbd ? "seen" : depth ? "seen (depth only)" : "";
+  if (!seen.empty() && heard) return seen + " + heard";
+  return heard ? "heard" : seen;
+}
+
+MissionSummary Summarise(const MissionData& data, double match_radius_m) {
+  MissionSummary s;
+  s.match_radius_m = match_radius_m;
+  if (data.people) s.people_found = data.people->num_people;
+  if (data.sources) s.sources_mapped = data.sources->num_sources;
+  if (!data.truth) return s;
+  const auto& truth = data.truth->people;
+  std::vector<const sarmap::mapped_person_t*> found;
+  if (data.people) {
+    for (const auto& p : data.people->people) found.push_back(&p);
+  }
+  // All pairs within the radius, closest first; each true and each found person used once.
+  struct Pair {
+    double d;
+    size_t t, f;
+  };
+  std::vector<Pair> pairs;
+  for (size_t t = 0; t < truth.size(); ++t) {
+    for (size_t f = 0; f < found.size(); ++f) {
+      const double d = std::hypot(truth[t].position_m[0] - found[f]->position_m[0],
+                                  truth[t].position_m[1] - found[f]->position_m[1]);
+      if (d <= match_radius_m) pairs.push_back({d, t, f});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
+  std::vector<int> truth_to(truth.size(), -1), found_used(found.size(), 0);
+  std::vector<double> error(truth.size(), 0);
+  for (const auto& p : pairs) {
+    if (truth_to[p.t] >= 0 || found_used[p.f]) continue;
+    truth_to[p.t] = static_cast<int>(p.f);
+    found_used[p.f] = 1;
+    error[p.t] = p.d;
+  }
+  for (size_t t = 0; t < truth.size(); ++t) {
+    TruthMatch m;
+    m.truth_id = truth[t].id;
+    m.name = truth[t].name;
+    m.x_m = truth[t].position_m[0];
+    m.y_m = truth[t].position_m[1];
+    if (truth_to[t] >= 0) {
+      const auto* p = found[truth_to[t]];
+      m.found = true;
+      m.person_id = p->id;
+      m.how = HowFound(p->cues);
+      m.error_m = error[t];
+    }
+    s.truth.push_back(m);
+  }
+  for (size_t f = 0; f < found.size(); ++f) s.false_positives += found_used[f] ? 0 : 1;
+  return s;
+}
+
+namespace {
+
+// Map frame -> image pixels (the grid drawn at `scale` pixels per cell, y up).
+struct Canvas {
+  cv::Mat image;
+  double x0 = 0, y0 = 0, pixels_per_m = 40;
+  cv::Point P(double x, double y) const {
+    return cv::Point(static_cast<int>(std::lround((x - x0) * pixels_per_m)),
+                     static_cast<int>(std::lround(image.rows - 1 - (y - y0) * pixels_per_m)));
+  }
+};
+
+void DrawEllipse(Canvas* c, double x, double y, const double (&cov)[9], const cv::Scalar& colour) {
+  Eigen::Matrix2d P;
+  P << cov[0], cov[1], cov[3], cov[4];
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (P + P.transpose()));
+  const Eigen::Vector2d v = eig.eigenvalues().cwiseMax(0.0);
+  const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+  const double angle_deg = -std::atan2(axis.y(), axis.x()) * 180 / M_PI;
+  const cv::Size axes(std::max(2, static_cast<int>(3 * std::sqrt(v(1)) * c->pixels_per_m)),
+                      std::max(2, static_cast<int>(3 * std::sqrt(v(0)) * c->pixels_per_m)));
+  cv::ellipse(c->image, c->P(x, y), axes, angle_deg, 0, 360, colour, 2, cv::LINE_AA);
+}
+
+Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
+  Canvas c;
+  // Extent: the grid, else everything drawn, with a margin.
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  const auto grow = [&](double x, double y) {
+    x0 = std::min(x0, x - 1);
+    y0 = std::min(y0, y - 1);
+    x1 = std::max(x1, x + 1);
+    y1 = std::max(y1, y + 1);
+  };
+  std::vector<uint8_t> cells;
+  if (data.map) {
+    const auto& m = *data.map;
+    grow(m.origin_x_m + 1, m.origin_y_m + 1);
+    grow(m.origin_x_m + m.width * m.resolution_m - 1, m.origin_y_m + m.height * m.resolution_m - 1);
+    std::string error;
+    std::vector<int8_t> decoded;
+    if (common::DecodeOccupancyGrid(m, &decoded, &error)) cells.assign(decoded.begin(), decoded.end());
+  }
+  for (const auto& p : data.trail) grow(p.first, p.second);
+  if (data.people) for (const auto& p : data.people->people) grow(p.position_m[0], p.position_m[1]);
+  if (data.sources) for (const auto& s : data.sources->sources) grow(s.position_m[0], s.position_m[1]);
+  for (const auto& t : summary.truth) grow(t.x_m, t.y_m);
+  if (x0 > x1) {
+    x0 = y0 = -5;
+    x1 = y1 = 5;
+  }
+  c.x0 = x0;
+  c.y0 = y0;
+  c.pixels_per_m = std::clamp(1400.0 / std::max(x1 - x0, y1 - y0), 20.0, 100.0);
+  c.image = cv::Mat(static_cast<int>((y1 - y0) * c.pixels_per_m) + 1,
+                    static_cast<int>((x1 - x0) * c.pixels_per_m) + 1, CV_8UC3, cv::Scalar(60, 60, 60));
+  if (data.map && !cells.empty()) {
+    const auto& m = *data.map;
+    for (int gy = 0; gy < m.height; ++gy) {
+      for (int gx = 0; gx < m.width; ++gx) {
+        const int8_t v = static_cast<int8_t>(cells[static_cast<size_t>(gy) * m.width + gx]);
+        const uint8_t g = v < 0 ? 205 : static_cast<uint8_t>(255 - v * 255 / 100);
+        const double x = m.origin_x_m + gx * m.resolution_m, y = m.origin_y_m + gy * m.resolution_m;
+        cv::rectangle(c.image, c.P(x, y + m.resolution_m), c.P(x + m.resolution_m, y), cv::Scalar(g, g, g), cv::FILLED);
+      }
+    }
+  }
+  for (size_t i = 1; i < data.truth_trail.size(); ++i) {
+    cv::line(c.image, c.P(data.truth_trail[i - 1].first, data.truth_trail[i - 1].second),
+             c.P(data.truth_trail[i].first, data.truth_trail[i].second), cv::Scalar(160, 160, 160), 1, cv::LINE_AA);
+  }
+  for (size_t i = 1; i < data.trail.size(); ++i) {
+    cv::line(c.image, c.P(data.trail[i - 1].first, data.trail[i - 1].second),
+             c.P(data.trail[i].first, data.trail[i].second), cv::Scalar(182, 89, 155), 2, cv::LINE_AA);
+  }
+  const cv::Scalar blue(219, 152, 52), red(60, 76, 231), green(113, 204, 46), yellow(15, 196, 241);
+  if (data.sources) {
+    for (const auto& s : data.sources->sources) {
+      DrawEllipse(&c, s.position_m[0], s.position_m[1], s.covariance, blue);
+      cv::drawMarker(c.image, c.P(s.position_m[0], s.position_m[1]), blue, cv::MARKER_SQUARE, 10, 2);
+    }
+  }
+  for (const auto& t : summary.truth) {  // true people: hollow diamonds
+    cv::drawMarker(c.image, c.P(t.x_m, t.y_m), cv::Scalar(0, 0, 0), cv::MARKER_DIAMOND, 22, 2);
+  }
+  if (data.people) {
+    for (const auto& p : data.people->people) {
+      const bool heard = p.cues & sarmap::mapped_person_t::CUE_HEARD;
+      const bool seen = p.cues & (sarmap::mapped_person_t::CUE_SEEN_RGBD | sarmap::mapped_person_t::CUE_SEEN_DEPTH);
+      const cv::Scalar colour = seen && heard ? yellow : heard ? red : green;
+      if (heard) DrawEllipse(&c, p.position_m[0], p.position_m[1], p.covariance, colour);
+      cv::circle(c.image, c.P(p.position_m[0], p.position_m[1]), 8, colour, cv::FILLED, cv::LINE_AA);
+      cv::circle(c.image, c.P(p.position_m[0], p.position_m[1]), 8, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      const std::string label = "#" + std::to_string(p.id) + (p.keyword.empty() ? "" : " \"" + p.keyword + "\"");
+      const cv::Point at = c.P(p.position_m[0], p.position_m[1]) + cv::Point(11, -9);
+      cv::putText(c.image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+      cv::putText(c.image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    }
+  }
+  // Legend (on a dark panel) and scale bar.
+  cv::rectangle(c.image, cv::Point(4, 4), cv::Point(240, 136), cv::Scalar(45, 45, 45), cv::FILLED);
+  int y = 24;
+  for (const auto& [text, colour] : std::vector<std::pair<std::string, cv::Scalar>>{
+           {"seen", green}, {"heard (3-sigma)", red}, {"seen + heard", yellow}, {"sound source (3-sigma)", blue},
+           {"true person (simulator)", cv::Scalar(0, 0, 0)}, {"robot path", cv::Scalar(182, 89, 155)}}) {
+    cv::rectangle(c.image, cv::Point(10, y - 12), cv::Point(24, y + 2), colour, cv::FILLED);
+    cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+    cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    y += 20;
+  }
+  const int bar = static_cast<int>(c.pixels_per_m);
+  cv::rectangle(c.image, cv::Point(4, c.image.rows - 28), cv::Point(bar + 50, c.image.rows - 4),
+                cv::Scalar(45, 45, 45), cv::FILLED);
+  cv::line(c.image, cv::Point(10, c.image.rows - 15), cv::Point(10 + bar, c.image.rows - 15), cv::Scalar(255, 255, 255), 3);
+  cv::putText(c.image, "1 m", cv::Point(14 + bar, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return c;
+}
+
+std::string Html(const std::string& s) {
+  std::string out;
+  for (char ch : s) {
+    if (ch == '<') out += "&lt;";
+    else if (ch == '>') out += "&gt;";
+    else if (ch == '&') out += "&amp;";
+    else out += ch;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string SummaryText(const MissionData& data, const MissionSummary& summary) {
+  std::ostringstream out;
+  char line[256];
+  snprintf(line, sizeof(line), "mission: %.1f s, %lld messages; %d people on the map, %d sound sources\n",
+           data.duration_s, static_cast<long long>(data.messages), summary.people_found, summary.sources_mapped);
+  out << line;
+  if (data.people) {
+    for (const auto& p : data.people->people) {
+      snprintf(line, sizeof(line), "  person #%lld at (%.2f, %.2f) m, %s, confidence %.0f%%%s\n",
+               static_cast<long long>(p.id), p.position_m[0], p.position_m[1], HowFound(p.cues).c_str(),
+               100.0 * p.confidence, p.keyword.empty() ? "" : (", said \"" + p.keyword + "\"").c_str());
+      out << line;
+    }
+  }
+  if (!summary.truth.empty()) {
+    int found = 0;
+    for (const auto& t : summary.truth) found += t.found;
+    snprintf(line, sizeof(line), "against the simulator's truth: %d of %zu people found within %.2f m, %d false\n",
+             found, summary.truth.size(), summary.match_radius_m, summary.false_positives);
+    out << line;
+    for (const auto& t : summary.truth) {
+      if (t.found) {
+        snprintf(line, sizeof(line), "  %-12s FOUND  %-22s error %.2f m\n", t.name.c_str(), t.how.c_str(), t.error_m);
+      } else {
+        snprintf(line, sizeof(line), "  %-12s MISSED at (%.2f, %.2f)\n", t.name.c_str(), t.x_m, t.y_m);
+      }
+      out << line;
+    }
+  }
+  return out.str();
+}
+
+void WriteReport(const MissionData& data, const MissionSummary& summary, const std::string& directory) {
+  mkdir(directory.c_str(), 0755);
+  const Canvas canvas = RenderMap(data, summary);
+  if (!cv::imwrite(directory + "/map.png", canvas.image)) {
+    throw std::runtime_error(directory + "/map.png: cannot write");
+  }
+  nlohmann::json j;
+  j["log"] = data.log_path;
+  j["duration_s"] = data.duration_s;
+  j["messages"] = data.messages;
+  j["people"] = nlohmann::json::array();
+  if (data.people) {
+    for (const auto& p : data.people->people) {
+      j["people"].push_back({{"id", p.id}, {"x_m", p.position_m[0]}, {"y_m", p.position_m[1]}, {"z_m", p.position_m[2]},
+                             {"covariance", std::vector<double>(p.covariance, p.covariance + 9)},
+                             {"confidence", p.confidence}, {"how", HowFound(p.cues)}, {"keyword", p.keyword},
+                             {"count", p.people_count}, {"detections", p.num_detections},
+                             {"sound_source_id", p.sound_source_id}});
+    }
+  }
+  j["sound_sources"] = nlohmann::json::array();
+  if (data.sources) {
+    for (const auto& s : data.sources->sources) {
+      j["sound_sources"].push_back({{"id", s.id}, {"x_m", s.position_m[0]}, {"y_m", s.position_m[1]},
+                                    {"z_m", s.position_m[2]}, {"covariance", std::vector<double>(s.covariance, s.covariance + 9)},
+                                    {"converged", s.state == sarmap::sound_source_t::STATE_CONVERGED},
+                                    {"is_person", s.is_person}});
+    }
+  }
+  if (!summary.truth.empty()) {
+    j["truth"] = nlohmann::json::array();
+    for (const auto& t : summary.truth) {
+      j["truth"].push_back({{"id", t.truth_id}, {"name", t.name}, {"x_m", t.x_m}, {"y_m", t.y_m}, {"found", t.found},
+                            {"person_id", t.person_id}, {"how", t.how}, {"error_m", t.error_m}});
+    }
+    j["false_positives"] = summary.false_positives;
+    j["match_radius_m"] = summary.match_radius_m;
+  }
+  std::ofstream(directory + "/report.json") << j.dump(2) << "\n";
+
+  std::ofstream html(directory + "/report.html");
+  html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>sarmap mission report</title><style>"
+          "body{font:15px system-ui,sans-serif;margin:2em;max-width:1100px}table{border-collapse:collapse}"
+          "td,th{padding:.25em .8em;border-bottom:1px solid #ddd;text-align:left}.missed{color:#c0392b}"
+          ".found{color:#1e8449}img{max-width:100%;border:1px solid #ccc}</style></head><body>"
+       << "<h1>sarmap mission report</h1><p>Log <code>" << Html(data.log_path) << "</code>: "
+       << static_cast<int>(data.duration_s) << " s, " << data.messages << " messages. <b>" << summary.people_found
+       << "</b> people and <b>" << summary.sources_mapped << "</b> sound sources on the map.</p>";
+  if (!summary.truth.empty()) {
+    int found = 0;
+    for (const auto& t : summary.truth) found += t.found;
+    html << "<h2>Found versus the simulator's truth</h2><p>" << found << " of " << summary.truth.size()
+         << " people found within " << summary.match_radius_m << " m; " << summary.false_positives
+         << " reported people match nobody.</p><table><tr><th>person</th><th>true position (m)</th><th>result</th>"
+            "<th>how</th><th>error (m)</th></tr>";
+    for (const auto& t : summary.truth) {
+      char pos[64], err[32];
+      snprintf(pos, sizeof(pos), "%.2f, %.2f", t.x_m, t.y_m);
+      snprintf(err, sizeof(err), "%.2f", t.error_m);
+      html << "<tr><td>" << Html(t.name) << "</td><td>" << pos << "</td><td class=\"" << (t.found ? "found\">found" : "missed\">missed")
+           << "</td><td>" << Html(t.how) << "</td><td>" << (t.found ? err : "") << "</td></tr>";
+    }
+    html << "</table>";
+  }
+  html << "<h2>Map</h2><img src=\"map.png\" alt=\"map with people and sound sources\"><h2>People</h2>"
+          "<table><tr><th>#</th><th>position (m)</th><th>how</th><th>confidence</th><th>said</th><th>count</th></tr>";
+  if (data.people) {
+    for (const auto& p : data.people->people) {
+      char pos[64];
+      snprintf(pos, sizeof(pos), "%.2f, %.2f", p.position_m[0], p.position_m[1]);
+      html << "<tr><td>" << p.id << "</td><td>" << pos << "</td><td>" << HowFound(p.cues) << "</td><td>"
+           << static_cast<int>(100 * p.confidence) << "%</td><td>" << Html(p.keyword) << "</td><td>" << p.people_count
+           << "</td></tr>";
+    }
+  }
+  html << "</table><h2>Sound sources</h2><table><tr><th>#</th><th>position (m)</th><th>state</th><th>person</th></tr>";
+  if (data.sources) {
+    for (const auto& s : data.sources->sources) {
+      char pos[64];
+      snprintf(pos, sizeof(pos), "%.2f, %.2f", s.position_m[0], s.position_m[1]);
+      html << "<tr><td>" << s.id << "</td><td>" << pos << "</td><td>"
+           << (s.state == sarmap::sound_source_t::STATE_CONVERGED ? "converged" : "initialising") << "</td><td>"
+           << (s.is_person ? "yes" : "") << "</td></tr>";
+    }
+  }
+  html << "</table><p><a href=\"report.json\">report.json</a></p></body></html>\n";
+}
+
+}  // namespace logtools
+}  // namespace sarmap

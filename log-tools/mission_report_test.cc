@@ -1,0 +1,112 @@
+#include "log-tools/mission_report.h"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <sys/stat.h>
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+#include "sarmap/pose_t.hpp"
+
+namespace sarmap {
+namespace logtools {
+namespace {
+
+template <class T>
+void Write(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t utime) {
+  std::vector<uint8_t> buf(msg.getEncodedSize());
+  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  lcm::LogEvent e;
+  e.eventnum = 0;
+  e.timestamp = utime;
+  e.channel = channel;
+  e.datalen = static_cast<int32_t>(buf.size());
+  e.data = buf.data();
+  log->writeEvent(&e);
+}
+
+sarmap::mapped_person_t Person(int64_t id, double x, double y, int cues, const std::string& keyword = "") {
+  sarmap::mapped_person_t p{};
+  p.id = id;
+  p.position_m[0] = x;
+  p.position_m[1] = y;
+  p.covariance[0] = p.covariance[4] = p.covariance[8] = 0.04;
+  p.confidence = 0.8f;
+  p.cues = static_cast<int8_t>(cues);
+  p.keyword = keyword;
+  p.people_count = 1;
+  return p;
+}
+
+TEST(MissionReportTest, FoundVersusTruthFromALog) {
+  const std::string path = ::testing::TempDir() + "/mission.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    sarmap::occupancy_grid_t grid{};
+    grid.resolution_m = 0.1;
+    grid.width = 80;
+    grid.height = 60;
+    grid.data.assign(80 * 60, 0);
+    for (int x = 0; x < 80; ++x) grid.data[x] = grid.data[59 * 80 + x] = 100;
+    grid.size = static_cast<int32_t>(grid.data.size());
+    Write(&log, "MAP", grid, 1'000'000);
+    for (int i = 0; i < 20; ++i) {
+      sarmap::pose_t pose{};
+      pose.orientation[0] = 1;
+      pose.position_m[0] = 1 + 0.2 * i;
+      pose.position_m[1] = 3;
+      Write(&log, "POSE", pose, 1'000'000 + i * 100'000);
+    }
+    sarmap::people_map_t people{};
+    people.people = {Person(1, 2.0, 1.0, sarmap::mapped_person_t::CUE_SEEN_RGBD),
+                     Person(2, 6.1, 4.9, sarmap::mapped_person_t::CUE_HEARD, "help"),
+                     Person(3, 7.5, 1.0, sarmap::mapped_person_t::CUE_SEEN_DEPTH)};  // nobody there
+    people.num_people = 3;
+    Write(&log, "PEOPLE_MAP", people, 3'000'000);
+    sarmap::sim_truth_t truth{};
+    truth.robot_orientation[0] = 1;
+    const double positions[3][2] = {{2.1, 1.1}, {6.0, 5.2}, {4.0, 5.5}};
+    for (int i = 0; i < 3; ++i) {
+      sarmap::sim_person_t p{};
+      p.id = i;
+      p.name = "person" + std::to_string(i);
+      p.position_m[0] = positions[i][0];
+      p.position_m[1] = positions[i][1];
+      truth.people.push_back(p);
+    }
+    truth.num_people = 3;
+    Write(&log, "SIM_TRUTH", truth, 3'000'000);
+  }
+  const MissionData data = LoadMission(path);
+  EXPECT_TRUE(data.map);
+  EXPECT_GT(data.trail.size(), 10u);
+  const MissionSummary s = Summarise(data, 0.5);
+  ASSERT_EQ(s.truth.size(), 3u);
+  EXPECT_TRUE(s.truth[0].found);
+  EXPECT_EQ(s.truth[0].how, "seen");
+  EXPECT_NEAR(s.truth[0].error_m, std::hypot(0.1, 0.1), 1e-9);
+  EXPECT_TRUE(s.truth[1].found);
+  EXPECT_EQ(s.truth[1].how, "heard");
+  EXPECT_FALSE(s.truth[2].found);
+  EXPECT_EQ(s.false_positives, 1);
+  EXPECT_NE(SummaryText(data, s).find("2 of 3 people found"), std::string::npos);
+
+  const std::string dir = ::testing::TempDir() + "/mission-report";
+  WriteReport(data, s, dir);
+  struct stat st;
+  ASSERT_EQ(stat((dir + "/map.png").c_str(), &st), 0);
+  EXPECT_GT(st.st_size, 5000);
+  std::ifstream json(dir + "/report.json");
+  const auto j = nlohmann::json::parse(json);
+  EXPECT_EQ(j["truth"].size(), 3u);
+  EXPECT_EQ(j["false_positives"], 1);
+  std::ifstream html_file(dir + "/report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)), {});
+  EXPECT_NE(html.find("missed"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace logtools
+}  // namespace sarmap

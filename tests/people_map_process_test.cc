@@ -1,0 +1,188 @@
+// sarmap-people-map as a real process: replaying the same inputs gives the same people map,
+// and a kill -9 loses nothing already found (the restarted node resumes from its state file).
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "common/node.h"
+#include "common/robot_config.h"
+#include "tests/process.h"
+
+namespace sarmap {
+namespace testing {
+namespace {
+
+class PeopleMapProcessTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!getenv("SARMAP_NETNS")) GTEST_FAIL() << "run through tests/harness/sarmap-netns (ctest does)";
+    dir_ = ::testing::TempDir() + "/pm-" + std::to_string(getpid());
+    std::string ignored;
+    RunCapture({"mkdir", "-p", dir_}, &ignored);
+    lcm_ = std::make_unique<lcm::LCM>(common::DefaultLcmUrl());
+    lcm_->subscribe("PEOPLE_MAP", &PeopleMapProcessTest::OnMap, this);
+  }
+  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const sarmap::people_map_t* m) { last_ = *m; ++maps_; }
+
+  std::unique_ptr<Process> StartNode(const std::string& state_file) {
+    std::vector<std::string> args = {"sarmap-people-map", "--set", "reorder_delay_s=0.2", "--set",
+                                     "save_period_s=0.2", "--set", "publish_period_s=0.3"};
+    if (!state_file.empty()) args.insert(args.end(), {"--set", "state_file=" + state_file});
+    auto p = std::make_unique<Process>(args, dir_ + "/node-" + std::to_string(++starts_) + ".log");
+    // Up when its NODE_STATUS... simplest: when it answers a pose with a PEOPLE_MAP republish.
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    return p;
+  }
+
+  void Spin(double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) lcm_->handleTimeout(20);
+  }
+
+  // A robot driving along +x at 0.5 m/s, seeing two people and hearing a third one, hidden,
+  // whose position the sound map knows. `from`..`to` in seconds of mission time.
+  void Play(double from, double to) {
+    const common::Rigid3d base_from_camera = common::RobotOptions().base_from_camera.ToRigid3d();
+    const Eigen::Vector3d people[2] = {{3.0, 0.5, 0.9}, {4.0, -0.8, 0.9}};
+    for (double t = from; t < to; t += 0.05) {
+      const int64_t utime = 1'000'000'000 + static_cast<int64_t>(t * 1e6);
+      sarmap::pose_t pose{};
+      pose.header.utime = utime;
+      pose.header.frame = "map";
+      pose.child_frame = "base";
+      pose.position_m[0] = 0.5 * t;
+      pose.orientation[0] = 1;
+      pose.covariance[0] = pose.covariance[7] = 0.01;
+      pose.covariance[35] = 0.001;
+      lcm_->publish("POSE", &pose);
+      const int step = static_cast<int>(std::lround(t / 0.05));
+      if (step % 4 == 0) {  // people seen at 5 Hz
+        const common::Rigid3d map_from_camera =
+            common::Rigid3d(Eigen::Vector3d(0.5 * t, 0, 0), Eigen::Quaterniond::Identity()) * base_from_camera;
+        sarmap::people_detections_t seen{};
+        seen.header.utime = utime;
+        seen.header.frame = "camera";
+        for (const auto& p : people) {
+          const Eigen::Vector3d c = map_from_camera.inverse() * p;
+          if (c.z() < 0.5 || c.z() > 4.5) continue;
+          sarmap::person_detection_t d{};
+          d.cue = sarmap::person_detection_t::CUE_SEEN_RGBD;
+          d.has_range = true;
+          for (int i = 0; i < 3; ++i) d.position_m[i] = c[i];
+          d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
+          d.confidence = 0.8f;
+          seen.detections.push_back(d);
+        }
+        seen.num_detections = static_cast<int32_t>(seen.detections.size());
+        lcm_->publish("PEOPLE_VISUAL", &seen);
+      }
+      if (step % 20 == 10) {  // the sound map and a call for help at 1 Hz
+        sarmap::sound_map_t sound{};
+        sound.header.utime = utime;
+        sound.header.frame = "map";
+        sarmap::sound_source_t s{};
+        s.id = 5;
+        s.position_m[0] = 2.0;
+        s.position_m[1] = 3.0;
+        s.covariance[0] = s.covariance[4] = s.covariance[8] = 0.05;
+        s.state = sarmap::sound_source_t::STATE_CONVERGED;
+        sound.sources.push_back(s);
+        sound.num_sources = 1;
+        lcm_->publish("SOUND_MAP", &sound);
+        sarmap::people_detections_t heard{};
+        heard.header.utime = utime;
+        heard.header.frame = "mic_array";
+        sarmap::person_detection_t d{};
+        d.cue = sarmap::person_detection_t::CUE_HEARD;
+        const double ax = 2.0 - (0.5 * t + 0.10), ay = 3.0;  // array 0.10 m ahead of the base
+        d.azimuth_rad = std::atan2(ay, ax);
+        d.direction_covariance[0] = 0.05 * 0.05;
+        d.confidence = 0.7f;
+        d.keyword = "help";
+        heard.detections.push_back(d);
+        heard.num_detections = 1;
+        lcm_->publish("PEOPLE_AUDIO", &heard);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      lcm_->handleTimeout(0);
+    }
+  }
+
+  std::string dir_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  sarmap::people_map_t last_{};
+  int maps_ = 0, starts_ = 0;
+};
+
+std::string Describe(const sarmap::people_map_t& m) {
+  std::string out;
+  char line[200];
+  for (const auto& p : m.people) {
+    snprintf(line, sizeof(line), "#%lld (%.6f, %.6f) cues %d n %d conf %.6f kw '%s'\n", static_cast<long long>(p.id),
+             p.position_m[0], p.position_m[1], p.cues, p.num_detections, p.confidence, p.keyword.c_str());
+    out += line;
+  }
+  return out;
+}
+
+TEST_F(PeopleMapProcessTest, SameInputsGiveTheSameMapAndTheHiddenCallerIsPlaced) {
+  std::string first;
+  for (int run = 0; run < 2; ++run) {
+    auto node = StartNode("");
+    Play(0.0, 6.0);
+    Spin(1.0);
+    node->Signal(SIGINT);
+    ASSERT_EQ(node->Wait(10), 0) << node->Output();
+    Spin(0.3);
+    const std::string described = Describe(last_);
+    if (run == 0) {
+      first = described;
+      ASSERT_EQ(last_.num_people, 3) << described << node->Output();
+      bool hidden = false;
+      for (const auto& p : last_.people) {
+        if (p.cues == sarmap::mapped_person_t::CUE_HEARD) {
+          hidden = true;
+          EXPECT_NEAR(p.position_m[0], 2.0, 1e-6);
+          EXPECT_NEAR(p.position_m[1], 3.0, 1e-6);
+          EXPECT_EQ(p.keyword, "help");
+        } else {
+          EXPECT_LT(std::min(std::hypot(p.position_m[0] - 3.0, p.position_m[1] - 0.5),
+                             std::hypot(p.position_m[0] - 4.0, p.position_m[1] + 0.8)), 0.05) << described;
+        }
+      }
+      EXPECT_TRUE(hidden) << described;
+    } else {
+      EXPECT_EQ(described, first);
+    }
+  }
+}
+
+TEST_F(PeopleMapProcessTest, KillNineLosesNothingAlreadyFound) {
+  const std::string state = dir_ + "/people.yaml";
+  auto node = StartNode(state);
+  Play(0.0, 4.0);
+  Spin(1.0);  // applied and saved
+  const int before = last_.num_people;
+  ASSERT_GE(before, 2) << Describe(last_) << node->Output();
+  const std::string found_before = Describe(last_);
+  node->Signal(SIGKILL);
+  node->Wait(5);
+  last_ = {};
+  auto restarted = StartNode(state);
+  Spin(1.0);  // the restarted node republishes what it resumed... once it has a time
+  Play(4.0, 4.5);
+  Spin(1.0);
+  EXPECT_GE(last_.num_people, before) << Describe(last_) << restarted->Output();
+  EXPECT_NE(restarted->Output().find("resumed"), std::string::npos) << restarted->Output();
+  for (const auto& line : {std::string("#1 "), std::string("#2 ")}) {
+    EXPECT_NE(Describe(last_).find(line), std::string::npos) << "lost " << line << " of\n" << found_before;
+  }
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace sarmap
