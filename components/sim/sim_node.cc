@@ -11,6 +11,7 @@
 #include "common/logging.h"
 #include "common/node.h"
 #include "common/options.h"
+#include "common/robot_config.h"
 #include "sarmap/velocity_command_t.hpp"
 #include "sim/simulator.h"
 
@@ -68,7 +69,9 @@ int Run(int argc, char** argv) {
   if (speed >= 0) overrides.push_back("speed=" + std::to_string(speed));
   if (seed >= 0) overrides.push_back("seed=" + std::to_string(seed));
   if (duration >= 0) overrides.push_back("duration_s=" + std::to_string(duration));
-  const std::string config = node_args.config_path;
+  // The config file is found like every node's (working directory, $SARMAP_CONFIG_DIR, the
+  // source tree's config/).
+  const std::string config = common::ResolveConfigPath(node_args.config_path);
   const bool have_config = !config.empty() && std::ifstream(config).good();
   const auto options = common::LoadOptions<sim::SimOptions>(have_config ? config : "", overrides);
   if (node_args.print_config) {

@@ -32,9 +32,10 @@ double ThreadCpuSeconds() {
 // Relative paths: from the repository root; files (not the data dir) may also be given
 // relative to the working directory.
 std::string Resolve(const std::string& path, const std::string& root, bool try_cwd = true) {
-  if (path.empty() || fs::path(path).is_absolute() || root.empty()) return path;
+  if (path.empty() || fs::path(path).is_absolute()) return path;
   std::error_code ec;
   if (try_cwd && fs::is_regular_file(path, ec)) return path;
+  if (root.empty()) return try_cwd ? common::ResolveConfigPath(path) : path;
   return (fs::path(root) / path).lexically_normal().string();
 }
 

@@ -9,6 +9,7 @@
 
 #include "common/args.h"
 #include "common/options.h"
+#include "common/robot_config.h"
 #include "sim/simulator.h"
 
 namespace {
@@ -35,11 +36,12 @@ int main(int argc, char** argv) {
     std::vector<std::string> overrides = node_args.overrides;
     if (!world.empty()) overrides.push_back("world=" + world);
     overrides.push_back("audio.enabled=false");
-    const bool have_config = std::ifstream(node_args.config_path).good();
-    const auto options = common::LoadOptions<sim::SimOptions>(have_config ? node_args.config_path : "", overrides);
+    const std::string config = common::ResolveConfigPath(node_args.config_path);
+    const bool have_config = std::ifstream(config).good();
+    const auto options = common::LoadOptions<sim::SimOptions>(have_config ? config : "", overrides);
     sim::SimSetup setup;
     try {
-      setup = sim::LoadSetup(options, have_config ? sim::FindRepoRoot(node_args.config_path) : "");
+      setup = sim::LoadSetup(options, have_config ? sim::FindRepoRoot(config) : "");
     } catch (const sim::WorldError& e) {
       throw common::OptionsError(e.what());
     }
