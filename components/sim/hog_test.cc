@@ -84,6 +84,36 @@ TEST(SimHogTest, DefaultPeopleDetectorFindsVisiblePeopleInLitLab) {
   EXPECT_GE(expected, 6);
 }
 
+// In darkness (Sales 2014 §5.2.2) the same detector finds nobody: the colour image is noise.
+TEST(SimHogTest, NobodyIsFoundInTheDarkLab) {
+  const std::string tud = std::string(SARMAP_DATA_DIR) + "/vision/rgb/tud_campus/gt/gt.txt";
+  if (!std::filesystem::exists(tud)) GTEST_SKIP() << "shared data missing: " << tud;
+  SimOptions options;
+  options.world = std::string(SARMAP_SOURCE_DIR) + "/config/worlds/lab_dark.yaml";
+  options.robot_config = std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml";
+  options.data_dir = SARMAP_DATA_DIR;
+  options.audio.enabled = false;
+  Simulator sim(LoadSetup(options, ""));
+  cv::HOGDescriptor hog;
+  hog.setSVMDetector(cv::HOGDescriptor::getDefaultPeopleDetector());
+  NullSink sink;
+  int detections_total = 0, in_view = 0;
+  for (double t : {0.0, 2.0, 4.0}) {
+    sim.AdvanceTo(t, &sink);
+    const Simulator::View view = sim.RenderView();
+    for (int pixels : view.person_pixels) in_view += pixels > 800;
+    cv::Mat image(view.height, view.width, CV_8UC3, const_cast<uint8_t*>(view.rgb.data())), bgr;
+    cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
+    std::vector<cv::Rect> detections;
+    std::vector<double> weights;
+    hog.detectMultiScale(bgr, detections, weights, 0.0, cv::Size(8, 8), cv::Size(16, 16), 1.05, 2.0);
+    detections_total += static_cast<int>(detections.size());
+  }
+  std::printf("dark lab: %d people in view over 3 frames, %d HOG detections\n", in_view, detections_total);
+  EXPECT_GE(in_view, 4);  // they are there (the depth camera sees them) ...
+  EXPECT_EQ(detections_total, 0);  // ... but not in colour
+}
+
 }  // namespace
 }  // namespace sim
 }  // namespace sarmap
