@@ -1,6 +1,7 @@
 #include "sim/renderer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -419,12 +420,28 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
     }
     tex[k] = {poly.tex_s, poly.tex_t, poly.tex_origin.dot(poly.tex_s), poly.tex_origin.dot(poly.tex_t), bilinear};
   }
+  // Flat polygons: their final 8-bit colour, once per frame (the common, cheap case).
+  std::vector<std::array<uint8_t, 3>> flat(polygons_.size());
+  auto to_byte = [&](float v) { return static_cast<uint8_t>(std::min(255, std::max(0, static_cast<int>(v * gain + 0.5f)))); };
+  for (size_t k = 0; k < polygons_.size(); ++k) {
+    flat[k] = {to_byte(polygons_[k].shade[0]), to_byte(polygons_[k].shade[1]), to_byte(polygons_[k].shade[2])};
+  }
+  const std::array<uint8_t, 3> background = {to_byte(background_[0]), to_byte(background_[1]), to_byte(background_[2])};
   for (int j = 0; j < H; ++j) {
     const float ry = (j - cy) / fy;
     for (int i = 0; i < W; ++i) {
       const size_t p = static_cast<size_t>(j) * W + i;
-      float c[3] = {background_[0], background_[1], background_[2]};  // nothing hit: sky or far dark
       const int id = color_id_[p];
+      uint8_t* dst = &out->rgb[p * 3];
+      const bool billboard = id >= 0 && (polygons_[id].flags & kBillboard) && textured;
+      if (!billboard && glass_layers_[p] == 0) {
+        const std::array<uint8_t, 3>& f = id >= 0 ? flat[id] : background;
+        dst[0] = f[0];
+        dst[1] = f[1];
+        dst[2] = f[2];
+        continue;
+      }
+      float c[3] = {background_[0], background_[1], background_[2]};  // nothing hit: sky or far dark
       if (id >= 0) {
         const Polygon& poly = polygons_[id];
         if ((poly.flags & kBillboard) && textured) {
@@ -461,11 +478,7 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
         c[1] = 0.84f * c[1] + 0.16f * 0.82f;
         c[2] = 0.84f * c[2] + 0.16f * 0.88f;
       }
-      uint8_t* dst = &out->rgb[p * 3];
-      for (int ch = 0; ch < 3; ++ch) {
-        const int v = static_cast<int>(c[ch] * gain + 0.5f);
-        dst[ch] = static_cast<uint8_t>(std::min(255, std::max(0, v)));
-      }
+      for (int ch = 0; ch < 3; ++ch) dst[ch] = to_byte(c[ch]);
     }
   }
   // Sensor noise, pre-scaled for the lighting, in one vectorisable saturating pass.
