@@ -89,7 +89,7 @@ std::vector<float> ImageSourceRir(const ShoeboxRoom& room, const Eigen::Vector3d
     }
   };
   if (!options.reverb) {
-    add((source - mic).norm(), 1.0, true);
+    if (options.min_order == 0) add((source - mic).norm(), 1.0, true);
     return h;
   }
   // Per axis: the offsets of all images from the mic, with gain and reflection order.
@@ -111,7 +111,7 @@ std::vector<float> ImageSourceRir(const ShoeboxRoom& room, const Eigen::Vector3d
         const double g = std::pow(b_lo, r_lo) * std::pow(b_hi, r_hi);
         if (g == 0.0 && (r_lo + r_hi) > 0) continue;
         const double off = x - m[a];
-        if (std::abs(off) > max_dist) continue;
+        if (std::abs(off) > max_dist || r_lo + r_hi > options.max_order) continue;
         axes[a].offset.push_back(off);
         axes[a].gain.push_back(r_lo + r_hi == 0 ? 1.0 : g);
         axes[a].order.push_back(r_lo + r_hi);
@@ -135,11 +135,13 @@ std::vector<float> ImageSourceRir(const ShoeboxRoom& room, const Eigen::Vector3d
       const double* oz = axes[2].offset.data();
       const double* gz = axes[2].gain.data();
       const int* ordz = axes[2].order.data();
+      if (oxy > options.max_order) continue;
       for (size_t k = 0; k < nz; ++k) {
         const double d2 = dxy2 + oz[k] * oz[k];
-        if (d2 > max_d2) continue;
+        const int order = oxy + ordz[k];
+        if (d2 > max_d2 || order < options.min_order || order > options.max_order) continue;
         const double g = gxy * gz[k];
-        if (oxy + ordz[k] <= options.exact_order) {
+        if (order <= options.exact_order) {
           add(std::sqrt(d2), g, true);
           continue;
         }

@@ -59,6 +59,10 @@ struct RirOptions {
   int exact_order = 2;        // reflections up to this order: windowed sinc; later: linear
   int sinc_half_width = 16;
   bool reverb = true;         // false: direct path only (free field)
+  // Which images to include, by reflection order (e.g. only the early part, or only the late
+  // part, so a moving array can refresh the early part often and the diffuse tail rarely).
+  int min_order = 0;
+  int max_order = 1 << 20;
 };
 
 // Impulse response from `source` to `mic` (time 0 = emission), pressure per unit source

@@ -56,6 +56,26 @@ TEST(AcousticsTest, ImageSourceDecayMatchesConfiguredRt60) {
   }
 }
 
+// Early (order <= 2) and late (order > 2) parts add up to the whole response.
+TEST(AcousticsTest, EarlyAndLatePartsSumToTheWhole) {
+  ShoeboxRoom room;
+  room.max = Eigen::Vector3d(6, 5, 3);
+  SetUniformRt60(&room, 0.3);
+  RirOptions all;
+  all.max_length_s = 0.3;
+  RirOptions early = all, late = all;
+  early.max_order = all.exact_order;
+  late.min_order = all.exact_order + 1;
+  const Eigen::Vector3d s(1.2, 3.1, 1.4), m(4.4, 1.7, 0.9);
+  const auto h = ImageSourceRir(room, s, m, all), he = ImageSourceRir(room, s, m, early),
+             hl = ImageSourceRir(room, s, m, late);
+  ASSERT_EQ(h.size(), he.size());
+  ASSERT_EQ(h.size(), hl.size());
+  double worst = 0;
+  for (size_t k = 0; k < h.size(); ++k) worst = std::max(worst, static_cast<double>(std::abs(h[k] - he[k] - hl[k])));
+  EXPECT_LT(worst, 1e-6);
+}
+
 TEST(AcousticsTest, DirectPathHasOneOverRAttenuation) {
   ShoeboxRoom room;
   room.max = Eigen::Vector3d(10, 10, 10);

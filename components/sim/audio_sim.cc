@@ -10,6 +10,8 @@ namespace {
 constexpr int kPhases = 1024;
 constexpr int kInterpHalf = 16;
 double DbToPa(double db) { return 20e-6 * std::pow(10.0, db / 20.0); }
+// The diffuse tail changes little over a few decimetres; the early reflections do not.
+constexpr double kLateUpdateDistance_m = 0.25;
 }  // namespace
 
 struct AudioSim::Source {
@@ -17,6 +19,10 @@ struct AudioSim::Source {
   std::unique_ptr<MultiConvolver> convolver;
   std::vector<Eigen::Vector3d> filter_mics;  // mic positions the filters were made for
   Eigen::Vector3d filter_source;
+  // The late (diffuse) part per mic and where it was computed: refreshed only after larger
+  // moves, while the early part follows every few centimetres.
+  std::vector<std::vector<float>> late;
+  std::vector<Eigen::Vector3d> late_mics;
   double pressure_pa = 1;
 };
 
@@ -147,9 +153,25 @@ void AudioSim::GenerateBlock(const common::Rigid2d& map_from_base, double speed_
         update = (src->filter_mics[m] - mic_pos[m]).norm() > options_.rir_update_distance_m;
       }
       if (update) {
+        const Eigen::Vector3d& source_pos = src->signal->source().position;
+        bool late_stale = src->late.empty() || (src->filter_source - source_pos).norm() > 1e-6;
+        for (int m = 0; m < mics_ && !late_stale; ++m) {
+          late_stale = (src->late_mics[m] - mic_pos[m]).norm() > kLateUpdateDistance_m;
+        }
+        if (late_stale) {
+          RirOptions late = rir_options_;
+          late.min_order = rir_options_.exact_order + 1;
+          src->late.assign(mics_, {});
+          for (int m = 0; m < mics_; ++m) src->late[m] = ImageSourceRir(room_, source_pos, mic_pos[m], late);
+          src->late_mics = mic_pos;
+        }
+        RirOptions early = rir_options_;
+        early.max_order = rir_options_.exact_order;
         std::vector<std::vector<float>> filters(mics_);
         for (int m = 0; m < mics_; ++m) {
-          filters[m] = ImageSourceRir(room_, src->signal->source().position, mic_pos[m], rir_options_);
+          filters[m] = ImageSourceRir(room_, source_pos, mic_pos[m], early);
+          filters[m].resize(std::max(filters[m].size(), src->late[m].size()), 0.0f);
+          for (size_t k = 0; k < src->late[m].size(); ++k) filters[m][k] += src->late[m][k];
         }
         src->convolver->SetFilters(filters);
         src->filter_mics = mic_pos;
