@@ -117,6 +117,7 @@ std::vector<Appearance> LoadAppearances(const std::string& data_dir, int max_cou
   for (const char* stem : {"crop001501", "crop_000001"}) {
     if (static_cast<int>(out.size()) >= max_count) break;
     const std::string base = data_dir + "/vision/rgb/inria_samples/" + stem;
+    if (!std::ifstream(base + ".png").good()) continue;  // quietly: the warning below says it all
     const cv::Mat img = cv::imread(base + ".png", cv::IMREAD_COLOR);
     if (img.empty()) continue;
     for (const cv::Rect2d& box : InriaBoxes(base + ".txt")) {
