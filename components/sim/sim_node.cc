@@ -106,6 +106,9 @@ int Run(int argc, char** argv) {
   while (!node.stopping()) {
     if (options.duration_s > 0 && simulator.time_s() >= options.duration_s - 1e-9) break;
     simulator.AdvanceTo(simulator.time_s() + step_s, &sink);
+    // Serve LCM (CMD_VEL) every step, also when running behind the requested speed (a few
+    // non-blocking rounds: each handles at most one message).
+    for (int k = 0; k < 4 && !node.stopping(); ++k) node.SpinOnce(0.0);
     if (options.speed > 0) {
       const auto due = wall0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                    std::chrono::duration<double>(simulator.time_s() / options.speed));
@@ -114,8 +117,6 @@ int Run(int argc, char** argv) {
         if (left <= 0) break;
         if (!node.SpinOnce(left)) break;
       }
-    } else {
-      node.SpinOnce(0.0);
     }
     if (simulator.time_s() - last_status >= 1.0) {
       last_status = simulator.time_s();
