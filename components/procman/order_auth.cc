@@ -115,18 +115,22 @@ ReplayGuard::ReplayGuard(std::string state_path) : state_path_(std::move(state_p
   }
 }
 
+std::string ReplayDomain(const std::string& sheriff_id) {
+  return sheriff_id.substr(0, sheriff_id.find('/'));
+}
+
 bool ReplayGuard::Fresh(const std::string& sheriff_id, int64_t counter) const {
-  auto it = last_.find(sheriff_id);
+  auto it = last_.find(ReplayDomain(sheriff_id));
   return it == last_.end() || counter > it->second;
 }
 
 int64_t ReplayGuard::Last(const std::string& sheriff_id) const {
-  auto it = last_.find(sheriff_id);
+  auto it = last_.find(ReplayDomain(sheriff_id));
   return it == last_.end() ? -1 : it->second;
 }
 
 bool ReplayGuard::Accept(const std::string& sheriff_id, int64_t counter) {
-  last_[sheriff_id] = counter;
+  last_[ReplayDomain(sheriff_id)] = counter;
   if (state_path_.empty()) return true;
   // Write a new file and rename it over the old one: a crash never leaves half a file.
   const std::string tmp = state_path_ + ".tmp";

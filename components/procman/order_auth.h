@@ -43,7 +43,12 @@ bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders);
 enum class Verdict { kAccepted, kUnsigned, kForged, kReplayed };
 const char* ToString(Verdict verdict);
 
-// The last counter accepted per sheriff, optionally persisted in a small text file.
+// A sheriff_id is "NAME" or "NAME/INSTANCE" (the sheriff uses sheriff@host/pid): counters are
+// kept per NAME, the replay domain, so the state file does not grow with every sheriff run,
+// while sheriffs can still tell each other's orders apart.
+std::string ReplayDomain(const std::string& sheriff_id);
+
+// The last counter accepted per sheriff NAME, optionally persisted in a small text file.
 class ReplayGuard {
  public:
   // state_path "" keeps the counters in memory only. Throws std::runtime_error on an

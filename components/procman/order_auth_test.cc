@@ -91,6 +91,11 @@ TEST(OrderAuth, RefusesUnsignedForgedAndReplayed) {
   sarmap::pm_orders_t next = SomeOrders(8);
   SignOrders(key, &next);
   EXPECT_EQ(VerifyOrders(key, next, &guard), Verdict::kAccepted);
+  // Another instance of the same sheriff name shares the counter (a restarted sheriff).
+  sarmap::pm_orders_t instance = SomeOrders(8);
+  instance.sheriff_id = "sheriff@base/1234";
+  SignOrders(key, &instance);
+  EXPECT_EQ(VerifyOrders(key, instance, &guard), Verdict::kReplayed);
   // Another sheriff has its own counter.
   sarmap::pm_orders_t other = SomeOrders(1);
   other.sheriff_id = "sheriff@laptop";
