@@ -17,7 +17,7 @@ struct ProcmanOptions {
   double output_period_s = 0.1;
   int output_max_bytes = 16384;
   int output_buffer_bytes = 65536;
-  double respawn_base_s = 0.25;
+  double respawn_base_s = 0.1;
   double respawn_max_s = 10.0;
   double respawn_stable_run_s = 5.0;
   std::string state_dir = "";

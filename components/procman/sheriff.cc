@@ -183,6 +183,9 @@ void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   if (!Decode(rbuf, &orders) || orders.sheriff_id == sheriff_id_) return;
   DeputyView* d = FindDeputy(orders.deputy_id);
   if (!d || !SignatureValid(*key_, orders)) return;
+  // Only orders newer than our own last ones: an older re-send of the other sheriff must not
+  // undo a change we just made (nor ours theirs: they follow the same rule).
+  if (orders.counter <= d->last_sent_counter) return;
   auto it = foreign_counters_.find(orders.sheriff_id);
   if (it != foreign_counters_.end() && orders.counter <= it->second) return;
   foreign_counters_[orders.sheriff_id] = orders.counter;
@@ -193,11 +196,19 @@ void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string&) {
           (c->desired_running != o.desired_running || c->desired_runid != o.desired_runid)) {
         c->desired_running = o.desired_running;
         c->desired_runid = o.desired_runid;
-        c->has_pending = false;
       }
     }
   }
-  d->initialised = true;
+  if (!d->initialised) {
+    d->initialised = true;
+    // What we were asked before knowing this deputy applies on top.
+    for (auto& c : commands_) {
+      if (c->cfg.deputy == d->id && c->has_pending) {
+        c->has_pending = false;
+        ApplyTo(c->pending, c.get(), d);
+      }
+    }
+  }
 }
 
 bool Sheriff::Acknowledged(const DeputyView& d) const {

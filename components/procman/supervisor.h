@@ -62,7 +62,7 @@ struct CommandStatus {
 };
 
 struct RespawnPolicy {
-  double base_s = 0.25;
+  double base_s = 0.1;
   double max_s = 10.0;
   double stable_run_s = 5.0;
   // Delay before respawn number `quick_crashes` (0 = first crash after a stable run).
