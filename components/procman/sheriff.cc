@@ -308,6 +308,19 @@ bool Sheriff::DeputyLost(const std::string& deputy_id, double now_s) const {
   return !d || !d->heard || now_s - d->last_heard_s > options_.deputy_lost_after_s;
 }
 
+bool Sheriff::DeputyHeard(const std::string& deputy_id) const {
+  const DeputyView* d = FindDeputy(deputy_id);
+  return d && d->heard;
+}
+
+double Sheriff::NextLostDeadline(double now_s) const {
+  double next = std::numeric_limits<double>::infinity();
+  for (const auto& d : deputies_) {
+    if (d->heard && !DeputyLost(d->id, now_s)) next = std::min(next, d->last_heard_s + options_.deputy_lost_after_s);
+  }
+  return next;
+}
+
 int Sheriff::RefusedOrders(const std::string& deputy_id) const {
   const DeputyView* d = FindDeputy(deputy_id);
   return d && d->heard ? d->info.refused_orders : 0;

@@ -49,6 +49,9 @@ class Sheriff : public EventLoop::Participant {
   bool Settled(std::string* why_not) const;
   bool AllDeputiesHeard() const;
   bool DeputyLost(const std::string& deputy_id, double now_s) const;
+  bool DeputyHeard(const std::string& deputy_id) const;
+  // When the next deputy that is present now would count as lost (+inf: none).
+  double NextLostDeadline(double now_s) const;
   int RefusedOrders(const std::string& deputy_id) const;
   // State of a command as last reported (-1: not reported).
   int CommandState(const std::string& command_id) const;

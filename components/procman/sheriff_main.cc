@@ -11,12 +11,14 @@
 
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 
 #include "common/args.h"
 #include "common/logging.h"
 #include "common/node.h"
+#include "common/time.h"
 #include "procman/deputy.h"
 #include "procman/sheriff.h"
 #include "procman/supervisor.h"
@@ -54,7 +56,7 @@ class Driver : public EventLoop::Participant {
   }
   double NextWakeup() const override {
     double next = runner_ ? runner_->NextWakeup() : 1e300;
-    if (live_) next = std::min(next, next_draw_s_);
+    if (live_) next = std::min(next, events_ ? sheriff_->NextLostDeadline(Now()) + 0.001 : next_draw_s_);
     if (settling_ || status_only_) next = std::min(next, Now() + 0.1);
     return next;
   }
@@ -109,7 +111,9 @@ class Driver : public EventLoop::Participant {
       }
     }
     if (!runner_ && !settling_ && live_after_) live_ = true;
-    if (live_ && now_s >= next_draw_s_) {
+    if (live_ && events_) {
+      PrintEvents(now_s);
+    } else if (live_ && now_s >= next_draw_s_) {
       Draw(now_s);
       next_draw_s_ = now_s + 1.0;
     }
@@ -122,6 +126,38 @@ class Driver : public EventLoop::Participant {
   void Finish(int code) {
     finished_ = true;
     exit_code_ = code;
+  }
+
+  // Live view without a terminal (a log, systemd, tests): one time-stamped line per change.
+  void PrintEvents(double now_s) {
+    const double wall_s = static_cast<double>(common::WallClockUtime()) * 1e-6;
+    char stamp[32];
+    snprintf(stamp, sizeof(stamp), "[%.3f] ", wall_s);
+    for (const auto& id : sheriff_->config().Deputies()) {
+      const std::string state = !sheriff_->DeputyHeard(id) ? "not seen" : sheriff_->DeputyLost(id, now_s) ? "LOST" : "ok";
+      std::string& last = deputy_state_[id];
+      if (state != last) {
+        if (state == "LOST") {
+          std::cout << stamp << "deputy '" << id << "' LOST (silent for more than " << options_.deputy_lost_after_s
+                    << " s)\n";
+        } else if (state == "ok") {
+          std::cout << stamp << "deputy '" << id << "' " << (last == "LOST" ? "back" : "seen") << "\n";
+        }
+        last = state;
+      }
+    }
+    for (const auto& c : sheriff_->config().commands) {
+      const int state = sheriff_->CommandState(c.id);
+      const int pid = sheriff_->CommandPid(c.id);
+      auto& last = command_state_[c.id];
+      if (state >= 0 && (state != last.first || pid != last.second)) {
+        std::cout << stamp << "command '" << c.id << "' on '" << c.deputy
+                  << "': " << ToString(static_cast<CommandState>(state)) << (pid > 0 ? " pid " + std::to_string(pid) : "")
+                  << "\n";
+        last = {state, pid};
+      }
+    }
+    std::cout << std::flush;
   }
 
   void Draw(double now_s) {
@@ -202,6 +238,9 @@ class Driver : public EventLoop::Participant {
   std::string message_;
   bool finished_ = false;
   int exit_code_ = 0;
+  const bool events_ = !isatty(1);
+  std::map<std::string, std::string> deputy_state_;
+  std::map<std::string, std::pair<int, int>> command_state_;
 };
 
 }  // namespace
