@@ -211,8 +211,9 @@ TEST(Supervisor, CountsCpuAndMemoryOfChildren) {
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   sup.UpdateUsage(Now());
   const CommandStatus* st = Find(sup.Status(), "busy");
-  // The busy loop is a child of the command's sh: counted.
-  EXPECT_GT(st->cpu_percent, 20.0);
+  // The busy loop is a child of the command's sh (which itself only waits): counted. The
+  // share it gets depends on the machine's load, so only "clearly more than nothing".
+  EXPECT_GT(st->cpu_percent, 2.0);
   EXPECT_GT(st->rss_bytes, 0);
   sup.Shutdown();
   ASSERT_TRUE(StepUntil(&sup, [&] { return sup.AllStopped(); }));
