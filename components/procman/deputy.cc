@@ -52,6 +52,17 @@ std::string DeputyStatePath(const std::string& state_dir, const std::string& id)
   return dir + "/procman-deputy-" + safe_id + ".counters";
 }
 
+void PutOwnDirectoryOnPath() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (n <= 0) return;
+  self[n] = '\0';
+  std::string dir(self);
+  dir = dir.substr(0, dir.rfind('/'));
+  const char* path = getenv("PATH");
+  setenv("PATH", (dir + ":" + (path ? path : "/usr/local/bin:/usr/bin:/bin")).c_str(), 1);
+}
+
 Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key,
                const std::string& replay_state_path)
     : lcm_(lcm),
@@ -107,7 +118,7 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     }
     return;
   }
-  if (!persisted) {
+  if (!persisted && refuse_log_limit_.try_emplace("persist", 30.0).first->second.Allow(Now())) {
     SARMAP_LOG(ERROR) << "cannot write replay state " << replay_.state_path()
                       << "; a deputy restart could accept replays of these orders";
   }

@@ -25,6 +25,10 @@ namespace procman {
 // Replay state file of deputy `id` in `state_dir` ("" = the default from the options doc).
 std::string DeputyStatePath(const std::string& state_dir, const std::string& id);
 
+// Puts the directory of the running program (build/bin, or the install's bin) first on PATH,
+// so .pmd files can name sarmap programs without paths.
+void PutOwnDirectoryOnPath();
+
 class Deputy : public EventLoop::Participant {
  public:
   Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key,

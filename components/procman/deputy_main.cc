@@ -1,7 +1,6 @@
 // sarmap-procman-deputy: runs the commands a verified sheriff orders on this computer.
 #include <unistd.h>
 
-#include <climits>
 #include <cstdlib>
 #include <iostream>
 
@@ -13,22 +12,6 @@
 using namespace sarmap;
 using namespace sarmap::procman;
 
-namespace {
-
-// Programs next to the deputy (build/bin, or the install's bin) come first on PATH, so the
-// .pmd files can name sarmap programs without paths.
-void PutOwnDirectoryOnPath() {
-  char self[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-  if (n <= 0) return;
-  self[n] = '\0';
-  std::string dir(self);
-  dir = dir.substr(0, dir.rfind('/'));
-  const char* path = getenv("PATH");
-  setenv("PATH", (dir + ":" + (path ? path : "/usr/local/bin:/usr/bin:/bin")).c_str(), 1);
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-procman-deputy", [&]() -> int {

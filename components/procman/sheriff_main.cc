@@ -342,6 +342,7 @@ int main(int argc, char** argv) {
 
     std::vector<std::unique_ptr<Deputy>> deputies;
     if (lone_ranger) {
+      PutOwnDirectoryOnPath();
       if (!BecomeSubreaper()) {
       SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
     }
