@@ -10,6 +10,7 @@
 #include "procman/order_auth.h"
 #include "procman/test_support.h"
 #include "sarmap/pm_command_status_t.hpp"
+#include "sarmap/pm_output_t.hpp"
 
 namespace sarmap {
 namespace procman {
@@ -25,7 +26,7 @@ class ProcmanSystem : public ::testing::Test {
     deputy_id_ = std::string("d") + std::to_string(getpid()) + "-" + info->name();
     // Unique sleep lengths mark this run's (and this test's) processes in /proc.
     static int test_index = 0;
-    base_ = 500000 + (getpid() % 1000) * 400 + 20 * test_index++;
+    base_ = getpid() * 100 + 10 * test_index++;
   }
   std::string Marker(int i) const { return std::to_string(base_ + i); }
   std::string SleepCmd(int i) const { return "sleep " + Marker(i); }
@@ -53,7 +54,7 @@ class ProcmanSystem : public ::testing::Test {
   Scratch scratch_;
   Watcher watch_;
   std::string deputy_id_;
-  int base_ = 0;
+  long base_ = 0;
 };
 
 TEST_F(ProcmanSystem, GroupStartStopRestart) {
@@ -92,6 +93,30 @@ TEST_F(ProcmanSystem, GroupStartStopRestart) {
   const CliResult bad = Sheriff(pmd, {"start", "nonexistent"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.output.find("no command or group \"nonexistent\""), std::string::npos);
+}
+
+TEST_F(ProcmanSystem, OutputAndEnvironmentReachTheSheriff) {
+  const std::string d = deputy_id_;
+  setenv("PROCMAN_TEST_VALUE", Marker(5).c_str(), 1);  // the deputy inherits it
+  const std::string pmd = Pmd("cmd \"talker\" { exec = \"GREETING=hello-$PROCMAN_TEST_VALUE sh -c "
+                              "'echo $GREETING; echo to-stderr >&2; exec " + SleepCmd(1) + "'\"; deputy = \"" + d +
+                              "\"; }\n");
+  auto deputy = StartDeputy(d);
+  std::string output;
+  lcm::Subscription* sub = watch_.lcm().subscribeFunction(
+      "^PM_OUTPUT$", +[](const lcm::ReceiveBuffer* rbuf, const std::string&, std::string* out) {
+        sarmap::pm_output_t msg;
+        if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+        for (const auto& t : msg.text) *out += t;
+      }, &output);
+  ASSERT_EQ(Sheriff(pmd, {"start", "talker"}).exit_code, 0);
+  EXPECT_TRUE(watch_.WaitFor([&] { return output.find("to-stderr\n") != std::string::npos; })) << output;
+  EXPECT_NE(output.find("hello-" + Marker(5) + "\n"), std::string::npos) << output;
+  // Started without a shell of ours: the command's own process is the sh we asked for.
+  const int pid = watch_.Pid(d, "talker");
+  EXPECT_EQ(ProcessesWithCmdline(SleepCmd(1)), std::vector<int>{pid});  // sh exec'd the sleep
+  ASSERT_EQ(Sheriff(pmd, {"stop", "talker"}).exit_code, 0);
+  watch_.lcm().unsubscribe(sub);
 }
 
 TEST_F(ProcmanSystem, CrashingCommandIsRespawned) {

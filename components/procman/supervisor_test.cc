@@ -136,7 +136,7 @@ TEST(Supervisor, NoDescendantSurvivesAStop) {
   ASSERT_TRUE(BecomeSubreaper());
   Supervisor sup;
   // Background children of a non-interactive sh ignore SIGINT; one even leaves the group.
-  const std::string marker = "31" + std::to_string(getpid() % 1000);  // unique sleep length
+  const std::string marker = "31" + std::to_string(getpid());  // unique sleep length
   CommandSpec s = Spec("family",
                        "sleep " + marker + " & setsid sleep " + marker + " & sleep " + marker, true);
   s.use_shell = true;
@@ -148,6 +148,23 @@ TEST(Supervisor, NoDescendantSurvivesAStop) {
   sup.SetDesired({s});
   ASSERT_TRUE(StepUntil(&sup, [&] { return StateOf(&sup, "family") == CommandState::kStopped; }));
   EXPECT_TRUE(LiveDescendantsWithMarker("sleep " + marker).empty());
+}
+
+TEST(Supervisor, OutputBeyondTheBufferIsDroppedAndCounted) {
+  Supervisor sup(RespawnPolicy(), 1000);
+  sup.SetDesired({Spec("loud", "sh -c 'yes | head -c 5000; echo END'", true)});
+  ASSERT_TRUE(StepUntil(&sup, [&] { return StateOf(&sup, "loud") == CommandState::kStopped; }));
+  for (int i = 0; i < 5; ++i) sup.Step(Now());
+  std::string out;
+  auto first = sup.TakeOutput(300);
+  ASSERT_EQ(first.size(), 1u);
+  out = first[0].second;
+  EXPECT_EQ(out.rfind("[procman] ", 0), 0u) << out;  // the note comes first
+  EXPECT_NE(out.find("bytes of output dropped"), std::string::npos) << out;
+  for (int i = 0; i < 10; ++i) {
+    for (auto& [id, text] : sup.TakeOutput(300)) out += text;
+  }
+  EXPECT_NE(out.find("END\n"), std::string::npos);  // the newest output is kept
 }
 
 TEST(Supervisor, CrashingCommandIsRespawnedWithBackoff) {

@@ -235,13 +235,20 @@ class Watcher {
   std::vector<sarmap::pm_orders_t> orders_;
 };
 
-// Live (non-zombie) processes whose full command line is exactly `cmdline` (words joined by
-// spaces).
+inline std::string NetNamespaceOf(const std::string& pid) {
+  char buf[128] = {0};
+  const ssize_t n = readlink(("/proc/" + pid + "/ns/net").c_str(), buf, sizeof(buf) - 1);
+  return n > 0 ? std::string(buf, static_cast<size_t>(n)) : "";
+}
+
+// Live (non-zombie) processes of our network namespace (parallel test runs each have their
+// own) whose full command line is exactly `cmdline` (words joined by spaces).
 inline std::vector<int> ProcessesWithCmdline(const std::string& cmdline) {
   std::vector<int> out;
+  const std::string our_net = NetNamespaceOf("self");
   const ProcessTable table = ProcessTable::Snapshot();
   for (const auto& [pid, info] : table.processes()) {
-    if (info.state == 'Z') continue;
+    if (info.state == 'Z' || NetNamespaceOf(std::to_string(pid)) != our_net) continue;
     std::string text = ReadFile("/proc/" + std::to_string(pid) + "/cmdline");
     if (text.empty()) continue;
     if (text.back() == '\0') text.pop_back();
