@@ -303,16 +303,21 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
   auto sheriff_a = std::make_unique<Child>(live_argv, scratch_.dir() + "/sheriff-a.log");
   ASSERT_EQ(Sheriff(pmd, {"start", "g"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
-  const int pid_a = watch_.Pid(d, "a"), pid_b = watch_.Pid(d, "b");
+  const int pid_a = watch_.Pid(d, "a");
+  int pid_b = watch_.Pid(d, "b");
   // The live sheriff follows the one-shot command's orders and keeps re-sending them.
   watch_.Spin(2.5);
   EXPECT_EQ(watch_.Pid(d, "a"), pid_a);
   EXPECT_EQ(watch_.Pid(d, "b"), pid_b);
 
-  // Sheriff gone: the deputy carries on.
+  // Sheriff gone: the deputy carries on, and still respawns what crashes.
   sheriff_a->Signal(SIGINT);
   ASSERT_NE(sheriff_a->Wait(10), -1);
-  watch_.Spin(2.5);
+  kill(pid_b, SIGKILL);
+  ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "b") && watch_.Pid(d, "b") != pid_b; }));
+  EXPECT_EQ(watch_.Command(d, "b")->restart_count, 1);
+  pid_b = watch_.Pid(d, "b");
+  watch_.Spin(2.0);
   EXPECT_EQ(watch_.Pid(d, "a"), pid_a);
   EXPECT_EQ(watch_.Pid(d, "b"), pid_b);
 
@@ -327,7 +332,7 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
     const auto* c = watch_.Command(d, id);
     ASSERT_NE(c, nullptr);
     EXPECT_EQ(+c->state, +Status::STATE_RUNNING) << id;
-    EXPECT_EQ(c->restart_count, 0) << id;
+    EXPECT_EQ(c->restart_count, id[0] == 'b' ? 1 : 0) << id;  // b: the respawn above only
     EXPECT_EQ(c->actual_runid, 1) << id;
   }
   EXPECT_EQ(watch_.Pid(d, "a"), pid_a);
