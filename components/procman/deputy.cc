@@ -10,6 +10,7 @@
 
 #include "common/message_checks.h"
 #include "common/time.h"
+#include "sarmap/node_status_t.hpp"
 #include "sarmap/pm_output_t.hpp"
 
 namespace sarmap {
@@ -72,6 +73,7 @@ Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key
       key_(std::move(key)),
       replay_(replay_state_path),
       supervisor_(PolicyFrom(options), static_cast<size_t>(options.output_buffer_bytes)) {
+  start_s_ = Now();
   subscription_ = lcm_->subscribe("^" + options_.orders_channel + "$", &Deputy::OnOrders, this);
   machine_.Update();
   SARMAP_LOG(INFO) << "deputy '" << id_ << "' on " << host_ << " (pid " << getpid()
@@ -103,6 +105,7 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     return;
   }
   if (orders.deputy_id != id_) return;  // for another deputy
+  ++orders_received_;
   if (shutting_down_) return;
   bool persisted = true;
   const Verdict verdict = VerifyOrders(key_, orders, &replay_, &persisted);
@@ -170,6 +173,7 @@ void Deputy::OnWake(const std::vector<pollfd>& /*fds*/, double now_s) {
   if (now_s >= next_info_s_) {
     supervisor_.UpdateUsage(now_s);
     machine_.Update();
+    PublishNodeStatus(now_s);
     info_dirty_ = true;
   }
   if (info_dirty_) PublishInfo(now_s);
@@ -206,6 +210,34 @@ void Deputy::PublishInfo(double now_s) {
   lcm_->publish(options_.info_channel, &info);
   info_dirty_ = false;
   next_info_s_ = now_s + options_.info_period_s;
+}
+
+void Deputy::PublishNodeStatus(double now_s) {
+  sarmap::node_status_t status;
+  status.header.utime = common::WallClockUtime();
+  status.header.seq = status_seq_++;
+  status.header.frame = "";
+  status.node_name = "sarmap-procman-deputy[" + id_ + "]";
+  status.host = host_;
+  status.pid = getpid();
+  status.uptime_us = static_cast<int64_t>((now_s - start_s_) * 1e6);
+  sarmap::channel_stats_t orders;
+  orders.channel = options_.orders_channel;
+  orders.type_name = sarmap::pm_orders_t::getTypeName();
+  orders.received = orders_received_ - refused_;
+  orders.dropped_malformed = malformed_ + refused_;
+  orders.handler_errors = 0;
+  orders.sequence_gaps = 0;
+  orders.reordered = 0;
+  orders.last_utime = 0;
+  status.channels.push_back(orders);
+  status.num_channels = 1;
+  int running = 0;
+  const auto all = supervisor_.Status();
+  for (const auto& c : all) running += c.state == CommandState::kRunning;
+  status.message = std::to_string(running) + "/" + std::to_string(all.size()) + " commands running, " +
+                   std::to_string(refused_) + " orders refused";
+  lcm_->publish("NODE_STATUS", &status);
 }
 
 void Deputy::PublishOutput() {

@@ -50,6 +50,8 @@ class Deputy : public EventLoop::Participant {
   void OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void PublishInfo(double now_s);
   void PublishOutput();
+  // NODE_STATUS like every sarmap node (health for the viewer), with the info period.
+  void PublishNodeStatus(double now_s);
 
   lcm::LCM* lcm_;
   ProcmanOptions options_;
@@ -67,7 +69,9 @@ class Deputy : public EventLoop::Participant {
   bool info_dirty_ = true;
   double next_info_s_ = 0;
   double next_output_s_ = 0;
-  int64_t info_seq_ = 0, output_seq_ = 0;
+  int64_t info_seq_ = 0, output_seq_ = 0, status_seq_ = 0;
+  int64_t orders_received_ = 0;
+  double start_s_ = 0;
   std::map<std::string, common::RateLimiter> refuse_log_limit_;
 };
 
