@@ -139,6 +139,13 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     s.stop_time_allowed_s = c.stop_time_allowed_s;
     s.desired_running = c.desired_running;
     s.desired_runid = c.desired_runid;
+    // Run ids version each command's desired state: a re-send from another sheriff that has
+    // not yet seen the latest change must not undo it.
+    const CommandSpec* current = supervisor_.FindSpec(s.id);
+    if (current && current->desired_runid > s.desired_runid) {
+      s.desired_running = current->desired_running;
+      s.desired_runid = current->desired_runid;
+    }
     specs.push_back(s);
   }
   supervisor_.SetDesired(specs);

@@ -57,6 +57,30 @@ class ProcmanSystem : public ::testing::Test {
   long base_ = 0;
 };
 
+sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exec, int64_t counter) {
+  sarmap::pm_orders_t o;
+  o.header.utime = counter;
+  o.header.seq = 0;
+  o.header.frame = "";
+  o.sheriff_id = "mallory";
+  o.deputy_id = deputy;
+  o.counter = counter;
+  sarmap::pm_command_order_t c;
+  c.command_id = "evil";
+  c.group = "";
+  c.exec = exec;
+  c.use_shell = false;
+  c.auto_respawn = true;
+  c.stop_signal = 2;
+  c.stop_time_allowed_s = 1;
+  c.desired_running = true;
+  c.desired_runid = 1;
+  o.commands.push_back(c);
+  o.num_commands = 1;
+  std::fill(std::begin(o.hmac_sha256), std::end(o.hmac_sha256), 0);
+  return o;
+}
+
 TEST_F(ProcmanSystem, GroupStartStopRestart) {
   const std::string d = deputy_id_;
   const std::string pmd = Pmd("group \"g\" {\n"
@@ -198,29 +222,6 @@ TEST_F(ProcmanSystem, NoDescendantSurvivesAStop) {
   for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
 }
 
-sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exec, int64_t counter) {
-  sarmap::pm_orders_t o;
-  o.header.utime = counter;
-  o.header.seq = 0;
-  o.header.frame = "";
-  o.sheriff_id = "mallory";
-  o.deputy_id = deputy;
-  o.counter = counter;
-  sarmap::pm_command_order_t c;
-  c.command_id = "evil";
-  c.group = "";
-  c.exec = exec;
-  c.use_shell = false;
-  c.auto_respawn = true;
-  c.stop_signal = 2;
-  c.stop_time_allowed_s = 1;
-  c.desired_running = true;
-  c.desired_runid = 1;
-  o.commands.push_back(c);
-  o.num_commands = 1;
-  std::fill(std::begin(o.hmac_sha256), std::end(o.hmac_sha256), 0);
-  return o;
-}
 
 TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   const std::string d = deputy_id_;
@@ -289,6 +290,32 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   EXPECT_NE(log1.find(": forged"), std::string::npos) << log1;
   EXPECT_NE(log1.find(": replayed"), std::string::npos) << log1;
   EXPECT_NE(restarted->Log().find(": replayed"), std::string::npos) << restarted->Log();
+}
+
+TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
+  const std::string d = deputy_id_;
+  const std::string pmd = Pmd("cmd \"x\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
+  auto deputy = StartDeputy(d);
+  ASSERT_EQ(Sheriff(pmd, {"start", "x"}).exit_code, 0);
+  ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "x"); }));
+  const int pid = watch_.Pid(d, "x");
+  const int32_t runid = watch_.Command(d, "x")->actual_runid;
+  // A genuine, newer (by counter) re-send from a sheriff that has not seen the start yet.
+  const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                             std::chrono::system_clock::now().time_since_epoch())
+                             .count();
+  sarmap::pm_orders_t stale = EvilOrders(d, SleepCmd(1), now_us);
+  stale.sheriff_id = "other-sheriff/1";
+  stale.commands[0].command_id = "x";
+  stale.commands[0].desired_running = false;
+  stale.commands[0].desired_runid = runid - 1;
+  SignOrders(LoadKeyFile(scratch_.key()), &stale);
+  watch_.lcm().publish("PM_ORDERS", &stale);
+  ASSERT_TRUE(watch_.WaitFor([&] { return watch_.Info(d).last_order_counter == now_us; }));
+  watch_.Spin(1.0);
+  EXPECT_TRUE(watch_.IsRunning(d, "x"));
+  EXPECT_EQ(watch_.Pid(d, "x"), pid);
+  EXPECT_EQ(watch_.Info(d).refused_orders, 0);
 }
 
 TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {

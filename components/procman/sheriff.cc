@@ -183,17 +183,19 @@ void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   if (!Decode(rbuf, &orders) || orders.sheriff_id == sheriff_id_) return;
   DeputyView* d = FindDeputy(orders.deputy_id);
   if (!d || !SignatureValid(*key_, orders)) return;
-  // Only orders newer than our own last ones: an older re-send of the other sheriff must not
-  // undo a change we just made (nor ours theirs: they follow the same rule).
-  if (orders.counter <= d->last_sent_counter) return;
   auto it = foreign_counters_.find(orders.sheriff_id);
   if (it != foreign_counters_.end() && orders.counter <= it->second) return;
   foreign_counters_[orders.sheriff_id] = orders.counter;
-  // Another sheriff (e.g. a one-shot command) changed the desired state: follow it.
+  // Another sheriff (e.g. a one-shot command) changed the desired state: follow it. Every
+  // change bumps the command's run id, so a higher run id is a newer change; a periodic
+  // re-send carries the old one and never undoes our change. Two changes made at once from
+  // the same run id: the later orders win.
   for (const auto& o : orders.commands) {
     for (auto& c : commands_) {
-      if (c->cfg.id == o.command_id && c->cfg.deputy == d->id &&
-          (c->desired_running != o.desired_running || c->desired_runid != o.desired_runid)) {
+      if (c->cfg.id != o.command_id || c->cfg.deputy != d->id) continue;
+      const bool newer = o.desired_runid > c->desired_runid ||
+                         (o.desired_runid == c->desired_runid && orders.counter > d->last_sent_counter);
+      if (newer) {
         c->desired_running = o.desired_running;
         c->desired_runid = o.desired_runid;
       }
@@ -236,6 +238,7 @@ void Sheriff::ApplyTo(Verb verb, CommandView* c, DeputyView* d) {
     case Verb::kStop:
       if (!c->desired_running) return;
       c->desired_running = false;
+      c->desired_runid = next_runid;  // every change is a new version
       break;
     case Verb::kRestart:
       c->desired_running = true;

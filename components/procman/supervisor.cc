@@ -402,6 +402,11 @@ bool Supervisor::Step(double now_s) {
       }
       if (m->state == before) break;
     }
+    // Stopped as ordered: it is in the state of that order (a new sheriff adopts this id).
+    const bool want = !shutting_down_ && !m->removed && m->spec.desired_running;
+    if (!want && (m->state == CommandState::kStopped || m->state == CommandState::kFailed)) {
+      m->actual_runid = m->spec.desired_runid;
+    }
     changed = changed || signature != std::make_tuple(m->state, m->pid, m->restart_count, m->exit_code);
   }
   // Forget commands no longer ordered, once nothing of them runs.
@@ -492,6 +497,13 @@ std::vector<CommandStatus> Supervisor::Status() const {
     out.push_back(s);
   }
   return out;
+}
+
+const CommandSpec* Supervisor::FindSpec(const std::string& id) const {
+  for (const auto& m : commands_) {
+    if (m->spec.id == id && !m->removed) return &m->spec;
+  }
+  return nullptr;
 }
 
 std::vector<std::pair<std::string, std::string>> Supervisor::TakeOutput(size_t max_bytes) {

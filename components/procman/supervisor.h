@@ -12,7 +12,9 @@
 // - A command that exits on its own leaves nothing behind: what is left of its tree is killed.
 // - auto_respawn: restarted after a back-off of base * 2^k (k = quick crashes in a row, a run
 //   longer than `stable_run_s` resets it), capped at max.
-// - A restart is asked by bumping desired_runid.
+// - desired_runid versions the desired state of a command: the sheriff bumps it on every
+//   change (start, stop, restart). A new run id while running means restart; a stopped
+//   command takes the run id of the stop as its actual_runid.
 // - CPU (percent of one core) and RSS include all descendants, from /proc (UpdateUsage()).
 
 #include <cstdint>
@@ -99,6 +101,8 @@ class Supervisor {
   void UpdateUsage(double now_s);
 
   std::vector<CommandStatus> Status() const;
+  // The desired state last given for a command; nullptr if unknown.
+  const CommandSpec* FindSpec(const std::string& id) const;
   // Captured output per command since the last call, at most `max_bytes` each (the rest
   // stays buffered). Commands without new output are left out.
   std::vector<std::pair<std::string, std::string>> TakeOutput(size_t max_bytes);
