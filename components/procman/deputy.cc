@@ -3,9 +3,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <cctype>
-
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 
 #include "common/message_checks.h"
@@ -93,8 +92,9 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
   } catch (const std::exception&) {
     decoded = -1;
   }
-  const std::string problem =
-      decoded != static_cast<int>(rbuf->data_size) ? "not a valid pm_orders_t" : common::CheckMessage(orders);
+  const std::string problem = decoded != static_cast<int>(rbuf->data_size)
+                                  ? "not a valid pm_orders_t"
+                                  : common::CheckMessage(orders);
   if (!problem.empty()) {
     ++malformed_;
     long suppressed = 0;
@@ -113,10 +113,12 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     ++refused_;
     info_dirty_ = true;
     long suppressed = 0;
-    if (refuse_log_limit_.try_emplace(ToString(verdict), 1.0).first->second.Allow(Now(), &suppressed)) {
+    if (refuse_log_limit_.try_emplace(ToString(verdict), 1.0)
+            .first->second.Allow(Now(), &suppressed)) {
       SARMAP_LOG(WARN) << "REFUSED orders claiming sheriff '" << orders.sheriff_id << "', counter "
-                       << orders.counter << ": " << ToString(verdict) << "; nothing changed (refused so far: "
-                       << refused_ << (suppressed ? ", " + std::to_string(suppressed) + " not logged" : "")
+                       << orders.counter << ": " << ToString(verdict)
+                       << "; nothing changed (refused so far: " << refused_
+                       << (suppressed ? ", " + std::to_string(suppressed) + " not logged" : "")
                        << ")";
     }
     return;
@@ -242,8 +244,8 @@ void Deputy::PublishNodeStatus(double now_s) {
   int running = 0;
   const auto all = supervisor_.Status();
   for (const auto& c : all) running += c.state == CommandState::kRunning;
-  status.message = std::to_string(running) + "/" + std::to_string(all.size()) + " commands running, " +
-                   std::to_string(refused_) + " orders refused";
+  status.message = std::to_string(running) + "/" + std::to_string(all.size()) +
+                   " commands running, " + std::to_string(refused_) + " orders refused";
   lcm_->publish("NODE_STATUS", &status);
 }
 

@@ -6,7 +6,6 @@
 // when the sheriff goes away.
 
 #include <lcm/lcm-cpp.hpp>
-
 #include <map>
 #include <string>
 

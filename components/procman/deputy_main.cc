@@ -12,16 +12,17 @@
 using namespace sarmap;
 using namespace sarmap::procman;
 
-
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-procman-deputy", [&]() -> int {
-    common::ArgParser parser("sarmap-procman-deputy",
-                             "Runs and watches the commands that a verified sheriff orders for this deputy id.");
+    common::ArgParser parser(
+        "sarmap-procman-deputy",
+        "Runs and watches the commands that a verified sheriff orders for this deputy id.");
     common::NodeArgs node_args;
     std::string id, key_path = DefaultKeyPath(), state_dir;
     parser.AddFlag("--id", &id, "deputy name used in the .pmd files (deputy = \"NAME\";)");
     parser.AddFlag("--key", &key_path, "shared HMAC key file (see README: key set-up)");
-    parser.AddFlag("--state-dir", &state_dir, "where the replay counters are kept (overrides state_dir)");
+    parser.AddFlag("--state-dir", &state_dir,
+                   "where the replay counters are kept (overrides state_dir)");
     parser.AddNodeOptions(&node_args);
     parser.SetEpilog(
         "channels: PM_ORDERS in; PM_INFO (1 Hz and on change), PM_OUTPUT (rate-limited) out.\n"

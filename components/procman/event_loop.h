@@ -6,7 +6,6 @@
 #include <poll.h>
 
 #include <lcm/lcm-cpp.hpp>
-
 #include <vector>
 
 namespace sarmap {

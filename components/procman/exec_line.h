@@ -5,9 +5,9 @@
 //
 // Words are separated by blanks; '...' quotes literally, "..." quotes with $VAR expansion,
 // backslash escapes the next character. $NAME and ${NAME} expand from the deputy's
-// environment (unset: empty; ${NAME:-default} gives a default). Leading NAME=VALUE words are environment assignments for the
-// command (as in sh). Shell syntax that needs a real shell (| & ; < > ` $( ) outside quotes)
-// is an error that says to set use_shell.
+// environment (unset: empty; ${NAME:-default} gives a default). Leading NAME=VALUE words are
+// environment assignments for the command (as in sh). Shell syntax that needs a real shell (| & ; <
+// > ` $( ) outside quotes) is an error that says to set use_shell.
 
 #include <functional>
 #include <stdexcept>
@@ -20,7 +20,7 @@ namespace procman {
 
 struct ExecPlan {
   std::vector<std::pair<std::string, std::string>> env;  // assignments, in order
-  std::vector<std::string> argv;                          // argv[0] = program
+  std::vector<std::string> argv;                         // argv[0] = program
 };
 
 using EnvLookup = std::function<const char*(const std::string&)>;

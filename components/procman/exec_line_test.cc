@@ -24,8 +24,9 @@ TEST(ExecLine, SplitsQuotesAndExpands) {
   EXPECT_EQ(p.env[0], (std::pair<std::string, std::string>{"LD_LIBRARY_PATH", "/opt/x"}));
   EXPECT_EQ(p.env[1], (std::pair<std::string, std::string>{"A", "3"}));
   // Expansion is not word-split (unlike sh): "$SP" stays one word.
-  EXPECT_EQ(p.argv, (std::vector<std::string>{"sarmap-slam", "--config", "$HOME/my cfg.yaml", "--set",
-                                              "a=3", "/home/op/x y", "a b", "end word", "dflt", "3"}));
+  EXPECT_EQ(p.argv,
+            (std::vector<std::string>{"sarmap-slam", "--config", "$HOME/my cfg.yaml", "--set",
+                                      "a=3", "/home/op/x y", "a b", "end word", "dflt", "3"}));
 }
 
 TEST(ExecLine, AssignmentsOnlyAtTheStart) {
@@ -35,8 +36,8 @@ TEST(ExecLine, AssignmentsOnlyAtTheStart) {
 }
 
 TEST(ExecLine, ShellSyntaxNeedsUseShell) {
-  for (const char* bad : {"a | b", "a && b", "a > log", "a; b", "echo `id`", "echo $(id)", "'open",
-                          "X=1", ""}) {
+  for (const char* bad :
+       {"a | b", "a && b", "a > log", "a; b", "echo `id`", "echo $(id)", "'open", "X=1", ""}) {
     SCOPED_TRACE(bad);
     EXPECT_THROW(PlanExec(bad, Lookup), std::invalid_argument);
   }

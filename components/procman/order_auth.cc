@@ -29,12 +29,14 @@ std::string DefaultKeyPath() {
 Key LoadKeyFile(const std::string& path) {
   struct stat st;
   if (stat(path.c_str(), &st) != 0) {
-    throw std::runtime_error("key file " + path + ": " + strerror(errno) +
-                             " (create one: mkdir -p ~/.config/sarmap && head -c 32 /dev/urandom > " +
-                             path + " && chmod 600 " + path + ")");
+    throw std::runtime_error(
+        "key file " + path + ": " + strerror(errno) +
+        " (create one: mkdir -p ~/.config/sarmap && head -c 32 /dev/urandom > " + path +
+        " && chmod 600 " + path + ")");
   }
   if (st.st_mode & (S_IRWXG | S_IRWXO)) {
-    throw std::runtime_error("key file " + path + " is accessible by group or others; chmod 600 " + path);
+    throw std::runtime_error("key file " + path + " is accessible by group or others; chmod 600 " +
+                             path);
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("key file " + path + ": cannot read");
@@ -65,7 +67,8 @@ Digest OrdersDigest(const Key& key, const sarmap::pm_orders_t& orders) {
   std::fill(std::begin(copy.hmac_sha256), std::end(copy.hmac_sha256), 0);
   const int size = copy.getEncodedSize();
   std::vector<uint8_t> buffer(static_cast<size_t>(size));
-  if (copy.encode(buffer.data(), 0, size) != size) throw std::runtime_error("cannot encode pm_orders_t");
+  if (copy.encode(buffer.data(), 0, size) != size)
+    throw std::runtime_error("cannot encode pm_orders_t");
   return HmacSha256(key, buffer.data(), buffer.size());
 }
 
@@ -83,10 +86,14 @@ bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders) {
 
 const char* ToString(Verdict verdict) {
   switch (verdict) {
-    case Verdict::kAccepted: return "accepted";
-    case Verdict::kUnsigned: return "unsigned";
-    case Verdict::kForged: return "forged (signature does not match the key)";
-    case Verdict::kReplayed: return "replayed (counter not above the last accepted)";
+    case Verdict::kAccepted:
+      return "accepted";
+    case Verdict::kUnsigned:
+      return "unsigned";
+    case Verdict::kForged:
+      return "forged (signature does not match the key)";
+    case Verdict::kReplayed:
+      return "replayed (counter not above the last accepted)";
   }
   return "?";
 }
@@ -137,7 +144,8 @@ bool ReplayGuard::Accept(const std::string& sheriff_id, int64_t counter) {
   FILE* f = fopen(tmp.c_str(), "w");
   if (!f) return false;
   bool ok = true;
-  for (const auto& [id, c] : last_) ok = ok && fprintf(f, "%lld %s\n", static_cast<long long>(c), id.c_str()) > 0;
+  for (const auto& [id, c] : last_)
+    ok = ok && fprintf(f, "%lld %s\n", static_cast<long long>(c), id.c_str()) > 0;
   ok = fflush(f) == 0 && ok;
   ok = fsync(fileno(f)) == 0 && ok;
   ok = fclose(f) == 0 && ok;

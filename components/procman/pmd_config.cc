@@ -1,15 +1,15 @@
 #include "procman/pmd_config.h"
 
-#include "procman/exec_line.h"
-
-#include <csignal>
 #include <cctype>
+#include <csignal>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <set>
 #include <sstream>
+
+#include "procman/exec_line.h"
 
 namespace sarmap {
 namespace procman {
@@ -20,9 +20,12 @@ std::string Location::ToString() const {
 
 std::string Target::ToString() const {
   switch (kind) {
-    case kCommand: return "cmd \"" + name + "\"";
-    case kGroup: return "group \"" + name + "\"";
-    case kEverything: return "everything";
+    case kCommand:
+      return "cmd \"" + name + "\"";
+    case kGroup:
+      return "group \"" + name + "\"";
+    case kEverything:
+      return "everything";
   }
   return "?";
 }
@@ -83,8 +86,10 @@ class Lexer {
           if (d == '\\' && pos_ + 1 < text_.size()) {
             Advance();
             d = text_[pos_];
-            if (d == 'n') d = '\n';
-            else if (d == 't') d = '\t';
+            if (d == 'n')
+              d = '\n';
+            else if (d == 't')
+              d = '\t';
             // \" and \\ and anything else: the character itself
           }
           t.text += d;
@@ -92,9 +97,8 @@ class Lexer {
         }
       } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
         t.kind = Token::kIdent;
-        while (pos_ < text_.size() &&
-               (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_' ||
-                text_[pos_] == '-')) {
+        while (pos_ < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[pos_])) ||
+                                       text_[pos_] == '_' || text_[pos_] == '-')) {
           t.text += text_[pos_];
           Advance();
         }
@@ -154,9 +158,12 @@ class Lexer {
 
 std::string Describe(const Token& t) {
   switch (t.kind) {
-    case Token::kEnd: return "end of file";
-    case Token::kString: return "\"" + t.text + "\"";
-    default: return "'" + t.text + "'";
+    case Token::kEnd:
+      return "end of file";
+    case Token::kString:
+      return "\"" + t.text + "\"";
+    default:
+      return "'" + t.text + "'";
   }
 }
 
@@ -201,12 +208,14 @@ class Parser {
   }
   const Token& ExpectString(const std::string& what) {
     const Token& t = Next();
-    if (t.kind != Token::kString) Fail(t, "expected " + what + " in double quotes, found " + Describe(t));
+    if (t.kind != Token::kString)
+      Fail(t, "expected " + what + " in double quotes, found " + Describe(t));
     return t;
   }
   const Token& ExpectWord(const char* word, const std::string& context) {
     const Token& t = Next();
-    if (!IsWord(t, word)) Fail(t, std::string("expected '") + word + "' " + context + ", found " + Describe(t));
+    if (!IsWord(t, word))
+      Fail(t, std::string("expected '") + word + "' " + context + ", found " + Describe(t));
     return t;
   }
 
@@ -265,13 +274,15 @@ class Parser {
     std::set<std::string> seen;
     while (!(Peek().kind == Token::kPunct && Peek().text == "}")) {
       const Token& key = Next();
-      if (key.kind != Token::kIdent) Fail(key, "expected an attribute name or '}', found " + Describe(key));
+      if (key.kind != Token::kIdent)
+        Fail(key, "expected an attribute name or '}', found " + Describe(key));
       if (!seen.insert(key.text == "host" ? "deputy" : key.text).second) {
         Fail(key, "attribute '" + key.text + "' given twice");
       }
       ExpectPunct("=", "after '" + key.text + "'");
       const Token& value = Next();
-      if (value.kind != Token::kString && value.kind != Token::kNumber && value.kind != Token::kIdent) {
+      if (value.kind != Token::kString && value.kind != Token::kNumber &&
+          value.kind != Token::kIdent) {
         Fail(value, "expected a value for '" + key.text + "', found " + Describe(value));
       }
       if (key.text == "exec") {
@@ -285,12 +296,16 @@ class Parser {
         cmd.deputy = value.text;
       } else if (key.text == "auto_respawn" || key.text == "use_shell") {
         bool b = false;
-        if (!ParseBool(value, &b)) Fail(value, key.text + " must be true or false, is " + Describe(value));
+        if (!ParseBool(value, &b))
+          Fail(value, key.text + " must be true or false, is " + Describe(value));
         (key.text == "auto_respawn" ? cmd.auto_respawn : cmd.use_shell) = b;
       } else if (key.text == "stop_signal") {
         const int sig = ParseSignal(value.text);
-        if (sig < 0) Fail(value, "unknown signal " + Describe(value) + " (e.g. SIGINT, SIGTERM, 15)");
-        if (sig == SIGKILL) Fail(value, "stop_signal SIGKILL leaves no chance to clean up; use stop_time_allowed = 0");
+        if (sig < 0)
+          Fail(value, "unknown signal " + Describe(value) + " (e.g. SIGINT, SIGTERM, 15)");
+        if (sig == SIGKILL)
+          Fail(value,
+               "stop_signal SIGKILL leaves no chance to clean up; use stop_time_allowed = 0");
         cmd.stop_signal = sig;
       } else if (key.text == "stop_time_allowed") {
         char* end = nullptr;
@@ -300,10 +315,13 @@ class Parser {
         }
         cmd.stop_time_allowed_s = s;
       } else if (key.text == "nickname" || key.text == "group") {
-        Fail(key, "'" + key.text + "' is old procman syntax: name the command in cmd \"NAME\" and nest it in group \"...\" { }");
+        Fail(key, "'" + key.text +
+                      "' is old procman syntax: name the command in cmd \"NAME\" and nest it in "
+                      "group \"...\" { }");
       } else {
         Fail(key, "unknown attribute '" + key.text +
-                      "' (known: exec, deputy/host, auto_respawn, stop_signal, stop_time_allowed, use_shell)");
+                      "' (known: exec, deputy/host, auto_respawn, stop_signal, stop_time_allowed, "
+                      "use_shell)");
       }
       ExpectPunct(";", "after the value of '" + key.text + "'");
     }
@@ -361,7 +379,8 @@ class Parser {
     const Token& name = ExpectString("a script name");
     for (const auto& s : config_->scripts) {
       if (s.name == name.text) {
-        Fail(name, "duplicate script \"" + name.text + "\" (first defined at " + s.where.ToString() + ")");
+        Fail(name, "duplicate script \"" + name.text + "\" (first defined at " +
+                       s.where.ToString() + ")");
       }
     }
     Script script;
@@ -373,7 +392,7 @@ class Parser {
       ScriptAction a;
       a.where = verb.where;
       if (IsWord(verb, "start") || IsWord(verb, "stop") || IsWord(verb, "restart")) {
-        a.kind = verb.text == "start" ? ScriptAction::kStart
+        a.kind = verb.text == "start"  ? ScriptAction::kStart
                  : verb.text == "stop" ? ScriptAction::kStop
                                        : ScriptAction::kRestart;
         a.target = ParseTarget(verb.text);
@@ -431,7 +450,8 @@ class Parser {
       }
     }
     for (const auto& [name, where] : script_refs_) {
-      if (!config_->FindScript(name)) throw ConfigError(where.ToString() + ": no script \"" + name + "\"");
+      if (!config_->FindScript(name))
+        throw ConfigError(where.ToString() + ": no script \"" + name + "\"");
     }
     // run_script cycles would never end.
     std::map<std::string, int> mark;  // 0 new, 1 visiting, 2 done
@@ -440,7 +460,8 @@ class Parser {
       for (const auto& a : s.actions) {
         if (a.kind != ScriptAction::kRunScript) continue;
         const int m = mark[a.script];
-        if (m == 1) throw ConfigError(a.where.ToString() + ": run_script \"" + a.script + "\" makes a cycle");
+        if (m == 1)
+          throw ConfigError(a.where.ToString() + ": run_script \"" + a.script + "\" makes a cycle");
         if (m == 0) visit(*config_->FindScript(a.script));
       }
       mark[s.name] = 2;
@@ -490,7 +511,8 @@ bool Config::HasGroup(const std::string& path) const {
 std::vector<const CommandConfig*> Config::Select(const Target& target) const {
   std::vector<const CommandConfig*> out;
   for (const auto& c : commands) {
-    if (target.kind == Target::kEverything || (target.kind == Target::kCommand && c.id == target.name) ||
+    if (target.kind == Target::kEverything ||
+        (target.kind == Target::kCommand && c.id == target.name) ||
         (target.kind == Target::kGroup && GroupContains(c.group, target.name))) {
       out.push_back(&c);
     }

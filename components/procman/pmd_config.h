@@ -45,8 +45,8 @@ struct Location {
 };
 
 struct CommandConfig {
-  std::string id;      // cmd "id"
-  std::string group;   // "/"-separated path of enclosing groups, "" at top level
+  std::string id;     // cmd "id"
+  std::string group;  // "/"-separated path of enclosing groups, "" at top level
   std::string exec;
   std::string deputy = "localhost";
   bool auto_respawn = false;
@@ -65,11 +65,11 @@ struct Target {
 
 struct ScriptAction {
   enum Kind { kStart, kStop, kRestart, kWaitMs, kWaitStatus, kRunScript } kind = kStart;
-  Target target;             // start/stop/restart/wait-status
-  std::string wait_status;   // "" (no wait), "running" or "stopped"
-  double timeout_s = 30.0;   // for any wait
-  int wait_ms = 0;           // kWaitMs
-  std::string script;        // kRunScript
+  Target target;            // start/stop/restart/wait-status
+  std::string wait_status;  // "" (no wait), "running" or "stopped"
+  double timeout_s = 30.0;  // for any wait
+  int wait_ms = 0;          // kWaitMs
+  std::string script;       // kRunScript
   Location where;
 };
 

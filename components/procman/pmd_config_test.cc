@@ -114,29 +114,35 @@ TEST(PmdConfig, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(ErrorOf("cmd \"a\" { deputy = \"d\"; }"), "bad.pmd:1:25: command \"a\" has no exec");
   EXPECT_EQ(ErrorOf("cmd \"a\" { exec = \"x\"; }\ncmd \"a\" { exec = \"y\"; }"),
             "bad.pmd:2:5: duplicate command \"a\" (first defined at bad.pmd:1:1)");
-  EXPECT_EQ(ErrorOf("script \"s\" {\n  start cmd \"ghost\";\n}"), "bad.pmd:2:13: no command \"ghost\"");
+  EXPECT_EQ(ErrorOf("script \"s\" {\n  start cmd \"ghost\";\n}"),
+            "bad.pmd:2:13: no command \"ghost\"");
   EXPECT_EQ(ErrorOf("cmd \"a\" { exec = \"x\"; }\nscript \"s\" { wait cmd \"a\" status \"up\"; }"),
             "bad.pmd:2:34: status must be \"running\" or \"stopped\", is \"up\"");
   EXPECT_EQ(ErrorOf("script \"s\" { run_script \"t\"; }\nscript \"t\" { run_script \"s\"; }"),
             "bad.pmd:2:14: run_script \"s\" makes a cycle");
   EXPECT_EQ(ErrorOf("cmd \"a\" {\n  exec = \"a | b\";\n}"),
-            "bad.pmd:2:10: exec \"a | b\": '|' is shell syntax; set use_shell = true to run through /bin/sh");
-  EXPECT_EQ(ErrorOf("cmd \"a\" { exec = \"x;\n"), "bad.pmd:1:18: unterminated string (newline inside quotes)");
+            "bad.pmd:2:10: exec \"a | b\": '|' is shell syntax; set use_shell = true to run "
+            "through /bin/sh");
+  EXPECT_EQ(ErrorOf("cmd \"a\" { exec = \"x;\n"),
+            "bad.pmd:1:18: unterminated string (newline inside quotes)");
   EXPECT_EQ(ErrorOf("group \"g\" { cmd \"a\" { exec = \"x\"; }"),
             "bad.pmd:1:36: expected 'cmd', 'group' or '}' in group \"g\", found end of file");
-  EXPECT_EQ(ErrorOf("cmd \"a\" { exec = \"x\"; }\nscript \"s\" { start cmd \"a\" wait \"running\" timeout -1; }"),
+  EXPECT_EQ(ErrorOf("cmd \"a\" { exec = \"x\"; }\nscript \"s\" { start cmd \"a\" wait \"running\" "
+                    "timeout -1; }"),
             "bad.pmd:2:51: timeout must be a positive number of seconds, found '-1'");
 }
 
 TEST(PmdConfig, LaunchScriptsInTheRepositoryParse) {
-  for (const char* name : {"sim-demo.pmd", "robot-one-computer.pmd", "robot-two-computers.pmd", "replay.pmd"}) {
+  for (const char* name :
+       {"sim-demo.pmd", "robot-one-computer.pmd", "robot-two-computers.pmd", "replay.pmd"}) {
     const std::string path = std::string(SARMAP_SOURCE_DIR) + "/launch-scripts/" + name;
     SCOPED_TRACE(path);
     const Config c = LoadConfigFile(path);
     EXPECT_FALSE(c.commands.empty());
     EXPECT_FALSE(c.scripts.empty());
   }
-  const Config two = LoadConfigFile(std::string(SARMAP_SOURCE_DIR) + "/launch-scripts/robot-two-computers.pmd");
+  const Config two =
+      LoadConfigFile(std::string(SARMAP_SOURCE_DIR) + "/launch-scripts/robot-two-computers.pmd");
   EXPECT_EQ(two.Deputies(), (std::vector<std::string>{"sensors", "compute"}));
 }
 

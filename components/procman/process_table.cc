@@ -112,8 +112,8 @@ void MachineUsage::Update() {
   char buf[4096];
   if (ReadSmallFile("/proc/stat", buf, sizeof(buf)) > 0 && strncmp(buf, "cpu ", 4) == 0) {
     unsigned long long v[10] = {0};
-    sscanf(buf + 4, "%llu %llu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2],
-           &v[3], &v[4], &v[5], &v[6], &v[7], &v[8], &v[9]);
+    sscanf(buf + 4, "%llu %llu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3],
+           &v[4], &v[5], &v[6], &v[7], &v[8], &v[9]);
     uint64_t total = 0;
     for (int i = 0; i < 8; ++i) total += v[i];  // guest time is already in user
     const uint64_t idle = v[3] + v[4];

@@ -15,9 +15,9 @@ struct ProcInfo {
   int ppid = 0;
   int pgid = 0;
   char state = '?';
-  uint64_t ticks = 0;           // utime + stime of the process itself
-  uint64_t child_ticks = 0;     // cutime + cstime: children it has reaped
-  uint64_t start_time = 0;      // since boot, in clock ticks: tells a reused pid apart
+  uint64_t ticks = 0;        // utime + stime of the process itself
+  uint64_t child_ticks = 0;  // cutime + cstime: children it has reaped
+  uint64_t start_time = 0;   // since boot, in clock ticks: tells a reused pid apart
   int64_t rss_bytes = 0;
 };
 

@@ -32,7 +32,8 @@ struct ProcmanOptions {
   void Visit(V& v) {
     v("orders_channel", orders_channel, "sheriff -> deputies: signed desired state (pm_orders_t)");
     v("info_channel", info_channel, "deputies -> sheriff: state of every command (pm_info_t)");
-    v("output_channel", output_channel, "deputies -> sheriff: captured stdout/stderr (pm_output_t)");
+    v("output_channel", output_channel,
+      "deputies -> sheriff: captured stdout/stderr (pm_output_t)");
     v("info_period_s", info_period_s, "deputy: PM_INFO period (also sent on every change)");
     v("output_period_s", output_period_s, "deputy: at most one PM_OUTPUT per this period");
     v("output_max_bytes", output_max_bytes, "deputy: output bytes per command per PM_OUTPUT");
@@ -56,17 +57,19 @@ struct ProcmanOptions {
     check.Positive("info_period_s", info_period_s);
     check.Positive("output_period_s", output_period_s);
     check.That(output_max_bytes >= 256, "output_max_bytes", "must be >= 256");
-    check.That(output_buffer_bytes >= output_max_bytes, "output_buffer_bytes", "must be >= output_max_bytes");
+    check.That(output_buffer_bytes >= output_max_bytes, "output_buffer_bytes",
+               "must be >= output_max_bytes");
     check.Positive("respawn_base_s", respawn_base_s);
     check.That(respawn_max_s >= respawn_base_s, "respawn_max_s", "must be >= respawn_base_s");
     check.NonNegative("respawn_stable_run_s", respawn_stable_run_s);
     check.Positive("resend_period_s", resend_period_s);
-    check.That(deputy_lost_after_s > info_period_s, "deputy_lost_after_s", "must be > info_period_s");
+    check.That(deputy_lost_after_s > info_period_s, "deputy_lost_after_s",
+               "must be > info_period_s");
     check.Positive("discovery_timeout_s", discovery_timeout_s);
     check.Positive("command_timeout_s", command_timeout_s);
     check.That(output_tail_lines >= 0, "output_tail_lines", "must be >= 0");
-    check.That(!orders_channel.empty() && !info_channel.empty() && !output_channel.empty(), "channels",
-               "must not be empty");
+    check.That(!orders_channel.empty() && !info_channel.empty() && !output_channel.empty(),
+               "channels", "must not be empty");
   }
 };
 

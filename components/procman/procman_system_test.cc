@@ -31,13 +31,15 @@ class ProcmanSystem : public ::testing::Test {
   std::string Marker(int i) const { return std::to_string(base_ + i); }
   std::string SleepCmd(int i) const { return "sleep " + Marker(i); }
 
-  std::unique_ptr<Child> StartDeputy(const std::string& id, const std::string& log_name = "deputy.log") {
+  std::unique_ptr<Child> StartDeputy(const std::string& id,
+                                     const std::string& log_name = "deputy.log") {
     watch_.Forget(id);
     auto d = std::make_unique<Child>(
-        std::vector<std::string>{BinDir() + "/sarmap-procman-deputy", "--id", id, "--key", scratch_.key(),
-                                 "--state-dir", scratch_.state()},
+        std::vector<std::string>{BinDir() + "/sarmap-procman-deputy", "--id", id, "--key",
+                                 scratch_.key(), "--state-dir", scratch_.state()},
         scratch_.dir() + "/" + log_name);
-    EXPECT_TRUE(watch_.WaitFor([&] { return watch_.Heard(id); })) << "deputy " << id << " not heard";
+    EXPECT_TRUE(watch_.WaitFor([&] { return watch_.Heard(id); }))
+        << "deputy " << id << " not heard";
     return d;
   }
   CliResult Sheriff(const std::string& pmd, std::vector<std::string> args) {
@@ -46,7 +48,8 @@ class ProcmanSystem : public ::testing::Test {
     const CliResult r = testing::Run(argv, scratch_.dir() + "/sheriff-cli.log");
     std::string joined;
     for (const auto& a : args) joined += " " + a;
-    printf("$ sarmap-procman CONFIG%s -> exit %d\n%s", joined.c_str(), r.exit_code, r.output.c_str());
+    printf("$ sarmap-procman CONFIG%s -> exit %d\n%s", joined.c_str(), r.exit_code,
+           r.output.c_str());
     return r;
   }
   std::string Pmd(const std::string& body) { return scratch_.Write("test.pmd", body); }
@@ -57,7 +60,8 @@ class ProcmanSystem : public ::testing::Test {
   long base_ = 0;
 };
 
-sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exec, int64_t counter) {
+sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exec,
+                               int64_t counter) {
   sarmap::pm_orders_t o;
   o.header.utime = counter;
   o.header.seq = 0;
@@ -83,11 +87,17 @@ sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exe
 
 TEST_F(ProcmanSystem, GroupStartStopRestart) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("group \"g\" {\n"
-                              "  cmd \"a\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n"
-                              "  group \"inner\" { cmd \"b\" { exec = \"" + SleepCmd(2) + "\"; deputy = \"" + d + "\"; } }\n"
-                              "}\n"
-                              "cmd \"c\" { exec = \"" + SleepCmd(3) + "\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd =
+      Pmd("group \"g\" {\n"
+          "  cmd \"a\" { exec = \"" +
+          SleepCmd(1) + "\"; deputy = \"" + d +
+          "\"; }\n"
+          "  group \"inner\" { cmd \"b\" { exec = \"" +
+          SleepCmd(2) + "\"; deputy = \"" + d +
+          "\"; } }\n"
+          "}\n"
+          "cmd \"c\" { exec = \"" +
+          SleepCmd(3) + "\"; deputy = \"" + d + "\"; }\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "g"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
@@ -122,19 +132,23 @@ TEST_F(ProcmanSystem, GroupStartStopRestart) {
 TEST_F(ProcmanSystem, OutputAndEnvironmentReachTheSheriff) {
   const std::string d = deputy_id_;
   setenv("PROCMAN_TEST_VALUE", Marker(5).c_str(), 1);  // the deputy inherits it
-  const std::string pmd = Pmd("cmd \"talker\" { exec = \"GREETING=hello-$PROCMAN_TEST_VALUE sh -c "
-                              "'echo $GREETING; echo to-stderr >&2; exec " + SleepCmd(1) + "'\"; deputy = \"" + d +
-                              "\"; }\n");
+  const std::string pmd =
+      Pmd("cmd \"talker\" { exec = \"GREETING=hello-$PROCMAN_TEST_VALUE sh -c "
+          "'echo $GREETING; echo to-stderr >&2; exec " +
+          SleepCmd(1) + "'\"; deputy = \"" + d + "\"; }\n");
   auto deputy = StartDeputy(d);
   std::string output;
   lcm::Subscription* sub = watch_.lcm().subscribeFunction(
-      "^PM_OUTPUT$", +[](const lcm::ReceiveBuffer* rbuf, const std::string&, std::string* out) {
+      "^PM_OUTPUT$",
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&, std::string* out) {
         sarmap::pm_output_t msg;
         if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
         for (const auto& t : msg.text) *out += t;
-      }, &output);
+      },
+      &output);
   ASSERT_EQ(Sheriff(pmd, {"start", "talker"}).exit_code, 0);
-  EXPECT_TRUE(watch_.WaitFor([&] { return output.find("to-stderr\n") != std::string::npos; })) << output;
+  EXPECT_TRUE(watch_.WaitFor([&] { return output.find("to-stderr\n") != std::string::npos; }))
+      << output;
   EXPECT_NE(output.find("hello-" + Marker(5) + "\n"), std::string::npos) << output;
   // Started without a shell of ours: the command's own process is the sh we asked for.
   const int pid = watch_.Pid(d, "talker");
@@ -145,8 +159,9 @@ TEST_F(ProcmanSystem, OutputAndEnvironmentReachTheSheriff) {
 
 TEST_F(ProcmanSystem, CrashingCommandIsRespawned) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("cmd \"crasher\" { exec = \"sh -c 'sleep 0.3; exit 3'\"; deputy = \"" + d +
-                              "\"; auto_respawn = true; }\n");
+  const std::string pmd =
+      Pmd("cmd \"crasher\" { exec = \"sh -c 'sleep 0.3; exit 3'\"; deputy = \"" + d +
+          "\"; auto_respawn = true; }\n");
   auto deputy = StartDeputy(d);
   Sheriff(pmd, {"start", "crasher"});  // may or may not catch it running: not asserted
   ASSERT_TRUE(watch_.WaitFor([&] {
@@ -177,17 +192,19 @@ TEST_F(ProcmanSystem, CrashingCommandIsRespawned) {
       }
     }
   }
-  printf("FIGURE crash -> running again (s), consecutive quick crashes: %s; longest %.3f s "
-         "(back-off 0.1 s doubling)\n",
-         delays.c_str(), worst_s);
+  printf(
+      "FIGURE crash -> running again (s), consecutive quick crashes: %s; longest %.3f s "
+      "(back-off 0.1 s doubling)\n",
+      delays.c_str(), worst_s);
   EXPECT_GE(respawns, 3);
   ASSERT_EQ(Sheriff(pmd, {"stop", "crasher"}).exit_code, 0);
 }
 
 TEST_F(ProcmanSystem, CommandIgnoringSigintIsKilledAfterStopTimeAllowed) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("cmd \"stubborn\" { exec = \"trap '' INT; exec " + SleepCmd(1) +
-                              "\"; use_shell = true; deputy = \"" + d + "\"; stop_time_allowed = 1.0; }\n");
+  const std::string pmd =
+      Pmd("cmd \"stubborn\" { exec = \"trap '' INT; exec " + SleepCmd(1) +
+          "\"; use_shell = true; deputy = \"" + d + "\"; stop_time_allowed = 1.0; }\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "stubborn"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(SleepCmd(1)).size() == 1; }, 5));
@@ -200,7 +217,8 @@ TEST_F(ProcmanSystem, CommandIgnoringSigintIsKilledAfterStopTimeAllowed) {
   for (const auto& info : watch_.History(d)) {
     for (const auto& c : info.commands) {
       if (c.state == Status::STATE_STOPPING && stopping < 0) stopping = info.header.utime;
-      if (c.state == Status::STATE_STOPPED && stopping >= 0 && stopped < 0) stopped = info.header.utime;
+      if (c.state == Status::STATE_STOPPED && stopping >= 0 && stopped < 0)
+        stopped = info.header.utime;
     }
   }
   printf("FIGURE SIGINT ignored: stopping -> stopped (SIGKILL) %.3f s, stop_time_allowed 1.0 s\n",
@@ -211,8 +229,9 @@ TEST_F(ProcmanSystem, NoDescendantSurvivesAStop) {
   const std::string d = deputy_id_;
   // Background children of sh ignore SIGINT; one leaves the process group with setsid.
   const std::string s = SleepCmd(1);
-  const std::string pmd = Pmd("cmd \"family\" { exec = \"sh -c '" + s + " & " + s + " & setsid " + s + " & " + s +
-                              "'\"; deputy = \"" + d + "\"; stop_time_allowed = 1; }\n");
+  const std::string pmd =
+      Pmd("cmd \"family\" { exec = \"sh -c '" + s + " & " + s + " & setsid " + s + " & " + s +
+          "'\"; deputy = \"" + d + "\"; stop_time_allowed = 1; }\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "family"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).size() == 4; }, 5));
@@ -222,11 +241,11 @@ TEST_F(ProcmanSystem, NoDescendantSurvivesAStop) {
   for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
 }
 
-
 TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   const std::string d = deputy_id_;
   const std::string evil = SleepCmd(9);
-  const std::string pmd = Pmd("cmd \"victim\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd =
+      Pmd("cmd \"victim\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
   auto deputy = StartDeputy(d);
   const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
                              std::chrono::system_clock::now().time_since_epoch())
@@ -257,7 +276,8 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   ASSERT_TRUE(watch_.WaitFor([&] {
     for (size_t i = 0; i < watch_.Orders().size(); ++i) {
       const auto& o = watch_.Orders()[i];
-      if (o.deputy_id == d && o.sheriff_id != "mallory" && o.num_commands == 1 && o.commands[0].desired_running) {
+      if (o.deputy_id == d && o.sheriff_id != "mallory" && o.num_commands == 1 &&
+          o.commands[0].desired_running) {
         start_order = watch_.RawOrders()[i];
       }
     }
@@ -268,7 +288,8 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   watch_.lcm().publish("PM_ORDERS", start_order.data(), static_cast<unsigned>(start_order.size()));
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.Info(d).refused_orders == 4; }));
   watch_.Spin(1.0);
-  EXPECT_TRUE(watch_.IsStopped(d, "victim")) << "state " << (watch_.Command(d, "victim") ? watch_.Command(d, "victim")->state : -1);
+  EXPECT_TRUE(watch_.IsStopped(d, "victim"))
+      << "state " << (watch_.Command(d, "victim") ? watch_.Command(d, "victim")->state : -1);
   EXPECT_TRUE(ProcessesWithCmdline(SleepCmd(1)).empty());
 
   // 5. The same replay after a deputy restart: the counter was persisted.
@@ -294,7 +315,8 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
 
 TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("cmd \"x\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd =
+      Pmd("cmd \"x\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "x"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "x"); }));
@@ -320,13 +342,20 @@ TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
 
 TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("group \"g\" {\n"
-                              "  cmd \"a\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n"
-                              "  cmd \"b\" { exec = \"" + SleepCmd(2) + "\"; deputy = \"" + d + "\"; auto_respawn = true; }\n"
-                              "}\n"
-                              "cmd \"c\" { exec = \"" + SleepCmd(3) + "\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd =
+      Pmd("group \"g\" {\n"
+          "  cmd \"a\" { exec = \"" +
+          SleepCmd(1) + "\"; deputy = \"" + d +
+          "\"; }\n"
+          "  cmd \"b\" { exec = \"" +
+          SleepCmd(2) + "\"; deputy = \"" + d +
+          "\"; auto_respawn = true; }\n"
+          "}\n"
+          "cmd \"c\" { exec = \"" +
+          SleepCmd(3) + "\"; deputy = \"" + d + "\"; }\n");
   auto deputy = StartDeputy(d);
-  const std::vector<std::string> live_argv = {BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key()};
+  const std::vector<std::string> live_argv = {BinDir() + "/sarmap-procman", pmd, "--key",
+                                              scratch_.key()};
   auto sheriff_a = std::make_unique<Child>(live_argv, scratch_.dir() + "/sheriff-a.log");
   ASSERT_EQ(Sheriff(pmd, {"start", "g"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
@@ -341,7 +370,8 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
   sheriff_a->Signal(SIGINT);
   ASSERT_NE(sheriff_a->Wait(10), -1);
   kill(pid_b, SIGKILL);
-  ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "b") && watch_.Pid(d, "b") != pid_b; }));
+  ASSERT_TRUE(
+      watch_.WaitFor([&] { return watch_.IsRunning(d, "b") && watch_.Pid(d, "b") != pid_b; }));
   EXPECT_EQ(watch_.Command(d, "b")->restart_count, 1);
   pid_b = watch_.Pid(d, "b");
   watch_.Spin(2.0);
@@ -368,8 +398,8 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
   EXPECT_TRUE(Alive(pid_b));
   EXPECT_TRUE(watch_.IsStopped(d, "c"));
   EXPECT_EQ(watch_.Info(d).refused_orders, 0);
-  printf("FIGURE sheriff restart: pids %d %d unchanged after %zu orders from the new sheriff\n", pid_a, pid_b,
-         watch_.Orders().size() - orders_before);
+  printf("FIGURE sheriff restart: pids %d %d unchanged after %zu orders from the new sheriff\n",
+         pid_a, pid_b, watch_.Orders().size() - orders_before);
 
   // And the live sheriff follows a one-shot stop instead of undoing it.
   ASSERT_EQ(Sheriff(pmd, {"stop", "everything"}).exit_code, 0);
@@ -382,12 +412,16 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
 
 TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("group \"all\" {\n"
-                              "  cmd \"a\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n"
-                              "  cmd \"b\" { exec = \"sh -c '" + SleepCmd(2) + " & " + SleepCmd(2) +
-                              "'\"; deputy = \"" + d + "\"; stop_time_allowed = 1; }\n"
-                              "}\n"
-                              "script \"up\" { start group \"all\" wait \"running\" timeout 10; }\n");
+  const std::string pmd =
+      Pmd("group \"all\" {\n"
+          "  cmd \"a\" { exec = \"" +
+          SleepCmd(1) + "\"; deputy = \"" + d +
+          "\"; }\n"
+          "  cmd \"b\" { exec = \"sh -c '" +
+          SleepCmd(2) + " & " + SleepCmd(2) + "'\"; deputy = \"" + d +
+          "\"; stop_time_allowed = 1; }\n"
+          "}\n"
+          "script \"up\" { start group \"all\" wait \"running\" timeout 10; }\n");
   Child lone({BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key(), "--lone-ranger", "--set",
               "state_dir=" + scratch_.state(), "run", "up"},
              scratch_.dir() + "/lone.log");
@@ -404,12 +438,15 @@ TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
 
 TEST_F(ProcmanSystem, ScriptWaitTimesOutWithLocation) {
   const std::string d = deputy_id_;
-  const std::string pmd = Pmd("cmd \"dies\" { exec = \"no-such-program-xyz\"; deputy = \"" + d + "\"; }\n"
-                              "script \"s\" {\n  start cmd \"dies\" wait \"running\" timeout 2;\n}\n");
+  const std::string pmd =
+      Pmd("cmd \"dies\" { exec = \"no-such-program-xyz\"; deputy = \"" + d +
+          "\"; }\n"
+          "script \"s\" {\n  start cmd \"dies\" wait \"running\" timeout 2;\n}\n");
   auto deputy = StartDeputy(d);
   const CliResult r = Sheriff(pmd, {"run", "s"});
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("test.pmd:3:3: start cmd \"dies\" wait \"running\": timed out after 2 s: 'dies' is failed "
+  EXPECT_NE(r.output.find("test.pmd:3:3: start cmd \"dies\" wait \"running\": timed out after 2 s: "
+                          "'dies' is failed "
                           "(last exit code 127)"),
             std::string::npos);
 }

@@ -41,12 +41,14 @@ struct Sheriff::DeputyView {
 namespace {
 
 bool Active(const pm_command_status_t& s) {
-  return s.state == pm_command_status_t::STATE_RUNNING || s.state == pm_command_status_t::STATE_STARTING ||
+  return s.state == pm_command_status_t::STATE_RUNNING ||
+         s.state == pm_command_status_t::STATE_STARTING ||
          s.state == pm_command_status_t::STATE_RESPAWN_WAIT;
 }
 
 bool Down(const pm_command_status_t& s) {
-  return s.state == pm_command_status_t::STATE_STOPPED || s.state == pm_command_status_t::STATE_FAILED;
+  return s.state == pm_command_status_t::STATE_STOPPED ||
+         s.state == pm_command_status_t::STATE_FAILED;
 }
 
 template <class T>
@@ -69,7 +71,11 @@ std::string Mb(int64_t bytes) {
 
 Sheriff::Sheriff(lcm::LCM* lcm, const ProcmanOptions& options, Config config, const Key* key,
                  std::string sheriff_id)
-    : lcm_(lcm), options_(options), config_(std::move(config)), key_(key), sheriff_id_(std::move(sheriff_id)) {
+    : lcm_(lcm),
+      options_(options),
+      config_(std::move(config)),
+      key_(key),
+      sheriff_id_(std::move(sheriff_id)) {
   for (const auto& c : config_.commands) {
     auto v = std::make_unique<CommandView>();
     v->cfg = c;
@@ -80,9 +86,13 @@ Sheriff::Sheriff(lcm::LCM* lcm, const ProcmanOptions& options, Config config, co
     v->id = d;
     deputies_.push_back(std::move(v));
   }
-  subscriptions_.push_back(lcm_->subscribe("^" + options_.info_channel + "$", &Sheriff::OnInfo, this));
-  subscriptions_.push_back(lcm_->subscribe("^" + options_.output_channel + "$", &Sheriff::OnOutput, this));
-  if (key_) subscriptions_.push_back(lcm_->subscribe("^" + options_.orders_channel + "$", &Sheriff::OnOrders, this));
+  subscriptions_.push_back(
+      lcm_->subscribe("^" + options_.info_channel + "$", &Sheriff::OnInfo, this));
+  subscriptions_.push_back(
+      lcm_->subscribe("^" + options_.output_channel + "$", &Sheriff::OnOutput, this));
+  if (key_)
+    subscriptions_.push_back(
+        lcm_->subscribe("^" + options_.orders_channel + "$", &Sheriff::OnOrders, this));
 }
 
 Sheriff::~Sheriff() {
@@ -143,8 +153,8 @@ void Sheriff::Adopt(DeputyView* d) {
   }
   d->initialised = true;
   if (!strangers.empty() && !observer()) {
-    SARMAP_LOG(WARN) << "deputy '" << d->id << "' runs commands not in " << config_.source << ":" << strangers
-                     << "; they will be stopped";
+    SARMAP_LOG(WARN) << "deputy '" << d->id << "' runs commands not in " << config_.source << ":"
+                     << strangers << "; they will be stopped";
     d->dirty = true;
   }
   for (auto& c : commands_) {
@@ -193,8 +203,9 @@ void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   for (const auto& o : orders.commands) {
     for (auto& c : commands_) {
       if (c->cfg.id != o.command_id || c->cfg.deputy != d->id) continue;
-      const bool newer = o.desired_runid > c->desired_runid ||
-                         (o.desired_runid == c->desired_runid && orders.counter > d->last_sent_counter);
+      const bool newer =
+          o.desired_runid > c->desired_runid ||
+          (o.desired_runid == c->desired_runid && orders.counter > d->last_sent_counter);
       if (newer) {
         c->desired_running = o.desired_running;
         c->desired_runid = o.desired_runid;
@@ -223,7 +234,8 @@ void Sheriff::ApplyTo(Verb verb, CommandView* c, DeputyView* d) {
     c->pending = verb;
     return;
   }
-  const int32_t next_runid = std::max(c->desired_runid, c->reported ? c->status.actual_runid : 0) + 1;
+  const int32_t next_runid =
+      std::max(c->desired_runid, c->reported ? c->status.actual_runid : 0) + 1;
   switch (verb) {
     case Verb::kStart:
       if (!c->desired_running) {
@@ -268,12 +280,15 @@ bool Sheriff::Reached(const Target& target, const std::string& status, double no
       why = "deputy '" + d->id + "' lost";
     } else if (!Acknowledged(*d)) {
       why = "deputy '" + d->id + "' has not acknowledged the orders yet";
-    } else if (status == "running" ? !(c->reported && c->status.state == pm_command_status_t::STATE_RUNNING)
-                                   : (c->reported && !Down(c->status))) {
+    } else if (status == "running"
+                   ? !(c->reported && c->status.state == pm_command_status_t::STATE_RUNNING)
+                   : (c->reported && !Down(c->status))) {
       why = "'" + c->cfg.id + "' is " +
-            (c->reported ? ToString(static_cast<procman::CommandState>(c->status.state)) : "not on its deputy") +
-            (c->reported && c->status.exit_code != 0 ? " (last exit code " + std::to_string(c->status.exit_code) + ")"
-                                                     : "");
+            (c->reported ? ToString(static_cast<procman::CommandState>(c->status.state))
+                         : "not on its deputy") +
+            (c->reported && c->status.exit_code != 0
+                 ? " (last exit code " + std::to_string(c->status.exit_code) + ")"
+                 : "");
     }
     if (!why.empty()) {
       if (why_not) *why_not = why;
@@ -319,7 +334,8 @@ bool Sheriff::DeputyHeard(const std::string& deputy_id) const {
 double Sheriff::NextLostDeadline(double now_s) const {
   double next = std::numeric_limits<double>::infinity();
   for (const auto& d : deputies_) {
-    if (d->heard && !DeputyLost(d->id, now_s)) next = std::min(next, d->last_heard_s + options_.deputy_lost_after_s);
+    if (d->heard && !DeputyLost(d->id, now_s))
+      next = std::min(next, d->last_heard_s + options_.deputy_lost_after_s);
   }
   return next;
 }
@@ -390,35 +406,38 @@ double Sheriff::NextWakeup() const {
 std::string Sheriff::Table(double now_s) const {
   std::ostringstream out;
   char line[512];
-  snprintf(line, sizeof(line), "%-14s %-16s %-9s %9s %8s %10s %8s\n", "DEPUTY", "HOST", "STATE", "LAST SEEN",
-           "CPU LOAD", "MEM FREE", "REFUSED");
+  snprintf(line, sizeof(line), "%-14s %-16s %-9s %9s %8s %10s %8s\n", "DEPUTY", "HOST", "STATE",
+           "LAST SEEN", "CPU LOAD", "MEM FREE", "REFUSED");
   out << line;
   for (const auto& d : deputies_) {
     if (!d->heard) {
       snprintf(line, sizeof(line), "%-14s %-16s %-9s\n", d->id.c_str(), "-", "not seen");
     } else {
       snprintf(line, sizeof(line), "%-14s %-16s %-9s %7.1f s %7.0f%% %7s MB %8d\n", d->id.c_str(),
-               d->info.host.c_str(), DeputyLost(d->id, now_s) ? "LOST" : "ok", now_s - d->last_heard_s,
-               100.0 * d->info.cpu_load, Mb(d->info.phys_mem_free_bytes).c_str(), d->info.refused_orders);
+               d->info.host.c_str(), DeputyLost(d->id, now_s) ? "LOST" : "ok",
+               now_s - d->last_heard_s, 100.0 * d->info.cpu_load,
+               Mb(d->info.phys_mem_free_bytes).c_str(), d->info.refused_orders);
     }
     out << line;
   }
   out << "\n";
-  snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s %7s %5s %5s %6s %8s\n", "COMMAND", "DEPUTY", "GROUP",
-           "WANT", "STATE", "PID", "EXIT", "RESP", "CPU%", "RSS MB");
+  snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s %7s %5s %5s %6s %8s\n", "COMMAND",
+           "DEPUTY", "GROUP", "WANT", "STATE", "PID", "EXIT", "RESP", "CPU%", "RSS MB");
   out << line;
   for (const auto& c : commands_) {
     const DeputyView* d = FindDeputy(c->cfg.deputy);
-    std::string state = c->reported ? ToString(static_cast<procman::CommandState>(c->status.state)) : "-";
+    std::string state =
+        c->reported ? ToString(static_cast<procman::CommandState>(c->status.state)) : "-";
     if (d->heard && DeputyLost(d->id, now_s)) state += "?";  // last known, deputy lost
     const char* want = !d->initialised ? "?" : c->desired_running ? "run" : "stop";
     if (c->reported) {
-      snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s %7d %5d %5d %6.1f %8s\n", c->cfg.id.c_str(),
-               c->cfg.deputy.c_str(), c->cfg.group.c_str(), want, state.c_str(), c->status.pid,
-               c->status.exit_code, c->status.restart_count, c->status.cpu_percent, Mb(c->status.rss_bytes).c_str());
+      snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s %7d %5d %5d %6.1f %8s\n",
+               c->cfg.id.c_str(), c->cfg.deputy.c_str(), c->cfg.group.c_str(), want, state.c_str(),
+               c->status.pid, c->status.exit_code, c->status.restart_count, c->status.cpu_percent,
+               Mb(c->status.rss_bytes).c_str());
     } else {
-      snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s\n", c->cfg.id.c_str(), c->cfg.deputy.c_str(),
-               c->cfg.group.c_str(), want, state.c_str());
+      snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s\n", c->cfg.id.c_str(),
+               c->cfg.deputy.c_str(), c->cfg.group.c_str(), want, state.c_str());
     }
     out << line;
   }
@@ -427,8 +446,10 @@ std::string Sheriff::Table(double now_s) const {
 
 std::string Sheriff::OutputTail(int lines, const std::string& command_id) const {
   std::vector<std::string> picked;
-  for (auto it = tail_.rbegin(); it != tail_.rend() && static_cast<int>(picked.size()) < lines; ++it) {
-    if (command_id.empty() || it->first == command_id) picked.push_back("[" + it->first + "] " + it->second);
+  for (auto it = tail_.rbegin(); it != tail_.rend() && static_cast<int>(picked.size()) < lines;
+       ++it) {
+    if (command_id.empty() || it->first == command_id)
+      picked.push_back("[" + it->first + "] " + it->second);
   }
   std::string out;
   for (auto it = picked.rbegin(); it != picked.rend(); ++it) out += *it + "\n";
@@ -440,14 +461,25 @@ std::string Sheriff::OutputTail(int lines, const std::string& command_id) const 
 std::string DescribeAction(const ScriptAction& a) {
   std::string s;
   switch (a.kind) {
-    case ScriptAction::kStart: s = "start " + a.target.ToString(); break;
-    case ScriptAction::kStop: s = "stop " + a.target.ToString(); break;
-    case ScriptAction::kRestart: s = "restart " + a.target.ToString(); break;
-    case ScriptAction::kWaitMs: return "wait ms " + std::to_string(a.wait_ms);
-    case ScriptAction::kWaitStatus: s = "wait " + a.target.ToString() + " status \"" + a.wait_status + "\""; break;
-    case ScriptAction::kRunScript: return "run_script \"" + a.script + "\"";
+    case ScriptAction::kStart:
+      s = "start " + a.target.ToString();
+      break;
+    case ScriptAction::kStop:
+      s = "stop " + a.target.ToString();
+      break;
+    case ScriptAction::kRestart:
+      s = "restart " + a.target.ToString();
+      break;
+    case ScriptAction::kWaitMs:
+      return "wait ms " + std::to_string(a.wait_ms);
+    case ScriptAction::kWaitStatus:
+      s = "wait " + a.target.ToString() + " status \"" + a.wait_status + "\"";
+      break;
+    case ScriptAction::kRunScript:
+      return "run_script \"" + a.script + "\"";
   }
-  if (a.kind != ScriptAction::kWaitStatus && !a.wait_status.empty()) s += " wait \"" + a.wait_status + "\"";
+  if (a.kind != ScriptAction::kWaitStatus && !a.wait_status.empty())
+    s += " wait \"" + a.wait_status + "\"";
   return s;
 }
 
@@ -480,11 +512,18 @@ ScriptRunner::Result ScriptRunner::Step(double now_s) {
     if (!started_) {
       started_ = true;
       started_s_ = now_s;
-      SARMAP_LOG(INFO) << (a.where.file.empty() ? "" : a.where.ToString() + ": ") << DescribeAction(a);
+      SARMAP_LOG(INFO) << (a.where.file.empty() ? "" : a.where.ToString() + ": ")
+                       << DescribeAction(a);
       switch (a.kind) {
-        case ScriptAction::kStart: sheriff_->Apply(Sheriff::Verb::kStart, a.target); break;
-        case ScriptAction::kStop: sheriff_->Apply(Sheriff::Verb::kStop, a.target); break;
-        case ScriptAction::kRestart: sheriff_->Apply(Sheriff::Verb::kRestart, a.target); break;
+        case ScriptAction::kStart:
+          sheriff_->Apply(Sheriff::Verb::kStart, a.target);
+          break;
+        case ScriptAction::kStop:
+          sheriff_->Apply(Sheriff::Verb::kStop, a.target);
+          break;
+        case ScriptAction::kRestart:
+          sheriff_->Apply(Sheriff::Verb::kRestart, a.target);
+          break;
         case ScriptAction::kRunScript: {
           ++f.index;
           started_ = false;
@@ -492,7 +531,8 @@ ScriptRunner::Result ScriptRunner::Step(double now_s) {
           stack_.push_back({s, 0});
           continue;
         }
-        default: break;
+        default:
+          break;
       }
     }
     bool done = true;
@@ -506,8 +546,8 @@ ScriptRunner::Result ScriptRunner::Step(double now_s) {
       if (!done && now_s - started_s_ > a.timeout_s) {
         char buf[64];
         snprintf(buf, sizeof(buf), "%g", a.timeout_s);
-        error_ = (a.where.file.empty() ? "" : a.where.ToString() + ": ") + DescribeAction(a) + ": timed out after " +
-                 buf + " s: " + why;
+        error_ = (a.where.file.empty() ? "" : a.where.ToString() + ": ") + DescribeAction(a) +
+                 ": timed out after " + buf + " s: " + why;
         return kFailed;
       }
       if (!done) next_wakeup_s_ = std::min(now_s + 0.5, started_s_ + a.timeout_s + 0.01);

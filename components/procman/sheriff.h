@@ -8,9 +8,8 @@
 // `sarmap-procman ... status`) changes nothing. It also adopts the desired state from
 // verified orders of other sheriffs (so a one-shot command and a live sheriff agree).
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <deque>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
 #include <string>
@@ -42,7 +41,8 @@ class Sheriff : public EventLoop::Participant {
   // True when every command of the target is in `status` ("running" or "stopped") on a
   // deputy that is present and has acknowledged the latest orders; otherwise `why_not`
   // says what is missing.
-  bool Reached(const Target& target, const std::string& status, double now_s, std::string* why_not) const;
+  bool Reached(const Target& target, const std::string& status, double now_s,
+               std::string* why_not) const;
 
   // True when every change was sent to its deputy and acknowledged (a one-shot command exits
   // only then); otherwise `why_not` names what is still awaited.
@@ -88,7 +88,7 @@ class Sheriff : public EventLoop::Participant {
   std::vector<std::unique_ptr<CommandView>> commands_;
   std::vector<std::unique_ptr<DeputyView>> deputies_;
   std::vector<lcm::Subscription*> subscriptions_;
-  std::map<std::string, int64_t> foreign_counters_;  // other sheriffs' last adopted orders
+  std::map<std::string, int64_t> foreign_counters_;       // other sheriffs' last adopted orders
   std::deque<std::pair<std::string, std::string>> tail_;  // (command, line)
   double next_resend_s_ = 0;
   int64_t orders_seq_ = 0;

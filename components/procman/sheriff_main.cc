@@ -56,7 +56,8 @@ class Driver : public EventLoop::Participant {
   }
   double NextWakeup() const override {
     double next = runner_ ? runner_->NextWakeup() : 1e300;
-    if (live_) next = std::min(next, events_ ? sheriff_->NextLostDeadline(Now()) + 0.001 : next_draw_s_);
+    if (live_)
+      next = std::min(next, events_ ? sheriff_->NextLostDeadline(Now()) + 0.001 : next_draw_s_);
     if (settling_ || status_only_) next = std::min(next, Now() + 0.1);
     return next;
   }
@@ -100,7 +101,8 @@ class Driver : public EventLoop::Participant {
           return;
         }
         message_ = "done";
-      } else if (now_s - settle_start_s_ > options_.discovery_timeout_s + options_.command_timeout_s) {
+      } else if (now_s - settle_start_s_ >
+                 options_.discovery_timeout_s + options_.command_timeout_s) {
         std::cerr << "sarmap-procman: " << why << "\n";
         settling_ = false;
         if (!live_after_) {
@@ -134,14 +136,17 @@ class Driver : public EventLoop::Participant {
     char stamp[32];
     snprintf(stamp, sizeof(stamp), "[%.3f] ", wall_s);
     for (const auto& id : sheriff_->config().Deputies()) {
-      const std::string state = !sheriff_->DeputyHeard(id) ? "not seen" : sheriff_->DeputyLost(id, now_s) ? "LOST" : "ok";
+      const std::string state = !sheriff_->DeputyHeard(id)        ? "not seen"
+                                : sheriff_->DeputyLost(id, now_s) ? "LOST"
+                                                                  : "ok";
       std::string& last = deputy_state_[id];
       if (state != last) {
         if (state == "LOST") {
-          std::cout << stamp << "deputy '" << id << "' LOST (silent for more than " << options_.deputy_lost_after_s
-                    << " s)\n";
+          std::cout << stamp << "deputy '" << id << "' LOST (silent for more than "
+                    << options_.deputy_lost_after_s << " s)\n";
         } else if (state == "ok") {
-          std::cout << stamp << "deputy '" << id << "' " << (last == "LOST" ? "back" : "seen") << "\n";
+          std::cout << stamp << "deputy '" << id << "' " << (last == "LOST" ? "back" : "seen")
+                    << "\n";
         }
         last = state;
       }
@@ -152,8 +157,8 @@ class Driver : public EventLoop::Participant {
       auto& last = command_state_[c.id];
       if (state >= 0 && (state != last.first || pid != last.second)) {
         std::cout << stamp << "command '" << c.id << "' on '" << c.deputy
-                  << "': " << ToString(static_cast<CommandState>(state)) << (pid > 0 ? " pid " + std::to_string(pid) : "")
-                  << "\n";
+                  << "': " << ToString(static_cast<CommandState>(state))
+                  << (pid > 0 ? " pid " + std::to_string(pid) : "") << "\n";
         last = {state, pid};
       }
     }
@@ -163,7 +168,8 @@ class Driver : public EventLoop::Participant {
   void Draw(double now_s) {
     std::ostringstream out;
     if (isatty(1)) out << "\033[H\033[2J";
-    out << "sarmap-procman  " << sheriff_->config().source << (sheriff_->observer() ? "  (observer)" : "") << "\n\n";
+    out << "sarmap-procman  " << sheriff_->config().source
+        << (sheriff_->observer() ? "  (observer)" : "") << "\n\n";
     out << sheriff_->Table(now_s);
     if (runner_) out << "\n" << runner_->Describe() << "\n";
     if (options_.output_tail_lines > 0) {
@@ -247,19 +253,21 @@ class Driver : public EventLoop::Participant {
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-procman", [&]() -> int {
-    common::ArgParser parser("sarmap-procman",
-                             "The procman sheriff: sends the desired state of a .pmd config to its deputies "
-                             "(signed) and shows their state.");
+    common::ArgParser parser(
+        "sarmap-procman",
+        "The procman sheriff: sends the desired state of a .pmd config to its deputies "
+        "(signed) and shows their state.");
     common::NodeArgs node_args;
     std::string pmd_path, command, target;
     std::string key_path = DefaultKeyPath();
     std::string sheriff_name = "sheriff@" + HostName();
     bool observer = false, lone_ranger = false;
     parser.AddPositional("CONFIG.pmd", &pmd_path, "procman launch configuration");
-    parser.AddPositional("COMMAND", &command,
-                         "status | start NAME | stop NAME | restart NAME | run SCRIPT; none: live view",
-                         false);
-    parser.AddPositional("NAME", &target, "command, group (\"group:NAME\" if ambiguous), everything; or script",
+    parser.AddPositional(
+        "COMMAND", &command,
+        "status | start NAME | stop NAME | restart NAME | run SCRIPT; none: live view", false);
+    parser.AddPositional("NAME", &target,
+                         "command, group (\"group:NAME\" if ambiguous), everything; or script",
                          false);
     parser.AddFlag("--key", &key_path, "shared HMAC key file (see README: key set-up)");
     parser.AddFlag("--sheriff-id", &sheriff_name,
@@ -301,7 +309,7 @@ int main(int argc, char** argv) {
       } else if (command == "start" || command == "stop" || command == "restart") {
         if (target.empty()) throw common::ArgError(command + " needs a command or group NAME");
         action = std::make_unique<ScriptAction>();
-        action->kind = command == "start" ? ScriptAction::kStart
+        action->kind = command == "start"  ? ScriptAction::kStart
                        : command == "stop" ? ScriptAction::kStop
                                            : ScriptAction::kRestart;
         action->target = config.ResolveTarget(target);
@@ -311,13 +319,16 @@ int main(int argc, char** argv) {
         script = config.FindScript(target);
         if (!script) throw common::ArgError(pmd_path + ": no script \"" + target + "\"");
       } else if (!command.empty()) {
-        throw common::ArgError("unknown command '" + command + "' (status, start, stop, restart, run)");
+        throw common::ArgError("unknown command '" + command +
+                               "' (status, start, stop, restart, run)");
       }
     } catch (const ConfigError& e) {
       throw common::ArgError(e.what());
     }
-    if (observer && (action || script)) throw common::ArgError("--observer sends no orders; only status or live view");
-    if (observer && lone_ranger) throw common::ArgError("--observer and --lone-ranger exclude each other");
+    if (observer && (action || script))
+      throw common::ArgError("--observer sends no orders; only status or live view");
+    if (observer && lone_ranger)
+      throw common::ArgError("--observer and --lone-ranger exclude each other");
     // status only watches: no key needed.
     const bool watch_only = observer || (status_only && !lone_ranger);
     Key key;
@@ -344,10 +355,11 @@ int main(int argc, char** argv) {
     if (lone_ranger) {
       PutOwnDirectoryOnPath();
       if (!BecomeSubreaper()) {
-      SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
-    }
+        SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
+      }
       for (const auto& id : config.Deputies()) {
-        deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key, DeputyStatePath(options.state_dir, id)));
+        deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key,
+                                                    DeputyStatePath(options.state_dir, id)));
         loop.Add(deputies.back().get());
       }
     }

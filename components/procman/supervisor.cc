@@ -26,12 +26,18 @@ namespace procman {
 
 const char* ToString(CommandState state) {
   switch (state) {
-    case CommandState::kStopped: return "stopped";
-    case CommandState::kStarting: return "starting";
-    case CommandState::kRunning: return "running";
-    case CommandState::kStopping: return "stopping";
-    case CommandState::kFailed: return "failed";
-    case CommandState::kRespawnWait: return "respawn-wait";
+    case CommandState::kStopped:
+      return "stopped";
+    case CommandState::kStarting:
+      return "starting";
+    case CommandState::kRunning:
+      return "running";
+    case CommandState::kStopping:
+      return "stopping";
+    case CommandState::kFailed:
+      return "failed";
+    case CommandState::kRespawnWait:
+      return "respawn-wait";
   }
   return "?";
 }
@@ -304,7 +310,7 @@ void Supervisor::BeginStop(Managed* m, double now_s) {
 void Supervisor::OnExit(Managed* m, int wait_status, double now_s) {
   int code = 127;
   if (wait_status >= 0) {
-    code = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status)
+    code = WIFEXITED(wait_status)     ? WEXITSTATUS(wait_status)
            : WIFSIGNALED(wait_status) ? 128 + WTERMSIG(wait_status)
                                       : 1;
   }
@@ -327,12 +333,14 @@ void Supervisor::OnExit(Managed* m, int wait_status, double now_s) {
     m->respawn_at_s = now_s + delay;
     m->state = CommandState::kRespawnWait;
     char line[128];
-    snprintf(line, sizeof(line), "[procman] exited with code %d; respawning in %.2f s\n", code, delay);
+    snprintf(line, sizeof(line), "[procman] exited with code %d; respawning in %.2f s\n", code,
+             delay);
     AppendOutput(m, line);
   } else {
     m->state = code == 0 ? CommandState::kStopped : CommandState::kFailed;
     m->exited_on_its_own = true;
-    if (wait_status >= 0) AppendOutput(m, "[procman] exited with code " + std::to_string(code) + "\n");
+    if (wait_status >= 0)
+      AppendOutput(m, "[procman] exited with code " + std::to_string(code) + "\n");
   }
 }
 
@@ -376,9 +384,9 @@ bool Supervisor::Step(double now_s) {
             m->tree.clear();
             ReadOutput(m);
           } else if (now_s >= m->stop_deadline_s && !m->killed) {
-            AppendOutput(m, "[procman] still running " + std::to_string(m->spec.stop_time_allowed_s) +
-                                " s after signal " + std::to_string(m->spec.stop_signal) +
-                                "; sending SIGKILL\n");
+            AppendOutput(m, "[procman] still running " +
+                                std::to_string(m->spec.stop_time_allowed_s) + " s after signal " +
+                                std::to_string(m->spec.stop_signal) + "; sending SIGKILL\n");
             SignalTree(m, SIGKILL);
             m->killed = true;
             changed = true;
@@ -407,7 +415,8 @@ bool Supervisor::Step(double now_s) {
     if (!want && (m->state == CommandState::kStopped || m->state == CommandState::kFailed)) {
       m->actual_runid = m->spec.desired_runid;
     }
-    changed = changed || signature != std::make_tuple(m->state, m->pid, m->restart_count, m->exit_code);
+    changed =
+        changed || signature != std::make_tuple(m->state, m->pid, m->restart_count, m->exit_code);
   }
   // Forget commands no longer ordered, once nothing of them runs.
   const size_t before = commands_.size();
@@ -471,7 +480,8 @@ void Supervisor::UpdateUsage(double now_s) {
     }
     m->tree = std::move(tree);
     if (m->prev_ticks_s >= 0 && now_s > m->prev_ticks_s && ticks >= m->prev_ticks) {
-      m->cpu_percent = 100.0 * static_cast<double>(ticks - m->prev_ticks) / hz / (now_s - m->prev_ticks_s);
+      m->cpu_percent =
+          100.0 * static_cast<double>(ticks - m->prev_ticks) / hz / (now_s - m->prev_ticks_s);
     }
     m->prev_ticks = ticks;
     m->prev_ticks_s = now_s;

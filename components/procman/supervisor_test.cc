@@ -63,8 +63,9 @@ std::string AllOutput(Supervisor* sup, std::string* acc) {
 
 TEST(Supervisor, StartsStopsAndCapturesOutput) {
   Supervisor sup;
-  sup.SetDesired({Spec("hello", "GREETING=hi sh -c 'echo $GREETING $0 && echo err >&2' from-procman", true),
-                  Spec("sleeper", "sleep 100", true)});
+  sup.SetDesired(
+      {Spec("hello", "GREETING=hi sh -c 'echo $GREETING $0 && echo err >&2' from-procman", true),
+       Spec("sleeper", "sleep 100", true)});
   std::string out;
   ASSERT_TRUE(StepUntil(&sup, [&] {
     return StateOf(&sup, "hello") == CommandState::kStopped &&
@@ -105,7 +106,8 @@ TEST(Supervisor, IgnoredStopSignalEscalatesToSigkill) {
   s.stop_time_allowed_s = 0.3;
   sup.SetDesired({s});
   std::string out;
-  ASSERT_TRUE(StepUntil(&sup, [&] { return AllOutput(&sup, &out).find("ready") != std::string::npos; }));
+  ASSERT_TRUE(
+      StepUntil(&sup, [&] { return AllOutput(&sup, &out).find("ready") != std::string::npos; }));
   s.desired_running = false;
   sup.SetDesired({s});
   ASSERT_TRUE(StepUntil(&sup, [&] { return StateOf(&sup, "stubborn") == CommandState::kStopped; }));
@@ -137,12 +139,13 @@ TEST(Supervisor, NoDescendantSurvivesAStop) {
   Supervisor sup;
   // Background children of a non-interactive sh ignore SIGINT; one even leaves the group.
   const std::string marker = "31" + std::to_string(getpid());  // unique sleep length
-  CommandSpec s = Spec("family",
-                       "sleep " + marker + " & setsid sleep " + marker + " & sleep " + marker, true);
+  CommandSpec s =
+      Spec("family", "sleep " + marker + " & setsid sleep " + marker + " & sleep " + marker, true);
   s.use_shell = true;
   s.stop_time_allowed_s = 0.5;
   sup.SetDesired({s});
-  ASSERT_TRUE(StepUntil(&sup, [&] { return LiveDescendantsWithMarker("sleep " + marker).size() == 3; }));
+  ASSERT_TRUE(
+      StepUntil(&sup, [&] { return LiveDescendantsWithMarker("sleep " + marker).size() == 3; }));
   sup.UpdateUsage(Now());  // the deputy samples the tree at 1 Hz; it also walks it at stop
   s.desired_running = false;
   sup.SetDesired({s});
@@ -201,7 +204,8 @@ TEST(Supervisor, MissingProgramFailsWithAReason) {
   sup.SetDesired({Spec("ghost", "no-such-program-xyz --flag", true), Spec("bad", "a | b", true)});
   std::string out;
   ASSERT_TRUE(StepUntil(&sup, [&] {
-    return StateOf(&sup, "ghost") == CommandState::kFailed && StateOf(&sup, "bad") == CommandState::kFailed;
+    return StateOf(&sup, "ghost") == CommandState::kFailed &&
+           StateOf(&sup, "bad") == CommandState::kFailed;
   }));
   EXPECT_EQ(Find(sup.Status(), "ghost")->exit_code, 127);
   AllOutput(&sup, &out);

@@ -8,12 +8,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -185,7 +184,8 @@ class Watcher {
     return it == heard_s_.end() ? -1e9 : it->second;
   }
   // Status of a command as last reported; nullptr if not reported.
-  const sarmap::pm_command_status_t* Command(const std::string& deputy, const std::string& id) const {
+  const sarmap::pm_command_status_t* Command(const std::string& deputy,
+                                             const std::string& id) const {
     auto it = info_.find(deputy);
     if (it == info_.end()) return nullptr;
     for (const auto& c : it->second.commands) {
@@ -201,14 +201,16 @@ class Watcher {
   bool IsStopped(const std::string& deputy, const std::string& id) const {
     const auto* c = Command(deputy, id);
     return c && (c->state == sarmap::pm_command_status_t::STATE_STOPPED ||
-           c->state == sarmap::pm_command_status_t::STATE_FAILED);
+                 c->state == sarmap::pm_command_status_t::STATE_FAILED);
   }
   int Pid(const std::string& deputy, const std::string& id) const {
     const auto* c = Command(deputy, id);
     return c ? c->pid : 0;
   }
   // Every PM_INFO received for a deputy, in order (for timing from the deputy's own stamps).
-  const std::vector<sarmap::pm_info_t>& History(const std::string& deputy) { return history_[deputy]; }
+  const std::vector<sarmap::pm_info_t>& History(const std::string& deputy) {
+    return history_[deputy];
+  }
   const std::vector<std::vector<uint8_t>>& RawOrders() const { return raw_orders_; }
   const std::vector<sarmap::pm_orders_t>& Orders() const { return orders_; }
 
