@@ -98,7 +98,12 @@ const char* ToString(Verdict verdict) {
   return "?";
 }
 
-ReplayGuard::ReplayGuard(std::string state_path) : state_path_(std::move(state_path)) {
+std::string ReplayDomain(const std::string& sheriff_id) {
+  return sheriff_id.substr(0, sheriff_id.find('/'));
+}
+
+ReplayGuard::ReplayGuard(std::string state_path, int64_t window_us)
+    : state_path_(std::move(state_path)), window_us_(window_us) {
   if (state_path_.empty()) return;
   std::ifstream in(state_path_);
   if (!in) {
@@ -122,30 +127,48 @@ ReplayGuard::ReplayGuard(std::string state_path) : state_path_(std::move(state_p
   }
 }
 
-std::string ReplayDomain(const std::string& sheriff_id) {
-  return sheriff_id.substr(0, sheriff_id.find('/'));
-}
-
-bool ReplayGuard::Fresh(const std::string& sheriff_id, int64_t counter) const {
-  auto it = last_.find(ReplayDomain(sheriff_id));
-  return it == last_.end() || counter > it->second;
-}
-
 int64_t ReplayGuard::Last(const std::string& sheriff_id) const {
-  auto it = last_.find(ReplayDomain(sheriff_id));
+  auto it = last_.find(sheriff_id);
   return it == last_.end() ? -1 : it->second;
 }
 
+int64_t ReplayGuard::Newest(const std::string& sheriff_id) const {
+  const std::string name = ReplayDomain(sheriff_id);
+  int64_t newest = -1;
+  for (const auto& [id, c] : last_) {
+    if (ReplayDomain(id) == name) newest = std::max(newest, c);
+  }
+  return newest;
+}
+
+bool ReplayGuard::Fresh(const std::string& sheriff_id, int64_t counter) const {
+  const int64_t last = Last(sheriff_id);
+  const int64_t newest = Newest(sheriff_id);
+  if (last >= 0 && counter <= last) return false;
+  return newest < 0 || counter > newest - window_us_;
+}
+
 bool ReplayGuard::Accept(const std::string& sheriff_id, int64_t counter) {
-  last_[ReplayDomain(sheriff_id)] = counter;
+  last_[sheriff_id] = std::max(counter, Last(sheriff_id));
+  // Forget instances of this name that fell out of the window: the NAME rule refuses them.
+  const std::string name = ReplayDomain(sheriff_id);
+  const int64_t newest = Newest(sheriff_id);
+  for (auto it = last_.begin(); it != last_.end();) {
+    if (ReplayDomain(it->first) == name && it->second < newest - window_us_) {
+      it = last_.erase(it);
+    } else {
+      ++it;
+    }
+  }
   if (state_path_.empty()) return true;
   // Write a new file and rename it over the old one: a crash never leaves half a file.
   const std::string tmp = state_path_ + ".tmp";
   FILE* f = fopen(tmp.c_str(), "w");
   if (!f) return false;
   bool ok = true;
-  for (const auto& [id, c] : last_)
+  for (const auto& [id, c] : last_) {
     ok = ok && fprintf(f, "%lld %s\n", static_cast<long long>(c), id.c_str()) > 0;
+  }
   ok = fflush(f) == 0 && ok;
   ok = fsync(fileno(f)) == 0 && ok;
   ok = fclose(f) == 0 && ok;

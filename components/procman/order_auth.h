@@ -43,27 +43,40 @@ bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders);
 enum class Verdict { kAccepted, kUnsigned, kForged, kReplayed };
 const char* ToString(Verdict verdict);
 
-// A sheriff_id is "NAME" or "NAME/INSTANCE" (the sheriff uses sheriff@host/pid): counters are
-// kept per NAME, the replay domain, so the state file does not grow with every sheriff run,
-// while sheriffs can still tell each other's orders apart.
+// A sheriff_id is "NAME" or "NAME/INSTANCE" (the sheriff uses sheriff@host/PID). Counters are
+// checked per instance, and every instance of a NAME (the replay domain) is held to that
+// NAME's newest counter:
+//
+//   fresh(id, c)  <=>  c > last[id] (if id was seen)  and  c > newest[NAME(id)] - window
+//
+// - an order the deputy accepted is never accepted again (c <= last[id]), also after a deputy
+//   restart (persisted);
+// - a restarted sheriff (new instance, counters from the wall clock) continues upward;
+// - two instances of one NAME running at once (a live sheriff and a one-shot command) may
+//   interleave within `window` without false refusals;
+// - instances whose last counter fell more than `window` behind their NAME's newest are
+//   forgotten (the state file stays small): their orders fail the NAME rule anyway.
 std::string ReplayDomain(const std::string& sheriff_id);
 
-// The last counter accepted per sheriff NAME, optionally persisted in a small text file.
 class ReplayGuard {
  public:
+  static constexpr int64_t kDefaultWindowUs = 2000000;
   // state_path "" keeps the counters in memory only. Throws std::runtime_error on an
   // unreadable or corrupt state file (a deputy must not silently forget its counters).
-  explicit ReplayGuard(std::string state_path = "");
+  explicit ReplayGuard(std::string state_path = "", int64_t window_us = kDefaultWindowUs);
   bool Fresh(const std::string& sheriff_id, int64_t counter) const;
   // Records the counter; returns false when persisting failed (logged by the caller).
   bool Accept(const std::string& sheriff_id, int64_t counter);
-  // -1 when nothing was accepted from that sheriff.
+  // Last counter accepted from exactly this sheriff_id; -1 if none (or forgotten).
   int64_t Last(const std::string& sheriff_id) const;
+  // Newest counter accepted from any instance of the id's NAME; -1 if none.
+  int64_t Newest(const std::string& sheriff_id) const;
   const std::string& state_path() const { return state_path_; }
 
  private:
   std::string state_path_;
-  std::map<std::string, int64_t> last_;
+  int64_t window_us_;
+  std::map<std::string, int64_t> last_;  // per full sheriff_id
 };
 
 // Checks signature, then freshness; on kAccepted records the counter in `guard`.

@@ -73,34 +73,57 @@ TEST(OrderAuth, SignedOrdersVerifyAndAnyChangeBreaksThem) {
 TEST(OrderAuth, RefusesUnsignedForgedAndReplayed) {
   const Key key = TestKey(1);
   ReplayGuard guard;
-  sarmap::pm_orders_t unsigned_orders = SomeOrders(5);
+  const int64_t t = 1700000000000000;  // counters are wall-clock microseconds
+  sarmap::pm_orders_t unsigned_orders = SomeOrders(t);
   EXPECT_EQ(VerifyOrders(key, unsigned_orders, &guard), Verdict::kUnsigned);
 
-  sarmap::pm_orders_t forged = SomeOrders(6);
+  sarmap::pm_orders_t forged = SomeOrders(t + 1);
   SignOrders(TestKey(9), &forged);
   EXPECT_EQ(VerifyOrders(key, forged, &guard), Verdict::kForged);
 
-  sarmap::pm_orders_t first = SomeOrders(7);
+  sarmap::pm_orders_t first = SomeOrders(t + 2);
   SignOrders(key, &first);
   EXPECT_EQ(VerifyOrders(key, first, &guard), Verdict::kAccepted);
-  EXPECT_EQ(guard.Last("sheriff@base"), 7);
-  EXPECT_EQ(VerifyOrders(key, first, &guard), Verdict::kReplayed);  // same again
-  sarmap::pm_orders_t older = SomeOrders(6);
+  EXPECT_EQ(guard.Last("sheriff@base"), t + 2);
+  EXPECT_EQ(VerifyOrders(key, first, &guard), Verdict::kReplayed);  // the same again
+  sarmap::pm_orders_t older = SomeOrders(t + 1);
   SignOrders(key, &older);
   EXPECT_EQ(VerifyOrders(key, older, &guard), Verdict::kReplayed);
-  sarmap::pm_orders_t next = SomeOrders(8);
+  sarmap::pm_orders_t next = SomeOrders(t + 1000000);
   SignOrders(key, &next);
   EXPECT_EQ(VerifyOrders(key, next, &guard), Verdict::kAccepted);
-  // Another instance of the same sheriff name shares the counter (a restarted sheriff).
-  sarmap::pm_orders_t instance = SomeOrders(8);
-  instance.sheriff_id = "sheriff@base/1234";
-  SignOrders(key, &instance);
-  EXPECT_EQ(VerifyOrders(key, instance, &guard), Verdict::kReplayed);
-  // Another sheriff has its own counter.
-  sarmap::pm_orders_t other = SomeOrders(1);
+  // Another sheriff name has its own counters.
+  sarmap::pm_orders_t other = SomeOrders(5);
   other.sheriff_id = "sheriff@laptop";
   SignOrders(key, &other);
   EXPECT_EQ(VerifyOrders(key, other, &guard), Verdict::kAccepted);
+}
+
+sarmap::pm_orders_t Signed(const Key& key, const std::string& sheriff, int64_t counter) {
+  sarmap::pm_orders_t o = SomeOrders(counter);
+  o.sheriff_id = sheriff;
+  SignOrders(key, &o);
+  return o;
+}
+
+TEST(OrderAuth, InstancesOfOneSheriffName) {
+  const Key key = TestKey(1);
+  ReplayGuard guard;  // window 2 s
+  const int64_t t = 1700000000000000;
+  // A live sheriff and a one-shot command of the same name send at once: their counters
+  // interleave on the wire; neither is a replay.
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/100", t + 500000), &guard), Verdict::kAccepted);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/200", t + 400000), &guard), Verdict::kAccepted);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/100", t + 450000), &guard), Verdict::kReplayed);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/200", t + 400000), &guard), Verdict::kReplayed);
+  // A restarted sheriff (new instance) continues upward.
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/300", t + 10000000), &guard), Verdict::kAccepted);
+  // Instances left behind by more than the window are held to the name's newest counter,
+  // also with orders of theirs the deputy never saw.
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/100", t + 600000), &guard), Verdict::kReplayed);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/400", t + 7000000), &guard), Verdict::kReplayed);
+  EXPECT_EQ(guard.Last("s@h/100"), -1);  // forgotten: the state stays small
+  EXPECT_EQ(guard.Newest("s@h/999"), t + 10000000);
 }
 
 TEST(OrderAuth, CountersSurviveADeputyRestart) {
@@ -108,7 +131,7 @@ TEST(OrderAuth, CountersSurviveADeputyRestart) {
   ASSERT_NE(mkdtemp(dir_template), nullptr);
   const std::string path = std::string(dir_template) + "/counters";
   const Key key = TestKey(3);
-  sarmap::pm_orders_t o = SomeOrders(1000);
+  sarmap::pm_orders_t o = SomeOrders(1700000000000000);
   o.sheriff_id = "sheriff with spaces";
   SignOrders(key, &o);
   {
@@ -118,7 +141,7 @@ TEST(OrderAuth, CountersSurviveADeputyRestart) {
     EXPECT_TRUE(persisted);
   }
   ReplayGuard restarted(path);
-  EXPECT_EQ(restarted.Last("sheriff with spaces"), 1000);
+  EXPECT_EQ(restarted.Last("sheriff with spaces"), 1700000000000000);
   EXPECT_EQ(VerifyOrders(key, o, &restarted), Verdict::kReplayed);
 
   std::ofstream(path) << "garbage\n";
