@@ -135,8 +135,7 @@ ip link set "$SENSORS_PORT" down
 log "cut the link to 'sensors'"
 wait_for 10 observed "deputy 'sensors' LOST" || fail "sensors never shown as lost"
 t_lost=$(grep -m1 "deputy 'sensors' LOST" "$WORK/observer.log" | sed -E 's/^\[([0-9.]+)\].*/\1/')
-lost_after=$(echo "$t_lost - $t_cut" | bc -l)
-printf 'FIGURE link cut -> deputy shown LOST: %.3f s (acceptance: within 3 s)\n' "$lost_after"
+awk -v a="$t_cut" -v b="$t_lost" 'BEGIN { printf "FIGURE link cut -> deputy shown LOST: %.3f s (acceptance: within 3 s)\n", b - a }'
 sleep 2
 observed "deputy 'compute' LOST" && fail "compute was shown lost but its link was not cut"
 [ "$(marked_pids "$NS_SENSORS")" = "$SENSOR_PIDS_BEFORE" ] || fail "sensors processes changed while cut off"
@@ -147,7 +146,7 @@ ip link set "$SENSORS_PORT" up
 log "restored the link"
 wait_for 10 observed "deputy 'sensors' back" || fail "sensors never shown back"
 t_back=$(grep -m1 "deputy 'sensors' back" "$WORK/observer.log" | sed -E 's/^\[([0-9.]+)\].*/\1/')
-printf 'FIGURE link restored -> deputy shown again: %.3f s\n' "$(echo "$t_back - $t_up" | bc -l)"
+awk -v a="$t_up" -v b="$t_back" 'BEGIN { printf "FIGURE link restored -> deputy shown again: %.3f s\n", b - a }'
 sleep 1.5
 [ "$(marked_pids "$NS_SENSORS")" = "$SENSOR_PIDS_BEFORE" ] || fail "sensors processes changed: [$SENSOR_PIDS_BEFORE] -> [$(marked_pids "$NS_SENSORS")]"
 grep -q "REFUSED" "$WORK/deputy-sensors.log" && fail "sensors refused orders: $(grep REFUSED "$WORK/deputy-sensors.log")"
