@@ -38,7 +38,12 @@ int main(int argc, char** argv) {
     if (id.empty()) throw common::ArgError("--id NAME is required");
     if (!state_dir.empty()) options.state_dir = state_dir;
     common::SetLogName("sarmap-procman-deputy[" + id + "]");
-    Key key = LoadKeyFile(key_path);
+    Key key;
+    try {
+      key = LoadKeyFile(key_path);
+    } catch (const std::runtime_error& e) {
+      throw common::ArgError(e.what());
+    }
     PutOwnDirectoryOnPath();
     if (!BecomeSubreaper()) {
       SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";

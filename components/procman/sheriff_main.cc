@@ -270,8 +270,9 @@ int main(int argc, char** argv) {
                          "command, group (\"group:NAME\" if ambiguous), everything; or script",
                          false);
     parser.AddFlag("--key", &key_path, "shared HMAC key file (see README: key set-up)");
-    parser.AddFlag("--sheriff-id", &sheriff_name,
-                   "sheriff name; deputies keep the order counter per name (instances add /PID)");
+    parser.AddFlag(
+        "--sheriff-id", &sheriff_name,
+        "sheriff name (each run adds /PID); deputies check order counters per name, see README");
     parser.AddSwitch("--observer", &observer, "only watch: send no orders (no key needed)");
     parser.AddSwitch("--lone-ranger", &lone_ranger,
                      "run the config's deputies inside this process (one computer, one command); "
@@ -332,7 +333,13 @@ int main(int argc, char** argv) {
     // status only watches: no key needed.
     const bool watch_only = observer || (status_only && !lone_ranger);
     Key key;
-    if (!watch_only) key = LoadKeyFile(key_path);
+    if (!watch_only) {
+      try {
+        key = LoadKeyFile(key_path);
+      } catch (const std::runtime_error& e) {
+        throw common::ArgError(e.what());
+      }
+    }
     const std::string sheriff_id = sheriff_name + "/" + std::to_string(getpid());
 
     const std::string url = node_args.lcm_url.empty() ? common::DefaultLcmUrl() : node_args.lcm_url;
