@@ -104,6 +104,16 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     }
     return;
   }
+  if (orders.deputy_id == kProbeDeputyId && orders.num_commands == 0) {
+    // A sheriff starting up asks every deputy to report now rather than within a second.
+    // Orders nothing, so it needs no signature; rate-limited.
+    const double now = Now();
+    if (now - last_probe_reply_s_ >= 0.05) {
+      last_probe_reply_s_ = now;
+      info_dirty_ = true;
+    }
+    return;
+  }
   if (orders.deputy_id != id_) return;  // for another deputy
   ++orders_received_;
   if (shutting_down_) return;

@@ -71,6 +71,7 @@ class Deputy : public EventLoop::Participant {
   int64_t info_seq_ = 0, output_seq_ = 0, status_seq_ = 0;
   int64_t orders_received_ = 0;
   double start_s_ = 0;
+  double last_probe_reply_s_ = -1e9;
   std::map<std::string, common::RateLimiter> refuse_log_limit_;
 };
 

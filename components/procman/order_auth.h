@@ -22,6 +22,11 @@
 namespace sarmap {
 namespace procman {
 
+// pm_orders_t with this deputy_id and no commands is a probe: every deputy publishes PM_INFO
+// at once (so a sheriff starting up need not wait a second). It orders nothing, so it needs
+// no signature, and deputies rate-limit their answers.
+constexpr const char* kProbeDeputyId = "*";
+
 using Key = std::vector<uint8_t>;
 using Digest = std::array<uint8_t, 32>;
 

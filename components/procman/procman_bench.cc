@@ -1,7 +1,7 @@
 // Benchmark of the launcher (prints figures, asserts nothing):
 //  1. time from `start` to all of 10 commands reported running, with a sheriff that already
 //     knows the deputy (in-process Sheriff) and end to end through the CLI (which first has to
-//     hear the deputy's 1 Hz PM_INFO);
+//     learn the deputy's state: it probes for PM_INFO);
 //  2. CPU of an idle deputy supervising 20 running commands (from /proc, over 10 s), while a
 //     live sheriff re-sends the desired state every second.
 // Runs inside a private network namespace (sarmap_add_bench ... NETNS).

@@ -93,6 +93,22 @@ Sheriff::Sheriff(lcm::LCM* lcm, const ProcmanOptions& options, Config config, co
   if (key_)
     subscriptions_.push_back(
         lcm_->subscribe("^" + options_.orders_channel + "$", &Sheriff::OnOrders, this));
+  SendProbe();
+}
+
+void Sheriff::SendProbe() {
+  sarmap::pm_orders_t probe;
+  probe.header.utime = common::WallClockUtime();
+  probe.header.seq = orders_seq_++;
+  probe.header.frame = "";
+  probe.sheriff_id = sheriff_id_;
+  probe.deputy_id = kProbeDeputyId;
+  probe.counter = 0;
+  probe.num_commands = 0;
+  std::fill(std::begin(probe.hmac_sha256), std::end(probe.hmac_sha256), 0);
+  lcm_->publish(options_.orders_channel, &probe);
+  ++probes_sent_;
+  next_probe_s_ = Now() + 0.25;
 }
 
 Sheriff::~Sheriff() {
@@ -387,6 +403,8 @@ void Sheriff::SendOrders(DeputyView* d, double /*now_s*/) {
 }
 
 void Sheriff::OnWake(const std::vector<pollfd>&, double now_s) {
+  // A second probe, in case the first went out before a deputy was listening.
+  if (probes_sent_ < 2 && now_s >= next_probe_s_) SendProbe();
   if (observer()) return;
   const bool resend = now_s >= next_resend_s_;
   for (auto& d : deputies_) {
@@ -396,6 +414,7 @@ void Sheriff::OnWake(const std::vector<pollfd>&, double now_s) {
 }
 
 double Sheriff::NextWakeup() const {
+  if (probes_sent_ < 2) return next_probe_s_;
   if (observer()) return std::numeric_limits<double>::infinity();
   for (const auto& d : deputies_) {
     if (d->initialised && d->dirty) return 0;

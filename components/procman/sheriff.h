@@ -90,7 +90,10 @@ class Sheriff : public EventLoop::Participant {
   std::vector<lcm::Subscription*> subscriptions_;
   std::map<std::string, int64_t> foreign_counters_;       // other sheriffs' last adopted orders
   std::deque<std::pair<std::string, std::string>> tail_;  // (command, line)
+  void SendProbe();
   double next_resend_s_ = 0;
+  double next_probe_s_ = 0;
+  int probes_sent_ = 0;
   int64_t orders_seq_ = 0;
 };
 

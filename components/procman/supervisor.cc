@@ -146,15 +146,17 @@ void Supervisor::ReadOutput(Managed* m) {
 }
 
 void Supervisor::SignalTree(Managed* m, int sig) {
-  if (m->pgid > 0) kill(-m->pgid, sig);
-  // Descendants that left the group (setsid, daemons) are found through parent links.
+  // Walk the tree before signalling: once a parent dies its children are re-parented (to us,
+  // the subreaper) and the parent links that lead to them are gone. This also finds
+  // descendants that left the group (setsid, daemons).
   const ProcessTable table = ProcessTable::Snapshot();
   for (int pid : table.Tree(m->pid, m->pgid)) {
     const uint64_t start = table.processes().at(pid).start_time;
     bool known = false;
-    for (const auto& [p, s] : m->tree) known = known || (p == pid && s == start);
+    for (const auto& [p, st] : m->tree) known = known || (p == pid && st == start);
     if (!known) m->tree.emplace_back(pid, start);
   }
+  if (m->pgid > 0) kill(-m->pgid, sig);
   for (const auto& [pid, start] : m->tree) {
     ProcInfo info;
     if (ReadProcInfo(pid, &info) && info.start_time == start && info.state != 'Z') kill(pid, sig);
