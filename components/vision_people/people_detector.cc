@@ -546,24 +546,50 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     }
     c.width_m = tmax >= tmin ? tmax - tmin + vs : 0.0;
     c.depth_extent_m = rmax - rmin + vs;
-    const int nbins = static_cast<int>((smax - smin) / vs) + 1;
-    std::vector<double> profile(nbins, -1.0);
+    // Footprints on the floor (6 cm cells) of the head (points within head_drop of the top)
+    // and of head + shoulders (within shoulder_drop): a person's shoulders stick out beside
+    // the head from every side; the top edge of a wall, door or cupboard does not.
     const int nslices = static_cast<int>(H / vs) + 1;
     std::vector<uint8_t> slice(nslices, 0);
+    constexpr int kFoot = 32;
+    uint8_t head_cells[kFoot][kFoot] = {}, shoulder_cells[kFoot][kFoot] = {};
+    int head_area = 0, shoulder_area = 0;
     for (int i : part) {
       const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
-      const int b = std::min(nbins - 1, static_cast<int>((across.dot(d) - smin) / vs));
-      profile[b] = std::max(profile[b], ws.floor[i].z());
-      const int s = std::clamp(static_cast<int>(ws.floor[i].z() / vs), 0, nslices - 1);
+      const int cx = std::clamp(static_cast<int>(std::floor(d.x() / vs)) + kFoot / 2, 0, kFoot - 1);
+      const int cy = std::clamp(static_cast<int>(std::floor(d.y() / vs)) + kFoot / 2, 0, kFoot - 1);
+      const double z = ws.floor[i].z();
+      if (z >= H - so.head_drop_m && !head_cells[cx][cy]) {
+        head_cells[cx][cy] = 1;
+        ++head_area;
+      }
+      if (z >= H - so.shoulder_drop_m && !shoulder_cells[cx][cy]) {
+        shoulder_cells[cx][cy] = 1;
+        ++shoulder_area;
+      }
+      const int s = std::clamp(static_cast<int>(z / vs), 0, nslices - 1);
       slice[s] = 1;
     }
-    int head_bins = 0, shoulder_bins = 0;
-    for (double h : profile) {
-      head_bins += h >= H - so.head_drop_m;
-      shoulder_bins += h >= H - so.shoulder_drop_m;
+    c.head_area_m2 = head_area * vs * vs;
+    c.shoulder_area_m2 = shoulder_area * vs * vs;
+    // Lateral height profile (6 cm bins across the viewing ray, highest point per bin):
+    // head bins reach within head_drop of the top, head-and-shoulder bins within
+    // shoulder_drop. Unlike the footprint it does not smear with range noise.
+    {
+      const int nbins = static_cast<int>((smax - smin) / vs) + 1;
+      std::vector<double> profile(nbins, -1.0);
+      for (int i : part) {
+        const int b = std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0, nbins - 1);
+        profile[b] = std::max(profile[b], ws.floor[i].z());
+      }
+      int head_bins = 0, shoulder_bins = 0;
+      for (double h : profile) {
+        head_bins += h >= H - so.head_drop_m;
+        shoulder_bins += h >= H - so.shoulder_drop_m;
+      }
+      c.head_width_m = head_bins * vs;
+      c.shoulder_width_m = shoulder_bins * vs;
     }
-    c.head_width_m = head_bins * vs;
-    c.shoulder_width_m = shoulder_bins * vs;
 
     // What of the head-to-floor span is inside the image.
     const double v_top = ProjectV(K, c.head_camera);
@@ -592,25 +618,13 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     }
     c.fill = slices > 0 ? static_cast<double>(occupied) / slices : 0.0;
 
-    // Is the top of the cluster the top of the object? When the top voxel is within a few
-    // rows of the first valid depth row of its column (or the image edge), the object may
-    // continue above the field of view (a wall, a door): its height is unknown.
+    // Is the top of the cluster the top of the object? Not when it touches the image's top
+    // edge (the object may go on above the field of view).
     {
       const Eigen::Vector3d top_point = ws.centroid[top_voxel];
       const double vt = ProjectV(K, top_point), ut = ProjectU(K, top_point);
       const int margin = std::max(2, frame.height / 48);
-      c.truncated_top = true;
-      if (std::isfinite(vt) && std::isfinite(ut)) {
-        const int u = std::clamp(static_cast<int>(ut), 0, frame.width - 1);
-        int first_valid = frame.height;
-        for (int v = 0; v < frame.height; ++v) {
-          if (std::isfinite(frame.xyz[3 * (static_cast<size_t>(v) * frame.width + u) + 2])) {
-            first_valid = v;
-            break;
-          }
-        }
-        c.truncated_top = vt - std::max(0, first_valid) < margin;
-      }
+      c.truncated_top = !(std::isfinite(vt) && std::isfinite(ut)) || vt < margin;
     }
 
     // Depth shape score: a fuzzy AND (product) of memberships.
@@ -619,11 +633,32 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m,
                                      so.max_width_m, 1.3 * so.max_width_m);
     const double m_depth = 1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
-    const double ratio = c.shoulder_width_m > 0 ? c.head_width_m / c.shoulder_width_m : 1.0;
-    // Head narrower than the shoulders, and shoulders sticking out beside it.
-    const double m_head = std::min(1.0 - Ramp(ratio, so.max_head_to_shoulder, 1.0),
-                                   1.0 - Ramp(c.head_width_m, 0.35, 0.5)) *
-                          Ramp(c.shoulder_width_m - c.head_width_m, 0.0, 2 * vs);
+    const double area_ratio = shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
+    // Head prominence: how far the top stands above everything at least head_radius away
+    // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
+    // the top edge of a box, wall or cupboard: ~0).
+    // The head centre is the mean of the points within 0.1 m of the top (robust to range
+    // noise); with nothing outside the head radius there are no shoulders: prominence 0.
+    Eigen::Vector2d top_xy = Eigen::Vector2d::Zero();
+    int top_n = 0;
+    for (int i : part) {
+      if (ws.floor[i].z() >= H - 0.1) {
+        top_xy += ws.floor[i].head<2>();
+        ++top_n;
+      }
+    }
+    top_xy /= std::max(1, top_n);
+    double around = -1.0;
+    const double r2 = so.head_radius_m * so.head_radius_m;
+    for (int i : part) {
+      if ((ws.floor[i].head<2>() - top_xy).squaredNorm() >= r2) around = std::max(around, ws.floor[i].z());
+    }
+    c.head_prominence_m = around < 0 ? 0.0 : H - around;
+    // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
+    // surface has the same footprint at every height).
+    const double m_head = Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+                          (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
+                          (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
     const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
     const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
     const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);

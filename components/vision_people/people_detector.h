@@ -104,7 +104,10 @@ struct DepthShapeOptions {
   double max_depth_extent_m = 0.8;
   double head_drop_m = 0.2;        // head = bins within this of the top
   double shoulder_drop_m = 0.5;    // head + shoulders = bins within this of the top
-  double max_head_to_shoulder = 0.75;  // head width / shoulder width
+  double max_head_to_shoulder = 0.85;  // head footprint / head-and-shoulders footprint
+  double max_head_width_m = 0.35;
+  double head_radius_m = 0.18;        // beyond this from the top point (on the floor) ...
+  double min_head_prominence_m = 0.15;  // ... everything is at least this much lower
   double min_fill = 0.6;           // occupied fraction of the height column
   double accept = 0.5;             // depth-only decision threshold on the shape score
   template <class V>
@@ -119,7 +122,10 @@ struct DepthShapeOptions {
     v("max_depth_extent_m", max_depth_extent_m, "largest extent along the viewing ray");
     v("head_drop_m", head_drop_m, "height map bins within this of the top form the head");
     v("shoulder_drop_m", shoulder_drop_m, "height map bins within this of the top form head and shoulders");
-    v("max_head_to_shoulder", max_head_to_shoulder, "largest head width / shoulder width ratio");
+    v("max_head_to_shoulder", max_head_to_shoulder, "largest head / head-and-shoulders floor footprint ratio (1.0: zero)");
+    v("head_radius_m", head_radius_m, "points farther than this from the top (on the floor) are not head");
+    v("min_head_prominence_m", min_head_prominence_m, "the top must stand this far above all non-head points (-0.06 m: zero)");
+    v("max_head_width_m", max_head_width_m, "widest head across the viewing ray (+0.15 m: zero)");
     v("min_fill", min_fill, "smallest occupied fraction of the 6 cm height slices");
     v("accept", accept, "depth-only: accept when the shape score reaches this");
   }
@@ -253,8 +259,11 @@ struct PersonCandidate {
   double bottom_m = 0;
   double width_m = 0;
   double depth_extent_m = 0;
-  double head_width_m = 0;
-  double shoulder_width_m = 0;
+  double head_width_m = 0;      // across the viewing ray
+  double shoulder_width_m = 0;  // head and shoulders, across the viewing ray
+  double head_prominence_m = 0; // top above everything outside the head radius
+  double head_area_m2 = 0;      // floor footprint of the head
+  double shoulder_area_m2 = 0;  // floor footprint of head and shoulders
   double fill = 0;
   double visible_fraction = 0;
   bool truncated_top = false;  // the top may be cut by the field of view
