@@ -197,6 +197,13 @@ std::vector<ImageBox> DetectPeopleInImage(const uint8_t* rgb, int width, int hei
   if (options.upscale != 1.0) {
     cv::resize(image, input, cv::Size(), options.upscale, options.upscale, cv::INTER_LINEAR);
   }
+  const int pad_x = static_cast<int>(std::lround(options.pad_fraction * input.cols));
+  const int pad_y = static_cast<int>(std::lround(options.pad_fraction * input.rows));
+  if (pad_x > 0 || pad_y > 0) {
+    cv::Mat padded;
+    cv::copyMakeBorder(input, padded, pad_y, pad_y, pad_x, pad_x, cv::BORDER_REPLICATE);
+    input = padded;
+  }
   cv::HOGDescriptor hog;
   hog.setSVMDetector(cv::HOGDescriptor::getDefaultPeopleDetector());
   std::vector<cv::Rect> found;
@@ -206,8 +213,8 @@ std::vector<ImageBox> DetectPeopleInImage(const uint8_t* rgb, int width, int hei
   for (size_t i = 0; i < found.size(); ++i) {
     ImageBox b;
     cv::Rect r = found[i];
-    b.x = r.x / options.upscale;
-    b.y = r.y / options.upscale;
+    b.x = (r.x - pad_x) / options.upscale;
+    b.y = (r.y - pad_y) / options.upscale;
     b.w = r.width / options.upscale;
     b.h = r.height / options.upscale;
     if (options.shrink_boxes) {  // as OpenCV's peopledetect sample: the window has margins
@@ -228,6 +235,13 @@ double BoxIoU(const ImageBox& a, const ImageBox& b) {
   const double inter = ix * iy;
   const double uni = a.w * a.h + b.w * b.h - inter;
   return uni > 0 ? inter / uni : 0.0;
+}
+
+ImageBox StandardizeAspect(const ImageBox& box, double aspect) {
+  ImageBox b = box;
+  b.w = aspect * box.h;
+  b.x = box.x + 0.5 * box.w - 0.5 * b.w;
+  return b;
 }
 
 int MatchBoxes(const std::vector<ImageBox>& detections, const std::vector<ImageBox>& truth,

@@ -36,9 +36,11 @@ std::shared_ptr<const HogClassifier> MakePclHogClassifier(const std::string& svm
 struct SlidingWindowOptions {
   double hit_threshold = 0.0;
   double scale_step = 1.05;
-  int group_threshold = 2;
+  int group_threshold = 1;   // 1 keeps large people (few overlapping windows at coarse scales)
   double upscale = 1.0;       // resize the image first (finds people smaller than 96 px when > 1)
   bool shrink_boxes = true;   // drop the window margins (0.1 w each side, 0.07 h top, 0.8 h tall)
+  double pad_fraction = 0.15; // replicate-pad the image by this fraction of its size so that
+                              // people filling the frame still fit a window (with its margins)
 };
 struct ImageBox {
   double x = 0, y = 0, w = 0, h = 0;  // pixels, top-left and size
@@ -49,6 +51,10 @@ std::vector<ImageBox> DetectPeopleInImage(const uint8_t* rgb, int width, int hei
 
 // Intersection over union of two boxes.
 double BoxIoU(const ImageBox& a, const ImageBox& b);
+
+// The box with its width set to aspect * height about the same centre: Dollar et al.'s
+// pedestrian-benchmark protocol (aspect 0.41) so that IoU does not punish thin annotations.
+ImageBox StandardizeAspect(const ImageBox& box, double aspect = 0.41);
 
 // Greedy matching of detections (highest score first) to ground truth at IoU >= min_iou;
 // returns the number of true positives.
