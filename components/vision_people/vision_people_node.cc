@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
     };
 
     std::vector<RgbdFrame> ready;
+    node.SetStatusMessage("frames 0 bad 0 people 0 colour none input_warnings 0");
     node.Subscribe<image_t>(options.depth_channel, [&](const image_t& m, const common::ReceiveInfo&) {
       assembler.AddDepth(m, &ready);
       process(ready);
