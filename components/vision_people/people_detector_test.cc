@@ -283,6 +283,27 @@ TEST(PeopleDetector, FivePeopleFromDepthAlone) {
   for (const auto& c : r.people) EXPECT_TRUE(c.depth_only);
 }
 
+TEST(PeopleDetector, GlareAndFlatColourFallBackToDepth) {
+  const std::string path = kPclDir + "/five_people.pcd";
+  if (!Exists(path)) GTEST_SKIP() << "shared data missing: " << path;
+  RgbdFrame frame;
+  std::string error;
+  ASSERT_TRUE(LoadPcdFrame(path, PinholeIntrinsics(), &frame, &error)) << error;
+  PeopleDetector detector(DetectorOptions(), GroundPlane::FromCoefficients(kFivePeopleFloor),
+                          MakeOpenCvHogClassifier());
+  RgbdFrame glare = frame;  // sunlight into the lens: almost everything saturated
+  for (size_t i = 0; i < glare.rgb.size(); ++i) glare.rgb[i] = i % 97 == 0 ? 200 : 255;
+  DetectionResult r = detector.Detect(glare, &error);
+  EXPECT_EQ(r.stats.color_state, ColorState::kGlare);
+  EXPECT_EQ(r.people.size(), 5u);
+  RgbdFrame flat = frame;  // fog / smoke: mid grey, no contrast
+  for (auto& b : flat.rgb) b = static_cast<uint8_t>(120 + b % 5);
+  r = detector.Detect(flat, &error);
+  EXPECT_EQ(r.stats.color_state, ColorState::kLowContrast);
+  EXPECT_EQ(r.people.size(), 5u);
+  for (const auto& c : r.people) EXPECT_TRUE(c.depth_only);
+}
+
 TEST(PeopleDetector, HeadAndShouldersOnlyIsNoPerson) {
   const std::string path = kPclDir + "/pcl_data_person/person.pcd";
   if (!Exists(path)) GTEST_SKIP() << "shared data missing: " << path;
