@@ -446,6 +446,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
 
   // 6. Head-based sub-clustering on a height map along the axis perpendicular to the ray.
   std::vector<std::vector<int>> subclusters;
+  std::vector<size_t> parent_of;  // cluster each sub-cluster came from
+  std::vector<int> heads_in_cluster(clusters.size(), 0);
   const double head_d2 = o.min_head_distance_m * o.min_head_distance_m;
   for (const auto& cluster : clusters) {
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
@@ -488,6 +490,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
       if (far) heads.push_back(m);
     }
+    heads_in_cluster[&cluster - clusters.data()] = static_cast<int>(heads.size());
     std::vector<std::vector<int>> parts(heads.size());
     for (int i : cluster) {
       for (size_t h = 0; h < heads.size(); ++h) {
@@ -498,7 +501,10 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
     }
     for (auto& p : parts) {
-      if (static_cast<int>(p.size()) >= o.min_subcluster_voxels) subclusters.push_back(std::move(p));
+      if (static_cast<int>(p.size()) >= o.min_subcluster_voxels) {
+        subclusters.push_back(std::move(p));
+        parent_of.push_back(static_cast<size_t>(&cluster - clusters.data()));
+      }
     }
   }
 
@@ -506,7 +512,9 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   const PinholeIntrinsics& K = frame.intrinsics;
   const DepthShapeOptions& so = o.shape;
   const ColorOptions& co = o.color;
-  for (const auto& part : subclusters) {
+  for (size_t sub = 0; sub < subclusters.size(); ++sub) {
+    const std::vector<int>& part = subclusters[sub];
+    const std::vector<int>& parent = clusters[parent_of[sub]];
     PersonCandidate c;
     c.num_voxels = static_cast<int>(part.size());
     Eigen::Vector3d centroid_floor = Eigen::Vector3d::Zero();
@@ -648,10 +656,17 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
     }
     top_xy /= std::max(1, top_n);
+    // With a single head in its cluster, the ring is searched in the whole cluster: the
+    // 0.3 m cut around the top can leave a box edge looking like a lone peak. With several
+    // heads (people side by side) only the sub-cluster, so a neighbour's shoulder does not
+    // count.
     double around = -1.0;
     const double r2 = so.head_radius_m * so.head_radius_m;
-    for (int i : part) {
-      if ((ws.floor[i].head<2>() - top_xy).squaredNorm() >= r2) around = std::max(around, ws.floor[i].z());
+    const double outer2 = std::pow(so.head_radius_m + o.min_head_distance_m, 2);
+    const bool single_head = heads_in_cluster[parent_of[sub]] == 1;
+    for (int i : single_head ? parent : part) {
+      const double d2 = (ws.floor[i].head<2>() - top_xy).squaredNorm();
+      if (d2 >= r2 && d2 <= outer2) around = std::max(around, ws.floor[i].z());
     }
     c.head_prominence_m = around < 0 ? 0.0 : H - around;
     // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
