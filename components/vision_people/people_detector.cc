@@ -471,24 +471,35 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       return b < 0 || b >= nbins || top[b] < 0 ? -std::numeric_limits<double>::infinity()
                                                : ws.floor[top[b]].z();
     };
-    // Local maxima (a plateau counts once, at its centre).
-    std::vector<int> maxima;
+    // Local maxima (a plateau counts once, at its centre): (voxel, bin).
+    std::vector<std::pair<int, int>> maxima;
     for (int b = 0; b < nbins; ++b) {
       if (top[b] < 0 || !(height(b) > height(b - 1))) continue;
       int e = b;
       while (e + 1 < nbins && height(e + 1) == height(b)) ++e;
-      if (height(e + 1) < height(b)) maxima.push_back(top[(b + e) / 2]);
+      if (height(e + 1) < height(b)) maxima.emplace_back(top[(b + e) / 2], (b + e) / 2);
       b = e;
     }
-    std::sort(maxima.begin(), maxima.end(),
-              [&](int a, int b) { return ws.floor[a].z() > ws.floor[b].z(); });
+    std::sort(maxima.begin(), maxima.end(), [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+      return ws.floor[a.first].z() > ws.floor[b.first].z();
+    });
+    // A maximum is a new head when it is at least min_head_distance from every higher head
+    // and the height map dips by min_head_dip between them (a neck and shoulders, or a gap);
+    // range noise on a flat top (a box, a cupboard) makes maxima without such a dip.
     std::vector<int> heads;
-    for (int m : maxima) {
-      bool far = true;
-      for (int h : heads) {
-        far = far && (ws.floor[m].head<2>() - ws.floor[h].head<2>()).squaredNorm() >= head_d2;
+    std::vector<int> head_bins;
+    for (const auto& [m, bm] : maxima) {
+      bool separate = true;
+      for (size_t k = 0; k < heads.size() && separate; ++k) {
+        separate = (ws.floor[m].head<2>() - ws.floor[heads[k]].head<2>()).squaredNorm() >= head_d2;
+        double low = std::numeric_limits<double>::infinity();
+        for (int b = std::min(bm, head_bins[k]) + 1; b < std::max(bm, head_bins[k]); ++b) low = std::min(low, height(b));
+        separate = separate && ws.floor[m].z() - low >= o.min_head_dip_m;
       }
-      if (far) heads.push_back(m);
+      if (separate) {
+        heads.push_back(m);
+        head_bins.push_back(bm);
+      }
     }
     heads_in_cluster[&cluster - clusters.data()] = static_cast<int>(heads.size());
     std::vector<std::vector<int>> parts(heads.size());

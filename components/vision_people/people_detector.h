@@ -203,6 +203,7 @@ struct DetectorOptions {
   int max_cluster_voxels = 5000;
   double merge_distance_m = 0.4;  // ground-plane centroid distance for merging clusters
   double min_head_distance_m = 0.3;
+  double min_head_dip_m = 0.1;    // the height map must dip this much between two heads
   int min_subcluster_voxels = 30;
   double candidate_min_height_m = 1.0;  // candidates outside these never reach a classifier
   double candidate_max_height_m = 2.3;
@@ -223,6 +224,7 @@ struct DetectorOptions {
     v("max_cluster_voxels", max_cluster_voxels, "largest cluster");
     v("merge_distance_m", merge_distance_m, "merge clusters whose ground-plane centroids are closer");
     v("min_head_distance_m", min_head_distance_m, "height-map maxima closer than this are one head");
+    v("min_head_dip_m", min_head_dip_m, "the height map must dip this much between two heads");
     v("min_subcluster_voxels", min_subcluster_voxels, "smallest sub-cluster");
     v("candidate_min_height_m", candidate_min_height_m, "lowest candidate top above the floor");
     v("candidate_max_height_m", candidate_max_height_m, "highest candidate top above the floor");

@@ -233,9 +233,10 @@ TEST(PeopleDetector, SyntheticDarkLabFrameRecallFromDepthAlone) {
   printf("synthetic dark lab: %d frames, frame recall %.3f (%d/%d), %.3f false positives/frame, "
          "worst floor error %.2f m\n", frames, recall, found, visible, fp_per_frame, worst);
   EXPECT_GE(recall, 0.8);  // the dark goal
-  // Depth alone confuses some furniture (a 1.2 m pillar box seen at 4-7 m) with a person:
-  // measured 0.29 false positives per frame here; pinned so it cannot get worse unnoticed.
-  EXPECT_LE(fp_per_frame, 0.3);
+  // Depth alone can still confuse furniture with a person (here a 1.2 m pillar box at 4.7 m,
+  // partly hidden by a person in front): measured 0.083 false positives per frame (2 in 24);
+  // pinned so it cannot get worse unnoticed.
+  EXPECT_LE(fp_per_frame, 0.1);
 }
 
 TEST(PeopleDetector, FivePeopleWithColour) {
