@@ -42,7 +42,7 @@ void GaussianProcess1d::Fit(const std::vector<double>& x, const std::vector<doub
     double best = -INFINITY;
     for (double l : {2.0, 4.0, 8.0, 16.0, 32.0, 64.0})
       for (double sf : {1.0, 3.0, 10.0, 30.0})
-        for (double sn : {0.5, 1.0, 2.0, 4.0, 8.0}) {
+        for (double sn : {0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 12.0, 16.0}) {
           const Hyper h{l, sf, sn};
           const double ll = LogMarginalLikelihood(h);
           if (ll > best) {
