@@ -4,12 +4,16 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <unistd.h>
+
+#include "speech/verification_vocabulary.h"
 
 namespace sarmap {
 namespace speech {
@@ -32,13 +36,16 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
   const std::string dict = options.model_dir + "/cmudict-en-us.dict";
   for (const auto& p : {hmm, lm, dict})
     if (!fs::exists(p)) throw std::runtime_error("PocketSphinx model missing: " + p + " (install pocketsphinx-en-us)");
-  // The n-gram model is large and slow to load: only with full decoding.
-  if (options.full_decoding)
-    impl_->config = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", hmm.c_str(), "-lm", lm.c_str(), "-dict",
-                                dict.c_str(), "-logfn", "/dev/null", nullptr);
-  else
-    impl_->config = cmd_ln_init(nullptr, ps_args(), TRUE, "-hmm", hmm.c_str(), "-dict", dict.c_str(), "-logfn",
-                                "/dev/null", nullptr);
+  // The n-gram model is large and slow to load: only with full decoding or LM verification.
+  std::vector<std::string> args = {"-hmm", hmm, "-dict", dict, "-logfn", "/dev/null", "-cmn", options.cmn};
+  if (options.full_decoding || options.verify_with_lm) {
+    args.insert(args.end(), {"-lm", lm});
+    // No second (flat-lexicon) pass: about twice as fast.
+    args.insert(args.end(), {"-fwdflat", "no"});
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(&a[0]);
+  impl_->config = cmd_ln_parse_r(nullptr, ps_args(), static_cast<int32>(argv.size()), argv.data(), TRUE);
   if (!impl_->config) throw std::runtime_error("PocketSphinx: bad configuration");
   impl_->ps = ps_init(impl_->config);
   if (!impl_->ps) throw std::runtime_error("PocketSphinx: cannot initialise the decoder with " + options.model_dir);
@@ -62,6 +69,28 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
   std::ofstream(impl_->kws_file) << kws.str();
   if (ps_set_kws(impl_->ps, "kws", impl_->kws_file.c_str()) < 0)
     throw std::runtime_error("PocketSphinx: cannot set the keyword list");
+  if (options.verify_with_grammar) {
+    // A free loop over a general vocabulary plus the keywords: the keyword must win against
+    // every other word there, its sound-alikes included.
+    std::set<std::string> vocab;
+    std::istringstream vs(kVerificationVocabulary);
+    std::string w;
+    while (vs >> w) vocab.insert(w);
+    for (const auto& k : options.keywords) {
+      std::istringstream ks(k);
+      while (ks >> w) vocab.insert(w);
+    }
+    std::string alternatives;
+    for (const auto& v : vocab) {
+      char* pron = ps_lookup_word(impl_->ps, v.c_str());
+      if (!pron) continue;
+      ckd_free(pron);
+      alternatives += (alternatives.empty() ? "" : " | ") + v;
+    }
+    const std::string jsgf = "#JSGF V1.0;\ngrammar verify;\npublic <utt> = <w>+;\n<w> = " + alternatives + ";\n";
+    if (ps_set_jsgf_string(impl_->ps, "verify", jsgf.c_str()) < 0)
+      throw std::runtime_error("PocketSphinx: cannot build the verification grammar");
+  }
 }
 
 KeywordSpotter::~KeywordSpotter() = default;
@@ -72,7 +101,7 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
   logmath_t* lmath = ps_get_logmath(ps);
   ps_set_search(ps, "kws");
   ps_start_utt(ps);
-  ps_process_raw(ps, samples, count, FALSE, TRUE);
+  ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
   ps_end_utt(ps);
   const int frame_rate = cmd_ln_int32_r(impl_->config, "-frate");
   for (ps_seg_t* seg = ps_seg_iter(ps); seg; seg = ps_seg_next(seg)) {
@@ -94,25 +123,120 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
                                                        : options_.thresholds[std::min(idx, options_.thresholds.size() - 1)];
     const double margin = h.log_ratio - std::log(thr);
     h.confidence = 1.0 / (1.0 + std::exp(-margin * std::log(9.0) / 20.0));
+    h.kws_confidence = h.confidence;
     r.keywords.push_back(h);
   }
-  if (full) r.text = DecodeText(std::vector<int16_t>(samples, samples + count), &r.text_confidence);
+  if (options_.verify_with_grammar && !r.keywords.empty()) {
+    const auto words = DecodeSearch("verify", samples, count);
+    if (std::getenv("SARMAP_KWS_DUMP")) {
+      std::string t;
+      for (const auto& [w, p] : words) t += w + "(" + std::to_string(p).substr(0, 4) + ") ";
+      int32 sc = 0;
+      const char* hyp = ps_get_hyp(impl_->ps, &sc);
+      std::fprintf(stderr, "VERIFY [%s] hyp [%s]\n", t.c_str(), hyp ? hyp : "null");
+    }
+    std::vector<KeywordHit> kept;
+    for (KeywordHit h : r.keywords) {
+      std::istringstream ws(h.keyword);
+      std::string w;
+      double conf = 1.0;
+      bool all = true;
+      while (ws >> w) {
+        double best = -1;
+        for (const auto& [word, post] : words)
+          if (word == w) best = std::max(best, post);
+        if (best < 0) all = false;
+        else conf = std::min(conf, best);
+      }
+      if (!all) continue;
+      h.confidence = std::min(h.kws_confidence, conf);
+      kept.push_back(h);
+    }
+    r.keywords = kept;
+  }
+  if (full || (options_.verify_with_lm && !r.keywords.empty())) {
+    const auto words = DecodeWords(samples, count, &r.text, &r.text_confidence);
+    if (options_.verify_with_lm) {
+      std::vector<KeywordHit> kept;
+      for (KeywordHit h : r.keywords) {
+        // Every word of the keyphrase must be in the LM hypothesis; confidence = the lowest
+        // posterior among them.
+        std::istringstream ws(h.keyword);
+        std::string w;
+        double conf = 1.0;
+        bool all = true;
+        while (ws >> w) {
+          double best = -1;
+          for (const auto& [word, post] : words)
+            if (word == w) best = std::max(best, post);
+          if (best < 0) all = false;
+          else conf = std::min(conf, best);
+        }
+        if (!all) continue;
+        h.confidence = conf;
+        kept.push_back(h);
+      }
+      r.keywords = kept;
+    }
+    if (!full) r.text.clear();
+  }
   return r;
 }
 
-std::string KeywordSpotter::DecodeText(const std::vector<int16_t>& samples, double* confidence) {
-  if (!options_.full_decoding)
-    throw std::logic_error("full decoding needs KeywordOptions::full_decoding (loads the language model)");
+std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeSearch(const std::string& search,
+                                                                         const int16_t* samples, size_t count) {
+  ps_decoder_t* ps = impl_->ps;
+  ps_set_search(ps, search.c_str());
+  ps_start_utt(ps);
+  ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
+  ps_end_utt(ps);
+  logmath_t* lmath = ps_get_logmath(ps);
+  std::vector<std::pair<std::string, double>> words;
+  for (ps_seg_t* seg = ps_seg_iter(ps); seg; seg = ps_seg_next(seg)) {
+    std::string w = ps_seg_word(seg);
+    const size_t paren = w.find('(');
+    if (paren != std::string::npos) w = w.substr(0, paren);
+    if (w.empty() || w[0] == '<' || w[0] == '[') continue;
+    int32 a = 0, l = 0, b = 0;
+    words.emplace_back(w, std::min(1.0, logmath_exp(lmath, ps_seg_prob(seg, &a, &l, &b))));
+  }
+  ps_set_search(ps, "kws");
+  return words;
+}
+
+std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeWords(const int16_t* samples, size_t count,
+                                                                        std::string* text, double* confidence) {
+  if (!options_.full_decoding && !options_.verify_with_lm)
+    throw std::logic_error("language-model decoding needs full_decoding or verify_with_lm");
   ps_decoder_t* ps = impl_->ps;
   ps_set_search(ps, "_default");  // the -lm search
   ps_start_utt(ps);
-  ps_process_raw(ps, samples.data(), samples.size(), FALSE, TRUE);
+  ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
   ps_end_utt(ps);
   int32 score = 0;
   const char* hyp = ps_get_hyp(ps, &score);
-  if (confidence) *confidence = logmath_exp(ps_get_logmath(ps), ps_get_prob(ps));
+  *text = hyp ? hyp : "";
+  logmath_t* lmath = ps_get_logmath(ps);
+  *confidence = logmath_exp(lmath, ps_get_prob(ps));
+  std::vector<std::pair<std::string, double>> words;
+  for (ps_seg_t* seg = ps_seg_iter(ps); seg; seg = ps_seg_next(seg)) {
+    std::string w = ps_seg_word(seg);
+    const size_t paren = w.find('(');  // alternate pronunciations: help(2)
+    if (paren != std::string::npos) w = w.substr(0, paren);
+    if (w.empty() || w[0] == '<' || w[0] == '[') continue;  // <s>, </s>, <sil>, [NOISE]
+    int32 a = 0, l = 0, b = 0;
+    words.emplace_back(w, logmath_exp(lmath, ps_seg_prob(seg, &a, &l, &b)));
+  }
   ps_set_search(ps, "kws");
-  return hyp ? hyp : "";
+  return words;
+}
+
+std::string KeywordSpotter::DecodeText(const std::vector<int16_t>& samples, double* confidence) {
+  std::string text;
+  double conf = 0;
+  DecodeWords(samples.data(), samples.size(), &text, &conf);
+  if (confidence) *confidence = conf;
+  return text;
 }
 
 }  // namespace speech

@@ -23,6 +23,15 @@ struct KeywordOptions {
   std::vector<double> thresholds{1e-20};
   double min_confidence = 0.6;  // detections below are not published as keywords
   bool full_decoding = false;   // also decode each utterance with the language model (loads it)
+  // Second stage: an utterance with a keyword detection is decoded with the n-gram language
+  // model; the detection stands only if the keyword is in that hypothesis, and its confidence
+  // becomes the keyword's lattice posterior probability.
+  bool verify_with_lm = false;
+  // Cheaper second stage: decode the utterance with a free-loop grammar over a general
+  // vocabulary (and the keywords' sound-alikes); the keyword must be in that hypothesis.
+  bool verify_with_grammar = false;
+  std::string cmn = "live";      // cepstral mean normalisation: live (running) or current (per utterance)
+  bool full_utterance = false;   // hand PocketSphinx each utterance as one block
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
@@ -30,6 +39,10 @@ struct KeywordOptions {
     v("thresholds", thresholds, "detection thresholds per keyword (or one for all), e.g. 1e-20");
     v("min_confidence", min_confidence, "keywords below this confidence (0..1) are ignored");
     v("full_decoding", full_decoding, "also decode full text with the language model");
+    v("verify_with_lm", verify_with_lm, "confirm detections with language-model decoding (confidence = posterior)");
+    v("verify_with_grammar", verify_with_grammar, "confirm detections with a general-vocabulary word loop");
+    v("cmn", cmn, "PocketSphinx cepstral mean normalisation: live or current");
+    v("full_utterance", full_utterance, "process each utterance as one block (batch front end)");
   }
   void Validate(common::Validator& check) const {
     check.That(!keywords.empty(), "keywords", "needs at least one keyword");
@@ -37,6 +50,7 @@ struct KeywordOptions {
                "one value, or one per keyword");
     for (double t : thresholds) check.That(t > 0 && t < 1, "thresholds", "must be in (0, 1)");
     check.InRange("min_confidence", min_confidence, 0, 1);
+    check.OneOf("cmn", cmn, {"live", "current", "prior", "none"});
   }
 };
 
@@ -45,6 +59,7 @@ struct KeywordHit {
   double start_s = 0, end_s = 0;  // within the utterance
   double confidence = 0;          // 0..1
   double log_ratio = 0;           // natural log of the keyphrase/phone-loop likelihood ratio
+  double kws_confidence = 0;      // from the likelihood ratio alone (first stage)
 };
 
 struct DecodeResult {
@@ -66,6 +81,12 @@ class KeywordSpotter {
   DecodeResult Decode(const std::vector<int16_t>& s) { return Decode(s.data(), s.size(), options_.full_decoding); }
   // Language-model decoding only (text).
   std::string DecodeText(const std::vector<int16_t>& samples, double* confidence = nullptr);
+  // Decoding with a named search (words with posteriors).
+  std::vector<std::pair<std::string, double>> DecodeSearch(const std::string& search, const int16_t* samples,
+                                                           size_t count);
+  // LM decoding with per-word posterior probabilities.
+  std::vector<std::pair<std::string, double>> DecodeWords(const int16_t* samples, size_t count, std::string* text,
+                                                          double* confidence);
   const KeywordOptions& options() const { return options_; }
 
  private:
