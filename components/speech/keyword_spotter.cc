@@ -22,6 +22,7 @@ struct KeywordSpotter::Impl {
   ps_decoder_t* ps = nullptr;
   cmd_ln_t* config = nullptr;
   std::string kws_file;
+  int64_t kws_samples = 0;  // samples given to the kws search so far
   ~Impl() {
     if (ps) ps_free(ps);
     if (config) cmd_ln_free_r(config);
@@ -40,8 +41,9 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
   std::vector<std::string> args = {"-hmm", hmm, "-dict", dict, "-logfn", "/dev/null", "-cmn", options.cmn};
   if (options.full_decoding || options.verify_with_lm) {
     args.insert(args.end(), {"-lm", lm});
-    // No second (flat-lexicon) pass: about twice as fast.
-    args.insert(args.end(), {"-fwdflat", "no"});
+    // No second (flat-lexicon) pass and bounded active HMMs/words per frame: several times
+    // faster than the defaults.
+    args.insert(args.end(), {"-fwdflat", "no", "-maxhmmpf", "3000", "-maxwpf", "10"});
   }
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(&a[0]);
@@ -100,6 +102,9 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
   ps_decoder_t* ps = impl_->ps;
   logmath_t* lmath = ps_get_logmath(ps);
   ps_set_search(ps, "kws");
+  // The kws search numbers frames from the decoder's start, not the utterance's.
+  const double offset_s = static_cast<double>(impl_->kws_samples) / 16000.0;
+  impl_->kws_samples += count;
   ps_start_utt(ps);
   ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
   ps_end_utt(ps);
@@ -110,8 +115,8 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
     while (!h.keyword.empty() && h.keyword.back() == ' ') h.keyword.pop_back();  // kws pads words
     int sf = 0, ef = 0;
     ps_seg_frames(seg, &sf, &ef);
-    h.start_s = static_cast<double>(sf) / frame_rate;
-    h.end_s = static_cast<double>(ef) / frame_rate;
+    h.start_s = std::max(0.0, static_cast<double>(sf) / frame_rate - offset_s);
+    h.end_s = std::max(0.0, static_cast<double>(ef) / frame_rate - offset_s);
     int32 ascr = 0, lscr = 0, lback = 0;
     const int32 prob = ps_seg_prob(seg, &ascr, &lscr, &lback);
     h.log_ratio = logmath_log_to_ln(lmath, prob);

@@ -205,7 +205,14 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     }
   };
   std::vector<std::vector<Hit>> pos(data.positives.size());
-  for (size_t i = 0; i < data.positives.size(); ++i) run(data.positives[i], &pos[i]);
+  for (size_t i = 0; i < data.positives.size(); ++i) {
+    run(data.positives[i], &pos[i]);
+    if (std::getenv("SARMAP_KWS_DUMP")) {
+      std::fprintf(stderr, "POS %zu call %.2f-%.2f:", i, data.call_start_s[i], data.call_end_s[i]);
+      for (const auto& h : pos[i]) std::fprintf(stderr, " %s@%.2f(%.2f)", h.keyword.c_str(), h.t, h.confidence);
+      std::fprintf(stderr, "\n");
+    }
+  }
   std::vector<Hit> neg;
   run(data.negatives, &neg);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
