@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "common/robot_config.h"
+
 namespace sarmap {
 namespace sound {
 namespace {
@@ -76,6 +78,24 @@ TEST(SensorModelRealData, GpLowersRmsErrorOnHeldBackRows) {
               gp.hyper().signal_sigma, gp.hyper().noise_sigma);
   EXPECT_LT(corrected, raw);
   EXPECT_GT(inside, 0.8 * test.size());
+}
+
+TEST(SensorModelRealData, GpArrayConfigCorrectsEndFire) {
+  const std::string path = std::string(SARMAP_DATA_DIR) + "/audio/ssm/gp_doa_calibration.csv";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data missing: " << path;
+  auto array = common::LoadMicArray(std::string(SARMAP_SOURCE_DIR) + "/config/arrays/ps3eye_gp.yaml");
+  array.gp_model_file = path;  // the worktree may not sit beside shared/
+  const auto model = SensorModel::FromArray(array, "");
+  EXPECT_EQ(model->name(), "gp");
+  // The raw estimates saturate short of end-fire (a true 90 deg reads about 60-70 deg from
+  // broadside): a raw 65 deg from broadside (25 deg to the axis) is pushed toward the axis.
+  Direction d{DegToRad(25), 0};
+  const auto cov = model->Apply(DoaKind::kAngle1d, &d);
+  std::printf("GP: raw 25 deg to the axis -> %.1f deg, sigma %.1f deg\n", RadToDeg(d.azimuth_rad), RadToDeg(std::sqrt(cov(0, 0))));
+  EXPECT_LT(RadToDeg(d.azimuth_rad), 25.0);
+  Direction b{DegToRad(90), 0};  // broadside stays put
+  model->Apply(DoaKind::kAngle1d, &b);
+  EXPECT_NEAR(RadToDeg(b.azimuth_rad), 90.0, 5.0);
 }
 
 }  // namespace
