@@ -22,7 +22,7 @@ struct KeywordSpotter::Impl {
   ps_decoder_t* ps = nullptr;
   cmd_ln_t* config = nullptr;
   std::string kws_file;
-  int64_t kws_samples = 0;  // samples given to the kws search so far
+  int64_t kws_samples = 0;  // samples given to the decoder so far (any search)
   ~Impl() {
     if (ps) ps_free(ps);
     if (config) cmd_ln_free_r(config);
@@ -102,7 +102,8 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
   ps_decoder_t* ps = impl_->ps;
   logmath_t* lmath = ps_get_logmath(ps);
   ps_set_search(ps, "kws");
-  // The kws search numbers frames from the decoder's start, not the utterance's.
+  // The kws search numbers frames from the decoder's start (across all searches), not the
+  // utterance's.
   const double offset_s = static_cast<double>(impl_->kws_samples) / 16000.0;
   impl_->kws_samples += count;
   ps_start_utt(ps);
@@ -133,13 +134,6 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
   }
   if (options_.verify_with_grammar && !r.keywords.empty()) {
     const auto words = DecodeSearch("verify", samples, count);
-    if (std::getenv("SARMAP_KWS_DUMP")) {
-      std::string t;
-      for (const auto& [w, p] : words) t += w + "(" + std::to_string(p).substr(0, 4) + ") ";
-      int32 sc = 0;
-      const char* hyp = ps_get_hyp(impl_->ps, &sc);
-      std::fprintf(stderr, "VERIFY [%s] hyp [%s]\n", t.c_str(), hyp ? hyp : "null");
-    }
     std::vector<KeywordHit> kept;
     for (KeywordHit h : r.keywords) {
       std::istringstream ws(h.keyword);
@@ -192,6 +186,7 @@ std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeSearch(const s
                                                                          const int16_t* samples, size_t count) {
   ps_decoder_t* ps = impl_->ps;
   ps_set_search(ps, search.c_str());
+  impl_->kws_samples += count;
   ps_start_utt(ps);
   ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
   ps_end_utt(ps);
@@ -215,6 +210,7 @@ std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeWords(const in
     throw std::logic_error("language-model decoding needs full_decoding or verify_with_lm");
   ps_decoder_t* ps = impl_->ps;
   ps_set_search(ps, "_default");  // the -lm search
+  impl_->kws_samples += count;
   ps_start_utt(ps);
   ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
   ps_end_utt(ps);
@@ -231,6 +227,18 @@ std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeWords(const in
     if (w.empty() || w[0] == '<' || w[0] == '[') continue;  // <s>, </s>, <sil>, [NOISE]
     int32 a = 0, l = 0, b = 0;
     words.emplace_back(w, logmath_exp(lmath, ps_seg_prob(seg, &a, &l, &b)));
+  }
+  // Every word of the lattice with its posterior probability: a keyword that lost the 1-best
+  // path narrowly still counts, with its (lower) posterior as the confidence.
+  if (ps_lattice_t* dag = ps_get_lattice(ps)) {
+    for (ps_latnode_iter_t* it = ps_latnode_iter(dag); it; it = ps_latnode_iter_next(it)) {
+      ps_latnode_t* node = ps_latnode_iter_node(it);
+      const char* base = ps_latnode_baseword(dag, node);
+      if (!base || base[0] == '<' || base[0] == '[') continue;
+      ps_latlink_t* best = nullptr;
+      const int32 post = ps_latnode_prob(dag, node, &best);
+      words.emplace_back(base, std::min(1.0, logmath_exp(lmath, post)));
+    }
   }
   ps_set_search(ps, "kws");
   return words;

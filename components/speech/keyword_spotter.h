@@ -30,7 +30,7 @@ struct KeywordOptions {
   // Cheaper second stage: decode the utterance with a free-loop grammar over a general
   // vocabulary (and the keywords' sound-alikes); the keyword must be in that hypothesis.
   bool verify_with_grammar = false;
-  std::string cmn = "live";      // cepstral mean normalisation: live (running) or current (per utterance)
+  std::string cmn = "current";   // PocketSphinx cepstral mean normalisation: current, prior or none
   bool full_utterance = false;   // hand PocketSphinx each utterance as one block
   template <class V>
   void Visit(V& v) {
@@ -41,7 +41,7 @@ struct KeywordOptions {
     v("full_decoding", full_decoding, "also decode full text with the language model");
     v("verify_with_lm", verify_with_lm, "confirm detections with language-model decoding (confidence = posterior)");
     v("verify_with_grammar", verify_with_grammar, "confirm detections with a general-vocabulary word loop");
-    v("cmn", cmn, "PocketSphinx cepstral mean normalisation: live or current");
+    v("cmn", cmn, "PocketSphinx cepstral mean normalisation: current, prior or none");
     v("full_utterance", full_utterance, "process each utterance as one block (batch front end)");
   }
   void Validate(common::Validator& check) const {
@@ -50,7 +50,7 @@ struct KeywordOptions {
                "one value, or one per keyword");
     for (double t : thresholds) check.That(t > 0 && t < 1, "thresholds", "must be in (0, 1)");
     check.InRange("min_confidence", min_confidence, 0, 1);
-    check.OneOf("cmn", cmn, {"live", "current", "prior", "none"});
+    check.OneOf("cmn", cmn, {"current", "prior", "none"});
   }
 };
 

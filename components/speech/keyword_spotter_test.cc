@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "audio_capture/audio_file.h"
+#include "speech/kws_evaluation.h"
 
 namespace sarmap {
 namespace speech {
@@ -50,6 +51,30 @@ TEST(KeywordSpotter, UnknownWordIsAClearError) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("not in"), std::string::npos) << e.what();
   }
+}
+
+// Calls for help rendered by espeak-ng at test time (varied voices, rates, pitches) in noise
+// (20 dB), and other speech (real recordings + espeak sentences) in noise as negatives. Pins the
+// keyword-only operating point that reaches the recall goal; its false-alarm rate is printed (the
+// full curve: sarmap-log kws-eval, see README; it does not meet 1 per 10 minutes).
+TEST(KeywordSpotterSimulated, CallsForHelpInNoise) {
+  if (!EspeakAvailable()) GTEST_SKIP() << "espeak-ng not installed";
+  KwsEvalOptions o;
+  o.num_calls = 8;
+  o.negative_minutes = 0.25;
+  o.call_snr_db = 20;
+  o.babble_db = -100;
+  o.data_dir = SARMAP_DATA_DIR;
+  const auto data = MakeKwsEvalData(o);
+  ASSERT_EQ(data.positives.size(), 8u);
+  KeywordOptions k;
+  k.thresholds = {1e-40};
+  k.min_confidence = 0;
+  const auto r = EvaluateKws(data, k, VadOptions{}, o);
+  std::printf("simulated calls (SNR 20 dB), threshold 1e-40: recall %d/%d, 'help' false alarms %d in %.2f min of other "
+              "speech (%.0f per 10 min), other keywords %d\n",
+              r.hits, r.calls, r.target_false_alarms, r.negative_minutes, r.false_alarms_per_10_min, r.other_false_alarms);
+  EXPECT_GE(r.recall, 0.85);
 }
 
 }  // namespace

@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
     std::string thresholds = "1e-10,1e-20,1e-30,1e-40", keyword_list = "help,rescue,assist,here";
     double min_conf = 0.0;
     std::string confidences = "0,0.3,0.5,0.6,0.7,0.8,0.9";
-    std::string verify = "lm", cmn = "live";
+    std::string verify = "none", cmn = "current";
     bool full_utt = false;
     common::ArgParser p("sarmap-log-kws-eval", "Keyword-spotting recall and false alarms vs threshold.");
     p.AddFlag("--calls", &o.num_calls, "number of simulated calls");
@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     p.AddFlag("--min-confidence", &min_conf, "confidence cut applied to detections");
     p.AddFlag("--confidences", &confidences, "posterior cuts reported for each threshold (a post-filter)");
     p.AddFlag("--verify", &verify, "second stage: lm, grammar or none");
-    p.AddFlag("--cmn", &cmn, "PocketSphinx CMN: live or current");
+    p.AddFlag("--cmn", &cmn, "PocketSphinx CMN: current, prior or none");
     p.AddSwitch("--full-utterance", &full_utt, "process utterances as one block");
     if (!p.Parse(argc, argv)) return 0;
     if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");

@@ -185,15 +185,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     std::vector<Utterance> utts;
     for (size_t i = 0; i < x.size(); i += 4096) vad.Push(x.data() + i, std::min<size_t>(4096, x.size() - i), &utts);
     vad.Flush(&utts);
-    static int dump_n = 0;
     for (const auto& u : utts) {
-      if (std::getenv("SARMAP_KWS_DUMP") && dump_n < 4) {
-        audio::AudioBuffer b;
-        b.sample_rate_hz = 16000;
-        b.channels.assign(1, {});
-        for (int16_t v : u.samples) b.channels[0].push_back(v / 32768.0f);
-        audio::WriteWav("/tmp/kws_utt_" + std::to_string(dump_n++) + ".wav", b);
-      }
       const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
       for (const auto& h : d.keywords) {
         hits->push_back({u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence});
