@@ -2,6 +2,7 @@
 
 #include <pocketsphinx.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -132,6 +133,27 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
     h.kws_confidence = h.confidence;
     r.keywords.push_back(h);
   }
+  // The kws search may fire several times on one spoken keyword (a low threshold): merge
+  // detections of the same keyword that overlap or nearly touch, keeping the strongest.
+  std::sort(r.keywords.begin(), r.keywords.end(), [](const KeywordHit& a, const KeywordHit& b) {
+    return a.start_s < b.start_s;
+  });
+  std::vector<KeywordHit> merged;
+  for (const KeywordHit& h : r.keywords) {
+    bool joined = false;
+    for (KeywordHit& m : merged)
+      if (m.keyword == h.keyword && h.start_s < m.end_s + 0.3) {
+        m.end_s = std::max(m.end_s, h.end_s);
+        if (h.log_ratio > m.log_ratio) {
+          m.log_ratio = h.log_ratio;
+          m.confidence = h.confidence;
+          m.kws_confidence = h.kws_confidence;
+        }
+        joined = true;
+      }
+    if (!joined) merged.push_back(h);
+  }
+  r.keywords = merged;
   if (options_.verify_with_grammar && !r.keywords.empty()) {
     const auto words = DecodeSearch("verify", samples, count);
     std::vector<KeywordHit> kept;
