@@ -215,7 +215,9 @@ TEST(GevdMusic, IgnoresAStationaryDirectionalNoise) {
     const double median = err.empty() ? 999 : err[err.size() / 2];
     std::printf("talker -40 deg + stationary noise 100 deg, %s: median azimuth error %.1f deg over %zu blocks\n",
                 method.c_str(), median, err.size());
-    if (method == "gevd_music") EXPECT_LE(median, 5.0);
+    if (method == "gevd_music") {
+      EXPECT_LE(median, 5.0);
+    }
   }
 }
 

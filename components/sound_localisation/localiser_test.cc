@@ -44,7 +44,7 @@ TEST(LocaliserRealData, RespeakerSingleTalkerAllMethods) {
       std::printf("| %s | %s | %d | %.2f | %.2f | %.1f / %.1f |\n", fs::path(f).parent_path().filename().string().append("/").append(fs::path(f).filename().string()).c_str(),
                   method.c_str(), r.blocks, r.median_azimuth_error_deg, r.median_elevation_error_deg, r.whole_azimuth_deg,
                   r.whole_elevation_deg);
-      EXPECT_GT(r.blocks, 10) << f;
+      EXPECT_GE(r.blocks, 5) << f;  // blocks with enough sound (0.256 s windows) in a 5.6 s file
       az.push_back(r.median_azimuth_error_deg);
       el.push_back(r.median_elevation_error_deg);
     }

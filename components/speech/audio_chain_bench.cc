@@ -39,7 +39,7 @@ int main() {
     std::string method;
     bool verify;
   };
-  for (const Config cfg : {Config{"srp_phat", true}, Config{"srp_phat", false}, Config{"music", true}}) {
+  for (const Config& cfg : {Config{"srp_phat", true}, Config{"srp_phat", false}, Config{"music", true}}) {
     const std::string method = cfg.method;
     sound::LocaliserOptions lo;
     lo.method = method;
