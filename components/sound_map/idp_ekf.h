@@ -42,6 +42,9 @@ class IdpEkf {
 
   // Odometry prediction x <- x ∘ u with u ~ N(odometry, q) in the robot frame.
   void Predict(const Pose2& odometry, const Eigen::Matrix3d& q);
+  // Replaces the current pose's mean (the localisation map's latest estimate), keeping the
+  // covariance.
+  void SetCurrentMean(const Pose2& current) { x_.head<3>() = current.vec(); }
 
   // Keeps a copy of the current pose (fully correlated with it) as anchor `id`.
   void AddAnchor(int64_t id);
