@@ -89,7 +89,7 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   }
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while ((sink.requests == 0 || sink.maps == 0 || sink.map.num_sources == 0 ||
-          sink.map.sources[0].num_observations < 40) &&
+          sink.map.sources[0].num_observations < 30) &&
          std::chrono::steady_clock::now() < deadline)
     lcm.handleTimeout(50);
   ASSERT_GT(sink.requests, 0) << node.Output();
