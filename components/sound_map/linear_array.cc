@@ -117,8 +117,26 @@ void MultiHypothesisSource::Update(const Eigen::Isometry3d& pose, double beta, d
   for (size_t i = 0; i < hypotheses_.size(); ++i) {
     Hypothesis& h = hypotheses_[i];
     if (!h.alive || static_cast<int>(i) == best) continue;
-    if (h.updates >= options_.prune_min_observations && h.chi2_sum / h.updates > options_.prune_mean_chi2)
-      h.alive = false;
+    if (h.updates < options_.prune_min_observations) continue;
+    // Mean chi-square too large (5.22): either above the fixed bound, or, over n updates,
+    // above the (1 - alpha) quantile of chi2(n) / n (Wilson-Hilferty approximation).
+    const double n = h.updates;
+    const double wh = 1 - 2 / (9 * n) + options_.prune_z * std::sqrt(2 / (9 * n));
+    const double quantile_mean = wh * wh * wh;
+    const double mean = h.chi2_sum / n;
+    if (mean > options_.prune_mean_chi2 || (options_.prune_z > 0 && mean > quantile_mean)) h.alive = false;
+  }
+  // Relative pruning (our addition; a multi-hypothesis tracker's likelihood-ratio test):
+  // a hypothesis whose summed chi-square exceeds the best one's by more than
+  // relative_prune_chi2 is (exp(-d/2)) far less likely.
+  if (options_.relative_prune_chi2 > 0 && best >= 0 &&
+      hypotheses_[best].updates >= options_.relative_prune_min_observations) {
+    const double best_sum = hypotheses_[best].chi2_sum;
+    for (size_t i = 0; i < hypotheses_.size(); ++i) {
+      Hypothesis& h = hypotheses_[i];
+      if (h.alive && static_cast<int>(i) != best && h.chi2_sum - best_sum > options_.relative_prune_chi2)
+        h.alive = false;
+    }
   }
   // Converged to separate places: drop the clearly less likely ones.
   if (AllLinear() && !Clustered()) {
@@ -188,19 +206,28 @@ double SimulatedDoaSigma(double true_beta_rad) {
 
 namespace {
 
+// A dense path (1 cm) with, per point, a yaw to face (NaN: face along the path).
 struct PathBuilder {
   std::vector<Eigen::Vector3d> pts;
+  std::vector<double> yaw;
+  double hold_yaw = NAN;  // while set, every new point faces this yaw (up/down at an arc)
+  void Push(const Eigen::Vector3d& p, double y) {
+    pts.push_back(p);
+    yaw.push_back(y);
+  }
   void LineTo(const Eigen::Vector3d& p) {
     const Eigen::Vector3d a = pts.back();
     const int n = std::max(1, static_cast<int>((p - a).norm() / 0.01));
-    for (int i = 1; i <= n; ++i) pts.push_back(a + (p - a) * (static_cast<double>(i) / n));
+    for (int i = 1; i <= n; ++i) Push(a + (p - a) * (static_cast<double>(i) / n), hold_yaw);
   }
-  void Arc(const Eigen::Vector2d& c, double r, double a0, double a1) {
+  // Arc about c; the sensor faces the centre turned by `face_offset` (NaN: along the arc).
+  void Arc(const Eigen::Vector2d& c, double r, double a0, double a1, double face_offset) {
     const double z = pts.back().z();
     const int n = std::max(1, static_cast<int>(std::abs(a1 - a0) * r / 0.01));
     for (int i = 1; i <= n; ++i) {
       const double a = a0 + (a1 - a0) * i / n;
-      pts.emplace_back(c.x() + r * std::cos(a), c.y() + r * std::sin(a), z);
+      Push(Eigen::Vector3d(c.x() + r * std::cos(a), c.y() + r * std::sin(a), z),
+           std::isnan(face_offset) ? NAN : a + M_PI + face_offset);
     }
   }
   void UpDown(double h) {
@@ -211,7 +238,8 @@ struct PathBuilder {
   }
 };
 
-std::vector<Eigen::Isometry3d> Resample(const std::vector<Eigen::Vector3d>& pts, double step) {
+std::vector<Eigen::Isometry3d> Resample(const PathBuilder& path, double step) {
+  const std::vector<Eigen::Vector3d>& pts = path.pts;
   std::vector<Eigen::Isometry3d> poses;
   double yaw = 0, acc = 0;
   Eigen::Vector3d last = pts[0];
@@ -224,7 +252,10 @@ std::vector<Eigen::Isometry3d> Resample(const std::vector<Eigen::Vector3d>& pts,
   emit(pts[0]);
   for (size_t i = 1; i < pts.size(); ++i) {
     const Eigen::Vector3d d = pts[i] - pts[i - 1];
-    if (std::hypot(d.x(), d.y()) > 1e-9) yaw = std::atan2(d.y(), d.x());
+    if (!std::isnan(path.yaw[i]))
+      yaw = path.yaw[i];
+    else if (std::hypot(d.x(), d.y()) > 1e-9)
+      yaw = std::atan2(d.y(), d.x());
     acc += d.norm();
     if (acc >= step - 1e-9) {
       emit(pts[i]);
@@ -244,7 +275,7 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
   std::normal_distribution<double> n01(0, 1);
   std::uniform_real_distribution<double> u01(0, 1);
   PathBuilder path;
-  path.pts.push_back(Eigen::Vector3d::Zero());
+  path.Push(Eigen::Vector3d::Zero(), NAN);
   double size = 8.0;
   if (c.trajectory == 1) {
     // Per side of an 8 m square: 2 m, a quarter arc (radius 2 m) around the side's middle
@@ -257,9 +288,12 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
       const Eigen::Vector2d centre = s + 4 * dir;
       path.LineTo(Eigen::Vector3d((s + 2 * dir).x(), (s + 2 * dir).y(), 0));
       const double a0 = std::atan2(-dir.y(), -dir.x());
-      path.Arc(centre, 2.0, a0, a0 + M_PI / 2);
+      // On the arcs the sensor looks c.arc_face_offset_rad to the side of the source.
+      path.Arc(centre, 2.0, a0, a0 + M_PI / 2, c.arc_face_offset_rad);
+      path.hold_yaw = a0 + M_PI / 2 + M_PI + c.arc_face_offset_rad;
       path.UpDown(0.6);
-      path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI);
+      path.hold_yaw = NAN;
+      path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, c.arc_face_offset_rad);
       path.LineTo(Eigen::Vector3d((s + 8 * dir).x(), (s + 8 * dir).y(), 0));
     }
   } else {
@@ -279,7 +313,7 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
     }
     path.LineTo(Eigen::Vector3d(12, 12, 0));
   }
-  d.truth = Resample(path.pts, c.step_m);
+  d.truth = Resample(path, c.step_m);
 
   const double lo = -3, hi = size + 3;
   const int nl = static_cast<int>(c.landmark_density_per_m2 * (hi - lo) * (hi - lo));
@@ -575,7 +609,7 @@ class Mapper {
     so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
     so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
     so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    so.max_num_iterations = first == 0 ? 50 : 10;
+    so.max_num_iterations = first == 0 ? 200 : 10;
     so.num_threads = 1;
     so.logging_type = ceres::SILENT;
     ceres::Solver::Summary sum;

@@ -43,6 +43,9 @@ struct MultiHypothesisOptions {
   int num_hypotheses = 10;           // N_h (Table 5.1)
   double min_distance_m = 0.4;       // d_min: rho_0 = 1 / (3 d_min), sigma_rho = rho_0
   double prune_mean_chi2 = 4.0;      // prune when the mean chi-square exceeds this
+  // ... or exceeds the quantile of chi2(n)/n at this many standard scores (3.09: 99.9 %;
+  // 0: off), which tightens the bound as a hypothesis collects observations.
+  double prune_z = 3.09;
   int prune_min_observations = 3;
   double linearity_threshold = 0.3;  // converged when L_d < this (Civera: 0.1)
   int min_observations = 8;          // and at least this many updates
@@ -50,6 +53,9 @@ struct MultiHypothesisOptions {
   // averaged: all must lie within this radius of their mean, else the ones whose mean
   // chi-square is clearly worse than the best one's are pruned (our addition).
   double cluster_radius_m = 0.5;
+  // Likelihood-ratio pruning against the best hypothesis (our addition; 0: off).
+  double relative_prune_chi2 = 12.0;
+  int relative_prune_min_observations = 10;
   double relative_prune = 1.5;
 };
 
@@ -96,6 +102,10 @@ struct LinearSimConfig {
   double landmark_sigma_rad = 1.0 * M_PI / 180;
   double sound_range_m = 3.0;                 // Table 5.1
   double heard_probability = 1.0;
+  // Trajectory 1: on the arcs round a source the sensor faces the source turned by this
+  // much; NaN (default): it faces along the path like a walking operator. (0 would put
+  // both sources of a pair at beta = 0 whatever their height, leaving it unobservable.)
+  double arc_face_offset_rad = NAN;
   double doa_noise_scale = 1.0;   // multiplies SimulatedDoaSigma (1: Table 5.1's 10-20 deg)
   uint64_t seed = 1;
 };
