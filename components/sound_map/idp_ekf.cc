@@ -217,8 +217,9 @@ double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
   if (gate > 0 && chi2 > gate) return chi2;
   const Eigen::MatrixXd k = ldlt.solve(pht.transpose()).transpose();
   x_ += k * nu;
+  // P -= K S K' written as K (P H')' keeps P symmetric up to rounding; it is re-symmetrised
+  // at every back-propagation.
   p_.noalias() -= k * pht.transpose();
-  p_ = 0.5 * (p_ + p_.transpose()).eval();
   WrapAngles();
   return chi2;
 }
