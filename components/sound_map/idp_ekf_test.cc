@@ -74,13 +74,15 @@ TEST(IdpEkf, BackPropagationMovesSourcesWithAnchors) {
   EXPECT_NEAR(after.x() - before.x(), 0.0, 0.05);
 }
 
-TEST(Experiments, AccurateOdometryMapsSources) {
+TEST(Experiments, MapsSourcesWithTable41Settings) {
   Sim2dConfig c;
   c.seed = 5;
   const Sim2dData d = Simulate2d(c);
   for (Method m : {Method::kEkfOdometry, Method::kJointOdometry}) {
     const RunResult res = RunMethod(d, m);
     printf("%s rms %.3f conv %.2f n %d\n", MethodName(m), res.score.rms_m, res.score.convergence_rate, res.score.num_sources);
+    EXPECT_EQ(res.score.num_sources, 8);
+    EXPECT_LT(res.score.rms_m, 0.35);  // Table 4.1 Part I odometry: accurate mapping (Figs. 4.3-4.4)
   }
   c.landmarks = true;
   c.odo_sigma_m = 0.02;
@@ -89,6 +91,53 @@ TEST(Experiments, AccurateOdometryMapsSources) {
   for (Method m : {Method::kCiSubmaps, Method::kFullEkf, Method::kJoint}) {
     const RunResult res = RunMethod(d2, m);
     printf("%s rms %.3f conv %.2f n %d t %.3f step %.4f\n", MethodName(m), res.score.rms_m, res.score.convergence_rate, res.score.num_sources, res.total_seconds, res.sound_step_ms_mean);
+    EXPECT_LT(res.score.rms_m, 0.35);  // Part II: typical odometry + landmarks (Figs. 4.6, 4.10)
+  }
+}
+
+// Fig. 4.5 (reduced: 3 runs per cell): worse odometry, worse map, for both methods.
+TEST(Experiments, Fig45ErrorGrowsWithOdometryNoise) {
+  for (Method m : {Method::kEkfOdometry, Method::kJointOdometry}) {
+    double rms[2] = {0, 0}, conv[2] = {0, 0};
+    const double scales[2] = {1, 32};
+    for (int s = 0; s < 2; ++s)
+      for (int r = 0; r < 3; ++r) {
+        Sim2dConfig c;
+        c.odo_sigma_m = 0.001 * scales[s];
+        c.odo_sigma_rad = 0.016 * scales[s] * M_PI / 180;
+        c.seed = 1000 + r;
+        const RunResult res = RunMethod(Simulate2d(c), m);
+        rms[s] += res.score.rms_m / 3;
+        conv[s] += res.score.convergence_rate / 3;
+      }
+    printf("%s: x1 rms %.3f conv %.2f | x32 rms %.3f conv %.2f\n", MethodName(m), rms[0], conv[0], rms[1], conv[1]);
+    EXPECT_LT(rms[0], 0.35);
+    EXPECT_GT(rms[1], 1.5 * rms[0]);
+    EXPECT_LT(conv[1], conv[0]);
+  }
+}
+
+// Fig. 4.11 (reduced: 2 runs, 45 m and 125 m): the CI method is as accurate as the full EKF,
+// and joint optimisation is at least as good.
+TEST(Experiments, Fig411CiMatchesFullEkf) {
+  for (double side : {10.0, 30.0}) {
+    double rms[3] = {0, 0, 0};
+    const Method methods[3] = {Method::kCiSubmaps, Method::kFullEkf, Method::kJoint};
+    for (int r = 0; r < 2; ++r) {
+      Sim2dConfig c;
+      c.side_m = side;
+      c.overshoot_m = 5;
+      c.landmarks = true;
+      c.odo_sigma_m = 0.02;
+      c.odo_sigma_rad = 5 * M_PI / 180;
+      c.seed = 2000 + r;
+      const Sim2dData d = Simulate2d(c);
+      for (int i = 0; i < 3; ++i) rms[i] += RunMethod(d, methods[i]).score.rms_m / 2;
+    }
+    printf("side %.0f m: ci %.3f full-ekf %.3f joint %.3f\n", side, rms[0], rms[1], rms[2]);
+    EXPECT_NEAR(rms[0], rms[1], 0.1 * rms[1] + 0.02);
+    EXPECT_LE(rms[2], rms[0] + 0.02);
+    EXPECT_LT(rms[0], 0.6);
   }
 }
 

@@ -542,6 +542,10 @@ class Mapper {
     }
     res.rms_m = res.converged ? std::sqrt(sum2 / res.converged) : 0;
     res.convergence_rate = static_cast<double>(res.converged) / d_.sources.size();
+    int correct = 0;
+    for (size_t j = 0; j < d_.sources.size(); ++j)
+      correct += res.source_converged[j] && (res.estimates[j] - d_.sources[j]).norm() < o_.converged_error_m;
+    res.correct_convergence_rate = static_cast<double>(correct) / d_.sources.size();
     return res;
   }
 

@@ -146,7 +146,8 @@ struct LinearMapperOptions {
 
 struct LinearRunResult {
   double rms_m = 0;               // over sources that converged
-  double convergence_rate = 0;    // converged / number of sources
+  double convergence_rate = 0;    // converged (linearity index) / number of sources
+  double correct_convergence_rate = 0;  // converged and within converged_error_m of the truth
   int converged = 0;
   int full_optimisations = 0;
   std::vector<Eigen::Vector3d> estimates;

@@ -97,6 +97,27 @@ TEST(LinearArray, Table51SecondTrajectory) {
   EXPECT_LT(r.rms_m, 0.6);
 }
 
+// Fig. 5.8 (reduced: 2 runs of trajectory 2): one hypothesis lands on the wrong part of the
+// cone more often than ten.
+TEST(LinearArray, Fig58MoreHypothesesMapBetter) {
+  double rms[2] = {0, 0}, ok[2] = {0, 0};
+  const int nh[2] = {1, 10};
+  for (int i = 0; i < 2; ++i)
+    for (int r = 0; r < 2; ++r) {
+      LinearSimConfig c;
+      c.trajectory = 2;
+      c.seed = 4000 + r;
+      LinearMapperOptions o;
+      o.num_hypotheses = nh[i];
+      const LinearRunResult res = RunLinearArrayMapping(SimulateLinear(c), o);
+      rms[i] += res.rms_m / 2;
+      ok[i] += res.correct_convergence_rate / 2;
+    }
+  printf("N_h 1: rms %.3f ok %.2f | N_h 10: rms %.3f ok %.2f\n", rms[0], ok[0], rms[1], ok[1]);
+  EXPECT_LT(rms[1], rms[0]);
+  EXPECT_GE(ok[1], ok[0]);
+}
+
 }  // namespace
 }  // namespace sound_map
 }  // namespace sarmap
