@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <set>
 
 namespace sarmap {
 namespace sound_map {
@@ -23,6 +24,10 @@ OnlineSoundMap::OnlineSoundMap(const OnlineSoundMapOptions& options, const Array
       associator_(SourceAssociator::Options{options.gate_chi2, options.max_signature_distance}) {}
 
 void OnlineSoundMap::OnPose(int64_t, const Pose2& pose, const Eigen::Matrix3d& cov, int64_t node_id) {
+  if (!pose.vec().allFinite() || !cov.allFinite()) {
+    ++counters_.bad_poses;
+    return;
+  }
   if (!have_pose_) {
     ekf_.Reset(pose, cov);
     have_pose_ = true;
@@ -44,7 +49,11 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
                                    const std::vector<std::pair<int64_t, Pose2>>& anchors,
                                    const Eigen::MatrixXd& covariance) {
   const int m = 3 * (1 + static_cast<int>(anchors.size()));
-  if (covariance.rows() != m || covariance.cols() != m || !covariance.allFinite()) {
+  bool ok = covariance.rows() == m && covariance.cols() == m && covariance.allFinite() &&
+            current.vec().allFinite();
+  std::set<int64_t> seen;
+  for (const auto& a : anchors) ok = ok && a.second.vec().allFinite() && seen.insert(a.first).second;
+  if (!ok) {  // wrong size, non-finite values or a node listed twice
     ++counters_.bad_anchors;
     return false;
   }

@@ -106,6 +106,7 @@ class OnlineSoundMap {
   struct Counters {
     int64_t doa_used = 0, doa_new_sources = 0, doa_reassociated = 0, doa_gated_out = 0;
     int64_t doa_unsupported_kind = 0, doa_before_pose = 0, back_propagations = 0, bad_anchors = 0;
+    int64_t bad_poses = 0;
   };
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);

@@ -149,12 +149,16 @@ TEST(OnlineSoundMap, FollowsLoopClosureCorrection) {
 TEST(OnlineSoundMap, RejectsBadAnchorsAndUnsupportedKinds) {
   OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
   EXPECT_FALSE(map.OnSlamAnchors(0, Pose2(), {{1, Pose2()}}, Eigen::MatrixXd::Identity(3, 3)));
+  EXPECT_FALSE(map.OnSlamAnchors(0, Pose2(), {{1, Pose2()}, {1, Pose2()}}, Eigen::MatrixXd::Identity(9, 9)));
+  EXPECT_FALSE(map.OnSlamAnchors(0, Pose2(NAN, 0, 0), {}, Eigen::MatrixXd::Identity(3, 3)));
+  map.OnPose(0, Pose2(0, NAN, 0), Eigen::Matrix3d::Identity(), 0);
+  EXPECT_EQ(map.counters().bad_poses, 1);
   OnlineSoundMap::Doa doa;
   doa.kind = OnlineSoundMap::kAngle1d;
   map.OnPose(0, Pose2(), Eigen::Matrix3d::Identity() * 1e-4, 0);
   map.OnDoa(0, "a", {doa});
   EXPECT_EQ(map.counters().doa_unsupported_kind, 1);
-  EXPECT_EQ(map.counters().bad_anchors, 1);
+  EXPECT_EQ(map.counters().bad_anchors, 3);
   EXPECT_TRUE(map.Sources(0).empty());
 }
 
