@@ -227,7 +227,7 @@ struct PathBuilder {
     for (int i = 1; i <= n; ++i) {
       const double a = a0 + (a1 - a0) * i / n;
       Push(Eigen::Vector3d(c.x() + r * std::cos(a), c.y() + r * std::sin(a), z),
-           std::isnan(face_offset) ? NAN : a + M_PI + face_offset);
+           std::isnan(face_offset) ? hold_yaw : a + M_PI + face_offset);
     }
   }
   void UpDown(double h) {
@@ -288,12 +288,21 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
       const Eigen::Vector2d centre = s + 4 * dir;
       path.LineTo(Eigen::Vector3d((s + 2 * dir).x(), (s + 2 * dir).y(), 0));
       const double a0 = std::atan2(-dir.y(), -dir.x());
-      // On the arcs the sensor looks c.arc_face_offset_rad to the side of the source.
-      path.Arc(centre, 2.0, a0, a0 + M_PI / 2, c.arc_face_offset_rad);
-      path.hold_yaw = a0 + M_PI / 2 + M_PI + c.arc_face_offset_rad;
-      path.UpDown(0.6);
-      path.hold_yaw = NAN;
-      path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, c.arc_face_offset_rad);
+      if (c.fixed_heading) {
+        // The sensor keeps facing along the side while it side-steps round the source.
+        path.hold_yaw = a;
+        path.Arc(centre, 2.0, a0, a0 + M_PI / 2, NAN);
+        path.UpDown(0.6);
+        path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, NAN);
+        path.hold_yaw = NAN;
+      } else {
+        // On the arcs the sensor looks c.arc_face_offset_rad to the side of the source.
+        path.Arc(centre, 2.0, a0, a0 + M_PI / 2, c.arc_face_offset_rad);
+        path.hold_yaw = a0 + M_PI / 2 + M_PI + c.arc_face_offset_rad;
+        path.UpDown(0.6);
+        path.hold_yaw = NAN;
+        path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, c.arc_face_offset_rad);
+      }
       path.LineTo(Eigen::Vector3d((s + 8 * dir).x(), (s + 8 * dir).y(), 0));
     }
   } else {

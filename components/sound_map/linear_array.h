@@ -106,6 +106,8 @@ struct LinearSimConfig {
   // much; NaN (default): it faces along the path like a walking operator. (0 would put
   // both sources of a pair at beta = 0 whatever their height, leaving it unobservable.)
   double arc_face_offset_rad = NAN;
+  // Trajectory 1: keep facing along the side (+x on the first) through the arcs instead.
+  bool fixed_heading = false;
   double doa_noise_scale = 1.0;   // multiplies SimulatedDoaSigma (1: Table 5.1's 10-20 deg)
   uint64_t seed = 1;
 };
