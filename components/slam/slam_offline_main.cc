@@ -89,7 +89,9 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
                         slam::FromOdometryMessage(msg)});
     }
   }
-  if (bad) SARMAP_LOG(WARN) << bad << " undecodable events skipped";
+  if (bad) {
+    SARMAP_LOG(WARN) << bad << " undecodable events skipped";
+  }
   return inputs;
 }
 
@@ -143,14 +145,18 @@ int main(int argc, char** argv) {
       if (!in.is_scan) {
         std::string why;
         if (!slam.AddOdometry(in.odom_time_s, in.odom, &why)) {
-          if (++rejected_odom <= 5) SARMAP_LOG(WARN) << "odometry rejected: " << why;
+          if (++rejected_odom <= 5) {
+            SARMAP_LOG(WARN) << "odometry rejected: " << why;
+          }
         }
         continue;
       }
       const auto t0 = std::chrono::steady_clock::now();
       const slam::ScanResult r = slam.AddScan(in.scan);
       latencies.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      if (!r.accepted && ++rejected_scans <= 5) SARMAP_LOG(WARN) << "scan rejected: " << r.reason;
+      if (!r.accepted && ++rejected_scans <= 5) {
+        SARMAP_LOG(WARN) << "scan rejected: " << r.reason;
+      }
       ++done;
       const int percent = static_cast<int>(100 * done / std::max<int64_t>(1, num_scans));
       if (!quiet && percent != last_percent) {

@@ -1,0 +1,70 @@
+# sarmap: the whole set-up is `make demo` or `make test` on a fresh Debian machine.
+# Each target installs missing Debian packages (apt-get, via sudo when not root), configures
+# (CMake + Ninja + ccache), builds incrementally, then runs.
+
+BUILD_DIR  ?= build
+BUILD_TYPE ?= Release
+JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
+CTEST_ARGS ?=
+
+# Build tools and libraries (ARCHITECTURE.md), and tools the tests and demo run.
+PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
+  liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libzstd-dev \
+  libgtest-dev libgmock-dev libbenchmark-dev \
+  libopencv-dev libopencv-contrib-dev libpcl-dev libceres-dev libsuitesparse-dev \
+  libopenni2-dev libpocketsphinx-dev pocketsphinx-en-us libfftw3-dev libsndfile1-dev \
+  libasound2-dev libssl-dev \
+  iproute2 util-linux espeak-ng sox
+# Java types for lcm-spy: installed when available, never required.
+OPTIONAL_PACKAGES = liblcm-java default-jdk-headless
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: all deps configure build test bench demo format clean help
+
+all: build
+
+help:
+	@echo "make demo    run the stack on the simulated incident site and write a mission report"
+	@echo "make test    build and run every test (unit + multi-process) with CTest"
+	@echo "make bench   build and run every benchmark (prints figures)"
+	@echo "make build   just build;  make deps  just install packages;  make clean"
+
+# Installs only what is missing, so a second run installs nothing.
+deps:
+	@missing=""; for p in $(PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "sarmap: installing missing Debian packages:$$missing"; \
+	  $(SUDO) apt-get update -q && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing || exit 1; \
+	  optional=""; for p in $(OPTIONAL_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || optional="$$optional $$p"; \
+	  done; \
+	  [ -z "$$optional" ] || DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$optional \
+	    || echo "sarmap: optional packages$$optional not installed (lcm-spy types skipped)"; \
+	fi
+
+$(BUILD_DIR)/build.ninja:
+	cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
+
+configure: deps $(BUILD_DIR)/build.ninja
+
+build: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
+
+bench: build
+	cmake --build $(BUILD_DIR) --target bench
+
+demo: build
+	launch-scripts/demo.sh $(BUILD_DIR)
+
+format:
+	find components log-tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD_DIR)

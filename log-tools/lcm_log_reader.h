@@ -1,0 +1,66 @@
+#pragma once
+// A tolerant reader of LCM log files (the format lcm-logger writes): each event is
+//   sync word 0xEDA1DA01 | event number int64 | timestamp int64 (us) | channel length int32 |
+//   data length int32 | channel | data            (all big-endian)
+// Unlike lcm::LogFile it does not stop at the first damage: it reports where the log breaks
+// (byte offset, last good event) and resynchronises on the next sync word, so the readable
+// part of a truncated or corrupt log is still available.
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace sarmap {
+namespace logtools {
+
+struct LogEvent {
+  int64_t event_number = 0;
+  int64_t timestamp_us = 0;
+  int64_t file_offset = 0;
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+struct LogProblem {
+  int64_t file_offset;        // where the damage starts
+  int64_t after_event;        // event number of the last good event before it (-1: none)
+  std::string what;
+  int64_t resync_offset = -1; // where reading continued (-1: end of file)
+};
+
+class LcmLogReader {
+ public:
+  // Throws std::runtime_error when the file cannot be opened.
+  explicit LcmLogReader(const std::string& path);
+  ~LcmLogReader();
+  LcmLogReader(const LcmLogReader&) = delete;
+  LcmLogReader& operator=(const LcmLogReader&) = delete;
+
+  // Next readable event; false at the end of the file.
+  bool Next(LogEvent* event);
+  const std::vector<LogProblem>& problems() const { return problems_; }
+  int64_t file_size() const { return file_size_; }
+  int64_t offset() const { return offset_; }
+
+ private:
+  bool ReadAt(int64_t offset, void* out, size_t size);
+  bool Resync(int64_t from);
+
+  FILE* file_ = nullptr;
+  int64_t file_size_ = 0;
+  int64_t offset_ = 0;
+  int64_t last_event_ = -1;
+  std::vector<LogProblem> problems_;
+};
+
+// Type name of an LCM message by its fingerprint (first 8 bytes), for sarmap types;
+// "" when unknown.
+std::string SarmapTypeName(const std::vector<uint8_t>& data);
+
+// header.utime and header.seq of a sarmap message (they follow the fingerprint in every
+// sarmap message type); false when the data is too short or the type unknown.
+bool ReadSarmapHeader(const std::vector<uint8_t>& data, int64_t* utime, int64_t* seq);
+
+}  // namespace logtools
+}  // namespace sarmap

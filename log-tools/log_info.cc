@@ -1,0 +1,145 @@
+// sarmap-log info LOG: what a log holds, per channel, and where it is damaged.
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "common/args.h"
+#include "common/sequence.h"
+#include "common/time.h"
+#include "log-tools/lcm_log_reader.h"
+
+namespace {
+
+using sarmap::logtools::LcmLogReader;
+using sarmap::logtools::LogEvent;
+
+struct ChannelSummary {
+  std::map<std::string, int64_t> types;  // type name (or "?") -> count
+  int64_t count = 0;
+  int64_t bytes = 0;
+  int64_t first_us = 0, last_us = 0;
+  int64_t first_utime = 0, last_utime = 0;
+  bool has_header = false;
+  sarmap::common::SequenceTracker sequence;
+};
+
+std::string JsonEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return sarmap::common::RunMain("sarmap-log info", [&] {
+    sarmap::common::ArgParser parser(
+        "sarmap-log info", "Reports what an LCM log holds: per channel the message type, count, rate,\n"
+                           "size, sequence gaps and time span; and where a truncated or corrupt log\n"
+                           "breaks (the readable part is still reported).");
+    std::string path;
+    bool json = false;
+    parser.AddPositional("LOG", &path, "LCM log file (as written by lcm-logger / sarmap-log record)");
+    parser.AddSwitch("--json", &json, "print JSON instead of a table");
+    if (!parser.Parse(argc, argv)) return 0;
+
+    LcmLogReader reader(path);
+    std::map<std::string, ChannelSummary> channels;
+    LogEvent event;
+    int64_t events = 0, first_us = 0, last_us = 0;
+    int64_t next_report = 64 << 20;
+    while (reader.Next(&event)) {
+      if (events == 0) first_us = event.timestamp_us;
+      last_us = std::max(last_us, event.timestamp_us);
+      ++events;
+      ChannelSummary& c = channels[event.channel];
+      const std::string type = sarmap::logtools::SarmapTypeName(event.data);
+      ++c.types[type.empty() ? "?" : type];
+      if (c.count == 0) c.first_us = event.timestamp_us;
+      c.last_us = event.timestamp_us;
+      ++c.count;
+      c.bytes += static_cast<int64_t>(event.data.size());
+      int64_t utime, seq;
+      if (sarmap::logtools::ReadSarmapHeader(event.data, &utime, &seq)) {
+        if (!c.has_header) c.first_utime = utime;
+        c.has_header = true;
+        c.last_utime = utime;
+        c.sequence.Observe(seq);
+      }
+      if (!json && reader.offset() > next_report) {
+        fprintf(stderr, "\r  read %.0f%% ...", 100.0 * reader.offset() / std::max<int64_t>(1, reader.file_size()));
+        next_report += 64 << 20;
+      }
+    }
+    if (!json && next_report > (64 << 20)) fprintf(stderr, "\r                 \r");
+    const double span_s = events > 1 ? (last_us - first_us) * 1e-6 : 0.0;
+
+    std::ostringstream out;
+    if (json) {
+      out << "{\"file\": \"" << JsonEscape(path) << "\", \"bytes\": " << reader.file_size()
+          << ", \"events\": " << events << ", \"span_s\": " << span_s << ", \"channels\": [";
+      bool first = true;
+      for (const auto& [name, c] : channels) {
+        const double cspan = (c.last_us - c.first_us) * 1e-6;
+        out << (first ? "" : ", ") << "{\"channel\": \"" << JsonEscape(name) << "\", \"type\": \""
+            << c.types.rbegin()->first << "\", \"count\": " << c.count << ", \"bytes\": " << c.bytes
+            << ", \"rate_hz\": " << (cspan > 0 ? (c.count - 1) / cspan : 0.0)
+            << ", \"seq_gaps\": " << c.sequence.gaps() << ", \"reordered\": " << c.sequence.reordered()
+            << "}";
+        first = false;
+      }
+      out << "], \"problems\": [";
+      first = true;
+      for (const auto& p : reader.problems()) {
+        out << (first ? "" : ", ") << "{\"offset\": " << p.file_offset << ", \"after_event\": "
+            << p.after_event << ", \"what\": \"" << JsonEscape(p.what) << "\", \"resync_offset\": "
+            << p.resync_offset << "}";
+        first = false;
+      }
+      out << "]}\n";
+      fputs(out.str().c_str(), stdout);
+      return reader.problems().empty() ? 0 : 3;
+    }
+
+    char line[512];
+    snprintf(line, sizeof(line), "log     %s (%.1f MB)\nevents  %lld over %.2f s\n", path.c_str(),
+             reader.file_size() / 1e6, static_cast<long long>(events), span_s);
+    out << line;
+    if (events > 0) {
+      snprintf(line, sizeof(line), "%-22s %-22s %8s %9s %10s %7s %7s %10s\n", "channel", "type",
+               "count", "rate_Hz", "kB", "gaps", "reord", "utime_s");
+      out << "\n" << line;
+      for (const auto& [name, c] : channels) {
+        const double cspan = (c.last_us - c.first_us) * 1e-6;
+        std::string type;
+        for (const auto& [t, n] : c.types) type += (type.empty() ? "" : "+") + t;
+        snprintf(line, sizeof(line), "%-22s %-22s %8lld %9.2f %10.1f %7lld %7lld %10.2f\n",
+                 name.c_str(), type.c_str(), static_cast<long long>(c.count),
+                 cspan > 0 ? (c.count - 1) / cspan : 0.0, c.bytes / 1e3,
+                 static_cast<long long>(c.sequence.gaps()),
+                 static_cast<long long>(c.sequence.reordered()),
+                 c.has_header ? (c.last_utime - c.first_utime) * 1e-6 : 0.0);
+        out << line;
+      }
+    }
+    if (!reader.problems().empty()) {
+      out << "\nthe log is damaged:\n";
+      for (const auto& p : reader.problems()) {
+        out << "  breaks at byte " << p.file_offset << " (after event " << p.after_event << "): " << p.what;
+        if (p.resync_offset >= 0) {
+          out << "; resumed at byte " << p.resync_offset << " (" << (p.resync_offset - p.file_offset)
+              << " bytes skipped)\n";
+        } else {
+          out << "; nothing readable after it\n";
+        }
+      }
+    }
+    fputs(out.str().c_str(), stdout);
+    return reader.problems().empty() ? 0 : 3;
+  });
+}
