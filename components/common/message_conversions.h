@@ -29,7 +29,9 @@ inline Eigen::Matrix<double, 6, 6> ToCovariance6(const double (&cov)[36]) {
   return Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(cov);
 }
 inline void FromCovariance6(const Eigen::Matrix<double, 6, 6>& m, double (&cov)[36]) {
-  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(cov) = m;
+  // (A named map: "Map<...>(cov) = m;" would parse as a declaration of a variable cov.)
+  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> out(cov);
+  out = m;
 }
 
 // The planar (x, y, yaw) block of a 6x6 covariance, and back (other entries zero).
