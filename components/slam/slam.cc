@@ -28,6 +28,7 @@ Slam::Slam(const SlamOptions& options) : options_(options) {}
 Slam::~Slam() = default;
 
 bool Slam::AddOdometry(double time_s, const Rigid2d& pose, std::string* why) {
+  // (time_s may be clamped below)
   auto reject = [&](const std::string& w) {
     ++stats_.rejected_odometry;
     if (why) *why = w;
@@ -38,7 +39,13 @@ bool Slam::AddOdometry(double time_s, const Rigid2d& pose, std::string* why) {
   }
   if (!odometry_.empty()) {
     const OdomSample& last = odometry_.back();
-    if (time_s < last.time_s) return reject("odometry out of time order");
+    // Some logs stamp messages in bursts (Intel): a sample slightly older than the previous
+    // one is kept in arrival order at the previous time rather than dropped.
+    if (time_s < last.time_s - 1.0) return reject("odometry more than 1 s out of time order");
+    if (time_s < last.time_s) {
+      ++stats_.reordered_odometry;
+      time_s = last.time_s;
+    }
     const double dt = time_s - last.time_s;
     const double d = (pose.translation() - last.pose.translation()).norm();
     const double a = std::abs(std::remainder(pose.yaw_rad() - last.pose.yaw_rad(), 2 * M_PI));
@@ -129,8 +136,8 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
       return false;
     }
   }
-  if (have_last_scan_ && scan.time_s < last_scan_time_) {
-    *why = "scan older than the previous one";
+  if (have_last_scan_ && scan.time_s < last_scan_time_ - 1.0) {
+    *why = "scan more than 1 s older than the previous one";
     return false;
   }
   return true;
@@ -161,19 +168,37 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
 }
 
 Rigid2d Slam::PredictLocal(double time_s) {
+  // Odometry predicts the motion since the last scan whose odometry was fresh (the reference).
+  // Odometry that did not change while the scans show motion is stale (some logs freeze it
+  // for a second and then jump): then a constant-velocity model from the last two matched
+  // poses predicts, and the jump that follows is measured from the reference, so no motion is
+  // counted twice.
   Rigid2d odom;
   int segment;
   const bool have_odom = OdometryAt(time_s, &odom, &segment);
-  Rigid2d predicted = last_scan_local_;
-  if (have_odom && last_scan_has_odom_ && segment == last_scan_segment_) {
-    predicted = last_scan_local_ * (last_scan_odom_.inverse() * odom);
+  const double dt = time_s - last_scan_time_;
+  Rigid2d constant_velocity = last_scan_local_;
+  if (have_prev_scan_ && last_scan_time_ >= prev_scan_time_ && dt >= 0 && dt < 1.0) {
+    const Rigid2d step = prev_scan_local_.inverse() * last_scan_local_;
+    // Burst-stamped logs give tiny or huge time ratios: one step ahead, at most 2.
+    const double gap = last_scan_time_ - prev_scan_time_;
+    const double f = gap < 0.02 ? 1.0 : std::min(2.0, dt / gap);
+    constant_velocity = last_scan_local_ * Rigid2d(f * step.translation(), f * step.yaw_rad());
   }
+  this_scan_has_fresh_odom_ = false;
   last_scan_has_odom_ = have_odom;
-  if (have_odom) {
-    last_scan_odom_ = odom;
-    last_scan_segment_ = segment;
+  if (!have_odom) return have_last_scan_ ? constant_velocity : last_scan_local_;
+  last_scan_odom_ = odom;
+  last_scan_segment_ = segment;
+  if (!have_reference_ || segment != reference_segment_) {
+    this_scan_has_fresh_odom_ = true;
+    return last_scan_local_;
   }
-  return predicted;
+  const Rigid2d odom_delta = reference_odom_.inverse() * odom;
+  const bool frozen = odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
+  if (frozen) return constant_velocity;
+  this_scan_has_fresh_odom_ = true;
+  return reference_local_ * odom_delta;
 }
 
 Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
@@ -186,7 +211,21 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
     c.angular_window_rad = l.correlative_angular_window_deg * kDegToRad;
     c.translation_delta_cost_weight = l.correlative_translation_cost;
     c.rotation_delta_cost_weight = l.correlative_rotation_cost;
-    initial = CorrelativeMatch(grid, points, predicted, c, nullptr);
+    double csm_score = 0;
+    initial = CorrelativeMatch(grid, points, predicted, c, &csm_score);
+    // The prediction can be far off (wheel slip, fast turns): when the best candidate lies at
+    // the edge of the window or matches poorly, search again in a wide window.
+    const Rigid2d delta = predicted.inverse() * initial;
+    const bool at_edge =
+        std::abs(delta.yaw_rad()) > 0.8 * c.angular_window_rad ||
+        delta.translation().cwiseAbs().maxCoeff() > 0.8 * c.linear_window_m;
+    if (at_edge || csm_score < l.wide_search_below_score) {
+      c.linear_window_m = l.wide_linear_window_m;
+      c.angular_window_rad = l.wide_angular_window_deg * kDegToRad;
+      double wide_score = 0;
+      const Rigid2d wide = CorrelativeMatch(grid, points, predicted, c, &wide_score);
+      if (wide_score > csm_score) initial = wide;
+    }
   }
   CeresMatcherOptions m;
   m.occupied_space_weight = l.ceres_occupied_weight;
@@ -240,6 +279,15 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
   stats_.local_seconds += Seconds(t0);
   ++stats_.scans;
   have_scan_since_load_ = true;
+  if (this_scan_has_fresh_odom_) {
+    have_reference_ = true;
+    reference_local_ = local;
+    reference_odom_ = last_scan_odom_;
+    reference_segment_ = last_scan_segment_;
+  }
+  have_prev_scan_ = have_last_scan_;
+  prev_scan_time_ = last_scan_time_;
+  prev_scan_local_ = last_scan_local_;
   have_last_scan_ = true;
   last_scan_time_ = scan.time_s;
   last_scan_local_ = local;
@@ -797,6 +845,8 @@ void Slam::Load(const std::string& path) {
   // The odometry frame of a restarted robot may differ: predict no motion until new odometry
   // arrives, and let the scan matcher (wide search on the first scan) find the robot.
   last_scan_has_odom_ = false;
+  have_reference_ = false;
+  have_prev_scan_ = false;
   ++odom_segment_;
   if (localisation_only_ && !nodes_.empty()) last_scan_local_ = global_from_local_ * last_scan_local_;
   stats_ = SlamStats();

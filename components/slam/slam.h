@@ -53,7 +53,7 @@ struct ScanResult {
 
 struct SlamStats {
   int64_t scans = 0, nodes = 0, submaps = 0;
-  int64_t rejected_scans = 0, rejected_odometry = 0;
+  int64_t rejected_scans = 0, rejected_odometry = 0, reordered_odometry = 0;
   int64_t loop_searches = 0, loop_closures = 0;
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
@@ -175,6 +175,13 @@ class Slam {
   bool last_scan_has_odom_ = false;
   Rigid2d last_scan_odom_;
   int last_scan_segment_ = -1;
+  bool this_scan_has_fresh_odom_ = false;
+  bool have_reference_ = false;
+  Rigid2d reference_local_, reference_odom_;
+  int reference_segment_ = -1;
+  bool have_prev_scan_ = false;
+  double prev_scan_time_ = 0;
+  Rigid2d prev_scan_local_;
   double last_node_time_ = -1e300;
   Rigid2d last_node_local_;
 

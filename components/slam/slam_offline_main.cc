@@ -2,6 +2,8 @@
 // and writes the trajectory of every scan; reads CARMEN logs directly or LCM logs (ODOM, SCAN).
 
 #include <lcm/lcm-cpp.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -101,7 +103,7 @@ int main(int argc, char** argv) {
   return common::RunMain("sarmap-slam-offline", [&]() -> int {
     std::string input, output, map_prefix, save_path, config;
     std::vector<std::string> overrides;
-    bool print_config = false, quiet = false;
+    bool print_config = false, quiet = false, no_final = false, sort_by_time = false;
     common::ArgParser args("sarmap-slam-offline",
                            "Runs SLAM over a CARMEN or LCM log as fast as possible and writes "
                            "the trajectory (t x y yaw per scan).");
@@ -113,6 +115,8 @@ int main(int argc, char** argv) {
     args.AddFlag("--save", &save_path, "write the pose-graph file here");
     args.AddSwitch("--print-config", &print_config, "print the effective options and exit");
     args.AddSwitch("--quiet", &quiet, "no progress output");
+    args.AddSwitch("--sort-by-time", &sort_by_time, "process inputs in time order instead of log order");
+    args.AddSwitch("--no-final-optimisation", &no_final, "skip the optimisation at the end (to see local SLAM alone)");
     if (!args.Parse(argc, argv)) return 0;
     const auto options = common::LoadOptions<slam::SlamNodeOptions>(config, overrides);
     if (print_config) {
@@ -122,7 +126,13 @@ int main(int argc, char** argv) {
     if (output.empty()) throw common::ArgError("--output is required");
 
     auto start = std::chrono::steady_clock::now();
-    const std::vector<Input> inputs = ReadInput(input, options);
+    std::vector<Input> inputs = ReadInput(input, options);
+    if (sort_by_time) {
+      // As the node's time-ordered queue does.
+      std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
+        return (a.is_scan ? a.scan.time_s : a.odom_time_s) < (b.is_scan ? b.scan.time_s : b.odom_time_s);
+      });
+    }
     const double read_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     double first_t = 0, last_t = 0;
@@ -172,7 +182,7 @@ int main(int argc, char** argv) {
       }
     }
     const auto t_final = std::chrono::steady_clock::now();
-    slam.Optimise();
+    if (!no_final) slam.Optimise();
     const double final_opt_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_final).count();
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!quiet) std::fprintf(stderr, "\n");
@@ -198,10 +208,23 @@ int main(int argc, char** argv) {
     std::printf("per-scan latency: median %.2f ms, p99 %.2f ms, max %.2f ms\n", 1e3 * pct(0.5),
                 1e3 * pct(0.99), 1e3 * latencies.back());
     std::printf("peak memory (max RSS) %.1f MB\n", ru.ru_maxrss / 1024.0);
+    const double cpu_s = ru.ru_utime.tv_sec + 1e-6 * ru.ru_utime.tv_usec + ru.ru_stime.tv_sec + 1e-6 * ru.ru_stime.tv_usec;
+    std::printf("CPU time (one thread, incl. reading) %.2f s = %.1fx real time\n", cpu_s,
+                cpu_s > 0 ? (last_t - first_t) / cpu_s : 0.0);
     std::printf("trajectory: %s\n", output.c_str());
     if (!map_prefix.empty()) {
-      slam::SaveMapServerMap(slam.RenderMap(), map_prefix);
-      std::printf("map: %s.pgm %s.yaml\n", map_prefix.c_str(), map_prefix.c_str());
+      const slam::OccupancyMap map = slam.RenderMap();
+      slam::SaveMapServerMap(map, map_prefix);
+      // A PNG for people (grey unknown, darker = more likely occupied; top row = highest y).
+      cv::Mat img(map.height, map.width, CV_8UC1);
+      for (int y = 0; y < map.height; ++y) {
+        for (int x = 0; x < map.width; ++x) {
+          const int v = map.cells[static_cast<size_t>(y) * map.width + x];
+          img.at<uint8_t>(map.height - 1 - y, x) = v < 0 ? 205 : static_cast<uint8_t>(255 - v * 255 / 100);
+        }
+      }
+      cv::imwrite(map_prefix + ".png", img);
+      std::printf("map: %s.pgm %s.yaml %s.png\n", map_prefix.c_str(), map_prefix.c_str(), map_prefix.c_str());
     }
     if (!save_path.empty()) {
       slam.Save(save_path);

@@ -56,6 +56,9 @@ struct LocalOptions {
   double correlative_angular_window_deg = 15.0;
   double correlative_translation_cost = 0.1;
   double correlative_rotation_cost = 0.1;
+  double wide_search_below_score = 0.5;
+  double wide_linear_window_m = 0.3;
+  double wide_angular_window_deg = 45.0;
   double ceres_occupied_weight = 1.0;
   double ceres_translation_weight = 10.0;
   double ceres_rotation_weight = 40.0;
@@ -74,6 +77,9 @@ struct LocalOptions {
     v("correlative_angular_window_deg", correlative_angular_window_deg, "Correlative search half-window (deg)");
     v("correlative_translation_cost", correlative_translation_cost, "Penalty weight on translation from prediction");
     v("correlative_rotation_cost", correlative_rotation_cost, "Penalty weight on rotation from prediction");
+    v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
+    v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
+    v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
     v("ceres_occupied_weight", ceres_occupied_weight, "Scan matcher: weight of the map term");
     v("ceres_translation_weight", ceres_translation_weight, "Scan matcher: weight of staying at the prior translation");
     v("ceres_rotation_weight", ceres_rotation_weight, "Scan matcher: weight of staying at the prior rotation");
@@ -134,8 +140,8 @@ struct GraphOptions {
   double huber_scale = 10.0;
   double intra_translation_weight = 5e2;
   double intra_rotation_weight = 1.6e3;
-  double odometry_translation_weight = 1e5;
-  double odometry_rotation_weight = 1e5;
+  double odometry_translation_weight = 1e3;
+  double odometry_rotation_weight = 1e2;
   double local_slam_translation_weight = 1e5;
   double local_slam_rotation_weight = 1e5;
   template <class V> void Visit(V& v) {
