@@ -10,6 +10,10 @@
 #include <chrono>
 #include <cmath>
 #include <dirent.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <functional>
 #include <memory>
 #include <thread>
 
@@ -103,23 +107,30 @@ class Publisher {
 
 // Image-folder replay: depth files sorted by name.
 int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
+  // Depth files: regular files whose name contains depth_pattern, in the folder or in a
+  // sub-folder named like it (folder/depth/1.pgm with folder/color/1.png beside).
   std::vector<std::string> files;
-  DIR* dir = opendir(o.folder.c_str());
-  if (!dir) throw std::runtime_error("cannot open folder '" + o.folder + "'");
-  while (dirent* e = readdir(dir)) {
-    const std::string name = e->d_name;
-    if (name.find(o.depth_pattern) != std::string::npos) files.push_back(o.folder + "/" + name);
-  }
-  closedir(dir);
-  // Also accept folder/depth/* layouts.
-  if (files.empty()) {
-    const std::string sub = o.folder + "/" + o.depth_pattern;
-    if (DIR* d2 = opendir(sub.c_str())) {
-      while (dirent* e = readdir(d2)) {
-        if (e->d_name[0] != '.') files.push_back(sub + "/" + e->d_name);
+  std::function<void(const std::string&, bool)> scan_dir = [&](const std::string& path, bool all) {
+    DIR* dir = opendir(path.c_str());
+    if (!dir) return;
+    while (dirent* e = readdir(dir)) {
+      const std::string name = e->d_name;
+      if (name.empty() || name[0] == '.') continue;
+      const std::string full = path + "/" + name;
+      struct stat st;
+      if (stat(full.c_str(), &st) != 0) continue;
+      const bool match = all || name.find(o.depth_pattern) != std::string::npos;
+      if (S_ISDIR(st.st_mode)) {
+        if (match && !all) scan_dir(full, true);
+      } else if (match) {
+        files.push_back(full);
       }
-      closedir(d2);
     }
+    closedir(dir);
+  };
+  scan_dir(o.folder, false);
+  if (files.empty() && access(o.folder.c_str(), R_OK) != 0) {
+    throw std::runtime_error("cannot open folder '" + o.folder + "'");
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) throw std::runtime_error("no depth images matching '" + o.depth_pattern + "' in '" + o.folder + "'");
@@ -155,6 +166,7 @@ int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
       if (at != std::string::npos) cpath.replace(at, o.depth_pattern.size(), o.color_pattern);
       cv::Mat c;
       for (const std::string& p : {cpath, cpath.substr(0, cpath.rfind('.')) + ".png"}) {
+        if (access(p.c_str(), R_OK) != 0) continue;
         c = cv::imread(p, cv::IMREAD_COLOR);
         if (!c.empty()) break;
       }

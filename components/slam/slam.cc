@@ -397,16 +397,23 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
                               g.odometry_translation_weight, g.odometry_rotation_weight});
     }
   }
-  // Loop closures of this node against finished submaps.
+  // Loop closures of this node against the nearest finished submaps (each pair sampled at
+  // sampling_ratio): in a building revisited again and again, every submap is near, and
+  // searching them all would cost far more than it gains.
   const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::pair<double, int>> near;
   for (size_t s = 0; s < submaps_.size(); ++s) {
     if (!submaps_[s].finished) continue;
-    if ((node_global_[id].translation() - submap_global_[s].translation()).norm() >
-        options_.loop.max_constraint_distance_m) {
-      continue;
-    }
+    const double d = (node_global_[id].translation() - submap_global_[s].translation()).norm();
+    if (d <= options_.loop.max_constraint_distance_m) near.emplace_back(d, static_cast<int>(s));
+  }
+  std::sort(near.begin(), near.end());
+  if (static_cast<int>(near.size()) > options_.loop.max_submaps_per_node) {
+    near.resize(options_.loop.max_submaps_per_node);
+  }
+  for (const auto& [d, s] : near) {
     if (!SampleSubmap(&submaps_[s])) continue;
-    TryLoopClosure(id, static_cast<int>(s));
+    TryLoopClosure(id, s);
   }
   stats_.loop_seconds += Seconds(t0);
   return id;
@@ -427,14 +434,17 @@ void Slam::FinishSubmap(int submap_id) {
   // Older nodes (not in this submap) against the newly finished submap.
   const auto t0 = std::chrono::steady_clock::now();
   const int first_own = s.nodes.empty() ? static_cast<int>(nodes_.size()) : s.nodes.front();
+  std::vector<int> near;
   for (int n = 0; n < first_own; ++n) {
-    if ((node_global_[n].translation() - submap_global_[submap_id].translation()).norm() >
+    if ((node_global_[n].translation() - submap_global_[submap_id].translation()).norm() <=
         options_.loop.max_constraint_distance_m) {
-      continue;
+      near.push_back(n);
     }
-    if (!SampleSubmap(&s)) continue;
-    TryLoopClosure(n, submap_id);
   }
+  // At most max_old_nodes_per_submap of them, spread evenly over time.
+  const int limit = options_.loop.max_old_nodes_per_submap;
+  const double stride = near.size() > static_cast<size_t>(limit) ? double(near.size()) / limit : 1.0;
+  for (double k = 0; k < near.size(); k += stride) TryLoopClosure(near[static_cast<size_t>(k)], submap_id);
   stats_.loop_seconds += Seconds(t0);
 }
 
@@ -518,6 +528,8 @@ std::vector<StampedPose2> Slam::Trajectory() const {
     }
     out.push_back({s.time_s, g.translation().x(), g.translation().y(), g.yaw_rad()});
   }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const StampedPose2& a, const StampedPose2& b) { return a.time_s < b.time_s; });
   return out;
 }
 

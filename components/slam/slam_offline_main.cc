@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
   return common::RunMain("sarmap-slam-offline", [&]() -> int {
     std::string input, output, map_prefix, save_path, config;
     std::vector<std::string> overrides;
-    bool print_config = false, quiet = false, no_final = false, sort_by_time = false;
+    bool print_config = false, quiet = false, no_final = false, log_order = false;
     common::ArgParser args("sarmap-slam-offline",
                            "Runs SLAM over a CARMEN or LCM log as fast as possible and writes "
                            "the trajectory (t x y yaw per scan).");
@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
     args.AddFlag("--save", &save_path, "write the pose-graph file here");
     args.AddSwitch("--print-config", &print_config, "print the effective options and exit");
     args.AddSwitch("--quiet", &quiet, "no progress output");
-    args.AddSwitch("--sort-by-time", &sort_by_time, "process inputs in time order instead of log order");
+    args.AddSwitch("--log-order", &log_order, "process inputs in log order instead of time order");
     args.AddSwitch("--no-final-optimisation", &no_final, "skip the optimisation at the end (to see local SLAM alone)");
     if (!args.Parse(argc, argv)) return 0;
     const auto options = common::LoadOptions<slam::SlamNodeOptions>(config, overrides);
@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
 
     auto start = std::chrono::steady_clock::now();
     std::vector<Input> inputs = ReadInput(input, options);
-    if (sort_by_time) {
+    if (!log_order) {
       // As the node's time-ordered queue does.
       std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
         return (a.is_scan ? a.scan.time_s : a.odom_time_s) < (b.is_scan ? b.scan.time_s : b.odom_time_s);

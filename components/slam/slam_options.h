@@ -112,6 +112,8 @@ struct LoopClosureOptions {
   double translation_weight = 1.1e4;
   double rotation_weight = 1e5;
   int max_cached_precomputations = 64;
+  int max_submaps_per_node = 3;       // nearest finished submaps searched for a new node
+  int max_old_nodes_per_submap = 20;  // older nodes searched against a newly finished submap
   template <class V> void Visit(V& v) {
     v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
     v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
@@ -125,12 +127,16 @@ struct LoopClosureOptions {
     v("translation_weight", translation_weight, "Pose graph weight of loop closures (translation)");
     v("rotation_weight", rotation_weight, "Pose graph weight of loop closures (rotation)");
     v("max_cached_precomputations", max_cached_precomputations, "Submap precomputation stacks kept in memory");
+    v("max_submaps_per_node", max_submaps_per_node, "A new node is searched against at most this many nearest finished submaps");
+    v("max_old_nodes_per_submap", max_old_nodes_per_submap, "A newly finished submap is searched for at most this many older nodes");
   }
   void Validate(Validator& c) const {
     c.InRange("sampling_ratio", sampling_ratio, 0, 1);
     c.InRange("min_score", min_score, 0, 1);
     c.That(branch_and_bound_depth >= 1 && branch_and_bound_depth <= 12, "branch_and_bound_depth", "must be in [1, 12]");
     c.That(max_cached_precomputations >= 1, "max_cached_precomputations", "must be >= 1");
+    c.That(max_submaps_per_node >= 0, "max_submaps_per_node", "must be >= 0");
+    c.That(max_old_nodes_per_submap >= 0, "max_old_nodes_per_submap", "must be >= 0");
   }
 };
 
