@@ -55,9 +55,10 @@ PointCloud AdaptiveVoxelFilter(const PointCloud& points, float max_length_m, int
   return result;
 }
 
-double AngularSearchStep(const PointCloud& points, double resolution_m) {
+double AngularSearchStep(const PointCloud& points, double resolution_m, double max_range_cap_m) {
   double max_range = 3 * resolution_m;
   for (const auto& p : points) max_range = std::max<double>(max_range, p.norm());
+  max_range = std::max(3 * resolution_m, std::min(max_range, max_range_cap_m));
   return std::acos(1. - resolution_m * resolution_m / (2. * max_range * max_range));
 }
 
@@ -94,7 +95,7 @@ Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
     return initial;
   }
   const double res = grid.resolution();
-  const double angle_step = AngularSearchStep(points, res);
+  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
   const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
   const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
   const int side = 2 * w + 1;
@@ -291,7 +292,7 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
                          double* score) {
   if (points.empty()) return false;
   const double res = grid.resolution();
-  const double angle_step = AngularSearchStep(points, res);
+  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
   const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
   const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
   std::vector<std::vector<Eigen::Array2i>> scans(2 * num_angles + 1);

@@ -21,7 +21,10 @@ PointCloud AdaptiveVoxelFilter(const PointCloud& points, float max_length_m, int
 
 // The angular step at which the farthest point moves by about one cell:
 //   step = acos(1 - r^2 / (2 d^2)),  r = resolution, d = max point range.
-double AngularSearchStep(const PointCloud& points, double resolution_m);
+// Points farther than `max_range_cap_m` do not make the step finer (the Ceres refinement
+// recovers the last fraction of a step).
+double AngularSearchStep(const PointCloud& points, double resolution_m,
+                         double max_range_cap_m = 1e9);
 
 // Mean matched probability of the points at `pose` (probabilities at cell centres).
 double ScoreAt(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& pose);
@@ -33,6 +36,7 @@ struct CorrelativeOptions {
   // among nearly equal candidates.
   double translation_delta_cost_weight = 0.1;
   double rotation_delta_cost_weight = 0.1;
+  double step_range_cap_m = 10.0;  // see AngularSearchStep
 };
 
 // Exhaustive search around `initial`; returns the best pose and its (unweighted) score.
@@ -78,6 +82,7 @@ struct BranchAndBoundOptions {
   double linear_window_m = 7.0;
   double angular_window_rad = 0.52;
   int depth = 7;
+  double step_range_cap_m = 15.0;  // see AngularSearchStep
 };
 
 // Finds the pose in the window around `initial` whose score is highest and >= min_score

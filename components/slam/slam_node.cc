@@ -70,8 +70,16 @@ class SlamNode {
         [this](const slam_anchor_request_t& m, const common::ReceiveInfo&) {
           anchor_requests_[m.client_id] = m.node_ids;
           SARMAP_LOG(INFO) << "client '" << m.client_id << "' keeps " << m.num_node_ids << " anchors";
+          PublishAnchors(false);  // answer at once, then after every optimisation
         });
     node->AddTimer(1.0, [this]() { UpdateStatus(); });
+    // When inputs pause (end of a replay, a stalled sensor), release what waits in the queue
+    // after queue_delay_s of wall time instead of holding the last scans back.
+    node->AddTimer(0.02, [this]() {
+      if (queue_.size() > 0 && common::SteadySeconds() - last_input_s_ > options_.queue_delay_s) {
+        queue_.Flush([this](Utime, Input& in) { Process(in); });
+      }
+    });
   }
 
   void Finish() {
@@ -97,6 +105,7 @@ class SlamNode {
   };
 
   void Push(Utime utime, Input in) {
+    last_input_s_ = common::SteadySeconds();
     if (!queue_.Push(utime, std::move(in))) {
       if (late_log_.Allow(common::SteadySeconds())) {
         SARMAP_LOG(WARN) << "input too late for the time-ordered queue (dropped "
@@ -265,6 +274,7 @@ class SlamNode {
   Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
   double last_map_time_s_ = -1e300, last_save_time_s_ = -1e300;
   common::RateLimiter late_log_{2.0}, odom_log_{2.0}, scan_log_{2.0};
+  double last_input_s_ = 0;
   double latency_sum_s_ = 0;
   int64_t latency_count_ = 0;
 };

@@ -16,7 +16,7 @@ struct SlamNodeOptions {
   std::string map_channel = "MAP";
   std::string anchors_channel = "SLAM_ANCHORS";
   std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
-  double queue_delay_s = 0.2;        // time-ordering delay of the input queue
+  double queue_delay_s = 0.1;        // time-ordering delay of the input queue
   double map_period_s = 5.0;         // MAP at most this often (message time)
   std::string state_file = "";       // pose-graph file saved periodically and at exit ("" = none)
   double state_save_period_s = 10.0; // message time between periodic saves

@@ -103,8 +103,8 @@ struct LoopClosureOptions {
   double sampling_ratio = 0.3;        // fraction of (node, submap) pairs tried
   double max_constraint_distance_m = 15.0;
   double min_score = 0.55;            // verification: mean matched probability
-  double linear_window_m = 7.0;
-  double angular_window_deg = 30.0;
+  double linear_window_m = 5.0;
+  double angular_window_deg = 20.0;
   int branch_and_bound_depth = 7;
   double ceres_occupied_weight = 20.0;
   double ceres_translation_weight = 10.0;
