@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -115,18 +116,32 @@ bool NodeCovariance(const std::vector<Constraint>& constraints,
   cov_options.algorithm_type = ceres::SPARSE_QR;
   cov_options.num_threads = 1;
   ceres::Covariance cov(cov_options);
-  std::vector<const double*> blocks;
+  // ceres::Covariance refuses repeated blocks: compute over the distinct nodes, then expand.
+  std::vector<int> unique_ids;
   for (int id : node_ids) {
     if (id < 0 || id >= static_cast<int>(b.nodes.size())) return false;
-    blocks.push_back(b.nodes[id].data());
+    if (std::find(unique_ids.begin(), unique_ids.end(), id) == unique_ids.end()) unique_ids.push_back(id);
   }
+  std::vector<const double*> blocks;
+  for (int id : unique_ids) blocks.push_back(b.nodes[id].data());
   if (!cov.Compute(blocks, &problem)) return false;
-  const int n = static_cast<int>(blocks.size());
-  covariance->resize(3 * n, 3 * n);
-  std::vector<double> full(9 * n * n);
+  const int u = static_cast<int>(blocks.size());
+  std::vector<double> full(9 * u * u);
   if (!cov.GetCovarianceMatrix(blocks, full.data())) return false;
-  for (int r = 0; r < 3 * n; ++r) {
-    for (int c = 0; c < 3 * n; ++c) (*covariance)(r, c) = full[r * 3 * n + c];
+  const int n = static_cast<int>(node_ids.size());
+  covariance->resize(3 * n, 3 * n);
+  std::vector<int> index(n);
+  for (int i = 0; i < n; ++i) {
+    index[i] = static_cast<int>(std::find(unique_ids.begin(), unique_ids.end(), node_ids[i]) - unique_ids.begin());
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          (*covariance)(3 * i + r, 3 * j + c) = full[(3 * index[i] + r) * 3 * u + 3 * index[j] + c];
+        }
+      }
+    }
   }
   return true;
 }

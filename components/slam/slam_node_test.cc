@@ -93,9 +93,9 @@ void Publish(lcm::LCM* lcm, const std::vector<Event>& ev, size_t begin, size_t e
 
 TEST(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
   if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
-  const std::vector<Event> events = LoadIntelPrefix(300);
+  const std::vector<Event> events = LoadIntelPrefix(500);
   size_t half = 0;
-  for (int scans = 0; half < events.size() && scans < 150; ++half) scans += events[half].is_scan;
+  for (int scans = 0; half < events.size() && scans < 250; ++half) scans += events[half].is_scan;
   const std::string state = ::testing::TempDir() + "/slam_node_test.pg";
   std::remove(state.c_str());
   const std::vector<std::string> args = {
