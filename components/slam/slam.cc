@@ -232,7 +232,10 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
   m.translation_weight = l.ceres_translation_weight;
   m.rotation_weight = l.ceres_rotation_weight;
   m.max_iterations = l.ceres_max_iterations;
-  const Rigid2d result = CeresMatch(grid, points, initial, initial, m);
+  // The translation prior is the prediction (as in Cartographer): where the scan cannot tell
+  // (a corridor), the prediction wins; the rotation prior is the correlative result.
+  const Rigid2d prior(predicted.translation(), initial.yaw_rad());
+  const Rigid2d result = CeresMatch(grid, points, prior, initial, m);
   if (score) *score = ScoreAt(grid, points, result);
   return result;
 }
@@ -263,7 +266,7 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
       // down; search widely around the last pose before tracking again.
       const int id = active_submaps_.front();
       BranchAndBoundOptions b;
-      b.linear_window_m = std::min(3.0, options_.loop.linear_window_m);
+      b.linear_window_m = std::min(1.0, options_.loop.linear_window_m);
       b.angular_window_rad = options_.loop.angular_window_deg * kDegToRad;
       b.depth = options_.loop.branch_and_bound_depth;
       Rigid2d found;

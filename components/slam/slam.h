@@ -85,6 +85,13 @@ class Slam {
   // submaps of a loaded map.
   void SetLocalisationOnly(bool on) { localisation_only_ = on; }
   bool localisation_only() const { return localisation_only_; }
+  // Localisation only: where to start (the first scan is searched around it); by default the
+  // last pose of the saved map.
+  void SetLocalisationStart(const Rigid2d& map_from_base) {
+    last_scan_local_ = map_from_base;
+    have_scan_since_load_ = false;
+    have_last_scan_ = false;  // a new start: no time order with the saved state
+  }
 
   // Global pose of every accepted scan (time order).
   std::vector<StampedPose2> Trajectory() const;

@@ -48,6 +48,10 @@ class SlamNode {
     if (!options_.load_map.empty()) {
       slam_.SetLocalisationOnly(true);
       slam_.Load(options_.load_map);
+      if (options_.initial_pose.size() == 3) {
+        slam_.SetLocalisationStart(slam::Rigid2d(options_.initial_pose[0], options_.initial_pose[1],
+                                                 options_.initial_pose[2]));
+      }
       SARMAP_LOG(INFO) << "localisation only in " << options_.load_map << " (" << slam_.num_nodes()
                        << " nodes)";
     } else if (options_.resume && !options_.state_file.empty() && FileExists(options_.state_file)) {

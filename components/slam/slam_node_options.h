@@ -2,6 +2,7 @@
 // Options of sarmap-slam (config/slam.yaml); the offline runner reads the same file.
 
 #include <string>
+#include <vector>
 
 #include "common/options.h"
 #include "slam/slam_options.h"
@@ -23,6 +24,7 @@ struct SlamNodeOptions {
   bool resume = false;               // load state_file at start (if it exists) and continue
   std::string load_map = "";         // pose-graph file to localise in (localisation only)
   std::string map_output_prefix = "";  // at exit: PREFIX.pgm + PREFIX.yaml
+  std::vector<double> initial_pose = {};  // localisation only: x y yaw (empty: last saved pose)
   double pose_sigma_xy_m = 0.02;     // local matching uncertainty added to POSE covariance
   double pose_sigma_yaw_deg = 0.5;
   SlamOptions slam;
@@ -40,12 +42,14 @@ struct SlamNodeOptions {
     v("resume", resume, "Load state_file at start if it exists and continue mapping");
     v("load_map", load_map, "Localisation only in this saved pose-graph file");
     v("map_output_prefix", map_output_prefix, "At exit write PREFIX.pgm and PREFIX.yaml (map_server)");
+    v("initial_pose", initial_pose, "Localisation only: start pose [x, y, yaw] in the map (empty: last saved pose)");
     v("pose_sigma_xy_m", pose_sigma_xy_m, "Local matching standard deviation added to POSE covariance");
     v("pose_sigma_yaw_deg", pose_sigma_yaw_deg, "Local matching yaw standard deviation added to POSE covariance");
     v("slam", slam, "SLAM core");
   }
   void Validate(common::Validator& c) const {
     c.NonNegative("queue_delay_s", queue_delay_s);
+    c.That(initial_pose.empty() || initial_pose.size() == 3, "initial_pose", "must be empty or [x, y, yaw]");
     c.Positive("map_period_s", map_period_s);
     c.Positive("state_save_period_s", state_save_period_s);
     c.NonNegative("pose_sigma_xy_m", pose_sigma_xy_m);
