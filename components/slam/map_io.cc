@@ -41,6 +41,7 @@ void SaveMapServerMap(const OccupancyMap& map, const std::string& prefix) {
   RenameOrThrow(pgm + ".tmp", pgm);
   {
     std::ofstream out(yaml + ".tmp");
+    out.precision(10);
     const std::string image = pgm.substr(pgm.find_last_of('/') + 1);
     out << "image: " << image << "\nresolution: " << map.resolution_m << "\norigin: ["
         << map.origin_x_m << ", " << map.origin_y_m << ", 0.0]\nnegate: 0\noccupied_thresh: "

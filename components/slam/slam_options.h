@@ -54,7 +54,7 @@ struct LocalOptions {
   bool use_correlative_search = true;
   double correlative_linear_window_m = 0.1;
   double correlative_angular_window_deg = 15.0;
-  double correlative_translation_cost = 0.1;
+  double correlative_translation_cost = 2.0;
   double correlative_rotation_cost = 0.1;
   double wide_search_below_score = 0.5;
   double wide_linear_window_m = 0.3;
