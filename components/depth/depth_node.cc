@@ -39,6 +39,8 @@ struct Frame {
   std::vector<uint16_t> depth_mm;
   std::vector<uint8_t> rgb;  // empty when none
   int rgb_width = 0, rgb_height = 0;
+  double depth_unit_m = 0.001;
+  bool republish_images = true;  // false when the images came from the bus
 };
 
 class Publisher {
@@ -70,9 +72,11 @@ class Publisher {
     in.height = f.intrinsics.height;
     in.fx = f.intrinsics.fx, in.fy = f.intrinsics.fy, in.cx = f.intrinsics.cx, in.cy = f.intrinsics.cy;
     in.distortion_model = camera_intrinsics_t::DISTORTION_NONE;
-    image_t depth_msg = common::MakeDepthImage(header, in, f.depth_mm.data(), in.width, in.height);
-    depth_pub_.Publish(&depth_msg);
-    if (options_.color && !f.rgb.empty()) {
+    if (f.republish_images) {
+      image_t depth_msg = common::MakeDepthImage(header, in, f.depth_mm.data(), in.width, in.height);
+      depth_pub_.Publish(&depth_msg);
+    }
+    if (f.republish_images && options_.color && !f.rgb.empty()) {
       camera_intrinsics_t cin = in;
       cin.width = f.rgb_width;
       cin.height = f.rgb_height;
@@ -80,7 +84,7 @@ class Publisher {
                                                options_.jpeg_quality);
       rgb_pub_.Publish(&rgb_msg);
     }
-    const depth::PlanarScan s = converter_->Convert(f.depth_mm.data(), 0.001);
+    const depth::PlanarScan s = converter_->Convert(f.depth_mm.data(), f.depth_unit_m);
     laser_scan_t scan{};
     scan.header.utime = f.utime;
     scan.header.frame = "base";
@@ -250,6 +254,30 @@ int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
   return 0;
 }
 
+// DEPTH from the bus (the simulator, or a driver on another computer): SCAN only.
+int RunLcm(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
+  int64_t bad = 0;
+  node->Subscribe<image_t>(o.depth_channel, [&](const image_t& m, const common::ReceiveInfo&) {
+    Frame f;
+    std::string error;
+    if (!common::DecodeDepthImage(m, &f.depth_mm, &error)) {
+      if (++bad % 100 == 1) SARMAP_LOG(WARN) << "undecodable depth image (" << bad << " so far): " << error;
+      return;
+    }
+    f.utime = m.header.utime;
+    f.intrinsics.width = m.width;
+    f.intrinsics.height = m.height;
+    f.intrinsics.fx = m.intrinsics.fx;
+    f.intrinsics.fy = m.intrinsics.fy;
+    f.intrinsics.cx = m.intrinsics.cx;
+    f.intrinsics.cy = m.intrinsics.cy;
+    f.depth_unit_m = m.depth_unit_m;
+    f.republish_images = false;
+    pub->Publish(f);
+  }, 2);
+  return node->Run();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -263,7 +291,8 @@ int main(int argc, char** argv) {
         "Examples:\n"
         "  sarmap-depth                                   # first OpenNI2 device\n"
         "  sarmap-depth --set device_uri=rec.oni          # a recording\n"
-        "  sarmap-depth --set source=folder --set folder=DIR --set rate_hz=5");
+        "  sarmap-depth --set source=folder --set folder=DIR --set rate_hz=5\n"
+        "  sarmap-depth --set source=lcm                  # SCAN from DEPTH on the bus (simulator)");
     if (!parser.Parse(argc, argv)) return 0;
     const auto options =
         common::LoadOptions<depth::DepthNodeOptions>(node_args.config_path, node_args.overrides);
@@ -279,6 +308,7 @@ int main(int argc, char** argv) {
     base_from_camera.translation() = bc.translation();
     common::Node node("sarmap-depth", node_args.lcm_url);
     Publisher pub(options, &node, base_from_camera);
+    if (options.source == "lcm") return RunLcm(options, &node, &pub);
     return options.source == "folder" ? RunFolder(options, &node, &pub) : RunOpenNI(options, &node, &pub);
   });
 }

@@ -9,7 +9,7 @@ namespace sarmap {
 namespace depth {
 
 struct DepthNodeOptions {
-  std::string source = "openni2";   // openni2 | folder
+  std::string source = "openni2";   // openni2 | folder | lcm
   std::string device_uri = "";      // openni2: "" = first device, or a .oni recording path
   bool color = true;                // also publish RGB
   bool register_depth = true;       // openni2: depth registered to colour when supported
@@ -35,7 +35,7 @@ struct DepthNodeOptions {
   int num_beams = 0;
   int row_step = 2;
   template <class V> void Visit(V& v) {
-    v("source", source, "openni2 (device or .oni) or folder (image replay)");
+    v("source", source, "openni2 (device or .oni), folder (image replay), or lcm (DEPTH from the bus, e.g. the simulator: only SCAN is published)");
     v("device_uri", device_uri, "OpenNI2 device URI or .oni file; empty = first device");
     v("color", color, "publish RGB as well");
     v("register_depth", register_depth, "OpenNI2: register depth to colour when supported");
@@ -62,7 +62,7 @@ struct DepthNodeOptions {
     v("row_step", row_step, "use every n-th image row for the scan");
   }
   void Validate(common::Validator& c) const {
-    c.OneOf("source", source, {"openni2", "folder"});
+    c.OneOf("source", source, {"openni2", "folder", "lcm"});
     c.Positive("folder_depth_unit_m", folder_depth_unit_m);
     c.Positive("rate_hz", rate_hz);
     c.That(max_height_m > min_height_m, "max_height_m", "must be > min_height_m");
