@@ -148,7 +148,9 @@ TEST(DepthToScanTest, RealKinectFrame) {
     }
   }
   for (size_t b = 0; b < s.ranges_m.size(); ++b) {
-    if (brute[b] < 1e8f) EXPECT_NEAR(s.ranges_m[b], brute[b], 1e-3) << "bin " << b;
+    if (brute[b] < 1e8f) {
+      EXPECT_NEAR(s.ranges_m[b], brute[b], 1e-3) << "bin " << b;
+    }
   }
 }
 
