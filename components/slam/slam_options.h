@@ -102,7 +102,7 @@ struct LocalOptions {
 struct LoopClosureOptions {
   double sampling_ratio = 0.3;        // fraction of (node, submap) pairs tried
   double max_constraint_distance_m = 15.0;
-  double min_score = 0.55;            // verification: mean matched probability
+  double min_score = 0.65;            // verification: mean matched probability
   double linear_window_m = 5.0;
   double angular_window_deg = 20.0;
   int branch_and_bound_depth = 7;
@@ -143,7 +143,7 @@ struct LoopClosureOptions {
 struct GraphOptions {
   int optimise_every_n_nodes = 90;
   int max_iterations = 50;
-  double huber_scale = 10.0;
+  double huber_scale = 100.0;  // 10 (Cartographer) kept loops too weak; 1000 let bad ones in
   double intra_translation_weight = 5e2;
   double intra_rotation_weight = 1.6e3;
   double odometry_translation_weight = 1e3;
