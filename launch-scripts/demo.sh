@@ -59,8 +59,10 @@ if [ ! -x "$bin/sarmap-sim" ]; then
 fi
 echo "   running: ${started[*]}"
 [ ${#missing[@]} -eq 0 ] || echo "   not built: ${missing[*]}"
+# The simulated robot carries a planar ReSpeaker array (the sound map maps azimuths; the Kinect's
+# linear array gives only cone angles), the one config/sound_localisation.yaml and speech.yaml use.
 echo "== simulating (the robot follows the world's scripted path)"
-(cd "$root" && "$bin/sarmap-sim" --world "$world" --duration "$seconds" --speed 1) >"$out/sarmap-sim.txt" 2>&1 \
+(cd "$root" && "$bin/sarmap-sim" --world "$world" --duration "$seconds" --speed 1 --set audio.mic_array=respeaker4) >"$out/sarmap-sim.txt" 2>&1 \
   || echo "   sarmap-sim failed: see $out/sarmap-sim.txt"
 sleep 2
 stop_all
