@@ -17,7 +17,7 @@
 #include <memory>
 #include <thread>
 
-#include "common/args.h"
+#include "common/node_main.h"
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/logging.h"
@@ -286,21 +286,15 @@ int main(int argc, char** argv) {
     common::ArgParser parser("sarmap-depth",
                              "RGB-D input (OpenNI2 device, .oni recording or image folder) -> "
                              "DEPTH, RGB and a depth-derived SCAN.");
-    parser.AddNodeOptions(&node_args, "config/depth.yaml");
     parser.SetEpilog(
         "Examples:\n"
         "  sarmap-depth                                   # first OpenNI2 device\n"
         "  sarmap-depth --set device_uri=rec.oni          # a recording\n"
         "  sarmap-depth --set source=folder --set folder=DIR --set rate_hz=5\n"
         "  sarmap-depth --set source=lcm                  # SCAN from DEPTH on the bus (simulator)");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options =
-        common::LoadOptions<depth::DepthNodeOptions>(node_args.config_path, node_args.overrides);
-    if (node_args.print_config) {
-      std::printf("%s", common::OptionsToYaml(options, true).c_str());
-      return 0;
-    }
-    common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
+    const auto parsed = common::ParseNodeOptions<depth::DepthNodeOptions>(&parser, &node_args, argc, argv, "config/depth.yaml");
+    if (!parsed) return 0;
+    const depth::DepthNodeOptions& options = *parsed;
     const common::RobotOptions robot = common::LoadRobot(options.robot_config);
     const common::Rigid3d bc = robot.base_from_camera.ToRigid3d();
     Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();

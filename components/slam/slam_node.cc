@@ -8,7 +8,7 @@
 #include <set>
 #include <variant>
 
-#include "common/args.h"
+#include "common/node_main.h"
 #include "common/compression.h"
 #include "common/logging.h"
 #include "common/message_conversions.h"
@@ -290,19 +290,13 @@ int main(int argc, char** argv) {
     common::NodeArgs node_args;
     common::ArgParser parser("sarmap-slam",
                              "2D graph SLAM: SCAN + ODOM in; POSE, MAP, SLAM_ANCHORS out.");
-    parser.AddNodeOptions(&node_args, "config/slam.yaml");
     parser.SetEpilog(
         "Channels (configurable): in SCAN, ODOM, SLAM_ANCHOR_REQUEST; out POSE, MAP, SLAM_ANCHORS.\n"
         "Resume after a crash: --set state_file=run.pg --set resume=true\n"
         "Localisation only:   --set load_map=run.pg");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options =
-        common::LoadOptions<slam::SlamNodeOptions>(node_args.config_path, node_args.overrides);
-    if (node_args.print_config) {
-      std::printf("%s", common::OptionsToYaml(options, true).c_str());
-      return 0;
-    }
-    common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
+    const auto parsed = common::ParseNodeOptions<slam::SlamNodeOptions>(&parser, &node_args, argc, argv, "config/slam.yaml");
+    if (!parsed) return 0;
+    const slam::SlamNodeOptions& options = *parsed;
     common::Node node("sarmap-slam", node_args.lcm_url);
     SlamNode slam_node(options, &node);
     const int rc = node.Run();

@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "common/args.h"
+#include "common/node_main.h"
 #include "common/logging.h"
 #include "common/node.h"
 #include "common/options.h"
@@ -89,17 +89,11 @@ int main(int argc, char** argv) {
         "kept conditionally independent of SLAM (Su 2017 §4.3), updated from SLAM_ANCHORS by\n"
         "back-propagation after every SLAM optimisation.");
     sarmap::common::NodeArgs node_args;
-    parser.AddNodeOptions(&node_args, "config/sound_map.yaml");
     parser.SetEpilog(
         "Channels in: DOA, PEOPLE_AUDIO, POSE, SLAM_ANCHORS. Out: SLAM_ANCHOR_REQUEST, SOUND_MAP.");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options =
-        sarmap::common::LoadOptions<SoundMapNodeOptions>(node_args.config_path, node_args.overrides);
-    if (node_args.print_config) {
-      fputs(sarmap::common::OptionsToYaml(options, true).c_str(), stdout);
-      return 0;
-    }
-    sarmap::common::SetLogLevel(sarmap::common::ParseLogLevel(node_args.log_level));
+    const auto parsed = sarmap::common::ParseNodeOptions<SoundMapNodeOptions>(&parser, &node_args, argc, argv, "config/sound_map.yaml");
+    if (!parsed) return 0;
+    const SoundMapNodeOptions& options = *parsed;
     const auto robot = sarmap::common::LoadRobot(options.robot_config);
     sarmap::sound_map::ArrayMount mount;
     mount.x_m = robot.base_from_mic_array.x_m;

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "common/args.h"
+#include "common/node_main.h"
 #include "common/logging.h"
 #include "common/node.h"
 #include "common/options.h"
@@ -46,14 +46,9 @@ int main(int argc, char** argv) {
         "clustering with HOG on the colour patch; a depth-only shape classifier takes over in\n"
         "darkness and glare. People are reported after k of n frames.");
     common::NodeArgs node_args;
-    parser.AddNodeOptions(&node_args, "config/vision_people.yaml");
-    if (!parser.Parse(argc, argv)) return 0;
-    const auto options = common::LoadOptions<VisionPeopleOptions>(node_args.config_path, node_args.overrides);
-    if (node_args.print_config) {
-      fputs(common::OptionsToYaml(options, true).c_str(), stdout);
-      return 0;
-    }
-    common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
+    const auto parsed = common::ParseNodeOptions<VisionPeopleOptions>(&parser, &node_args, argc, argv, "config/vision_people.yaml");
+    if (!parsed) return 0;
+    const VisionPeopleOptions& options = *parsed;
     PeopleDetector detector(options.detector, InitialGround(options),
                             MakeHogClassifier(options.detector.color));
     ConfirmationTracker tracker(options.confirmation);
