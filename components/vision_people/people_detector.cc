@@ -328,9 +328,23 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   for (int i = 0; i < nv; ++i) ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
 
   // 2. Floor: least-squares plane through the voxels near the prior, twice with a shrinking
-  // band; accepted only close to the mounting plane.
+  // band; accepted only close to the mounting plane. Floor candidates must have nothing
+  // 0.18-0.30 m above them (cells iz+3, iz+4 of their column): the bottom rows of a wall, a
+  // cabinet or a leg lie in the band too, and facing a wall they outnumber the floor voxels
+  // and tilt the fit a little each frame, which the next frame's prior then carries on.
   GroundPlane ground = prior_;
   if (o.ground.refine) {
+    const int64_t layer = static_cast<int64_t>(ws.ny + 2 * kPad) * (ws.nx + 2 * kPad);
+    const int64_t layers = ws.nz + 2 * kPad;
+    ws.kept.assign(nv, 0);  // here: "open above" (floor candidate) flags
+    for (int i = 0; i < nv; ++i) {
+      const int64_t cell = ws.voxel_cell[i];
+      bool open = true;
+      for (int k = 3; k <= 4 && open; ++k) {
+        if (cell / layer + k < layers) open = ws.cell_voxel[cell + k * layer] < 0;
+      }
+      ws.kept[i] = open;
+    }
     GroundPlane estimate = prior_;
     bool ok = true;
     int used = 0;
@@ -340,7 +354,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       used = 0;
       for (int i = 0; i < nv; ++i) {
         const Eigen::Vector3d& c = ws.centroid[i];
-        if (std::abs(estimate.Height(c)) > band) continue;
+        if (!ws.kept[i] || std::abs(estimate.Height(c)) > band) continue;
         mean += c;
         second += c * c.transpose();
         ++used;
@@ -373,6 +387,11 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       ground = estimate;
       prior_ = estimate;  // Munaro: next frame starts from this one
       result.stats.ground_refined = true;
+    } else {
+      // Too little floor in view (or an implausible fit): the camera is rigidly mounted, so
+      // the mounting plane is the best guess, and a stale estimate must not stick.
+      ground = mounting_;
+      prior_ = mounting_;
     }
   }
   result.ground = ground;
@@ -671,13 +690,21 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     // 0.3 m cut around the top can leave a box edge looking like a lone peak. With several
     // heads (people side by side) only the sub-cluster, so a neighbour's shoulder does not
     // count.
+    // The head region is an ellipse on the floor: head_radius_m across the viewing ray and
+    // head_radius_m + head_depth_m along it, because the visible head surface reaches back
+    // along the ray (a head seen obliquely shows its side, ~0.2 m deep) and the range noise
+    // (sigma = c z^2) spreads it further; across the ray the shoulders stick out.
     double around = -1.0;
-    const double r2 = so.head_radius_m * so.head_radius_m;
+    const double inv_a2 = 1.0 / (so.head_radius_m * so.head_radius_m);
+    const double inv_b2 = 1.0 / std::pow(so.head_radius_m + so.head_depth_m, 2);
     const double outer2 = std::pow(so.head_radius_m + o.min_head_distance_m, 2);
     const bool single_head = heads_in_cluster[parent_of[sub]] == 1;
     for (int i : single_head ? parent : part) {
-      const double d2 = (ws.floor[i].head<2>() - top_xy).squaredNorm();
-      if (d2 >= r2 && d2 <= outer2) around = std::max(around, ws.floor[i].z());
+      const Eigen::Vector2d d = ws.floor[i].head<2>() - top_xy;
+      const double s = across.dot(d), r = ray.dot(d);
+      if (s * s * inv_a2 + r * r * inv_b2 >= 1.0 && d.squaredNorm() <= outer2) {
+        around = std::max(around, ws.floor[i].z());
+      }
     }
     c.head_prominence_m = around < 0 ? 0.0 : H - around;
     // ... and the head's floor footprint smaller than that of head and shoulders (a vertical

@@ -4,6 +4,7 @@
 // false positives per frame. Prints figures; asserts nothing.
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "common/robot_config.h"
 #include "sim/simulator.h"
@@ -20,6 +21,9 @@ struct NullSink : sarmap::sim::SimSink {
   void Publish(const std::string&, const sarmap::sim_truth_t&) override {}
 };
 
+bool g_verbose = false;
+std::vector<std::string> g_overrides;  // --set key=value (options of config/vision_people.yaml)
+
 void Evaluate(const std::string& world, double seconds) {
   using namespace sarmap;
   sim::SimOptions options;
@@ -29,7 +33,7 @@ void Evaluate(const std::string& world, double seconds) {
   options.audio.enabled = false;
   sim::Simulator simulator(sim::LoadSetup(options, ""));
   auto vision = common::LoadOptions<vision_people::VisionPeopleOptions>(
-      std::string(SARMAP_SOURCE_DIR) + "/config/vision_people.yaml", {});
+      std::string(SARMAP_SOURCE_DIR) + "/config/vision_people.yaml", g_overrides);
   vision.robot_config = options.robot_config;
   vision_people::PeopleDetector detector(vision.detector, vision_people::InitialGround(vision),
                                          vision_people::MakeHogClassifier(vision.detector.color));
@@ -53,6 +57,12 @@ void Evaluate(const std::string& world, double seconds) {
     std::vector<Eigen::Vector2d> detections;
     for (const auto& p : result.people) detections.push_back((map_from_camera * p.position_camera).head<2>());
     ++frames;
+    if (g_verbose) {
+      printf("t %5.1f ground n %.3f %.3f %.3f d %.3f refined %d used %d candidates %d people %d\n", t,
+             result.ground.normal.x(), result.ground.normal.y(), result.ground.normal.z(),
+             result.ground.offset, result.stats.ground_refined, result.stats.num_ground_voxels,
+             result.stats.num_candidates, static_cast<int>(result.people.size()));
+    }
     const auto& people = simulator.world().people;
     std::vector<bool> used(detections.size(), false);
     for (size_t i = 0; i < people.size() && i < view.person_box.size(); ++i) {
@@ -64,10 +74,37 @@ void Evaluate(const std::string& world, double seconds) {
       }
       if (!whole) continue;
       ++visible;
+      bool hit = false;
       for (const auto& d : detections) {
         if ((d - people[i].position).norm() <= 0.5) {
-          ++found;
+          hit = true;
           break;
+        }
+      }
+      found += hit;
+      if (g_verbose) {
+        // Nearest candidate (accepted or rejected) to this person: where was it lost?
+        const vision_people::PersonCandidate* best = nullptr;
+        double best_d = 1e9;
+        for (const auto* list : {&result.people, &result.rejected}) {
+          for (const auto& c : *list) {
+            const double dd = ((map_from_camera * c.position_camera).head<2>() - people[i].position).norm();
+            if (dd < best_d) { best_d = dd; best = &c; }
+          }
+        }
+        const double range = (people[i].position - map_from_camera.translation().head<2>()).norm();
+        printf("  t %5.1f person %zu range %.2f px %5d box %3d %3d %3d %3d %s", t, i, range,
+               view.person_pixels[i], box[0], box[1], box[2], box[3], hit ? "FOUND" : "lost ");
+        if (best) {
+          printf(" cand d %.2f H %.2f bot %.2f w %.2f dep %.2f headw %.2f prom %.2f ratio %.2f fill %.2f vis %.2f trunc %d depth %.2f hog %d %.2f conf %.2f acc %d\n",
+                 best_d, best->height_m, best->bottom_m, best->width_m, best->depth_extent_m,
+                 best->head_width_m, best->head_prominence_m,
+                 best->shoulder_area_m2 > 0 ? best->head_area_m2 / best->shoulder_area_m2 : 1.0,
+                 best->fill, best->visible_fraction, best->truncated_top, best->depth_score,
+                 best->hog_used, best->hog_score, best->confidence, best->accepted);
+        } else {
+          printf(" no candidate (clusters %d, ground refined %d)\n", result.stats.num_clusters,
+                 result.stats.ground_refined);
         }
       }
     }
@@ -80,7 +117,18 @@ void Evaluate(const std::string& world, double seconds) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--verbose") {
+      g_verbose = true;
+    } else if (arg == "--set" && i + 1 < argc) {
+      g_overrides.push_back(argv[++i]);
+    } else {
+      fprintf(stderr, "usage: bench_sim_vision [--verbose] [--set key=value]...\n");
+      return 2;
+    }
+  }
   Evaluate("lab_lit", 40.0);
   Evaluate("lab_dark", 40.0);
   return 0;
