@@ -756,12 +756,34 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
     }
     if (patch_ok) {
-      c.hog_used = true;
-      c.hog_score = hog_->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center,
-                                v_top, v_foot, co.search_steps);
-      const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
-      c.confidence = co.color_weight * p_hog + (1.0 - co.color_weight) * loose_score;
-      c.accepted = loose_score >= co.min_depth_score && c.confidence >= co.accept;
+      // Fusion: confidence = w p_hog + (1 - w) loose_score, accepted at co.accept, so a
+      // candidate the depth shape supports needs only a weak colour cue (with loose_score 1:
+      // p_hog >= 1/6, an SVM margin of -1.6) and HOG vetoes only when it is sure. The HOG
+      // score that decides is p_needed's; HOG is skipped when no score could accept, and the
+      // window search around the theoretical box (scale and offset errors of the box: range
+      // noise, a person not upright) runs only when the centre window falls short. The
+      // decision equals that of a full search; the confidence of an accepted candidate is
+      // then a lower bound.
+      const double w = co.color_weight;
+      const double p_needed = w > 0 ? (co.accept - (1.0 - w) * loose_score) / w : 0.0;
+      if (loose_score < co.min_depth_score || p_needed >= 1.0) {
+        c.confidence = (1.0 - w) * loose_score;  // colour cue not evaluated: counted as 0
+        c.accepted = false;
+      } else {
+        const double hog_needed =
+            p_needed <= 0.0 ? -std::numeric_limits<double>::infinity()
+                            : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
+        c.hog_used = true;
+        c.hog_score = hog_->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center,
+                                  v_top, v_foot, 0);
+        if (c.hog_score < hog_needed && co.search_steps > 0) {
+          c.hog_score = std::max(c.hog_score, hog_->Score(frame.rgb.data(), frame.width, frame.height,
+                                                          c.box_u_center, v_top, v_foot, co.search_steps));
+        }
+        const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
+        c.confidence = w * p_hog + (1.0 - w) * loose_score;
+        c.accepted = c.confidence >= co.accept;
+      }
     } else {
       c.depth_only = true;
       c.confidence = c.depth_score;

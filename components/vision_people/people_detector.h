@@ -146,7 +146,7 @@ struct ColorOptions {
       "../shared/data/vision/pcl_people/trainedLinearSVMForPeopleDetectionWithHOG.yaml";
   double hog_threshold = 0.0;   // SVM score at which the colour cue is 50/50
   double hog_scale = 1.0;       // SVM score units per logistic unit
-  int search_steps = 0;         // +-steps of 1/8 window in x and y and one scale step each way
+  int search_steps = 1;         // +-steps of 1/8 window in x and y and one scale step each way
   double dark_mean = 25;        // grey mean below this: too dark for colour (0..255)
   double min_contrast = 10;     // grey standard deviation below this: no contrast
   double max_saturated = 0.5;   // fraction of pixels >= 250: glare

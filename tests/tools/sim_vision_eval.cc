@@ -109,6 +109,22 @@ void Evaluate(const std::string& world, double seconds) {
       }
     }
     for (bool u : used) false_positives += u ? 0 : 1;
+    if (g_verbose) {
+      // Candidates that are nobody (accepted: false positives; rejected: correctly refused).
+      for (const auto* list : {&result.people, &result.rejected}) {
+        for (const auto& c : *list) {
+          const Eigen::Vector2d xy = (map_from_camera * c.position_camera).head<2>();
+          bool person = false;
+          for (const auto& p : people) person = person || (xy - p.position).norm() <= 0.5;
+          if (person) continue;
+          printf("  t %5.1f other at %.2f %.2f %s H %.2f bot %.2f w %.2f dep %.2f headw %.2f prom %.2f fill %.2f vis %.2f trunc %d depth %.2f hog %d %.2f conf %.2f\n",
+                 t, xy.x(), xy.y(), c.accepted ? "FALSE-POSITIVE" : "rejected", c.height_m, c.bottom_m,
+                 c.width_m, c.depth_extent_m, c.head_width_m, c.head_prominence_m, c.fill,
+                 c.visible_fraction, c.truncated_top, c.depth_score, c.hog_used, c.hog_score,
+                 c.confidence);
+        }
+      }
+    }
   }
   printf("%-10s frames %3d  fully visible person-frames %3d  found %3d  frame recall %.3f  false positives/frame %.3f\n",
          world.c_str(), frames, visible, found, visible ? static_cast<double>(found) / visible : 0.0,
