@@ -710,6 +710,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
     // surface has the same footprint at every height).
     const double m_head = Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+                          (1.0 - Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
                           (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
                           (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
     const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);

@@ -109,6 +109,7 @@ struct DepthShapeOptions {
   double head_radius_m = 0.18;        // beyond this from the top point (on the floor) ...
   double head_depth_m = 0.12;         // (plus this along the viewing ray) ...
   double min_head_prominence_m = 0.15;  // ... everything is at least this much lower
+  double max_head_prominence_m = 0.5;   // ... but not this much: shoulders are near
   double min_fill = 0.6;           // occupied fraction of the height column
   double accept = 0.5;             // depth-only decision threshold on the shape score
   template <class V>
@@ -127,6 +128,7 @@ struct DepthShapeOptions {
     v("head_radius_m", head_radius_m, "points farther than this from the top (on the floor, across the viewing ray) are not head");
     v("head_depth_m", head_depth_m, "along the viewing ray the head reaches head_radius_m + this (its side, range noise)");
     v("min_head_prominence_m", min_head_prominence_m, "the top must stand this far above all non-head points (-0.06 m: zero)");
+    v("max_head_prominence_m", max_head_prominence_m, "... and at most this far: a person's shoulders are there (+0.1 m: zero; a pole or a sliver of furniture has none)");
     v("max_head_width_m", max_head_width_m, "widest head across the viewing ray (+0.15 m: zero)");
     v("min_fill", min_fill, "smallest occupied fraction of the 6 cm height slices");
     v("accept", accept, "depth-only: accept when the shape score reaches this");

@@ -1,0 +1,48 @@
+#pragma once
+// The people detector (components/vision_people) on the simulator's lab (issue 7's simulated
+// acceptance), shared by bench_sim_vision (prints) and sim_vision_test (asserts).
+//
+// Frames are rendered every step_s along the world's scripted robot path. A person counts as
+// fully visible when at least 1500 of its body pixels are in the depth image and its box does
+// not touch the image border; it is found when a detection lies within 0.5 m of it on the
+// floor (map frame). A detection within 0.5 m of no person is a false positive.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sarmap {
+namespace sim_vision {
+
+struct EvalOptions {
+  std::string world = "lab_lit";     // config/worlds/<world>.yaml
+  double seconds = 40.0;             // simulated time covered
+  double step_s = 0.5;               // between evaluated frames
+  int64_t seed = 1;                  // simulator noise
+  std::vector<std::string> overrides;  // key=value on config/vision_people.yaml
+  bool verbose = false;              // per person and per non-person candidate lines
+};
+
+struct Figures {
+  int frames = 0;
+  int visible = 0;          // fully visible person-frames
+  int found = 0;            // ... with a detection in that frame
+  int false_positives = 0;  // detections near nobody, over all frames
+  // The same after the node's k-of-n confirmation run on these frames (step_s apart, so a
+  // track needs k * step_s of simulated time, not k camera frames).
+  int confirm_k = 0, confirm_n = 0;
+  int confirmed_found = 0;
+  int confirmed_false_positives = 0;
+  double detect_cpu_ms_mean = 0, detect_cpu_ms_max = 0;  // PeopleDetector::Detect, CPU time
+  double recall() const { return visible ? static_cast<double>(found) / visible : 0.0; }
+  double fp_per_frame() const { return frames ? static_cast<double>(false_positives) / frames : 0.0; }
+  double confirmed_recall() const { return visible ? static_cast<double>(confirmed_found) / visible : 0.0; }
+  double confirmed_fp_per_frame() const {
+    return frames ? static_cast<double>(confirmed_false_positives) / frames : 0.0;
+  }
+};
+
+// Runs one world. Throws on a bad world or options file.
+Figures Evaluate(const EvalOptions& options);
+
+}  // namespace sim_vision
+}  // namespace sarmap
