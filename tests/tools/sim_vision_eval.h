@@ -3,8 +3,9 @@
 // acceptance), shared by bench_sim_vision (prints) and sim_vision_test (asserts).
 //
 // Frames are rendered every step_s along the world's scripted robot path. A person counts as
-// fully visible when at least 1500 of its body pixels are in the depth image and its box does
-// not touch the image border; it is found when a detection lies within 0.5 m of it on the
+// fully visible when at least 1500 of its body pixels are in the depth image, its box does
+// not touch the image border and it stands within the camera's depth range (4.6 m, floor
+// distance from the camera to the person's centre); it is found when a detection lies within 0.5 m of it on the
 // floor (map frame). A detection within 0.5 m of no person is a false positive.
 #include <cstdint>
 #include <string>

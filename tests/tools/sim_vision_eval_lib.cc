@@ -108,8 +108,11 @@ Figures Evaluate(const EvalOptions& eval) {
     std::vector<bool> whole(people.size(), false);
     for (size_t i = 0; i < people.size() && i < view.person_box.size(); ++i) {
       const auto& box = view.person_box[i];  // x0 y0 x1 y1
+      // The simulator counts body pixels before its depth range cut: a person beyond the
+      // Kinect's range (corridor_glass) is in view but has no depth at all.
+      const double range = (people[i].position - map_from_camera.translation().head<2>()).norm();
       whole[i] = view.person_pixels[i] >= 1500 && box[0] > 2 && box[1] > 2 && box[2] < view.width - 3 &&
-                 box[3] < view.height - 3;
+                 box[3] < view.height - 3 && range <= options.camera.max_range_m;
       fig.visible += whole[i];
     }
     std::vector<Eigen::Vector2d> detections, confirmed;
