@@ -113,12 +113,13 @@ if [ "${DEMO_KILL:-}" = 1 ]; then
   (
     victims=(sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people
              sarmap-sound-map sarmap-people-map)
-    for _ in $(seq 300); do pgrep -x sarmap-sim >/dev/null && break; sleep 0.2; done
+    running() { pgrep -f "(^|/)$1( |\$)" | head -1; }   # (names are longer than pgrep -x sees)
+    for _ in $(seq 300); do [ -n "$(running sarmap-sim)" ] && break; sleep 0.2; done
     gap=$(( DEMO_SECONDS / (${#victims[@]} + 2) ))
     [ "$gap" -ge 2 ] || gap=2
     for v in "${victims[@]}"; do
       sleep "$gap"
-      pid="$(pgrep -x "$v" | head -1 || true)"
+      pid="$(running "$v" || true)"
       if [ -n "$pid" ]; then
         kill -KILL "$pid" && echo "$(date +%T) kill -9 $v (pid $pid)"
       else
