@@ -72,34 +72,17 @@ if [ "$computers" = 1 ]; then
 else
   pmd="$root/launch-scripts/demo-two-computers.pmd"
   namespaces=()
-  cleanup_netns() {
-    stop_all
-    for ns in "${namespaces[@]}"; do
-      for p in $(ip netns pids "$ns" 2>/dev/null); do kill -KILL "$p" 2>/dev/null || true; done
-      ip netns del "$ns" 2>/dev/null || true
-    done
-  }
+  # shellcheck source=../tests/harness/netns-hosts.sh
+  source "$root/tests/harness/netns-hosts.sh"
+  cleanup_netns() { stop_all; netns_remove_hosts "${namespaces[@]}"; }
   trap cleanup_netns EXIT
   # The robot's network: a bridge here (where the sheriff runs), one veth pair per computer.
-  mkdir -p /run/netns && mount -t tmpfs tmpfs /run/netns
-  ip link add br0 type bridge
-  ip link set br0 type bridge mcast_snooping 0   # flood multicast to every port (no querier)
-  ip addr add 10.77.0.1/24 dev br0
-  ip link set br0 up
-  ip route replace 224.0.0.0/4 dev br0
+  netns_bridge_up || { echo "demo: cannot create network namespaces and a bridge here"; exit 1; }
   export SARMAP_LCM_URL="udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608"
   i=2
   for id in sensors compute; do
     ns="demo-$id"
-    ip netns add "$ns"; namespaces+=("$ns")
-    ip link add "vp$i" type veth peer name eth0 netns "$ns"
-    ip link set "vp$i" master br0
-    ip link set "vp$i" up
-    ip -n "$ns" link set lo up
-    ip -n "$ns" addr add "10.77.0.$i/24" dev eth0
-    ip -n "$ns" link set eth0 up
-    ip -n "$ns" link set eth0 multicast on
-    ip -n "$ns" route add 224.0.0.0/4 dev eth0
+    netns_add_host "$ns" "$i"; namespaces+=("$ns")
     (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --set "state_dir=$out") \
       >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
     echo "   computer '$id': network namespace $ns, 10.77.0.$i"
