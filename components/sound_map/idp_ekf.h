@@ -67,6 +67,8 @@ class IdpEkf {
   double UpdateSource(int64_t id, const Eigen::VectorXd& z, const Eigen::MatrixXd& r,
                       double gate = 0);
   void RemoveSource(int64_t id);
+  // Drops an anchor no source uses any more (no-op if a source still uses it).
+  void RemoveAnchor(int64_t id);
 
   // Back-propagation from the localisation map (eqs. 4.20-4.25). The shared part x_C is the
   // current pose and the listed anchors (those this map holds); `covariance` is the joint
@@ -110,6 +112,7 @@ class IdpEkf {
   void SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,
                       std::vector<int>* cols) const;
   void WrapAngles();
+  void RemoveBlock(int i, int n);
 
   Options options_;
   Eigen::VectorXd x_;
