@@ -41,7 +41,10 @@ void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matri
     const double sy = options_.motion_noise_rad_per_m * dist + options_.motion_noise_rad_per_rad * std::abs(delta.yaw) + 1e-5;
     ekf_.Predict(delta, Eigen::Vector3d(sp * sp, sp * sp, sy * sy).asDiagonal());
     ekf_.SetCurrentMean(pose);
+    const double dt = (utime - last_pose_utime_) * 1e-6;
+    if (dt > 1e-3) turn_rate_rad_per_s_ = std::abs(delta.yaw) / dt;
   }
+  last_pose_utime_ = utime;
   last_pose_ = pose;
   last_node_id_ = node_id;
   Prune(utime);
@@ -127,6 +130,11 @@ void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::
     }
     if (!have_pose_) {
       ++counters_.doa_before_pose;
+      continue;
+    }
+    if (options_.max_turn_rate_deg_per_s > 0 &&
+        turn_rate_rad_per_s_ > options_.max_turn_rate_deg_per_s * M_PI / 180) {
+      ++counters_.doa_while_turning;
       continue;
     }
     if (obs.mirrored) ++counters_.doa_angle_1d;

@@ -60,6 +60,10 @@ struct OnlineSoundMapOptions {
   // is +angle or -angle. Both mirror sources are born; a mirror that misses this many
   // consecutive DOAs its twin explains is removed.
   int mirror_prune_misses = 3;
+  // DOAs come from analysis windows of a few hundred ms, smoothed by the localiser's tracker:
+  // while the robot turns fast they lag its heading by tens of degrees. They are dropped when
+  // the heading changed faster than this between the last two poses (0: keep all).
+  double max_turn_rate_deg_per_s = 10.0;
   template <class V>
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
@@ -81,6 +85,8 @@ struct OnlineSoundMapOptions {
     v("birth_drift_deg_per_s", birth_drift_deg_per_s, "bearing drift allowed between DOAs of a tentative source");
     v("prune_after_s", prune_after_s, "an unconverged source with little support is removed after this silence");
     v("prune_min_observations", prune_min_observations, "sources with at least this many DOAs are never pruned");
+    v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
+      "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
     v("mirror_prune_misses", mirror_prune_misses,
       "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
   }
@@ -103,6 +109,7 @@ struct OnlineSoundMapOptions {
     check.NonNegative("birth_drift_deg_per_s", birth_drift_deg_per_s);
     check.Positive("prune_after_s", prune_after_s);
     check.NonNegative("prune_min_observations", prune_min_observations);
+    check.NonNegative("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s);
     check.That(mirror_prune_misses >= 1, "mirror_prune_misses", "must be at least 1");
   }
 };
@@ -132,7 +139,7 @@ class OnlineSoundMap {
     int64_t doa_unsupported_kind = 0, doa_before_pose = 0, back_propagations = 0, bad_anchors = 0;
     int64_t bad_poses = 0;
     int64_t doa_tentative = 0, tentatives_expired = 0, sources_pruned = 0, mirrors_pruned = 0;
-    int64_t doa_angle_1d = 0;
+    int64_t doa_angle_1d = 0, doa_while_turning = 0;
   };
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
@@ -195,6 +202,8 @@ class OnlineSoundMap {
   SourceAssociator associator_;
   bool have_pose_ = false;
   Pose2 last_pose_;
+  int64_t last_pose_utime_ = 0;
+  double turn_rate_rad_per_s_ = 0;  // between the last two poses
   int64_t last_node_id_ = -1;
   int64_t next_local_anchor_ = -2;  // anchors without a SLAM node: negative ids
   int64_t next_source_id_ = 1;
