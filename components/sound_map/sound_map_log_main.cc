@@ -71,6 +71,8 @@ int main(int argc, char** argv) {
     std::map<int64_t, Pose2> truth_poses;  // world_from_base by utime
     std::map<int64_t, Pose2> slam_poses;   // map_from_base by utime
     std::vector<std::pair<int64_t, sarmap::doa_t>> doa_log;
+    sarmap::sound_map_t live;  // the last SOUND_MAP the running node published, if logged
+    int64_t live_msgs = 0;
     int64_t doa_msgs = 0, doa_sources = 0, max_track = -1, first_utime = -1;
     std::map<int, int64_t> kinds;
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
@@ -113,6 +115,12 @@ int main(int argc, char** argv) {
         inputs.emplace(m.header.utime, [&map, device, tracks] {
           for (int64_t tr : tracks) map.OnHeardPerson(device, tr);
         });
+      } else if (e->channel == options.sound_map_channel) {
+        sarmap::sound_map_t m;
+        if (Decode(*e, &m)) {
+          live = m;
+          ++live_msgs;
+        }
       } else if (e->channel == truth_channel) {
         sarmap::sim_truth_t m;
         if (!Decode(*e, &m)) continue;
@@ -261,6 +269,27 @@ int main(int argc, char** argv) {
     for (const auto& k : kinds) printf(" kind %d: %ld", k.first, static_cast<long>(k.second));
     printf(" ), largest DOA track id %ld%s\n", static_cast<long>(max_track), no_anchors ? ", SLAM_ANCHORS ignored" : "");
     report(last, true);
+    if (live_msgs > 0) {
+      int converged = 0;
+      int64_t max_id = 0;
+      for (const auto& s : live.sources) {
+        converged += s.state == sarmap::sound_source_t::STATE_CONVERGED;
+        max_id = std::max(max_id, s.id);
+      }
+      printf("logged %s (the live node, %ld messages): last has %d sources (%d converged), largest id %ld\n",
+             options.sound_map_channel.c_str(), static_cast<long>(live_msgs), live.num_sources, converged,
+             static_cast<long>(max_id));
+      for (const auto& ts : truth.sources) {
+        const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
+        double best = std::numeric_limits<double>::infinity(), best_conv = best;
+        for (const auto& s : live.sources) {
+          const double d = (to_world(Eigen::Vector3d(s.position_m[0], s.position_m[1], 0)) - p).norm();
+          best = std::min(best, d);
+          if (s.state == sarmap::sound_source_t::STATE_CONVERGED) best_conv = std::min(best_conv, d);
+        }
+        printf("  truth %-18s nearest live source %.3f m, nearest converged %.3f m\n", ts.name.c_str(), best, best_conv);
+      }
+    }
     return 0;
   });
 }
