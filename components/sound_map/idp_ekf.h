@@ -91,6 +91,12 @@ class IdpEkf {
   // whose inverse depth is not positive are reported at 1/1e-3 m along the ray.
   void SourcePoint(int64_t id, Eigen::Vector3d* point, Eigen::Matrix3d* covariance) const;
   int64_t source_anchor(int64_t id) const { return sources_.at(id).anchor; }
+  // Inverse depth rho of a source (1/m) and its variance.
+  void SourceInverseDepth(int64_t id, double* rho, double* variance) const {
+    const int i = sources_.at(id).index + source_dim() - 1;
+    *rho = x_[i];
+    *variance = p_(i, i);
+  }
   std::vector<int64_t> source_ids() const;
   std::vector<int64_t> anchor_ids() const;
   int dim() const { return static_cast<int>(x_.size()); }

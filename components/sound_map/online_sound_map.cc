@@ -334,7 +334,16 @@ void OnlineSoundMap::Prune(int64_t utime) {
   std::vector<int64_t> drop;
   for (int64_t id : ekf_.source_ids()) {
     const Meta& m = meta_[id];
-    if (m.n < options_.prune_min_observations && utime - m.last > after && !Converged(id)) drop.push_back(id);
+    if (m.n < options_.prune_min_observations && utime - m.last > after && !Converged(id)) {
+      drop.push_back(id);
+      continue;
+    }
+    double rho = 0, var = 0;
+    ekf_.SourceInverseDepth(id, &rho, &var);
+    if (options_.prune_behind_sigmas > 0 && rho < -options_.prune_behind_sigmas * std::sqrt(std::max(0.0, var))) {
+      drop.push_back(id);
+      ++counters_.sources_behind;
+    }
   }
   for (int64_t id : drop) {
     Remove(id);

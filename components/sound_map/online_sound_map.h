@@ -56,6 +56,10 @@ struct OnlineSoundMapOptions {
   // not heard for prune_after_s is removed (it never got support).
   double prune_after_s = 10.0;
   int prune_min_observations = 10;
+  // A source whose inverse depth is negative by more than this many standard deviations lies
+  // behind its anchor: its bearings do not meet at one point (a mixture of a source and its
+  // reflection, or a moving source). It is removed (0: never).
+  double prune_behind_sigmas = 3.0;
   // Linear arrays (KIND_ANGLE_1D, angle to the array axis = mic_array x): the planar bearing
   // is +angle or -angle. Both mirror sources are born; a mirror that misses this many
   // consecutive DOAs its twin explains is removed.
@@ -85,6 +89,8 @@ struct OnlineSoundMapOptions {
     v("birth_drift_deg_per_s", birth_drift_deg_per_s, "bearing drift allowed between DOAs of a tentative source");
     v("prune_after_s", prune_after_s, "an unconverged source with little support is removed after this silence");
     v("prune_min_observations", prune_min_observations, "sources with at least this many DOAs are never pruned");
+    v("prune_behind_sigmas", prune_behind_sigmas,
+      "remove a source whose inverse depth is below zero by this many standard deviations (0: never)");
     v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
       "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
     v("mirror_prune_misses", mirror_prune_misses,
@@ -109,6 +115,7 @@ struct OnlineSoundMapOptions {
     check.NonNegative("birth_drift_deg_per_s", birth_drift_deg_per_s);
     check.Positive("prune_after_s", prune_after_s);
     check.NonNegative("prune_min_observations", prune_min_observations);
+    check.NonNegative("prune_behind_sigmas", prune_behind_sigmas);
     check.NonNegative("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s);
     check.That(mirror_prune_misses >= 1, "mirror_prune_misses", "must be at least 1");
   }
@@ -139,7 +146,7 @@ class OnlineSoundMap {
     int64_t doa_unsupported_kind = 0, doa_before_pose = 0, back_propagations = 0, bad_anchors = 0;
     int64_t bad_poses = 0;
     int64_t doa_tentative = 0, tentatives_expired = 0, sources_pruned = 0, mirrors_pruned = 0;
-    int64_t doa_angle_1d = 0, doa_while_turning = 0;
+    int64_t doa_angle_1d = 0, doa_while_turning = 0, sources_behind = 0;
   };
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
