@@ -183,7 +183,9 @@ int main(int argc, char** argv) {
           double best = 1e9, signed_best = 0;
           std::string name;
           for (const auto& ts : truth.sources) {
-            const double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
+            double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
+            // Linear arrays: the angle to the array's x axis (0..pi), in the plane |bearing|.
+            if (s.kind == sarmap::doa_source_t::KIND_ANGLE_1D) b = std::abs(sarmap::sound_map::WrapAngleD(b));
             const double se = sarmap::sound_map::WrapAngleD(s.azimuth_rad - b) * 180 / M_PI;
             if (std::abs(se) < best) {
               best = std::abs(se);
