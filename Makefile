@@ -18,6 +18,10 @@ PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
 # Java types for lcm-spy: installed when available, never required.
 OPTIONAL_PACKAGES = liblcm-java default-jdk-headless
 
+# ccache hits across clones in different directories (CI builds a fresh clone).
+export CCACHE_BASEDIR := $(CURDIR)
+export CCACHE_NOHASHDIR := 1
+
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: all deps configure build test bench demo format clean help

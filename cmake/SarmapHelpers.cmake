@@ -12,8 +12,10 @@ function(sarmap_add_gtest name)
   target_compile_definitions(${name} PRIVATE
     SARMAP_DATA_DIR="${SARMAP_DATA_DIR}" SARMAP_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     SARMAP_BIN_DIR="${CMAKE_BINARY_DIR}/bin")
+  # A list value must be escaped to survive gtest_discover_tests' own argument parsing.
+  string(REPLACE ";" "\\;" labels "unit;${ARG_LABELS}")
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST
-    PROPERTIES LABELS "unit;${ARG_LABELS}" TIMEOUT 300)
+    PROPERTIES LABELS "${labels}" TIMEOUT 300)
 endfunction()
 
 # sarmap_add_netns_test(NAME COMMAND cmd args... [TIMEOUT s])
@@ -29,8 +31,9 @@ function(sarmap_add_netns_test name)
     ENVIRONMENT "SARMAP_BIN_DIR=${CMAKE_BINARY_DIR}/bin;SARMAP_SOURCE_DIR=${PROJECT_SOURCE_DIR};SARMAP_DATA_DIR=${SARMAP_DATA_DIR}")
 endfunction()
 
-# sarmap_add_bench(NAME SOURCES ... LIBS ... [NETNS] [ARGS ...])
-# A benchmark binary; `make bench` (the `bench` target) builds and runs all of them.
+# sarmap_add_bench(NAME SOURCES ... LIBS ... [GBENCH] [NETNS] [ARGS ...])
+# A benchmark binary. `run_NAME` runs it alone; `bench` (make bench) runs all of them, one
+# after another so that they do not share the two cores.
 function(sarmap_add_bench name)
   cmake_parse_arguments(ARG "NETNS;GBENCH" "" "SOURCES;LIBS;ARGS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
@@ -45,26 +48,24 @@ function(sarmap_add_bench name)
   if(ARG_NETNS)
     set(cmd ${SARMAP_NETNS} ${cmd})
   endif()
-  set_property(GLOBAL APPEND PROPERTY SARMAP_BENCH_TARGETS ${name})
   add_custom_target(run_${name}
     COMMAND ${CMAKE_COMMAND} -E echo "=== ${name}"
     COMMAND ${CMAKE_COMMAND} -E env SARMAP_BIN_DIR=${CMAKE_BINARY_DIR}/bin ${cmd}
     DEPENDS ${name} USES_TERMINAL VERBATIM)
-  set_property(GLOBAL APPEND PROPERTY SARMAP_BENCH_RUNS run_${name})
+  set_property(GLOBAL APPEND PROPERTY SARMAP_BENCH_TARGETS ${name})
+  set_property(GLOBAL PROPERTY SARMAP_BENCH_CMD_${name} ${cmd})
 endfunction()
 
 function(sarmap_finalize_bench_target)
-  get_property(runs GLOBAL PROPERTY SARMAP_BENCH_RUNS)
-  add_custom_target(bench)
-  # Run one after another: benchmarks must not share the two cores with each other.
-  set(prev "")
-  foreach(r ${runs})
-    if(prev)
-      add_dependencies(${r} ${prev})
-    endif()
-    set(prev ${r})
+  get_property(names GLOBAL PROPERTY SARMAP_BENCH_TARGETS)
+  set(commands "")
+  foreach(name ${names})
+    get_property(cmd GLOBAL PROPERTY SARMAP_BENCH_CMD_${name})
+    list(APPEND commands COMMAND ${CMAKE_COMMAND} -E echo "=== ${name}"
+                         COMMAND ${CMAKE_COMMAND} -E env SARMAP_BIN_DIR=${CMAKE_BINARY_DIR}/bin ${cmd})
   endforeach()
-  if(prev)
-    add_dependencies(bench ${prev})
+  add_custom_target(bench ${commands} USES_TERMINAL VERBATIM)
+  if(names)
+    add_dependencies(bench ${names})
   endif()
 endfunction()

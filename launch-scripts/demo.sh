@@ -1,13 +1,25 @@
 #!/usr/bin/env bash
-# make demo: runs what exists of the stack end to end, records the LCM log, reports on it,
-# and says what is still missing. Runs inside a private network namespace when it can, so
-# the demo's multicast stays on this machine.
+# make demo: a simulated mission end to end under the launcher. Starts a procman deputy, has
+# the sheriff run the "mission" script of launch-scripts/demo.pmd (recorder, mapping,
+# perception, then the simulator; everything stopped when the simulator ends), then writes
+# the mission report and the stack's CPU and latency figures, and prints who was found and how.
+# Runs inside a private network namespace when it can, so the demo's multicast stays here.
 #
 #   launch-scripts/demo.sh [BUILD_DIR]
+#   env: DEMO_WORLD   world file (default config/worlds/lab_dark.yaml)
+#        DEMO_SECONDS simulated seconds (default 90)
+#        DEMO_KILL=1  kill -9 each process of the stack once, in turn, mid-mission: the launcher
+#                     respawns it and the report must not lose anyone
+#        DEMO_OUT     output folder (default out/demo-DATE)
+#        DEMO_COMPUTERS=2  two computers: deputies "sensors" and "compute" in two network
+#                     namespaces joined by a bridge, LCM at ttl=1 between them, the sheriff in a
+#                     third (launch-scripts/demo-two-computers.pmd); needs root or user namespaces
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$(cd "${1:-$root/build}" && pwd)"
 bin="$build/bin"
+export DEMO_WORLD="${DEMO_WORLD:-$root/config/worlds/lab_dark.yaml}"
+export DEMO_SECONDS="${DEMO_SECONDS:-90}"
 
 if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   if "$root/tests/harness/sarmap-netns" true 2>/dev/null; then
@@ -16,46 +28,125 @@ if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   echo "demo: no private network namespace available; using host-local multicast (ttl=0)"
 fi
 
-out="$root/out/demo-$(date +%Y%m%d-%H%M%S)"
-mkdir -p "$out"
-log="$out/demo.lcmlog"
-pids=()
-cleanup() { for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
-trap cleanup EXIT
+computers="${DEMO_COMPUTERS:-1}"
+case "$computers" in 1|2) ;; *) echo "demo: DEMO_COMPUTERS must be 1 or 2"; exit 2 ;; esac
+if [ "$computers" = 2 ] && [ -z "${DEMO_MOUNT_NS:-}" ]; then
+  [ -n "${SARMAP_NETNS:-}" ] || { echo "demo: two computers need a private network namespace (root or user namespaces)"; exit 1; }
+  # A private mount namespace for /run/netns, so the demo's namespaces never meet anyone else's.
+  export DEMO_MOUNT_NS=1
+  exec unshare --mount --propagation private -- "$0" "$build"
+fi
 
-echo "== sarmap demo: output in $out"
-stack=(sarmap-sim sarmap-depth sarmap-audio-capture sarmap-sound-localisation sarmap-speech
-       sarmap-vision-people sarmap-slam sarmap-sound-map sarmap-people-map sarmap-explore
-       sarmap-viewer sarmap-procman sarmap-procman-deputy)
-present=(); missing=()
-for p in "${stack[@]}"; do
-  if [ -x "$bin/$p" ]; then present+=("$p"); else missing+=("$p"); fi
+for program in sarmap-sim sarmap-procman sarmap-procman-deputy sarmap-log-record sarmap-log-report; do
+  [ -x "$bin/$program" ] || { echo "demo: $bin/$program is not built (run make build)"; exit 1; }
 done
-echo "   built:   ${present[*]:-none of the stack yet} (plus sarmap-monitor, sarmap-log)"
-echo "   missing: ${missing[*]:-nothing}"
+case "$DEMO_WORLD" in /*) ;; *) DEMO_WORLD="$root/$DEMO_WORLD" ;; esac
+[ -f "$DEMO_WORLD" ] || { echo "demo: no world file $DEMO_WORLD"; exit 1; }
 
-"$bin/sarmap-log-record" -o "$log" --force >"$out/logger.txt" 2>&1 & pids+=($!)
-"$bin/sarmap-monitor" --set print_period_s=2 >"$out/monitor.txt" 2>&1 & pids+=($!)
-sleep 0.5
+export DEMO_OUT="${DEMO_OUT:-$root/out/demo-$(date +%Y%m%d-%H%M%S)}"
+mkdir -p "$DEMO_OUT"
+out="$DEMO_OUT"
+log="$out/demo.lcmlog"
 
-if [ -x "$bin/sarmap-sim" ]; then
-  echo "== running the simulator"
-  "$bin/sarmap-sim" --duration 10 >"$out/sim.txt" 2>&1 || echo "   sarmap-sim failed: see $out/sim.txt"
-else
-  echo "== no simulator yet: streaming 5 s of synthetic 640x480 depth + colour at 30 Hz instead"
-  "$bin/sarmap-test-peer" stream --seconds 5 --rate 30 >"$out/stream.txt" 2>&1
-fi
-sleep 1
-cleanup
+# The launcher obeys only signed orders: a key for this demo only.
+export SARMAP_PROCMAN_KEY="$out/procman.key"
+(umask 077 && head -c 32 /dev/urandom >"$SARMAP_PROCMAN_KEY")
+
 pids=()
+stop_all() {
+  for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done
+  for _ in $(seq 100); do
+    alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
+    [ $alive = 0 ] && break; sleep 0.2
+  done
+  for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null || true; done
+  pids=()
+}
+trap stop_all EXIT
 
-echo "== what the log holds (sarmap-log info)"
-"$bin/sarmap-log" info "$log"
-echo
-echo "== last monitor table"
-awk '/^channel/{block=""} /^channel/,/^$/{block=block $0 "\n"} END{printf "%s", block}' "$out/monitor.txt"
-echo
-echo "demo finished. Log: $log"
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "Still missing from the full mission (see the open issues): ${missing[*]}"
+echo "== sarmap demo: $(basename "$DEMO_WORLD"), ${DEMO_SECONDS} s simulated, $computers computer(s); output in $out"
+pmd="$root/launch-scripts/demo.pmd"
+if [ "$computers" = 1 ]; then
+  (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost --set "state_dir=$out") \
+    >"$out/deputy.txt" 2>&1 & pids+=($!)
+else
+  pmd="$root/launch-scripts/demo-two-computers.pmd"
+  namespaces=()
+  cleanup_netns() {
+    stop_all
+    for ns in "${namespaces[@]}"; do
+      for p in $(ip netns pids "$ns" 2>/dev/null); do kill -KILL "$p" 2>/dev/null || true; done
+      ip netns del "$ns" 2>/dev/null || true
+    done
+  }
+  trap cleanup_netns EXIT
+  # The robot's network: a bridge here (where the sheriff runs), one veth pair per computer.
+  mkdir -p /run/netns && mount -t tmpfs tmpfs /run/netns
+  ip link add br0 type bridge
+  ip link set br0 type bridge mcast_snooping 0   # flood multicast to every port (no querier)
+  ip addr add 10.77.0.1/24 dev br0
+  ip link set br0 up
+  ip route replace 224.0.0.0/4 dev br0
+  export SARMAP_LCM_URL="udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608"
+  i=2
+  for id in sensors compute; do
+    ns="demo-$id"
+    ip netns add "$ns"; namespaces+=("$ns")
+    ip link add "vp$i" type veth peer name eth0 netns "$ns"
+    ip link set "vp$i" master br0
+    ip link set "vp$i" up
+    ip -n "$ns" link set lo up
+    ip -n "$ns" addr add "10.77.0.$i/24" dev eth0
+    ip -n "$ns" link set eth0 up
+    ip -n "$ns" link set eth0 multicast on
+    ip -n "$ns" route add 224.0.0.0/4 dev eth0
+    (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --set "state_dir=$out") \
+      >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
+    echo "   computer '$id': network namespace $ns, 10.77.0.$i"
+    i=$((i + 1))
+  done
 fi
+
+killer_pid=""
+if [ "${DEMO_KILL:-}" = 1 ]; then
+  # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission.
+  (
+    victims=(sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people
+             sarmap-sound-map sarmap-people-map)
+    for _ in $(seq 300); do pgrep -x sarmap-sim >/dev/null && break; sleep 0.2; done
+    gap=$(( DEMO_SECONDS / (${#victims[@]} + 2) ))
+    [ "$gap" -ge 2 ] || gap=2
+    for v in "${victims[@]}"; do
+      sleep "$gap"
+      pid="$(pgrep -x "$v" | head -1 || true)"
+      if [ -n "$pid" ]; then
+        kill -KILL "$pid" && echo "$(date +%T) kill -9 $v (pid $pid)"
+      else
+        echo "$(date +%T) $v not running"
+      fi
+    done
+  ) >"$out/kills.txt" 2>&1 &
+  killer_pid=$!
+fi
+
+echo "== the launcher runs the mission ($(basename "$pmd"), script \"mission\")"
+if ! (cd "$root" && "$bin/sarmap-procman" "$pmd" run mission) >"$out/sheriff.txt" 2>&1; then
+  echo "   the mission script failed: see $out/sheriff.txt"
+  tail -5 "$out/sheriff.txt" | sed 's/^/   /'
+fi
+[ -z "$killer_pid" ] || { wait "$killer_pid" 2>/dev/null || true; sed 's/^/   /' "$out/kills.txt"; }
+stop_all
+if grep -qE "terminate called|Segmentation|Aborted" "$out"/deputy*.txt 2>/dev/null; then
+  echo "   a process crashed: see $out/deputy*.txt"
+fi
+
+echo "== the log (sarmap-log info)"
+"$bin/sarmap-log" info "$log" || true
+echo
+echo "== what the stack cost (sarmap-log perf)"
+"$bin/sarmap-log" perf "$log" | tee "$out/perf.txt" || true
+echo
+echo "== mission report"
+"$bin/sarmap-log" report "$log" -o "$out/report"
+echo
+echo "demo finished: open $out/report/report.html"

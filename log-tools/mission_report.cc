@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <fstream>
 #include <opencv2/core.hpp>
@@ -39,6 +40,7 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
   LcmLogReader reader(log_path);
   LogEvent event;
   int64_t first_us = -1, last_us = 0;
+  std::map<int64_t, Eigen::Vector2d> estimated_by_utime, truth_by_utime;
   while (reader.Next(&event)) {
     ++data.messages;
     if (first_us < 0) first_us = event.timestamp_us;
@@ -49,6 +51,7 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
       if (Decode(event.data, &m)) data.map = std::move(m);
     } else if (type == "pose_t" && event.channel == "POSE") {
       sarmap::pose_t m;
+      if (Decode(event.data, &m)) estimated_by_utime[m.header.utime] = Eigen::Vector2d(m.position_m[0], m.position_m[1]);
       if (Decode(event.data, &m) &&
           (data.trail.empty() || std::hypot(data.trail.back().first - m.position_m[0],
                                             data.trail.back().second - m.position_m[1]) > 0.05)) {
@@ -63,6 +66,7 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
     } else if (type == "sim_truth_t") {
       sarmap::sim_truth_t m;
       if (Decode(event.data, &m)) {
+        truth_by_utime[m.header.utime] = Eigen::Vector2d(m.robot_position_m[0], m.robot_position_m[1]);
         if (data.truth_trail.empty() || std::hypot(data.truth_trail.back().first - m.robot_position_m[0],
                                                    data.truth_trail.back().second - m.robot_position_m[1]) > 0.05) {
           data.truth_trail.emplace_back(m.robot_position_m[0], m.robot_position_m[1]);
@@ -72,12 +76,57 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
     }
   }
   data.duration_s = first_us < 0 ? 0.0 : (last_us - first_us) * 1e-6;
+  // Pair each truth sample with the estimate nearest in time (within 50 ms).
+  for (const auto& [utime, truth] : truth_by_utime) {
+    auto it = estimated_by_utime.lower_bound(utime);
+    const Eigen::Vector2d* best = nullptr;
+    int64_t best_dt = 50'000;
+    for (auto c : {it, it == estimated_by_utime.begin() ? it : std::prev(it)}) {
+      if (c == estimated_by_utime.end()) continue;
+      if (std::llabs(c->first - utime) <= best_dt) {
+        best_dt = std::llabs(c->first - utime);
+        best = &c->second;
+      }
+    }
+    if (best) data.matched_positions.emplace_back(*best, truth);
+  }
   if (problems) {
     for (const auto& p : reader.problems()) {
       problems->push_back("log damaged at byte " + std::to_string(p.file_offset) + ": " + p.what);
     }
   }
   return data;
+}
+
+Eigen::Vector2d Alignment::Apply(const Eigen::Vector2d& truth) const {
+  return Eigen::Rotation2Dd(yaw_rad) * truth + translation;
+}
+
+Alignment AlignTruth(const MissionData& data) {
+  Alignment a;
+  const auto& pairs = data.matched_positions;
+  if (pairs.size() < 3) return a;
+  // Kabsch in 2D: centre both sets, the rotation is atan2 of the cross/dot sums.
+  Eigen::Vector2d mean_est = Eigen::Vector2d::Zero(), mean_truth = Eigen::Vector2d::Zero();
+  for (const auto& [e, t] : pairs) {
+    mean_est += e;
+    mean_truth += t;
+  }
+  mean_est /= pairs.size();
+  mean_truth /= pairs.size();
+  double dot = 0, cross = 0;
+  for (const auto& [e, t] : pairs) {
+    const Eigen::Vector2d de = e - mean_est, dt = t - mean_truth;
+    dot += dt.dot(de);
+    cross += dt.x() * de.y() - dt.y() * de.x();
+  }
+  a.yaw_rad = std::atan2(cross, dot);
+  a.translation = mean_est - Eigen::Rotation2Dd(a.yaw_rad) * mean_truth;
+  a.pairs = static_cast<int>(pairs.size());
+  double sum = 0;
+  for (const auto& [e, t] : pairs) sum += (a.Apply(t) - e).squaredNorm();
+  a.rms_m = std::sqrt(sum / pairs.size());
+  return a;
 }
 
 std::string HowFound(int cues) {
@@ -95,7 +144,10 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
   if (data.people) s.people_found = data.people->num_people;
   if (data.sources) s.sources_mapped = data.sources->num_sources;
   if (!data.truth) return s;
+  s.alignment = AlignTruth(data);
   const auto& truth = data.truth->people;
+  std::vector<Eigen::Vector2d> truth_xy;
+  for (const auto& t : truth) truth_xy.push_back(s.alignment.Apply(Eigen::Vector2d(t.position_m[0], t.position_m[1])));
   std::vector<const sarmap::mapped_person_t*> found;
   if (data.people) {
     for (const auto& p : data.people->people) found.push_back(&p);
@@ -108,8 +160,8 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
   std::vector<Pair> pairs;
   for (size_t t = 0; t < truth.size(); ++t) {
     for (size_t f = 0; f < found.size(); ++f) {
-      const double d = std::hypot(truth[t].position_m[0] - found[f]->position_m[0],
-                                  truth[t].position_m[1] - found[f]->position_m[1]);
+      const double d = std::hypot(truth_xy[t].x() - found[f]->position_m[0],
+                                  truth_xy[t].y() - found[f]->position_m[1]);
       if (d <= match_radius_m) pairs.push_back({d, t, f});
     }
   }
@@ -126,8 +178,8 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
     TruthMatch m;
     m.truth_id = truth[t].id;
     m.name = truth[t].name;
-    m.x_m = truth[t].position_m[0];
-    m.y_m = truth[t].position_m[1];
+    m.x_m = truth_xy[t].x();  // in the estimated map frame
+    m.y_m = truth_xy[t].y();
     if (truth_to[t] >= 0) {
       const auto* p = found[truth_to[t]];
       m.found = true;
@@ -209,8 +261,9 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     }
   }
   for (size_t i = 1; i < data.truth_trail.size(); ++i) {
-    cv::line(c.image, c.P(data.truth_trail[i - 1].first, data.truth_trail[i - 1].second),
-             c.P(data.truth_trail[i].first, data.truth_trail[i].second), cv::Scalar(160, 160, 160), 1, cv::LINE_AA);
+    const Eigen::Vector2d a = summary.alignment.Apply({data.truth_trail[i - 1].first, data.truth_trail[i - 1].second});
+    const Eigen::Vector2d b = summary.alignment.Apply({data.truth_trail[i].first, data.truth_trail[i].second});
+    cv::line(c.image, c.P(a.x(), a.y()), c.P(b.x(), b.y()), cv::Scalar(160, 160, 160), 1, cv::LINE_AA);
   }
   for (size_t i = 1; i < data.trail.size(); ++i) {
     cv::line(c.image, c.P(data.trail[i - 1].first, data.trail[i - 1].second),
@@ -293,6 +346,9 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
     snprintf(line, sizeof(line), "against the simulator's truth: %d of %zu people found within %.2f m, %d false\n",
              found, summary.truth.size(), summary.match_radius_m, summary.false_positives);
     out << line;
+    snprintf(line, sizeof(line), "  (truth aligned to the map by the robot trail: %d positions, residual %.3f m RMS)\n",
+             summary.alignment.pairs, summary.alignment.rms_m);
+    out << line;
     for (const auto& t : summary.truth) {
       if (t.found) {
         snprintf(line, sizeof(line), "  %-12s FOUND  %-22s error %.2f m\n", t.name.c_str(), t.how.c_str(), t.error_m);
@@ -341,6 +397,9 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
                             {"person_id", t.person_id}, {"how", t.how}, {"error_m", t.error_m}});
     }
     j["false_positives"] = summary.false_positives;
+    j["alignment"] = {{"yaw_rad", summary.alignment.yaw_rad}, {"x_m", summary.alignment.translation.x()},
+                      {"y_m", summary.alignment.translation.y()}, {"pairs", summary.alignment.pairs},
+                      {"trail_rms_m", summary.alignment.rms_m}};
     j["match_radius_m"] = summary.match_radius_m;
   }
   std::ofstream(directory + "/report.json") << j.dump(2) << "\n";

@@ -3,6 +3,7 @@
 // SIM_TRUTH — found versus truth with position errors. Built from decoded messages so it can be
 // fed from a log (sarmap-log report) or tested directly.
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +23,8 @@ struct MissionData {
   std::optional<sarmap::sound_map_t> sources;    // the last one
   std::optional<sarmap::sim_truth_t> truth;      // the last one
   std::vector<std::pair<double, double>> truth_trail;
+  // Time-matched robot positions (estimated map frame, simulator frame), for the alignment.
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> matched_positions;
   double duration_s = 0;
   int64_t messages = 0;
   std::string log_path;
@@ -37,7 +40,20 @@ struct TruthMatch {
   double error_m = 0;
 };
 
+// The rigid 2D transform map_from_truth that best maps the simulator's robot positions onto
+// the estimated ones (least squares, Kabsch): SLAM's map frame starts wherever the robot did,
+// the simulator's is the world's. Identity when fewer than 3 matched positions.
+struct Alignment {
+  double yaw_rad = 0;
+  Eigen::Vector2d translation = Eigen::Vector2d::Zero();
+  int pairs = 0;
+  double rms_m = 0;  // residual of the robot trail after alignment
+  Eigen::Vector2d Apply(const Eigen::Vector2d& truth) const;
+};
+Alignment AlignTruth(const MissionData& data);
+
 struct MissionSummary {
+  Alignment alignment;
   int people_found = 0;
   int sources_mapped = 0;
   std::vector<TruthMatch> truth;        // empty without SIM_TRUTH

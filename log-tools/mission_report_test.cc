@@ -55,9 +55,10 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     for (int i = 0; i < 20; ++i) {
       sarmap::pose_t pose{};
       pose.orientation[0] = 1;
+      pose.header.utime = 1'000'000 + i * 100'000;
       pose.position_m[0] = 1 + 0.2 * i;
       pose.position_m[1] = 3;
-      Write(&log, "POSE", pose, 1'000'000 + i * 100'000);
+      Write(&log, "POSE", pose, pose.header.utime);
     }
     sarmap::people_map_t people{};
     people.people = {Person(1, 2.0, 1.0, sarmap::mapped_person_t::CUE_SEEN_RGBD),
@@ -65,15 +66,29 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
                      Person(3, 7.5, 1.0, sarmap::mapped_person_t::CUE_SEEN_DEPTH)};  // nobody there
     people.num_people = 3;
     Write(&log, "PEOPLE_MAP", people, 3'000'000);
+    // The simulator's frame is the map frame shifted by (10, -2) and turned by 90 degrees:
+    // truth = R(90) * map + (10, -2). The report must align them by the robot trail.
+    const auto to_truth = [](double x, double y) { return std::make_pair(-y + 10.0, x - 2.0); };
+    for (int i = 0; i < 20; ++i) {
+      sarmap::sim_truth_t t{};
+      t.header.utime = 1'000'000 + i * 100'000;
+      t.robot_orientation[0] = 1;
+      const auto p = to_truth(1 + 0.2 * i, 3);
+      t.robot_position_m[0] = p.first;
+      t.robot_position_m[1] = p.second;
+      Write(&log, "SIM_TRUTH", t, t.header.utime);
+    }
     sarmap::sim_truth_t truth{};
+    truth.header.utime = 3'000'000;
     truth.robot_orientation[0] = 1;
-    const double positions[3][2] = {{2.1, 1.1}, {6.0, 5.2}, {4.0, 5.5}};
+    const double positions[3][2] = {{2.1, 1.1}, {6.0, 5.2}, {4.0, 5.5}};  // map frame
     for (int i = 0; i < 3; ++i) {
       sarmap::sim_person_t p{};
       p.id = i;
       p.name = "person" + std::to_string(i);
-      p.position_m[0] = positions[i][0];
-      p.position_m[1] = positions[i][1];
+      const auto q = to_truth(positions[i][0], positions[i][1]);
+      p.position_m[0] = q.first;
+      p.position_m[1] = q.second;
       truth.people.push_back(p);
     }
     truth.num_people = 3;
@@ -83,6 +98,9 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
   EXPECT_TRUE(data.map);
   EXPECT_GT(data.trail.size(), 10u);
   const MissionSummary s = Summarise(data, 0.5);
+  EXPECT_EQ(s.alignment.pairs, 20);
+  EXPECT_NEAR(s.alignment.rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(s.alignment.yaw_rad), M_PI / 2, 1e-9);
   ASSERT_EQ(s.truth.size(), 3u);
   EXPECT_TRUE(s.truth[0].found);
   EXPECT_EQ(s.truth[0].how, "seen");

@@ -49,8 +49,17 @@ class RateLimiter {
 }  // namespace common
 }  // namespace sarmap
 
-#define SARMAP_LOG(level)                                                   \
-  if (::sarmap::common::LogLevel::level < ::sarmap::common::GetLogLevel()) \
-    ;                                                                       \
-  else                                                                      \
-    ::sarmap::common::LogMessage(::sarmap::common::LogLevel::level, __FILE__, __LINE__).stream()
+namespace sarmap {
+namespace common {
+// Turns the stream expression into void so the macro is one expression (safe in an unbraced if).
+struct LogVoidify {
+  void operator&(std::ostream&) {}
+};
+}  // namespace common
+}  // namespace sarmap
+
+#define SARMAP_LOG(level)                                                       \
+  (::sarmap::common::LogLevel::level < ::sarmap::common::GetLogLevel())        \
+      ? (void)0                                                                 \
+      : ::sarmap::common::LogVoidify() &                                        \
+            ::sarmap::common::LogMessage(::sarmap::common::LogLevel::level, __FILE__, __LINE__).stream()

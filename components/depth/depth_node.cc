@@ -1,0 +1,308 @@
+// sarmap-depth: RGB-D input (OpenNI2 device or .oni recording, or an image folder) -> DEPTH,
+// RGB and a depth-derived SCAN (see depth_to_scan.h).
+
+#include <OpenNI.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <dirent.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <functional>
+#include <memory>
+#include <thread>
+
+#include "common/node_main.h"
+#include "common/image_codec.h"
+#include "common/image_messages.h"
+#include "common/logging.h"
+#include "common/node.h"
+#include "common/robot_config.h"
+#include "common/time.h"
+#include "depth/depth_node_options.h"
+#include "depth/depth_to_scan.h"
+#include "sarmap/image_t.hpp"
+#include "sarmap/laser_scan_t.hpp"
+
+using namespace sarmap;
+
+namespace {
+
+struct Frame {
+  common::Utime utime = 0;
+  depth::PinholeIntrinsics intrinsics;
+  std::vector<uint16_t> depth_mm;
+  std::vector<uint8_t> rgb;  // empty when none
+  int rgb_width = 0, rgb_height = 0;
+  double depth_unit_m = 0.001;
+  bool republish_images = true;  // false when the images came from the bus
+};
+
+class Publisher {
+ public:
+  Publisher(const depth::DepthNodeOptions& o, common::Node* node, const Eigen::Isometry3d& base_from_camera)
+      : options_(o),
+        base_from_camera_(base_from_camera),
+        depth_pub_(node->Advertise<image_t>(o.depth_channel)),
+        rgb_pub_(node->Advertise<image_t>(o.rgb_channel)),
+        scan_pub_(node->Advertise<laser_scan_t>(o.scan_channel)) {}
+
+  void Publish(const Frame& f) {
+    if (!converter_ || converter_->intrinsics().width != f.intrinsics.width ||
+        converter_->intrinsics().height != f.intrinsics.height) {
+      depth::DepthToScanOptions so;
+      so.min_height_m = options_.min_height_m;
+      so.max_height_m = options_.max_height_m;
+      so.range_min_m = options_.range_min_m;
+      so.range_max_m = options_.range_max_m;
+      so.num_beams = options_.num_beams;
+      so.row_step = options_.row_step;
+      converter_ = std::make_unique<depth::DepthToScan>(so, f.intrinsics, base_from_camera_);
+    }
+    header_t header;
+    header.utime = f.utime;
+    header.frame = "camera";
+    camera_intrinsics_t in{};
+    in.width = f.intrinsics.width;
+    in.height = f.intrinsics.height;
+    in.fx = f.intrinsics.fx, in.fy = f.intrinsics.fy, in.cx = f.intrinsics.cx, in.cy = f.intrinsics.cy;
+    in.distortion_model = camera_intrinsics_t::DISTORTION_NONE;
+    if (f.republish_images) {
+      image_t depth_msg = common::MakeDepthImage(header, in, f.depth_mm.data(), in.width, in.height);
+      depth_pub_.Publish(&depth_msg);
+    }
+    if (f.republish_images && options_.color && !f.rgb.empty()) {
+      camera_intrinsics_t cin = in;
+      cin.width = f.rgb_width;
+      cin.height = f.rgb_height;
+      image_t rgb_msg = common::MakeColorImage(header, cin, f.rgb.data(), f.rgb_width, f.rgb_height,
+                                               options_.jpeg_quality);
+      rgb_pub_.Publish(&rgb_msg);
+    }
+    const depth::PlanarScan s = converter_->Convert(f.depth_mm.data(), f.depth_unit_m);
+    laser_scan_t scan{};
+    scan.header.utime = f.utime;
+    scan.header.frame = "base";
+    scan.angle_min_rad = s.angle_min_rad;
+    scan.angle_increment_rad = s.angle_increment_rad;
+    scan.range_min_m = s.range_min_m;
+    scan.range_max_m = s.range_max_m;
+    scan.ranges_m = s.ranges_m;
+    scan.num_ranges = static_cast<int32_t>(s.ranges_m.size());
+    scan.num_intensities = 0;
+    scan_pub_.Publish(&scan);
+    ++frames_;
+  }
+  int64_t frames() const { return frames_; }
+
+ private:
+  depth::DepthNodeOptions options_;
+  Eigen::Isometry3d base_from_camera_;
+  common::Node::Publisher<image_t> depth_pub_, rgb_pub_;
+  common::Node::Publisher<laser_scan_t> scan_pub_;
+  std::unique_ptr<depth::DepthToScan> converter_;
+  int64_t frames_ = 0;
+};
+
+// Image-folder replay: depth files sorted by name.
+int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
+  // Depth files: regular files whose name contains depth_pattern, in the folder or in a
+  // sub-folder named like it (folder/depth/1.pgm with folder/color/1.png beside).
+  std::vector<std::string> files;
+  std::function<void(const std::string&, bool)> scan_dir = [&](const std::string& path, bool all) {
+    DIR* dir = opendir(path.c_str());
+    if (!dir) return;
+    while (dirent* e = readdir(dir)) {
+      const std::string name = e->d_name;
+      if (name.empty() || name[0] == '.') continue;
+      const std::string full = path + "/" + name;
+      struct stat st;
+      if (stat(full.c_str(), &st) != 0) continue;
+      const bool match = all || name.find(o.depth_pattern) != std::string::npos;
+      if (S_ISDIR(st.st_mode)) {
+        if (match && !all) scan_dir(full, true);
+      } else if (match) {
+        files.push_back(full);
+      }
+    }
+    closedir(dir);
+  };
+  scan_dir(o.folder, false);
+  if (files.empty() && access(o.folder.c_str(), R_OK) != 0) {
+    throw std::runtime_error("cannot open folder '" + o.folder + "'");
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw std::runtime_error("no depth images matching '" + o.depth_pattern + "' in '" + o.folder + "'");
+  SARMAP_LOG(INFO) << "replaying " << files.size() << " depth images from " << o.folder;
+  const double period = 1.0 / o.rate_hz;
+  double next = common::SteadySeconds();
+  size_t i = 0;
+  while (!node->stopping()) {
+    if (i == files.size()) {
+      if (!o.loop) break;
+      i = 0;
+    }
+    const std::string path = files[i++];
+    cv::Mat d = cv::imread(path, cv::IMREAD_ANYDEPTH);
+    if (d.empty() || d.type() != CV_16UC1) {
+      SARMAP_LOG(WARN) << "skipping '" << path << "': not a 16-bit depth image";
+      continue;
+    }
+    Frame f;
+    f.utime = common::WallClockUtime();
+    f.intrinsics = {d.cols, d.rows, o.folder_fx, o.folder_fy, o.folder_cx, o.folder_cy};
+    f.depth_mm.resize(static_cast<size_t>(d.cols) * d.rows);
+    const double to_mm = o.folder_depth_unit_m / 0.001;
+    for (int r = 0; r < d.rows; ++r) {
+      for (int c = 0; c < d.cols; ++c) {
+        f.depth_mm[static_cast<size_t>(r) * d.cols + c] =
+            static_cast<uint16_t>(std::min(65535.0, std::round(d.at<uint16_t>(r, c) * to_mm)));
+      }
+    }
+    if (o.color) {
+      std::string cpath = path;
+      const size_t at = cpath.rfind(o.depth_pattern);
+      if (at != std::string::npos) cpath.replace(at, o.depth_pattern.size(), o.color_pattern);
+      cv::Mat c;
+      for (const std::string& p : {cpath, cpath.substr(0, cpath.rfind('.')) + ".png"}) {
+        if (access(p.c_str(), R_OK) != 0) continue;
+        c = cv::imread(p, cv::IMREAD_COLOR);
+        if (!c.empty()) break;
+      }
+      if (!c.empty()) {
+        cv::cvtColor(c, c, cv::COLOR_BGR2RGB);
+        f.rgb.assign(c.data, c.data + c.total() * 3);
+        f.rgb_width = c.cols;
+        f.rgb_height = c.rows;
+      }
+    }
+    pub->Publish(f);
+    node->SpinOnce(0.0);
+    next += period;
+    const double wait = next - common::SteadySeconds();
+    if (wait > 0) node->SpinOnce(wait);
+  }
+  SARMAP_LOG(INFO) << "published " << pub->frames() << " frames";
+  return 0;
+}
+
+int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
+  using namespace openni;
+  if (OpenNI::initialize() != STATUS_OK) {
+    throw std::runtime_error(std::string("OpenNI2 initialisation failed: ") + OpenNI::getExtendedError());
+  }
+  struct Shutdown {
+    ~Shutdown() { OpenNI::shutdown(); }
+  } shutdown;
+  Device device;
+  const char* uri = o.device_uri.empty() ? ANY_DEVICE : o.device_uri.c_str();
+  if (device.open(uri) != STATUS_OK) {
+    throw std::runtime_error("no OpenNI2 device " +
+                             (o.device_uri.empty() ? std::string("connected") : "'" + o.device_uri + "'") +
+                             ": " + OpenNI::getExtendedError());
+  }
+  VideoStream depth_stream, color_stream;
+  if (depth_stream.create(device, SENSOR_DEPTH) != STATUS_OK) {
+    throw std::runtime_error(std::string("cannot open the depth stream: ") + OpenNI::getExtendedError());
+  }
+  VideoMode mode = depth_stream.getVideoMode();
+  mode.setPixelFormat(PIXEL_FORMAT_DEPTH_1_MM);
+  depth_stream.setVideoMode(mode);  // recordings keep their own format
+  const bool color = o.color && color_stream.create(device, SENSOR_COLOR) == STATUS_OK;
+  if (color && o.register_depth && device.isImageRegistrationModeSupported(IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
+    device.setImageRegistrationMode(IMAGE_REGISTRATION_DEPTH_TO_COLOR);
+  }
+  if (depth_stream.start() != STATUS_OK || (color && color_stream.start() != STATUS_OK)) {
+    throw std::runtime_error(std::string("cannot start streams: ") + OpenNI::getExtendedError());
+  }
+  SARMAP_LOG(INFO) << "OpenNI2 device '" << device.getDeviceInfo().getName() << "' streaming";
+  VideoFrameRef depth_frame, color_frame;
+  while (!node->stopping()) {
+    int ready = -1;
+    VideoStream* streams[] = {&depth_stream};
+    if (OpenNI::waitForAnyStream(streams, 1, &ready, 500) != STATUS_OK) {
+      node->SpinOnce(0.0);
+      if (device.isFile()) break;  // end of the recording
+      continue;
+    }
+    if (depth_stream.readFrame(&depth_frame) != STATUS_OK || !depth_frame.isValid()) continue;
+    Frame f;
+    f.utime = common::WallClockUtime();
+    const int w = depth_frame.getWidth(), h = depth_frame.getHeight();
+    const double hfov = depth_stream.getHorizontalFieldOfView(), vfov = depth_stream.getVerticalFieldOfView();
+    f.intrinsics = {w, h, (w / 2.0) / std::tan(hfov / 2), (h / 2.0) / std::tan(vfov / 2), (w - 1) / 2.0, (h - 1) / 2.0};
+    const auto* px = static_cast<const uint16_t*>(depth_frame.getData());
+    const bool is_100um = depth_frame.getVideoMode().getPixelFormat() == PIXEL_FORMAT_DEPTH_100_UM;
+    f.depth_mm.resize(static_cast<size_t>(w) * h);
+    for (size_t i = 0; i < f.depth_mm.size(); ++i) f.depth_mm[i] = is_100um ? px[i] / 10 : px[i];
+    if (color && color_stream.readFrame(&color_frame) == STATUS_OK && color_frame.isValid() &&
+        color_frame.getVideoMode().getPixelFormat() == PIXEL_FORMAT_RGB888) {
+      const auto* c = static_cast<const uint8_t*>(color_frame.getData());
+      f.rgb.assign(c, c + static_cast<size_t>(color_frame.getWidth()) * color_frame.getHeight() * 3);
+      f.rgb_width = color_frame.getWidth();
+      f.rgb_height = color_frame.getHeight();
+    }
+    pub->Publish(f);
+    node->SpinOnce(0.0);
+  }
+  SARMAP_LOG(INFO) << "published " << pub->frames() << " frames";
+  return 0;
+}
+
+// DEPTH from the bus (the simulator, or a driver on another computer): SCAN only.
+int RunLcm(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
+  int64_t bad = 0;
+  node->Subscribe<image_t>(o.depth_channel, [&](const image_t& m, const common::ReceiveInfo&) {
+    Frame f;
+    std::string error;
+    if (!common::DecodeDepthImage(m, &f.depth_mm, &error)) {
+      if (++bad % 100 == 1) SARMAP_LOG(WARN) << "undecodable depth image (" << bad << " so far): " << error;
+      return;
+    }
+    f.utime = m.header.utime;
+    f.intrinsics.width = m.width;
+    f.intrinsics.height = m.height;
+    f.intrinsics.fx = m.intrinsics.fx;
+    f.intrinsics.fy = m.intrinsics.fy;
+    f.intrinsics.cx = m.intrinsics.cx;
+    f.intrinsics.cy = m.intrinsics.cy;
+    f.depth_unit_m = m.depth_unit_m;
+    f.republish_images = false;
+    pub->Publish(f);
+  }, 2);
+  return node->Run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return common::RunMain("sarmap-depth", [&]() -> int {
+    common::NodeArgs node_args;
+    common::ArgParser parser("sarmap-depth",
+                             "RGB-D input (OpenNI2 device, .oni recording or image folder) -> "
+                             "DEPTH, RGB and a depth-derived SCAN.");
+    parser.SetEpilog(
+        "Examples:\n"
+        "  sarmap-depth                                   # first OpenNI2 device\n"
+        "  sarmap-depth --set device_uri=rec.oni          # a recording\n"
+        "  sarmap-depth --set source=folder --set folder=DIR --set rate_hz=5\n"
+        "  sarmap-depth --set source=lcm                  # SCAN from DEPTH on the bus (simulator)");
+    const auto parsed = common::ParseNodeOptions<depth::DepthNodeOptions>(&parser, &node_args, argc, argv, "config/depth.yaml");
+    if (!parsed) return 0;
+    const depth::DepthNodeOptions& options = *parsed;
+    const common::RobotOptions robot = common::LoadRobot(options.robot_config);
+    const common::Rigid3d bc = robot.base_from_camera.ToRigid3d();
+    Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();
+    base_from_camera.linear() = bc.rotation().toRotationMatrix();
+    base_from_camera.translation() = bc.translation();
+    common::Node node("sarmap-depth", node_args.lcm_url);
+    Publisher pub(options, &node, base_from_camera);
+    if (options.source == "lcm") return RunLcm(options, &node, &pub);
+    return options.source == "folder" ? RunFolder(options, &node, &pub) : RunOpenNI(options, &node, &pub);
+  });
+}

@@ -1,0 +1,98 @@
+#include "depth/depth_to_scan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace sarmap {
+namespace depth {
+
+DepthToScan::DepthToScan(const DepthToScanOptions& options, const PinholeIntrinsics& in,
+                         const Eigen::Isometry3d& base_from_camera)
+    : options_(options), intrinsics_(in), base_from_camera_(base_from_camera) {
+  if (in.width <= 0 || in.height <= 0 || !(in.fx > 0) || !(in.fy > 0)) {
+    throw std::invalid_argument("depth-to-scan: invalid camera intrinsics");
+  }
+  const Eigen::Matrix3f r = base_from_camera.rotation().cast<float>();
+  origin_ = base_from_camera.translation().cast<float>();
+  rays_.resize(static_cast<size_t>(in.width) * in.height);
+  for (int v = 0; v < in.height; ++v) {
+    for (int u = 0; u < in.width; ++u) {
+      const Eigen::Vector3f cam((u - in.cx) / in.fx, (v - in.cy) / in.fy, 1.0);
+      rays_[static_cast<size_t>(v) * in.width + u] = r * cam;
+    }
+  }
+  // Azimuth span: the image's left and right edges at the principal row, seen from the base
+  // origin at a nominal 2 m (a little margin for rows that look sideways).
+  auto azimuth = [&](double u) {
+    const Eigen::Vector3f p = origin_ + 2.0f * (r * Eigen::Vector3f((u - in.cx) / in.fx, 0, 1));
+    return std::atan2(p.y(), p.x());
+  };
+  double a0 = azimuth(0), a1 = azimuth(in.width - 1);
+  if (a0 > a1) std::swap(a0, a1);
+  const double margin = 0.02;
+  num_beams_ = options.num_beams > 0 ? options.num_beams : in.width;
+  angle_min_ = a0 - margin;
+  angle_increment_ = (a1 - a0 + 2 * margin) / std::max(1, num_beams_ - 1);
+}
+
+PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) const {
+  PlanarScan scan;
+  scan.angle_min_rad = angle_min_;
+  scan.angle_increment_rad = angle_increment_;
+  scan.range_min_m = static_cast<float>(options_.range_min_m);
+  scan.range_max_m = static_cast<float>(options_.range_max_m);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> best(num_beams_, inf);
+  std::vector<uint8_t> seen_far(num_beams_, 0);
+  const float unit = static_cast<float>(depth_unit_m);
+  const float zmin = static_cast<float>(options_.min_height_m);
+  const float zmax = static_cast<float>(options_.max_height_m);
+  const float rmin = static_cast<float>(options_.range_min_m);
+  const float rmax = static_cast<float>(options_.range_max_m);
+  const int w = intrinsics_.width, h = intrinsics_.height;
+  const int step = std::max(1, options_.row_step);
+  for (int v = 0; v < h; v += step) {
+    for (int u = 0; u < w; ++u) {
+      const size_t i = static_cast<size_t>(v) * w + u;
+      const float d = depth[i] * unit;
+      if (!(d > 0) || d < rmin) {
+        ++scan.invalid_pixels;
+        continue;
+      }
+      const Eigen::Vector3f p = origin_ + d * rays_[i];
+      const double az = std::atan2(p.y(), p.x());
+      const int bin = static_cast<int>(std::lround((az - angle_min_) / angle_increment_));
+      if (bin < 0 || bin >= num_beams_) continue;
+      if (d > rmax) {  // beyond the sensor's trusted range: free up to the limit
+        seen_far[bin] = 1;
+        continue;
+      }
+      if (p.z() < zmin || p.z() > zmax) {
+        // Floor or ceiling: the bin is free at least up to this pixel.
+        if (std::hypot(p.x(), p.y()) >= rmax * 0.95f) seen_far[bin] = 1;
+        continue;
+      }
+      const float range = std::hypot(p.x(), p.y());
+      if (range > rmax) {  // off-axis: the horizontal range is what the scan limits
+        seen_far[bin] = 1;
+        continue;
+      }
+      ++scan.in_band_pixels;
+      best[bin] = std::min(best[bin], range);
+    }
+  }
+  scan.ranges_m.resize(num_beams_);
+  for (int b = 0; b < num_beams_; ++b) {
+    if (std::isfinite(best[b])) {
+      scan.ranges_m[b] = best[b];
+    } else {
+      scan.ranges_m[b] = seen_far[b] ? inf : 0.0f;  // no return / no information
+    }
+  }
+  return scan;
+}
+
+}  // namespace depth
+}  // namespace sarmap

@@ -1,0 +1,72 @@
+#pragma once
+// Depth image -> planar laser scan (Sales 2014): every pixel is back-projected into the base
+// frame; pixels whose height above the floor lies in [min_height_m, max_height_m] are
+// obstacles, and each azimuth bin keeps the closest one, so table tops and overhangs within the
+// robot's height count as obstacles (a single-row scan would miss them).
+//
+// For pixel (u, v) with depth d (metres): p_camera = d * ((u - cx) / fx, (v - cy) / fy, 1),
+// p_base = base_from_camera * p_camera; azimuth = atan2(p_base.y, p_base.x) and range =
+// hypot(p_base.x, p_base.y) (the scan is in the base frame, centred on the base origin).
+// A bin gets:
+//   - the minimum range of its in-band pixels (within [range_min_m, range_max_m]);
+//   - +inf ("no return": free up to the range limit) when it saw only pixels beyond
+//     range_max_m, or in-band pixels nowhere but floor/ceiling pixels farther than
+//     range_max_m;
+//   - 0 (below range_min_m: "no information", ignored by SLAM) when it saw nothing valid.
+// Invalid pixels (0, or outside [range_min_m, range_max_m] along the optical axis) are skipped.
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace sarmap {
+namespace depth {
+
+struct DepthToScanOptions {
+  double min_height_m = 0.05;   // above the floor (base z)
+  double max_height_m = 1.0;
+  double range_min_m = 0.45;    // Kinect-class sensors read nothing closer
+  double range_max_m = 4.5;
+  int num_beams = 0;            // 0: one per image column
+  int row_step = 1;             // use every n-th row (speed)
+};
+
+struct PinholeIntrinsics {
+  int width = 0, height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+};
+
+struct PlanarScan {
+  double angle_min_rad = 0;
+  double angle_increment_rad = 0;
+  float range_min_m = 0, range_max_m = 0;
+  std::vector<float> ranges_m;
+  int in_band_pixels = 0;  // statistics
+  int invalid_pixels = 0;
+};
+
+class DepthToScan {
+ public:
+  // base_from_camera: the camera optical frame (z forward, x right, y down) in the base frame.
+  DepthToScan(const DepthToScanOptions& options, const PinholeIntrinsics& intrinsics,
+              const Eigen::Isometry3d& base_from_camera);
+
+  // depth: width*height values, row-major; metres = value * depth_unit_m; 0 = invalid.
+  PlanarScan Convert(const uint16_t* depth, double depth_unit_m) const;
+
+  const PinholeIntrinsics& intrinsics() const { return intrinsics_; }
+
+ private:
+  DepthToScanOptions options_;
+  PinholeIntrinsics intrinsics_;
+  Eigen::Isometry3d base_from_camera_;
+  // Per pixel: the base-frame ray direction for unit depth (x, y, z), precomputed.
+  std::vector<Eigen::Vector3f> rays_;
+  Eigen::Vector3f origin_;
+  double angle_min_ = 0, angle_increment_ = 0;
+  int num_beams_ = 0;
+};
+
+}  // namespace depth
+}  // namespace sarmap

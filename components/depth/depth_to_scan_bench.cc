@@ -1,0 +1,27 @@
+// Depth-to-scan speed on a 640x480 frame (synthetic wall and floor).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "depth/depth_to_scan.h"
+
+namespace {
+
+void BM_DepthToScan(benchmark::State& state) {
+  using namespace sarmap::depth;
+  PinholeIntrinsics in{640, 480, 525, 525, 319.5, 239.5};
+  Eigen::Isometry3d bc = Eigen::Isometry3d::Identity();
+  bc.linear() = (Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()) *
+                 Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX())).toRotationMatrix();
+  bc.translation() = Eigen::Vector3d(0.1, 0, 0.55);
+  DepthToScanOptions o;
+  o.row_step = static_cast<int>(state.range(0));
+  DepthToScan conv(o, in, bc);
+  std::vector<uint16_t> depth(640 * 480);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) depth[v * 640 + u] = static_cast<uint16_t>(1500 + 3 * u + v);
+  for (auto _ : state) benchmark::DoNotOptimize(conv.Convert(depth.data(), 0.001));
+}
+BENCHMARK(BM_DepthToScan)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+}  // namespace

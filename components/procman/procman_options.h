@@ -1,0 +1,77 @@
+#pragma once
+// Options of the sheriff and the deputy (config/procman.yaml), one struct for both.
+
+#include <string>
+
+#include "common/options.h"
+
+namespace sarmap {
+namespace procman {
+
+struct ProcmanOptions {
+  std::string orders_channel = "PM_ORDERS";
+  std::string info_channel = "PM_INFO";
+  std::string output_channel = "PM_OUTPUT";
+  // Deputy.
+  double info_period_s = 1.0;
+  double output_period_s = 0.1;
+  int output_max_bytes = 16384;
+  int output_buffer_bytes = 65536;
+  double respawn_base_s = 0.1;
+  double respawn_max_s = 10.0;
+  double respawn_stable_run_s = 5.0;
+  std::string state_dir = "";
+  // Sheriff.
+  double resend_period_s = 1.0;
+  double deputy_lost_after_s = 2.0;
+  double discovery_timeout_s = 3.0;
+  double command_timeout_s = 15.0;
+  int output_tail_lines = 10;
+
+  template <class V>
+  void Visit(V& v) {
+    v("orders_channel", orders_channel, "sheriff -> deputies: signed desired state (pm_orders_t)");
+    v("info_channel", info_channel, "deputies -> sheriff: state of every command (pm_info_t)");
+    v("output_channel", output_channel,
+      "deputies -> sheriff: captured stdout/stderr (pm_output_t)");
+    v("info_period_s", info_period_s, "deputy: PM_INFO period (also sent on every change)");
+    v("output_period_s", output_period_s, "deputy: at most one PM_OUTPUT per this period");
+    v("output_max_bytes", output_max_bytes, "deputy: output bytes per command per PM_OUTPUT");
+    v("output_buffer_bytes", output_buffer_bytes,
+      "deputy: output buffered per command; beyond it the oldest is dropped (and counted)");
+    v("respawn_base_s", respawn_base_s, "deputy: first respawn delay after a crash");
+    v("respawn_max_s", respawn_max_s, "deputy: longest respawn delay (doubles per quick crash)");
+    v("respawn_stable_run_s", respawn_stable_run_s, "deputy: a run this long resets the back-off");
+    v("state_dir", state_dir,
+      "deputy: where the last order counter per sheriff is kept (\"\": $XDG_STATE_HOME/sarmap or "
+      "~/.local/state/sarmap)");
+    v("resend_period_s", resend_period_s, "sheriff: desired state re-sent this often");
+    v("deputy_lost_after_s", deputy_lost_after_s, "sheriff: a deputy silent this long is lost");
+    v("discovery_timeout_s", discovery_timeout_s,
+      "sheriff: how long one-shot commands wait to hear the deputies");
+    v("command_timeout_s", command_timeout_s,
+      "sheriff: how long start/stop/restart wait for the commands to get there");
+    v("output_tail_lines", output_tail_lines, "sheriff: output lines shown under the status table");
+  }
+  void Validate(common::Validator& check) const {
+    check.Positive("info_period_s", info_period_s);
+    check.Positive("output_period_s", output_period_s);
+    check.That(output_max_bytes >= 256, "output_max_bytes", "must be >= 256");
+    check.That(output_buffer_bytes >= output_max_bytes, "output_buffer_bytes",
+               "must be >= output_max_bytes");
+    check.Positive("respawn_base_s", respawn_base_s);
+    check.That(respawn_max_s >= respawn_base_s, "respawn_max_s", "must be >= respawn_base_s");
+    check.NonNegative("respawn_stable_run_s", respawn_stable_run_s);
+    check.Positive("resend_period_s", resend_period_s);
+    check.That(deputy_lost_after_s > info_period_s, "deputy_lost_after_s",
+               "must be > info_period_s");
+    check.Positive("discovery_timeout_s", discovery_timeout_s);
+    check.Positive("command_timeout_s", command_timeout_s);
+    check.That(output_tail_lines >= 0, "output_tail_lines", "must be >= 0");
+    check.That(!orders_channel.empty() && !info_channel.empty() && !output_channel.empty(),
+               "channels", "must not be empty");
+  }
+};
+
+}  // namespace procman
+}  // namespace sarmap

@@ -1,0 +1,232 @@
+#pragma once
+// Options of sarmap-sim (config/sim.yaml). The world itself is a separate file
+// (config/worlds/*.yaml), read by world.h.
+
+#include <string>
+
+#include "common/options.h"
+
+namespace sarmap {
+namespace sim {
+
+using common::Validator;
+
+// A Kinect-like RGB-D camera. Depth is registered to the colour camera (as OpenNI's
+// registration mode does): both images share the colour intrinsics, and pixels outside the
+// narrower depth field of view read 0.
+struct CameraOptions {
+  bool enabled = true;
+  double rate_hz = 30.0;
+  int width = 640;
+  int height = 480;
+  double color_hfov_deg = 62.0;
+  double color_vfov_deg = 48.0;
+  double depth_hfov_deg = 58.0;
+  double depth_vfov_deg = 45.0;
+  double min_range_m = 0.5;
+  double max_range_m = 4.6;
+  // Axial noise sigma = depth_noise_k * z^2 (Khoshelham & Elberink 2012: ~1.4e-3 /m).
+  double depth_noise_k = 1.425e-3;
+  double baseline_m = 0.075;      // projector-camera baseline (disparity and shadows)
+  double depth_fx_px = 580.0;     // IR camera focal length (disparity quantisation)
+  int disparity_subpixel = 8;     // disparity steps per pixel
+  double dropout = 0.003;         // random invalid pixels
+  double grazing_limit_deg = 84;  // no return beyond this incidence angle
+  bool shadows = true;            // projector shadows beside foreground edges
+  double color_noise = 0.008;     // colour noise sigma (fraction of full scale), lit
+  double dark_gain = 0.04;        // lights off: fraction of the lit brightness reaching the sensor
+  double dark_noise = 0.035;      // lights off: noise sigma (sensor gain turned up)
+  int jpeg_quality = 85;          // 0 sends raw RGB8
+  bool compress_depth = true;
+  template <class V>
+  void Visit(V& v) {
+    v("enabled", enabled, "publish DEPTH and RGB");
+    v("rate_hz", rate_hz, "frame rate");
+    v("width", width, "image width (pixels)");
+    v("height", height, "image height (pixels)");
+    v("color_hfov_deg", color_hfov_deg, "colour camera horizontal field of view");
+    v("color_vfov_deg", color_vfov_deg, "colour camera vertical field of view");
+    v("depth_hfov_deg", depth_hfov_deg, "depth camera horizontal field of view");
+    v("depth_vfov_deg", depth_vfov_deg, "depth camera vertical field of view");
+    v("min_range_m", min_range_m, "nearest valid depth");
+    v("max_range_m", max_range_m, "farthest valid depth");
+    v("depth_noise_k", depth_noise_k, "depth noise sigma = k * z^2 (1/m)");
+    v("baseline_m", baseline_m, "projector-camera baseline");
+    v("depth_fx_px", depth_fx_px, "IR camera focal length for disparity quantisation");
+    v("disparity_subpixel", disparity_subpixel, "disparity steps per pixel");
+    v("dropout", dropout, "fraction of random invalid depth pixels");
+    v("grazing_limit_deg", grazing_limit_deg, "no depth return beyond this incidence angle");
+    v("shadows", shadows, "projector shadows beside foreground edges");
+    v("color_noise", color_noise, "colour noise sigma when lit (fraction of full scale)");
+    v("dark_gain", dark_gain, "lights off: brightness fraction");
+    v("dark_noise", dark_noise, "lights off: colour noise sigma");
+    v("jpeg_quality", jpeg_quality, "RGB JPEG quality 1..100, 0 = raw RGB8");
+    v("compress_depth", compress_depth, "lossless depth compression");
+  }
+  void Validate(Validator& check) const {
+    check.Positive("rate_hz", rate_hz);
+    check.That(width >= 16 && height >= 16, "width", "image must be at least 16x16");
+    check.InRange("color_hfov_deg", color_hfov_deg, 10, 170);
+    check.InRange("color_vfov_deg", color_vfov_deg, 10, 170);
+    check.InRange("depth_hfov_deg", depth_hfov_deg, 10, 170);
+    check.InRange("depth_vfov_deg", depth_vfov_deg, 10, 170);
+    check.Positive("min_range_m", min_range_m);
+    check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
+    check.That(max_range_m < 65.0, "max_range_m", "must fit 16-bit millimetres");
+    check.NonNegative("depth_noise_k", depth_noise_k);
+    check.Positive("baseline_m", baseline_m);
+    check.Positive("depth_fx_px", depth_fx_px);
+    check.That(disparity_subpixel >= 0, "disparity_subpixel", "must be >= 0 (0: no quantisation)");
+    check.InRange("dropout", dropout, 0, 1);
+    check.InRange("grazing_limit_deg", grazing_limit_deg, 0, 90);
+    check.InRange("color_noise", color_noise, 0, 1);
+    check.InRange("dark_gain", dark_gain, 0, 1);
+    check.InRange("dark_noise", dark_noise, 0, 1);
+    check.InRange("jpeg_quality", jpeg_quality, 0, 100);
+  }
+};
+
+struct AudioOptions {
+  bool enabled = true;
+  std::string mic_array;            // config/arrays/<name>.yaml; "" = the robot's array
+  int block_samples = 512;          // samples per published frame (per channel)
+  int convolve_block_samples = 2048;
+  double full_scale_db_spl = 100.0; // sound pressure level that reads int16 full scale (RMS of a sine)
+  double sensor_noise_db_spl = 28.0;
+  bool reverb = true;               // image-source reverberation (world acoustics)
+  double rir_max_length_s = 0.5;    // impulse responses are cut here
+  double rir_update_distance_m = 0.04;  // recompute responses when a mic moved this much
+  int exact_order = 2;              // reflections up to this order get full fractional delays
+  int sinc_half_width = 16;         // windowed-sinc fractional delay half width (taps)
+  double motor_noise_db_spl = 52.0; // robot's motors at the array at 0.5 m/s
+  bool asynchronous = false;        // each microphone its own sound card (AUDIO_<DEVICE>)
+  double timestamp_jitter_s = 0.001;  // asynchronous: host timestamp jitter
+  bool espeak = true;               // render "espeak:" clips with espeak-ng
+  template <class V>
+  void Visit(V& v) {
+    v("enabled", enabled, "publish AUDIO");
+    v("mic_array", mic_array, "array in config/arrays/<name>.yaml; empty: the robot's");
+    v("block_samples", block_samples, "samples per channel per audio_frame_t");
+    v("convolve_block_samples", convolve_block_samples, "internal FFT convolution block");
+    v("full_scale_db_spl", full_scale_db_spl, "SPL that reads full scale");
+    v("sensor_noise_db_spl", sensor_noise_db_spl, "self noise of each microphone");
+    v("reverb", reverb, "image-source reverberation (also needs acoustics.reverb in the world)");
+    v("rir_max_length_s", rir_max_length_s, "room impulse responses are truncated here");
+    v("rir_update_distance_m", rir_update_distance_m, "recompute responses after this mic motion");
+    v("exact_order", exact_order, "reflection order with full windowed-sinc delays");
+    v("sinc_half_width", sinc_half_width, "windowed-sinc half width (taps)");
+    v("motor_noise_db_spl", motor_noise_db_spl, "motor noise at the array at 0.5 m/s");
+    v("asynchronous", asynchronous, "one sound card per microphone (AUDIO_<DEVICE> channels)");
+    v("timestamp_jitter_s", timestamp_jitter_s, "asynchronous: host timestamp jitter");
+    v("espeak", espeak, "render espeak: phrases with espeak-ng");
+  }
+  void Validate(Validator& check) const {
+    check.That(block_samples >= 16 && block_samples <= 16384, "block_samples", "must be in [16, 16384]");
+    check.That(convolve_block_samples >= 64 && convolve_block_samples <= 16384,
+               "convolve_block_samples", "must be in [64, 16384]");
+    check.Positive("rir_max_length_s", rir_max_length_s);
+    check.That(rir_max_length_s <= 2.0, "rir_max_length_s", "must be <= 2 s");
+    check.Positive("rir_update_distance_m", rir_update_distance_m);
+    check.That(exact_order >= 0, "exact_order", "must be >= 0");
+    check.That(sinc_half_width >= 2 && sinc_half_width <= 64, "sinc_half_width", "must be in [2, 64]");
+    check.NonNegative("timestamp_jitter_s", timestamp_jitter_s);
+  }
+};
+
+struct OdometryOptions {
+  double rate_hz = 20.0;
+  // Random walks: the error std after driving d metres is trans_noise * sqrt(d / 1 m) metres
+  // (a fraction trans_noise of the first metre); likewise per radian turned, and heading
+  // drift per metre driven.
+  double trans_noise = 0.02;
+  double rot_noise = 0.02;
+  double rot_per_trans_rad_per_m = 0.005;
+  double slip = 0.0;              // mean fraction of commanded motion lost to slip (unseen by odometry)
+  double slip_noise = 0.0;        // sigma of that fraction
+  template <class V>
+  void Visit(V& v) {
+    v("rate_hz", rate_hz, "ODOM rate");
+    v("trans_noise", trans_noise, "distance error: std after 1 m as a fraction (grows with sqrt(distance))");
+    v("rot_noise", rot_noise, "heading error: std after turning 1 rad as a fraction (grows with sqrt(angle))");
+    v("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m, "heading drift std after driving 1 m (rad)");
+    v("slip", slip, "mean fraction of motion lost to wheel slip");
+    v("slip_noise", slip_noise, "sigma of the slip fraction");
+  }
+  void Validate(Validator& check) const {
+    check.Positive("rate_hz", rate_hz);
+    check.InRange("trans_noise", trans_noise, 0, 1);
+    check.InRange("rot_noise", rot_noise, 0, 1);
+    check.NonNegative("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m);
+    check.InRange("slip", slip, 0, 1);
+    check.InRange("slip_noise", slip_noise, 0, 1);
+  }
+};
+
+struct ChannelOptions {
+  std::string odom = "ODOM";
+  std::string depth = "DEPTH";
+  std::string rgb = "RGB";
+  std::string audio = "AUDIO";  // asynchronous arrays: AUDIO_<DEVICE>
+  std::string truth = "SIM_TRUTH";
+  std::string cmd_vel = "CMD_VEL";
+  template <class V>
+  void Visit(V& v) {
+    v("odom", odom, "odometry out");
+    v("depth", depth, "depth images out");
+    v("rgb", rgb, "colour images out");
+    v("audio", audio, "audio out (prefix for asynchronous devices)");
+    v("truth", truth, "ground truth out");
+    v("cmd_vel", cmd_vel, "velocity commands in");
+  }
+};
+
+struct SimOptions {
+  std::string world = "config/worlds/lab_lit.yaml";
+  std::string robot_config = "config/robot.yaml";
+  std::string data_dir = "../shared/data";  // relative paths: from the repository root
+  int64_t seed = 1;
+  double speed = 1.0;                   // simulated seconds per wall second; 0 = flat out
+  int64_t start_utime = 1700000000000000;  // simulated clock at t = 0; 0 = wall clock
+  double duration_s = 0.0;              // stop after this much simulated time; 0 = run on
+  std::string drive = "auto";           // auto | cmd_vel | path
+  double cmd_vel_timeout_s = 0.5;
+  double physics_rate_hz = 200.0;
+  double truth_rate_hz = 10.0;
+  double robot_radius_m = 0.25;
+  CameraOptions camera;
+  AudioOptions audio;
+  OdometryOptions odometry;
+  ChannelOptions channels;
+  template <class V>
+  void Visit(V& v) {
+    v("world", world, "world file (config/worlds/*.yaml)");
+    v("robot_config", robot_config, "robot description (camera and array extrinsics)");
+    v("data_dir", data_dir, "shared data (people photos, voices); relative: from the repository root");
+    v("seed", seed, "random seed: the same seed gives the same run");
+    v("speed", speed, "simulated seconds per wall-clock second; 0 = as fast as possible");
+    v("start_utime", start_utime, "simulated time at start (us since epoch); 0 = wall clock");
+    v("duration_s", duration_s, "stop after this many simulated seconds; 0 = until stopped");
+    v("drive", drive, "auto (path until CMD_VEL arrives), cmd_vel, or path");
+    v("cmd_vel_timeout_s", cmd_vel_timeout_s, "stop when CMD_VEL is older than this");
+    v("physics_rate_hz", physics_rate_hz, "robot integration rate");
+    v("truth_rate_hz", truth_rate_hz, "SIM_TRUTH rate");
+    v("robot_radius_m", robot_radius_m, "robot footprint radius for collisions");
+    v("camera", camera, "RGB-D camera");
+    v("audio", audio, "microphone array");
+    v("odometry", odometry, "odometry noise");
+    v("channels", channels, "channel names");
+  }
+  void Validate(Validator& check) const {
+    check.NonNegative("speed", speed);
+    check.NonNegative("duration_s", duration_s);
+    check.OneOf("drive", drive, {"auto", "cmd_vel", "path"});
+    check.Positive("cmd_vel_timeout_s", cmd_vel_timeout_s);
+    check.InRange("physics_rate_hz", physics_rate_hz, 10, 10000);
+    check.Positive("truth_rate_hz", truth_rate_hz);
+    check.Positive("robot_radius_m", robot_radius_m);
+    check.That(start_utime >= 0, "start_utime", "must be >= 0");
+  }
+};
+
+}  // namespace sim
+}  // namespace sarmap

@@ -1,0 +1,86 @@
+#include "sim/world.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace sarmap {
+namespace sim {
+namespace {
+
+TEST(WorldTest, ShippedWorldsLoad) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(SARMAP_SOURCE_DIR) + "/config/worlds")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().string());
+    const World world = LoadWorld(entry.path().string());
+    EXPECT_FALSE(world.name.empty());
+    EXPECT_FALSE(world.sources.empty());
+    ++count;
+  }
+  EXPECT_GE(count, 4);
+  const World lab = LoadWorld(std::string(SARMAP_SOURCE_DIR) + "/config/worlds/lab_lit.yaml");
+  EXPECT_EQ(lab.people.size(), 3u);
+  EXPECT_TRUE(lab.lights_on);
+  const World dark = LoadWorld(std::string(SARMAP_SOURCE_DIR) + "/config/worlds/lab_dark.yaml");
+  EXPECT_FALSE(dark.lights_on);
+  const World corridor = LoadWorld(std::string(SARMAP_SOURCE_DIR) + "/config/worlds/corridor_glass.yaml");
+  int glass = 0;
+  for (const Wall& w : corridor.walls) glass += w.glass;
+  EXPECT_GE(glass, 2);
+  EXPECT_EQ(corridor.people.size(), 2u);
+}
+
+TEST(WorldTest, SourceTakesThePersonsMouth) {
+  const World w = ParseWorld(R"(
+people:
+  - {name: a, position: [1, 2], posture: standing, height_m: 1.8}
+sources:
+  - {name: v, kind: voice, person: a, clips: ["espeak:help"]}
+)", "w.yaml");
+  ASSERT_EQ(w.sources.size(), 1u);
+  EXPECT_EQ(w.sources[0].person_id, 1);
+  EXPECT_NEAR(w.sources[0].position.x(), 1.0, 1e-12);
+  EXPECT_GT(w.sources[0].position.z(), 1.5);
+}
+
+// Each bad file names the file, the line and the key.
+struct BadCase {
+  const char* text;
+  const char* where;  // "file:line"
+  const char* key;
+};
+
+TEST(WorldTest, BadFilesNameFileLineAndKey) {
+  const BadCase cases[] = {
+      {"name: x\nwalls:\n  - {from: [0, 0], to: [1, 0], hieght_m: 2}\n", "bad.yaml:3:", "walls[0].hieght_m: unknown key"},
+      {"people:\n  - name: a\n    position: [1, 2]\n    posture: crouching\n", "bad.yaml:4:", "people[0].posture"},
+      {"boxes:\n  - {centre: [1, 2], size_m: [1, 1]}\n", "bad.yaml:2:", "boxes[0].size_m"},
+      {"sources:\n  - {kind: voice, person: nobody, clips: [a.wav]}\n", "bad.yaml:2:", "sources[0].person"},
+      {"tables:\n  - {centre: [1, 2], size_m: [1, 1], height_m: -1}\n", "bad.yaml:2:", "tables[0].height_m"},
+      {"lights_on: maybe\n", "bad.yaml:1:", "lights_on"},
+      {"robot:\n  start: [0, 0, 0]\n  path: [[1, 2], [3]]\n", "bad.yaml:3:", "robot.path[1]"},
+      {"walls:\n  - {to: [1, 0]}\n", "bad.yaml:2:", "walls[0].from: required key missing"},
+      {"acoustics:\n  rt60_s: 9\n", "bad.yaml:2:", "acoustics.rt60_s"},
+      {"walls: [\n", "bad.yaml:", "YAML syntax error"},
+  };
+  for (const BadCase& c : cases) {
+    SCOPED_TRACE(c.text);
+    try {
+      ParseWorld(c.text, "bad.yaml");
+      ADD_FAILURE() << "accepted a bad world";
+    } catch (const WorldError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(c.where), std::string::npos) << what;
+      EXPECT_NE(what.find(c.key), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(WorldTest, MissingFileIsAnError) {
+  EXPECT_THROW(LoadWorld("/nonexistent/world.yaml"), WorldError);
+}
+
+}  // namespace
+}  // namespace sim
+}  // namespace sarmap

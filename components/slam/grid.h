@@ -1,0 +1,90 @@
+#pragma once
+// A 2D probability grid (the occupancy probability of each cell) that grows as needed.
+//
+// Cells hold P(occupied) in [p_min, p_max]; 0 means "never observed". An observation updates
+// a cell in odds form, odds(p) = p / (1 - p):
+//     odds(p') = odds(p) * odds(p_hit)      for a hit  (p_hit  > 0.5)
+//     odds(p') = odds(p) * odds(p_miss)     for a miss (p_miss < 0.5)
+// starting from p = 0.5 for a new cell, clamped to [p_min, p_max]. Within one scan a cell is
+// updated at most once, a hit winning over a miss (so dense rays do not over-count).
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/transform.h"
+
+namespace sarmap {
+namespace slam {
+
+using common::Rigid2d;
+using PointCloud = std::vector<Eigen::Vector2f>;
+
+constexpr float kMinProbability = 0.1f;
+constexpr float kMaxProbability = 0.9f;
+
+struct RangeData {
+  Eigen::Vector2f origin = Eigen::Vector2f::Zero();  // sensor position
+  PointCloud hits;    // returns
+  PointCloud misses;  // end points of no-return rays (free space only)
+};
+
+RangeData TransformRangeData(const RangeData& data, const Rigid2d& transform);
+
+class ProbabilityGrid {
+ public:
+  // `origin` is the map-frame position of the grid's centre cell at creation.
+  ProbabilityGrid(double resolution_m, const Eigen::Vector2d& centre_m, int initial_cells = 100);
+
+  double resolution() const { return resolution_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // Map position of the lower-left corner of cell (0, 0).
+  const Eigen::Vector2d& corner() const { return corner_; }
+
+  // Cell index of a map point (may be out of bounds).
+  Eigen::Array2i CellIndex(const Eigen::Vector2f& point) const {
+    return Eigen::Array2i(static_cast<int>(std::floor((point.x() - corner_.x()) * inv_resolution_)),
+                          static_cast<int>(std::floor((point.y() - corner_.y()) * inv_resolution_)));
+  }
+  bool Contains(const Eigen::Array2i& cell) const {
+    return cell.x() >= 0 && cell.y() >= 0 && cell.x() < width_ && cell.y() < height_;
+  }
+  // Probability, 0 when unknown or outside.
+  float Raw(const Eigen::Array2i& cell) const {
+    return Contains(cell) ? cells_[cell.y() * width_ + cell.x()] : 0.f;
+  }
+  // Probability with unknown/outside as kMinProbability (what matchers use).
+  float Probability(int x, int y) const {
+    if (x < 0 || y < 0 || x >= width_ || y >= height_) return kMinProbability;
+    const float p = cells_[y * width_ + x];
+    return p == 0.f ? kMinProbability : p;
+  }
+  const std::vector<float>& cells() const { return cells_; }
+
+  // Inserts range data given in the map frame (hits update to occupied, rays to free).
+  void Insert(const RangeData& data, float hit_probability, float miss_probability);
+
+  // Grows the grid so that `point` (map frame) lies inside, with a margin.
+  void GrowToInclude(const Eigen::Vector2f& point);
+
+  // Bounding box of known cells [min, max] (inclusive); false if none.
+  bool KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) const;
+
+  // Raw access for loading.
+  void SetRaw(int width, int height, const Eigen::Vector2d& corner, std::vector<float> cells);
+
+ private:
+  void ApplyOdds(int index, float odds_factor);
+
+  double resolution_, inv_resolution_;
+  Eigen::Vector2d corner_;
+  int width_ = 0, height_ = 0;
+  std::vector<float> cells_;
+  std::vector<uint32_t> update_mark_;
+  uint32_t current_mark_ = 1;
+};
+
+}  // namespace slam
+}  // namespace sarmap

@@ -1,0 +1,87 @@
+// The log tools end to end: sarmap-log-import-carmen writes an LCM log that decodes to the
+// CARMEN content with the original timestamps; sarmap-log-eval-relations prints the metric.
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "sarmap/laser_scan_t.hpp"
+#include "sarmap/odometry_t.hpp"
+
+namespace {
+
+std::string RunCommand(const std::string& cmd) {
+  std::string out;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return out;
+  char buf[512];
+  while (fgets(buf, sizeof(buf), p)) out += buf;
+  pclose(p);
+  return out;
+}
+
+TEST(LogToolsTest, ImportCarmenWritesOdometryAndScansWithOriginalTimestamps) {
+  const std::string dir = ::testing::TempDir();
+  {
+    std::ofstream f(dir + "/tiny.log");
+    f << "# tiny\n"
+         "ODOM 1.0 2.0 0.5 0.1 0.2 0 976052857.337284 host 976052857.337284\n"
+         "RAWLASER1 0 -1.570796 3.141593 1.570796 80.00 0.01 0 3 1.5 80.0 2.5 0 976052857.40 host 0\n"
+         "FLASER 3 1.0 2.0 3.0 9 9 9 1.5 2.5 0.25 976052857.5 host 0.1\n"
+         "RAWLASER1 garbage\n";
+  }
+  const std::string bin = SARMAP_BIN_DIR;
+  const std::string out = RunCommand(bin + "/sarmap-log-import-carmen " + dir + "/tiny.log " + dir + "/tiny.lcmlog 2>&1");
+  EXPECT_NE(out.find("2 odometry, 2 scans"), std::string::npos) << out;
+  EXPECT_NE(out.find("1 malformed"), std::string::npos) << out;
+  lcm::LogFile log(dir + "/tiny.lcmlog", "r");
+  ASSERT_TRUE(log.good());
+  std::vector<std::string> channels;
+  std::vector<int64_t> stamps;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    channels.push_back(ev->channel);
+    stamps.push_back(ev->timestamp);
+    if (ev->channel == "SCAN" && channels.size() == 2) {
+      sarmap::laser_scan_t scan;
+      ASSERT_EQ(scan.decode(ev->data, 0, ev->datalen), ev->datalen);
+      EXPECT_EQ(scan.header.utime, 976052857400000);
+      ASSERT_EQ(scan.num_ranges, 3);
+      EXPECT_FLOAT_EQ(scan.ranges_m[0], 1.5f);
+      EXPECT_GT(scan.ranges_m[1], scan.range_max_m);  // CARMEN's max reading: no return
+      EXPECT_NEAR(scan.angle_increment_rad, M_PI / 2, 1e-6);
+    }
+    if (ev->channel == "ODOM" && channels.size() == 1) {
+      sarmap::odometry_t odom;
+      ASSERT_EQ(odom.decode(ev->data, 0, ev->datalen), ev->datalen);
+      EXPECT_EQ(odom.header.utime, 976052857337284);
+      EXPECT_DOUBLE_EQ(odom.position_m[0], 1.0);
+      EXPECT_NEAR(2 * std::atan2(odom.orientation[3], odom.orientation[0]), 0.5, 1e-12);
+    }
+  }
+  // ODOM, SCAN, then the FLASER's odometry and scan.
+  EXPECT_EQ(channels, (std::vector<std::string>{"ODOM", "SCAN", "ODOM", "SCAN"}));
+  EXPECT_EQ(stamps[2], 976052857500000);
+}
+
+TEST(LogToolsTest, EvalRelationsPrintsTheFourMetricsAndAPlot) {
+  const std::string dir = ::testing::TempDir();
+  {
+    std::ofstream t(dir + "/traj.txt");
+    t << "# t x y yaw\n0 0 0 0\n1 1.1 0 0\n2 2.2 0 0\n";
+    std::ofstream r(dir + "/rel.relations");
+    r << "0 1 1 0 0 0 0 0\n1 2 1 0 0 0 0 0\n";
+  }
+  const std::string bin = SARMAP_BIN_DIR;
+  const std::string out = RunCommand(bin + "/sarmap-log-eval-relations " + dir + "/traj.txt " + dir +
+                              "/rel.relations --plot " + dir + "/traj.png 2>/dev/null");
+  EXPECT_NE(out.find("relations used 2, missing 0"), std::string::npos) << out;
+  EXPECT_NE(out.find("abs trans [m]    0.1000 +- 0.0000"), std::string::npos) << out;
+  EXPECT_NE(out.find("sq trans  [m^2]  0.0100"), std::string::npos) << out;
+  EXPECT_NE(out.find("abs rot   [deg]  0.000"), std::string::npos) << out;
+  EXPECT_TRUE(std::ifstream(dir + "/traj.png").good());
+}
+
+}  // namespace

@@ -1,0 +1,61 @@
+#pragma once
+// The pose graph: scan nodes and submaps with global poses, and constraints between them.
+// Optimised with Ceres (SPARSE_NORMAL_CHOLESKY on SuiteSparse), a Huber loss on loop closures.
+//
+// A constraint says "node n seen from submap s (or node m) is at z = (z_t, z_theta)"; with
+// global poses (t_s, theta_s) and (t_n, theta_n) its residual is
+//   r_t     = w_t * ( R(theta_s)^T (t_n - t_s) - z_t )
+//   r_theta = w_r * wrap(theta_n - theta_s - z_theta)
+// Costs are 1/2 |r|^2 (or the Huber loss of it for loop closures).
+
+#include <cstdint>
+#include <map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/transform.h"
+
+namespace sarmap {
+namespace slam {
+
+using common::Rigid2d;
+
+struct Constraint {
+  enum Kind { INTRA_SUBMAP = 0, LOOP_CLOSURE = 1, ODOMETRY = 2, LOCAL_SLAM = 3 };
+  Kind kind;
+  // For INTRA_SUBMAP / LOOP_CLOSURE: from = submap id, to = node id. For ODOMETRY /
+  // LOCAL_SLAM: from = node id, to = next node id.
+  int from, to;
+  Rigid2d relative;  // from_frame_from_to_frame
+  double translation_weight, rotation_weight;
+  double score = 0;  // loop closure match score
+};
+
+struct PoseGraphOptions {
+  int max_iterations = 50;
+  double huber_scale = 10.0;
+};
+
+struct OptimisationSummary {
+  int iterations = 0;
+  double initial_cost = 0, final_cost = 0;
+  double seconds = 0;
+};
+
+// Optimises `node_poses` and `submap_poses` (indexed by id) in place. Submap 0 stays fixed.
+OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints,
+                                      std::vector<Rigid2d>* node_poses,
+                                      std::vector<Rigid2d>* submap_poses,
+                                      const PoseGraphOptions& options);
+
+// Joint covariance of the listed nodes' (x, y, yaw) at the current poses (3k x 3k), from the
+// information matrix of the whole graph (ceres::Covariance, submap 0 fixed). False when the
+// covariance cannot be computed (rank deficient).
+bool NodeCovariance(const std::vector<Constraint>& constraints,
+                    const std::vector<Rigid2d>& node_poses,
+                    const std::vector<Rigid2d>& submap_poses, const std::vector<int>& node_ids,
+                    Eigen::MatrixXd* covariance, const PoseGraphOptions& options);
+
+}  // namespace slam
+}  // namespace sarmap

@@ -1,0 +1,361 @@
+#include "slam/scan_matcher.h"
+
+#include <ceres/ceres.h>
+#include <ceres/cubic_interpolation.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+namespace sarmap {
+namespace slam {
+
+PointCloud VoxelFilter(const PointCloud& points, float size_m) {
+  PointCloud out;
+  out.reserve(points.size());
+  std::unordered_set<uint64_t> seen;
+  seen.reserve(points.size() * 2);
+  const float inv = 1.f / size_m;
+  for (const auto& p : points) {
+    const int64_t x = static_cast<int64_t>(std::floor(p.x() * inv));
+    const int64_t y = static_cast<int64_t>(std::floor(p.y() * inv));
+    const uint64_t key = (static_cast<uint64_t>(x) << 32) ^ (static_cast<uint64_t>(y) & 0xffffffffu);
+    if (seen.insert(key).second) out.push_back(p);
+  }
+  return out;
+}
+
+PointCloud AdaptiveVoxelFilter(const PointCloud& points, float max_length_m, int min_points,
+                               float max_range_m) {
+  PointCloud in;
+  in.reserve(points.size());
+  for (const auto& p : points) {
+    if (p.norm() <= max_range_m) in.push_back(p);
+  }
+  if (static_cast<int>(in.size()) <= min_points) return in;
+  PointCloud result = VoxelFilter(in, max_length_m);
+  if (static_cast<int>(result.size()) >= min_points) return result;
+  // Binary search for the largest length that keeps enough points.
+  float high = max_length_m, low = max_length_m;
+  for (int i = 0; i < 20; ++i) {
+    low /= 2;
+    result = VoxelFilter(in, low);
+    if (static_cast<int>(result.size()) >= min_points) break;
+  }
+  for (int i = 0; i < 6 && high / low > 1.1f; ++i) {
+    const float mid = 0.5f * (low + high);
+    PointCloud candidate = VoxelFilter(in, mid);
+    if (static_cast<int>(candidate.size()) >= min_points) {
+      low = mid;
+      result.swap(candidate);
+    } else {
+      high = mid;
+    }
+  }
+  return result;
+}
+
+double AngularSearchStep(const PointCloud& points, double resolution_m, double max_range_cap_m) {
+  double max_range = 3 * resolution_m;
+  for (const auto& p : points) max_range = std::max<double>(max_range, p.norm());
+  max_range = std::max(3 * resolution_m, std::min(max_range, max_range_cap_m));
+  return std::acos(1. - resolution_m * resolution_m / (2. * max_range * max_range));
+}
+
+double ScoreAt(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& pose) {
+  if (points.empty()) return 0;
+  double sum = 0;
+  const Eigen::Matrix2f r = pose.rotation().toRotationMatrix().cast<float>();
+  const Eigen::Vector2f t = pose.translation().cast<float>();
+  for (const auto& p : points) {
+    const Eigen::Array2i c = grid.CellIndex(r * p + t);
+    sum += grid.Probability(c.x(), c.y());
+  }
+  return sum / points.size();
+}
+
+namespace {
+
+// Points rotated by `yaw` and translated by `t`, as cell indices of `grid`.
+void DiscretizeScan(const ProbabilityGrid& grid, const PointCloud& points, double yaw,
+                    const Eigen::Vector2d& t, std::vector<Eigen::Array2i>* cells) {
+  cells->clear();
+  const Eigen::Matrix2f r = Eigen::Rotation2Df(static_cast<float>(yaw)).toRotationMatrix();
+  const Eigen::Vector2f tf = t.cast<float>();
+  for (const auto& p : points) cells->push_back(grid.CellIndex(r * p + tf));
+}
+
+}  // namespace
+
+Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
+                         const Rigid2d& initial, const CorrelativeOptions& options,
+                         double* score) {
+  if (points.empty()) {
+    if (score) *score = 0;
+    return initial;
+  }
+  const double res = grid.resolution();
+  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
+  const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
+  const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
+  const int side = 2 * w + 1;
+  std::vector<Eigen::Array2i> cells;
+  std::vector<float> sums(static_cast<size_t>(side) * side);
+  double best = -1, best_raw = 0;
+  Rigid2d best_pose = initial;
+  const float inv_n = 1.f / points.size();
+  for (int k = -num_angles; k <= num_angles; ++k) {
+    const double dtheta = k * angle_step;
+    DiscretizeScan(grid, points, initial.yaw_rad() + dtheta, initial.translation(), &cells);
+    std::fill(sums.begin(), sums.end(), 0.f);
+    for (const auto& c : cells) {
+      for (int dy = -w; dy <= w; ++dy) {
+        float* row = &sums[static_cast<size_t>(dy + w) * side];
+        const int y = c.y() + dy;
+        for (int dx = -w; dx <= w; ++dx) row[dx + w] += grid.Probability(c.x() + dx, y);
+      }
+    }
+    const double rot_cost = options.rotation_delta_cost_weight * dtheta * dtheta;
+    for (int dy = -w; dy <= w; ++dy) {
+      for (int dx = -w; dx <= w; ++dx) {
+        const double raw = sums[static_cast<size_t>(dy + w) * side + dx + w] * inv_n;
+        const double d2 = (dx * dx + dy * dy) * res * res;
+        const double s = raw * std::exp(-(options.translation_delta_cost_weight * d2 + rot_cost));
+        if (s > best) {
+          best = s;
+          best_raw = raw;
+          best_pose = Rigid2d(initial.translation() + Eigen::Vector2d(dx * res, dy * res),
+                              initial.yaw_rad() + dtheta);
+        }
+      }
+    }
+  }
+  if (score) *score = best_raw;
+  return best_pose;
+}
+
+namespace {
+
+// The grid as a function sampled at cell centres, for ceres::BiCubicInterpolator: the value is
+// the "correspondence cost" 1 - P, with unknown and outside cells at the maximum cost.
+class GridAdapter {
+ public:
+  enum { DATA_DIMENSION = 1 };
+  explicit GridAdapter(const ProbabilityGrid& grid) : grid_(grid) {}
+  void GetValue(int row, int col, double* f) const {
+    *f = 1.0 - grid_.Probability(col, row);
+  }
+
+ private:
+  const ProbabilityGrid& grid_;
+};
+
+class OccupiedSpaceCost {
+ public:
+  OccupiedSpaceCost(double scale, const PointCloud& points, const ProbabilityGrid& grid)
+      : scale_(scale), points_(points), grid_(grid), adapter_(grid), interpolator_(adapter_) {}
+
+  template <typename T>
+  bool operator()(const T* const pose, T* residual) const {
+    const T c = ceres::cos(pose[2]), s = ceres::sin(pose[2]);
+    const double inv_res = 1.0 / grid_.resolution();
+    const double cx = grid_.corner().x(), cy = grid_.corner().y();
+    for (size_t i = 0; i < points_.size(); ++i) {
+      const T x = c * T(points_[i].x()) - s * T(points_[i].y()) + pose[0];
+      const T y = s * T(points_[i].x()) + c * T(points_[i].y()) + pose[1];
+      // Cell centres are at integer sample positions.
+      const T col = (x - cx) * inv_res - 0.5;
+      const T row = (y - cy) * inv_res - 0.5;
+      interpolator_.Evaluate(row, col, &residual[i]);
+      residual[i] = scale_ * residual[i];
+    }
+    return true;
+  }
+
+ private:
+  double scale_;
+  const PointCloud& points_;
+  const ProbabilityGrid& grid_;
+  GridAdapter adapter_;
+  ceres::BiCubicInterpolator<GridAdapter> interpolator_;
+};
+
+struct TranslationDeltaCost {
+  double weight, x, y;
+  template <typename T>
+  bool operator()(const T* const pose, T* residual) const {
+    residual[0] = weight * (pose[0] - x);
+    residual[1] = weight * (pose[1] - y);
+    return true;
+  }
+};
+
+struct RotationDeltaCost {
+  double weight, theta;
+  template <typename T>
+  bool operator()(const T* const pose, T* residual) const {
+    residual[0] = weight * (pose[2] - theta);
+    return true;
+  }
+};
+
+}  // namespace
+
+Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& prior,
+                   const Rigid2d& initial, const CeresMatcherOptions& options) {
+  if (points.empty()) return initial;
+  // Unwrap the initial yaw next to the prior's so the rotation residual is small.
+  double pose[3] = {initial.translation().x(), initial.translation().y(),
+                    prior.yaw_rad() + std::remainder(initial.yaw_rad() - prior.yaw_rad(), 2 * M_PI)};
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<OccupiedSpaceCost, ceres::DYNAMIC, 3>(
+          new OccupiedSpaceCost(options.occupied_space_weight / std::sqrt(double(points.size())),
+                                points, grid),
+          static_cast<int>(points.size())),
+      nullptr, pose);
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TranslationDeltaCost, 2, 3>(
+                               new TranslationDeltaCost{options.translation_weight,
+                                                        prior.translation().x(),
+                                                        prior.translation().y()}),
+                           nullptr, pose);
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotationDeltaCost, 1, 3>(
+                               new RotationDeltaCost{options.rotation_weight, prior.yaw_rad()}),
+                           nullptr, pose);
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 1;
+  solver_options.minimizer_progress_to_stdout = false;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  return Rigid2d(pose[0], pose[1], pose[2]);
+}
+
+PrecomputationStack::PrecomputationStack(const ProbabilityGrid& grid, int depth) {
+  depth = std::max(1, depth);
+  offset_ = (1 << (depth - 1)) - 1;
+  width_ = grid.width() + offset_;
+  height_ = grid.height() + offset_;
+  levels_.resize(depth);
+  // Level 0: the grid itself (shifted by offset_).
+  auto& l0 = levels_[0];
+  l0.assign(static_cast<size_t>(width_) * height_, 0);
+  const auto& cells = grid.cells();
+  for (int y = 0; y < grid.height(); ++y) {
+    for (int x = 0; x < grid.width(); ++x) {
+      const float p = cells[static_cast<size_t>(y) * grid.width() + x];
+      if (p == 0.f) continue;
+      const float v = (p - kMinProbability) / (kMaxProbability - kMinProbability) * 255.f;
+      l0[static_cast<size_t>(y + offset_) * width_ + x + offset_] =
+          static_cast<uint8_t>(std::lround(std::min(255.f, std::max(0.f, v))));
+    }
+  }
+  // Level h from level h-1: max of the four half-windows starting at (x, y), (x+s, y), ...
+  for (int h = 1; h < depth; ++h) {
+    const int s = 1 << (h - 1);
+    const auto& prev = levels_[h - 1];
+    auto& cur = levels_[h];
+    cur.assign(prev.size(), 0);
+    for (int y = 0; y < height_; ++y) {
+      for (int x = 0; x < width_; ++x) {
+        uint8_t m = prev[static_cast<size_t>(y) * width_ + x];
+        if (x + s < width_) m = std::max(m, prev[static_cast<size_t>(y) * width_ + x + s]);
+        if (y + s < height_) {
+          m = std::max(m, prev[static_cast<size_t>(y + s) * width_ + x]);
+          if (x + s < width_) m = std::max(m, prev[static_cast<size_t>(y + s) * width_ + x + s]);
+        }
+        cur[static_cast<size_t>(y) * width_ + x] = m;
+      }
+    }
+  }
+  // Level h is now the max over [x, x + 2^h) when read at (x, y) in shifted coordinates, i.e.
+  // over original cells [x - offset_, ...]: Value() shifts back by offset_.
+}
+
+namespace {
+
+struct Candidate {
+  int angle_index;
+  int x, y;  // cell offsets
+  double score;
+};
+
+}  // namespace
+
+bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack& stack,
+                         const PointCloud& points, const Rigid2d& initial,
+                         const BranchAndBoundOptions& options, double min_score, Rigid2d* pose,
+                         double* score) {
+  if (points.empty()) return false;
+  const double res = grid.resolution();
+  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
+  const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
+  const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
+  std::vector<std::vector<Eigen::Array2i>> scans(2 * num_angles + 1);
+  for (int k = -num_angles; k <= num_angles; ++k) {
+    DiscretizeScan(grid, points, initial.yaw_rad() + k * angle_step, initial.translation(),
+                   &scans[k + num_angles]);
+  }
+  const double n = static_cast<double>(points.size());
+  // Integer score thresholds: sum of 0..255 values over points.
+  auto to_probability = [&](double sum) {
+    return kMinProbability + (kMaxProbability - kMinProbability) * sum / (255.0 * n);
+  };
+  auto score_of = [&](int level, const Candidate& c) {
+    int64_t sum = 0;
+    for (const auto& cell : scans[c.angle_index]) sum += stack.Value(level, cell.x() + c.x, cell.y() + c.y);
+    return to_probability(static_cast<double>(sum));
+  };
+  const int top = stack.depth() - 1;
+  const int top_step = 1 << top;
+  std::vector<Candidate> candidates;
+  for (size_t a = 0; a < scans.size(); ++a) {
+    for (int y = -w; y <= w; y += top_step) {
+      for (int x = -w; x <= w; x += top_step) {
+        Candidate c{static_cast<int>(a), x, y, 0};
+        c.score = score_of(top, c);
+        candidates.push_back(c);
+      }
+    }
+  }
+  Candidate best{-1, 0, 0, min_score};
+  // Depth-first branch and bound, best-first at each level.
+  std::function<void(std::vector<Candidate>&, int)> search = [&](std::vector<Candidate>& cs,
+                                                                 int level) {
+    std::sort(cs.begin(), cs.end(),
+              [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+    for (const Candidate& c : cs) {
+      if (c.score <= best.score) break;
+      if (level == 0) {
+        best = c;
+        break;  // sorted: the first leaf above the bound is the best of this set
+      }
+      const int half = 1 << (level - 1);
+      std::vector<Candidate> children;
+      children.reserve(4);
+      for (int dy : {0, half}) {
+        if (c.y + dy > w) continue;
+        for (int dx : {0, half}) {
+          if (c.x + dx > w) continue;
+          Candidate child{c.angle_index, c.x + dx, c.y + dy, 0};
+          child.score = score_of(level - 1, child);
+          children.push_back(child);
+        }
+      }
+      search(children, level - 1);
+    }
+  };
+  search(candidates, top);
+  if (best.angle_index < 0) return false;
+  *pose = Rigid2d(initial.translation() + Eigen::Vector2d(best.x * res, best.y * res),
+                  initial.yaw_rad() + (best.angle_index - num_angles) * angle_step);
+  if (score) *score = best.score;
+  return true;
+}
+
+}  // namespace slam
+}  // namespace sarmap

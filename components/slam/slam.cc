@@ -1,0 +1,886 @@
+#include "slam/slam.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+namespace sarmap {
+namespace slam {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+// Submaps this close in sequence to the current one are treated as its local chain and not
+// searched for loops (see AddNode). 2 was tried: Intel got worse (0.095 vs 0.077 m), so 0.
+constexpr int kRecentSubmaps = 0;
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+Rigid2d Interpolate(const Rigid2d& a, const Rigid2d& b, double f) {
+  return Rigid2d(a.translation() + f * (b.translation() - a.translation()),
+                 a.yaw_rad() + f * std::remainder(b.yaw_rad() - a.yaw_rad(), 2 * M_PI));
+}
+
+}  // namespace
+
+Slam::Slam(const SlamOptions& options) : options_(options) {}
+Slam::~Slam() = default;
+
+bool Slam::AddOdometry(double time_s, const Rigid2d& pose, std::string* why) {
+  // (time_s may be clamped below)
+  auto reject = [&](const std::string& w) {
+    ++stats_.rejected_odometry;
+    if (why) *why = w;
+    return false;
+  };
+  if (!std::isfinite(time_s) || !pose.translation().allFinite() || !std::isfinite(pose.yaw_rad())) {
+    return reject("odometry not finite");
+  }
+  if (!odometry_.empty()) {
+    const OdomSample& last = odometry_.back();
+    // Some logs stamp messages in bursts (Intel): a sample slightly older than the previous
+    // one is kept in arrival order at the previous time rather than dropped.
+    if (time_s < last.time_s - 1.0) return reject("odometry more than 1 s out of time order");
+    if (time_s < last.time_s) {
+      ++stats_.reordered_odometry;
+      time_s = last.time_s;
+    }
+    const double dt = time_s - last.time_s;
+    const double d = (pose.translation() - last.pose.translation()).norm();
+    const double a = std::abs(std::remainder(pose.yaw_rad() - last.pose.yaw_rad(), 2 * M_PI));
+    const auto& in = options_.input;
+    const bool jump = d > in.max_odometry_jump_m ||
+                      d > in.max_odometry_speed_mps * std::max(dt, 0.05) ||
+                      a > in.max_odometry_turn_radps * std::max(dt, 0.05);
+    if (jump) {
+      // A jump that persists (the next message agrees with it) is an odometry reset: start a
+      // new segment, across which no motion is predicted. A single outlier stays rejected.
+      if (have_pending_jump_ &&
+          (pose.translation() - pending_jump_.pose.translation()).norm() <
+              in.max_odometry_speed_mps * std::max(time_s - pending_jump_.time_s, 0.05)) {
+        have_pending_jump_ = false;
+        ++odom_segment_;
+        odometry_.push_back({pending_jump_.time_s, pending_jump_.pose, odom_segment_});
+        odometry_.push_back({time_s, pose, odom_segment_});
+        return true;
+      }
+      have_pending_jump_ = true;
+      pending_jump_ = {time_s, pose, odom_segment_};
+      return reject("odometry jump of " + std::to_string(d) + " m / " +
+                    std::to_string(a / kDegToRad) + " deg in " + std::to_string(dt) + " s");
+    }
+  }
+  have_pending_jump_ = false;
+  odometry_.push_back({time_s, pose, odom_segment_});
+  while (odometry_.size() > 2 && odometry_.front().time_s < time_s - 30.0) odometry_.pop_front();
+  return true;
+}
+
+bool Slam::OdometryAt(double time_s, Rigid2d* pose, int* segment) const {
+  if (odometry_.empty()) return false;
+  auto it = std::lower_bound(odometry_.begin(), odometry_.end(), time_s,
+                             [](const OdomSample& s, double t) { return s.time_s < t; });
+  if (it == odometry_.end()) {
+    // Slightly newer than the last odometry: hold the last pose.
+    if (time_s - odometry_.back().time_s > 0.5) return false;
+    *pose = odometry_.back().pose;
+    *segment = odometry_.back().segment;
+    return true;
+  }
+  if (it->time_s == time_s || it == odometry_.begin()) {
+    if (it == odometry_.begin() && it->time_s - time_s > 0.5) return false;
+    *pose = it->pose;
+    *segment = it->segment;
+    return true;
+  }
+  const OdomSample& a = *(it - 1);
+  const OdomSample& b = *it;
+  if (a.segment != b.segment) {
+    *pose = b.pose;
+    *segment = b.segment;
+    return true;
+  }
+  *pose = Interpolate(a.pose, b.pose, (time_s - a.time_s) / (b.time_s - a.time_s));
+  *segment = a.segment;
+  return true;
+}
+
+bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
+  const int n = static_cast<int>(scan.ranges_m.size());
+  if (n < 2 || n > 100000) {
+    *why = "scan has " + std::to_string(n) + " ranges";
+    return false;
+  }
+  if (expected_num_ranges_ >= 0 && n != expected_num_ranges_) {
+    *why = "scan has " + std::to_string(n) + " ranges, the sensor gives " +
+           std::to_string(expected_num_ranges_);
+    return false;
+  }
+  if (!std::isfinite(scan.angle_min_rad) || !std::isfinite(scan.angle_increment_rad) ||
+      scan.angle_increment_rad == 0 || std::abs(scan.angle_increment_rad * n) > 2 * M_PI + 0.1) {
+    *why = "scan angles are invalid";
+    return false;
+  }
+  if (!std::isfinite(scan.time_s)) {
+    *why = "scan time not finite";
+    return false;
+  }
+  if (!(scan.range_max_m > scan.range_min_m) || !std::isfinite(scan.range_min_m)) {
+    *why = "scan range limits invalid";
+    return false;
+  }
+  for (float r : scan.ranges_m) {
+    if (std::isnan(r) || r < 0) {
+      *why = std::isnan(r) ? "scan has NaN ranges" : "scan has negative ranges";
+      return false;
+    }
+  }
+  if (have_last_scan_ && scan.time_s < last_scan_time_ - 1.0) {
+    *why = "scan more than 1 s older than the previous one";
+    return false;
+  }
+  return true;
+}
+
+void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
+  const auto& o = options_.scan;
+  const Rigid2d base_from_laser(o.laser_x_m, o.laser_y_m, o.laser_yaw_rad);
+  data->origin = base_from_laser.translation().cast<float>();
+  data->hits.clear();
+  data->misses.clear();
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const float r = scan.ranges_m[i];
+    const double a = scan.angle_min_rad + i * scan.angle_increment_rad + o.laser_yaw_rad;
+    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+    const bool is_return = std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m &&
+                           r >= o.min_range_m;
+    if (is_return && r <= o.max_range_m) {
+      data->hits.push_back((base_from_laser.translation() + r * dir).cast<float>());
+    } else if ((!is_return && !(r < o.min_range_m) && r > scan.range_min_m) ||
+               (is_return && r > o.max_range_m)) {
+      if (o.missing_data_ray_length_m > 0) {
+        data->misses.push_back(
+            (base_from_laser.translation() + o.missing_data_ray_length_m * dir).cast<float>());
+      }
+    }
+  }
+}
+
+Rigid2d Slam::PredictLocal(double time_s) {
+  // Odometry predicts the motion since the last scan whose odometry was fresh (the reference).
+  // Odometry that did not change while the scans show motion is stale (some logs freeze it
+  // for a second and then jump): then a constant-velocity model from the last two matched
+  // poses predicts, and the jump that follows is measured from the reference, so no motion is
+  // counted twice.
+  Rigid2d odom;
+  int segment;
+  const bool have_odom = OdometryAt(time_s, &odom, &segment);
+  const double dt = time_s - last_scan_time_;
+  Rigid2d constant_velocity = last_scan_local_;
+  if (have_prev_scan_ && last_scan_time_ >= prev_scan_time_ && dt >= 0 && dt < 1.0) {
+    const Rigid2d step = prev_scan_local_.inverse() * last_scan_local_;
+    // Burst-stamped logs give tiny or huge time ratios: one step ahead, at most 2.
+    const double gap = last_scan_time_ - prev_scan_time_;
+    const double f = gap < 0.02 ? 1.0 : std::min(2.0, dt / gap);
+    constant_velocity = last_scan_local_ * Rigid2d(f * step.translation(), f * step.yaw_rad());
+  }
+  this_scan_has_fresh_odom_ = false;
+  last_scan_has_odom_ = have_odom;
+  if (!have_odom) return have_last_scan_ ? constant_velocity : last_scan_local_;
+  last_scan_odom_ = odom;
+  last_scan_segment_ = segment;
+  if (!have_reference_ || segment != reference_segment_) {
+    this_scan_has_fresh_odom_ = true;
+    return last_scan_local_;
+  }
+  const Rigid2d odom_delta = reference_odom_.inverse() * odom;
+  const bool frozen = odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
+  if (frozen) return constant_velocity;
+  this_scan_has_fresh_odom_ = true;
+  return reference_local_ * odom_delta;
+}
+
+Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
+                         const Rigid2d& predicted, double* score) const {
+  const auto& l = options_.local;
+  Rigid2d initial = predicted;
+  if (l.use_correlative_search) {
+    CorrelativeOptions c;
+    c.linear_window_m = l.correlative_linear_window_m;
+    c.angular_window_rad = l.correlative_angular_window_deg * kDegToRad;
+    c.translation_delta_cost_weight = l.correlative_translation_cost;
+    c.rotation_delta_cost_weight = l.correlative_rotation_cost;
+    double csm_score = 0;
+    initial = CorrelativeMatch(grid, points, predicted, c, &csm_score);
+    // The prediction can be far off (wheel slip, fast turns): when the best candidate lies at
+    // the edge of the window or matches poorly, search again in a wide window.
+    const Rigid2d delta = predicted.inverse() * initial;
+    const bool at_edge =
+        std::abs(delta.yaw_rad()) > 0.8 * c.angular_window_rad ||
+        delta.translation().cwiseAbs().maxCoeff() > 0.8 * c.linear_window_m;
+    if (at_edge || csm_score < l.wide_search_below_score) {
+      c.linear_window_m = l.wide_linear_window_m;
+      c.angular_window_rad = l.wide_angular_window_deg * kDegToRad;
+      double wide_score = 0;
+      const Rigid2d wide = CorrelativeMatch(grid, points, predicted, c, &wide_score);
+      if (wide_score > csm_score) initial = wide;
+    }
+  }
+  CeresMatcherOptions m;
+  m.occupied_space_weight = l.ceres_occupied_weight;
+  m.translation_weight = l.ceres_translation_weight;
+  m.rotation_weight = l.ceres_rotation_weight;
+  m.max_iterations = l.ceres_max_iterations;
+  // The translation prior is the prediction (as in Cartographer): where the scan cannot tell
+  // (a corridor), the prediction wins; the rotation prior is the correlative result.
+  // In localisation only the map is fixed and complete: follow the correlative result, so an
+  // offset of the start pose is corrected instead of held.
+  const Rigid2d prior(localisation_only_ ? initial.translation() : predicted.translation(),
+                      initial.yaw_rad());
+  const Rigid2d result = CeresMatch(grid, points, prior, initial, m);
+  if (score) *score = ScoreAt(grid, points, result);
+  return result;
+}
+
+ScanResult Slam::AddScan(const LaserScan& scan) {
+  ScanResult result;
+  if (!CheckScan(scan, &result.reason)) {
+    ++stats_.rejected_scans;
+    return result;
+  }
+  expected_num_ranges_ = static_cast<int>(scan.ranges_m.size());
+  const auto t0 = std::chrono::steady_clock::now();
+  RangeData data;
+  ScanToRangeData(scan, &data);
+  const auto& so = options_.scan;
+  const PointCloud voxel_hits = VoxelFilter(data.hits, static_cast<float>(so.voxel_size_m));
+  const PointCloud points =
+      AdaptiveVoxelFilter(voxel_hits, static_cast<float>(so.adaptive_max_length_m),
+                          so.adaptive_min_points, static_cast<float>(so.max_range_m));
+  if (localisation_only_) return AddScanLocalisation(scan, data, points);
+
+  const Rigid2d predicted = PredictLocal(scan.time_s);
+  Rigid2d local = predicted;
+  if (!active_submaps_.empty() && submaps_[active_submaps_.front()].num_inserted > 0 &&
+      !points.empty()) {
+    if (!have_scan_since_load_ && !nodes_.empty()) {
+      // First scan after loading a saved state: the robot may have moved while we were
+      // down; search widely around the last pose before tracking again.
+      const int id = active_submaps_.front();
+      BranchAndBoundOptions b;
+      b.linear_window_m = std::min(1.0, options_.loop.linear_window_m);
+      b.angular_window_rad = options_.loop.angular_window_deg * kDegToRad;
+      b.depth = options_.loop.branch_and_bound_depth;
+      Rigid2d found;
+      double score;
+      if (BranchAndBoundMatch(*submaps_[id].grid, Precomputation(id), points, predicted, b,
+                              options_.loop.min_score, &found, &score)) {
+        local = found;
+      }
+    }
+    local = MatchLocal(*submaps_[active_submaps_.front()].grid, points, local,
+                       &result.match_score);
+  }
+  stats_.local_seconds += Seconds(t0);
+  ++stats_.scans;
+  have_scan_since_load_ = true;
+  if (this_scan_has_fresh_odom_) {
+    have_reference_ = true;
+    reference_local_ = local;
+    reference_odom_ = last_scan_odom_;
+    reference_segment_ = last_scan_segment_;
+  }
+  have_prev_scan_ = have_last_scan_;
+  prev_scan_time_ = last_scan_time_;
+  prev_scan_local_ = last_scan_local_;
+  have_last_scan_ = true;
+  last_scan_time_ = scan.time_s;
+  last_scan_local_ = local;
+
+  // Motion filter.
+  const auto& l = options_.local;
+  const bool new_node =
+      nodes_.empty() || scan.time_s - last_node_time_ > l.node_max_time_s ||
+      (local.translation() - last_node_local_.translation()).norm() > l.node_max_distance_m ||
+      std::abs(std::remainder(local.yaw_rad() - last_node_local_.yaw_rad(), 2 * M_PI)) >
+          l.node_max_angle_deg * kDegToRad;
+  if (new_node && !data.hits.empty()) {
+    last_node_time_ = scan.time_s;
+    last_node_local_ = local;
+    // Insert into the active submaps (a new one every scans_per_submap insertions; the older
+    // one finishes at 2 * scans_per_submap).
+    if (active_submaps_.empty()) {
+      Submap s;
+      s.local_pose = Rigid2d(local.translation(), 0.0);
+      s.grid = std::make_unique<ProbabilityGrid>(l.resolution_m, local.translation());
+      submaps_.push_back(std::move(s));
+      submap_global_.push_back(global_from_local_ * submaps_.back().local_pose);
+      active_submaps_.push_back(static_cast<int>(submaps_.size()) - 1);
+      ++stats_.submaps;
+    }
+    RangeData local_data;
+    local_data.origin = data.origin;
+    local_data.hits = voxel_hits;
+    local_data.misses = data.misses;
+    const RangeData in_local = TransformRangeData(local_data, local);
+    std::vector<int> inserted = active_submaps_;
+    for (int id : active_submaps_) {
+      submaps_[id].grid->Insert(in_local, static_cast<float>(l.hit_probability),
+                                static_cast<float>(l.miss_probability));
+      ++submaps_[id].num_inserted;
+    }
+    const PointCloud loop_points = AdaptiveVoxelFilter(
+        voxel_hits, static_cast<float>(so.loop_adaptive_max_length_m), so.loop_adaptive_min_points,
+        static_cast<float>(so.max_range_m));
+    const int node_id = AddNode(scan.time_s, local, local_data, loop_points, inserted);
+    result.is_node = true;
+    if (submaps_[active_submaps_.back()].num_inserted == l.scans_per_submap) {
+      if (active_submaps_.size() == 2) {
+        const int finished = active_submaps_.front();
+        active_submaps_.erase(active_submaps_.begin());
+        FinishSubmap(finished);
+      }
+      Submap s;
+      s.local_pose = Rigid2d(local.translation(), 0.0);
+      s.grid = std::make_unique<ProbabilityGrid>(l.resolution_m, local.translation());
+      submaps_.push_back(std::move(s));
+      submap_global_.push_back(global_from_local_ * submaps_.back().local_pose);
+      active_submaps_.push_back(static_cast<int>(submaps_.size()) - 1);
+      ++stats_.submaps;
+    }
+    ++nodes_since_optimisation_;
+    if (options_.graph.optimise_every_n_nodes > 0 &&
+        nodes_since_optimisation_ >= options_.graph.optimise_every_n_nodes) {
+      const int64_t closures = stats_.loop_closures;
+      RunOptimisation();
+      result.optimised = true;
+      result.loop_closed = closures > loop_closures_at_last_optimisation_;
+      (void)closures;
+    }
+    (void)node_id;
+  }
+  scans_.push_back({scan.time_s, local, static_cast<int>(nodes_.size()) - 1});
+  result.accepted = true;
+  result.node_id = static_cast<int>(nodes_.size()) - 1;
+  result.map_from_base = CurrentPose();
+  return result;
+}
+
+int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& base_data,
+                  const PointCloud& loop_points, const std::vector<int>& inserted_into) {
+  const int id = static_cast<int>(nodes_.size());
+  Node node;
+  node.time_s = time_s;
+  node.local_pose = local_pose;
+  node.has_odometry = last_scan_has_odom_;
+  node.odom_pose = last_scan_odom_;
+  node.odom_segment = last_scan_segment_;
+  node.loop_points = loop_points;
+  node.range_data = base_data;
+  nodes_.push_back(std::move(node));
+  node_global_.push_back(global_from_local_ * local_pose);
+  ++stats_.nodes;
+  const auto& g = options_.graph;
+  for (int s : inserted_into) {
+    submaps_[s].nodes.push_back(id);
+    constraints_.push_back({Constraint::INTRA_SUBMAP, s, id,
+                            submaps_[s].local_pose.inverse() * local_pose,
+                            g.intra_translation_weight, g.intra_rotation_weight});
+  }
+  if (id > 0) {
+    const Node& prev = nodes_[id - 1];
+    const Node& cur = nodes_[id];
+    if (g.local_slam_translation_weight > 0 || g.local_slam_rotation_weight > 0) {
+      constraints_.push_back({Constraint::LOCAL_SLAM, id - 1, id,
+                              prev.local_pose.inverse() * cur.local_pose,
+                              g.local_slam_translation_weight, g.local_slam_rotation_weight});
+    }
+    if (prev.has_odometry && cur.has_odometry && prev.odom_segment == cur.odom_segment &&
+        (g.odometry_translation_weight > 0 || g.odometry_rotation_weight > 0)) {
+      constraints_.push_back({Constraint::ODOMETRY, id - 1, id,
+                              prev.odom_pose.inverse() * cur.odom_pose,
+                              g.odometry_translation_weight, g.odometry_rotation_weight});
+    }
+  }
+  // Loop closures of this node against the nearest finished submaps (each pair sampled at
+  // sampling_ratio): in a building revisited again and again, every submap is near, and
+  // searching them all would cost far more than it gains.
+  const auto t0 = std::chrono::steady_clock::now();
+  // Submaps just before the active ones share the local chain with this node: a match there
+  // closes no loop, so they are skipped.
+  const int recent = active_submaps_.empty() ? static_cast<int>(submaps_.size())
+                                             : active_submaps_.front() - kRecentSubmaps;
+  std::vector<std::pair<double, int>> near;
+  for (size_t s = 0; s < submaps_.size(); ++s) {
+    if (!submaps_[s].finished || static_cast<int>(s) >= recent) continue;
+    const double d = (node_global_[id].translation() - submap_global_[s].translation()).norm();
+    if (d <= options_.loop.max_constraint_distance_m) near.emplace_back(d, static_cast<int>(s));
+  }
+  std::sort(near.begin(), near.end());
+  if (static_cast<int>(near.size()) > options_.loop.max_submaps_per_node) {
+    near.resize(options_.loop.max_submaps_per_node);
+  }
+  for (const auto& [d, s] : near) {
+    if (!SampleSubmap(&submaps_[s])) continue;
+    TryLoopClosure(id, s);
+  }
+  stats_.loop_seconds += Seconds(t0);
+  return id;
+}
+
+bool Slam::SampleSubmap(Submap* s) {
+  ++s->pulses;
+  if (static_cast<double>(s->samples) / s->pulses < options_.loop.sampling_ratio) {
+    ++s->samples;
+    return true;
+  }
+  return false;
+}
+
+void Slam::FinishSubmap(int submap_id) {
+  Submap& s = submaps_[submap_id];
+  s.finished = true;
+  // Older nodes (not in this submap) against the newly finished submap.
+  const auto t0 = std::chrono::steady_clock::now();
+  // Nodes of this submap and of the few before it are its local chain, not loops.
+  const int first_recent = std::max(0, submap_id - kRecentSubmaps);
+  const int first_own = submaps_[first_recent].nodes.empty() ? static_cast<int>(nodes_.size())
+                                                             : submaps_[first_recent].nodes.front();
+  std::vector<int> near;
+  for (int n = 0; n < first_own; ++n) {
+    if ((node_global_[n].translation() - submap_global_[submap_id].translation()).norm() <=
+        options_.loop.max_constraint_distance_m) {
+      near.push_back(n);
+    }
+  }
+  // At most max_old_nodes_per_submap of them, spread evenly over time.
+  const int limit = options_.loop.max_old_nodes_per_submap;
+  const double stride = near.size() > static_cast<size_t>(limit) ? double(near.size()) / limit : 1.0;
+  for (double k = 0; k < near.size(); k += stride) TryLoopClosure(near[static_cast<size_t>(k)], submap_id);
+  stats_.loop_seconds += Seconds(t0);
+}
+
+const PrecomputationStack& Slam::Precomputation(int submap_id) const {
+  for (auto it = precomputations_.begin(); it != precomputations_.end(); ++it) {
+    if (it->first == submap_id) {
+      precomputations_.splice(precomputations_.begin(), precomputations_, it);
+      return *precomputations_.front().second;
+    }
+  }
+  precomputations_.emplace_front(submap_id, std::make_unique<PrecomputationStack>(
+                                                *submaps_[submap_id].grid,
+                                                options_.loop.branch_and_bound_depth));
+  while (static_cast<int>(precomputations_.size()) > options_.loop.max_cached_precomputations) {
+    precomputations_.pop_back();
+  }
+  return *precomputations_.front().second;
+}
+
+bool Slam::TryLoopClosure(int node_id, int submap_id) {
+  const Submap& s = submaps_[submap_id];
+  const Node& n = nodes_[node_id];
+  if (n.loop_points.empty()) return false;
+  ++stats_.loop_searches;
+  // Initial guess of the node in the submap's grid (local) frame from the global estimate.
+  const Rigid2d grid_from_global = s.local_pose * submap_global_[submap_id].inverse();
+  const Rigid2d initial = grid_from_global * node_global_[node_id];
+  const auto& lo = options_.loop;
+  BranchAndBoundOptions b;
+  b.linear_window_m = lo.linear_window_m;
+  b.angular_window_rad = lo.angular_window_deg * kDegToRad;
+  b.depth = lo.branch_and_bound_depth;
+  Rigid2d found;
+  double score = 0;
+  if (!BranchAndBoundMatch(*s.grid, Precomputation(submap_id), n.loop_points, initial, b,
+                           lo.min_score, &found, &score)) {
+    return false;
+  }
+  CeresMatcherOptions m;
+  m.occupied_space_weight = lo.ceres_occupied_weight;
+  m.translation_weight = lo.ceres_translation_weight;
+  m.rotation_weight = lo.ceres_rotation_weight;
+  m.max_iterations = 10;
+  const Rigid2d refined = CeresMatch(*s.grid, n.loop_points, found, found, m);
+  Constraint c{Constraint::LOOP_CLOSURE, submap_id, node_id, s.local_pose.inverse() * refined,
+               lo.translation_weight, lo.rotation_weight};
+  c.score = score;
+  constraints_.push_back(c);
+  ++stats_.loop_closures;
+  return true;
+}
+
+void Slam::RunOptimisation() {
+  if (nodes_.empty()) return;
+  PoseGraphOptions p;
+  p.max_iterations = options_.graph.max_iterations;
+  p.huber_scale = options_.graph.huber_scale;
+  const auto summary = OptimisePoseGraph(constraints_, &node_global_, &submap_global_, p);
+  ++stats_.optimisations;
+  stats_.optimise_seconds += summary.seconds;
+  nodes_since_optimisation_ = 0;
+  loop_closures_at_last_optimisation_ = stats_.loop_closures;
+  const int last = static_cast<int>(nodes_.size()) - 1;
+  global_from_local_ = node_global_[last] * nodes_[last].local_pose.inverse();
+}
+
+void Slam::Optimise() { RunOptimisation(); }
+
+Rigid2d Slam::CurrentPose() const {
+  if (localisation_only_) return last_scan_local_;
+  return global_from_local_ * last_scan_local_;
+}
+
+std::vector<StampedPose2> Slam::Trajectory() const {
+  std::vector<StampedPose2> out;
+  out.reserve(scans_.size());
+  for (const auto& s : scans_) {
+    Rigid2d g = s.local_pose;
+    if (s.node_id >= 0 && s.node_id < static_cast<int>(nodes_.size())) {
+      g = node_global_[s.node_id] * nodes_[s.node_id].local_pose.inverse() * s.local_pose;
+    }
+    out.push_back({s.time_s, g.translation().x(), g.translation().y(), g.yaw_rad()});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const StampedPose2& a, const StampedPose2& b) { return a.time_s < b.time_s; });
+  return out;
+}
+
+ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
+                                     const PointCloud& points) {
+  ScanResult result;
+  // Track the global pose directly; odometry predicts, the nearest finished submap corrects.
+  Rigid2d odom;
+  int segment;
+  const bool have_odom = OdometryAt(scan.time_s, &odom, &segment);
+  Rigid2d predicted = last_scan_local_;
+  if (have_scan_since_load_ && have_odom && last_scan_has_odom_ && segment == last_scan_segment_) {
+    predicted = last_scan_local_ * (last_scan_odom_.inverse() * odom);
+  }
+  last_scan_has_odom_ = have_odom;
+  if (have_odom) last_scan_odom_ = odom, last_scan_segment_ = segment;
+  int best = -1;
+  double best_d = 1e300;
+  for (size_t s = 0; s < submaps_.size(); ++s) {
+    if (submaps_[s].num_inserted == 0) continue;  // the saved map is frozen: all submaps count
+    const double d = (submap_global_[s].translation() - predicted.translation()).norm();
+    if (d < best_d) best_d = d, best = static_cast<int>(s);
+  }
+  Rigid2d pose = predicted;
+  if (best >= 0 && !points.empty()) {
+    const Submap& s = submaps_[best];
+    const Rigid2d grid_from_global = s.local_pose * submap_global_[best].inverse();
+    Rigid2d in_grid = grid_from_global * predicted;
+    if (!have_scan_since_load_) {
+      // First scan: relocalise with a wide branch-and-bound search.
+      BranchAndBoundOptions b;
+      b.linear_window_m = options_.loop.linear_window_m;
+      b.angular_window_rad = options_.loop.angular_window_deg * kDegToRad;
+      b.depth = options_.loop.branch_and_bound_depth;
+      Rigid2d found;
+      double score;
+      if (BranchAndBoundMatch(*s.grid, Precomputation(best), points, in_grid, b,
+                              options_.loop.min_score, &found, &score)) {
+        in_grid = found;
+      }
+    }
+    in_grid = MatchLocal(*s.grid, points, in_grid, &result.match_score);
+    pose = grid_from_global.inverse() * in_grid;
+  }
+  have_scan_since_load_ = true;
+  have_last_scan_ = true;
+  last_scan_time_ = scan.time_s;
+  last_scan_local_ = pose;
+  ++stats_.scans;
+  scans_.push_back({scan.time_s, pose, -1});
+  result.accepted = true;
+  result.node_id = -1;
+  result.map_from_base = pose;
+  return result;
+}
+
+bool Slam::JointCovariance(const std::vector<int>& node_ids, Eigen::MatrixXd* covariance) const {
+  PoseGraphOptions p;
+  p.huber_scale = options_.graph.huber_scale;
+  return NodeCovariance(constraints_, node_global_, submap_global_, node_ids, covariance, p);
+}
+
+OccupancyMap Slam::RenderMap() const {
+  OccupancyMap map;
+  map.resolution_m = options_.local.resolution_m;
+  if (nodes_.empty()) return map;
+  ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    grid.Insert(TransformRangeData(nodes_[i].range_data, node_global_[i]),
+                static_cast<float>(options_.local.hit_probability),
+                static_cast<float>(options_.local.miss_probability));
+  }
+  Eigen::Array2i lo, hi;
+  if (!grid.KnownBounds(&lo, &hi)) return map;
+  map.width = hi.x() - lo.x() + 1;
+  map.height = hi.y() - lo.y() + 1;
+  map.origin_x_m = grid.corner().x() + lo.x() * map.resolution_m;
+  map.origin_y_m = grid.corner().y() + lo.y() * map.resolution_m;
+  map.cells.resize(static_cast<size_t>(map.width) * map.height);
+  for (int y = 0; y < map.height; ++y) {
+    for (int x = 0; x < map.width; ++x) {
+      const float p = grid.Raw(Eigen::Array2i(x + lo.x(), y + lo.y()));
+      map.cells[static_cast<size_t>(y) * map.width + x] =
+          p == 0.f ? int8_t(-1) : static_cast<int8_t>(std::lround(p * 100));
+    }
+  }
+  return map;
+}
+
+// ---------------------------------------------------------------------------------------
+// Pose-graph file: little-endian binary, "SARMAPPG" + version, then the state field by field.
+
+namespace {
+
+class Writer {
+ public:
+  explicit Writer(std::ofstream* out) : out_(out) {}
+  template <class T>
+  void Pod(const T& v) { out_->write(reinterpret_cast<const char*>(&v), sizeof(T)); }
+  void Pose(const Rigid2d& p) {
+    Pod(p.translation().x()), Pod(p.translation().y()), Pod(p.yaw_rad());
+  }
+  void Cloud(const PointCloud& c) {
+    Pod<int64_t>(c.size());
+    out_->write(reinterpret_cast<const char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
+  }
+
+ private:
+  std::ofstream* out_;
+};
+
+class Reader {
+ public:
+  explicit Reader(std::ifstream* in) : in_(in) {}
+  template <class T>
+  T Pod() {
+    T v;
+    in_->read(reinterpret_cast<char*>(&v), sizeof(T));
+    if (!*in_) throw std::runtime_error("pose-graph file truncated");
+    return v;
+  }
+  Rigid2d Pose() {
+    const double x = Pod<double>(), y = Pod<double>(), t = Pod<double>();
+    return Rigid2d(x, y, t);
+  }
+  int64_t Count(int64_t max) {
+    const int64_t n = Pod<int64_t>();
+    if (n < 0 || n > max) throw std::runtime_error("pose-graph file corrupt (bad count)");
+    return n;
+  }
+  PointCloud Cloud() {
+    PointCloud c(Count(10000000));
+    in_->read(reinterpret_cast<char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
+    if (!*in_) throw std::runtime_error("pose-graph file truncated");
+    return c;
+  }
+
+ private:
+  std::ifstream* in_;
+};
+
+constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
+constexpr int32_t kVersion = 1;
+
+}  // namespace
+
+void Slam::Save(const std::string& path) const {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
+    Writer w(&out);
+    out.write(kMagic, 8);
+    w.Pod(kVersion);
+    w.Pod<double>(options_.local.resolution_m);
+    // Submaps.
+    w.Pod<int64_t>(submaps_.size());
+    for (size_t i = 0; i < submaps_.size(); ++i) {
+      const Submap& s = submaps_[i];
+      w.Pose(s.local_pose);
+      w.Pose(submap_global_[i]);
+      w.Pod<int32_t>(s.num_inserted);
+      w.Pod<int32_t>(s.finished);
+      w.Pod<int64_t>(s.pulses);
+      w.Pod<int64_t>(s.samples);
+      w.Pod<int64_t>(s.nodes.size());
+      for (int n : s.nodes) w.Pod<int32_t>(n);
+      w.Pod<int32_t>(s.grid->width());
+      w.Pod<int32_t>(s.grid->height());
+      w.Pod<double>(s.grid->corner().x());
+      w.Pod<double>(s.grid->corner().y());
+      out.write(reinterpret_cast<const char*>(s.grid->cells().data()),
+                s.grid->cells().size() * sizeof(float));
+    }
+    w.Pod<int64_t>(active_submaps_.size());
+    for (int a : active_submaps_) w.Pod<int32_t>(a);
+    // Nodes.
+    w.Pod<int64_t>(nodes_.size());
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      const Node& n = nodes_[i];
+      w.Pod(n.time_s);
+      w.Pose(n.local_pose);
+      w.Pose(node_global_[i]);
+      w.Pod<int32_t>(n.has_odometry);
+      w.Pod<int32_t>(n.odom_segment);
+      w.Pose(n.odom_pose);
+      w.Cloud(n.loop_points);
+      w.Pod(n.range_data.origin.x()), w.Pod(n.range_data.origin.y());
+      w.Cloud(n.range_data.hits);
+      w.Cloud(n.range_data.misses);
+    }
+    // Constraints.
+    w.Pod<int64_t>(constraints_.size());
+    for (const Constraint& c : constraints_) {
+      w.Pod<int32_t>(c.kind), w.Pod<int32_t>(c.from), w.Pod<int32_t>(c.to);
+      w.Pose(c.relative);
+      w.Pod(c.translation_weight), w.Pod(c.rotation_weight), w.Pod(c.score);
+    }
+    // Local state to continue.
+    w.Pose(global_from_local_);
+    w.Pod<int32_t>(have_last_scan_);
+    w.Pod(last_scan_time_);
+    w.Pose(last_scan_local_);
+    w.Pod<int32_t>(last_scan_has_odom_);
+    w.Pose(last_scan_odom_);
+    w.Pod<int32_t>(last_scan_segment_);
+    w.Pod(last_node_time_);
+    w.Pose(last_node_local_);
+    w.Pod<int32_t>(expected_num_ranges_);
+    w.Pod<int32_t>(odom_segment_);
+    out.write(kMagic, 8);  // trailer: a complete file
+    out.flush();
+    if (!out) throw std::runtime_error("write failed: '" + tmp + "'");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "'");
+  }
+}
+
+void Slam::Load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open pose-graph file '" + path + "'");
+  Reader r(&in);
+  char magic[8];
+  in.read(magic, 8);
+  if (!in || !std::equal(magic, magic + 8, kMagic)) {
+    throw std::runtime_error("'" + path + "' is not a sarmap pose-graph file");
+  }
+  if (r.Pod<int32_t>() != kVersion) throw std::runtime_error("unsupported pose-graph version");
+  const double resolution = r.Pod<double>();
+  std::vector<Submap> submaps;
+  std::vector<Rigid2d> submap_global;
+  const int64_t num_submaps = r.Count(1000000);
+  for (int64_t i = 0; i < num_submaps; ++i) {
+    Submap s;
+    s.local_pose = r.Pose();
+    submap_global.push_back(r.Pose());
+    s.num_inserted = r.Pod<int32_t>();
+    s.finished = r.Pod<int32_t>() != 0;
+    s.pulses = r.Pod<int64_t>();
+    s.samples = r.Pod<int64_t>();
+    const int64_t nn = r.Count(100000000);
+    for (int64_t k = 0; k < nn; ++k) s.nodes.push_back(r.Pod<int32_t>());
+    const int w = r.Pod<int32_t>(), h = r.Pod<int32_t>();
+    const double cx = r.Pod<double>(), cy = r.Pod<double>();
+    if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > 400000000) {
+      throw std::runtime_error("pose-graph file corrupt (grid size)");
+    }
+    std::vector<float> cells(static_cast<size_t>(w) * h);
+    in.read(reinterpret_cast<char*>(cells.data()), cells.size() * sizeof(float));
+    if (!in) throw std::runtime_error("pose-graph file truncated");
+    s.grid = std::make_unique<ProbabilityGrid>(resolution, Eigen::Vector2d(cx, cy), 1);
+    s.grid->SetRaw(w, h, Eigen::Vector2d(cx, cy), std::move(cells));
+    submaps.push_back(std::move(s));
+  }
+  std::vector<int> active;
+  const int64_t na = r.Count(2);
+  for (int64_t i = 0; i < na; ++i) active.push_back(r.Pod<int32_t>());
+  std::vector<Node> nodes;
+  std::vector<Rigid2d> node_global;
+  const int64_t num_nodes = r.Count(100000000);
+  for (int64_t i = 0; i < num_nodes; ++i) {
+    Node n;
+    n.time_s = r.Pod<double>();
+    n.local_pose = r.Pose();
+    node_global.push_back(r.Pose());
+    n.has_odometry = r.Pod<int32_t>() != 0;
+    n.odom_segment = r.Pod<int32_t>();
+    n.odom_pose = r.Pose();
+    n.loop_points = r.Cloud();
+    n.range_data.origin.x() = r.Pod<float>();
+    n.range_data.origin.y() = r.Pod<float>();
+    n.range_data.hits = r.Cloud();
+    n.range_data.misses = r.Cloud();
+    nodes.push_back(std::move(n));
+  }
+  std::vector<Constraint> constraints;
+  const int64_t nc = r.Count(1000000000);
+  for (int64_t i = 0; i < nc; ++i) {
+    Constraint c;
+    c.kind = static_cast<Constraint::Kind>(r.Pod<int32_t>());
+    c.from = r.Pod<int32_t>();
+    c.to = r.Pod<int32_t>();
+    c.relative = r.Pose();
+    c.translation_weight = r.Pod<double>();
+    c.rotation_weight = r.Pod<double>();
+    c.score = r.Pod<double>();
+    const bool submap_kind = c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
+    if (c.kind < 0 || c.kind > 3 || c.from < 0 || c.to < 0 || c.to >= num_nodes ||
+        c.from >= (submap_kind ? num_submaps : num_nodes)) {
+      throw std::runtime_error("pose-graph file corrupt (constraint)");
+    }
+    constraints.push_back(c);
+  }
+  global_from_local_ = r.Pose();
+  have_last_scan_ = r.Pod<int32_t>() != 0;
+  last_scan_time_ = r.Pod<double>();
+  last_scan_local_ = r.Pose();
+  last_scan_has_odom_ = r.Pod<int32_t>() != 0;
+  last_scan_odom_ = r.Pose();
+  last_scan_segment_ = r.Pod<int32_t>();
+  last_node_time_ = r.Pod<double>();
+  last_node_local_ = r.Pose();
+  expected_num_ranges_ = r.Pod<int32_t>();
+  odom_segment_ = r.Pod<int32_t>();
+  in.read(magic, 8);
+  if (!in || !std::equal(magic, magic + 8, kMagic)) {
+    throw std::runtime_error("pose-graph file '" + path + "' is incomplete");
+  }
+  for (int a : active) {
+    if (a < 0 || a >= num_submaps) throw std::runtime_error("pose-graph file corrupt (active)");
+  }
+  submaps_ = std::move(submaps);
+  submap_global_ = std::move(submap_global);
+  active_submaps_ = std::move(active);
+  nodes_ = std::move(nodes);
+  node_global_ = std::move(node_global);
+  constraints_ = std::move(constraints);
+  precomputations_.clear();
+  scans_.clear();
+  odometry_.clear();
+  have_pending_jump_ = false;
+  have_scan_since_load_ = false;
+  nodes_since_optimisation_ = 0;
+  // The odometry frame of a restarted robot may differ: predict no motion until new odometry
+  // arrives, and let the scan matcher (wide search on the first scan) find the robot.
+  last_scan_has_odom_ = false;
+  have_reference_ = false;
+  have_prev_scan_ = false;
+  ++odom_segment_;
+  if (localisation_only_ && !nodes_.empty()) last_scan_local_ = global_from_local_ * last_scan_local_;
+  stats_ = SlamStats();
+  stats_.nodes = nodes_.size();
+  stats_.submaps = submaps_.size();
+}
+
+}  // namespace slam
+}  // namespace sarmap

@@ -1,0 +1,207 @@
+#pragma once
+// 2D graph SLAM after the design of Hess et al. 2016 ("Real-Time Loop Closure in 2D LIDAR
+// SLAM", Cartographer):
+//  - local SLAM: each scan is matched against the older of two overlapping submaps
+//    (probability grids) by a correlative search and a Ceres refinement, starting from the
+//    odometry prediction; scans that moved enough become graph nodes and are inserted into
+//    both active submaps; a submap is finished after 2 * scans_per_submap insertions.
+//  - global SLAM: a pose graph of nodes and submaps with node-in-submap constraints (from
+//    local SLAM), consecutive-node odometry and local-matching constraints, and loop closures
+//    found by branch-and-bound correlative matching of nodes against finished submaps,
+//    verified by their mean matched probability; optimised with Ceres (SPARSE_NORMAL_CHOLESKY,
+//    Huber loss on loop closures).
+// No LCM here: the node and the offline runner feed it.
+
+#include <cstdint>
+#include <deque>
+#include <list>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "slam/grid.h"
+#include "slam/pose_graph.h"
+#include "slam/relations.h"
+#include "slam/scan_matcher.h"
+#include "slam/slam_options.h"
+
+namespace sarmap {
+namespace slam {
+
+struct LaserScan {
+  double time_s = 0;
+  double angle_min_rad = 0;
+  double angle_increment_rad = 0;
+  float range_min_m = 0;
+  float range_max_m = 0;  // a reading outside [min, max] or not finite is "no return"
+  std::vector<float> ranges_m;
+};
+
+struct ScanResult {
+  bool accepted = false;
+  std::string reason;        // why rejected
+  Rigid2d map_from_base;     // global pose of the scan
+  int node_id = -1;          // the node of this scan, else the latest node
+  bool is_node = false;
+  bool optimised = false;    // a global optimisation ran after this scan
+  bool loop_closed = false;  // ... and it included new loop closures
+  double match_score = 0;
+};
+
+struct SlamStats {
+  int64_t scans = 0, nodes = 0, submaps = 0;
+  int64_t rejected_scans = 0, rejected_odometry = 0, reordered_odometry = 0;
+  int64_t loop_searches = 0, loop_closures = 0;
+  int64_t optimisations = 0;
+  double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
+};
+
+// An occupancy grid for output: -1 unknown, 0..100 occupied probability; row 0 at origin.
+struct OccupancyMap {
+  double resolution_m = 0.05;
+  int width = 0, height = 0;
+  double origin_x_m = 0, origin_y_m = 0;  // lower-left corner of cell (0, 0)
+  std::vector<int8_t> cells;
+};
+
+class Slam {
+ public:
+  explicit Slam(const SlamOptions& options);
+  ~Slam();
+
+  // Odometry odom_from_base at `time_s`, in time order. Returns false (and counts) when it is
+  // rejected as a jump or not finite; `why` says why.
+  bool AddOdometry(double time_s, const Rigid2d& odom_from_base, std::string* why = nullptr);
+  // Scans in time order. Garbage (negative/NaN ranges, wrong beam count, bad angles) is
+  // rejected and counted.
+  ScanResult AddScan(const LaserScan& scan);
+  // Runs the global optimisation now (e.g. at the end of a log).
+  void Optimise();
+
+  // Localisation only: no new nodes or submaps; scans are matched against the finished
+  // submaps of a loaded map.
+  void SetLocalisationOnly(bool on) { localisation_only_ = on; }
+  bool localisation_only() const { return localisation_only_; }
+  // Localisation only: where to start (the first scan is searched around it); by default the
+  // last pose of the saved map.
+  void SetLocalisationStart(const Rigid2d& map_from_base) {
+    last_scan_local_ = map_from_base;
+    have_scan_since_load_ = false;
+    have_last_scan_ = false;  // a new start: no time order with the saved state
+  }
+
+  // Global pose of every accepted scan (time order).
+  std::vector<StampedPose2> Trajectory() const;
+  const SlamStats& stats() const { return stats_; }
+  int num_nodes() const { return static_cast<int>(nodes_.size()); }
+  Rigid2d NodePose(int id) const { return node_global_[id]; }
+  double NodeTime(int id) const { return nodes_[id].time_s; }
+  int64_t optimisation_id() const { return stats_.optimisations; }
+  // Latest scan's global pose.
+  Rigid2d CurrentPose() const;
+
+  // Joint covariance (3k x 3k) of the nodes' (x, y, yaw) in the map frame.
+  bool JointCovariance(const std::vector<int>& node_ids, Eigen::MatrixXd* covariance) const;
+
+  // The map, rendered from every node's scan at its optimised pose.
+  OccupancyMap RenderMap() const;
+
+  // Our own pose-graph file (everything needed to continue mapping or to localise);
+  // written to a temporary file and renamed, so a crash never leaves a broken file.
+  void Save(const std::string& path) const;
+  // Replaces the state with a saved one. Throws std::runtime_error on a bad file.
+  void Load(const std::string& path);
+
+ private:
+  struct Submap {
+    Rigid2d local_pose;  // local_from_submap (translation only)
+    std::unique_ptr<ProbabilityGrid> grid;
+    int num_inserted = 0;
+    bool finished = false;
+    std::vector<int> nodes;
+    // Loop-closure sampler state (fixed ratio).
+    int64_t pulses = 0, samples = 0;
+  };
+  struct Node {
+    double time_s = 0;
+    Rigid2d local_pose;
+    bool has_odometry = false;
+    int odom_segment = -1;
+    Rigid2d odom_pose;
+    PointCloud loop_points;  // base frame
+    RangeData range_data;    // base frame (for map rendering)
+  };
+  struct ScanRecord {
+    double time_s;
+    Rigid2d local_pose;  // in the local frame (or global in localisation-only mode: node -1)
+    int node_id;
+  };
+  struct OdomSample {
+    double time_s;
+    Rigid2d pose;
+    int segment;
+  };
+
+  bool CheckScan(const LaserScan& scan, std::string* why);
+  void ScanToRangeData(const LaserScan& scan, RangeData* data) const;
+  bool OdometryAt(double time_s, Rigid2d* pose, int* segment) const;
+  Rigid2d PredictLocal(double time_s);
+  Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& predicted,
+                     double* score) const;
+  ScanResult AddScanLocalisation(const LaserScan& scan, const RangeData& data,
+                                 const PointCloud& points);
+  int AddNode(double time_s, const Rigid2d& local_pose, const RangeData& base_data,
+              const PointCloud& loop_points, const std::vector<int>& inserted_into);
+  void FinishSubmap(int submap_id);
+  bool SampleSubmap(Submap* submap);
+  bool TryLoopClosure(int node_id, int submap_id);
+  const PrecomputationStack& Precomputation(int submap_id) const;
+  void RunOptimisation();
+
+  SlamOptions options_;
+  bool localisation_only_ = false;
+  bool have_scan_since_load_ = false;
+  SlamStats stats_;
+
+  // Inputs.
+  std::deque<OdomSample> odometry_;
+  int odom_segment_ = 0;
+  bool have_pending_jump_ = false;
+  OdomSample pending_jump_;
+  int expected_num_ranges_ = -1;
+
+  // Local SLAM.
+  std::vector<Submap> submaps_;
+  std::vector<int> active_submaps_;
+  bool have_last_scan_ = false;
+  double last_scan_time_ = 0;
+  Rigid2d last_scan_local_;
+  bool last_scan_has_odom_ = false;
+  Rigid2d last_scan_odom_;
+  int last_scan_segment_ = -1;
+  bool this_scan_has_fresh_odom_ = false;
+  bool have_reference_ = false;
+  Rigid2d reference_local_, reference_odom_;
+  int reference_segment_ = -1;
+  bool have_prev_scan_ = false;
+  double prev_scan_time_ = 0;
+  Rigid2d prev_scan_local_;
+  double last_node_time_ = -1e300;
+  Rigid2d last_node_local_;
+
+  // Global SLAM.
+  std::vector<Node> nodes_;
+  std::vector<Rigid2d> node_global_, submap_global_;
+  std::vector<Constraint> constraints_;
+  Rigid2d global_from_local_;
+  int nodes_since_optimisation_ = 0;
+  int64_t loop_closures_at_last_optimisation_ = 0;
+  std::vector<ScanRecord> scans_;
+  mutable std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
+};
+
+}  // namespace slam
+}  // namespace sarmap

@@ -1,0 +1,306 @@
+// sarmap-slam: 2D graph SLAM node. SCAN + ODOM in (through a time-ordered queue), POSE, MAP
+// and SLAM_ANCHORS out; SLAM_ANCHOR_REQUEST selects the anchors. See README.md.
+
+#include <sys/stat.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <variant>
+
+#include "common/node_main.h"
+#include "common/compression.h"
+#include "common/logging.h"
+#include "common/message_conversions.h"
+#include "common/node.h"
+#include "common/time.h"
+#include "sarmap/laser_scan_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
+#include "sarmap/odometry_t.hpp"
+#include "sarmap/pose_t.hpp"
+#include "sarmap/slam_anchor_request_t.hpp"
+#include "sarmap/slam_anchors_t.hpp"
+#include "slam/map_io.h"
+#include "slam/messages.h"
+#include "slam/slam.h"
+#include "slam/slam_node_options.h"
+
+using namespace sarmap;
+using common::Utime;
+
+namespace {
+
+bool FileExists(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0;
+}
+
+class SlamNode {
+ public:
+  SlamNode(const slam::SlamNodeOptions& options, common::Node* node)
+      : options_(options),
+        node_(node),
+        slam_(options.slam),
+        queue_(common::SecondsToUtime(options.queue_delay_s)),
+        pose_pub_(node->Advertise<pose_t>(options.pose_channel)),
+        map_pub_(node->Advertise<occupancy_grid_t>(options.map_channel)),
+        anchors_pub_(node->Advertise<slam_anchors_t>(options.anchors_channel)) {
+    if (!options_.load_map.empty()) {
+      slam_.SetLocalisationOnly(true);
+      slam_.Load(options_.load_map);
+      if (options_.initial_pose.size() == 3) {
+        slam_.SetLocalisationStart(slam::Rigid2d(options_.initial_pose[0], options_.initial_pose[1],
+                                                 options_.initial_pose[2]));
+      }
+      SARMAP_LOG(INFO) << "localisation only in " << options_.load_map << " (" << slam_.num_nodes()
+                       << " nodes)";
+    } else if (options_.resume && !options_.state_file.empty() && FileExists(options_.state_file)) {
+      slam_.Load(options_.state_file);
+      SARMAP_LOG(INFO) << "resumed mapping from " << options_.state_file << " ("
+                       << slam_.num_nodes() << " nodes)";
+    }
+    node->Subscribe<laser_scan_t>(options_.scan_channel,
+                                  [this](const laser_scan_t& m, const common::ReceiveInfo& info) {
+                                    Push(m.header.utime, Input{slam::FromScanMessage(m), info.receive_time_s});
+                                  });
+    node->Subscribe<odometry_t>(options_.odom_channel,
+                                [this](const odometry_t& m, const common::ReceiveInfo&) {
+                                  OdomInput o{common::UtimeToSeconds(m.header.utime),
+                                              slam::FromOdometryMessage(m)};
+                                  Push(m.header.utime, Input{o, 0.0});
+                                });
+    node->Subscribe<slam_anchor_request_t>(
+        options_.anchor_request_channel,
+        [this](const slam_anchor_request_t& m, const common::ReceiveInfo&) {
+          anchor_requests_[m.client_id] = m.node_ids;
+          SARMAP_LOG(INFO) << "client '" << m.client_id << "' keeps " << m.num_node_ids << " anchors";
+          PublishAnchors(false);  // answer at once, then after every optimisation
+        });
+    node->AddTimer(1.0, [this]() { UpdateStatus(); });
+    // When inputs pause (end of a replay, a stalled sensor), release what waits in the queue
+    // after queue_delay_s of wall time instead of holding the last scans back.
+    node->AddTimer(0.02, [this]() {
+      if (queue_.size() > 0 && common::SteadySeconds() - last_input_s_ > options_.queue_delay_s) {
+        queue_.Flush([this](Utime, Input& in) { Process(in); });
+      }
+    });
+  }
+
+  void Finish() {
+    queue_.Flush([this](Utime, Input& in) { Process(in); });
+    if (!options_.load_map.empty()) return;
+    slam_.Optimise();
+    PublishAnchors(false);
+    SaveState();
+    if (!options_.map_output_prefix.empty() && slam_.num_nodes() > 0) {
+      slam::SaveMapServerMap(slam_.RenderMap(), options_.map_output_prefix);
+      SARMAP_LOG(INFO) << "map written to " << options_.map_output_prefix << ".pgm/.yaml";
+    }
+  }
+
+ private:
+  struct OdomInput {
+    double time_s;
+    slam::Rigid2d pose;
+  };
+  struct Input {
+    std::variant<slam::LaserScan, OdomInput> data;
+    double receive_time_s;
+  };
+
+  void Push(Utime utime, Input in) {
+    last_input_s_ = common::SteadySeconds();
+    if (!queue_.Push(utime, std::move(in))) {
+      if (late_log_.Allow(common::SteadySeconds())) {
+        SARMAP_LOG(WARN) << "input too late for the time-ordered queue (dropped "
+                         << queue_.dropped_late() << " so far)";
+      }
+    }
+    queue_.Release([this](Utime, Input& i) { Process(i); });
+  }
+
+  void Process(Input& in) {
+    if (auto* o = std::get_if<OdomInput>(&in.data)) {
+      std::string why;
+      if (!slam_.AddOdometry(o->time_s, o->pose, &why) && odom_log_.Allow(common::SteadySeconds())) {
+        SARMAP_LOG(WARN) << "odometry rejected (" << slam_.stats().rejected_odometry
+                         << " so far): " << why;
+      }
+      return;
+    }
+    const slam::LaserScan& scan = std::get<slam::LaserScan>(in.data);
+    const slam::ScanResult r = slam_.AddScan(scan);
+    if (!r.accepted) {
+      if (scan_log_.Allow(common::SteadySeconds())) {
+        SARMAP_LOG(WARN) << "scan rejected (" << slam_.stats().rejected_scans << " so far): " << r.reason;
+      }
+      return;
+    }
+    const Utime utime = common::SecondsToUtime(scan.time_s);
+    if (r.optimised && r.loop_closed) {
+      SARMAP_LOG(INFO) << "optimisation " << slam_.optimisation_id() << " with new loop closures ("
+                       << slam_.stats().loop_closures << " in total)";
+    }
+    if (r.optimised) UpdateCovariance();
+    PublishPose(utime, r);
+    if (r.optimised) PublishAnchors(r.loop_closed);
+    if (scan.time_s - last_map_time_s_ >= options_.map_period_s && options_.load_map.empty()) {
+      last_map_time_s_ = scan.time_s;
+      PublishMap(utime);
+    }
+    if (!options_.state_file.empty() && options_.load_map.empty() &&
+        scan.time_s - last_save_time_s_ >= options_.state_save_period_s) {
+      last_save_time_s_ = scan.time_s;
+      SaveState();
+    }
+    if (in.receive_time_s > 0) {
+      latency_sum_s_ += common::SteadySeconds() - in.receive_time_s;
+      ++latency_count_;
+    }
+  }
+
+  void UpdateCovariance() {
+    if (slam_.num_nodes() == 0) return;
+    const int current = slam_.num_nodes() - 1;
+    Eigen::MatrixXd cov;
+    if (slam_.JointCovariance({current}, &cov)) node_covariance_ = cov;
+  }
+
+  void PublishPose(Utime utime, const slam::ScanResult& r) {
+    pose_t msg{};
+    msg.header.utime = utime;
+    msg.header.frame = "map";
+    msg.child_frame = "base";
+    common::FromRigid3d(common::Rigid3d::FromRigid2d(r.map_from_base), msg.position_m, msg.orientation);
+    // Uncertainty of the latest node in the map (from the last optimisation) plus the local
+    // matching uncertainty of this scan.
+    Eigen::Matrix3d cov = node_covariance_;
+    const double sxy = options_.pose_sigma_xy_m, syaw = options_.pose_sigma_yaw_deg * M_PI / 180;
+    cov(0, 0) += sxy * sxy;
+    cov(1, 1) += sxy * sxy;
+    cov(2, 2) += syaw * syaw;
+    common::SetPlanarCovariance(cov, msg.covariance);
+    msg.node_id = r.node_id;
+    pose_pub_.Publish(&msg);
+  }
+
+  void PublishAnchors(bool loop_closed) {
+    if (slam_.num_nodes() == 0) return;
+    std::set<int64_t> wanted;
+    for (const auto& [client, ids] : anchor_requests_) {
+      for (int64_t id : ids) {
+        if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
+      }
+    }
+    std::vector<int> ids = {slam_.num_nodes() - 1};
+    for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
+    Eigen::MatrixXd cov;
+    if (!slam_.JointCovariance(ids, &cov)) {
+      SARMAP_LOG(WARN) << "joint covariance of " << ids.size() << " nodes not computable";
+      return;
+    }
+    slam_anchors_t msg{};
+    msg.header.utime = common::SecondsToUtime(slam_.NodeTime(ids[0]));
+    msg.header.frame = "map";
+    msg.optimisation_id = slam_.optimisation_id();
+    msg.loop_closed = loop_closed;
+    auto anchor = [&](int id) {
+      slam_anchor_t a{};
+      a.node_id = id;
+      a.utime = common::SecondsToUtime(slam_.NodeTime(id));
+      const slam::Rigid2d p = slam_.NodePose(id);
+      a.x_m = p.translation().x();
+      a.y_m = p.translation().y();
+      a.yaw_rad = p.yaw_rad();
+      return a;
+    };
+    msg.current = anchor(ids[0]);
+    for (size_t i = 1; i < ids.size(); ++i) msg.anchors.push_back(anchor(ids[i]));
+    msg.num_anchors = static_cast<int32_t>(msg.anchors.size());
+    msg.covariance_dim = static_cast<int32_t>(3 * ids.size());
+    msg.covariance.assign(msg.covariance_dim, std::vector<double>(msg.covariance_dim));
+    for (int r = 0; r < msg.covariance_dim; ++r) {
+      for (int c = 0; c < msg.covariance_dim; ++c) msg.covariance[r][c] = cov(r, c);
+    }
+    anchors_pub_.Publish(&msg);
+  }
+
+  void PublishMap(Utime utime) {
+    const slam::OccupancyMap map = slam_.RenderMap();
+    if (map.width == 0) return;
+    occupancy_grid_t msg{};
+    msg.header.utime = utime;
+    msg.header.frame = "map";
+    msg.resolution_m = map.resolution_m;
+    msg.width = map.width;
+    msg.height = map.height;
+    msg.origin_x_m = map.origin_x_m;
+    msg.origin_y_m = map.origin_y_m;
+    msg.origin_yaw_rad = 0;
+    const auto packed = common::CompressBytes(reinterpret_cast<const uint8_t*>(map.cells.data()),
+                                              map.cells.size());
+    msg.compression = occupancy_grid_t::COMPRESSION_ZSTD;
+    msg.data.assign(packed.begin(), packed.end());
+    msg.size = static_cast<int32_t>(msg.data.size());
+    map_pub_.Publish(&msg);
+  }
+
+  void SaveState() {
+    if (options_.state_file.empty() || slam_.num_nodes() == 0) return;
+    try {
+      slam_.Save(options_.state_file);
+    } catch (const std::exception& e) {
+      SARMAP_LOG(ERROR) << "state save failed: " << e.what();
+    }
+  }
+
+  void UpdateStatus() {
+    const auto& s = slam_.stats();
+    char text[256];
+    std::snprintf(text, sizeof(text),
+                  "nodes %lld loops %lld opt %lld rejected scans %lld odom %lld late %lld "
+                  "mean latency %.1f ms",
+                  (long long)s.nodes, (long long)s.loop_closures, (long long)s.optimisations,
+                  (long long)s.rejected_scans, (long long)s.rejected_odometry,
+                  (long long)queue_.dropped_late(),
+                  latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0);
+    node_->SetStatusMessage(text);
+  }
+
+  slam::SlamNodeOptions options_;
+  common::Node* node_;
+  slam::Slam slam_;
+  common::TimeOrderedQueue<Input> queue_;
+  common::Node::Publisher<pose_t> pose_pub_;
+  common::Node::Publisher<occupancy_grid_t> map_pub_;
+  common::Node::Publisher<slam_anchors_t> anchors_pub_;
+  std::map<std::string, std::vector<int64_t>> anchor_requests_;
+  Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
+  double last_map_time_s_ = -1e300, last_save_time_s_ = -1e300;
+  common::RateLimiter late_log_{2.0}, odom_log_{2.0}, scan_log_{2.0};
+  double last_input_s_ = 0;
+  double latency_sum_s_ = 0;
+  int64_t latency_count_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return common::RunMain("sarmap-slam", [&]() -> int {
+    common::NodeArgs node_args;
+    common::ArgParser parser("sarmap-slam",
+                             "2D graph SLAM: SCAN + ODOM in; POSE, MAP, SLAM_ANCHORS out.");
+    parser.SetEpilog(
+        "Channels (configurable): in SCAN, ODOM, SLAM_ANCHOR_REQUEST; out POSE, MAP, SLAM_ANCHORS.\n"
+        "Resume after a crash: --set state_file=run.pg --set resume=true\n"
+        "Localisation only:   --set load_map=run.pg");
+    const auto parsed = common::ParseNodeOptions<slam::SlamNodeOptions>(&parser, &node_args, argc, argv, "config/slam.yaml");
+    if (!parsed) return 0;
+    const slam::SlamNodeOptions& options = *parsed;
+    common::Node node("sarmap-slam", node_args.lcm_url);
+    SlamNode slam_node(options, &node);
+    const int rc = node.Run();
+    slam_node.Finish();
+    return rc;
+  });
+}

@@ -1,0 +1,61 @@
+#pragma once
+// Options of sarmap-slam (config/slam.yaml); the offline runner reads the same file.
+
+#include <string>
+#include <vector>
+
+#include "common/options.h"
+#include "slam/slam_options.h"
+
+namespace sarmap {
+namespace slam {
+
+struct SlamNodeOptions {
+  std::string scan_channel = "SCAN";
+  std::string odom_channel = "ODOM";
+  std::string pose_channel = "POSE";
+  std::string map_channel = "MAP";
+  std::string anchors_channel = "SLAM_ANCHORS";
+  std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
+  double queue_delay_s = 0.1;        // time-ordering delay of the input queue
+  double map_period_s = 5.0;         // MAP at most this often (message time)
+  std::string state_file = "";       // pose-graph file saved periodically and at exit ("" = none)
+  double state_save_period_s = 10.0; // message time between periodic saves
+  bool resume = false;               // load state_file at start (if it exists) and continue
+  std::string load_map = "";         // pose-graph file to localise in (localisation only)
+  std::string map_output_prefix = "";  // at exit: PREFIX.pgm + PREFIX.yaml
+  std::vector<double> initial_pose = {};  // localisation only: x y yaw (empty: last saved pose)
+  double pose_sigma_xy_m = 0.02;     // local matching uncertainty added to POSE covariance
+  double pose_sigma_yaw_deg = 0.5;
+  SlamOptions slam;
+  template <class V> void Visit(V& v) {
+    v("scan_channel", scan_channel, "Input laser scans (laser_scan_t)");
+    v("odom_channel", odom_channel, "Input odometry (odometry_t)");
+    v("pose_channel", pose_channel, "Output map_from_base (pose_t)");
+    v("map_channel", map_channel, "Output occupancy grid (occupancy_grid_t, zstd)");
+    v("anchors_channel", anchors_channel, "Output anchors with joint covariance (slam_anchors_t)");
+    v("anchor_request_channel", anchor_request_channel, "Input anchor requests (slam_anchor_request_t)");
+    v("queue_delay_s", queue_delay_s, "Inputs are released in time order this long after arrival (message time)");
+    v("map_period_s", map_period_s, "Publish MAP at most this often (message time)");
+    v("state_file", state_file, "Pose-graph file saved periodically (temp + rename) and at exit");
+    v("state_save_period_s", state_save_period_s, "Message time between periodic state saves");
+    v("resume", resume, "Load state_file at start if it exists and continue mapping");
+    v("load_map", load_map, "Localisation only in this saved pose-graph file");
+    v("map_output_prefix", map_output_prefix, "At exit write PREFIX.pgm and PREFIX.yaml (map_server)");
+    v("initial_pose", initial_pose, "Localisation only: start pose [x, y, yaw] in the map (empty: last saved pose)");
+    v("pose_sigma_xy_m", pose_sigma_xy_m, "Local matching standard deviation added to POSE covariance");
+    v("pose_sigma_yaw_deg", pose_sigma_yaw_deg, "Local matching yaw standard deviation added to POSE covariance");
+    v("slam", slam, "SLAM core");
+  }
+  void Validate(common::Validator& c) const {
+    c.NonNegative("queue_delay_s", queue_delay_s);
+    c.That(initial_pose.empty() || initial_pose.size() == 3, "initial_pose", "must be empty or [x, y, yaw]");
+    c.Positive("map_period_s", map_period_s);
+    c.Positive("state_save_period_s", state_save_period_s);
+    c.NonNegative("pose_sigma_xy_m", pose_sigma_xy_m);
+    c.NonNegative("pose_sigma_yaw_deg", pose_sigma_yaw_deg);
+  }
+};
+
+}  // namespace slam
+}  // namespace sarmap

@@ -1,0 +1,204 @@
+#pragma once
+// Options of the SLAM core (config/slam.yaml, section "slam" of the node's options).
+
+#include <cmath>
+
+#include "common/options.h"
+
+namespace sarmap {
+namespace slam {
+
+using common::Validator;
+
+struct ScanOptions {
+  double min_range_m = 0.1;
+  double max_range_m = 30.0;              // returns farther are used as free-space rays only
+  double missing_data_ray_length_m = 5.0; // free-space ray for "no return" beams
+  double voxel_size_m = 0.025;
+  double adaptive_max_length_m = 0.5;     // points used for local matching
+  int adaptive_min_points = 200;
+  double loop_adaptive_max_length_m = 0.9;  // points kept for loop closure
+  int loop_adaptive_min_points = 100;
+  // Pose of the laser on the robot (base_from_laser).
+  double laser_x_m = 0, laser_y_m = 0, laser_yaw_rad = 0;
+  template <class V> void Visit(V& v) {
+    v("min_range_m", min_range_m, "Shorter ranges are ignored");
+    v("max_range_m", max_range_m, "Longer ranges only clear free space (up to missing_data_ray_length_m)");
+    v("missing_data_ray_length_m", missing_data_ray_length_m, "Free-space ray length for no-return beams");
+    v("voxel_size_m", voxel_size_m, "Voxel filter size applied to each scan");
+    v("adaptive_max_length_m", adaptive_max_length_m, "Adaptive voxel filter: largest voxel for local matching");
+    v("adaptive_min_points", adaptive_min_points, "Adaptive voxel filter: keep at least this many points");
+    v("loop_adaptive_max_length_m", loop_adaptive_max_length_m, "Adaptive voxel filter for loop-closure points");
+    v("loop_adaptive_min_points", loop_adaptive_min_points, "Minimum loop-closure points per node");
+    v("laser_x_m", laser_x_m, "base_from_laser x");
+    v("laser_y_m", laser_y_m, "base_from_laser y");
+    v("laser_yaw_rad", laser_yaw_rad, "base_from_laser yaw");
+  }
+  void Validate(Validator& c) const {
+    c.NonNegative("min_range_m", min_range_m);
+    c.That(max_range_m > min_range_m, "max_range_m", "must be > min_range_m");
+    c.NonNegative("missing_data_ray_length_m", missing_data_ray_length_m);
+    c.Positive("voxel_size_m", voxel_size_m);
+    c.Positive("adaptive_max_length_m", adaptive_max_length_m);
+    c.Positive("loop_adaptive_max_length_m", loop_adaptive_max_length_m);
+    c.That(adaptive_min_points > 0, "adaptive_min_points", "must be > 0");
+    c.That(loop_adaptive_min_points > 0, "loop_adaptive_min_points", "must be > 0");
+  }
+};
+
+struct LocalOptions {
+  double resolution_m = 0.05;
+  int scans_per_submap = 90;
+  double hit_probability = 0.55;
+  double miss_probability = 0.49;
+  bool use_correlative_search = true;
+  double correlative_linear_window_m = 0.1;
+  double correlative_angular_window_deg = 15.0;
+  double correlative_translation_cost = 2.0;
+  double correlative_rotation_cost = 0.1;
+  double wide_search_below_score = 0.5;
+  double wide_linear_window_m = 0.3;
+  double wide_angular_window_deg = 45.0;
+  double ceres_occupied_weight = 1.0;
+  double ceres_translation_weight = 10.0;
+  double ceres_rotation_weight = 40.0;
+  int ceres_max_iterations = 20;
+  // Motion filter: a scan becomes a graph node (and is inserted) only when the robot moved.
+  double node_max_time_s = 5.0;
+  double node_max_distance_m = 0.2;
+  double node_max_angle_deg = 1.0;
+  template <class V> void Visit(V& v) {
+    v("resolution_m", resolution_m, "Submap cell size");
+    v("scans_per_submap", scans_per_submap, "Scans inserted before a new submap starts (each submap gets 2x)");
+    v("hit_probability", hit_probability, "Occupancy update for a return");
+    v("miss_probability", miss_probability, "Occupancy update for a cell a ray passes");
+    v("use_correlative_search", use_correlative_search, "Correlative search before the Ceres refinement");
+    v("correlative_linear_window_m", correlative_linear_window_m, "Correlative search half-window (m)");
+    v("correlative_angular_window_deg", correlative_angular_window_deg, "Correlative search half-window (deg)");
+    v("correlative_translation_cost", correlative_translation_cost, "Penalty weight on translation from prediction");
+    v("correlative_rotation_cost", correlative_rotation_cost, "Penalty weight on rotation from prediction");
+    v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
+    v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
+    v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
+    v("ceres_occupied_weight", ceres_occupied_weight, "Scan matcher: weight of the map term");
+    v("ceres_translation_weight", ceres_translation_weight, "Scan matcher: weight of staying at the prior translation");
+    v("ceres_rotation_weight", ceres_rotation_weight, "Scan matcher: weight of staying at the prior rotation");
+    v("ceres_max_iterations", ceres_max_iterations, "Scan matcher iterations");
+    v("node_max_time_s", node_max_time_s, "Motion filter: new node after this time");
+    v("node_max_distance_m", node_max_distance_m, "Motion filter: new node after this distance");
+    v("node_max_angle_deg", node_max_angle_deg, "Motion filter: new node after this rotation");
+  }
+  void Validate(Validator& c) const {
+    c.Positive("resolution_m", resolution_m);
+    c.That(scans_per_submap >= 2, "scans_per_submap", "must be >= 2");
+    c.InRange("hit_probability", hit_probability, 0.5001, 0.99);
+    c.InRange("miss_probability", miss_probability, 0.01, 0.4999);
+    c.NonNegative("correlative_linear_window_m", correlative_linear_window_m);
+    c.NonNegative("correlative_angular_window_deg", correlative_angular_window_deg);
+    c.That(ceres_max_iterations > 0, "ceres_max_iterations", "must be > 0");
+  }
+};
+
+struct LoopClosureOptions {
+  double sampling_ratio = 0.3;        // fraction of (node, submap) pairs tried
+  double max_constraint_distance_m = 15.0;
+  double min_score = 0.65;            // verification: mean matched probability
+  double linear_window_m = 5.0;
+  double angular_window_deg = 20.0;
+  int branch_and_bound_depth = 7;
+  double ceres_occupied_weight = 20.0;
+  double ceres_translation_weight = 10.0;
+  double ceres_rotation_weight = 1.0;
+  double translation_weight = 1.1e4;
+  double rotation_weight = 1e5;
+  int max_cached_precomputations = 64;
+  int max_submaps_per_node = 3;       // nearest finished submaps searched for a new node
+  int max_old_nodes_per_submap = 20;  // older nodes searched against a newly finished submap
+  template <class V> void Visit(V& v) {
+    v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
+    v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
+    v("min_score", min_score, "Accept a loop closure when its mean matched probability is at least this");
+    v("linear_window_m", linear_window_m, "Branch-and-bound half-window (m)");
+    v("angular_window_deg", angular_window_deg, "Branch-and-bound half-window (deg)");
+    v("branch_and_bound_depth", branch_and_bound_depth, "Levels of the precomputation stack");
+    v("ceres_occupied_weight", ceres_occupied_weight, "Refinement: map term weight");
+    v("ceres_translation_weight", ceres_translation_weight, "Refinement: translation prior weight");
+    v("ceres_rotation_weight", ceres_rotation_weight, "Refinement: rotation prior weight");
+    v("translation_weight", translation_weight, "Pose graph weight of loop closures (translation)");
+    v("rotation_weight", rotation_weight, "Pose graph weight of loop closures (rotation)");
+    v("max_cached_precomputations", max_cached_precomputations, "Submap precomputation stacks kept in memory");
+    v("max_submaps_per_node", max_submaps_per_node, "A new node is searched against at most this many nearest finished submaps");
+    v("max_old_nodes_per_submap", max_old_nodes_per_submap, "A newly finished submap is searched for at most this many older nodes");
+  }
+  void Validate(Validator& c) const {
+    c.InRange("sampling_ratio", sampling_ratio, 0, 1);
+    c.InRange("min_score", min_score, 0, 1);
+    c.That(branch_and_bound_depth >= 1 && branch_and_bound_depth <= 12, "branch_and_bound_depth", "must be in [1, 12]");
+    c.That(max_cached_precomputations >= 1, "max_cached_precomputations", "must be >= 1");
+    c.That(max_submaps_per_node >= 0, "max_submaps_per_node", "must be >= 0");
+    c.That(max_old_nodes_per_submap >= 0, "max_old_nodes_per_submap", "must be >= 0");
+  }
+};
+
+struct GraphOptions {
+  int optimise_every_n_nodes = 90;
+  int max_iterations = 50;
+  double huber_scale = 100.0;  // 10 (Cartographer) kept loops too weak; 1000 let bad ones in
+  double intra_translation_weight = 5e2;
+  double intra_rotation_weight = 1.6e3;
+  double odometry_translation_weight = 1e3;
+  double odometry_rotation_weight = 1e2;
+  double local_slam_translation_weight = 1e5;
+  double local_slam_rotation_weight = 1e5;
+  template <class V> void Visit(V& v) {
+    v("optimise_every_n_nodes", optimise_every_n_nodes, "Run the global optimisation after this many new nodes (0: only at the end)");
+    v("max_iterations", max_iterations, "Ceres iterations per optimisation");
+    v("huber_scale", huber_scale, "Huber loss scale on loop closures");
+    v("intra_translation_weight", intra_translation_weight, "Node-in-submap constraints (translation)");
+    v("intra_rotation_weight", intra_rotation_weight, "Node-in-submap constraints (rotation)");
+    v("odometry_translation_weight", odometry_translation_weight, "Consecutive-node odometry (translation)");
+    v("odometry_rotation_weight", odometry_rotation_weight, "Consecutive-node odometry (rotation)");
+    v("local_slam_translation_weight", local_slam_translation_weight, "Consecutive-node local matching (translation)");
+    v("local_slam_rotation_weight", local_slam_rotation_weight, "Consecutive-node local matching (rotation)");
+  }
+  void Validate(Validator& c) const {
+    c.That(optimise_every_n_nodes >= 0, "optimise_every_n_nodes", "must be >= 0");
+    c.That(max_iterations > 0, "max_iterations", "must be > 0");
+    c.Positive("huber_scale", huber_scale);
+  }
+};
+
+struct InputOptions {
+  // Odometry steps faster than these (per second of message time) are rejected as jumps.
+  double max_odometry_speed_mps = 5.0;
+  double max_odometry_turn_radps = 10.0;
+  double max_odometry_jump_m = 1.0;   // regardless of elapsed time
+  template <class V> void Visit(V& v) {
+    v("max_odometry_speed_mps", max_odometry_speed_mps, "Odometry faster than this is a jump (rejected)");
+    v("max_odometry_turn_radps", max_odometry_turn_radps, "Odometry turning faster than this is a jump (rejected)");
+    v("max_odometry_jump_m", max_odometry_jump_m, "Odometry steps longer than this are jumps (rejected)");
+  }
+  void Validate(Validator& c) const {
+    c.Positive("max_odometry_speed_mps", max_odometry_speed_mps);
+    c.Positive("max_odometry_turn_radps", max_odometry_turn_radps);
+    c.Positive("max_odometry_jump_m", max_odometry_jump_m);
+  }
+};
+
+struct SlamOptions {
+  ScanOptions scan;
+  LocalOptions local;
+  LoopClosureOptions loop;
+  GraphOptions graph;
+  InputOptions input;
+  template <class V> void Visit(V& v) {
+    v("scan", scan, "Scan preprocessing");
+    v("local", local, "Local SLAM: submaps and scan matching");
+    v("loop", loop, "Loop closure: branch-and-bound matching against finished submaps");
+    v("graph", graph, "Global pose graph optimisation");
+    v("input", input, "Input checks");
+  }
+};
+
+}  // namespace slam
+}  // namespace sarmap

@@ -1,0 +1,289 @@
+// SLAM core behaviour: the relations metric, the CARMEN reader, input rejection, save/load
+// resume, and a real-data regression on a short prefix of the Intel log.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "slam/carmen.h"
+#include "slam/map_io.h"
+#include "slam/relations.h"
+#include "slam/slam.h"
+
+// Measured on this prefix (see the printout), with a margin.
+#define REL_TRANS_BOUND 0.06
+#define REL_ROT_BOUND 0.6
+
+namespace sarmap {
+namespace slam {
+namespace {
+
+const std::string kIntel = std::string(SARMAP_DATA_DIR) + "/slam/intel/intel.log";
+const std::string kIntelRelations = std::string(SARMAP_DATA_DIR) + "/slam/intel/intel.relations";
+
+TEST(RelationsTest, MetricOfAKnownError) {
+  // Truth: straight line, 1 m steps. Estimate: every step 1.1 m and turned by 1 deg.
+  std::vector<StampedPose2> est;
+  std::vector<Relation> rel;
+  double x = 0, y = 0, yaw = 0;
+  const double turn = M_PI / 180;
+  for (int i = 0; i < 10; ++i) {
+    est.push_back({double(i), x, y, yaw});
+    x += 1.1 * std::cos(yaw);
+    y += 1.1 * std::sin(yaw);
+    yaw += turn;
+    if (i < 9) rel.push_back({double(i), double(i + 1), 1.0, 0.0, 0.0});
+  }
+  const RelationErrors e = EvaluateRelations(est, rel);
+  EXPECT_EQ(e.used, 9);
+  EXPECT_EQ(e.missing, 0);
+  // e = d*^-1 (+) d_est = (1.1 - 1, 0, 1 deg): 0.1 m and 1 deg for every relation.
+  EXPECT_NEAR(e.abs_trans_m.mean, 0.1, 1e-9);
+  EXPECT_NEAR(e.abs_trans_m.std, 0.0, 1e-9);
+  EXPECT_NEAR(e.sq_trans_m2.mean, 0.01, 1e-9);
+  EXPECT_NEAR(e.abs_rot_deg.mean, 1.0, 1e-9);
+  EXPECT_NEAR(e.sq_rot_deg2.mean, 1.0, 1e-9);
+  // A relation outside the trajectory is counted as missing.
+  rel.push_back({100, 101, 1, 0, 0});
+  EXPECT_EQ(EvaluateRelations(est, rel).missing, 1);
+}
+
+TEST(CarmenTest, ParsesTheLineTypesAndCountsMalformedLines) {
+  std::istringstream in(
+      "# comment\n"
+      "PARAM robot_length 0.5 host 0\n"
+      "ODOM 1.0 2.0 0.5 0.1 0.2 0 100.5 host 100.5\n"
+      "FLASER 3 1.0 2.0 3.0 9 9 9 1.5 2.5 0.25 100.6 host 0.1\n"
+      "RAWLASER1 0 -1.5 3.0 0.01 80 0.01 0 2 4.0 5.0 0 100.7 host 100.7\n"
+      "ROBOTLASER1 0 -1.5 3.0 0.01 80 0.01 0 1 7.0 0 1.1 0.0 0.0 1.0 0.0 0.0 0 0 0 0 0 100.8 host 1\n"
+      "ODOM 1.0 oops\n");
+  CarmenReader reader;
+  std::vector<CarmenOdometry> odom;
+  std::vector<CarmenLaser> lasers;
+  reader.on_odometry = [&](const CarmenOdometry& o) { odom.push_back(o); };
+  reader.on_laser = [&](const CarmenLaser& l) { lasers.push_back(l); };
+  const CarmenStats s = reader.Read(in);
+  EXPECT_EQ(s.odometry, 1);
+  EXPECT_EQ(s.lasers, 3);
+  EXPECT_EQ(s.malformed, 1);
+  EXPECT_EQ(s.skipped_unknown, 1);
+  ASSERT_EQ(odom.size(), 1u);
+  EXPECT_DOUBLE_EQ(odom[0].time_s, 100.5);
+  ASSERT_EQ(lasers.size(), 3u);
+  EXPECT_EQ(lasers[0].source, "FLASER");
+  EXPECT_TRUE(lasers[0].has_odometry);
+  EXPECT_DOUBLE_EQ(lasers[0].odometry.theta_rad, 0.25);
+  EXPECT_NEAR(lasers[0].angle_increment_rad, M_PI / 2, 1e-12);
+  EXPECT_DOUBLE_EQ(lasers[1].time_s, 100.7);
+  EXPECT_EQ(lasers[1].ranges_m.size(), 2u);
+  // ROBOTLASER1: laser 0.1 m ahead of the robot.
+  EXPECT_NEAR(lasers[2].base_from_laser_x_m, 0.1, 1e-12);
+  EXPECT_DOUBLE_EQ(lasers[2].time_s, 100.8);
+}
+
+LaserScan MakeScan(double t, int n = 180) {
+  LaserScan s;
+  s.time_s = t;
+  s.angle_min_rad = -M_PI / 2;
+  s.angle_increment_rad = M_PI / (n - 1);
+  s.range_min_m = 0;
+  s.range_max_m = 30;
+  s.ranges_m.assign(n, 3.0f);
+  return s;
+}
+
+TEST(SlamInputTest, GarbageScansAndOdometryJumpsAreRejectedAndCounted) {
+  Slam slam{SlamOptions()};
+  EXPECT_TRUE(slam.AddOdometry(0.0, Rigid2d(0, 0, 0)));
+  EXPECT_TRUE(slam.AddScan(MakeScan(0.0)).accepted);
+  LaserScan nan_scan = MakeScan(0.1);
+  nan_scan.ranges_m[10] = std::nanf("");
+  EXPECT_FALSE(slam.AddScan(nan_scan).accepted);
+  LaserScan negative = MakeScan(0.2);
+  negative.ranges_m[3] = -1.0f;
+  EXPECT_FALSE(slam.AddScan(negative).accepted);
+  EXPECT_FALSE(slam.AddScan(MakeScan(0.3, 90)).accepted);  // wrong beam count
+  LaserScan bad_angles = MakeScan(0.4);
+  bad_angles.angle_increment_rad = std::nan("");
+  EXPECT_FALSE(slam.AddScan(bad_angles).accepted);
+  EXPECT_EQ(slam.stats().rejected_scans, 4);
+  // +inf is "no return", not garbage.
+  LaserScan inf_scan = MakeScan(0.5);
+  inf_scan.ranges_m[0] = INFINITY;
+  EXPECT_TRUE(slam.AddScan(inf_scan).accepted);
+  // Odometry: a 5 m jump in 0.1 s is rejected; normal motion is not; a jump that persists
+  // (an odometry reset) is accepted as a new odometry segment after one rejection.
+  EXPECT_TRUE(slam.AddOdometry(0.1, Rigid2d(0.02, 0, 0)));
+  EXPECT_FALSE(slam.AddOdometry(0.2, Rigid2d(5.0, 0, 0)));
+  EXPECT_TRUE(slam.AddOdometry(0.3, Rigid2d(0.05, 0, 0)));
+  EXPECT_FALSE(slam.AddOdometry(0.4, Rigid2d(0.05, 0, 2.0)));  // 115 deg in 0.1 s
+  EXPECT_FALSE(slam.AddOdometry(0.5, Rigid2d(std::nan(""), 0, 0)));
+  EXPECT_EQ(slam.stats().rejected_odometry, 3);
+  EXPECT_FALSE(slam.AddOdometry(0.6, Rigid2d(10.0, 0, 0)));
+  EXPECT_TRUE(slam.AddOdometry(0.7, Rigid2d(10.01, 0, 0)));  // reset confirmed
+  EXPECT_EQ(slam.stats().rejected_odometry, 4);
+}
+
+// Feeds the Intel log in time order (as the node's time-ordered queue and
+// sarmap-slam-offline do), scans [first_scan, max_scans) and the odometry between them.
+int FeedIntel(Slam* slam, int first_scan, int max_scans) {
+  struct Item {
+    double t;
+    bool is_scan;
+    CarmenOdometry odom;
+    LaserScan scan;
+  };
+  static std::vector<Item> items;  // parsed once per test binary
+  if (items.empty()) {
+    CarmenReader reader;
+    int scans = 0;
+    reader.on_odometry = [&](const CarmenOdometry& o) { items.push_back({o.time_s, false, o, {}}); };
+    reader.on_laser = [&](const CarmenLaser& l) {
+      if (scans++ > 2000) return;
+      LaserScan s;
+      s.time_s = l.time_s;
+      s.angle_min_rad = l.angle_min_rad;
+      s.angle_increment_rad = l.angle_increment_rad;
+      s.range_min_m = 0;
+      s.range_max_m = std::nextafter(static_cast<float>(l.range_max_m), 0.f);
+      s.ranges_m = l.ranges_m;
+      items.push_back({l.time_s, true, {}, s});
+    };
+    ReadCarmenFile(kIntel, &reader);
+    std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.t < b.t; });
+  }
+  int scans = 0, fed = 0;
+  for (const Item& it : items) {
+    if (scans >= max_scans) break;
+    if (scans >= first_scan) {
+      if (it.is_scan) {
+        slam->AddScan(it.scan);
+        ++fed;
+      } else {
+        slam->AddOdometry(it.t, Rigid2d(it.odom.x_m, it.odom.y_m, it.odom.theta_rad));
+      }
+    }
+    scans += it.is_scan;
+  }
+  return fed;
+}
+
+constexpr int kPrefixScans = 500;  // ~100 s of the Intel log
+
+TEST(SlamRealDataTest, IntelPrefixMatchesTheRelations) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  Slam slam{SlamOptions()};
+  ASSERT_EQ(FeedIntel(&slam, 0, kPrefixScans), kPrefixScans);
+  slam.Optimise();
+  const auto traj = slam.Trajectory();
+  ASSERT_EQ(static_cast<int>(traj.size()), kPrefixScans);
+  // Relations within the prefix.
+  std::vector<Relation> rel;
+  for (const Relation& r : LoadRelations(kIntelRelations)) {
+    if (r.t1_s >= traj.front().time_s && r.t2_s <= traj.back().time_s && r.t1_s <= traj.back().time_s &&
+        r.t2_s >= traj.front().time_s) {
+      rel.push_back(r);
+    }
+  }
+  const RelationErrors e = EvaluateRelations(traj, rel);
+  std::printf("Intel prefix: %d relations, abs trans %.4f +- %.4f m, abs rot %.3f +- %.3f deg, "
+              "%lld loop closures\n",
+              e.used, e.abs_trans_m.mean, e.abs_trans_m.std, e.abs_rot_deg.mean, e.abs_rot_deg.std,
+              (long long)slam.stats().loop_closures);
+  EXPECT_GT(e.used, 30);
+  EXPECT_EQ(e.missing, 0);
+  // Regression bounds (measured values are printed above and in the README).
+  EXPECT_LT(e.abs_trans_m.mean, REL_TRANS_BOUND);
+  EXPECT_LT(e.abs_rot_deg.mean, REL_ROT_BOUND);
+}
+
+TEST(SlamRealDataTest, SaveLoadResumesMapping) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  const int half = kPrefixScans / 2;
+  Slam first{SlamOptions()};
+  FeedIntel(&first, 0, half);
+  const std::string path = ::testing::TempDir() + "/slam_resume.pg";
+  first.Save(path);
+  // A new process loads the saved state and continues with the rest of the log.
+  Slam resumed{SlamOptions()};
+  resumed.Load(path);
+  EXPECT_EQ(resumed.num_nodes(), first.num_nodes());
+  FeedIntel(&resumed, half, kPrefixScans);
+  resumed.Optimise();
+  EXPECT_GT(resumed.num_nodes(), first.num_nodes());
+  // The resumed map continues the first one: its poses agree with an uninterrupted run.
+  Slam full{SlamOptions()};
+  FeedIntel(&full, 0, kPrefixScans);
+  full.Optimise();
+  const Rigid2d a = resumed.CurrentPose(), b = full.CurrentPose();
+  std::printf("resumed end pose %.3f %.3f %.3f, uninterrupted %.3f %.3f %.3f\n", a.translation().x(),
+              a.translation().y(), a.yaw_rad(), b.translation().x(), b.translation().y(), b.yaw_rad());
+  EXPECT_LT((a.translation() - b.translation()).norm(), 0.3);
+  EXPECT_LT(std::abs(std::remainder(a.yaw_rad() - b.yaw_rad(), 2 * M_PI)), 0.05);
+  // A truncated file is refused with a clear error.
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream out(path + ".cut", std::ios::binary);
+    out.write(bytes.data(), bytes.size() / 2);
+  }
+  Slam broken{SlamOptions()};
+  EXPECT_THROW(broken.Load(path + ".cut"), std::runtime_error);
+  // Localisation only on the saved map: scans of the mapped stretch, replayed, are tracked
+  // against the map (no new nodes) and land where mapping put them.
+  Slam localiser{SlamOptions()};
+  localiser.SetLocalisationOnly(true);
+  localiser.Load(path);
+  const int nodes_before = localiser.num_nodes();
+  {
+    // Start from the mapped pose of the first replayed scan, perturbed by 0.14 m and 3 deg.
+    Slam probe{SlamOptions()};
+    FeedIntel(&probe, 0, half - 150 + 1);
+    const Rigid2d start = probe.CurrentPose();
+    localiser.SetLocalisationStart(
+        Rigid2d(start.translation() + Eigen::Vector2d(0.1, -0.1), start.yaw_rad() + 0.05));
+  }
+  FeedIntel(&localiser, half - 150, half);
+  EXPECT_EQ(localiser.num_nodes(), nodes_before);
+  const auto traj = localiser.Trajectory();
+  ASSERT_EQ(traj.size(), 150u);
+  const auto first_traj = first.Trajectory();
+  std::vector<double> dev;
+  for (const auto& p : traj) {
+    StampedPose2 q;
+    ASSERT_TRUE(PoseAt(first_traj, p.time_s, 1e-3, 0.5, &q));
+    dev.push_back(std::hypot(p.x_m - q.x_m, p.y_m - q.y_m));
+  }
+  std::sort(dev.begin(), dev.end());
+  std::printf("localisation-only: median deviation from the mapping run %.3f m, 90%% %.3f m\n",
+              dev[dev.size() / 2], dev[dev.size() * 9 / 10]);
+  // Measured: the localiser tracks the map but keeps most of the 0.14 m start offset (median
+  // ~0.13 m, 90% ~0.33 m): a known weakness, asserted as measured rather than hidden.
+  EXPECT_LT(dev[dev.size() / 2], 0.2);
+  EXPECT_LT(dev[dev.size() * 9 / 10], 0.4);
+  const auto full_traj = full.Trajectory();
+  // Map export: PGM + YAML that read back.
+  const OccupancyMap map = full.RenderMap();
+  SaveMapServerMap(map, ::testing::TempDir() + "/intel_prefix");
+  const OccupancyMap back = LoadMapServerMap(::testing::TempDir() + "/intel_prefix.yaml");
+  EXPECT_EQ(back.width, map.width);
+  EXPECT_EQ(back.height, map.height);
+  EXPECT_NEAR(back.origin_x_m, map.origin_x_m, 1e-6);
+  int occupied_agree = 0, occupied = 0;
+  for (size_t i = 0; i < map.cells.size(); ++i) {
+    if (map.cells[i] >= 65) {
+      ++occupied;
+      occupied_agree += back.cells[i] == 100;
+    }
+  }
+  EXPECT_GT(occupied, 100);
+  EXPECT_EQ(occupied_agree, occupied);
+}
+
+}  // namespace
+}  // namespace slam
+}  // namespace sarmap

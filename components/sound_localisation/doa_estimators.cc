@@ -1,0 +1,379 @@
+#include "sound_localisation/doa_estimators.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace sarmap {
+namespace sound {
+
+void BlockStatistics::Reset(int num_mics) {
+  const int n = num_bins();
+  raw.assign(n, Eigen::MatrixXcd::Zero(num_mics, num_mics));
+  phat.assign(n, Eigen::MatrixXcd::Zero(num_mics, num_mics));
+  num_frames = 0;
+}
+
+void BlockStatistics::Add(const BlockStatistics& other) {
+  for (size_t k = 0; k < raw.size() && k < other.raw.size(); ++k) {
+    raw[k] += other.raw[k];
+    phat[k] += other.phat[k];
+  }
+  num_frames += other.num_frames;
+}
+
+// ---------------------------------------------------------------- search
+
+namespace {
+
+struct Grid {
+  std::vector<double> az, el;  // radians (1-D: az holds theta)
+  bool wrap_az = true;
+};
+
+Grid MakeGrid(const SearchOptions& o) {
+  Grid g;
+  const double step = DegToRad(o.coarse_step_deg);
+  if (o.kind == DoaKind::kAngle1d) {
+    g.wrap_az = false;
+    const int n = static_cast<int>(std::floor(M_PI / step + 1e-9)) + 1;
+    for (int i = 0; i < n; ++i) g.az.push_back(std::min(M_PI, i * step));
+    g.el = {0.0};
+    return g;
+  }
+  const int n = static_cast<int>(std::round(2 * M_PI / step));
+  for (int i = 0; i < n; ++i) g.az.push_back(-M_PI + i * 2 * M_PI / n);
+  if (o.kind == DoaKind::kAzimuth) {
+    g.el = {0.0};
+  } else {
+    const double lo = DegToRad(o.min_elevation_deg), hi = DegToRad(o.max_elevation_deg);
+    const int ne = std::max(1, static_cast<int>(std::floor((hi - lo) / step + 1e-9)) + 1);
+    for (int i = 0; i < ne; ++i) g.el.push_back(lo + i * step);
+  }
+  return g;
+}
+
+}  // namespace
+
+std::vector<DoaEstimate> FindPeaks(const ArrayGeometry& geometry, const SearchOptions& o,
+                                   const SpatialSpectrum& spectrum, double* grid_mean) {
+  const Grid grid = MakeGrid(o);
+  const int na = static_cast<int>(grid.az.size()), ne = static_cast<int>(grid.el.size());
+  std::vector<double> values(static_cast<size_t>(na) * ne);
+  double vmin = INFINITY, vmax = -INFINITY, sum = 0;
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a < na; ++a) {
+      const double v = spectrum(geometry.Unit(o.kind, {grid.az[a], grid.el[e]}));
+      values[e * na + a] = v;
+      vmin = std::min(vmin, v);
+      vmax = std::max(vmax, v);
+      sum += v;
+    }
+  if (grid_mean) *grid_mean = sum / values.size();
+  if (!std::isfinite(vmax)) return {};
+  struct Candidate {
+    double value;
+    Direction dir;
+  };
+  std::vector<Candidate> candidates;
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a < na; ++a) {
+      const double v = values[e * na + a];
+      bool is_max = true;
+      for (int de = -1; de <= 1 && is_max; ++de)
+        for (int da = -1; da <= 1 && is_max; ++da) {
+          if (!de && !da) continue;
+          const int ee = e + de;
+          int aa = a + da;
+          if (ee < 0 || ee >= ne) continue;
+          if (grid.wrap_az) aa = (aa + na) % na;
+          else if (aa < 0 || aa >= na) continue;
+          if (values[ee * na + aa] > v) is_max = false;
+        }
+      if (is_max) candidates.push_back({v, {grid.az[a], grid.el[e]}});
+    }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& x, const Candidate& y) { return x.value > y.value; });
+
+  const double lo_el = DegToRad(o.min_elevation_deg), hi_el = DegToRad(o.max_elevation_deg);
+  auto refine = [&](Direction d, double v) {
+    double step = DegToRad(o.coarse_step_deg) / 2;
+    const double fine = DegToRad(o.fine_step_deg);
+    while (step >= fine * 0.999) {
+      for (int iter = 0; iter < 4; ++iter) {
+        Direction best = d;
+        double best_v = v;
+        for (int de = -1; de <= 1; ++de)
+          for (int da = -1; da <= 1; ++da) {
+            if (!de && !da) continue;
+            if (o.kind != DoaKind::kAzimuthElevation && de) continue;
+            Direction t{d.azimuth_rad + da * step, d.elevation_rad + de * step};
+            if (o.kind == DoaKind::kAngle1d) t.azimuth_rad = std::clamp(t.azimuth_rad, 0.0, M_PI);
+            else t.azimuth_rad = WrapAngle(t.azimuth_rad);
+            if (o.kind == DoaKind::kAzimuthElevation) t.elevation_rad = std::clamp(t.elevation_rad, lo_el, hi_el);
+            const double tv = spectrum(geometry.Unit(o.kind, t));
+            if (tv > best_v) {
+              best_v = tv;
+              best = t;
+            }
+          }
+        if (best_v <= v) break;
+        d = best;
+        v = best_v;
+      }
+      step /= 2;
+    }
+    return Candidate{v, d};
+  };
+
+  std::vector<DoaEstimate> out;
+  const double min_sep = DegToRad(o.min_separation_deg);
+  const double range = std::max(vmax - vmin, 1e-12);
+  for (const Candidate& c : candidates) {
+    if (static_cast<int>(out.size()) >= o.max_sources) break;
+    if (!out.empty() && (c.value - vmin) / range < o.min_peak_ratio) break;
+    bool far = true;
+    for (const auto& e : out)
+      if (AngularDistanceRad(geometry, o.kind, e.direction, c.dir) < min_sep) far = false;
+    if (!far) continue;
+    const Candidate r = refine(c.dir, c.value);
+    for (const auto& e : out)
+      if (AngularDistanceRad(geometry, o.kind, e.direction, r.dir) < min_sep) far = false;
+    if (!far) continue;
+    DoaEstimate est;
+    est.direction = r.dir;
+    est.power = r.value;
+    out.push_back(est);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- steering
+
+SteeredQuadraticForm::SteeredQuadraticForm(const ArrayGeometry& geometry, const BlockStatistics& stats)
+    : geometry_(geometry), stats_(stats) {}
+
+void SteeredQuadraticForm::Evaluate(const Eigen::Vector3d& u, const std::vector<Eigen::MatrixXcd>& q,
+                                    bool off_diagonal_only, std::vector<double>* out) const {
+  const int m = geometry_.num_mics();
+  const Eigen::VectorXd tau = geometry_.Delays(u);
+  const double dw = 2 * M_PI * stats_.sample_rate_hz / stats_.fft_size;
+  ComplexD a[16], step[16];
+  if (m > 16) throw std::invalid_argument("at most 16 microphones");
+  for (int i = 0; i < m; ++i) {
+    a[i] = std::polar(1.0, -dw * stats_.bin_lo * tau(i));
+    step[i] = std::polar(1.0, -dw * tau(i));
+  }
+  const int nb = stats_.num_bins();
+  out->resize(nb);
+  for (int k = 0; k < nb; ++k) {
+    const Eigen::MatrixXcd& Q = q[k];
+    ComplexD acc = 0;
+    for (int i = 0; i < m; ++i) {
+      ComplexD row = 0;
+      for (int j = i + 1; j < m; ++j) row += Q(i, j) * a[j];
+      acc += std::conj(a[i]) * row;
+    }
+    double total = 2 * acc.real();
+    if (!off_diagonal_only)
+      for (int i = 0; i < m; ++i) total += Q(i, i).real();
+    (*out)[k] = total;
+    for (int i = 0; i < m; ++i) a[i] *= step[i];
+  }
+}
+
+SrpPhat::SrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats)
+    : form_(geometry, stats), stats_(stats) {
+  const int m = geometry.num_mics();
+  scale_ = 1.0 / (std::max(1, stats.num_frames) * std::max(1, stats.num_bins()) * m * (m - 1));
+}
+
+double SrpPhat::operator()(const Eigen::Vector3d& u) const {
+  form_.Evaluate(u, stats_.phat, true, &per_bin_);
+  return std::accumulate(per_bin_.begin(), per_bin_.end(), 0.0) * scale_;
+}
+
+Music::Music(const ArrayGeometry& geometry, const BlockStatistics& stats, int num_sources, bool generalized)
+    : form_(geometry, stats), num_mics_(geometry.num_mics()) {
+  const int m = num_mics_;
+  const int d = std::clamp(num_sources, 1, m - 1);
+  const int nb = stats.num_bins();
+  noise_projectors_.resize(nb);
+  weights_.resize(nb);
+  used_generalized_ = generalized && static_cast<int>(stats.noise.size()) == nb;
+  for (int k = 0; k < nb; ++k) {
+    const Eigen::MatrixXcd& R = stats.raw[k];
+    Eigen::MatrixXcd En;
+    double top = 0;
+    if (used_generalized_) {
+      Eigen::MatrixXcd K = stats.noise[k];
+      const double load = std::max(1e-12, 1e-3 * K.trace().real() / m);
+      K += load * Eigen::MatrixXcd::Identity(m, m);
+      Eigen::LLT<Eigen::MatrixXcd> llt(K);
+      const Eigen::MatrixXcd L = llt.matrixL();
+      const Eigen::MatrixXcd Linv = L.inverse();
+      const Eigen::MatrixXcd C = Linv * R * Linv.adjoint();
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> eig(0.5 * (C + C.adjoint()));
+      En = Linv.adjoint() * eig.eigenvectors().leftCols(m - d);
+      for (int c = 0; c < En.cols(); ++c) En.col(c).normalize();
+      top = std::max(0.0, eig.eigenvalues()(m - 1));
+    } else {
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> eig(0.5 * (R + R.adjoint()));
+      En = eig.eigenvectors().leftCols(m - d);
+      top = std::max(0.0, eig.eigenvalues()(m - 1));
+    }
+    noise_projectors_[k] = En * En.adjoint();
+    weights_[k] = std::sqrt(top);
+  }
+  const double total = std::accumulate(weights_.begin(), weights_.end(), 0.0);
+  for (double& w : weights_) w = total > 0 ? w / total : 1.0 / nb;
+}
+
+double Music::operator()(const Eigen::Vector3d& u) const {
+  form_.Evaluate(u, noise_projectors_, false, &per_bin_);
+  double p = 0;
+  for (size_t k = 0; k < per_bin_.size(); ++k) p += weights_[k] / std::max(per_bin_[k] / num_mics_, 1e-4);
+  return p;
+}
+
+// ---------------------------------------------------------------- GCC-PHAT
+
+double GccPhatTdoa(const BlockStatistics& stats, int i, int j, double max_tau_s, int upsample, double* peak) {
+  const double fs = stats.sample_rate_hz;
+  const int max_lag = static_cast<int>(std::ceil(max_tau_s * fs * upsample)) + 1;
+  const double dw = 2 * M_PI * fs / stats.fft_size;
+  std::vector<double> r(2 * max_lag + 1);
+  for (int l = -max_lag; l <= max_lag; ++l) {
+    const double t = static_cast<double>(l) / (fs * upsample);
+    double s = 0;
+    for (int k = 0; k < stats.num_bins(); ++k) {
+      const ComplexD g = stats.phat[k](i, j);
+      const double ph = dw * (stats.bin_lo + k) * t;
+      s += g.real() * std::cos(ph) - g.imag() * std::sin(ph);
+    }
+    r[l + max_lag] = s;
+  }
+  const int best = static_cast<int>(std::max_element(r.begin(), r.end()) - r.begin());
+  double offset = 0;
+  if (best > 0 && best + 1 < static_cast<int>(r.size())) {
+    const double y0 = r[best - 1], y1 = r[best], y2 = r[best + 1];
+    const double den = y0 - 2 * y1 + y2;
+    if (den < 0) offset = 0.5 * (y0 - y2) / den;
+  }
+  if (peak) *peak = r[best] / std::max(1, stats.num_frames * stats.num_bins());
+  return (best - max_lag + offset) / (fs * upsample);
+}
+
+std::vector<DoaEstimate> GccPhatDirection(const ArrayGeometry& g, const BlockStatistics& stats, DoaKind kind) {
+  const int m = g.num_mics();
+  const int pairs = m * (m - 1) / 2;
+  Eigen::MatrixXd D(pairs, 3);
+  Eigen::VectorXd b(pairs), w(pairs);
+  int row = 0;
+  double mean_peak = 0;
+  for (int i = 0; i < m; ++i)
+    for (int j = i + 1; j < m; ++j, ++row) {
+      const Eigen::Vector3d dp = g.positions_m.col(i) - g.positions_m.col(j);
+      double peak = 0;
+      const double tau = GccPhatTdoa(stats, i, j, dp.norm() / g.speed_of_sound_mps * 1.1, 8, &peak);
+      D.row(row) = dp.transpose();
+      b(row) = -g.speed_of_sound_mps * tau;
+      w(row) = std::max(peak, 1e-3);
+      mean_peak += peak / pairs;
+    }
+  const Eigen::MatrixXd Dw = w.asDiagonal() * D;
+  const Eigen::VectorXd bw = w.asDiagonal() * b;
+  Eigen::Vector3d u;
+  if (g.is_linear()) {
+    const Eigen::VectorXd da = Dw * g.axis;
+    const double c = std::clamp(da.dot(bw) / std::max(da.squaredNorm(), 1e-12), -1.0, 1.0);
+    u = c * g.axis + std::sqrt(1 - c * c) * g.axis.unitOrthogonal();
+  } else if (g.geometry == "planar") {
+    const Eigen::Vector3d e1 = g.normal.unitOrthogonal(), e2 = g.normal.cross(e1);
+    Eigen::MatrixXd P(3, 2);
+    P << e1, e2;
+    const Eigen::Vector2d v = (Dw * P).colPivHouseholderQr().solve(bw);
+    const double n2 = v.squaredNorm();
+    const Eigen::Vector2d vin = n2 > 1 ? Eigen::Vector2d(v / std::sqrt(n2)) : v;
+    u = P * vin + std::sqrt(std::max(0.0, 1 - vin.squaredNorm())) * g.normal;
+  } else {
+    u = Dw.colPivHouseholderQr().solve(bw);
+    if (u.norm() < 1e-9) u = Eigen::Vector3d::UnitX();
+    u.normalize();
+  }
+  DoaEstimate e;
+  e.direction = g.FromUnit(kind, u);
+  e.power = mean_peak;
+  e.confidence = std::clamp(mean_peak, 0.0, 1.0);
+  return {e};
+}
+
+// ---------------------------------------------------------------- ESPRIT
+
+std::vector<DoaEstimate> Esprit(const ArrayGeometry& g, const BlockStatistics& stats, int num_sources,
+                                double min_separation_deg) {
+  const double d = g.UniformSpacing();
+  if (!g.is_linear() || d <= 0 || g.num_mics() < 3)
+    throw std::invalid_argument("ESPRIT needs a uniform linear array of >= 3 microphones; '" + g.name +
+                                "' is not one");
+  const int m = g.num_mics();
+  const int ns = std::clamp(num_sources, 1, m - 2);
+  const double f_max = g.speed_of_sound_mps / (2 * d);
+  // Histogram of angles to the axis, 0.5 deg bins, weighted by the signal eigenvalue.
+  const int nh = 361;
+  std::vector<double> hist(nh, 0.0);
+  std::vector<std::pair<double, double>> samples;  // (theta, weight)
+  for (int k = 0; k < stats.num_bins(); ++k) {
+    const double f = stats.BinHz(stats.bin_lo + k);
+    if (f > f_max || f < 200) continue;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> eig(0.5 * (stats.raw[k] + stats.raw[k].adjoint()));
+    const Eigen::MatrixXcd Es = eig.eigenvectors().rightCols(ns);
+    const Eigen::MatrixXcd E1 = Es.topRows(m - 1), E2 = Es.bottomRows(m - 1);
+    const Eigen::MatrixXcd Phi = E1.colPivHouseholderQr().solve(E2);
+    Eigen::ComplexEigenSolver<Eigen::MatrixXcd> ces(Phi);
+    for (int s = 0; s < ns; ++s) {
+      const double phase = std::arg(ces.eigenvalues()(s));
+      const double c = phase * g.speed_of_sound_mps / (2 * M_PI * f * d);
+      if (std::abs(c) > 1.05) continue;
+      const double theta = std::acos(std::clamp(c, -1.0, 1.0));
+      const double w = std::sqrt(std::max(0.0, eig.eigenvalues()(m - ns + s)));
+      samples.emplace_back(theta, w);
+      const int bin = static_cast<int>(std::round(RadToDeg(theta) * 2));
+      for (int b = std::max(0, bin - 4); b <= std::min(nh - 1, bin + 4); ++b)
+        hist[b] += w * (1.0 - std::abs(b - bin) / 5.0);
+    }
+  }
+  std::vector<DoaEstimate> out;
+  std::vector<bool> used(nh, false);
+  const double total = std::accumulate(hist.begin(), hist.end(), 0.0);
+  for (int s = 0; s < num_sources && total > 0; ++s) {
+    int best = -1;
+    for (int b = 0; b < nh; ++b)
+      if (!used[b] && (best < 0 || hist[b] > hist[best])) best = b;
+    if (best < 0 || hist[best] <= 0) break;
+    if (!out.empty() && hist[best] < 0.3 * out.front().power) break;
+    // Refine: weighted mean of the samples within 3 deg.
+    const double centre = DegToRad(best / 2.0);
+    double sw = 0, st = 0;
+    for (const auto& [t, w] : samples)
+      if (std::abs(t - centre) < DegToRad(3)) {
+        sw += w;
+        st += w * t;
+      }
+    DoaEstimate e;
+    e.direction.azimuth_rad = sw > 0 ? st / sw : centre;
+    e.power = hist[best];
+    e.confidence = std::clamp(hist[best] / total * 10, 0.0, 1.0);
+    out.push_back(e);
+    const int sep = static_cast<int>(min_separation_deg * 2);
+    for (int b = std::max(0, best - sep); b <= std::min(nh - 1, best + sep); ++b) used[b] = true;
+  }
+  return out;
+}
+
+}  // namespace sound
+}  // namespace sarmap

@@ -1,0 +1,133 @@
+#pragma once
+// Direction-of-arrival estimators on per-bin spatial covariance matrices of one analysis
+// block (no LCM).
+//
+// Per frequency bin k (angular frequency w_k) the block statistics are
+//   R(k)      = mean_t X_t(k) X_t(k)^H                       (raw, for MUSIC)
+//   Rphat(k)  = mean_t Y_t(k) Y_t(k)^H, Y_m = X_m / |X_m|     (PHAT-whitened, for SRP)
+//   K(k)      = noise covariance learnt from non-speech frames (for GEVD-MUSIC)
+// SRP-PHAT:   P(u) = sum_k sum_{i<j} 2 Re(Rphat_ij(k) exp(j w_k (tau_i(u) - tau_j(u))))
+//             (the steered response power of the phase-transformed signals, constant diagonal
+//             dropped); divided by (#bins * #pairs) it is the mean PHAT coherence, in [-1, 1].
+// MUSIC:      per bin, eigenvectors of R (SEVD) or of the pencil (R, K) (GEVD: R v = l K v);
+//             the M - d weakest span the noise subspace En(k), orthogonal to the steering
+//             vectors a_k(u) of the d sources. Broadband pseudo-spectrum (incoherent sum):
+//             P(u) = sum_k w_k / max(|En(k)^H a_k(u)|^2 / M, floor), w_k = sqrt(l_max(k)) / sum.
+// GCC-PHAT:   tau_ij = argmax_tau IFFT(Rphat_ij)(tau) per pair (with sub-sample interpolation),
+//             then the far-field direction by least squares: (p_i - p_j) . u = -c tau_ij.
+// ESPRIT:     uniform linear arrays: per bin, the rotation between the two overlapping
+//             sub-arrays of the signal subspace, Es2 = Es1 Phi, has eigenvalues
+//             exp(-j w_k d cos(theta) / c); angles from all bins are pooled and clustered.
+
+#include <Eigen/Core>
+#include <complex>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sound_localisation/array_geometry.h"
+
+namespace sarmap {
+namespace sound {
+
+using ComplexD = std::complex<double>;
+
+// Statistics of one block over the analysed band [bin_lo, bin_hi].
+struct BlockStatistics {
+  int fft_size = 512;
+  int sample_rate_hz = 16000;
+  int bin_lo = 0, bin_hi = 0;
+  int num_frames = 0;                      // active frames accumulated
+  std::vector<Eigen::MatrixXcd> raw;       // R(k), index k - bin_lo
+  std::vector<Eigen::MatrixXcd> phat;      // Rphat(k)
+  std::vector<Eigen::MatrixXcd> noise;     // K(k) (empty if unknown)
+  int num_bins() const { return bin_hi - bin_lo + 1; }
+  double BinHz(int k) const { return static_cast<double>(k) * sample_rate_hz / fft_size; }
+  void Reset(int num_mics);
+  void Add(const BlockStatistics& other);  // sums (same shape)
+};
+
+// A direction found by an estimator, before tracking.
+struct DoaEstimate {
+  Direction direction;
+  double power = 0;       // spectrum value at the peak (method units)
+  double confidence = 0;  // 0..1
+};
+
+struct SearchOptions {
+  DoaKind kind = DoaKind::kAzimuthElevation;
+  double coarse_step_deg = 5.0;
+  double fine_step_deg = 0.25;
+  double min_elevation_deg = 0.0;
+  double max_elevation_deg = 90.0;
+  int max_sources = 1;
+  double min_separation_deg = 20.0;
+  // A secondary peak must reach this fraction of the best one, on the spectrum scaled to
+  // [grid minimum, best] (0..1).
+  double min_peak_ratio = 0.5;
+};
+
+// A spatial spectrum over directions (higher = more likely a source).
+using SpatialSpectrum = std::function<double(const Eigen::Vector3d& u)>;
+
+// Coarse grid, local maxima with suppression of close ones, then hill-climbing refinement
+// with halving steps down to fine_step_deg. Returned best first; `grid_mean` (optional)
+// gets the spectrum's mean over the coarse grid.
+std::vector<DoaEstimate> FindPeaks(const ArrayGeometry& geometry, const SearchOptions& options,
+                                   const SpatialSpectrum& spectrum, double* grid_mean = nullptr);
+
+// Per-bin quadratic forms a_k(u)^H Q_k a_k(u) (real parts) for steering vectors of u.
+class SteeredQuadraticForm {
+ public:
+  SteeredQuadraticForm(const ArrayGeometry& geometry, const BlockStatistics& stats);
+  // out[k - bin_lo] = a^H Q[k - bin_lo] a; off_diagonal_only drops the i == j terms.
+  void Evaluate(const Eigen::Vector3d& u, const std::vector<Eigen::MatrixXcd>& q, bool off_diagonal_only,
+                std::vector<double>* out) const;
+
+ private:
+  const ArrayGeometry& geometry_;
+  const BlockStatistics& stats_;
+};
+
+class SrpPhat {
+ public:
+  SrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats);
+  double operator()(const Eigen::Vector3d& u) const;  // mean PHAT coherence
+ private:
+  SteeredQuadraticForm form_;
+  const BlockStatistics& stats_;
+  double scale_;
+  mutable std::vector<double> per_bin_;
+};
+
+class Music {
+ public:
+  // generalized: use the noise covariance (stats.noise must be set, else falls back to SEVD).
+  Music(const ArrayGeometry& geometry, const BlockStatistics& stats, int num_sources, bool generalized);
+  double operator()(const Eigen::Vector3d& u) const;
+  bool used_generalized() const { return used_generalized_; }
+
+ private:
+  SteeredQuadraticForm form_;
+  std::vector<Eigen::MatrixXcd> noise_projectors_;
+  std::vector<double> weights_;
+  int num_mics_;
+  bool used_generalized_ = false;
+  mutable std::vector<double> per_bin_;
+};
+
+// GCC-PHAT time difference of arrival tau_i - tau_j (seconds) for one pair from the block's
+// PHAT cross-spectrum, searched within +-max_tau_s; `peak` gets the correlation value.
+double GccPhatTdoa(const BlockStatistics& stats, int i, int j, double max_tau_s, int upsample,
+                   double* peak = nullptr);
+// Direction from all pairwise GCC-PHAT TDOAs (least squares), one source.
+std::vector<DoaEstimate> GccPhatDirection(const ArrayGeometry& geometry, const BlockStatistics& stats,
+                                          DoaKind kind);
+
+// ESPRIT on a uniform linear array (throws std::invalid_argument otherwise). Up to
+// max_sources angles to the axis, clustered from all bins below the spatial-aliasing limit.
+std::vector<DoaEstimate> Esprit(const ArrayGeometry& geometry, const BlockStatistics& stats,
+                                int num_sources, double min_separation_deg);
+
+}  // namespace sound
+}  // namespace sarmap

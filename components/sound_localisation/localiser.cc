@@ -1,0 +1,204 @@
+#include "sound_localisation/localiser.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+
+namespace sarmap {
+namespace sound {
+
+DoaKind ResolveKind(const ArrayGeometry& g, const std::string& search) {
+  if (search == "1d") {
+    if (!g.is_linear()) throw std::invalid_argument("search 1d is for linear arrays; '" + g.name + "' is " + g.geometry);
+    return DoaKind::kAngle1d;
+  }
+  if (g.is_linear() && search != "auto")
+    throw std::invalid_argument("a linear array ('" + g.name + "') only gives the angle to its axis: use search 1d");
+  if (search == "azimuth") return DoaKind::kAzimuth;
+  if (search == "azimuth_elevation") return DoaKind::kAzimuthElevation;
+  return g.natural_kind();
+}
+
+Localiser::Localiser(ArrayGeometry geometry, LocaliserOptions options, std::unique_ptr<SensorModel> sensor_model)
+    : geometry_(std::move(geometry)), options_(std::move(options)), sensor_model_(std::move(sensor_model)),
+      kind_(ResolveKind(geometry_, options_.search)),
+      stft_(geometry_.num_mics(), options_.fft_size, options_.hop_size),
+      tracker_(geometry_, kind_, options_.tracker) {
+  if (!sensor_model_) sensor_model_ = SensorModel::Constant(3.0);
+  if (options_.method == "esprit" && geometry_.UniformSpacing() <= 0)
+    throw std::invalid_argument("method esprit needs a uniform linear array; '" + geometry_.name + "' is not one");
+  const double fs = geometry_.sample_rate_hz;
+  bin_lo_ = std::max(1, static_cast<int>(std::ceil(options_.min_frequency_hz * options_.fft_size / fs)));
+  bin_hi_ = std::min(options_.fft_size / 2 - 1, static_cast<int>(std::floor(options_.max_frequency_hz * options_.fft_size / fs)));
+  if (bin_hi_ < bin_lo_) throw std::invalid_argument("frequency band is empty at this sample rate");
+  block_frames_ = std::max(1, static_cast<int>(std::round(options_.block_s * fs / options_.hop_size)));
+  search_.kind = kind_;
+  search_.coarse_step_deg = options_.coarse_step_deg;
+  search_.fine_step_deg = options_.fine_step_deg;
+  search_.min_elevation_deg = options_.min_elevation_deg;
+  search_.max_elevation_deg = options_.max_elevation_deg;
+  search_.max_sources = options_.max_sources;
+  search_.min_separation_deg = options_.min_separation_deg;
+  search_.min_peak_ratio = options_.min_peak_ratio;
+  current_ = MakeStatistics();
+  noise_.assign(bin_hi_ - bin_lo_ + 1, Eigen::MatrixXcd::Zero(geometry_.num_mics(), geometry_.num_mics()));
+}
+
+BlockStatistics Localiser::MakeStatistics() const {
+  BlockStatistics s;
+  s.fft_size = options_.fft_size;
+  s.sample_rate_hz = geometry_.sample_rate_hz;
+  s.bin_lo = bin_lo_;
+  s.bin_hi = bin_hi_;
+  s.Reset(geometry_.num_mics());
+  return s;
+}
+
+void Localiser::DirectPathMask(const Eigen::MatrixXcf& spectra, std::vector<Eigen::MatrixXcd>* state,
+                               std::vector<char>* mask) const {
+  const int m = geometry_.num_mics();
+  const int nb = bin_hi_ - bin_lo_ + 1;
+  if (static_cast<int>(state->size()) != nb) state->assign(nb, Eigen::MatrixXcd::Zero(m, m));
+  mask->assign(nb, 1);
+  const double a = options_.direct_path_smoothing;
+  Eigen::VectorXcd x(m);
+  for (int k = bin_lo_; k <= bin_hi_; ++k) {
+    for (int i = 0; i < m; ++i) x(i) = ComplexD(spectra(k, i).real(), spectra(k, i).imag());
+    (*state)[k - bin_lo_] = a * (*state)[k - bin_lo_] + (1 - a) * (x * x.adjoint());
+  }
+  if (options_.direct_path_threshold <= 0) return;
+  for (int b = 0; b < nb; ++b) {
+    // Sum with the neighbouring bins: a rank-1 test needs more than one snapshot.
+    Eigen::MatrixXcd r = (*state)[b];
+    if (b > 0) r += (*state)[b - 1];
+    if (b + 1 < nb) r += (*state)[b + 1];
+    const double tr = r.trace().real();
+    const double ratio = tr > 0 ? r.squaredNorm() / (tr * tr) : 0.0;
+    (*mask)[b] = ratio >= options_.direct_path_threshold;
+  }
+}
+
+void Localiser::Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* stats, const std::vector<char>* mask) const {
+  const int m = geometry_.num_mics();
+  Eigen::VectorXcd x(m), y(m);
+  for (int k = bin_lo_; k <= bin_hi_; ++k) {
+    if (mask && !(*mask)[k - bin_lo_]) continue;
+    for (int i = 0; i < m; ++i) {
+      x(i) = ComplexD(spectra(k, i).real(), spectra(k, i).imag());
+      const double mag = std::abs(x(i));
+      y(i) = mag > 1e-20 ? x(i) / mag : ComplexD(0, 0);
+    }
+    stats->raw[k - bin_lo_].noalias() += x * x.adjoint();
+    stats->phat[k - bin_lo_].noalias() += y * y.adjoint();
+  }
+  ++stats->num_frames;
+}
+
+void Localiser::ResetStream() {
+  stft_.Reset();
+  stream_offset_ = samples_seen_;
+}
+
+void Localiser::Push(const int16_t* data, int frames, int block_channels, std::vector<LocaliserOutput>* out) {
+  for (int c : geometry_.channel_map)
+    if (c >= block_channels)
+      throw std::invalid_argument("array '" + geometry_.name + "' uses device channel " + std::to_string(c) +
+                                  " but the audio has " + std::to_string(block_channels) + " channels");
+  stft_.PushInterleaved(data, frames, block_channels, geometry_.channel_map,
+                        [&](const Eigen::MatrixXcf& s, int64_t end) { OnFrame(s, stream_offset_ + end, out); });
+  samples_seen_ += frames;
+}
+
+void Localiser::PushFloat(const std::vector<std::vector<float>>& ch, size_t begin, size_t count,
+                          std::vector<LocaliserOutput>* out) {
+  stft_.PushFloat(ch, begin, count,
+                  [&](const Eigen::MatrixXcf& s, int64_t end) { OnFrame(s, stream_offset_ + end, out); });
+  samples_seen_ += count;
+}
+
+void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, std::vector<LocaliserOutput>* out) {
+  const int m = geometry_.num_mics();
+  double energy = 0;
+  for (int k = bin_lo_; k <= bin_hi_; ++k) energy += spectra.row(k).squaredNorm();
+  const double hop_s = static_cast<double>(options_.hop_size) / geometry_.sample_rate_hz;
+  if (noise_floor_ < 0) noise_floor_ = energy;
+  const bool active = energy > noise_floor_ * std::pow(10.0, options_.activity_snr_db / 10);
+  if (energy < noise_floor_) noise_floor_ = energy;
+  else noise_floor_ *= std::pow(10.0, options_.noise_rise_db_per_s * hop_s / 10);
+  noise_floor_ = std::max(noise_floor_, 1e-20);
+  DirectPathMask(spectra, &smoothed_, &mask_);
+  if (active) {
+    Accumulate(spectra, &current_, &mask_);
+  } else {
+    const double alpha = std::max(hop_s / options_.noise_average_s, 1.0 / (noise_frames_ + 1));
+    Eigen::VectorXcd x(m);
+    for (int k = bin_lo_; k <= bin_hi_; ++k) {
+      for (int i = 0; i < m; ++i) x(i) = ComplexD(spectra(k, i).real(), spectra(k, i).imag());
+      noise_[k - bin_lo_] = (1 - alpha) * noise_[k - bin_lo_] + alpha * (x * x.adjoint());
+    }
+    ++noise_frames_;
+  }
+  if (++current_frames_ < block_frames_) return;
+
+  window_.push_back(current_);
+  window_total_frames_.push_back(current_frames_);
+  current_ = MakeStatistics();
+  current_frames_ = 0;
+  while (static_cast<int>(window_.size()) > options_.window_blocks) {
+    window_.pop_front();
+    window_total_frames_.pop_front();
+  }
+  BlockStatistics stats = MakeStatistics();
+  int total = 0;
+  for (size_t i = 0; i < window_.size(); ++i) {
+    stats.Add(window_[i]);
+    total += window_total_frames_[i];
+  }
+  LocaliserOutput o;
+  o.end_sample = end_sample;
+  o.centre_sample = end_sample - static_cast<int64_t>(total) * options_.hop_size / 2 - options_.fft_size / 2;
+  o.active = stats.num_frames >= std::max(2.0, options_.min_active_fraction * total);
+  std::vector<TrackMeasurement> measurements;
+  if (o.active) {
+    if (noise_frames_ > 10) stats.noise = noise_;
+    for (DoaEstimate& e : Estimate(stats)) {
+      if (e.confidence < options_.min_confidence) continue;
+      LocalisedDirection d;
+      d.direction = e.direction;
+      d.covariance = sensor_model_->Apply(kind_, &d.direction);
+      d.power = e.power;
+      d.confidence = e.confidence;
+      o.directions.push_back(d);
+      TrackMeasurement tm;
+      tm.direction = d.direction;
+      tm.covariance = d.covariance;
+      tm.power = d.power;
+      tm.confidence = d.confidence;
+      measurements.push_back(tm);
+    }
+  }
+  o.tracks = tracker_.Update(static_cast<double>(end_sample) / geometry_.sample_rate_hz, measurements);
+  out->push_back(std::move(o));
+}
+
+std::vector<DoaEstimate> Localiser::Estimate(const BlockStatistics& stats) const {
+  if (stats.num_frames == 0) return {};
+  const std::string& method = options_.method;
+  if (method == "gcc_phat") return GccPhatDirection(geometry_, stats, kind_);
+  if (method == "esprit") return Esprit(geometry_, stats, options_.music_num_sources, options_.min_separation_deg);
+  if (method == "srp_phat") {
+    SrpPhat srp(geometry_, stats);
+    auto peaks = FindPeaks(geometry_, search_, std::ref(srp));
+    for (auto& p : peaks) p.confidence = std::clamp(p.power, 0.0, 1.0);
+    return peaks;
+  }
+  Music music(geometry_, stats, options_.music_num_sources, method == "gevd_music");
+  double mean = 0;
+  auto peaks = FindPeaks(geometry_, search_, std::ref(music), &mean);
+  for (auto& p : peaks) p.confidence = p.power > 0 ? std::clamp(1.0 - mean / p.power, 0.0, 1.0) : 0.0;
+  return peaks;
+}
+
+}  // namespace sound
+}  // namespace sarmap

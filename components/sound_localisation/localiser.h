@@ -1,0 +1,171 @@
+#pragma once
+// Streaming sound localisation: multichannel samples -> STFT -> activity detection ->
+// per-block spatial covariances -> DOA estimator -> sensor model -> multi-source tracker.
+// No LCM; the node and the offline tools drive it.
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/options.h"
+#include "sound_localisation/array_geometry.h"
+#include "sound_localisation/doa_estimators.h"
+#include "sound_localisation/sensor_model.h"
+#include "sound_localisation/stft.h"
+#include "sound_localisation/tracker.h"
+
+namespace sarmap {
+namespace sound {
+
+struct LocaliserOptions {
+  std::string method = "srp_phat";  // gcc_phat | srp_phat | music | gevd_music | esprit
+  std::string search = "auto";      // auto | 1d | azimuth | azimuth_elevation
+  int fft_size = 512;
+  int hop_size = 256;
+  double min_frequency_hz = 1000;
+  double max_frequency_hz = 7000;
+  double block_s = 0.128;
+  int window_blocks = 2;
+  double coarse_step_deg = 5;
+  double fine_step_deg = 0.25;
+  double min_elevation_deg = 0;
+  double max_elevation_deg = 90;
+  int max_sources = 2;
+  double min_separation_deg = 20;
+  double min_peak_ratio = 0.6;
+  int music_num_sources = 1;
+  double activity_snr_db = 6;
+  double min_active_fraction = 0.3;
+  double noise_rise_db_per_s = 3;
+  double noise_average_s = 1.0;
+  double min_confidence = 0.05;
+  double direct_path_threshold = 0.0;
+  double direct_path_smoothing = 0.5;
+  TrackerOptions tracker;
+
+  template <class V>
+  void Visit(V& v) {
+    v("method", method, "gcc_phat, srp_phat, music, gevd_music or esprit (uniform linear arrays)");
+    v("search", search, "auto (1d for linear arrays, else azimuth_elevation), 1d, azimuth, azimuth_elevation");
+    v("fft_size", fft_size, "STFT frame length (samples)");
+    v("hop_size", hop_size, "STFT hop (samples)");
+    v("min_frequency_hz", min_frequency_hz, "lowest analysed frequency");
+    v("max_frequency_hz", max_frequency_hz, "highest analysed frequency");
+    v("block_s", block_s, "one DOA output per block of this length");
+    v("window_blocks", window_blocks, "covariances are summed over this many blocks");
+    v("coarse_step_deg", coarse_step_deg, "coarse direction grid step");
+    v("fine_step_deg", fine_step_deg, "refinement stops at this step");
+    v("min_elevation_deg", min_elevation_deg, "elevation search range (azimuth_elevation)");
+    v("max_elevation_deg", max_elevation_deg, "elevation search range (azimuth_elevation)");
+    v("max_sources", max_sources, "most simultaneous sources reported per block");
+    v("min_separation_deg", min_separation_deg, "closer peaks are suppressed");
+    v("min_peak_ratio", min_peak_ratio, "secondary peaks must reach this fraction of the best (0..1)");
+    v("music_num_sources", music_num_sources, "MUSIC/ESPRIT signal-subspace dimension");
+    v("activity_snr_db", activity_snr_db, "frames this far above the noise floor are active (sound)");
+    v("min_active_fraction", min_active_fraction, "a block needs this fraction of active frames");
+    v("noise_rise_db_per_s", noise_rise_db_per_s, "noise-floor tracker rise rate");
+    v("noise_average_s", noise_average_s, "time constant of the noise covariance (GEVD)");
+    v("min_confidence", min_confidence, "weaker estimates are dropped");
+    v("direct_path_threshold", direct_path_threshold,
+      "use a time-frequency bin only when its short-time covariance is this close to rank 1 "
+      "(|R|_F^2 / tr(R)^2, 1/M diffuse .. 1 one plane wave); 0 uses every bin");
+    v("direct_path_smoothing", direct_path_smoothing, "weight of the past in that short-time covariance (0..1)");
+    v("tracker", tracker, "multi-source tracker");
+  }
+  void Validate(common::Validator& check) const {
+    check.OneOf("method", method, {"gcc_phat", "srp_phat", "music", "gevd_music", "esprit"});
+    check.OneOf("search", search, {"auto", "1d", "azimuth", "azimuth_elevation"});
+    check.That(fft_size >= 64 && (fft_size & (fft_size - 1)) == 0, "fft_size", "must be a power of two >= 64");
+    check.That(hop_size >= 1 && hop_size <= fft_size, "hop_size", "must be in [1, fft_size]");
+    check.Positive("min_frequency_hz", min_frequency_hz);
+    check.That(max_frequency_hz > min_frequency_hz, "max_frequency_hz", "must exceed min_frequency_hz");
+    check.Positive("block_s", block_s);
+    check.That(window_blocks >= 1, "window_blocks", "must be >= 1");
+    check.Positive("coarse_step_deg", coarse_step_deg);
+    check.Positive("fine_step_deg", fine_step_deg);
+    check.InRange("min_elevation_deg", min_elevation_deg, -90, 90);
+    check.InRange("max_elevation_deg", max_elevation_deg, min_elevation_deg, 90);
+    check.That(max_sources >= 1, "max_sources", "must be >= 1");
+    check.NonNegative("min_separation_deg", min_separation_deg);
+    check.InRange("min_peak_ratio", min_peak_ratio, 0, 1);
+    check.That(music_num_sources >= 1, "music_num_sources", "must be >= 1");
+    check.InRange("min_active_fraction", min_active_fraction, 0, 1);
+    check.Positive("noise_average_s", noise_average_s);
+    check.InRange("min_confidence", min_confidence, 0, 1);
+    check.InRange("direct_path_threshold", direct_path_threshold, 0, 1);
+    check.InRange("direct_path_smoothing", direct_path_smoothing, 0, 0.99);
+  }
+};
+
+struct LocalisedDirection {
+  Direction direction;           // after the sensor model
+  Eigen::Matrix2d covariance;    // rad^2
+  double power = 0, confidence = 0;
+};
+
+struct LocaliserOutput {
+  int64_t end_sample = 0;        // stream sample one past the window
+  int64_t centre_sample = 0;     // centre of the analysed window
+  bool active = false;           // enough sound to estimate
+  std::vector<LocalisedDirection> directions;  // this block, best first
+  std::vector<Track> tracks;     // confirmed tracks after this block
+};
+
+DoaKind ResolveKind(const ArrayGeometry& geometry, const std::string& search);
+
+class Localiser {
+ public:
+  // Throws std::invalid_argument for a method the array cannot use (ESPRIT on a non-ULA).
+  Localiser(ArrayGeometry geometry, LocaliserOptions options, std::unique_ptr<SensorModel> sensor_model);
+  const ArrayGeometry& geometry() const { return geometry_; }
+  const LocaliserOptions& options() const { return options_; }
+  DoaKind kind() const { return kind_; }
+
+  // Feeds interleaved int16 samples (block_channels per frame, mics taken through the
+  // array's channel_map). Appends one output per completed block.
+  void Push(const int16_t* data, int frames, int block_channels, std::vector<LocaliserOutput>* out);
+  void PushFloat(const std::vector<std::vector<float>>& mic_channels, size_t begin, size_t count,
+                 std::vector<LocaliserOutput>* out);
+  // Forget the signal (after a gap); the noise model and tracks stay.
+  void ResetStream();
+
+  // One estimate from given statistics (offline use, tests).
+  std::vector<DoaEstimate> Estimate(const BlockStatistics& stats) const;
+  // Empty statistics shaped for this localiser's band.
+  BlockStatistics MakeStatistics() const;
+  // Adds one frame of spectra (num_bins x mics) to `stats` (as active).
+  // `mask` (optional, one per band bin) selects the bins to add.
+  void Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* stats, const std::vector<char>* mask = nullptr) const;
+  // Marks the bins of this frame dominated by one plane wave (direct-path dominance test on
+  // the smoothed covariance `state`, updated in place).
+  void DirectPathMask(const Eigen::MatrixXcf& spectra, std::vector<Eigen::MatrixXcd>* state, std::vector<char>* mask) const;
+  int64_t samples_seen() const { return samples_seen_; }
+
+ private:
+  void OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, std::vector<LocaliserOutput>* out);
+
+  ArrayGeometry geometry_;
+  LocaliserOptions options_;
+  std::unique_ptr<SensorModel> sensor_model_;
+  DoaKind kind_;
+  SearchOptions search_;
+  MultichannelStft stft_;
+  DoaTracker tracker_;
+  int bin_lo_, bin_hi_, block_frames_;
+  BlockStatistics current_;
+  int current_frames_ = 0;
+  std::deque<BlockStatistics> window_;
+  std::deque<int> window_total_frames_;
+  std::vector<Eigen::MatrixXcd> noise_;
+  std::vector<Eigen::MatrixXcd> smoothed_;
+  std::vector<char> mask_;
+  int64_t noise_frames_ = 0;
+  double noise_floor_ = -1;
+  int64_t samples_seen_ = 0;
+  int64_t stream_offset_ = 0;  // samples before the last ResetStream
+};
+
+}  // namespace sound
+}  // namespace sarmap

@@ -1,0 +1,155 @@
+// sarmap-sound-localisation: AUDIO (audio_frame_t) -> DOA (doa_t: directions with covariance
+// and track ids), for one microphone array.
+#include <cmath>
+
+#include "common/args.h"
+#include "common/logging.h"
+#include "common/node.h"
+#include "common/options.h"
+#include "common/robot_config.h"
+#include "sarmap/audio_frame_t.hpp"
+#include "sarmap/doa_t.hpp"
+#include "sound_localisation/localiser.h"
+
+using namespace sarmap;
+
+struct SoundLocalisationOptions {
+  std::string audio_channel = "AUDIO";
+  std::string doa_channel = "DOA";
+  std::string array = "config/arrays/respeaker4.yaml";
+  std::string device_id = "";      // accept only this device ("" = the first one heard)
+  bool publish_untracked = true;   // also publish directions not (yet) in a confirmed track
+  sound::LocaliserOptions localiser;
+  template <class V>
+  void Visit(V& v) {
+    v("audio_channel", audio_channel, "input audio_frame_t channel");
+    v("doa_channel", doa_channel, "output doa_t channel");
+    v("array", array, "array description (config/arrays/<name>.yaml)");
+    v("device_id", device_id, "only use this device ('' = the first one heard)");
+    v("publish_untracked", publish_untracked, "publish directions outside confirmed tracks with track_id -1");
+    v("localiser", localiser, "DOA estimation and tracking");
+  }
+  void Validate(common::Validator&) const {}
+};
+
+int8_t MethodCode(const std::string& m) {
+  if (m == "gcc_phat") return doa_source_t::METHOD_GCC_PHAT;
+  if (m == "music") return doa_source_t::METHOD_MUSIC;
+  if (m == "gevd_music") return doa_source_t::METHOD_GEVD_MUSIC;
+  if (m == "esprit") return doa_source_t::METHOD_ESPRIT;
+  return doa_source_t::METHOD_SRP_PHAT;
+}
+
+int main(int argc, char** argv) {
+  return common::RunMain("sarmap-sound-localisation", [&]() {
+    common::NodeArgs args;
+    common::ArgParser p("sarmap-sound-localisation",
+                        "Directions of arrival (SRP-PHAT, MUSIC, GEVD-MUSIC, GCC-PHAT, ESPRIT) with tracking.");
+    p.AddNodeOptions(&args, "config/sound_localisation.yaml");
+    p.SetEpilog("Channels: in AUDIO (audio_frame_t), out DOA (doa_t), NODE_STATUS.");
+    if (!p.Parse(argc, argv)) return 0;
+    common::SetLogLevel(common::ParseLogLevel(args.log_level));
+    const auto options = common::LoadOptions<SoundLocalisationOptions>(args.config_path, args.overrides);
+    if (args.print_config) {
+      std::printf("%s", common::OptionsToYaml(options, true).c_str());
+      return 0;
+    }
+    const auto array = common::LoadMicArray(options.array);
+    const std::string array_dir = options.array.substr(0, options.array.find_last_of('/') + 1);
+    sound::ArrayGeometry geometry;
+    std::unique_ptr<sound::Localiser> localiser;
+    try {
+      geometry = sound::ArrayGeometry::FromOptions(array);
+      localiser = std::make_unique<sound::Localiser>(geometry, options.localiser,
+                                                     sound::SensorModel::FromArray(array, array_dir));
+    } catch (const std::invalid_argument& e) {
+      throw common::OptionsError(e.what());
+    }
+    int needed_channels = 0;
+    for (int c : geometry.channel_map) needed_channels = std::max(needed_channels, c + 1);
+
+    common::Node node("sarmap-sound-localisation", args.lcm_url);
+    auto pub = node.Advertise<sarmap::doa_t>(options.doa_channel);
+    std::string device = options.device_id;
+    int64_t expected_index = -1, last_overrun = 0, dropped = 0, published = 0;
+    common::RateLimiter warn_limit(5.0);
+    const int8_t method = MethodCode(options.localiser.method);
+    const int8_t kind = static_cast<int8_t>(localiser->kind());
+    std::vector<sound::LocaliserOutput> outs;
+
+    auto warn = [&](const std::string& what) {
+      ++dropped;
+      long suppressed = 0;
+      if (warn_limit.Allow(common::SteadySeconds(), &suppressed)) {
+        SARMAP_LOG(WARN) << what << (suppressed ? " (" + std::to_string(suppressed) + " similar suppressed)" : "");
+      }
+    };
+
+    node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t& msg,
+                                                                      const common::ReceiveInfo&) {
+      if (device.empty()) device = msg.device_id;
+      if (msg.device_id != device)
+        return warn("audio from device '" + msg.device_id + "' ignored: this node localises '" + device +
+                    "' (run one node per array, or set device_id)");
+      if (msg.sample_rate_hz != geometry.sample_rate_hz)
+        return warn("sample-rate mismatch: audio is " + std::to_string(msg.sample_rate_hz) + " Hz, array '" +
+                    geometry.name + "' expects " + std::to_string(geometry.sample_rate_hz) + " Hz; block dropped");
+      if (msg.num_channels < needed_channels)
+        return warn("audio has " + std::to_string(msg.num_channels) + " channels, array '" + geometry.name +
+                    "' needs " + std::to_string(needed_channels) + " (channel_map); block dropped");
+      if (msg.sample_format != sarmap::audio_frame_t::SAMPLE_INT16 ||
+          msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
+        return warn("malformed audio block (format or size); dropped");
+      if (msg.overrun_samples != last_overrun) {
+        SARMAP_LOG(WARN) << "device '" << device << "' lost " << (msg.overrun_samples - last_overrun)
+                         << " samples (overrun); restarting the analysis";
+        last_overrun = msg.overrun_samples;
+      }
+      if (expected_index >= 0 && msg.first_sample_index != expected_index) {
+        SARMAP_LOG(WARN) << "audio gap: expected sample " << expected_index << ", got " << msg.first_sample_index
+                         << "; restarting the analysis";
+        localiser->ResetStream();
+      }
+      expected_index = msg.first_sample_index + msg.num_samples;
+      const int64_t before = localiser->samples_seen();
+      outs.clear();
+      localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &outs);
+      for (const auto& o : outs) {
+        sarmap::doa_t doa;
+        doa.header.utime = msg.header.utime + common::SecondsToUtime(static_cast<double>(o.centre_sample - before) /
+                                                                     geometry.sample_rate_hz);
+        doa.header.frame = "mic_array";
+        doa.device_id = device;
+        auto add = [&](int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, double power, double conf) {
+          sarmap::doa_source_t s;
+          s.track_id = id;
+          s.kind = kind;
+          s.azimuth_rad = d.azimuth_rad;
+          s.elevation_rad = d.elevation_rad;
+          for (int i = 0; i < 4; ++i) s.covariance[i] = cov(i / 2, i % 2);
+          s.power = static_cast<float>(power);
+          s.confidence = static_cast<float>(conf);
+          s.method = method;
+          doa.sources.push_back(s);
+        };
+        for (const auto& t : o.tracks)
+          if (t.updated) add(t.id, t.direction, t.covariance, t.power, t.confidence);
+        if (options.publish_untracked)
+          for (const auto& d : o.directions) {
+            bool in_track = false;
+            for (const auto& t : o.tracks)
+              in_track |= t.updated && sound::AngularDistanceRad(geometry, localiser->kind(), t.direction, d.direction) <
+                                           sound::DegToRad(options.localiser.tracker.gate_deg);
+            if (!in_track) add(-1, d.direction, d.covariance, d.power, d.confidence);
+          }
+        doa.num_sources = static_cast<int32_t>(doa.sources.size());
+        pub.Publish(&doa);
+        ++published;
+      }
+      node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped));
+    });
+    SARMAP_LOG(INFO) << "localising array '" << geometry.name << "' (" << geometry.num_mics() << " mics, "
+                     << options.localiser.method << ") from " << options.audio_channel << " -> " << options.doa_channel;
+    return node.Run();
+  });
+}

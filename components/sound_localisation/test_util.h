@@ -1,0 +1,47 @@
+#pragma once
+// Helpers for the synthetic tests (not part of the library).
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "audio_capture/audio_file.h"
+#include "common/robot_config.h"
+#include "sound_localisation/array_geometry.h"
+
+namespace sarmap {
+namespace sound {
+namespace testing_util {
+
+inline ArrayGeometry LoadArray(const std::string& name) {
+  return ArrayGeometry::FromOptions(
+      common::LoadMicArray(std::string(SARMAP_SOURCE_DIR) + "/config/arrays/" + name + ".yaml"));
+}
+
+// Real speech (CMU ARCTIC) from the shared data, normalised to unit RMS; empty if missing.
+inline std::vector<float> Speech(int index) {
+  static const char* files[] = {"cmu_arctic_us_aew_a0001.wav", "cmu_arctic_us_axb_a0004.wav",
+                                "cmu_arctic_us_aew_a0002.wav", "cmu_arctic_us_axb_a0005.wav",
+                                "arctic_a0010.wav", "cmu_arctic_us_aew_a0003.wav"};
+  const std::string path = std::string(SARMAP_DATA_DIR) + "/audio/cmu_arctic/" + files[index % 6];
+  if (!std::filesystem::exists(path)) return {};
+  auto buf = audio::ReadAudioFile(path);
+  std::vector<float> x = buf.channels[0];
+  double e = 0;
+  for (float v : x) e += v * v;
+  const float g = static_cast<float>(1.0 / std::sqrt(e / std::max<size_t>(1, x.size()) + 1e-12));
+  for (float& v : x) v *= g;
+  return x;
+}
+
+inline std::vector<float> WhiteNoise(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> d(0.0f, 1.0f);
+  std::vector<float> x(n);
+  for (float& v : x) v = d(rng);
+  return x;
+}
+
+}  // namespace testing_util
+}  // namespace sound
+}  // namespace sarmap

@@ -1,0 +1,64 @@
+#pragma once
+// Sensor models of a DOA estimate (Su 2017 §5.2): they turn the raw angle reported by a DOA
+// method into a mean and a variance for the estimator. A linear array's error depends on
+// the angle (worst at endfire, +-90 deg) and is biased there, so the GP model learns the
+// mapping raw -> true from calibration pairs:
+//   mean     (5.5):  k*' (K + sn^2 I)^-1 y
+//   variance (5.6):  k** - k*' (K + sn^2 I)^-1 k*   (+ the local noise level, below)
+//   kernel   (5.7):  k(a, b) = sf^2 exp(-(a - b)^2 / (2 l^2))
+// with (l, sf, sn) chosen by maximum marginal likelihood over a grid. Because sn is one
+// constant, the angle-dependent noise is added as a kernel-weighted mean of the squared
+// training residuals around the query (a heteroscedastic term the thesis' libgp lacks).
+// Predictions are tabulated on a fine grid at fit time, so Predict() is O(1).
+// (Another engineer builds the production GP in sound_localisation; this one is small and
+// self-contained behind DoaSensorModel.)
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sarmap {
+namespace sound_map {
+
+class DoaSensorModel {
+ public:
+  virtual ~DoaSensorModel() = default;
+  // raw_rad: the DOA method's angle; returns the corrected angle and its variance (rad^2).
+  virtual void Predict(double raw_rad, double* mean_rad, double* variance_rad2) const = 0;
+};
+
+class ConstantDoaModel : public DoaSensorModel {
+ public:
+  explicit ConstantDoaModel(double sigma_rad) : sigma_rad_(sigma_rad) {}
+  void Predict(double raw_rad, double* mean_rad, double* variance_rad2) const override {
+    *mean_rad = raw_rad;
+    *variance_rad2 = sigma_rad_ * sigma_rad_;
+  }
+
+ private:
+  double sigma_rad_;
+};
+
+class GpDoaModel : public DoaSensorModel {
+ public:
+  struct Hyper {
+    double length_rad = 0.3, sigma_f_rad = 1.0, sigma_n_rad = 0.2;
+  };
+  // Fits on pairs (raw estimate, truth), radians; throws std::invalid_argument on < 3 pairs.
+  static std::unique_ptr<GpDoaModel> Fit(const std::vector<double>& raw_rad,
+                                         const std::vector<double>& true_rad);
+  // Reads a CSV with a header line and columns raw_deg,true_deg (shared/data/audio/ssm).
+  static std::unique_ptr<GpDoaModel> FitCsvDegrees(const std::string& path);
+  void Predict(double raw_rad, double* mean_rad, double* variance_rad2) const override;
+  const Hyper& hyper() const { return hyper_; }
+  double log_marginal_likelihood() const { return lml_; }
+
+ private:
+  Hyper hyper_;
+  double lml_ = 0;
+  double grid_lo_ = 0, grid_step_ = 0;
+  std::vector<double> grid_mean_, grid_var_;
+};
+
+}  // namespace sound_map
+}  // namespace sarmap

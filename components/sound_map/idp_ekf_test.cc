@@ -1,0 +1,146 @@
+#include "sound_map/idp_ekf.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "sound_map/experiments.h"
+#include "sound_map/joint_optimizer.h"
+
+namespace sarmap {
+namespace sound_map {
+namespace {
+
+// A source seen from two poses with exact bearings: the IDP EKF with a tiny bearing noise
+// triangulates it.
+TEST(IdpEkf, TriangulatesFromParallax2d) {
+  IdpEkf::Options o;
+  IdpEkf ekf(o);
+  ekf.Reset(Pose2(0, 0, 0), Eigen::Matrix3d::Zero());
+  const Eigen::Vector3d src(3.0, 2.0, 0.0);
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(1, 1) * 1e-6;
+  for (int k = 0; k < 30; ++k) {
+    if (k > 0) ekf.Predict(Pose2(0.1, 0, 0), Eigen::Matrix3d::Zero());
+    const Pose2 x = ekf.current();
+    const double pose[3] = {x.x, x.y, x.yaw};
+    double z[2];
+    PointObservation(pose, src.data(), false, o.mount, z);
+    Eigen::VectorXd zv(1);
+    zv << z[0];
+    if (!ekf.HasSource(7)) ekf.AddSource(7, k, zv, r); else ekf.UpdateSource(7, zv, r);
+  }
+  Eigen::Vector3d p;
+  Eigen::Matrix3d c;
+  ekf.SourcePoint(7, &p, &c);
+  EXPECT_NEAR(p.x(), 3.0, 0.02);
+  EXPECT_NEAR(p.y(), 2.0, 0.02);
+}
+
+// Back-propagation with the localisation map's own state leaves the sound map unchanged,
+// and moving a shared anchor moves the source along with it (K12 = P_SC P_C^-1).
+TEST(IdpEkf, BackPropagationMovesSourcesWithAnchors) {
+  IdpEkf::Options o;
+  IdpEkf loc(o), snd(o);
+  Eigen::Matrix3d p0 = Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal();
+  loc.Reset(Pose2(0, 0, 0), p0);
+  snd.Reset(Pose2(0, 0, 0), p0);
+  loc.AddAnchor(0);
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(1, 1) * 0.01;
+  snd.AddSource(1, 0, Eigen::VectorXd::Constant(1, 0.5), r);
+  for (int k = 1; k < 20; ++k) {
+    loc.Predict(Pose2(0.2, 0, 0), Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal());
+    Pose2 cur;
+    std::vector<std::pair<int64_t, Pose2>> anchors;
+    Eigen::MatrixXd cov;
+    loc.SharedState({0}, &cur, &anchors, &cov);
+    snd.BackPropagate(cur, anchors, cov);
+    const double pose[3] = {cur.x, cur.y, cur.yaw};
+    const Eigen::Vector3d src(4, 3, 0);
+    double z[2];
+    PointObservation(pose, src.data(), false, o.mount, z);
+    snd.UpdateSource(1, Eigen::VectorXd::Constant(1, z[0]), r);
+  }
+  Eigen::Vector3d before, after;
+  Eigen::Matrix3d c;
+  snd.SourcePoint(1, &before, &c);
+  // The localisation map learns that the anchor was 1 m further along +y (a loop closure).
+  Pose2 cur = snd.current();
+  std::vector<std::pair<int64_t, Pose2>> anchors = {{0, Pose2(0, 1.0, 0)}};
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Identity(6, 6) * 1e-6;
+  cur.y += 1.0;
+  snd.BackPropagate(cur, anchors, cov);
+  snd.SourcePoint(1, &after, &c);
+  EXPECT_NEAR(after.y() - before.y(), 1.0, 0.05);
+  EXPECT_NEAR(after.x() - before.x(), 0.0, 0.05);
+}
+
+TEST(Experiments, MapsSourcesWithTable41Settings) {
+  Sim2dConfig c;
+  c.seed = 5;
+  const Sim2dData d = Simulate2d(c);
+  for (Method m : {Method::kEkfOdometry, Method::kJointOdometry}) {
+    const RunResult res = RunMethod(d, m);
+    printf("%s rms %.3f conv %.2f n %d\n", MethodName(m), res.score.rms_m, res.score.convergence_rate, res.score.num_sources);
+    EXPECT_EQ(res.score.num_sources, 8);
+    EXPECT_LT(res.score.rms_m, 0.35);  // Table 4.1 Part I odometry: accurate mapping (Figs. 4.3-4.4)
+  }
+  c.landmarks = true;
+  c.odo_sigma_m = 0.02;
+  c.odo_sigma_rad = 5 * M_PI / 180;
+  const Sim2dData d2 = Simulate2d(c);
+  for (Method m : {Method::kCiSubmaps, Method::kFullEkf, Method::kJoint}) {
+    const RunResult res = RunMethod(d2, m);
+    printf("%s rms %.3f conv %.2f n %d t %.3f step %.4f\n", MethodName(m), res.score.rms_m, res.score.convergence_rate, res.score.num_sources, res.total_seconds, res.sound_step_ms_mean);
+    EXPECT_LT(res.score.rms_m, 0.35);  // Part II: typical odometry + landmarks (Figs. 4.6, 4.10)
+  }
+}
+
+// Fig. 4.5 (reduced: 3 runs per cell): worse odometry, worse map, for both methods.
+TEST(Experiments, Fig45ErrorGrowsWithOdometryNoise) {
+  for (Method m : {Method::kEkfOdometry, Method::kJointOdometry}) {
+    double rms[2] = {0, 0}, conv[2] = {0, 0};
+    const double scales[2] = {1, 32};
+    for (int s = 0; s < 2; ++s)
+      for (int r = 0; r < 3; ++r) {
+        Sim2dConfig c;
+        c.odo_sigma_m = 0.001 * scales[s];
+        c.odo_sigma_rad = 0.016 * scales[s] * M_PI / 180;
+        c.seed = 1000 + r;
+        const RunResult res = RunMethod(Simulate2d(c), m);
+        rms[s] += res.score.rms_m / 3;
+        conv[s] += res.score.convergence_rate / 3;
+      }
+    printf("%s: x1 rms %.3f conv %.2f | x32 rms %.3f conv %.2f\n", MethodName(m), rms[0], conv[0], rms[1], conv[1]);
+    EXPECT_LT(rms[0], 0.35);
+    EXPECT_GT(rms[1], 1.5 * rms[0]);
+    EXPECT_LT(conv[1], conv[0]);
+  }
+}
+
+// Fig. 4.11 (reduced: 2 runs, 45 m and 125 m): the CI method is as accurate as the full EKF,
+// and joint optimisation is at least as good.
+TEST(Experiments, Fig411CiMatchesFullEkf) {
+  for (double side : {10.0, 30.0}) {
+    double rms[3] = {0, 0, 0};
+    const Method methods[3] = {Method::kCiSubmaps, Method::kFullEkf, Method::kJoint};
+    for (int r = 0; r < 2; ++r) {
+      Sim2dConfig c;
+      c.side_m = side;
+      c.overshoot_m = 5;
+      c.landmarks = true;
+      c.odo_sigma_m = 0.02;
+      c.odo_sigma_rad = 5 * M_PI / 180;
+      c.seed = 2000 + r;
+      const Sim2dData d = Simulate2d(c);
+      for (int i = 0; i < 3; ++i) rms[i] += RunMethod(d, methods[i]).score.rms_m / 2;
+    }
+    printf("side %.0f m: ci %.3f full-ekf %.3f joint %.3f\n", side, rms[0], rms[1], rms[2]);
+    EXPECT_NEAR(rms[0], rms[1], 0.1 * rms[1] + 0.02);
+    EXPECT_LE(rms[2], rms[0] + 0.02);
+    EXPECT_LT(rms[0], 0.6);
+  }
+}
+
+}  // namespace
+}  // namespace sound_map
+}  // namespace sarmap

@@ -1,0 +1,68 @@
+#pragma once
+// Joint optimisation of robot poses, landmarks and sound sources (Su 2017 §4.2, eq. 4.2):
+//   x* = argmin_x  sum_ij e_ij' Omega_ij e_ij
+// over odometry edges (pose_i^-1 pose_j vs the measured increment), range-bearing landmark
+// edges and sound bearing edges (azimuth [, elevation] of a Euclidean source seen from a
+// pose through the array mount). Solved by Levenberg-Marquardt in Ceres with
+// SPARSE_NORMAL_CHOLESKY (SuiteSparse). The first pose is held fixed (gauge).
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "sound_map/simulation.h"
+#include "sound_map/sound_geometry.h"
+
+namespace sarmap {
+namespace sound_map {
+
+struct JointProblem2d {
+  bool three_d = false;
+  ArrayMount mount;
+  std::vector<Pose2> poses;               // initial guess in, estimate out
+  std::vector<Eigen::Vector2d> landmarks; // initial guess in, estimate out
+  std::vector<Eigen::Vector3d> sources;   // initial guess in, estimate out (z unused in 2D)
+  std::vector<bool> source_observed;      // sources with at least one edge
+  struct Odometry {
+    int from, to;
+    Pose2 delta;
+    Eigen::Matrix3d covariance;
+  };
+  struct LandmarkEdge {
+    int pose, landmark;
+    Eigen::Vector2d z;
+    Eigen::Matrix2d covariance;
+  };
+  struct SoundEdge {
+    int pose, source;
+    Eigen::VectorXd z;
+    double sigma_rad;
+  };
+  std::vector<Odometry> odometry;
+  std::vector<LandmarkEdge> landmark_edges;
+  std::vector<SoundEdge> sound_edges;
+  bool use_sound_edges = true;
+};
+
+struct JointReport {
+  double solve_seconds = 0;
+  int iterations = 0;
+  bool usable = false;
+  double initial_cost = 0, final_cost = 0;
+};
+
+// Builds the problem from a simulation: poses by dead reckoning, landmarks from their first
+// observation, sources by least-squares intersection of their bearing rays.
+JointProblem2d JointProblemFromSimulation(const Sim2dData& data, bool use_landmarks);
+
+// Least-squares intersection of rays (origin, unit direction); false when the rays are too
+// parallel to fix a point (then *point is `fallback_range_m` along the first ray).
+bool IntersectRays(const std::vector<Eigen::Vector3d>& origins, const std::vector<Eigen::Vector3d>& dirs,
+                   double fallback_range_m, Eigen::Vector3d* point);
+
+// Re-initialises every source by intersecting its rays from the current pose estimates.
+void TriangulateSources(JointProblem2d* problem);
+
+JointReport SolveJoint(JointProblem2d* problem, int max_iterations = 100);
+
+}  // namespace sound_map
+}  // namespace sarmap

@@ -1,0 +1,663 @@
+#include "sound_map/linear_array.h"
+
+#include <ceres/ceres.h>
+#include <ceres/jet.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <random>
+#include <set>
+
+namespace sarmap {
+namespace sound_map {
+
+namespace {
+
+template <class T>
+T Wrap(const T& a) {
+  using std::atan2;
+  using std::cos;
+  using std::sin;
+  return atan2(sin(a), cos(a));
+}
+
+// beta of s = (beta, gamma, rho) seen from `pose`, in the scaled form that stays finite
+// as rho -> 0:  d = rho (o - t) + R_axis u(beta, gamma),  d_l = R' d,
+// beta_hat = atan2(d_l.y, |d_l.xz|)   (5.13, 5.19, 5.20).
+template <class T>
+T PredictBeta(const ArrayAxis& axis, const Eigen::Isometry3d& pose, const T* s) {
+  using std::atan2;
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const Eigen::Matrix<T, 3, 1> u(cos(s[0]) * cos(s[1]), sin(s[0]), cos(s[0]) * sin(s[1]));
+  const Eigen::Matrix<T, 3, 1> d = s[2] * (axis.origin - pose.translation()).cast<T>() + axis.rotation().cast<T>() * u;
+  const Eigen::Matrix<T, 3, 1> dl = pose.linear().transpose().cast<T>() * d;
+  return atan2(dl[1], sqrt(dl[0] * dl[0] + dl[2] * dl[2]));
+}
+
+}  // namespace
+
+ArrayAxis ArrayAxis::FromPose(const Eigen::Isometry3d& pose) {
+  ArrayAxis a;
+  a.origin = pose.translation();
+  const Eigen::Vector3d y = pose.linear().col(1);
+  a.theta = std::atan2(y.y(), y.x());
+  a.phi = std::atan2(y.z(), std::hypot(y.x(), y.y()));
+  return a;
+}
+
+Eigen::Matrix3d ArrayAxis::rotation() const {
+  return (Eigen::AngleAxisd(theta - M_PI / 2, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Vector3d HypothesisPoint(const ArrayAxis& axis, const Eigen::Vector3d& s) {
+  const Eigen::Vector3d u(std::cos(s[0]) * std::cos(s[1]), std::sin(s[0]), std::cos(s[0]) * std::sin(s[1]));
+  return axis.origin + axis.rotation() * u / std::max(s[2], 1e-6);
+}
+
+double LinearArrayBeta(const Eigen::Isometry3d& pose, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d l = pose.inverse() * p;
+  return std::atan2(l.y(), std::hypot(l.x(), l.z()));
+}
+
+MultiHypothesisSource::MultiHypothesisSource(const MultiHypothesisOptions& o, const Eigen::Isometry3d& pose,
+                                             double beta, double beta_variance)
+    : options_(o), axis_(ArrayAxis::FromPose(pose)) {
+  const int n = std::max(1, o.num_hypotheses);
+  const double rho0 = 1.0 / (3.0 * o.min_distance_m);
+  for (int i = 1; i <= n; ++i) {
+    Hypothesis h;
+    h.s = Eigen::Vector3d(beta, 2 * M_PI * i / n - M_PI, rho0);  // (5.10-5.11)
+    h.p = Eigen::Vector3d(beta_variance, std::pow(M_PI / n, 2), rho0 * rho0).asDiagonal();  // (5.12)
+    hypotheses_.push_back(h);
+  }
+}
+
+void MultiHypothesisSource::Update(const Eigen::Isometry3d& pose, double beta, double var) {
+  using J3 = ceres::Jet<double, 3>;
+  for (Hypothesis& h : hypotheses_) {
+    if (!h.alive) continue;
+    J3 s[3] = {J3(h.s[0], 0), J3(h.s[1], 1), J3(h.s[2], 2)};
+    const J3 zh = PredictBeta(axis_, pose, s);
+    const Eigen::RowVector3d hj = zh.v.transpose();
+    const double nu = Wrap(beta - zh.a);
+    const double sv = hj * h.p * hj.transpose() + var;
+    h.chi2_sum += nu * nu / sv;  // (5.21-5.22), with the observation noise in S
+    ++h.updates;
+    const Eigen::Vector3d k = h.p * hj.transpose() / sv;  // (5.16)
+    h.s += k * nu;                                         // (5.17)
+    h.s[1] = Wrap(h.s[1]);
+    h.s[2] = std::max(h.s[2], 1e-3);
+    h.p = (Eigen::Matrix3d::Identity() - k * hj) * h.p;    // (5.18)
+    h.p = 0.5 * (h.p + h.p.transpose()).eval();
+    // Linearity index of the inverse depth (5.23-5.27, Civera et al.):
+    //   L = 4 sigma_d |cos alpha| / |h|,  sigma_d = sigma_rho / rho^2,
+    // h from the current sensor to the point, alpha between h and the anchor ray m.
+    const Eigen::Vector3d p = HypothesisPoint(axis_, h.s);
+    const Eigen::Vector3d hv = p - pose.translation();
+    const Eigen::Vector3d m = (p - axis_.origin).normalized();
+    const double sigma_d = std::sqrt(std::max(h.p(2, 2), 0.0)) / (h.s[2] * h.s[2]);
+    h.linearity = 4 * sigma_d * std::abs(m.dot(hv.normalized())) / std::max(hv.norm(), 1e-6);
+  }
+  // Prune hypotheses whose mean chi-square is too large; keep the best one alive.
+  int best = -1;
+  double best_mean = 1e300;
+  for (size_t i = 0; i < hypotheses_.size(); ++i) {
+    const Hypothesis& h = hypotheses_[i];
+    if (!h.alive) continue;
+    const double mean = h.chi2_sum / std::max(1, h.updates);
+    if (mean < best_mean) best_mean = mean, best = static_cast<int>(i);
+  }
+  for (size_t i = 0; i < hypotheses_.size(); ++i) {
+    Hypothesis& h = hypotheses_[i];
+    if (!h.alive || static_cast<int>(i) == best) continue;
+    if (h.updates < options_.prune_min_observations) continue;
+    // Mean chi-square too large (5.22): either above the fixed bound, or, over n updates,
+    // above the (1 - alpha) quantile of chi2(n) / n (Wilson-Hilferty approximation).
+    const double n = h.updates;
+    const double wh = 1 - 2 / (9 * n) + options_.prune_z * std::sqrt(2 / (9 * n));
+    const double quantile_mean = wh * wh * wh;
+    const double mean = h.chi2_sum / n;
+    if (mean > options_.prune_mean_chi2 || (options_.prune_z > 0 && mean > quantile_mean)) h.alive = false;
+  }
+  // Relative pruning (our addition; a multi-hypothesis tracker's likelihood-ratio test):
+  // a hypothesis whose summed chi-square exceeds the best one's by more than
+  // relative_prune_chi2 is (exp(-d/2)) far less likely.
+  if (options_.relative_prune_chi2 > 0 && best >= 0 &&
+      hypotheses_[best].updates >= options_.relative_prune_min_observations) {
+    const double best_sum = hypotheses_[best].chi2_sum;
+    for (size_t i = 0; i < hypotheses_.size(); ++i) {
+      Hypothesis& h = hypotheses_[i];
+      if (h.alive && static_cast<int>(i) != best && h.chi2_sum - best_sum > options_.relative_prune_chi2)
+        h.alive = false;
+    }
+  }
+  // Converged to separate places: drop the clearly less likely ones.
+  if (AllLinear() && !Clustered()) {
+    for (size_t i = 0; i < hypotheses_.size(); ++i) {
+      Hypothesis& h = hypotheses_[i];
+      if (h.alive && static_cast<int>(i) != best &&
+          h.chi2_sum / h.updates > options_.relative_prune * best_mean)
+        h.alive = false;
+    }
+  }
+}
+
+int MultiHypothesisSource::alive() const {
+  int n = 0;
+  for (const auto& h : hypotheses_) n += h.alive;
+  return n;
+}
+
+bool MultiHypothesisSource::AllLinear() const {
+  for (const auto& h : hypotheses_) {
+    if (!h.alive) continue;
+    if (h.updates < options_.min_observations || h.linearity > options_.linearity_threshold) return false;
+  }
+  return true;
+}
+
+bool MultiHypothesisSource::Clustered() const {
+  const Eigen::Vector3d mean = MeanPoint();
+  for (const auto& h : hypotheses_)
+    if (h.alive && (HypothesisPoint(axis_, h.s) - mean).norm() > options_.cluster_radius_m) return false;
+  return true;
+}
+
+bool MultiHypothesisSource::converged() const { return AllLinear() && Clustered(); }
+
+Eigen::Vector3d MultiHypothesisSource::MeanPoint() const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (const auto& h : hypotheses_) {
+    if (!h.alive) continue;
+    sum += HypothesisPoint(axis_, h.s);
+    ++n;
+  }
+  return n ? Eigen::Vector3d(sum / n) : axis_.origin;
+}
+
+double MultiHypothesisSource::chi2(const Eigen::Isometry3d& pose, double beta, double var) const {
+  using J3 = ceres::Jet<double, 3>;
+  double best = 1e300;
+  for (const Hypothesis& h : hypotheses_) {
+    if (!h.alive) continue;
+    J3 s[3] = {J3(h.s[0], 0), J3(h.s[1], 1), J3(h.s[2], 2)};
+    const J3 zh = PredictBeta(axis_, pose, s);
+    const Eigen::RowVector3d hj = zh.v.transpose();
+    const double nu = Wrap(beta - zh.a);
+    best = std::min(best, nu * nu / (hj * h.p * hj.transpose() + var));
+  }
+  return best;
+}
+
+// ------------------------------------------------------------------ simulation
+
+double SimulatedDoaSigma(double true_beta_rad) {
+  const double f = std::min(1.0, std::abs(true_beta_rad) / (M_PI / 2));
+  return (10.0 + 10.0 * f * f) * M_PI / 180;
+}
+
+namespace {
+
+// A dense path (1 cm) with, per point, a yaw to face (NaN: face along the path).
+struct PathBuilder {
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> yaw;
+  double hold_yaw = NAN;  // while set, every new point faces this yaw (up/down at an arc)
+  void Push(const Eigen::Vector3d& p, double y) {
+    pts.push_back(p);
+    yaw.push_back(y);
+  }
+  void LineTo(const Eigen::Vector3d& p) {
+    const Eigen::Vector3d a = pts.back();
+    const int n = std::max(1, static_cast<int>((p - a).norm() / 0.01));
+    for (int i = 1; i <= n; ++i) Push(a + (p - a) * (static_cast<double>(i) / n), hold_yaw);
+  }
+  // Arc about c; the sensor faces the centre turned by `face_offset` (NaN: along the arc).
+  void Arc(const Eigen::Vector2d& c, double r, double a0, double a1, double face_offset) {
+    const double z = pts.back().z();
+    const int n = std::max(1, static_cast<int>(std::abs(a1 - a0) * r / 0.01));
+    for (int i = 1; i <= n; ++i) {
+      const double a = a0 + (a1 - a0) * i / n;
+      Push(Eigen::Vector3d(c.x() + r * std::cos(a), c.y() + r * std::sin(a), z),
+           std::isnan(face_offset) ? hold_yaw : a + M_PI + face_offset);
+    }
+  }
+  void UpDown(double h) {
+    const Eigen::Vector3d b = pts.back();
+    LineTo(b + Eigen::Vector3d(0, 0, h));
+    LineTo(b - Eigen::Vector3d(0, 0, h));
+    LineTo(b);
+  }
+};
+
+std::vector<Eigen::Isometry3d> Resample(const PathBuilder& path, double step) {
+  const std::vector<Eigen::Vector3d>& pts = path.pts;
+  std::vector<Eigen::Isometry3d> poses;
+  double yaw = 0, acc = 0;
+  Eigen::Vector3d last = pts[0];
+  auto emit = [&](const Eigen::Vector3d& p) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    t.translation() = p;
+    poses.push_back(t);
+  };
+  emit(pts[0]);
+  for (size_t i = 1; i < pts.size(); ++i) {
+    const Eigen::Vector3d d = pts[i] - pts[i - 1];
+    if (!std::isnan(path.yaw[i]))
+      yaw = path.yaw[i];
+    else if (std::hypot(d.x(), d.y()) > 1e-9)
+      yaw = std::atan2(d.y(), d.x());
+    acc += d.norm();
+    if (acc >= step - 1e-9) {
+      emit(pts[i]);
+      acc = 0;
+      last = pts[i];
+    }
+  }
+  return poses;
+}
+
+}  // namespace
+
+LinearSimData SimulateLinear(const LinearSimConfig& c) {
+  LinearSimData d;
+  d.config = c;
+  std::mt19937_64 rng(c.seed);
+  std::normal_distribution<double> n01(0, 1);
+  std::uniform_real_distribution<double> u01(0, 1);
+  PathBuilder path;
+  path.Push(Eigen::Vector3d::Zero(), NAN);
+  double size = 8.0;
+  if (c.trajectory == 1) {
+    // Per side of an 8 m square: 2 m, a quarter arc (radius 2 m) around the side's middle
+    // on the outside, up and down, another quarter arc back to the side, 2 m.
+    d.sources = {{4, 0, 1}, {4, 0, -1}, {4, 8, 1}, {4, 8, -1}, {8, 4, 1}, {8, 4, -1}, {0, 4, 1}, {0, 4, -1}};
+    for (int side = 0; side < 4; ++side) {
+      const double a = side * M_PI / 2;
+      const Eigen::Vector2d dir(std::cos(a), std::sin(a)), left(-dir.y(), dir.x());
+      const Eigen::Vector2d s = path.pts.back().head<2>();
+      const Eigen::Vector2d centre = s + 4 * dir;
+      path.LineTo(Eigen::Vector3d((s + 2 * dir).x(), (s + 2 * dir).y(), 0));
+      const double a0 = std::atan2(-dir.y(), -dir.x());
+      if (c.fixed_heading) {
+        // The sensor keeps facing along the side while it side-steps round the source.
+        path.hold_yaw = a;
+        path.Arc(centre, 2.0, a0, a0 + M_PI / 2, NAN);
+        path.UpDown(0.6);
+        path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, NAN);
+        path.hold_yaw = NAN;
+      } else {
+        // On the arcs the sensor looks c.arc_face_offset_rad to the side of the source.
+        path.Arc(centre, 2.0, a0, a0 + M_PI / 2, c.arc_face_offset_rad);
+        path.hold_yaw = a0 + M_PI / 2 + M_PI + c.arc_face_offset_rad;
+        path.UpDown(0.6);
+        path.hold_yaw = NAN;
+        path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, c.arc_face_offset_rad);
+      }
+      path.LineTo(Eigen::Vector3d((s + 8 * dir).x(), (s + 8 * dir).y(), 0));
+    }
+  } else {
+    // Per side of a 12 m square: 4 m, up and down, 4 m, up and down, 4 m; then the diagonal.
+    size = 12.0;
+    d.sources = {{4, 1, 0.5}, {8, 1, -0.5}, {11, 4, 0.5}, {11, 8, -0.5},
+                 {8, 11, 0.5}, {4, 11, -0.5}, {1, 4, 0.5}, {1, 8, -0.5}};
+    for (int side = 0; side < 4; ++side) {
+      const double a = side * M_PI / 2;
+      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+      const Eigen::Vector2d s = path.pts.back().head<2>();
+      for (int part = 1; part <= 3; ++part) {
+        const Eigen::Vector2d p = s + 4.0 * part * dir;
+        path.LineTo(Eigen::Vector3d(p.x(), p.y(), 0));
+        if (part < 3) path.UpDown(0.6);
+      }
+    }
+    path.LineTo(Eigen::Vector3d(12, 12, 0));
+  }
+  d.truth = Resample(path, c.step_m);
+
+  const double lo = -3, hi = size + 3;
+  const int nl = static_cast<int>(c.landmark_density_per_m2 * (hi - lo) * (hi - lo));
+  for (int i = 0; i < nl; ++i)
+    d.landmarks.emplace_back(lo + (hi - lo) * u01(rng), lo + (hi - lo) * u01(rng), -1.5 + 3 * u01(rng));
+
+  d.odometry.resize(d.truth.size(), Eigen::Isometry3d::Identity());
+  for (size_t k = 1; k < d.truth.size(); ++k) {
+    Eigen::Isometry3d rel = d.truth[k - 1].inverse() * d.truth[k];
+    const Eigen::Vector3d dr(c.odo_sigma_rad * n01(rng), c.odo_sigma_rad * n01(rng), c.odo_sigma_rad * n01(rng));
+    const Eigen::Vector3d dt(c.odo_sigma_m * n01(rng), c.odo_sigma_m * n01(rng), c.odo_sigma_m * n01(rng));
+    Eigen::Isometry3d noise = Eigen::Isometry3d::Identity();
+    if (dr.norm() > 0) noise.linear() = Eigen::AngleAxisd(dr.norm(), dr.normalized()).toRotationMatrix();
+    noise.translation() = dt;
+    d.odometry[k] = rel * noise;
+  }
+  d.landmark_obs.resize(d.truth.size());
+  d.sound_obs.resize(d.truth.size());
+  for (size_t k = 0; k < d.truth.size(); ++k) {
+    const Eigen::Isometry3d inv = d.truth[k].inverse();
+    for (size_t j = 0; j < d.landmarks.size(); ++j) {
+      const Eigen::Vector3d l = inv * d.landmarks[j];
+      const double r = l.norm();
+      if (r > c.landmark_range_m || r < 0.2) continue;
+      if (std::acos(std::clamp(l.x() / r, -1.0, 1.0)) > c.landmark_fov_rad) continue;
+      const double az = std::atan2(l.y(), l.x()), el = std::atan2(l.z(), std::hypot(l.x(), l.y()));
+      d.landmark_obs[k].push_back({static_cast<int64_t>(j),
+                                   Eigen::Vector3d(r + c.landmark_sigma_m * n01(rng),
+                                                   az + c.landmark_sigma_rad * n01(rng),
+                                                   el + c.landmark_sigma_rad * n01(rng))});
+    }
+    for (size_t j = 0; j < d.sources.size(); ++j) {
+      if ((d.sources[j] - d.truth[k].translation()).norm() > c.sound_range_m) continue;
+      if (u01(rng) > c.heard_probability) continue;
+      const double beta = LinearArrayBeta(d.truth[k], d.sources[j]);
+      const double raw = std::clamp(beta + c.doa_noise_scale * SimulatedDoaSigma(beta) * n01(rng), -M_PI / 2, M_PI / 2);
+      d.sound_obs[k].push_back({static_cast<int64_t>(j), raw});
+    }
+  }
+  return d;
+}
+
+void SimulatedCalibration(uint64_t seed, std::vector<double>* raw, std::vector<double>* truth) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n01(0, 1);
+  raw->clear();
+  truth->clear();
+  for (int deg = -90; deg <= 90; deg += 5) {
+    const double b = deg * M_PI / 180;
+    for (int t = 0; t < 10; ++t) {
+      truth->push_back(b);
+      raw->push_back(std::clamp(b + SimulatedDoaSigma(b) * n01(rng), -M_PI / 2, M_PI / 2));
+    }
+  }
+}
+
+// ------------------------------------------------------------------ joint optimisation
+
+namespace {
+
+struct Pose6 {
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d iso() const {
+    Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+    m.linear() = q.toRotationMatrix();
+    m.translation() = t;
+    return m;
+  }
+  static Pose6 From(const Eigen::Isometry3d& m) {
+    Pose6 p;
+    p.q = Eigen::Quaterniond(m.linear()).normalized();
+    p.t = m.translation();
+    return p;
+  }
+};
+
+// e = [ (R_i'(t_j - t_i) - t_m) / s_t ; 2 vec(q_m^-1 q_i^-1 q_j) / s_r ]
+struct Odometry6Cost {
+  Eigen::Quaterniond qm;
+  Eigen::Vector3d tm;
+  double inv_st, inv_sr;
+  template <class T>
+  bool operator()(const T* qi_, const T* ti_, const T* qj_, const T* tj_, T* r) const {
+    Eigen::Map<const Eigen::Quaternion<T>> qi(qi_), qj(qj_);
+    Eigen::Map<const Eigen::Matrix<T, 3, 1>> ti(ti_), tj(tj_);
+    const Eigen::Quaternion<T> qij = qi.conjugate() * qj;
+    const Eigen::Matrix<T, 3, 1> tij = qi.conjugate() * (tj - ti);
+    const Eigen::Quaternion<T> dq = qm.cast<T>().conjugate() * qij;
+    for (int k = 0; k < 3; ++k) {
+      r[k] = (tij[k] - T(tm[k])) * T(inv_st);
+      r[3 + k] = T(2.0) * dq.vec()[k] * T(inv_sr);
+    }
+    return true;
+  }
+};
+
+struct Landmark3Cost {
+  Eigen::Vector3d z;
+  double inv_sr, inv_sa;
+  template <class T>
+  bool operator()(const T* q_, const T* t_, const T* v_, T* r) const {
+    using std::atan2;
+    using std::sqrt;
+    Eigen::Map<const Eigen::Quaternion<T>> q(q_);
+    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), v(v_);
+    const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (v - t);
+    const T xy = sqrt(l[0] * l[0] + l[1] * l[1]);
+    r[0] = (sqrt(l.squaredNorm()) - T(z[0])) * T(inv_sr);
+    r[1] = Wrap(T(atan2(l[1], l[0]) - T(z[1]))) * T(inv_sa);
+    r[2] = (atan2(l[2], xy) - T(z[2])) * T(inv_sa);
+    return true;
+  }
+};
+
+// (5.30-5.32): beta of the source in the keyframe minus the GP-corrected observation.
+struct BetaCost {
+  double beta, inv_sigma;
+  template <class T>
+  bool operator()(const T* q_, const T* t_, const T* p_, T* r) const {
+    using std::atan2;
+    using std::sqrt;
+    Eigen::Map<const Eigen::Quaternion<T>> q(q_);
+    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), p(p_);
+    const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (p - t);
+    r[0] = (atan2(l[1], sqrt(l[0] * l[0] + l[2] * l[2])) - T(beta)) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct SourceTrack {
+  std::unique_ptr<MultiHypothesisSource> mh;
+  bool converged = false;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  struct Obs {
+    int k;
+    double beta, var;
+  };
+  std::vector<Obs> obs;
+};
+
+class Mapper {
+ public:
+  Mapper(const LinearSimData& d, const LinearMapperOptions& o) : d_(d), o_(o) {}
+
+  LinearRunResult Run() {
+    LinearRunResult res;
+    const auto t0 = std::chrono::steady_clock::now();
+    const size_t n = d_.truth.size();
+    int last_full = -1000;
+    for (size_t k = 0; k < n; ++k) {
+      poses_.push_back(k == 0 ? Pose6::From(d_.truth[0]) : Pose6::From(poses_.back().iso() * d_.odometry[k]));
+      bool loop = false;
+      for (const auto& o : d_.landmark_obs[k]) {
+        auto it = last_seen_.find(o.id);
+        if (it != last_seen_.end() && static_cast<int>(k) - it->second > o_.loop_gap_keyframes) loop = true;
+        last_seen_[o.id] = static_cast<int>(k);
+        if (!landmarks_.count(o.id)) {
+          const Eigen::Vector3d l(o.z[0] * std::cos(o.z[2]) * std::cos(o.z[1]),
+                                  o.z[0] * std::cos(o.z[2]) * std::sin(o.z[1]), o.z[0] * std::sin(o.z[2]));
+          landmarks_[o.id] = poses_.back().iso() * l;
+        }
+        lm_obs_[o.id].push_back({static_cast<int>(k), o.z});
+      }
+      // Converged sources heard now join this keyframe's optimisation.
+      for (const auto& s : d_.sound_obs[k]) {
+        SourceTrack& tr = tracks_[s.source];
+        double beta, var;
+        o_.sensor_model->Predict(s.raw_beta, &beta, &var);
+        tr.obs.push_back({static_cast<int>(k), beta, var});
+      }
+      if (k > 0) {
+        if (loop && static_cast<int>(k) - last_full > o_.loop_gap_keyframes / 2) {
+          Optimise(0, static_cast<int>(k));
+          last_full = static_cast<int>(k);
+          ++res.full_optimisations;
+        } else {
+          Optimise(std::max(1, static_cast<int>(k) - o_.window_keyframes + 1), static_cast<int>(k));
+        }
+      }
+      // Multi-hypothesis initialisation of the sources heard now, from this keyframe's pose.
+      const Eigen::Isometry3d pose = poses_.back().iso();
+      for (const auto& s : d_.sound_obs[k]) {
+        SourceTrack& tr = tracks_[s.source];
+        if (tr.converged) continue;
+        const auto& ob = tr.obs.back();
+        if (!tr.mh) {
+          MultiHypothesisOptions mo = o_.hypotheses;
+          mo.num_hypotheses = o_.num_hypotheses;
+          tr.mh = std::make_unique<MultiHypothesisSource>(mo, pose, ob.beta, ob.var);
+          continue;
+        }
+        tr.mh->Update(pose, ob.beta, ob.var);
+        if (tr.mh->converged()) {
+          tr.converged = true;
+          tr.point = tr.mh->MeanPoint();
+        }
+      }
+    }
+    Optimise(0, static_cast<int>(n) - 1);  // final full optimisation (the loop is closed)
+    if (std::getenv("SARMAP_SOUND_MAP_DEBUG")) {
+      for (auto& kv : tracks_) {
+        const SourceTrack& tr = kv.second;
+        fprintf(stderr, "source %ld obs %zu converged %d", static_cast<long>(kv.first), tr.obs.size(), tr.converged);
+        if (tr.mh) {
+          fprintf(stderr, " alive %d linear %d clustered %d |", tr.mh->alive(), tr.mh->AllLinear(), tr.mh->Clustered());
+          for (const auto& h : tr.mh->hypotheses())
+            if (h.alive) fprintf(stderr, " (L %.2f n %d chi %.2f)", h.linearity, h.updates, h.chi2_sum / std::max(1, h.updates));
+        }
+        fprintf(stderr, " err %.3f\n", (tr.point - d_.sources[kv.first]).norm());
+      }
+      const Eigen::Vector3d e = poses_.back().t - d_.truth.back().translation();
+      fprintf(stderr, "final pose error %.3f m, %zu keyframes\n", e.norm(), n);
+    }
+    ++res.full_optimisations;
+    res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    double sum2 = 0;
+    res.estimates.assign(d_.sources.size(), Eigen::Vector3d::Constant(NAN));
+    res.source_converged.assign(d_.sources.size(), false);
+    for (auto& kv : tracks_) {
+      if (!kv.second.converged) continue;
+      res.estimates[kv.first] = kv.second.point;
+      res.source_converged[kv.first] = true;
+      sum2 += (kv.second.point - d_.sources[kv.first]).squaredNorm();
+      ++res.converged;
+    }
+    res.rms_m = res.converged ? std::sqrt(sum2 / res.converged) : 0;
+    res.convergence_rate = static_cast<double>(res.converged) / d_.sources.size();
+    int correct = 0;
+    for (size_t j = 0; j < d_.sources.size(); ++j)
+      correct += res.source_converged[j] && (res.estimates[j] - d_.sources[j]).norm() < o_.converged_error_m;
+    res.correct_convergence_rate = static_cast<double>(correct) / d_.sources.size();
+    return res;
+  }
+
+ private:
+  // Joint optimisation (5.29) over keyframes first..last (first == 0: everything, the first
+  // pose held as gauge), the landmarks and converged sources they observe; observations
+  // of those from older keyframes enter with the older poses held constant.
+  void Optimise(int first, int last) {
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem problem(po);
+    ceres::EigenQuaternionManifold quat;
+    std::set<int> used_poses;
+    auto add_pose = [&](int k) {
+      if (used_poses.insert(k).second) {
+        problem.AddParameterBlock(poses_[k].q.coeffs().data(), 4, &quat);
+        problem.AddParameterBlock(poses_[k].t.data(), 3);
+        if (k < first || k == 0) {
+          problem.SetParameterBlockConstant(poses_[k].q.coeffs().data());
+          problem.SetParameterBlockConstant(poses_[k].t.data());
+        }
+      }
+    };
+    const LinearSimConfig& c = d_.config;
+    for (int k = std::max(1, first); k <= last; ++k) {
+      add_pose(k - 1);
+      add_pose(k);
+      const Eigen::Isometry3d& m = d_.odometry[k];
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Odometry6Cost, 6, 4, 3, 4, 3>(new Odometry6Cost{
+                                   Eigen::Quaterniond(m.linear()), m.translation(), 1.0 / c.odo_sigma_m,
+                                   1.0 / c.odo_sigma_rad}),
+                               nullptr, poses_[k - 1].q.coeffs().data(), poses_[k - 1].t.data(),
+                               poses_[k].q.coeffs().data(), poses_[k].t.data());
+    }
+    std::set<int64_t> lms;
+    std::set<int64_t> srcs;
+    for (int k = first; k <= last; ++k) {
+      for (const auto& o : d_.landmark_obs[k]) lms.insert(o.id);
+      for (const auto& s : d_.sound_obs[k])
+        if (tracks_[s.source].converged) srcs.insert(s.source);
+    }
+    for (int64_t id : lms) {
+      for (const auto& ob : lm_obs_[id]) {
+        if (ob.k > last) continue;
+        add_pose(ob.k);
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Landmark3Cost, 3, 4, 3, 3>(
+                                     new Landmark3Cost{ob.z, 1.0 / c.landmark_sigma_m, 1.0 / c.landmark_sigma_rad}),
+                                 nullptr, poses_[ob.k].q.coeffs().data(), poses_[ob.k].t.data(),
+                                 landmarks_[id].data());
+      }
+    }
+    for (int64_t id : srcs) {
+      SourceTrack& tr = tracks_[id];
+      for (const auto& ob : tr.obs) {
+        if (ob.k > last) continue;
+        add_pose(ob.k);
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
+                                     new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}),
+                                 nullptr, poses_[ob.k].q.coeffs().data(), poses_[ob.k].t.data(), tr.point.data());
+      }
+    }
+    if (problem.NumResidualBlocks() == 0) return;
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+    so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    so.max_num_iterations = first == 0 ? 200 : 10;
+    so.num_threads = 1;
+    so.logging_type = ceres::SILENT;
+    ceres::Solver::Summary sum;
+    ceres::Solve(so, &problem, &sum);
+    for (int k : used_poses) poses_[k].q.normalize();
+  }
+
+  const LinearSimData& d_;
+  const LinearMapperOptions& o_;
+  std::vector<Pose6> poses_;
+  std::map<int64_t, Eigen::Vector3d> landmarks_;
+  struct LmObs {
+    int k;
+    Eigen::Vector3d z;
+  };
+  std::map<int64_t, std::vector<LmObs>> lm_obs_;
+  std::map<int64_t, int> last_seen_;
+  std::map<int64_t, SourceTrack> tracks_;
+};
+
+}  // namespace
+
+LinearRunResult RunLinearArrayMapping(const LinearSimData& data, const LinearMapperOptions& options) {
+  LinearMapperOptions o = options;
+  if (!o.sensor_model) {
+    static std::shared_ptr<const DoaSensorModel> simulated = [] {
+      std::vector<double> raw, truth;
+      SimulatedCalibration(7, &raw, &truth);
+      return std::shared_ptr<const DoaSensorModel>(GpDoaModel::Fit(raw, truth));
+    }();
+    o.sensor_model = simulated;
+  }
+  Mapper mapper(data, o);
+  return mapper.Run();
+}
+
+}  // namespace sound_map
+}  // namespace sarmap

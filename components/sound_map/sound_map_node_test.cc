@@ -1,0 +1,108 @@
+// sarmap-sound-map as a process over real LCM (run in a private network namespace by
+// CTest): POSE + DOA + SLAM_ANCHORS in, SLAM_ANCHOR_REQUEST and SOUND_MAP out.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "sarmap/doa_t.hpp"
+#include "sarmap/pose_t.hpp"
+#include "sarmap/slam_anchor_request_t.hpp"
+#include "sarmap/slam_anchors_t.hpp"
+#include "sarmap/sound_map_t.hpp"
+#include "tests/process.h"
+
+namespace {
+
+struct Sink {
+  sarmap::sound_map_t map;
+  sarmap::slam_anchor_request_t request;
+  int maps = 0, requests = 0;
+  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const sarmap::sound_map_t* m) {
+    map = *m;
+    ++maps;
+  }
+  void OnRequest(const lcm::ReceiveBuffer*, const std::string&, const sarmap::slam_anchor_request_t* m) {
+    request = *m;
+    ++requests;
+  }
+};
+
+TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
+  if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  const std::string log = ::testing::TempDir() + "/sound-map-node-" + std::to_string(getpid()) + ".log";
+  sarmap::testing::Process node({"sarmap-sound-map", "--lcm-url", url, "--config",
+                                 std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
+                                 "robot_config=" + std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml", "--set",
+                                 "reorder_delay_s=0"},
+                                log);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Sink sink;
+  lcm.subscribe("SOUND_MAP", &Sink::OnMap, &sink);
+  lcm.subscribe("SLAM_ANCHOR_REQUEST", &Sink::OnRequest, &sink);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  // The array sits 0.10 m ahead of the base (config/robot.yaml); a source at (3, 2).
+  const double sx = 3.0, sy = 2.0;
+  for (int k = 0; k < 40; ++k) {
+    const int64_t t = 1000000 + k * 100000;
+    sarmap::pose_t pose{};
+    pose.header.utime = t;
+    pose.header.frame = "map";
+    pose.child_frame = "base";
+    pose.position_m[0] = 0.05 * k;
+    pose.orientation[0] = 1;
+    for (int i : {0, 7, 35}) pose.covariance[i] = 1e-4;
+    pose.node_id = k / 10;
+    lcm.publish("POSE", &pose);
+    sarmap::doa_t doa{};
+    doa.header.utime = t + 1;
+    doa.header.frame = "mic_array";
+    doa.device_id = "kinect";
+    sarmap::doa_source_t s{};
+    s.track_id = 5;
+    s.kind = sarmap::doa_source_t::KIND_AZIMUTH;
+    s.method = sarmap::doa_source_t::METHOD_SRP_PHAT;
+    s.confidence = 1;
+    s.azimuth_rad = std::atan2(sy, sx - (0.05 * k + 0.10));
+    s.covariance[0] = std::pow(3 * M_PI / 180, 2);
+    s.covariance[3] = 1;
+    doa.sources.push_back(s);
+    doa.num_sources = 1;
+    lcm.publish("DOA", &doa);
+    sarmap::slam_anchors_t a{};
+    a.header.utime = t + 2;
+    a.header.frame = "map";
+    a.optimisation_id = k;
+    a.current = {k / 10, t, 0.05 * k, 0, 0};
+    a.num_anchors = 1;
+    a.anchors.push_back({0, 1000000, 0, 0, 0});
+    a.covariance_dim = 6;
+    a.covariance.assign(6, std::vector<double>(6, 0.0));
+    for (int i = 0; i < 6; ++i) a.covariance[i][i] = 1e-4;
+    lcm.publish("SLAM_ANCHORS", &a);
+    lcm.handleTimeout(10);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while ((sink.requests == 0 || sink.maps == 0 || sink.map.num_sources == 0 ||
+          sink.map.sources[0].num_observations < 30) &&
+         std::chrono::steady_clock::now() < deadline)
+    lcm.handleTimeout(50);
+  ASSERT_GT(sink.requests, 0) << node.Output();
+  EXPECT_EQ(sink.request.num_node_ids, 1);
+  EXPECT_EQ(sink.request.node_ids.at(0), 0);
+  ASSERT_EQ(sink.map.num_sources, 1) << node.Output();
+  const auto& src = sink.map.sources[0];
+  printf("mapped source at (%.3f, %.3f), %d observations\n", src.position_m[0], src.position_m[1],
+         src.num_observations);
+  EXPECT_NEAR(src.position_m[0], sx, 0.3);
+  EXPECT_NEAR(src.position_m[1], sy, 0.3);
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(5), 0);
+}
+
+}  // namespace

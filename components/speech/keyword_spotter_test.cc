@@ -1,0 +1,82 @@
+#include "speech/keyword_spotter.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "audio_capture/audio_file.h"
+#include "speech/kws_evaluation.h"
+
+namespace sarmap {
+namespace speech {
+namespace {
+
+std::vector<int16_t> ReadRaw16k(const std::string& path) {
+  audio::AudioFileReader r(path, audio::RawFormat{16000, 1, "s16le"});
+  std::vector<int16_t> all, block;
+  while (r.Read(4096, &block) > 0) all.insert(all.end(), block.begin(), block.end());
+  return all;
+}
+
+TEST(KeywordSpotterRealData, DecodesGoForwardExactly) {
+  const std::string path = std::string(SARMAP_DATA_DIR) + "/audio/pocketsphinx_test/goforward.raw";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data missing: " << path;
+  KeywordOptions full;
+  full.full_decoding = true;
+  KeywordSpotter spotter(full);
+  double conf = 0;
+  EXPECT_EQ(spotter.DecodeText(ReadRaw16k(path), &conf), "go forward ten meters");
+  // Keyword mode with the test's own keyword list: "forward" and "meters" are found.
+  KeywordOptions o;
+  o.keywords = {"forward", "meters"};
+  o.thresholds = {1e-20};
+  KeywordSpotter kws(o);
+  const auto r = kws.Decode(ReadRaw16k(path));
+  std::vector<std::string> found;
+  for (const auto& h : r.keywords) found.push_back(h.keyword);
+  EXPECT_NE(std::find(found.begin(), found.end(), "forward"), found.end());
+  EXPECT_NE(std::find(found.begin(), found.end(), "meters"), found.end());
+  for (const auto& h : r.keywords) {
+    EXPECT_GT(h.confidence, 0.5);
+    EXPECT_LE(h.start_s, h.end_s);
+  }
+}
+
+TEST(KeywordSpotter, UnknownWordIsAClearError) {
+  KeywordOptions o;
+  o.keywords = {"xqzzyv"};
+  try {
+    KeywordSpotter k(o);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not in"), std::string::npos) << e.what();
+  }
+}
+
+// Calls for help rendered by espeak-ng at test time (varied voices, rates, pitches) in noise
+// (20 dB), and other speech (real recordings + espeak sentences) in noise as negatives. Pins the
+// keyword-only operating point that reaches the recall goal; its false-alarm rate is printed (the
+// full curve: sarmap-log kws-eval, see README; it does not meet 1 per 10 minutes).
+TEST(KeywordSpotterSimulated, CallsForHelpInNoise) {
+  if (!EspeakAvailable()) GTEST_SKIP() << "espeak-ng not installed";
+  KwsEvalOptions o;
+  o.num_calls = 8;
+  o.negative_minutes = 0.25;
+  o.call_snr_db = 20;
+  o.babble_db = -100;
+  o.data_dir = SARMAP_DATA_DIR;
+  const auto data = MakeKwsEvalData(o);
+  ASSERT_EQ(data.positives.size(), 8u);
+  KeywordOptions k;
+  k.thresholds = {1e-40};
+  k.min_confidence = 0;
+  const auto r = EvaluateKws(data, k, VadOptions{}, o);
+  std::printf("simulated calls (SNR 20 dB), threshold 1e-40: recall %d/%d, 'help' false alarms %d in %.2f min of other "
+              "speech (%.0f per 10 min), other keywords %d\n",
+              r.hits, r.calls, r.target_false_alarms, r.negative_minutes, r.false_alarms_per_10_min, r.other_false_alarms);
+  EXPECT_GE(r.recall, 0.85);
+}
+
+}  // namespace
+}  // namespace speech
+}  // namespace sarmap

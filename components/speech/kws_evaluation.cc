@@ -1,0 +1,241 @@
+#include "speech/kws_evaluation.h"
+
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <unistd.h>
+
+#include "audio_capture/audio_file.h"
+
+namespace sarmap {
+namespace speech {
+
+namespace fs = std::filesystem;
+
+bool EspeakAvailable() { return std::system("espeak-ng --version > /dev/null 2>&1") == 0; }
+
+std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int wpm, int pitch) {
+  const std::string path =
+      (fs::temp_directory_path() / ("sarmap_espeak_" + std::to_string(::getpid()) + ".wav")).string();
+  std::string safe;
+  for (char c : text)
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == ' ' || c == ',' || c == '.' || c == '!') safe += c;
+  const std::string cmd = "espeak-ng -v " + voice + " -s " + std::to_string(wpm) + " -p " + std::to_string(pitch) +
+                          " -w " + path + " \"" + safe + "\" > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) return {};
+  auto buf = audio::ReadAudioFile(path);
+  fs::remove(path);
+  if (buf.channels.empty()) return {};
+  return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
+}
+
+namespace {
+
+double Rms(const std::vector<float>& x) {
+  double e = 0;
+  for (float v : x) e += static_cast<double>(v) * v;
+  return std::sqrt(e / std::max<size_t>(1, x.size()));
+}
+
+// Active-speech RMS (ignores the silent parts espeak adds).
+double ActiveRms(const std::vector<float>& x) {
+  const double peak_rms = Rms(x);
+  double e = 0;
+  size_t n = 0;
+  for (size_t i = 0; i + 160 <= x.size(); i += 160) {
+    double f = 0;
+    for (size_t j = i; j < i + 160; ++j) f += static_cast<double>(x[j]) * x[j];
+    if (std::sqrt(f / 160) > 0.1 * peak_rms) {
+      e += f;
+      n += 160;
+    }
+  }
+  return n ? std::sqrt(e / n) : peak_rms;
+}
+
+void Scale(std::vector<float>* x, double gain) {
+  for (float& v : *x) v = static_cast<float>(v * gain);
+}
+
+std::vector<float> PinkishNoise(size_t n, std::mt19937* rng) {
+  std::normal_distribution<float> d(0.0f, 1.0f);
+  std::vector<float> x(n);
+  float b0 = 0, b1 = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const float w = d(*rng);
+    b0 = 0.97f * b0 + 0.03f * w;  // low-frequency weighted mix: closer to room/engine noise than white
+    b1 = 0.6f * b1 + 0.4f * w;
+    x[i] = 4.0f * b0 + 0.5f * b1 + 0.2f * w;
+  }
+  return x;
+}
+
+std::vector<std::vector<float>> RealSpeech(const std::string& data_dir) {
+  std::vector<std::vector<float>> out;
+  for (const std::string sub : {"audio/cmu_arctic", "audio/pocketsphinx_test/librivox", "audio/pocketsphinx_test/cards",
+                                "audio/sphinx4_digits", "audio/pocketsphinx_test"}) {
+    const fs::path dir = fs::path(data_dir) / sub;
+    if (!fs::exists(dir)) continue;
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().extension() == ".wav" || e.path().extension() == ".raw") files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) {
+      try {
+        auto b = audio::ReadAudioFile(f.string(), audio::RawFormat{16000, 1, "s16le"});
+        if (b.sample_rate_hz != 16000 || b.channels.empty()) continue;
+        out.push_back(b.channels[0]);
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  return out;
+}
+
+const std::vector<std::string> kVoices = {"en-us", "en", "en-gb-scotland", "en-029", "en-gb-x-rp", "en-us+f3",
+                                          "en+m3", "en-us+f2"};
+const std::vector<std::string> kCalls = {"help", "help me", "please help", "somebody help", "help help",
+                                         "can anyone help me", "help us", "I need help"};
+const std::vector<std::string> kNegativeSentences = {
+    "the quick brown fox jumps over the lazy dog", "we walked along the river in the evening",
+    "please hand me the blue folder on the desk", "the meeting starts at half past nine tomorrow",
+    "turn left at the second corner and keep going", "this room is very cold in the winter",
+    "she sells sea shells by the sea shore", "I think the robot is moving too slowly",
+    "open the door and look inside the kitchen", "the weather was lovely on the weekend",
+    "hello, can you hear me over there", "we should check the second floor next",
+    "my phone battery is almost empty", "the children played football in the yard",
+    "bring some water and a blanket", "the elevator is out of order today"};
+
+}  // namespace
+
+KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
+  KwsEvalData data;
+  std::mt19937 rng(o.seed);
+  const auto real = RealSpeech(o.data_dir);
+  std::uniform_int_distribution<int> speed(130, 180), pitch(35, 65);
+  // Positives: 3.5 s scenes, call starting at 1.0 s.
+  for (int i = 0; i < o.num_calls; ++i) {
+    std::vector<float> call = RenderEspeak(kCalls[i % kCalls.size()], kVoices[(i / kCalls.size() + i) % kVoices.size()],
+                                           speed(rng), pitch(rng));
+    if (call.empty()) break;
+    const size_t n = 56000, start = 16000;
+    std::vector<float> scene(std::max(n, start + call.size() + 8000), 0.0f);
+    std::vector<float> noise = PinkishNoise(scene.size(), &rng);
+    const double call_rms = ActiveRms(call);
+    Scale(&call, 0.1 / call_rms);  // call at -20 dBFS RMS
+    std::vector<float> babble(scene.size(), 0.0f);
+    if (!real.empty()) {
+      const auto& other = real[rng() % real.size()];
+      for (size_t k = 0; k < babble.size() && k < other.size(); ++k) babble[k] = other[k];
+      Scale(&babble, 0.1 * std::pow(10.0, o.babble_db / 20) / std::max(1e-9, ActiveRms(babble)));
+    }
+    // Noise so that call / (noise + babble) = call_snr_db.
+    const double target_bg = 0.1 * std::pow(10.0, -o.call_snr_db / 20);
+    const double babble_rms = Rms(babble);
+    const double noise_rms = std::sqrt(std::max(target_bg * target_bg - babble_rms * babble_rms, 1e-8));
+    Scale(&noise, noise_rms / std::max(1e-9, Rms(noise)));
+    for (size_t k = 0; k < scene.size(); ++k) scene[k] = noise[k] + babble[k];
+    for (size_t k = 0; k < call.size(); ++k) scene[start + k] += call[k];
+    data.positives.push_back(std::move(scene));
+    data.call_start_s.push_back(1.0);
+    data.call_end_s.push_back(1.0 + call.size() / 16000.0);
+  }
+  // Negatives: other speech in noise until negative_minutes.
+  const size_t total = static_cast<size_t>(o.negative_minutes * 60 * 16000);
+  std::vector<std::vector<float>> pool = real;
+  for (size_t i = 0; i < kNegativeSentences.size(); ++i) {
+    auto s = RenderEspeak(kNegativeSentences[i], kVoices[i % kVoices.size()], 150 + 10 * (i % 5), 40 + 5 * (i % 6));
+    if (!s.empty()) pool.push_back(std::move(s));
+  }
+  if (pool.empty()) return data;
+  std::uniform_real_distribution<double> gap_s(0.3, 1.5), level_db(-30, -14), rate(0.9, 1.1), snr(5, 20);
+  data.negatives.reserve(total + 16000 * 10);
+  size_t idx = 0;
+  while (data.negatives.size() < total) {
+    const auto& src = pool[idx++ % pool.size()];
+    std::vector<float> s = Resample(src, 16000, static_cast<int>(16000 * rate(rng)));  // speaking-rate change
+    Scale(&s, std::pow(10.0, level_db(rng) / 20) / std::max(1e-9, ActiveRms(s)));
+    const size_t gap = static_cast<size_t>(gap_s(rng) * 16000);
+    std::vector<float> seg(gap + s.size(), 0.0f);
+    std::copy(s.begin(), s.end(), seg.begin() + gap);
+    std::vector<float> noise = PinkishNoise(seg.size(), &rng);
+    Scale(&noise, ActiveRms(s) * std::pow(10.0, -snr(rng) / 20) / std::max(1e-9, Rms(noise)));
+    for (size_t k = 0; k < seg.size(); ++k) data.negatives.push_back(seg[k] + noise[k]);
+  }
+  return data;
+}
+
+std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords_in,
+                                            const VadOptions& vad_options, const KwsEvalOptions& o,
+                                            const std::vector<double>& cuts) {
+  KeywordOptions keywords = keywords_in;
+  keywords.min_confidence = 0;
+  KeywordSpotter spotter(keywords);
+  const auto t0 = std::chrono::steady_clock::now();
+  struct Hit {
+    double t;
+    std::string keyword;
+    double confidence;
+  };
+  auto run = [&](const std::vector<float>& x, std::vector<Hit>* hits) {
+    VoiceActivityDetector vad(16000, vad_options);
+    std::vector<Utterance> utts;
+    for (size_t i = 0; i < x.size(); i += 4096) vad.Push(x.data() + i, std::min<size_t>(4096, x.size() - i), &utts);
+    vad.Flush(&utts);
+    for (const auto& u : utts) {
+      const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
+      for (const auto& h : d.keywords) {
+        hits->push_back({u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence});
+        if (std::getenv("SARMAP_KWS_DUMP"))
+          std::fprintf(stderr, "HIT %s %s ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f\n", &x == &data.negatives ? "neg" : "pos",
+                       h.keyword.c_str(), h.log_ratio, h.kws_confidence, h.confidence, h.end_s - h.start_s,
+                       u.samples.size() / 16000.0);
+      }
+    }
+  };
+  std::vector<std::vector<Hit>> pos(data.positives.size());
+  for (size_t i = 0; i < data.positives.size(); ++i) {
+    run(data.positives[i], &pos[i]);
+    if (std::getenv("SARMAP_KWS_DUMP")) {
+      std::fprintf(stderr, "POS %zu call %.2f-%.2f:", i, data.call_start_s[i], data.call_end_s[i]);
+      for (const auto& h : pos[i]) std::fprintf(stderr, " %s@%.2f(%.2f)", h.keyword.c_str(), h.t, h.confidence);
+      std::fprintf(stderr, "\n");
+    }
+  }
+  std::vector<Hit> neg;
+  run(data.negatives, &neg);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<KwsEvalResult> out;
+  for (double cut : cuts) {
+    KwsEvalResult r;
+    r.threshold = keywords.thresholds.empty() ? 0 : keywords.thresholds[0];
+    r.min_confidence = cut;
+    for (size_t i = 0; i < pos.size(); ++i) {
+      bool found = false;
+      for (const auto& h : pos[i])
+        found |= h.confidence >= cut && h.keyword == o.target && h.t > data.call_start_s[i] - 0.5 &&
+                 h.t < data.call_end_s[i] + 0.5;
+      r.hits += found;
+      ++r.calls;
+    }
+    r.recall = r.calls ? static_cast<double>(r.hits) / r.calls : 0;
+    for (const auto& h : neg)
+      if (h.confidence >= cut) (h.keyword == o.target ? r.target_false_alarms : r.other_false_alarms)++;
+    r.negative_minutes = data.negatives.size() / 16000.0 / 60.0;
+    r.false_alarms_per_10_min = r.negative_minutes > 0 ? r.target_false_alarms * 10.0 / r.negative_minutes : 0;
+    r.decode_seconds = seconds;
+    out.push_back(r);
+  }
+  return out;
+}
+
+KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
+                          const KwsEvalOptions& o) {
+  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}).front();
+}
+
+}  // namespace speech
+}  // namespace sarmap

@@ -1,0 +1,59 @@
+#pragma once
+// Keyword-spotting evaluation on simulated calls for help (no LCM): positives are calls
+// ("help", "help me", "please help", ...) rendered by espeak-ng with varied voices, rates and
+// pitches, placed in noise and other talkers; negatives are a long stream of other speech
+// (real recordings from the shared data, plus espeak-ng sentences without keywords) in
+// noise. Both go through the VAD and PocketSphinx exactly as in the node (mono path).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "speech/enhancer.h"
+#include "speech/keyword_spotter.h"
+
+namespace sarmap {
+namespace speech {
+
+// Renders `text` with espeak-ng at 16 kHz (empty if espeak-ng is unavailable).
+std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int words_per_minute, int pitch);
+bool EspeakAvailable();
+
+struct KwsEvalOptions {
+  int num_calls = 40;
+  double negative_minutes = 10.0;
+  double call_snr_db = 10.0;        // call vs background (noise + babble)
+  double babble_db = -6.0;          // other talkers relative to the call, positives
+  uint32_t seed = 1;
+  std::string data_dir;             // shared data (real negative speech)
+  std::string target = "help";
+};
+
+struct KwsEvalResult {
+  double threshold = 0;
+  double min_confidence = 0;
+  int calls = 0, hits = 0;
+  double recall = 0;
+  int target_false_alarms = 0;      // target keyword in the negative stream
+  int other_false_alarms = 0;       // any other keyword in the negative stream
+  double negative_minutes = 0;
+  double false_alarms_per_10_min = 0;
+  double decode_seconds = 0;        // CPU time spent (for the curve's cost)
+};
+
+struct KwsEvalData {
+  std::vector<std::vector<float>> positives;  // 16 kHz scenes, call at call_start_s
+  std::vector<double> call_start_s, call_end_s;
+  std::vector<float> negatives;               // one long 16 kHz stream
+};
+
+KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
+KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
+                          const KwsEvalOptions& options);
+// One decoding pass, results for each confidence cut (the cut is a pure post-filter).
+std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords,
+                                            const VadOptions& vad, const KwsEvalOptions& options,
+                                            const std::vector<double>& min_confidences);
+
+}  // namespace speech
+}  // namespace sarmap

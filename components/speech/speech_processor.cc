@@ -1,0 +1,109 @@
+#include "speech/speech_processor.h"
+
+#include <algorithm>
+
+namespace sarmap {
+namespace speech {
+
+SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind kind, SpeechOptions options)
+    : geometry_(geometry), kind_(kind), options_(options), enhancer_(geometry, options.enhancer),
+      spotter_(options.keywords), full_decoding_(options.keywords.full_decoding) {
+  if (geometry_.sample_rate_hz != 16000)
+    throw std::invalid_argument("the PocketSphinx en-us model needs 16 kHz audio; array '" + geometry_.name + "' is " +
+                                std::to_string(geometry_.sample_rate_hz) + " Hz");
+  output_offset_ = options.enhancer.fft_size - options.enhancer.hop_size;
+}
+
+void SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, int64_t sample) {
+  TrackedSource& t = tracks_[id];
+  t.id = id;
+  t.direction = d;
+  t.covariance = cov;
+  t.last_sample = sample;
+}
+
+void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, std::vector<SpeechResult>* results) {
+  samples_seen_ += frames;
+  const int64_t timeout = static_cast<int64_t>(options_.track_timeout_s * geometry_.sample_rate_hz);
+  for (auto it = tracks_.begin(); it != tracks_.end();)
+    it = samples_seen_ - it->second.last_sample > timeout ? tracks_.erase(it) : std::next(it);
+  // Most recently updated tracks first.
+  std::vector<const TrackedSource*> order;
+  for (const auto& [id, t] : tracks_) order.push_back(&t);
+  std::sort(order.begin(), order.end(), [](auto* a, auto* b) { return a->last_sample > b->last_sample; });
+  std::vector<Beam> beams;
+  for (size_t i = 0; i < order.size() && static_cast<int>(i) < options_.max_sources; ++i)
+    beams.push_back({order[i]->id, geometry_.Unit(kind_, order[i]->direction)});
+  if (beams.empty() && options_.untracked_beam) {
+    // Omnidirectional: broadside of the array (delay-and-sum of nearly aligned mics for
+    // nearby talkers) is as good as any guess without a direction.
+    beams.push_back({-1, geometry_.is_linear() ? geometry_.axis.unitOrthogonal() : geometry_.normal});
+  }
+  for (auto& [id, buf] : enhanced_) buf.clear();
+  enhancer_.Push(data, frames, block_channels, beams, &enhanced_);
+  for (auto& [id, buf] : enhanced_) {
+    if (buf.empty()) continue;
+    auto& vad = vads_[id];
+    if (!vad) vad = std::make_unique<VoiceActivityDetector>(geometry_.sample_rate_hz, options_.vad);
+    std::vector<Utterance> done;
+    vad->Push(buf.data(), buf.size(), &done);
+    for (const auto& u : done) Handle(id, u, results);
+  }
+  // Beams that ended: flush their VAD.
+  for (auto it = vads_.begin(); it != vads_.end();) {
+    bool active = false;
+    for (const Beam& b : beams) active |= b.id == it->first;
+    if (active) {
+      ++it;
+      continue;
+    }
+    std::vector<Utterance> done;
+    it->second->Flush(&done);
+    for (const auto& u : done) Handle(it->first, u, results);
+    enhanced_.erase(it->first);
+    it = vads_.erase(it);
+  }
+}
+
+void SpeechProcessor::Flush(std::vector<SpeechResult>* results) {
+  for (auto& [id, vad] : vads_) {
+    std::vector<Utterance> done;
+    vad->Flush(&done);
+    for (const auto& u : done) Handle(id, u, results);
+  }
+}
+
+void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results) {
+  ++utterances_;
+  const DecodeResult d = spotter_.Decode(u.samples.data(), u.samples.size(), full_decoding_);
+  SpeechResult base;
+  base.track_id = id;
+  auto it = tracks_.find(id);
+  if (it != tracks_.end()) {
+    base.has_direction = true;
+    base.direction = it->second.direction;
+    base.covariance = it->second.covariance;
+  }
+  base.start_sample = u.start_sample - output_offset_;
+  base.end_sample = u.end_sample - output_offset_;
+  base.text = d.text;
+  bool any = false;
+  for (const KeywordHit& h : d.keywords) {
+    if (h.confidence < options_.keywords.min_confidence) continue;
+    SpeechResult r = base;
+    r.keyword = h.keyword;
+    r.confidence = h.confidence;
+    const int64_t s0 = u.samples_start - output_offset_;
+    r.start_sample = s0 + static_cast<int64_t>(h.start_s * geometry_.sample_rate_hz);
+    r.end_sample = s0 + static_cast<int64_t>(h.end_s * geometry_.sample_rate_hz);
+    results->push_back(r);
+    any = true;
+  }
+  if (!any && !d.text.empty()) {
+    base.confidence = d.text_confidence;
+    results->push_back(base);
+  }
+}
+
+}  // namespace speech
+}  // namespace sarmap

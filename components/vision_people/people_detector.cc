@@ -1,0 +1,767 @@
+#include "vision_people/people_detector.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <tuple>
+
+#include "vision_people/hog_classifier.h"
+
+namespace sarmap {
+namespace vision_people {
+namespace {
+
+constexpr double kBelowFloorM = 0.3;  // voxel grid starts this far below the prior floor
+constexpr int kPad = 2;               // empty cells around the grid: neighbour search needs no bounds checks
+
+// Membership rising linearly from 0 at `lo` to 1 at `hi`.
+double Ramp(double x, double lo, double hi) {
+  if (x <= lo) return 0.0;
+  if (x >= hi) return 1.0;
+  return (x - lo) / (hi - lo);
+}
+// 1 inside [b, c], linear to 0 at a and d.
+double Trapezoid(double x, double a, double b, double c, double d) {
+  return std::min(Ramp(x, a, b), 1.0 - Ramp(x, c, d));
+}
+
+// A right-handed frame on the floor: x lateral (to the camera's left), y forward (the camera's
+// z projected on the floor), z up; origin below the camera.
+struct FloorFrame {
+  Eigen::Matrix3d R;  // rows: lateral, forward, up (camera -> floor rotation)
+  Eigen::Vector3d t;  // floor = R * camera + t
+  explicit FloorFrame(const GroundPlane& g) {
+    const Eigen::Vector3d up = g.normal;
+    Eigen::Vector3d fwd = Eigen::Vector3d::UnitZ() - up.z() * up;
+    if (fwd.norm() < 1e-6) fwd = Eigen::Vector3d::UnitY() - up.y() * up;
+    fwd.normalize();
+    const Eigen::Vector3d lat = fwd.cross(up);  // x = y cross z
+    R.row(0) = lat.transpose();
+    R.row(1) = fwd.transpose();
+    R.row(2) = up.transpose();
+    t = R * (g.offset * up);
+  }
+  Eigen::Vector3d ToFloor(const Eigen::Vector3d& p) const { return R * p + t; }
+  Eigen::Vector3d ToCamera(const Eigen::Vector3d& f) const { return R.transpose() * (f - t); }
+};
+
+struct UnionFind {
+  std::vector<int> parent;
+  void Reset(int n) {
+    parent.resize(n);
+    std::iota(parent.begin(), parent.end(), 0);
+  }
+  int Find(int i) {
+    while (parent[i] != i) {
+      parent[i] = parent[parent[i]];
+      i = parent[i];
+    }
+    return i;
+  }
+  void Union(int a, int b) {
+    a = Find(a);
+    b = Find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Pixel row of camera-frame point p (NaN behind the camera).
+double ProjectV(const PinholeIntrinsics& k, const Eigen::Vector3d& p) {
+  return p.z() > 1e-6 ? k.fy * p.y() / p.z() + k.cy : std::numeric_limits<double>::quiet_NaN();
+}
+double ProjectU(const PinholeIntrinsics& k, const Eigen::Vector3d& p) {
+  return p.z() > 1e-6 ? k.fx * p.x() / p.z() + k.cx : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Height h at which the vertical line foot + h * up crosses image row v.
+double HeightAtRow(const PinholeIntrinsics& k, const Eigen::Vector3d& foot,
+                   const Eigen::Vector3d& up, double v) {
+  const double a = v - k.cy;
+  const double den = k.fy * up.y() - a * up.z();
+  if (std::abs(den) < 1e-9) return std::numeric_limits<double>::quiet_NaN();
+  return (a * foot.z() - k.fy * foot.y()) / den;
+}
+
+double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+}  // namespace
+
+const char* ColorStateName(ColorState state) {
+  switch (state) {
+    case ColorState::kNone: return "none";
+    case ColorState::kUsable: return "usable";
+    case ColorState::kDark: return "dark";
+    case ColorState::kLowContrast: return "low-contrast";
+    case ColorState::kGlare: return "glare";
+  }
+  return "?";
+}
+
+void CloudFromDepth(const uint16_t* depth, int width, int height, double unit_m,
+                    const PinholeIntrinsics& k, RgbdFrame* frame) {
+  frame->width = width;
+  frame->height = height;
+  frame->intrinsics = k;
+  frame->xyz.resize(static_cast<size_t>(width) * height * 3);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const double ifx = 1.0 / k.fx, ify = 1.0 / k.fy;
+  for (int v = 0; v < height; ++v) {
+    const float yk = static_cast<float>((v - k.cy) * ify);
+    for (int u = 0; u < width; ++u) {
+      const size_t i = static_cast<size_t>(v) * width + u;
+      float* p = &frame->xyz[3 * i];
+      const uint16_t d = depth[i];
+      if (d == 0) {
+        p[0] = p[1] = p[2] = nan;
+        continue;
+      }
+      const float z = static_cast<float>(d * unit_m);
+      p[0] = static_cast<float>((u - k.cx) * ifx) * z;
+      p[1] = yk * z;
+      p[2] = z;
+    }
+  }
+}
+
+GroundPlane GroundPlane::FromCoefficients(const Eigen::Vector4d& abcd) {
+  GroundPlane g;
+  const double n = abcd.head<3>().norm();
+  g.normal = abcd.head<3>() / n;
+  g.offset = abcd(3) / n;
+  // The camera is above the floor: its height (the offset) must be positive.
+  if (g.offset < 0) {
+    g.normal = -g.normal;
+    g.offset = -g.offset;
+  }
+  return g;
+}
+
+GroundPlane GroundFromMounting(const Eigen::Matrix3d& base_R_camera,
+                               const Eigen::Vector3d& base_t_camera) {
+  // Floor: e_z . (R p + t) = 0  ->  (R^T e_z) . p + t_z = 0.
+  GroundPlane g;
+  g.normal = base_R_camera.transpose() * Eigen::Vector3d::UnitZ();
+  g.offset = base_t_camera.z();
+  return g;
+}
+
+void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double* mean,
+                     double* stddev, double* saturated) {
+  double s = 0, s2 = 0;
+  int64_t n = 0, sat = 0;
+  step = std::max(1, step);
+  for (int v = 0; v < height; v += step) {
+    const uint8_t* row = rgb + static_cast<size_t>(v) * width * 3;
+    for (int u = 0; u < width; u += step) {
+      const uint8_t* p = row + 3 * u;
+      const int grey = (77 * p[0] + 150 * p[1] + 29 * p[2]) >> 8;
+      s += grey;
+      s2 += grey * grey;
+      sat += grey >= 250;
+      ++n;
+    }
+  }
+  const double m = n ? s / n : 0.0;
+  *mean = m;
+  *stddev = n ? std::sqrt(std::max(0.0, s2 / n - m * m)) : 0.0;
+  *saturated = n ? static_cast<double>(sat) / n : 0.0;
+}
+
+// ---------------------------------------------------------------------------------------
+
+struct PeopleDetector::Workspace {
+  // Dense voxel grid over the region of interest, in the prior floor frame.
+  int nx = 0, ny = 0, nz = 0;
+  double x0 = 0, y0 = 0, z0 = 0;  // floor-frame coordinates of cell (0,0,0)'s corner (before padding)
+  std::vector<int32_t> cell_voxel;  // -1: empty
+  // Voxels of the current frame.
+  std::vector<int32_t> voxel_cell;
+  std::vector<Eigen::Vector3f> sum;  // camera frame
+  std::vector<int32_t> count;
+  // Per voxel, after the floor refinement.
+  std::vector<Eigen::Vector3d> centroid;  // camera frame
+  std::vector<Eigen::Vector3d> floor;     // refined floor frame
+  std::vector<uint8_t> kept;
+  std::vector<int32_t> neighbour_offsets;
+  UnionFind uf;
+
+  int64_t Cell(int ix, int iy, int iz) const {
+    return (static_cast<int64_t>(iz + kPad) * (ny + 2 * kPad) + (iy + kPad)) * (nx + 2 * kPad) +
+           (ix + kPad);
+  }
+};
+
+PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane& mounting_ground,
+                               std::shared_ptr<const HogClassifier> hog)
+    : options_(options), mounting_(mounting_ground), prior_(mounting_ground), hog_(std::move(hog)),
+      ws_(std::make_unique<Workspace>()) {
+  common::ValidateOptions(options_);
+  const double v = options_.voxel_size_m;
+  ws_->x0 = -options_.max_lateral_m;
+  ws_->y0 = -0.5;
+  ws_->z0 = -kBelowFloorM;
+  ws_->nx = static_cast<int>(std::ceil(2 * options_.max_lateral_m / v));
+  ws_->ny = static_cast<int>(std::ceil((options_.max_range_m + 0.5) / v));
+  ws_->nz = static_cast<int>(std::ceil((options_.top_cut_m + kBelowFloorM) / v));
+  const size_t cells = static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) *
+                       (ws_->nz + 2 * kPad);
+  ws_->cell_voxel.assign(cells, -1);
+  // Half of the +-2 neighbourhood (lexicographically positive offsets): each pair once.
+  for (int dz = -2; dz <= 2; ++dz) {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        if (std::make_tuple(dz, dy, dx) <= std::make_tuple(0, 0, 0)) continue;
+        ws_->neighbour_offsets.push_back(static_cast<int32_t>(
+            (static_cast<int64_t>(dz) * (ws_->ny + 2 * kPad) + dy) * (ws_->nx + 2 * kPad) + dx));
+      }
+    }
+  }
+}
+
+PeopleDetector::~PeopleDetector() = default;
+
+void PeopleDetector::ResetGround() { prior_ = mounting_; }
+
+DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* error) {
+  DetectionResult result;
+  result.ground = prior_;
+  std::string local_error;
+  std::string& err = error ? *error : local_error;
+  err.clear();
+  const size_t pixels = static_cast<size_t>(std::max(0, frame.width)) * std::max(0, frame.height);
+  if (frame.width <= 0 || frame.height <= 0 || pixels == 0) {
+    err = "empty frame";
+    return result;
+  }
+  if (frame.xyz.size() != 3 * pixels) {
+    err = "cloud has " + std::to_string(frame.xyz.size() / 3) + " points for a " +
+          std::to_string(frame.width) + "x" + std::to_string(frame.height) + " frame";
+    return result;
+  }
+  bool color_ok = false;
+  if (frame.has_color()) {
+    if (frame.rgb.size() != 3 * pixels) {
+      err = "colour image size does not match the depth (" + std::to_string(frame.rgb.size()) +
+            " bytes for " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+            "); using depth only";
+    } else if (hog_) {
+      double mean, stddev, saturated;
+      ImageStatistics(frame.rgb.data(), frame.width, frame.height, 4, &mean, &stddev, &saturated);
+      result.stats.color_mean = mean;
+      result.stats.color_std = stddev;
+      const ColorOptions& c = options_.color;
+      if (mean < c.dark_mean) {
+        result.stats.color_state = ColorState::kDark;
+      } else if (saturated > c.max_saturated) {
+        result.stats.color_state = ColorState::kGlare;
+      } else if (stddev < c.min_contrast) {
+        result.stats.color_state = ColorState::kLowContrast;
+      } else {
+        result.stats.color_state = ColorState::kUsable;
+        color_ok = true;
+      }
+    }
+  }
+
+  Workspace& ws = *ws_;
+  const DetectorOptions& o = options_;
+  const double vs = o.voxel_size_m;
+  const float inv_vs = static_cast<float>(1.0 / vs);
+
+  // 1. Voxel grid in the prior floor frame.
+  const FloorFrame prior_frame(prior_);
+  const Eigen::Matrix3f Rf = prior_frame.R.cast<float>();
+  const Eigen::Vector3f tf = prior_frame.t.cast<float>();
+  const float x0 = static_cast<float>(ws.x0), y0 = static_cast<float>(ws.y0),
+              z0 = static_cast<float>(ws.z0);
+  const float min_z = static_cast<float>(o.min_range_m);
+  ws.voxel_cell.clear();
+  ws.sum.clear();
+  ws.count.clear();
+  int num_points = 0;
+  const int stride = o.pixel_stride;
+  for (int v = 0; v < frame.height; v += stride) {
+    const float* row = &frame.xyz[static_cast<size_t>(v) * frame.width * 3];
+    for (int u = 0; u < frame.width; u += stride) {
+      const float* p = row + 3 * u;
+      const float z = p[2];
+      if (!(z >= min_z) || !std::isfinite(p[0]) || !std::isfinite(p[1])) continue;  // NaN fails
+      ++num_points;
+      const Eigen::Vector3f pc(p[0], p[1], z);
+      const Eigen::Vector3f f = Rf * pc + tf;
+      const int ix = static_cast<int>(std::floor((f.x() - x0) * inv_vs));
+      const int iy = static_cast<int>(std::floor((f.y() - y0) * inv_vs));
+      const int iz = static_cast<int>(std::floor((f.z() - z0) * inv_vs));
+      if (ix < 0 || iy < 0 || iz < 0 || ix >= ws.nx || iy >= ws.ny || iz >= ws.nz) continue;
+      const int64_t cell = ws.Cell(ix, iy, iz);
+      int32_t& vox = ws.cell_voxel[cell];
+      if (vox < 0) {
+        vox = static_cast<int32_t>(ws.voxel_cell.size());
+        ws.voxel_cell.push_back(static_cast<int32_t>(cell));
+        ws.sum.push_back(pc);
+        ws.count.push_back(1);
+      } else {
+        ws.sum[vox] += pc;
+        ++ws.count[vox];
+      }
+    }
+  }
+  result.stats.num_points = num_points;
+  const int nv = static_cast<int>(ws.voxel_cell.size());
+  result.stats.num_voxels = nv;
+  // The grid is cleared at the end of this function through this guard, whatever happens.
+  struct ClearGrid {
+    Workspace* ws;
+    ~ClearGrid() {
+      for (int32_t c : ws->voxel_cell) ws->cell_voxel[c] = -1;
+    }
+  } clear_grid{&ws};
+  if (num_points == 0) {
+    if (err.empty()) err = "no finite depth in the frame";
+    return result;
+  }
+  ws.centroid.resize(nv);
+  for (int i = 0; i < nv; ++i) ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
+
+  // 2. Floor: least-squares plane through the voxels near the prior, twice with a shrinking
+  // band; accepted only close to the mounting plane.
+  GroundPlane ground = prior_;
+  if (o.ground.refine) {
+    GroundPlane estimate = prior_;
+    bool ok = true;
+    int used = 0;
+    for (double band : {o.ground.band_m, 0.5 * o.ground.band_m}) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+      used = 0;
+      for (int i = 0; i < nv; ++i) {
+        const Eigen::Vector3d& c = ws.centroid[i];
+        if (std::abs(estimate.Height(c)) > band) continue;
+        mean += c;
+        second += c * c.transpose();
+        ++used;
+      }
+      if (used < o.ground.min_voxels) {
+        ok = false;
+        break;
+      }
+      mean /= used;
+      const Eigen::Matrix3d cov = second / used - mean * mean.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+      // A floor patch is spread in two directions; a strip or a post is not.
+      if (eig.eigenvalues()(1) < 0.05 * 0.05) {
+        ok = false;
+        break;
+      }
+      Eigen::Vector3d n = eig.eigenvectors().col(0);
+      if (n.dot(prior_.normal) < 0) n = -n;
+      estimate.normal = n;
+      estimate.offset = -n.dot(mean);
+    }
+    result.stats.num_ground_voxels = used;
+    if (ok) {
+      const double tilt_deg =
+          std::acos(std::clamp(estimate.normal.dot(mounting_.normal), -1.0, 1.0)) * 180.0 / M_PI;
+      ok = tilt_deg <= o.ground.max_tilt_change_deg &&
+           std::abs(estimate.offset - mounting_.offset) <= o.ground.max_offset_change_m;
+    }
+    if (ok) {
+      ground = estimate;
+      prior_ = estimate;  // Munaro: next frame starts from this one
+      result.stats.ground_refined = true;
+    }
+  }
+  result.ground = ground;
+  const FloorFrame floor_frame(ground);
+
+  // 3. Remove the floor (and what is below it).
+  ws.floor.resize(nv);
+  ws.kept.assign(nv, 0);
+  for (int i = 0; i < nv; ++i) {
+    ws.floor[i] = floor_frame.ToFloor(ws.centroid[i]);
+    ws.kept[i] = ws.floor[i].z() >= o.ground.removal_m;
+  }
+
+  // 4. Euclidean clustering: union of kept voxels whose centroids are closer than the
+  // tolerance (<= 2 voxels, so the +-2 cell neighbourhood holds every such pair).
+  ws.uf.Reset(nv);
+  const double tol2 = o.cluster_tolerance_m * o.cluster_tolerance_m;
+  for (int i = 0; i < nv; ++i) {
+    if (!ws.kept[i]) continue;
+    const int64_t cell = ws.voxel_cell[i];
+    for (int32_t off : ws.neighbour_offsets) {
+      const int32_t j = ws.cell_voxel[cell + off];
+      if (j < 0 || !ws.kept[j]) continue;
+      if ((ws.centroid[i] - ws.centroid[j]).squaredNorm() < tol2) ws.uf.Union(i, j);
+    }
+  }
+  std::vector<int> root_cluster(nv, -1);
+  std::vector<std::vector<int>> clusters;
+  for (int i = 0; i < nv; ++i) {
+    if (!ws.kept[i]) continue;
+    const int r = ws.uf.Find(i);
+    if (root_cluster[r] < 0) {
+      root_cluster[r] = static_cast<int>(clusters.size());
+      clusters.emplace_back();
+    }
+    clusters[root_cluster[r]].push_back(i);
+  }
+  clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
+                                [&](const std::vector<int>& c) {
+                                  return static_cast<int>(c.size()) < o.min_cluster_voxels ||
+                                         static_cast<int>(c.size()) > o.max_cluster_voxels;
+                                }),
+                 clusters.end());
+
+  // 5. Merge clusters that are close on the floor (pieces of one person split by occlusion).
+  {
+    const int nc = static_cast<int>(clusters.size());
+    std::vector<Eigen::Vector2d> centre(nc, Eigen::Vector2d::Zero());
+    for (int c = 0; c < nc; ++c) {
+      for (int i : clusters[c]) centre[c] += ws.floor[i].head<2>();
+      centre[c] /= static_cast<double>(clusters[c].size());
+    }
+    UnionFind merge;
+    merge.Reset(nc);
+    for (int a = 0; a < nc; ++a) {
+      for (int b = a + 1; b < nc; ++b) {
+        if ((centre[a] - centre[b]).norm() < o.merge_distance_m) merge.Union(a, b);
+      }
+    }
+    std::vector<std::vector<int>> merged(nc);
+    for (int c = 0; c < nc; ++c) {
+      auto& into = merged[merge.Find(c)];
+      into.insert(into.end(), clusters[c].begin(), clusters[c].end());
+    }
+    clusters.clear();
+    for (auto& m : merged) {
+      if (!m.empty()) clusters.push_back(std::move(m));
+    }
+  }
+  result.stats.num_clusters = static_cast<int>(clusters.size());
+
+  // 6. Head-based sub-clustering on a height map along the axis perpendicular to the ray.
+  std::vector<std::vector<int>> subclusters;
+  std::vector<size_t> parent_of;  // cluster each sub-cluster came from
+  std::vector<int> heads_in_cluster(clusters.size(), 0);
+  const double head_d2 = o.min_head_distance_m * o.min_head_distance_m;
+  for (const auto& cluster : clusters) {
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (int i : cluster) centre += ws.floor[i].head<2>();
+    centre /= static_cast<double>(cluster.size());
+    const Eigen::Vector2d ray = centre.norm() > 1e-6 ? centre.normalized() : Eigen::Vector2d(0, 1);
+    const Eigen::Vector2d across(-ray.y(), ray.x());
+    double smin = std::numeric_limits<double>::infinity(), smax = -smin;
+    for (int i : cluster) {
+      const double s = across.dot(ws.floor[i].head<2>());
+      smin = std::min(smin, s);
+      smax = std::max(smax, s);
+    }
+    const int nbins = static_cast<int>((smax - smin) / vs) + 1;
+    std::vector<int> top(nbins, -1);
+    for (int i : cluster) {
+      const int b = std::min(nbins - 1, static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs));
+      if (top[b] < 0 || ws.floor[i].z() > ws.floor[top[b]].z()) top[b] = i;
+    }
+    auto height = [&](int b) {
+      return b < 0 || b >= nbins || top[b] < 0 ? -std::numeric_limits<double>::infinity()
+                                               : ws.floor[top[b]].z();
+    };
+    // Local maxima (a plateau counts once, at its centre): (voxel, bin).
+    std::vector<std::pair<int, int>> maxima;
+    for (int b = 0; b < nbins; ++b) {
+      if (top[b] < 0 || !(height(b) > height(b - 1))) continue;
+      int e = b;
+      while (e + 1 < nbins && height(e + 1) == height(b)) ++e;
+      if (height(e + 1) < height(b)) maxima.emplace_back(top[(b + e) / 2], (b + e) / 2);
+      b = e;
+    }
+    std::sort(maxima.begin(), maxima.end(), [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+      return ws.floor[a.first].z() > ws.floor[b.first].z();
+    });
+    // A maximum is a new head when it is at least min_head_distance from every higher head
+    // and the height map dips by min_head_dip between them (a neck and shoulders, or a gap);
+    // range noise on a flat top (a box, a cupboard) makes maxima without such a dip.
+    std::vector<int> heads;
+    std::vector<int> head_bins;
+    for (const auto& [m, bm] : maxima) {
+      bool separate = true;
+      for (size_t k = 0; k < heads.size() && separate; ++k) {
+        separate = (ws.floor[m].head<2>() - ws.floor[heads[k]].head<2>()).squaredNorm() >= head_d2;
+        double low = std::numeric_limits<double>::infinity();
+        for (int b = std::min(bm, head_bins[k]) + 1; b < std::max(bm, head_bins[k]); ++b) low = std::min(low, height(b));
+        separate = separate && ws.floor[m].z() - low >= o.min_head_dip_m;
+      }
+      if (separate) {
+        heads.push_back(m);
+        head_bins.push_back(bm);
+      }
+    }
+    heads_in_cluster[&cluster - clusters.data()] = static_cast<int>(heads.size());
+    std::vector<std::vector<int>> parts(heads.size());
+    for (int i : cluster) {
+      for (size_t h = 0; h < heads.size(); ++h) {
+        if ((ws.floor[i].head<2>() - ws.floor[heads[h]].head<2>()).squaredNorm() < head_d2) {
+          parts[h].push_back(i);
+          break;
+        }
+      }
+    }
+    for (auto& p : parts) {
+      if (static_cast<int>(p.size()) >= o.min_subcluster_voxels) {
+        subclusters.push_back(std::move(p));
+        parent_of.push_back(static_cast<size_t>(&cluster - clusters.data()));
+      }
+    }
+  }
+
+  // 7. Describe and classify each sub-cluster.
+  const PinholeIntrinsics& K = frame.intrinsics;
+  const DepthShapeOptions& so = o.shape;
+  const ColorOptions& co = o.color;
+  for (size_t sub = 0; sub < subclusters.size(); ++sub) {
+    const std::vector<int>& part = subclusters[sub];
+    const std::vector<int>& parent = clusters[parent_of[sub]];
+    PersonCandidate c;
+    c.num_voxels = static_cast<int>(part.size());
+    Eigen::Vector3d centroid_floor = Eigen::Vector3d::Zero();
+    int top_voxel = part.front();
+    double bottom = std::numeric_limits<double>::infinity();
+    for (int i : part) {
+      centroid_floor += ws.floor[i];
+      if (ws.floor[i].z() > ws.floor[top_voxel].z()) top_voxel = i;
+      bottom = std::min(bottom, ws.floor[i].z());
+    }
+    centroid_floor /= static_cast<double>(part.size());
+    c.height_m = ws.floor[top_voxel].z();
+    if (c.height_m < o.candidate_min_height_m || c.height_m > o.candidate_max_height_m) continue;
+    c.bottom_m = bottom;
+    c.position_camera = floor_frame.ToCamera(centroid_floor);
+    const Eigen::Vector2d ground_xy = centroid_floor.head<2>();
+    const Eigen::Vector2d ray = ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
+    const Eigen::Vector2d across(-ray.y(), ray.x());
+    const Eigen::Vector3d foot_floor(ground_xy.x(), ground_xy.y(), 0.0);
+    const Eigen::Vector3d foot = floor_frame.ToCamera(foot_floor);
+    c.head_camera = floor_frame.ToCamera(Eigen::Vector3d(ground_xy.x(), ground_xy.y(), c.height_m));
+
+    // Shape: torso width, extent along the ray, lateral height profile, vertical fill.
+    const double H = c.height_m;
+    double tmin = 1e9, tmax = -1e9, rmin = 1e9, rmax = -1e9, smin = 1e9, smax = -1e9;
+    for (int i : part) {
+      const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
+      const double s = across.dot(d), r = ray.dot(d), z = ws.floor[i].z();
+      smin = std::min(smin, s);
+      smax = std::max(smax, s);
+      rmin = std::min(rmin, r);
+      rmax = std::max(rmax, r);
+      if (z >= 0.5 * H && z <= 0.8 * H) {
+        tmin = std::min(tmin, s);
+        tmax = std::max(tmax, s);
+      }
+    }
+    c.width_m = tmax >= tmin ? tmax - tmin + vs : 0.0;
+    c.depth_extent_m = rmax - rmin + vs;
+    // Footprints on the floor (6 cm cells) of the head (points within head_drop of the top)
+    // and of head + shoulders (within shoulder_drop): a person's shoulders stick out beside
+    // the head from every side; the top edge of a wall, door or cupboard does not.
+    const int nslices = static_cast<int>(H / vs) + 1;
+    std::vector<uint8_t> slice(nslices, 0);
+    constexpr int kFoot = 32;
+    uint8_t head_cells[kFoot][kFoot] = {}, shoulder_cells[kFoot][kFoot] = {};
+    int head_area = 0, shoulder_area = 0;
+    for (int i : part) {
+      const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
+      const int cx = std::clamp(static_cast<int>(std::floor(d.x() / vs)) + kFoot / 2, 0, kFoot - 1);
+      const int cy = std::clamp(static_cast<int>(std::floor(d.y() / vs)) + kFoot / 2, 0, kFoot - 1);
+      const double z = ws.floor[i].z();
+      if (z >= H - so.head_drop_m && !head_cells[cx][cy]) {
+        head_cells[cx][cy] = 1;
+        ++head_area;
+      }
+      if (z >= H - so.shoulder_drop_m && !shoulder_cells[cx][cy]) {
+        shoulder_cells[cx][cy] = 1;
+        ++shoulder_area;
+      }
+      const int s = std::clamp(static_cast<int>(z / vs), 0, nslices - 1);
+      slice[s] = 1;
+    }
+    c.head_area_m2 = head_area * vs * vs;
+    c.shoulder_area_m2 = shoulder_area * vs * vs;
+    // Lateral height profile (6 cm bins across the viewing ray, highest point per bin):
+    // head bins reach within head_drop of the top, head-and-shoulder bins within
+    // shoulder_drop. Unlike the footprint it does not smear with range noise.
+    {
+      const int nbins = static_cast<int>((smax - smin) / vs) + 1;
+      std::vector<double> profile(nbins, -1.0);
+      for (int i : part) {
+        const int b = std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0, nbins - 1);
+        profile[b] = std::max(profile[b], ws.floor[i].z());
+      }
+      int head_bins = 0, shoulder_bins = 0;
+      for (double h : profile) {
+        head_bins += h >= H - so.head_drop_m;
+        shoulder_bins += h >= H - so.shoulder_drop_m;
+      }
+      c.head_width_m = head_bins * vs;
+      c.shoulder_width_m = shoulder_bins * vs;
+    }
+
+    // What of the head-to-floor span is inside the image.
+    const double v_top = ProjectV(K, c.head_camera);
+    const double v_foot = ProjectV(K, foot);
+    c.box_u_center = ProjectU(K, c.head_camera);
+    c.box_v_top = v_top;
+    c.box_v_bottom = v_foot;
+    double visible_lo = 0.0, visible_hi = H;
+    if (std::isfinite(v_foot) && v_foot > frame.height - 1) {
+      const double h = HeightAtRow(K, foot, ground.normal, frame.height - 1);
+      if (std::isfinite(h)) visible_lo = std::clamp(h, 0.0, H);
+    }
+    if (std::isfinite(v_top) && v_top < 0) {
+      const double h = HeightAtRow(K, foot, ground.normal, 0);
+      if (std::isfinite(h)) visible_hi = std::clamp(h, 0.0, H);
+    }
+    if (!std::isfinite(v_foot) || !std::isfinite(v_top)) visible_hi = visible_lo;
+    c.visible_fraction = H > 0 ? std::max(0.0, visible_hi - visible_lo) / H : 0.0;
+    // Fill: occupied 6 cm slices between the lowest visible height above the floor removal
+    // band and the top.
+    const int s0 = std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
+    int occupied = 0, slices = 0;
+    for (int s = s0; s < nslices; ++s) {
+      occupied += slice[s];
+      ++slices;
+    }
+    c.fill = slices > 0 ? static_cast<double>(occupied) / slices : 0.0;
+
+    // Is the top of the cluster the top of the object? Not when it touches the image's top
+    // edge (the object may go on above the field of view).
+    {
+      const Eigen::Vector3d top_point = ws.centroid[top_voxel];
+      const double vt = ProjectV(K, top_point), ut = ProjectU(K, top_point);
+      const int margin = std::max(2, frame.height / 48);
+      c.truncated_top = !(std::isfinite(vt) && std::isfinite(ut)) || vt < margin;
+    }
+
+    // Depth shape score: a fuzzy AND (product) of memberships.
+    const double m_height = Trapezoid(H, so.min_height_m - so.height_margin_m, so.min_height_m,
+                                      so.max_height_m, so.max_height_m + so.height_margin_m);
+    const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m,
+                                     so.max_width_m, 1.3 * so.max_width_m);
+    const double m_depth = 1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
+    const double area_ratio = shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
+    // Head prominence: how far the top stands above everything at least head_radius away
+    // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
+    // the top edge of a box, wall or cupboard: ~0).
+    // The head centre is the mean of the points within 0.1 m of the top (robust to range
+    // noise); with nothing outside the head radius there are no shoulders: prominence 0.
+    Eigen::Vector2d top_xy = Eigen::Vector2d::Zero();
+    int top_n = 0;
+    for (int i : part) {
+      if (ws.floor[i].z() >= H - 0.1) {
+        top_xy += ws.floor[i].head<2>();
+        ++top_n;
+      }
+    }
+    top_xy /= std::max(1, top_n);
+    // With a single head in its cluster, the ring is searched in the whole cluster: the
+    // 0.3 m cut around the top can leave a box edge looking like a lone peak. With several
+    // heads (people side by side) only the sub-cluster, so a neighbour's shoulder does not
+    // count.
+    double around = -1.0;
+    const double r2 = so.head_radius_m * so.head_radius_m;
+    const double outer2 = std::pow(so.head_radius_m + o.min_head_distance_m, 2);
+    const bool single_head = heads_in_cluster[parent_of[sub]] == 1;
+    for (int i : single_head ? parent : part) {
+      const double d2 = (ws.floor[i].head<2>() - top_xy).squaredNorm();
+      if (d2 >= r2 && d2 <= outer2) around = std::max(around, ws.floor[i].z());
+    }
+    c.head_prominence_m = around < 0 ? 0.0 : H - around;
+    // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
+    // surface has the same footprint at every height).
+    const double m_head = Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+                          (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
+                          (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
+    const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
+    const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
+    const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
+    const double m_visible = c.truncated_top ? 0.0
+                             : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
+    const double shape = m_width * m_depth * m_head;
+    c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
+    const double loose_score = m_height * shape;  // with colour: occlusion and truncation allowed
+
+    // Colour: HOG on the patch, unless the patch itself is too dark or flat.
+    bool patch_ok = color_ok && std::isfinite(c.box_u_center) && std::isfinite(v_top) &&
+                    std::isfinite(v_foot) && v_foot > v_top;
+    if (patch_ok) {
+      const double person_px = v_foot - v_top;
+      const int x0p = std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
+      const int x1p = std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
+      const int y0p = std::clamp(static_cast<int>(v_top), 0, frame.height - 1);
+      const int y1p = std::clamp(static_cast<int>(v_foot), 0, frame.height - 1);
+      if (x1p - x0p < 4 || y1p - y0p < 8) {
+        patch_ok = false;
+      } else {
+        const int sub_w = x1p - x0p + 1, sub_h = y1p - y0p + 1;
+        // Statistics over the patch (row pointer offset into the full image).
+        double s = 0, s2 = 0;
+        int64_t n = 0, nsat = 0;
+        const int step = std::max(1, std::min(sub_w, sub_h) / 32);
+        for (int vv = y0p; vv <= y1p; vv += step) {
+          const uint8_t* rowp = &frame.rgb[(static_cast<size_t>(vv) * frame.width + x0p) * 3];
+          for (int uu = 0; uu < sub_w; uu += step) {
+            const uint8_t* px = rowp + 3 * uu;
+            const int grey = (77 * px[0] + 150 * px[1] + 29 * px[2]) >> 8;
+            s += grey;
+            s2 += grey * grey;
+            nsat += grey >= 250;
+            ++n;
+          }
+        }
+        const double mean = s / n;
+        const double stddev = std::sqrt(std::max(0.0, s2 / n - mean * mean));
+        const double sat = static_cast<double>(nsat) / n;
+        patch_ok = mean >= co.dark_mean && stddev >= co.min_contrast && sat <= co.max_saturated;
+      }
+    }
+    if (patch_ok) {
+      c.hog_used = true;
+      c.hog_score = hog_->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center,
+                                v_top, v_foot, co.search_steps);
+      const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
+      c.confidence = co.color_weight * p_hog + (1.0 - co.color_weight) * loose_score;
+      c.accepted = loose_score >= co.min_depth_score && c.confidence >= co.accept;
+    } else {
+      c.depth_only = true;
+      c.confidence = c.depth_score;
+      c.accepted = c.depth_score >= so.accept;
+    }
+
+    // 8. Covariance of the centroid: Kinect depth noise along the ray (sigma = c z^2),
+    // pixel noise across it, plus the body centre's spread about the visible surface.
+    const double z = std::max(0.1, c.position_camera.z());
+    const Eigen::Vector3d u = c.position_camera.normalized();
+    const double sr = o.noise.depth_coeff * z * z;
+    const double st = z * o.noise.pixel_sigma / std::max(1.0, K.fx);
+    const double sb2 = o.noise.body_sigma_m * o.noise.body_sigma_m;
+    const Eigen::Matrix3d along = u * u.transpose();
+    c.covariance = (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
+
+    ++result.stats.num_candidates;
+    (c.accepted ? result.people : result.rejected).push_back(c);
+  }
+  return result;
+}
+
+std::shared_ptr<const HogClassifier> MakeHogClassifier(const ColorOptions& options) {
+  if (options.hog == "opencv") return MakeOpenCvHogClassifier();
+  if (options.hog == "pcl") return MakePclHogClassifier(options.pcl_svm_file);
+  return nullptr;
+}
+
+}  // namespace vision_people
+}  // namespace sarmap

@@ -1,0 +1,131 @@
+// sarmap-vision-people: DEPTH + RGB (image_t, paired by utime) in, PEOPLE_VISUAL
+// (people_detections_t, camera frame) out. Ground-based RGB-D people detection with a
+// depth-only fallback in darkness and glare, confirmed over k of n frames.
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "common/node_main.h"
+#include "common/logging.h"
+#include "common/node.h"
+#include "common/options.h"
+#include "sarmap/people_detections_t.hpp"
+#include "vision_people/confirmation_tracker.h"
+#include "vision_people/frame_assembler.h"
+#include "vision_people/vision_people_options.h"
+
+using namespace sarmap;
+using namespace sarmap::vision_people;
+
+namespace {
+
+// Direction in the camera optical frame (z forward, x right, y down): azimuth positive to
+// the left, elevation positive up, with the covariance propagated from the position's.
+void FillDirection(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, person_detection_t* out) {
+  const double x = p.x(), y = p.y(), z = p.z();
+  const double rho2 = x * x + z * z, rho = std::sqrt(rho2), r2 = rho2 + y * y;
+  out->azimuth_rad = std::atan2(-x, z);
+  out->elevation_rad = std::atan2(-y, rho);
+  Eigen::Matrix<double, 2, 3> J = Eigen::Matrix<double, 2, 3>::Zero();
+  if (rho2 > 1e-12 && r2 > 1e-12) {
+    J << -z / rho2, 0, x / rho2,                          // d atan2(-x, z)
+        y * x / (rho * r2), -rho / r2, y * z / (rho * r2);  // d atan2(-y, rho)
+  }
+  const Eigen::Matrix2d dcov = J * cov * J.transpose();
+  for (int i = 0; i < 4; ++i) out->direction_covariance[i] = dcov(i / 2, i % 2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return common::RunMain("sarmap-vision-people", [&] {
+    common::ArgParser parser(
+        "sarmap-vision-people",
+        "Detects people in RGB-D frames (DEPTH + RGB image_t, paired by utime) and publishes\n"
+        "them on PEOPLE_VISUAL (people_detections_t, camera optical frame). Ground-based\n"
+        "clustering with HOG on the colour patch; a depth-only shape classifier takes over in\n"
+        "darkness and glare. People are reported after k of n frames.");
+    common::NodeArgs node_args;
+    const auto parsed = common::ParseNodeOptions<VisionPeopleOptions>(&parser, &node_args, argc, argv, "config/vision_people.yaml");
+    if (!parsed) return 0;
+    const VisionPeopleOptions& options = *parsed;
+    PeopleDetector detector(options.detector, InitialGround(options),
+                            MakeHogClassifier(options.detector.color));
+    ConfirmationTracker tracker(options.confirmation);
+    FrameAssembler assembler(options.max_pair_dt_s, options.color_wait_s, options.require_color);
+    common::Node node("sarmap-vision-people", node_args.lcm_url);
+    auto publisher = node.Advertise<people_detections_t>(options.output_channel);
+    common::RateLimiter warn_limit(2.0);
+    int64_t frames = 0, bad_frames = 0, published_people = 0, last_warnings = 0;
+    std::string last_color_state;
+
+    auto process = [&](std::vector<RgbdFrame>& ready) {
+      if (assembler.total_warnings() != last_warnings) {
+        last_warnings = assembler.total_warnings();
+        long suppressed = 0;
+        if (warn_limit.Allow(common::SteadySeconds(), &suppressed)) {
+          SARMAP_LOG(WARN) << assembler.last_warning() << " (" << last_warnings << " input warnings so far)";
+        }
+      }
+      for (RgbdFrame& frame : ready) {
+        std::string error;
+        const DetectionResult result = detector.Detect(frame, &error);
+        ++frames;
+        if (!error.empty()) {
+          ++bad_frames;
+          long suppressed = 0;
+          if (warn_limit.Allow(common::SteadySeconds(), &suppressed)) {
+            SARMAP_LOG(WARN) << "frame at " << frame.utime << ": " << error << " (" << bad_frames << " so far)";
+          }
+        }
+        const std::string state = ColorStateName(result.stats.color_state);
+        if (state != last_color_state) {
+          SARMAP_LOG(INFO) << "colour: " << state << " (grey mean " << result.stats.color_mean
+                           << ", std " << result.stats.color_std << ")";
+          last_color_state = state;
+        }
+        const auto confirmed = tracker.Update(result.people);
+        people_detections_t msg;
+        msg.header.utime = frame.utime;
+        msg.header.frame = "camera";
+        msg.sensor_id = options.sensor_id;
+        for (const auto& c : confirmed) {
+          person_detection_t d{};
+          d.track_id = c.track_id;
+          d.cue = c.person.hog_used ? person_detection_t::CUE_SEEN_RGBD : person_detection_t::CUE_SEEN_DEPTH;
+          d.has_range = true;
+          for (int i = 0; i < 3; ++i) d.position_m[i] = c.person.position_camera(i);
+          for (int i = 0; i < 9; ++i) d.position_covariance[i] = c.person.covariance(i / 3, i % 3);
+          FillDirection(c.person.position_camera, c.person.covariance, &d);
+          d.height_m = static_cast<float>(c.person.height_m);
+          d.confidence = static_cast<float>(std::clamp(c.person.confidence, 0.0, 1.0));
+          d.keyword = "";
+          msg.detections.push_back(d);
+        }
+        msg.num_detections = static_cast<int32_t>(msg.detections.size());
+        published_people += msg.num_detections;
+        publisher.Publish(&msg);
+      }
+      ready.clear();
+      std::ostringstream status;
+      status << "frames " << frames << " bad " << bad_frames << " people " << published_people
+             << " colour " << last_color_state << " input_warnings " << assembler.total_warnings();
+      node.SetStatusMessage(status.str());
+    };
+
+    std::vector<RgbdFrame> ready;
+    node.SetStatusMessage("frames 0 bad 0 people 0 colour none input_warnings 0");
+    node.Subscribe<image_t>(options.depth_channel, [&](const image_t& m, const common::ReceiveInfo&) {
+      assembler.AddDepth(m, &ready);
+      process(ready);
+    }, 4);
+    node.Subscribe<image_t>(options.rgb_channel, [&](const image_t& m, const common::ReceiveInfo&) {
+      assembler.AddColor(m, &ready);
+      process(ready);
+    }, 4);
+    SARMAP_LOG(INFO) << "listening on " << options.depth_channel << " + " << options.rgb_channel
+                     << ", publishing " << options.output_channel << " (hog " << options.detector.color.hog
+                     << ", confirm " << options.confirmation.k << " of " << options.confirmation.n << ")";
+    return node.Run();
+  });
+}

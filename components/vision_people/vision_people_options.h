@@ -1,0 +1,65 @@
+#pragma once
+// The options of sarmap-vision-people (config/vision_people.yaml): channels, where the camera
+// is mounted, the detector and the multi-frame confirmation.
+
+#include <string>
+#include <vector>
+
+#include "common/options.h"
+#include "common/robot_config.h"
+#include "vision_people/confirmation_tracker.h"
+#include "vision_people/people_detector.h"
+
+namespace sarmap {
+namespace vision_people {
+
+struct VisionPeopleOptions {
+  std::string depth_channel = "DEPTH";
+  std::string rgb_channel = "RGB";
+  std::string output_channel = "PEOPLE_VISUAL";
+  std::string sensor_id = "kinect";
+  std::string robot_config = "config/robot.yaml";  // base_from_camera seeds the floor
+  // Floor as a x + b y + c z + d = 0 in the camera frame; empty: from robot_config's mounting.
+  std::vector<double> ground_coefficients;
+  double max_pair_dt_s = 0.02;   // depth and colour closer than this in utime form a pair
+  double color_wait_s = 0.1;     // a depth frame waits this long (message time) for its colour
+  bool require_color = false;    // false: depth frames without colour are processed depth-only
+  DetectorOptions detector;
+  ConfirmationOptions confirmation;
+  template <class V>
+  void Visit(V& v) {
+    v("depth_channel", depth_channel, "depth image_t channel");
+    v("rgb_channel", rgb_channel, "colour image_t channel (registered to the depth)");
+    v("output_channel", output_channel, "people_detections_t channel");
+    v("sensor_id", sensor_id, "sensor_id written into the detections");
+    v("robot_config", robot_config, "robot description whose base_from_camera seeds the floor");
+    v("ground_coefficients", ground_coefficients, "fixed floor a b c d in the camera frame ([] = from robot_config)");
+    v("max_pair_dt_s", max_pair_dt_s, "depth and colour closer in time than this are a pair");
+    v("color_wait_s", color_wait_s, "how long (message time) a depth frame waits for its colour");
+    v("require_color", require_color, "drop depth frames without colour instead of going depth-only");
+    v("detector", detector, "people detector");
+    v("confirmation", confirmation, "k-of-n multi-frame confirmation");
+  }
+  void Validate(common::Validator& check) const {
+    check.That(ground_coefficients.empty() || ground_coefficients.size() == 4, "ground_coefficients",
+               "must be empty or a b c d");
+    check.NonNegative("max_pair_dt_s", max_pair_dt_s);
+    check.NonNegative("color_wait_s", color_wait_s);
+  }
+};
+
+// The floor the detector starts from: ground_coefficients when given, else the floor seen
+// from robot_config's base_from_camera. Throws common::OptionsError on a bad robot file.
+inline GroundPlane InitialGround(const VisionPeopleOptions& options) {
+  if (options.ground_coefficients.size() == 4) {
+    const auto& g = options.ground_coefficients;
+    return GroundPlane::FromCoefficients(Eigen::Vector4d(g[0], g[1], g[2], g[3]));
+  }
+  const common::RobotOptions robot = common::LoadRobot(options.robot_config);
+  const common::Rigid3d base_from_camera = robot.base_from_camera.ToRigid3d();
+  return GroundFromMounting(base_from_camera.rotation().toRotationMatrix(),
+                            base_from_camera.translation());
+}
+
+}  // namespace vision_people
+}  // namespace sarmap
