@@ -12,7 +12,8 @@ here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../../.." && pwd)
 bin=${1:-$repo/build/bin}
 out=${2:-/tmp/sarmap_e2e_calib}
-duration=${3:-150}
+duration=${3:-250}
+cal_end=205   # the noise bursts stop here (world file); the talker follows
 mkdir -p "$out"
 cd "$repo"
 if [ ! -s "$out/async_kinect.lcmlog" ]; then
@@ -21,11 +22,25 @@ if [ ! -s "$out/async_kinect.lcmlog" ]; then
     --set camera.enabled=false --speed 0 --duration "$duration" \
     --lcm-url "file://$out/async_kinect.lcmlog?mode=w" --log-level warn
 fi
+if [ ! -s "$out/sync_kinect.lcmlog" ]; then   # the same scene with the synchronous Kinect
+  "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
+    --set audio.mic_array=config/arrays/kinect.yaml --set audio.asynchronous=false \
+    --set camera.enabled=false --speed 0 --duration "$duration" \
+    --lcm-url "file://$out/sync_kinect.lcmlog?mode=w" --log-level warn
+fi
 "$bin/sarmap-mic-calibrate" "$out/async_kinect.lcmlog" --config config/mic_calibrate.yaml \
   --set solver.geometry=planar --set solver.known_positions=true \
   --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=async_kinect_calibrated \
+  --nominal config/arrays/kinect.yaml --output "$out/async_kinect_all.yaml" \
+  --report "$out/async_kinect_all_report" --write-tdoa "$out/async_kinect_tdoa.csv" --quiet
+# Calibrate from the noise-burst part only (the talker part is the test).
+awk -F, -v end="$cal_end" '/^#/ || /^k/ { print; next } $2 <= end { print }' \
+  "$out/async_kinect_tdoa.csv" > "$out/async_kinect_tdoa_calibration.csv"
+"$bin/sarmap-mic-calibrate" "$out/async_kinect_tdoa_calibration.csv" --config config/mic_calibrate.yaml \
+  --set solver.geometry=planar --set solver.known_positions=true \
+  --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=async_kinect_calibrated \
   --nominal config/arrays/kinect.yaml --output "$out/async_kinect_calibrated.yaml" \
-  --report "$out/async_kinect_report" --write-tdoa "$out/async_kinect_tdoa.csv" --quiet
+  --report "$out/async_kinect_report" --quiet
 echo "calibrated: $out/async_kinect_calibrated.yaml"
 # Truth. The log reader puts every card on the reference's time line by the utime of its
 # first sample (median over blocks of utime - index / rate), which the simulator stamps with
@@ -47,3 +62,6 @@ awk -v T="$duration" '
              ed[i] * 1e6, (ed[i] - td[i]) * 1e6, exp_tau * 1e3, et[i] * 1e3, (et[i] - exp_tau) * 1e3
     }
   }' config/arrays/async_kinect.yaml "$out/async_kinect_calibrated.yaml"
+# The talker part: DOA of the calibrated asynchronous array against the synchronous array.
+"$bin/sarmap-mic-calibrate-doa-check" "$out/sync_kinect.lcmlog" "$out/async_kinect.lcmlog" \
+  "$out/async_kinect_calibrated.yaml" --array config/arrays/kinect.yaml --from-s $((cal_end + 5))
