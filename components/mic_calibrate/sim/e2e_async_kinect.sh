@@ -6,6 +6,9 @@
 #
 #   components/mic_calibrate/sim/e2e_async_kinect.sh [BUILD_BIN_DIR] [OUT_DIR] [DURATION_S]
 #
+# ARRAY=async6 SYNC_ARRAY=sync6 GEOMETRY=3d EXTRA="--set solver.sources_in_gauge_plane=true" ...
+# runs the same with the six-card 3D array (the source is at the array's height).
+#
 # The log is written directly by the simulator through LCM's file provider (no network).
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
@@ -14,34 +17,38 @@ bin=${1:-$repo/build/bin}
 out=${2:-/tmp/sarmap_e2e_calib}
 duration=${3:-250}
 cal_end=205   # the noise bursts stop here (world file); the talker follows
+array=${ARRAY:-async_kinect}
+sync_array=${SYNC_ARRAY:-kinect}
+geometry=${GEOMETRY:-planar}
+EXTRA=${EXTRA:-}   # more --set options for the solver
 mkdir -p "$out"
 cd "$repo"
-if [ ! -s "$out/async_kinect.lcmlog" ]; then
+if [ ! -s "$out/$array.lcmlog" ]; then
   "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
-    --set audio.mic_array=config/arrays/async_kinect.yaml --set audio.asynchronous=true \
+    --set audio.mic_array=config/arrays/$array.yaml --set audio.asynchronous=true \
     --set camera.enabled=false --speed 0 --duration "$duration" \
-    --lcm-url "file://$out/async_kinect.lcmlog?mode=w" --log-level warn
+    --lcm-url "file://$out/$array.lcmlog?mode=w" --log-level warn
 fi
-if [ ! -s "$out/sync_kinect.lcmlog" ]; then   # the same scene with the synchronous Kinect
+if [ ! -s "$out/${sync_array}_sync.lcmlog" ]; then   # the same scene with the synchronous Kinect
   "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
-    --set audio.mic_array=config/arrays/kinect.yaml --set audio.asynchronous=false \
+    --set audio.mic_array=config/arrays/$sync_array.yaml --set audio.asynchronous=false \
     --set camera.enabled=false --speed 0 --duration "$duration" \
-    --lcm-url "file://$out/sync_kinect.lcmlog?mode=w" --log-level warn
+    --lcm-url "file://$out/${sync_array}_sync.lcmlog?mode=w" --log-level warn
 fi
-"$bin/sarmap-mic-calibrate" "$out/async_kinect.lcmlog" --config config/mic_calibrate.yaml \
-  --set solver.geometry=planar --set solver.known_positions=true \
-  --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=async_kinect_calibrated \
-  --nominal config/arrays/kinect.yaml --output "$out/async_kinect_all.yaml" \
-  --report "$out/async_kinect_all_report" --write-tdoa "$out/async_kinect_tdoa.csv" --quiet
+"$bin/sarmap-mic-calibrate" "$out/$array.lcmlog" --config config/mic_calibrate.yaml \
+  --set solver.geometry=$geometry --set solver.known_positions=true $EXTRA \
+  --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=${array}_calibrated \
+  --nominal config/arrays/$sync_array.yaml --output "$out/${array}_all.yaml" \
+  --report "$out/${array}_all_report" --write-tdoa "$out/${array}_tdoa.csv" --quiet
 # Calibrate from the noise-burst part only (the talker part is the test).
 awk -F, -v end="$cal_end" '/^#/ || /^k/ { print; next } $2 <= end { print }' \
-  "$out/async_kinect_tdoa.csv" > "$out/async_kinect_tdoa_calibration.csv"
-"$bin/sarmap-mic-calibrate" "$out/async_kinect_tdoa_calibration.csv" --config config/mic_calibrate.yaml \
-  --set solver.geometry=planar --set solver.known_positions=true \
-  --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=async_kinect_calibrated \
-  --nominal config/arrays/kinect.yaml --output "$out/async_kinect_calibrated.yaml" \
-  --report "$out/async_kinect_report" --quiet
-echo "calibrated: $out/async_kinect_calibrated.yaml"
+  "$out/${array}_tdoa.csv" > "$out/${array}_tdoa_calibration.csv"
+"$bin/sarmap-mic-calibrate" "$out/${array}_tdoa_calibration.csv" --config config/mic_calibrate.yaml \
+  --set solver.geometry=$geometry --set solver.known_positions=true $EXTRA \
+  --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=${array}_calibrated \
+  --nominal config/arrays/$sync_array.yaml --output "$out/${array}_calibrated.yaml" \
+  --report "$out/${array}_report" --quiet
+echo "calibrated: $out/${array}_calibrated.yaml"
 # Truth. The log reader puts every card on the reference's time line by the utime of its
 # first sample (median over blocks of utime - index / rate), which the simulator stamps with
 # the card's true capture time (so its start offset tau_i is taken out) plus +-1 ms jitter; the
@@ -61,7 +68,7 @@ awk -v T="$duration" '
       printf "%4d  %10.3f  %10.3f | %10.4f  %8.4f | %8.4f  %8.4f  %8.4f\n", i, tt[i] * 1e3, td[i] * 1e6,
              ed[i] * 1e6, (ed[i] - td[i]) * 1e6, exp_tau * 1e3, et[i] * 1e3, (et[i] - exp_tau) * 1e3
     }
-  }' config/arrays/async_kinect.yaml "$out/async_kinect_calibrated.yaml"
+  }' config/arrays/$array.yaml "$out/${array}_calibrated.yaml"
 # The talker part: DOA of the calibrated asynchronous array against the synchronous array.
-"$bin/sarmap-mic-calibrate-doa-check" "$out/sync_kinect.lcmlog" "$out/async_kinect.lcmlog" \
-  "$out/async_kinect_calibrated.yaml" --array config/arrays/kinect.yaml --from-s $((cal_end + 5))
+"$bin/sarmap-mic-calibrate-doa-check" "$out/${sync_array}_sync.lcmlog" "$out/$array.lcmlog" \
+  "$out/${array}_calibrated.yaml" --array config/arrays/$sync_array.yaml --from-s $((cal_end + 5))
