@@ -1,16 +1,25 @@
 #!/usr/bin/env bash
-# make demo: the simulated dark lab end to end. Starts the simulator and every perception and
-# mapping process that is built, records the LCM log, writes the mission report and prints
-# who was found and how. Runs inside a private network namespace when it can, so the demo's
-# multicast stays on this machine.
+# make demo: a simulated mission end to end under the launcher. Starts a procman deputy, has
+# the sheriff run the "mission" script of launch-scripts/demo.pmd (recorder, mapping,
+# perception, then the simulator; everything stopped when the simulator ends), then writes
+# the mission report and the stack's CPU and latency figures, and prints who was found and how.
+# Runs inside a private network namespace when it can, so the demo's multicast stays here.
 #
-#   launch-scripts/demo.sh [BUILD_DIR]        (env: DEMO_WORLD, DEMO_SECONDS)
+#   launch-scripts/demo.sh [BUILD_DIR]
+#   env: DEMO_WORLD   world file (default config/worlds/lab_dark.yaml)
+#        DEMO_SECONDS simulated seconds (default 90)
+#        DEMO_KILL=1  kill -9 each process of the stack once, in turn, mid-mission: the launcher
+#                     respawns it and the report must not lose anyone
+#        DEMO_OUT     output folder (default out/demo-DATE)
+#        DEMO_COMPUTERS=2  two computers: deputies "sensors" and "compute" in two network
+#                     namespaces joined by a bridge, LCM at ttl=1 between them, the sheriff in a
+#                     third (launch-scripts/demo-two-computers.pmd); needs root or user namespaces
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$(cd "${1:-$root/build}" && pwd)"
 bin="$build/bin"
-world="${DEMO_WORLD:-$root/config/worlds/lab_dark.yaml}"
-seconds="${DEMO_SECONDS:-90}"
+export DEMO_WORLD="${DEMO_WORLD:-$root/config/worlds/lab_dark.yaml}"
+export DEMO_SECONDS="${DEMO_SECONDS:-90}"
 
 if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   if "$root/tests/harness/sarmap-netns" true 2>/dev/null; then
@@ -19,13 +28,34 @@ if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   echo "demo: no private network namespace available; using host-local multicast (ttl=0)"
 fi
 
-out="$root/out/demo-$(date +%Y%m%d-%H%M%S)"
-mkdir -p "$out"
+computers="${DEMO_COMPUTERS:-1}"
+case "$computers" in 1|2) ;; *) echo "demo: DEMO_COMPUTERS must be 1 or 2"; exit 2 ;; esac
+if [ "$computers" = 2 ] && [ -z "${DEMO_MOUNT_NS:-}" ]; then
+  [ -n "${SARMAP_NETNS:-}" ] || { echo "demo: two computers need a private network namespace (root or user namespaces)"; exit 1; }
+  # A private mount namespace for /run/netns, so the demo's namespaces never meet anyone else's.
+  export DEMO_MOUNT_NS=1
+  exec unshare --mount --propagation private -- "$0" "$build"
+fi
+
+for program in sarmap-sim sarmap-procman sarmap-procman-deputy sarmap-log-record sarmap-log-report; do
+  [ -x "$bin/$program" ] || { echo "demo: $bin/$program is not built (run make build)"; exit 1; }
+done
+case "$DEMO_WORLD" in /*) ;; *) DEMO_WORLD="$root/$DEMO_WORLD" ;; esac
+[ -f "$DEMO_WORLD" ] || { echo "demo: no world file $DEMO_WORLD"; exit 1; }
+
+export DEMO_OUT="${DEMO_OUT:-$root/out/demo-$(date +%Y%m%d-%H%M%S)}"
+mkdir -p "$DEMO_OUT"
+out="$DEMO_OUT"
 log="$out/demo.lcmlog"
+
+# The launcher obeys only signed orders: a key for this demo only.
+export SARMAP_PROCMAN_KEY="$out/procman.key"
+(umask 077 && head -c 32 /dev/urandom >"$SARMAP_PROCMAN_KEY")
+
 pids=()
 stop_all() {
   for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done
-  for _ in $(seq 50); do
+  for _ in $(seq 100); do
     alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
     [ $alive = 0 ] && break; sleep 0.2
   done
@@ -33,47 +63,72 @@ stop_all() {
   pids=()
 }
 trap stop_all EXIT
-start() {  # start NAME ARGS... — in the background, output to $out/NAME.txt
-  local name="$1"; shift
-  if [ -x "$bin/$name" ]; then
-    (cd "$root" && exec "$bin/$name" "$@") >"$out/$name.txt" 2>&1 & pids+=($!)
-    started+=("$name")
-  else
-    missing+=("$name")
-  fi
-}
 
-echo "== sarmap demo: $(basename "$world"), ${seconds} s simulated; output in $out"
-started=(); missing=()
-"$bin/sarmap-log-record" -o "$log" --force >"$out/logger.txt" 2>&1 & pids+=($!)
-start sarmap-depth --set source=lcm
-start sarmap-slam
-start sarmap-sound-localisation
-start sarmap-speech
-start sarmap-vision-people
-start sarmap-sound-map
-start sarmap-people-map
-sleep 2
-if [ ! -x "$bin/sarmap-sim" ]; then
-  echo "demo: sarmap-sim is not built"; exit 1
+echo "== sarmap demo: $(basename "$DEMO_WORLD"), ${DEMO_SECONDS} s simulated, $computers computer(s); output in $out"
+pmd="$root/launch-scripts/demo.pmd"
+if [ "$computers" = 1 ]; then
+  (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost --set "state_dir=$out") \
+    >"$out/deputy.txt" 2>&1 & pids+=($!)
+else
+  pmd="$root/launch-scripts/demo-two-computers.pmd"
+  namespaces=()
+  # shellcheck source=../tests/harness/netns-hosts.sh
+  source "$root/tests/harness/netns-hosts.sh"
+  cleanup_netns() { stop_all; netns_remove_hosts "${namespaces[@]}"; }
+  trap cleanup_netns EXIT
+  # The robot's network: a bridge here (where the sheriff runs), one veth pair per computer.
+  netns_bridge_up || { echo "demo: cannot create network namespaces and a bridge here"; exit 1; }
+  export SARMAP_LCM_URL="udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608"
+  i=2
+  for id in sensors compute; do
+    ns="demo-$id"
+    netns_add_host "$ns" "$i"; namespaces+=("$ns")
+    (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --set "state_dir=$out") \
+      >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
+    echo "   computer '$id': network namespace $ns, 10.77.0.$i"
+    i=$((i + 1))
+  done
 fi
-echo "   running: ${started[*]}"
-[ ${#missing[@]} -eq 0 ] || echo "   not built: ${missing[*]}"
-# The simulated robot carries a planar ReSpeaker array (the sound map maps azimuths; the Kinect's
-# linear array gives only cone angles), the one config/sound_localisation.yaml and speech.yaml use.
-echo "== simulating (the robot follows the world's scripted path)"
-(cd "$root" && "$bin/sarmap-sim" --world "$world" --duration "$seconds" --speed 1 --set audio.mic_array=respeaker4) >"$out/sarmap-sim.txt" 2>&1 \
-  || echo "   sarmap-sim failed: see $out/sarmap-sim.txt"
-sleep 2
-stop_all
 
-for name in "${started[@]}"; do
-  if grep -qE "^E |terminate|Segmentation|Aborted" "$out/$name.txt" 2>/dev/null; then
-    echo "   $name reported errors: see $out/$name.txt"
-  fi
-done
+killer_pid=""
+if [ "${DEMO_KILL:-}" = 1 ]; then
+  # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission.
+  (
+    victims=(sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people
+             sarmap-sound-map sarmap-people-map)
+    running() { pgrep -f "(^|/)$1( |\$)" | head -1; }   # (names are longer than pgrep -x sees)
+    for _ in $(seq 300); do [ -n "$(running sarmap-sim)" ] && break; sleep 0.2; done
+    gap=$(( DEMO_SECONDS / (${#victims[@]} + 2) ))
+    [ "$gap" -ge 2 ] || gap=2
+    for v in "${victims[@]}"; do
+      sleep "$gap"
+      pid="$(running "$v" || true)"
+      if [ -n "$pid" ]; then
+        kill -KILL "$pid" && echo "$(date +%T) kill -9 $v (pid $pid)"
+      else
+        echo "$(date +%T) $v not running"
+      fi
+    done
+  ) >"$out/kills.txt" 2>&1 &
+  killer_pid=$!
+fi
+
+echo "== the launcher runs the mission ($(basename "$pmd"), script \"mission\")"
+if ! (cd "$root" && "$bin/sarmap-procman" "$pmd" run mission) >"$out/sheriff.txt" 2>&1; then
+  echo "   the mission script failed: see $out/sheriff.txt"
+  tail -5 "$out/sheriff.txt" | sed 's/^/   /'
+fi
+[ -z "$killer_pid" ] || { wait "$killer_pid" 2>/dev/null || true; sed 's/^/   /' "$out/kills.txt"; }
+stop_all
+if grep -qE "terminate called|Segmentation|Aborted" "$out"/deputy*.txt 2>/dev/null; then
+  echo "   a process crashed: see $out/deputy*.txt"
+fi
+
 echo "== the log (sarmap-log info)"
 "$bin/sarmap-log" info "$log" || true
+echo
+echo "== what the stack cost (sarmap-log perf)"
+"$bin/sarmap-log" perf "$log" | tee "$out/perf.txt" || true
 echo
 echo "== mission report"
 "$bin/sarmap-log" report "$log" -o "$out/report"

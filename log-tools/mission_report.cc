@@ -212,8 +212,12 @@ void DrawEllipse(Canvas* c, double x, double y, const double (&cov)[9], const cv
   const Eigen::Vector2d v = eig.eigenvalues().cwiseMax(0.0);
   const Eigen::Vector2d axis = eig.eigenvectors().col(1);
   const double angle_deg = -std::atan2(axis.y(), axis.x()) * 180 / M_PI;
-  const cv::Size axes(std::max(2, static_cast<int>(3 * std::sqrt(v(1)) * c->pixels_per_m)),
-                      std::max(2, static_cast<int>(3 * std::sqrt(v(0)) * c->pixels_per_m)));
+  // Axes beyond a few image sizes look the same and would overflow the rasteriser.
+  const double max_axis_px = 4.0 * std::max(c->image.cols, c->image.rows);
+  const auto axis_px = [&](double variance) {
+    return std::max(2, static_cast<int>(std::min(max_axis_px, 3 * std::sqrt(variance) * c->pixels_per_m)));
+  };
+  const cv::Size axes(axis_px(v(1)), axis_px(v(0)));
   cv::ellipse(c->image, c->P(x, y), axes, angle_deg, 0, 360, colour, 2, cv::LINE_AA);
 }
 
@@ -238,15 +242,33 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   }
   for (const auto& p : data.trail) grow(p.first, p.second);
   if (data.people) for (const auto& p : data.people->people) grow(p.position_m[0], p.position_m[1]);
-  if (data.sources) for (const auto& s : data.sources->sources) grow(s.position_m[0], s.position_m[1]);
   for (const auto& t : summary.truth) grow(t.x_m, t.y_m);
   if (x0 > x1) {
     x0 = y0 = -5;
     x1 = y1 = 5;
   }
+  // Sound sources far outside the mapped area (an estimate that has not converged can sit
+  // tens of metres away) would shrink the map to a speck: they are drawn only near it (they are
+  // all in report.json and the HTML table).
+  constexpr double kSourceMarginM = 5.0;
+  int sources_not_drawn = 0;
+  const double fx0 = x0 - kSourceMarginM, fy0 = y0 - kSourceMarginM, fx1 = x1 + kSourceMarginM,
+               fy1 = y1 + kSourceMarginM;
+  const auto near_map = [&](const double* p) {
+    return p[0] >= fx0 && p[0] <= fx1 && p[1] >= fy0 && p[1] <= fy1;
+  };
+  if (data.sources) {
+    for (const auto& s : data.sources->sources) {
+      if (near_map(s.position_m)) {
+        grow(s.position_m[0], s.position_m[1]);
+      } else {
+        ++sources_not_drawn;
+      }
+    }
+  }
   c.x0 = x0;
   c.y0 = y0;
-  c.pixels_per_m = std::clamp(1400.0 / std::max(x1 - x0, y1 - y0), 20.0, 100.0);
+  c.pixels_per_m = std::clamp(1400.0 / std::max(x1 - x0, y1 - y0), 5.0, 100.0);
   c.image = cv::Mat(static_cast<int>((y1 - y0) * c.pixels_per_m) + 1,
                     static_cast<int>((x1 - x0) * c.pixels_per_m) + 1, CV_8UC3, cv::Scalar(60, 60, 60));
   if (data.map && !cells.empty()) {
@@ -272,6 +294,7 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   const cv::Scalar blue(219, 152, 52), red(60, 76, 231), green(113, 204, 46), yellow(15, 196, 241);
   if (data.sources) {
     for (const auto& s : data.sources->sources) {
+      if (!near_map(s.position_m)) continue;
       DrawEllipse(&c, s.position_m[0], s.position_m[1], s.covariance, blue);
       cv::drawMarker(c.image, c.P(s.position_m[0], s.position_m[1]), blue, cv::MARKER_SQUARE, 10, 2);
     }
@@ -310,6 +333,11 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   cv::line(c.image, cv::Point(10, c.image.rows - 15), cv::Point(10 + bar, c.image.rows - 15), cv::Scalar(255, 255, 255), 3);
   cv::putText(c.image, "1 m", cv::Point(14 + bar, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
               cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  if (sources_not_drawn > 0) {
+    const std::string note = std::to_string(sources_not_drawn) + " sound source(s) far outside the map not drawn";
+    cv::putText(c.image, note, cv::Point(bar + 70, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
   return c;
 }
 

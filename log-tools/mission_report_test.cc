@@ -66,6 +66,21 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
                      Person(3, 7.5, 1.0, sarmap::mapped_person_t::CUE_SEEN_DEPTH)};  // nobody there
     people.num_people = 3;
     Write(&log, "PEOPLE_MAP", people, 3'000'000);
+    // A sound source near the map and one that has not converged, hundreds of metres away
+    // with a huge covariance: the PNG must still show the map at a readable scale.
+    sarmap::sound_map_t sounds{};
+    sarmap::sound_source_t near{}, far{};
+    near.id = 1;
+    near.position_m[0] = 5.0;
+    near.position_m[1] = 2.0;
+    near.covariance[0] = near.covariance[4] = near.covariance[8] = 0.01;
+    far.id = 2;
+    far.position_m[0] = 300.0;
+    far.position_m[1] = -200.0;
+    far.covariance[0] = far.covariance[4] = far.covariance[8] = 1e6;
+    sounds.sources = {near, far};
+    sounds.num_sources = 2;
+    Write(&log, "SOUND_MAP", sounds, 3'000'000);
     // The simulator's frame is the map frame shifted by (10, -2) and turned by 90 degrees:
     // truth = R(90) * map + (10, -2). The report must align them by the robot trail.
     const auto to_truth = [](double x, double y) { return std::make_pair(-y + 10.0, x - 2.0); };
@@ -116,9 +131,23 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
   struct stat st;
   ASSERT_EQ(stat((dir + "/map.png").c_str(), &st), 0);
   EXPECT_GT(st.st_size, 5000);
+  {
+    // PNG width and height: big-endian at bytes 16 and 20. The 8 x 6 m map at its scale, not
+    // stretched to the far source.
+    std::ifstream png(dir + "/map.png", std::ios::binary);
+    unsigned char header[24];
+    png.read(reinterpret_cast<char*>(header), sizeof(header));
+    const auto be32 = [&](int at) {
+      return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3];
+    };
+    EXPECT_LE(be32(16), 1500);
+    EXPECT_LE(be32(20), 1500);
+    EXPECT_GE(be32(16), 500);  // still drawn at a readable scale
+  }
   std::ifstream json(dir + "/report.json");
   const auto j = nlohmann::json::parse(json);
   EXPECT_EQ(j["truth"].size(), 3u);
+  EXPECT_EQ(j["sound_sources"].size(), 2u);  // every source is in the JSON, drawn or not
   EXPECT_EQ(j["false_positives"], 1);
   std::ifstream html_file(dir + "/report.html");
   const std::string html((std::istreambuf_iterator<char>(html_file)), {});

@@ -33,15 +33,19 @@ class TimeOrderedQueue {
  public:
   explicit TimeOrderedQueue(Utime delay_us) : delay_us_(delay_us) {}
 
-  // Returns false (and counts) when the item is too late to be released in order.
-  bool Push(Utime utime, T item) {
-    if (utime < last_released_) {
+  // Returns false (and counts) when the item is too late to be released in order. Items of
+  // different streams (e.g. odometry and scans made from depth frames, which arrive later) are
+  // kept in order within each stream only: a late item of one stream is still taken, after
+  // newer items of other streams, as long as it is not older than what its own stream released.
+  bool Push(Utime utime, T item, int stream = 0) {
+    auto released = last_released_.find(stream);
+    if (released != last_released_.end() && utime < released->second) {
       ++dropped_late_;
       return false;
     }
     if (utime < newest_) ++reordered_;
     newest_ = std::max(newest_, utime);
-    items_.emplace(utime, std::move(item));
+    items_.emplace(utime, std::make_pair(stream, std::move(item)));
     return true;
   }
 
@@ -57,17 +61,17 @@ class TimeOrderedQueue {
   void ReleaseUntil(Utime until, const std::function<void(Utime, T&)>& sink) {
     while (!items_.empty() && items_.begin()->first <= until) {
       auto node = items_.extract(items_.begin());
-      last_released_ = node.key();
-      sink(node.key(), node.mapped());
+      last_released_[node.mapped().first] = node.key();
+      sink(node.key(), node.mapped().second);
     }
   }
 
   Utime delay_us_;
   Utime newest_ = INT64_MIN / 2;
-  Utime last_released_ = INT64_MIN;
+  std::map<int, Utime> last_released_;  // per stream
   int64_t dropped_late_ = 0;
   int64_t reordered_ = 0;
-  std::multimap<Utime, T> items_;
+  std::multimap<Utime, std::pair<int, T>> items_;
 };
 
 }  // namespace common

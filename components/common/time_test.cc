@@ -34,6 +34,25 @@ TEST(TimeOrderedQueueTest, ReleasesInOrderAfterTheDelayAndDropsLateItems) {
   EXPECT_EQ(q.size(), 0u);
 }
 
+TEST(TimeOrderedQueueTest, ALateStreamIsKeptInItsOwnOrder) {
+  // Odometry (stream 1) arrives on time; scans made from depth frames (stream 0) arrive late.
+  TimeOrderedQueue<int> q(100);
+  std::vector<std::pair<Utime, int>> out;
+  auto sink = [&](Utime t, int& v) { out.push_back({t, v}); };
+  for (Utime t = 1000; t <= 1500; t += 100) q.Push(t, 1, /*stream=*/1);
+  q.Release(sink);  // odometry up to 1400 released
+  EXPECT_EQ(out.size(), 5u);
+  EXPECT_TRUE(q.Push(1050, 0, /*stream=*/0));  // older than released odometry: still taken
+  EXPECT_TRUE(q.Push(1150, 0, /*stream=*/0));
+  q.Release(sink);
+  ASSERT_EQ(out.size(), 7u);
+  EXPECT_EQ(out[5], std::make_pair(Utime{1050}, 0));
+  EXPECT_EQ(out[6], std::make_pair(Utime{1150}, 0));
+  EXPECT_FALSE(q.Push(1100, 0, /*stream=*/0));  // older than its own stream's last: too late
+  EXPECT_FALSE(q.Push(1350, 1, /*stream=*/1));
+  EXPECT_EQ(q.dropped_late(), 2);
+}
+
 }  // namespace
 }  // namespace common
 }  // namespace sarmap

@@ -128,6 +128,17 @@ struct RandomWalkResidual {
   Eigen::Vector3d motion, inv_sigma;
 };
 
+// Known microphone height (3d): r = (m_z - h) / sigma.
+struct HeightPriorResidual {
+  HeightPriorResidual(double height_m, double sigma_m) : h(height_m), inv_sigma(1 / sigma_m) {}
+  template <class T>
+  bool operator()(const T* m, T* residual) const {
+    residual[0] = (m[2] - h) * inv_sigma;
+    return true;
+  }
+  double h, inv_sigma;
+};
+
 // All unknowns, in internal units; blocks are stored with stride 3 (positions) and 2 (clocks).
 struct State {
   int dim = 2;
@@ -221,8 +232,25 @@ Problem Build(const TdoaData& data, const SolverOptions& o, int gx, int gp, Stat
     }
     problem.AddResidualBlock(cost, nullptr, a, b);
   }
+  if (!linear && D == 3 && o.height_prior_sigma_m > 0) {
+    for (int n = 1; n < N; ++n) {
+      if (!problem.HasParameterBlock(&state->mics[3 * n])) continue;
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<HeightPriorResidual, 1, 3>(
+              new HeightPriorResidual(o.mic_heights_m[n], o.height_prior_sigma_m)),
+          nullptr, &state->mics[3 * n]);
+    }
+  }
+  // Known geometry: the positions are data, not unknowns (no gauge needed: they fix the frame).
+  if (!linear && o.known_positions) {
+    for (int n = 1; n < N; ++n) {
+      if (problem.HasParameterBlock(&state->mics[3 * n])) {
+        problem.SetParameterBlockConstant(&state->mics[3 * n]);
+      }
+    }
+  }
   // Gauge: mic x on the x axis; (3d) mic plane in z = 0. Mic 1 never enters as a block.
-  if (!linear) {
+  if (!linear && !o.known_positions) {
     const int ix = gx - 1, ip = gp - 1;
     if (problem.HasParameterBlock(&state->mics[3 * ix])) {
       problem.SetManifold(&state->mics[3 * ix],
@@ -608,6 +636,15 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
                             " source position(s) cannot determine an array");
   }
 
+  if (o.height_prior_sigma_m > 0 && D == 3 && static_cast<int>(o.mic_heights_m.size()) != N) {
+    throw std::invalid_argument("height_prior_sigma_m > 0 needs mic_heights_m with " +
+                                std::to_string(N) + " entries");
+  }
+  if (o.known_positions && !linear &&
+      (!guess || static_cast<int>(guess->mic_positions_m.size()) != N)) {
+    throw std::invalid_argument("known_positions needs the " + std::to_string(N) +
+                                " microphone positions (--nominal)");
+  }
   CalibrationResult result;
   result.dim = linear ? 1 : D;
   CheckObservability(data, o, &result.warnings);
@@ -643,6 +680,16 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     State state;
     RandomInitialise(data, o, gx, gp, &rng, &state);
     if (s == 0 && guess) ApplyGuess(data, o, *guess, &state);
+    if (!linear && D == 3 && o.height_prior_sigma_m > 0) {
+      for (int n = 1; n < N; ++n) {
+        if (n != gx - 1 && n != gp - 1) state.mics[3 * n + 2] = o.mic_heights_m[n];
+      }
+    }
+    if (s > 0 && guess && o.known_positions && !linear) {
+      InitialGuess positions_only;
+      positions_only.mic_positions_m = guess->mic_positions_m;
+      ApplyGuess(data, o, positions_only, &state);
+    }
     Problem p = Build(data, o, gx, gp, &state, true);
     ceres::Solver::Summary summary;
     ceres::Solve(sopt, p.problem.get(), &summary);
@@ -676,7 +723,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
 
   // Gauge signs by mirroring everything.
   Eigen::Vector3d sign(1, 1, 1);
-  if (!linear) {
+  if (!linear && !o.known_positions) {
     sign = GaugeSigns(best, D, gx, gp, gz);
     for (int n = 0; n < N; ++n)
       for (int i = 0; i < 3; ++i) best.mics[3 * n + i] *= sign[i];
@@ -749,7 +796,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     std::vector<std::pair<const double*, const double*>> blocks;
     const int src_stride = linear ? 1 : 3;
     for (int n = 1; n < N; ++n) {
-      if (!linear && p.problem->HasParameterBlock(&state.mics[3 * n]))
+      if (!linear && !o.known_positions && p.problem->HasParameterBlock(&state.mics[3 * n]))
         blocks.emplace_back(&state.mics[3 * n], &state.mics[3 * n]);
       if (!o.synchronous && p.problem->HasParameterBlock(&state.clocks[2 * n]))
         blocks.emplace_back(&state.clocks[2 * n], &state.clocks[2 * n]);
@@ -770,7 +817,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     const int pd = linear ? 0 : D;
     std::ostringstream bad;
     for (int n = 1; n < N; ++n) {
-      if (!linear && p.problem->HasParameterBlock(&state.mics[3 * n])) {
+      if (!linear && !o.known_positions && p.problem->HasParameterBlock(&state.mics[3 * n])) {
         Eigen::Matrix<double, 3, 3, Eigen::RowMajor> c = Eigen::Matrix3d::Zero();
         Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(pd, pd);
         cov.GetCovarianceBlock(&state.mics[3 * n], &state.mics[3 * n], m.data());

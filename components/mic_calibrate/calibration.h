@@ -42,6 +42,15 @@ struct SolverOptions {
   std::string geometry = "planar";  // planar | 3d | linear
   bool synchronous = false;         // true: tau = delta = 0, positions only
   bool estimate_drift = true;       // false: delta held at 0 (thesis Fig. 3.13 ablation)
+  // Positions known (e.g. a Kinect-like array of separate sound cards whose geometry is the
+  // datasheet's): held at the guess' positions (mic 1 moved to the origin); only start
+  // offsets, drifts and the source positions are estimated. Any geometry, collinear included.
+  bool known_positions = false;
+  // 3d: known microphone heights (z in the gauge frame, one per mic, e.g. measured with a
+  // tape when the gauge mics span the horizontal plane) as a prior z_n ~ N(h_n, sigma^2);
+  // sigma 0 = off. Constrains what one source loop in a plane cannot (fig8a).
+  std::vector<double> mic_heights_m;
+  double height_prior_sigma_m = 0.0;
   double speed_of_sound_mps = 340.0;
   double tdoa_sigma_s = 0.333e-3;   // used where the input gives no per-row sigma
   double random_walk_sigma_m = 0.333;       // planar/3d: source random-walk prior
@@ -77,6 +86,10 @@ struct SolverOptions {
     v("geometry", geometry, "planar, 3d or linear (known spacing: offsets and drift only)");
     v("synchronous", synchronous, "synchronous array: estimate positions only (tau = delta = 0)");
     v("estimate_drift", estimate_drift, "estimate clock drift (false: thesis Fig. 3.13 ablation)");
+    v("mic_heights_m", mic_heights_m, "3d: known mic heights in the gauge frame (prior)");
+    v("height_prior_sigma_m", height_prior_sigma_m, "3d: std of the height prior (0 = off)");
+    v("known_positions", known_positions,
+      "microphone positions known (--nominal): estimate offsets, drifts and sources only");
     v("speed_of_sound_mps", speed_of_sound_mps, "speed of sound c");
     v("tdoa_sigma_s", tdoa_sigma_s, "TDOA noise std where the input has none");
     v("random_walk_sigma_m", random_walk_sigma_m, "source random-walk prior std (planar/3d)");

@@ -21,12 +21,27 @@ using namespace sarmap::mic_calibrate;
 
 namespace {
 
+// Command-line overrides of the scenario / solver (exploration; defaults = the stated setup).
+std::string g_path;
+int g_positions = 0;
+double g_wobble = -1, g_lobes = -1;
+int g_max_iterations = 0;
+double g_parameter_tolerance = 0;
+std::string g_only;  // run only the cases whose name starts with this
+
+void Tune(SolverOptions* o) {
+  if (g_max_iterations > 0) o->max_iterations = g_max_iterations;
+  if (g_parameter_tolerance > 0) o->parameter_tolerance = g_parameter_tolerance;
+}
+
 struct Thesis {
   double pos_m, tau_ms, delta_us;
 };
 
 void Row(const char* name, const SimScenario& sc, int runs, const Thesis* thesis,
          void (*configure)(SolverOptions*) = nullptr) {
+  if (!g_only.empty() && std::string(name).rfind(g_only, 0) != 0) return;
+  if (!configure) configure = Tune;
   const MonteCarloSummary m = RunMonteCarlo(sc, runs, 1, configure);
   printf("%-22s K=%-4d pos %8.4f m  tau %8.4f ms  delta %8.4f us/s  | per-coordinate pos "
          "%.4f m | fails %d/%d  solve %.3f s  it %.1f (all starts %.1f)  res %.4f ms\n",
@@ -53,6 +68,7 @@ void Row(const char* name, const SimScenario& sc, int runs, const Thesis* thesis
 // The ablation reports the errors it reaches instead of refusing (which it otherwise does:
 // the position covariances explode).
 void NoDrift(SolverOptions* o) {
+  Tune(o);
   o->estimate_drift = false;
   o->max_position_std_m = 1e9;
   o->max_offset_std_s = 1e9;
@@ -63,7 +79,48 @@ SimScenario Grid(int rows, int cols, double noise_factor) {
   sc.rows = rows;
   sc.cols = cols;
   sc.noise_conservative_factor = noise_factor;
+  if (!g_path.empty()) sc.path = g_path;
+  if (g_positions > 0) sc.num_positions = g_positions;
+  if (g_wobble >= 0) sc.loop_wobble = g_wobble;
+  if (g_lobes > 0) sc.loop_lobes = g_lobes;
   return sc;
+}
+
+// Per run: the random-start solution against a solve started at the truth (the minimum
+// nearest the truth). A lower truth-start cost means the random starts missed the global
+// minimum; equal costs mean the error is the estimator's, not the solver's.
+void Diagnose(const char* name, const SimScenario& sc, int runs) {
+  printf("%s (K=%d): run | cost random-start | cost truth-start | pos err random / truth-start "
+         "[m] | delta err [us/s]\n", name, sc.num_positions);
+  double sum_r = 0, sum_t = 0;
+  int missed = 0;
+  for (int i = 0; i < runs; ++i) {
+    const SimData sim = Simulate(sc, 1 + i);
+    SolverOptions o = SolverOptionsFor(sc, sim);
+    o.seed = 1001 + i;
+    o.compute_covariance = false;
+    Tune(&o);
+    const CalibrationResult r = Calibrate(sim.data, o);
+    InitialGuess g;
+    g.mic_positions_m = sim.mic_positions_m;
+    g.start_offsets_s = sim.start_offsets_s;
+    g.clock_drift = sim.clock_drift;
+    g.source_positions_m = sim.source_positions_m;
+    SolverOptions ot = o;
+    ot.num_starts = 1;
+    const CalibrationResult t = Calibrate(sim.data, ot, &g);
+    const Errors er = CompareToTruth(r, sim), et = CompareToTruth(t, sim);
+    const bool miss = r.final_cost > t.final_cost * (1 + 1e-4);
+    missed += miss;
+    sum_r += er.position_rms_m;
+    sum_t += et.position_rms_m;
+    printf("  %2d | %12.3f | %12.3f%s | %.4f / %.4f | %.3f / %.3f\n", i + 1, r.final_cost,
+           t.final_cost, miss ? " MISSED" : "", er.position_rms_m, et.position_rms_m,
+           er.drift_rms * 1e6, et.drift_rms * 1e6);
+  }
+  printf("  mean pos RMS random %.4f, truth-start %.4f; runs that missed the minimum: %d/%d\n",
+         sum_r / runs, sum_t / runs, missed, runs);
+  fflush(stdout);
 }
 
 }  // namespace
@@ -72,16 +129,35 @@ int main(int argc, char** argv) {
   int runs = 10;
   double noise_factor = 3.0;
   bool table = true;
+  bool diagnose = false;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--runs") && i + 1 < argc) runs = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--noise-factor") && i + 1 < argc) noise_factor = atof(argv[++i]);
     else if (!strcmp(argv[i], "--skip-table")) table = false;
+    else if (!strcmp(argv[i], "--diagnose")) diagnose = true;
+    else if (!strcmp(argv[i], "--path") && i + 1 < argc) g_path = argv[++i];
+    else if (!strcmp(argv[i], "--positions") && i + 1 < argc) g_positions = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--max-iterations") && i + 1 < argc) g_max_iterations = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--parameter-tolerance") && i + 1 < argc) g_parameter_tolerance = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--wobble") && i + 1 < argc) g_wobble = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--lobes") && i + 1 < argc) g_lobes = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--only") && i + 1 < argc) g_only = argv[++i];
     else {
-      printf("usage: %s [--runs N] [--noise-factor F] [--skip-table]\n", argv[0]);
+      printf("usage: %s [--runs N] [--noise-factor F] [--skip-table] [--diagnose] [--path loop|walk] [--positions K]\n"
+             "       [--wobble w] [--lobes l]\n"
+             "       [--max-iterations N] [--parameter-tolerance e] [--only CASE]\n", argv[0]);
       return strcmp(argv[i], "--help") ? 2 : 0;
     }
   }
   const SimScenario base = Grid(3, 3, noise_factor);
+  if (diagnose) {
+    Diagnose("3x3", base, runs);
+    Diagnose("4x4", Grid(4, 4, noise_factor), runs);
+    SimScenario twice = base;
+    twice.num_positions *= 2;
+    Diagnose("3x3 twice", twice, runs);
+    return 0;
+  }
   printf("Su 2017 ch. 3 simulations, %d Monte Carlo runs per case (seeds 1..%d).\n", runs, runs);
   printf("Table 3.1 solver settings: TDOA sigma %.3f ms, random walk %.3f m, c %.0f m/s, "
          "spacing %.2f m, max offset %.2f s, max drift %.1f us/s, %d max iterations, TDOAs "

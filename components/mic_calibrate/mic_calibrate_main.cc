@@ -197,9 +197,24 @@ int Run(int argc, char** argv) {
     }
   }
   SolverOptions so = opt.solver;
-  if (!nominal.empty() && so.geometry != "linear") {
+  if (so.known_positions && so.geometry != "linear") {
+    if (nominal.empty()) {
+      throw common::ArgError("solver.known_positions needs --nominal (the known positions)");
+    }
+    guess = InitialGuess();
+    guess.mic_positions_m = nominal;  // mic 1 is moved to the origin by the solver
+    init_from_nominal = true;
+  } else if (!nominal.empty() && so.geometry != "linear") {
     ChooseGauge(data.num_mics, so.dim(), nominal, &so.gauge_x_mic, &so.gauge_plane_mic,
                 &so.gauge_z_mic);
+    if (so.dim() == 3 && so.height_prior_sigma_m > 0 && so.mic_heights_m.empty()) {
+      // Known heights: the nominal z in the gauge frame (meaningful when the gauge mics span
+      // the horizontal plane, e.g. --set solver.gauge_x_mic=2 --set solver.gauge_plane_mic=3).
+      for (const auto& p : ToGaugeFrame(nominal, 3, so.gauge_x_mic, so.gauge_plane_mic,
+                                        so.gauge_z_mic)) {
+        so.mic_heights_m.push_back(p.z());
+      }
+    }
     if (init_from_nominal) {
       // The guess must be in the gauge frame (offsets/drifts, if given, are frame-free).
       guess.mic_positions_m = ToGaugeFrame(guess.mic_positions_m, so.dim(), so.gauge_x_mic,
@@ -219,7 +234,9 @@ int Run(int argc, char** argv) {
     return 3;
   }
   for (const auto& w : result.warnings) progress("warning: " + w);
-  const TruthComparison cmp = CompareWithNominal(result, nominal, source_truth);
+  // Known positions are the nominal ones (translated to mic 1): nothing to compare.
+  const TruthComparison cmp = CompareWithNominal(
+      result, so.known_positions ? std::vector<Eigen::Vector3d>() : nominal, source_truth);
   const std::string text = TextReport(result, cmp, so);
   if (!quiet) fprintf(stderr, "%s", text.c_str());
   if (!output.empty()) {

@@ -24,7 +24,7 @@ struct SimScenario {
   int cols = 3, rows = 3, layers = 1;  // grid, mic index = layer*rows*cols + row*cols + col
   double spacing_m = 0.5;              // Table 3.1
   double layer_spacing_m = 0.5;
-  int num_positions = 250;  // 125 s at dt_s: "more than 2 minutes" (sec. 3.5.3.3)
+  int num_positions = 320;  // 160 s at dt_s: "more than 2 minutes" (sec. 3.5.3.3)
   double dt_s = 0.5;
   double step_m = 0.05;                // Table 3.1
   double heading_sigma_rad = 0.35;
@@ -34,7 +34,7 @@ struct SimScenario {
   // "walk": the random-heading walk described above.
   std::string path = "loop";
   double loop_clearance_m = 0.0;
-  double loop_wobble = 0.25;
+  double loop_wobble = 0.7;   // radius 0.3..1.7 x half diagonal: through and around the array
   double loop_lobes = 2.5;
   double z_min_m = -0.25, z_max_m = 0.75;  // 3D: source height range (thesis "internal" case)
   double max_offset_s = 0.1;           // Table 3.1

@@ -104,7 +104,11 @@ int main(int argc, char** argv) {
     auto publisher = node.Advertise<people_map_t>(options.output_channel);
     common::PoseHistory poses(common::SecondsToUtime(60.0), common::SecondsToUtime(options.max_pose_gap_s));
     common::TimeOrderedQueue<std::function<void()>> queue(common::SecondsToUtime(options.reorder_delay_s));
+    // After a restart from saved state, the people already found are published at once (at the
+    // time of their last detection), not only after the next detection: the operator and the
+    // recorder never see the map lose them.
     Utime latest_utime = 0;
+    for (const auto& [id, person] : map.people()) latest_utime = std::max(latest_utime, person.last_detected_utime);
     bool dirty = false;
     int64_t without_pose = 0;
 

@@ -19,6 +19,7 @@ fi
 
 BIN="${SARMAP_BIN_DIR:?SARMAP_BIN_DIR not set}"
 SRC="${SARMAP_SOURCE_DIR:?SARMAP_SOURCE_DIR not set}"
+source "$SRC/tests/harness/netns-hosts.sh"
 TAG="pm$$"
 NS_SENSORS="${TAG}-sensors"
 NS_COMPUTE="${TAG}-compute"
@@ -39,10 +40,7 @@ cleanup() {
     [ $alive = 0 ] && break
     sleep 0.1
   done
-  for ns in "$NS_SENSORS" "$NS_COMPUTE"; do
-    for p in $(ip netns pids "$ns" 2>/dev/null); do kill -KILL "$p" 2>/dev/null; done
-    ip netns del "$ns" 2>/dev/null
-  done
+  netns_remove_hosts "$NS_SENSORS" "$NS_COMPUTE"
   for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
   if [ "${KEEP_LOGS:-}" != 1 ]; then rm -rf "$WORK"; else log "logs kept in $WORK"; fi
 }
@@ -50,29 +48,15 @@ trap cleanup EXIT
 trap 'exit 130' INT TERM
 
 # --- the network: br0 here, one veth pair per computer --------------------------------------
-if ! { mkdir -p /run/netns && mount -t tmpfs tmpfs /run/netns && ip link add br0 type bridge; } 2>/dev/null; then
+if ! netns_bridge_up 2>/dev/null; then
   echo "SKIP: cannot create network namespaces and a bridge here (needs root, or user namespaces with /run/netns)"
   exit 77
 fi
-ip link set lo up
-ip link set br0 type bridge mcast_snooping 0   # flood multicast to every port (no querier here)
-ip addr add 10.77.0.1/24 dev br0
-ip link set br0 up
 i=2
 for ns in "$NS_SENSORS" "$NS_COMPUTE"; do
-  port="vp$i"
-  ip netns add "$ns"
-  ip link add "$port" type veth peer name eth0 netns "$ns"
-  ip link set "$port" master br0
-  ip link set "$port" up
-  ip -n "$ns" link set lo up
-  ip -n "$ns" addr add "10.77.0.$i/24" dev eth0
-  ip -n "$ns" link set eth0 up
-  ip -n "$ns" link set eth0 multicast on
-  ip -n "$ns" route add 224.0.0.0/4 dev eth0
+  netns_add_host "$ns" "$i"
   i=$((i + 1))
 done
-ip route replace 224.0.0.0/4 dev br0
 SENSORS_PORT=vp2
 
 # --- key, config ------------------------------------------------------------------------------

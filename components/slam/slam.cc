@@ -193,6 +193,20 @@ Rigid2d Slam::PredictLocal(double time_s) {
   if (!have_odom) return have_last_scan_ ? constant_velocity : last_scan_local_;
   last_scan_odom_ = odom;
   last_scan_segment_ = segment;
+  if (resume_odom_valid_) {
+    // First odometry after a restart from saved state: if the process (not the robot) was
+    // restarted, the odometry frame is the same and bridges the motion made while we were down.
+    // A robot that rebooted restarts its odometry near the identity; a bridge longer than
+    // kMaxResumeBridgeM is then not believed and the wide search finds the robot instead.
+    constexpr double kMaxResumeBridgeM = 10.0;
+    resume_odom_valid_ = false;
+    const Rigid2d bridge = resume_odom_.inverse() * odom;
+    if (bridge.translation().norm() < kMaxResumeBridgeM) {
+      this_scan_has_fresh_odom_ = true;
+      resume_bridged_ = true;
+      return last_scan_local_ * bridge;
+    }
+  }
   if (!have_reference_ || segment != reference_segment_) {
     this_scan_has_fresh_odom_ = true;
     return last_scan_local_;
@@ -267,9 +281,11 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
   Rigid2d local = predicted;
   if (!active_submaps_.empty() && submaps_[active_submaps_.front()].num_inserted > 0 &&
       !points.empty()) {
-    if (!have_scan_since_load_ && !nodes_.empty()) {
-      // First scan after loading a saved state: the robot may have moved while we were
-      // down; search widely around the last pose before tracking again.
+    if (!have_scan_since_load_ && !nodes_.empty() && !resume_bridged_) {
+      // First scan after loading a saved state without odometry across the gap: the robot
+      // may have moved while we were down; search widely around the last pose before tracking
+      // again. (With the odometry bridge the normal matching is better: a wide search can
+      // slide along a corridor.)
       const int id = active_submaps_.front();
       BranchAndBoundOptions b;
       b.linear_window_m = std::min(1.0, options_.loop.linear_window_m);
@@ -870,8 +886,12 @@ void Slam::Load(const std::string& path) {
   have_pending_jump_ = false;
   have_scan_since_load_ = false;
   nodes_since_optimisation_ = 0;
-  // The odometry frame of a restarted robot may differ: predict no motion until new odometry
-  // arrives, and let the scan matcher (wide search on the first scan) find the robot.
+  // The odometry frame of a restarted robot may differ: the first new odometry bridges the gap
+  // only when it is plausible (PredictLocal), and the scan matcher (wide search on the first
+  // scan) finds the robot.
+  resume_odom_valid_ = last_scan_has_odom_ && !localisation_only_;
+  resume_bridged_ = false;
+  resume_odom_ = last_scan_odom_;
   last_scan_has_odom_ = false;
   have_reference_ = false;
   have_prev_scan_ = false;

@@ -181,6 +181,10 @@ class Slam {
   Rigid2d last_scan_local_;
   bool last_scan_has_odom_ = false;
   Rigid2d last_scan_odom_;
+  // Odometry of the last scan before a restart from saved state (Load), to bridge the gap.
+  bool resume_odom_valid_ = false;
+  bool resume_bridged_ = false;  // the first scan after Load was predicted across the gap
+  Rigid2d resume_odom_;
   int last_scan_segment_ = -1;
   bool this_scan_has_fresh_odom_ = false;
   bool have_reference_ = false;

@@ -110,7 +110,11 @@ class SlamNode {
 
   void Push(Utime utime, Input in) {
     last_input_s_ = common::SteadySeconds();
-    if (!queue_.Push(utime, std::move(in))) {
+    // Scans and odometry are ordered as separate streams: a scan made from a depth frame
+    // arrives later than the odometry of the same instant, and is still used (the odometry
+    // history interpolates at its time) instead of being dropped as late.
+    const int stream = std::holds_alternative<OdomInput>(in.data) ? 1 : 0;
+    if (!queue_.Push(utime, std::move(in), stream)) {
       if (late_log_.Allow(common::SteadySeconds())) {
         SARMAP_LOG(WARN) << "input too late for the time-ordered queue (dropped "
                          << queue_.dropped_late() << " so far)";

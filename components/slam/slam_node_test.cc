@@ -32,8 +32,8 @@ namespace {
 const std::string kIntel = std::string(SARMAP_DATA_DIR) + "/slam/intel/intel.log";
 
 struct Event {
-  double t;
-  bool is_scan;
+  double t = 0;
+  bool is_scan = false;
   laser_scan_t scan;
   odometry_t odom;
 };
@@ -43,10 +43,20 @@ std::vector<Event> LoadIntelPrefix(int max_scans) {
   slam::CarmenReader reader;
   int scans = 0;
   reader.on_odometry = [&](const slam::CarmenOdometry& o) {
-    if (scans < max_scans) events.push_back({o.time_s, false, {}, slam::ToOdometryMessage(o)});
+    if (scans >= max_scans) return;
+    Event e;
+    e.t = o.time_s;
+    e.is_scan = false;
+    e.odom = slam::ToOdometryMessage(o);
+    events.push_back(std::move(e));
   };
   reader.on_laser = [&](const slam::CarmenLaser& l) {
-    if (scans++ < max_scans) events.push_back({l.time_s, true, slam::ToScanMessage(l), {}});
+    if (scans++ >= max_scans) return;
+    Event e;
+    e.t = l.time_s;
+    e.is_scan = true;
+    e.scan = slam::ToScanMessage(l);
+    events.push_back(std::move(e));
   };
   slam::ReadCarmenFile(kIntel, &reader);
   std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.t < b.t; });

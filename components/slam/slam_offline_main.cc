@@ -25,11 +25,18 @@ using namespace sarmap;
 namespace {
 
 struct Input {
-  bool is_scan;
+  bool is_scan = false;
   slam::LaserScan scan;
-  double odom_time_s;
+  double odom_time_s = 0;
   slam::Rigid2d odom;
 };
+
+Input OdometryInput(double time_s, const slam::Rigid2d& odom) {
+  Input in;
+  in.odom_time_s = time_s;
+  in.odom = odom;
+  return in;
+}
 
 bool EndsWith(const std::string& s, const std::string& e) {
   return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
@@ -49,14 +56,15 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
       slam::CarmenReader reader;
       reader.warn = [](const std::string& w) { SARMAP_LOG(WARN) << "CARMEN: " << w; };
       reader.on_odometry = [&](const slam::CarmenOdometry& o) {
-        inputs.push_back({false, {}, o.time_s, slam::Rigid2d(o.x_m, o.y_m, o.theta_rad)});
+        inputs.push_back(OdometryInput(o.time_s, slam::Rigid2d(o.x_m, o.y_m, o.theta_rad)));
       };
       reader.on_laser = [&](const slam::CarmenLaser& l) {
         if (l.has_odometry) {
-          inputs.push_back({false, {}, l.time_s,
-                            slam::Rigid2d(l.odometry.x_m, l.odometry.y_m, l.odometry.theta_rad)});
+          inputs.push_back(
+              OdometryInput(l.time_s, slam::Rigid2d(l.odometry.x_m, l.odometry.y_m, l.odometry.theta_rad)));
         }
-        Input in{true, {}, 0, {}};
+        Input in;
+        in.is_scan = true;
         in.scan.time_s = l.time_s;
         in.scan.angle_min_rad = l.angle_min_rad;
         in.scan.angle_increment_rad = l.angle_increment_rad;
@@ -79,7 +87,9 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
         ++bad;
         continue;
       }
-      Input in{true, slam::FromScanMessage(msg), 0, {}};
+      Input in;
+      in.is_scan = true;
+      in.scan = slam::FromScanMessage(msg);
       inputs.push_back(std::move(in));
     } else if (ev->channel == options.odom_channel) {
       odometry_t msg;
@@ -87,8 +97,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
         ++bad;
         continue;
       }
-      inputs.push_back({false, {}, common::UtimeToSeconds(msg.header.utime),
-                        slam::FromOdometryMessage(msg)});
+      inputs.push_back(OdometryInput(common::UtimeToSeconds(msg.header.utime), slam::FromOdometryMessage(msg)));
     }
   }
   if (bad) {

@@ -284,6 +284,29 @@ TEST(SlamRealDataTest, SaveLoadResumesMapping) {
   EXPECT_EQ(occupied_agree, occupied);
 }
 
+TEST(SlamRealDataTest, ResumeBridgesTheMotionMadeWhileDownWithOdometry) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  // The process dies and comes back 25 scans (~5 s, a state-save period, about a metre of driving) later: the scans
+  // in between are lost, the odometry frame is the same.
+  const int half = kPrefixScans / 2, gap = 25;
+  Slam first{SlamOptions()};
+  FeedIntel(&first, 0, half);
+  const std::string path = ::testing::TempDir() + "/slam_resume_gap.pg";
+  first.Save(path);
+  Slam resumed{SlamOptions()};
+  resumed.Load(path);
+  FeedIntel(&resumed, half + gap, kPrefixScans);
+  resumed.Optimise();
+  Slam full{SlamOptions()};
+  FeedIntel(&full, 0, kPrefixScans);
+  full.Optimise();
+  const Rigid2d a = resumed.CurrentPose(), b = full.CurrentPose();
+  std::printf("resumed after a gap: end pose %.3f %.3f, uninterrupted %.3f %.3f\n",
+              a.translation().x(), a.translation().y(), b.translation().x(), b.translation().y());
+  EXPECT_LT((a.translation() - b.translation()).norm(), 0.3);
+  EXPECT_LT(std::abs(std::remainder(a.yaw_rad() - b.yaw_rad(), 2 * M_PI)), 0.05);
+}
+
 }  // namespace
 }  // namespace slam
 }  // namespace sarmap

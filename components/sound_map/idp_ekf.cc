@@ -141,10 +141,8 @@ void IdpEkf::AddSource(int64_t id, int64_t anchor_id, const Eigen::VectorXd& z,
   sources_[id] = Source{i, anchor_id};
 }
 
-void IdpEkf::RemoveSource(int64_t id) {
-  auto it = sources_.find(id);
-  if (it == sources_.end()) return;
-  const int i = it->second.index, sd = source_dim(), n = dim();
+void IdpEkf::RemoveBlock(int i, int sd) {
+  const int n = dim();
   std::vector<int> keep;
   for (int k = 0; k < n; ++k)
     if (k < i || k >= i + sd) keep.push_back(k);
@@ -155,13 +153,30 @@ void IdpEkf::RemoveSource(int64_t id) {
   x_.swap(x);
   p_.swap(p);
   is_angle_.swap(ang);
-  sources_.erase(it);
   auto shift = [&](int& index) {
     if (index > i) index -= sd;
   };
   for (auto& kv : anchors_) shift(kv.second);
   for (auto& kv : landmarks_) shift(kv.second);
   for (auto& kv : sources_) shift(kv.second.index);
+}
+
+void IdpEkf::RemoveSource(int64_t id) {
+  auto it = sources_.find(id);
+  if (it == sources_.end()) return;
+  const int i = it->second.index;
+  sources_.erase(it);
+  RemoveBlock(i, source_dim());
+}
+
+void IdpEkf::RemoveAnchor(int64_t id) {
+  auto it = anchors_.find(id);
+  if (it == anchors_.end()) return;
+  for (const auto& kv : sources_)
+    if (kv.second.anchor == id) return;
+  const int i = it->second;
+  anchors_.erase(it);
+  RemoveBlock(i, 3);
 }
 
 void IdpEkf::SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,

@@ -67,6 +67,8 @@ class IdpEkf {
   double UpdateSource(int64_t id, const Eigen::VectorXd& z, const Eigen::MatrixXd& r,
                       double gate = 0);
   void RemoveSource(int64_t id);
+  // Drops an anchor no source uses any more (no-op if a source still uses it).
+  void RemoveAnchor(int64_t id);
 
   // Back-propagation from the localisation map (eqs. 4.20-4.25). The shared part x_C is the
   // current pose and the listed anchors (those this map holds); `covariance` is the joint
@@ -89,6 +91,12 @@ class IdpEkf {
   // whose inverse depth is not positive are reported at 1/1e-3 m along the ray.
   void SourcePoint(int64_t id, Eigen::Vector3d* point, Eigen::Matrix3d* covariance) const;
   int64_t source_anchor(int64_t id) const { return sources_.at(id).anchor; }
+  // Inverse depth rho of a source (1/m) and its variance.
+  void SourceInverseDepth(int64_t id, double* rho, double* variance) const {
+    const int i = sources_.at(id).index + source_dim() - 1;
+    *rho = x_[i];
+    *variance = p_(i, i);
+  }
   std::vector<int64_t> source_ids() const;
   std::vector<int64_t> anchor_ids() const;
   int dim() const { return static_cast<int>(x_.size()); }
@@ -110,6 +118,7 @@ class IdpEkf {
   void SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,
                       std::vector<int>* cols) const;
   void WrapAngles();
+  void RemoveBlock(int i, int n);
 
   Options options_;
   Eigen::VectorXd x_;

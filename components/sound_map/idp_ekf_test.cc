@@ -36,6 +36,45 @@ TEST(IdpEkf, TriangulatesFromParallax2d) {
   EXPECT_NEAR(p.y(), 2.0, 0.02);
 }
 
+// Removing a source keeps the others exactly (mean and covariance); an anchor is removed
+// only once no source uses it.
+TEST(IdpEkf, RemovesSourcesAndUnusedAnchors) {
+  IdpEkf ekf(IdpEkf::Options{});
+  ekf.Reset(Pose2(0, 0, 0), Eigen::Matrix3d::Identity() * 1e-4);
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(1, 1) * 1e-3;
+  Eigen::VectorXd z(1);
+  z << 0.3;
+  ekf.AddSource(1, 10, z, r);
+  ekf.Predict(Pose2(0.5, 0, 0.1), Eigen::Matrix3d::Identity() * 1e-4);
+  z << -0.4;
+  ekf.AddSource(2, 11, z, r);
+  z << 0.9;
+  ekf.AddSource(3, 11, z, r);
+  z << 0.35;
+  ekf.UpdateSource(1, z, r);
+  Eigen::Vector3d p3;
+  Eigen::Matrix3d c3;
+  ekf.SourcePoint(3, &p3, &c3);
+  const int dim = ekf.dim();
+  ekf.RemoveSource(2);
+  ekf.RemoveAnchor(11);  // source 3 still uses it: kept
+  EXPECT_TRUE(ekf.HasAnchor(11));
+  EXPECT_EQ(ekf.dim(), dim - 2);
+  Eigen::Vector3d q3;
+  Eigen::Matrix3d d3;
+  ekf.SourcePoint(3, &q3, &d3);
+  EXPECT_LT((q3 - p3).norm(), 1e-12);
+  EXPECT_LT((d3 - c3).norm(), 1e-12);
+  ekf.RemoveSource(1);
+  ekf.RemoveAnchor(10);
+  EXPECT_FALSE(ekf.HasAnchor(10));
+  EXPECT_EQ(ekf.dim(), dim - 7);
+  ekf.SourcePoint(3, &q3, &d3);
+  EXPECT_LT((q3 - p3).norm(), 1e-12);
+  EXPECT_LT((d3 - c3).norm(), 1e-12);
+  EXPECT_EQ(ekf.source_ids(), std::vector<int64_t>{3});
+}
+
 // Back-propagation with the localisation map's own state leaves the sound map unchanged,
 // and moving a shared anchor moves the source along with it (K12 = P_SC P_C^-1).
 TEST(IdpEkf, BackPropagationMovesSourcesWithAnchors) {

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <set>
 
 namespace sarmap {
@@ -23,7 +24,7 @@ OnlineSoundMap::OnlineSoundMap(const OnlineSoundMapOptions& options, const Array
       ekf_(EkfOptions(options, mount)),
       associator_(SourceAssociator::Options{options.gate_chi2, options.max_signature_distance}) {}
 
-void OnlineSoundMap::OnPose(int64_t, const Pose2& pose, const Eigen::Matrix3d& cov, int64_t node_id) {
+void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matrix3d& cov, int64_t node_id) {
   if (!pose.vec().allFinite() || !cov.allFinite()) {
     ++counters_.bad_poses;
     return;
@@ -40,9 +41,13 @@ void OnlineSoundMap::OnPose(int64_t, const Pose2& pose, const Eigen::Matrix3d& c
     const double sy = options_.motion_noise_rad_per_m * dist + options_.motion_noise_rad_per_rad * std::abs(delta.yaw) + 1e-5;
     ekf_.Predict(delta, Eigen::Vector3d(sp * sp, sp * sp, sy * sy).asDiagonal());
     ekf_.SetCurrentMean(pose);
+    const double dt = (utime - last_pose_utime_) * 1e-6;
+    if (dt > 1e-3) turn_rate_rad_per_s_ = std::abs(delta.yaw) / dt;
   }
+  last_pose_utime_ = utime;
   last_pose_ = pose;
   last_node_id_ = node_id;
+  Prune(utime);
 }
 
 bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
@@ -69,70 +74,290 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
   return true;
 }
 
+bool OnlineSoundMap::MakeObs(const Doa& doa, Obs* obs) const {
+  const double floor = std::pow(options_.doa_sigma_floor_deg * M_PI / 180, 2);
+  const int d = options_.three_d ? 2 : 1;
+  obs->z = Eigen::VectorXd::Zero(d);
+  obs->r = Eigen::MatrixXd::Zero(d, d);
+  obs->z[0] = doa.azimuth_rad;
+  obs->r(0, 0) = std::max(doa.covariance(0, 0), floor);
+  obs->mirrored = false;
+  if (doa.kind == kAngle1d) {
+    // Angle to the array axis (mic_array x), 0..pi: in the plane the bearing is +angle or
+    // -angle (the cone meets the horizontal plane twice). Only the planar map takes it.
+    if (options_.three_d) return false;
+    obs->mirrored = true;
+    return true;
+  }
+  if (doa.kind != kAzimuth && doa.kind != kAzimuthElevation) return false;
+  if (options_.three_d) {
+    if (doa.kind == kAzimuthElevation) {
+      obs->z[1] = doa.elevation_rad;
+      obs->r(1, 1) = std::max(doa.covariance(1, 1), floor);
+      obs->r(0, 1) = obs->r(1, 0) = doa.covariance(0, 1);
+    } else {
+      obs->z[1] = 0.0;
+      obs->r(1, 1) = std::pow(options_.elevation_sigma_deg * M_PI / 180, 2);
+    }
+  }
+  return true;
+}
+
+double OnlineSoundMap::Chi2(int64_t source, const Obs& obs, Eigen::VectorXd* z_used) const {
+  double best = ekf_.SourceChi2(source, obs.z, obs.r);
+  if (z_used) *z_used = obs.z;
+  if (obs.mirrored) {
+    Eigen::VectorXd m = obs.z;
+    m[0] = -m[0];
+    const double c = ekf_.SourceChi2(source, m, obs.r);
+    if (c < best) {
+      best = c;
+      if (z_used) *z_used = m;
+    }
+  }
+  return std::isfinite(best) ? best : std::numeric_limits<double>::infinity();
+}
+
 void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::vector<Doa>& doas) {
+  std::set<int64_t> used;  // one DOA of a block per source
+  const double update_gate = options_.update_gate_chi2 > 0 ? options_.update_gate_chi2
+                                                            : std::numeric_limits<double>::infinity();
   for (const Doa& doa : doas) {
-    if (doa.kind != kAzimuth && doa.kind != kAzimuthElevation) {
-      ++counters_.doa_unsupported_kind;  // cone angles of linear arrays need the 6-DoF mapper
+    Obs obs;
+    if (!MakeObs(doa, &obs)) {
+      ++counters_.doa_unsupported_kind;
       continue;
     }
     if (!have_pose_) {
       ++counters_.doa_before_pose;
       continue;
     }
-    const double floor = std::pow(options_.doa_sigma_floor_deg * M_PI / 180, 2);
-    Eigen::VectorXd z(options_.three_d ? 2 : 1);
-    Eigen::MatrixXd r = Eigen::MatrixXd::Zero(z.size(), z.size());
-    z[0] = doa.azimuth_rad;
-    r(0, 0) = std::max(doa.covariance(0, 0), floor);
-    if (options_.three_d) {
-      if (doa.kind == kAzimuthElevation) {
-        z[1] = doa.elevation_rad;
-        r(1, 1) = std::max(doa.covariance(1, 1), floor);
-        r(0, 1) = r(1, 0) = doa.covariance(0, 1);
-      } else {
-        z[1] = 0.0;
-        r(1, 1) = std::pow(options_.elevation_sigma_deg * M_PI / 180, 2);
-      }
+    if (options_.max_turn_rate_deg_per_s > 0 &&
+        turn_rate_rad_per_s_ > options_.max_turn_rate_deg_per_s * M_PI / 180) {
+      ++counters_.doa_while_turning;
+      continue;
     }
-    // Candidates for an unknown track: converged sources that have been quiet a while.
-    std::vector<int64_t> ids;
-    const bool may_reassociate = !doa.signature.empty() || options_.reassociate_without_signature;
-    for (int64_t id : ekf_.source_ids()) {
-      if (!may_reassociate) break;
-      const Meta& m = meta_[id];
-      if (utime - m.last >= static_cast<int64_t>(options_.reassociate_after_silence_s * 1e6) && Converged(id))
-        ids.push_back(id);
+    if (obs.mirrored) ++counters_.doa_angle_1d;
+    // 1. The DOA track's source, a hint only: kept while its bearing stays consistent.
+    int64_t source = -1;
+    bool by_track = false;
+    Eigen::VectorXd z;
+    const int64_t hinted = doa.track_id >= 0 ? associator_.SourceOfTrack(device, doa.track_id) : -1;
+    if (hinted >= 0 && ekf_.HasSource(hinted) && !used.count(hinted) && Chi2(hinted, obs, &z) <= update_gate) {
+      source = hinted;
+      by_track = true;
     }
-    const auto decision = associator_.Associate(device, doa.track_id, doa.signature, ids,
-                                                [&](int64_t s) { return ekf_.SourceChi2(s, z, r); });
-    int64_t source = decision.source;
+    // 2. Chi-square gate on the predicted bearing of every source (and the spectral signature
+    //    when both carry one); the best one takes the DOA.
     if (source < 0) {
-      source = next_source_id_++;
-      int64_t anchor = last_node_id_;
-      if (anchor < 0) anchor = next_local_anchor_--;
-      if (!ekf_.HasAnchor(anchor) && anchor >= 0) anchors_changed_ = true;
-      ekf_.AddSource(source, anchor, z, r);
-      meta_[source].first = utime;
-      ++counters_.doa_new_sources;
-    } else {
-      const double chi2 = ekf_.UpdateSource(source, z, r, options_.update_gate_chi2);
-      if (options_.update_gate_chi2 > 0 && chi2 > options_.update_gate_chi2) {
-        ++counters_.doa_gated_out;
-        continue;
+      std::vector<int64_t> ids;
+      for (int64_t id : ekf_.source_ids())
+        if (!used.count(id)) ids.push_back(id);
+      const auto decision = associator_.Associate(device, -1, doa.signature, ids,
+                                                  [&](int64_t s) { return Chi2(s, obs, nullptr); });
+      source = decision.source;
+      if (source >= 0) {
+        Chi2(source, obs, &z);
+        if (doa.track_id >= 0 && hinted >= 0 && hinted != source) ++counters_.doa_reassociated;
       }
-      counters_.doa_reassociated += decision.reassociated;
     }
+    // 3. Nothing fits: a tentative source (born after a few consistent DOAs).
+    if (source < 0) {
+      Tentate(utime, device, doa, obs);
+      continue;
+    }
+    const double chi2 = ekf_.UpdateSource(source, z, obs.r, options_.update_gate_chi2);
+    if (options_.update_gate_chi2 > 0 && chi2 > options_.update_gate_chi2) {
+      ++counters_.doa_gated_out;
+      continue;
+    }
+    (void)by_track;
+    used.insert(source);
     associator_.Commit(device, doa.track_id, source, doa.signature);
     Meta& meta = meta_[source];
     meta.last = utime;
     ++meta.n;
+    meta.mirror_misses = 0;
     ++counters_.doa_used;
+    // Linear arrays: the mirror twin is updated too while it explains the DOA; a twin that
+    // keeps missing what this source explains was the ghost side of the cone.
+    const int64_t twin = meta.twin;
+    if (twin >= 0 && ekf_.HasSource(twin)) {
+      Eigen::VectorXd zt;
+      if (Chi2(twin, obs, &zt) <= options_.gate_chi2) {
+        ekf_.UpdateSource(twin, zt, obs.r, options_.update_gate_chi2);
+        Meta& tm = meta_[twin];
+        tm.last = utime;
+        ++tm.n;
+        tm.mirror_misses = 0;
+        used.insert(twin);
+      } else if (++meta_[twin].mirror_misses >= options_.mirror_prune_misses) {
+        Remove(twin);
+        ++counters_.mirrors_pruned;
+      }
+    }
+  }
+  Prune(utime);
+}
+
+void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa& doa, const Obs& obs) {
+  ++counters_.doa_tentative;
+  const int64_t window = static_cast<int64_t>(options_.birth_window_s * 1e6);
+  for (auto it = tentatives_.begin(); it != tentatives_.end();) {
+    if (utime - it->second.last > window) {
+      ++counters_.tentatives_expired;
+      it = tentatives_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  // Map-frame bearing of the DOA (and of its mirror).
+  const double base = last_pose_.yaw + ekf_.options().mount.yaw_rad;
+  const double bearing = WrapAngleD(base + obs.z[0]);
+  const double mirror = WrapAngleD(base - obs.z[0]);
+  const double var = obs.r(0, 0);
+  const double drift = options_.birth_drift_deg_per_s * M_PI / 180;
+  int64_t best_key = -1;
+  bool best_mirror = false;
+  double best = options_.birth_gate_chi2;
+  for (auto& kv : tentatives_) {
+    const Tentative& t = kv.second;
+    const double dt = (utime - t.last) * 1e-6;
+    const double s = var + t.variance + std::pow(drift * dt, 2);
+    for (int m = 0; m < (obs.mirrored ? 2 : 1); ++m) {
+      const double d = WrapAngleD((m ? mirror : bearing) - t.bearing_map_rad);
+      double c = d * d / s;
+      if (doa.track_id >= 0 && t.track_id == doa.track_id && t.device == device) c *= 0.5;  // the hint
+      if (c <= best) {
+        best = c;
+        best_key = kv.first;
+        best_mirror = m == 1;
+      }
+    }
+  }
+  if (best_key < 0) {
+    Tentative t;
+    t.first = t.last = utime;
+    t.bearing_map_rad = bearing;
+    t.variance = var;
+    t.n = 1;
+    t.track_id = doa.track_id;
+    t.device = device;
+    const int64_t key = next_tentative_++;
+    // A cone angle near the axis has a single bearing; otherwise the mirror is a twin.
+    if (obs.mirrored && std::sin(obs.z[0]) > 2 * std::sqrt(var)) {
+      Tentative tw = t;
+      tw.bearing_map_rad = mirror;
+      const int64_t tkey = next_tentative_++;
+      t.twin = tkey;
+      tw.twin = key;
+      tentatives_[tkey] = tw;
+    }
+    tentatives_[key] = t;
+    best_key = key;
+  } else {
+    Tentative& t = tentatives_[best_key];
+    t.last = utime;
+    t.bearing_map_rad = best_mirror ? mirror : bearing;
+    t.variance = var;
+    ++t.n;
+    if (doa.track_id >= 0) {
+      t.track_id = doa.track_id;
+      t.device = device;
+    }
+    auto tw = tentatives_.find(t.twin);
+    if (tw != tentatives_.end()) {
+      tw->second.last = utime;
+      tw->second.bearing_map_rad = best_mirror ? bearing : mirror;
+      tw->second.variance = var;
+      tw->second.n = t.n;
+    }
+  }
+  const Tentative& t = tentatives_.at(best_key);
+  if (t.n >= options_.birth_min_observations) {
+    // The DOA's azimuth in the array frame for this tentative's side of the cone.
+    const double az = (obs.mirrored && best_mirror) ? -obs.z[0] : obs.z[0];
+    Birth(utime, best_key, obs, az);
+  }
+}
+
+void OnlineSoundMap::Birth(int64_t utime, int64_t key, const Obs& obs, double azimuth_rad) {
+  const Tentative t = tentatives_.at(key);
+  auto make = [&](const Tentative& from, double az) {
+    const int64_t source = next_source_id_++;
+    int64_t anchor = last_node_id_;
+    if (anchor < 0) anchor = next_local_anchor_--;
+    if (!ekf_.HasAnchor(anchor) && anchor >= 0) anchors_changed_ = true;
+    Eigen::VectorXd z = obs.z;
+    z[0] = az;
+    ekf_.AddSource(source, anchor, z, obs.r);
+    Meta& m = meta_[source];
+    m.first = from.first;
+    m.last = utime;
+    m.n = from.n;
+    ++counters_.doa_new_sources;
+    ++counters_.doa_used;
+    if (from.track_id >= 0) associator_.Commit(from.device, from.track_id, source, {});
+    return source;
+  };
+  const int64_t a = make(t, azimuth_rad);
+  auto tw = tentatives_.find(t.twin);
+  if (tw != tentatives_.end()) {
+    const int64_t b = make(tw->second, -azimuth_rad);
+    meta_[a].twin = b;
+    meta_[b].twin = a;
+    tentatives_.erase(tw);
+  }
+  tentatives_.erase(key);
+}
+
+void OnlineSoundMap::Remove(int64_t source) {
+  if (!ekf_.HasSource(source)) return;
+  const int64_t anchor = ekf_.source_anchor(source);
+  ekf_.RemoveSource(source);
+  bool anchor_used = false;
+  for (int64_t s : ekf_.source_ids()) anchor_used = anchor_used || ekf_.source_anchor(s) == anchor;
+  if (!anchor_used) {
+    ekf_.RemoveAnchor(anchor);
+    if (anchor >= 0) anchors_changed_ = true;
+  }
+  auto it = meta_.find(source);
+  if (it != meta_.end()) {
+    auto tw = meta_.find(it->second.twin);
+    if (tw != meta_.end()) tw->second.twin = -1;
+    meta_.erase(it);
+  }
+}
+
+void OnlineSoundMap::Prune(int64_t utime) {
+  const int64_t after = static_cast<int64_t>(options_.prune_after_s * 1e6);
+  std::vector<int64_t> drop;
+  for (int64_t id : ekf_.source_ids()) {
+    const Meta& m = meta_[id];
+    if (m.n < options_.prune_min_observations && utime - m.last > after && !Converged(id)) {
+      drop.push_back(id);
+      continue;
+    }
+    double rho = 0, var = 0;
+    ekf_.SourceInverseDepth(id, &rho, &var);
+    if (options_.prune_behind_sigmas > 0 && rho < -options_.prune_behind_sigmas * std::sqrt(std::max(0.0, var))) {
+      drop.push_back(id);
+      ++counters_.sources_behind;
+    }
+  }
+  for (int64_t id : drop) {
+    Remove(id);
+    ++counters_.sources_pruned;
   }
 }
 
 void OnlineSoundMap::OnHeardPerson(const std::string& device, int64_t track_id) {
   const int64_t s = associator_.SourceOfTrack(device, track_id);
-  if (s >= 0) meta_[s].is_person = true;
+  if (s >= 0 && ekf_.HasSource(s)) {
+    meta_[s].is_person = true;
+    const int64_t twin = meta_[s].twin;
+    if (twin >= 0 && ekf_.HasSource(twin)) meta_[twin].is_person = true;
+  }
 }
 
 std::vector<int64_t> OnlineSoundMap::AnchorNodeIds() const {
@@ -169,6 +394,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
     s.first_heard_utime = m.first;
     s.last_heard_utime = m.last;
     s.num_observations = m.n;
+    s.hypotheses_left = (m.twin >= 0 && ekf_.HasSource(m.twin)) ? 2 : 1;
     s.state = Converged(id) ? Source::kConverged : Source::kInitialising;
     if (now - m.last > static_cast<int64_t>(options_.silent_after_s * 1e6)) s.state = Source::kSilent;
     out.push_back(s);

@@ -3,9 +3,13 @@
 // this is the IDP EKF sound map (§4.3).
 //   * POSE (current map_from_base + covariance + SLAM node id): the current pose of the sound
 //     map follows it; between SLAM optimisations its covariance grows with the motion.
-//   * DOA: associated to sources (track ids, chi-square gate, spectral signature); a new
-//     source is anchored at the SLAM node of the latest POSE, and that node is requested
-//     as an anchor (AnchorNodeIds()); a known one gets an EKF update.
+//   * DOA: associated to a source by the chi-square gate on its predicted bearing (and the
+//     spectral signature when both carry one); the DOA track id is only a hint (localiser
+//     tracks churn). A DOA no source explains feeds a tentative map-frame bearing track; after
+//     a few consistent DOAs it becomes a source anchored at the SLAM node of the latest POSE,
+//     and that node is requested as an anchor (AnchorNodeIds()). Sources that never get
+//     support are pruned. KIND_ANGLE_1D (linear arrays) gives two mirror sources (+/- the cone
+//     angle); the one the DOAs stop explaining is removed.
 //   * SLAM_ANCHORS: back-propagation (eqs. 4.20-4.25) of [current, anchors] into the sound
 //     map; nothing flows back into SLAM.
 //   * PEOPLE_AUDIO: a heard person's DOA track marks its source as a person.
@@ -40,12 +44,30 @@ struct OnlineSoundMapOptions {
   double motion_noise_rad_per_rad = 0.05;
   double converged_sigma_m = 0.5;   // converged when the largest position std is below
   double silent_after_s = 30.0;     // not heard for this long: STATE_SILENT
-  // An unknown DOA track may join an existing source only if that source is converged and
-  // has been quiet this long (else two nearby voices would merge).
-  double reassociate_after_silence_s = 1.0;
-  // Without a spectral signature a bearing alone rarely tells two sources apart: by default
-  // only signatures (plus the bearing gate) re-associate, never the bearing alone.
-  bool reassociate_without_signature = false;
+  // Births: a DOA that fits no source starts a tentative track in the map frame; it becomes a
+  // source after birth_min_observations DOAs whose map-frame bearings agree (chi-square
+  // birth_gate_chi2 with a drift allowance) within birth_window_s. Single spurious DOAs
+  // (reflections, noise bursts, localiser track churn) never enter the EKF.
+  int birth_min_observations = 3;
+  double birth_window_s = 2.0;
+  double birth_gate_chi2 = 9.0;
+  double birth_drift_deg_per_s = 6.0;  // the bearing of a static source turns as the robot moves
+  // Pruning: a source that is not converged, has fewer than prune_min_observations and was
+  // not heard for prune_after_s is removed (it never got support).
+  double prune_after_s = 10.0;
+  int prune_min_observations = 10;
+  // A source whose inverse depth is negative by more than this many standard deviations lies
+  // behind its anchor: its bearings do not meet at one point (a mixture of a source and its
+  // reflection, or a moving source). It is removed (0: never).
+  double prune_behind_sigmas = 3.0;
+  // Linear arrays (KIND_ANGLE_1D, angle to the array axis = mic_array x): the planar bearing
+  // is +angle or -angle. Both mirror sources are born; a mirror that misses this many
+  // consecutive DOAs its twin explains is removed.
+  int mirror_prune_misses = 3;
+  // DOAs come from analysis windows of a few hundred ms, smoothed by the localiser's tracker:
+  // while the robot turns fast they lag its heading by tens of degrees. They are dropped when
+  // the heading changed faster than this between the last two poses (0: keep all).
+  double max_turn_rate_deg_per_s = 10.0;
   template <class V>
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
@@ -61,10 +83,18 @@ struct OnlineSoundMapOptions {
     v("motion_noise_rad_per_rad", motion_noise_rad_per_rad, "current-pose heading noise per radian turned");
     v("converged_sigma_m", converged_sigma_m, "a source is converged when its largest position std is below this");
     v("silent_after_s", silent_after_s, "a source not heard for this long is reported silent");
-    v("reassociate_after_silence_s", reassociate_after_silence_s,
-      "an unknown DOA track may re-join a converged source quiet for this long");
-    v("reassociate_without_signature", reassociate_without_signature,
-      "allow re-association by the bearing gate alone when the DOA carries no spectral signature");
+    v("birth_min_observations", birth_min_observations, "consistent DOAs needed before a new source is born");
+    v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time");
+    v("birth_gate_chi2", birth_gate_chi2, "chi-square gate between map-frame bearings of a tentative source");
+    v("birth_drift_deg_per_s", birth_drift_deg_per_s, "bearing drift allowed between DOAs of a tentative source");
+    v("prune_after_s", prune_after_s, "an unconverged source with little support is removed after this silence");
+    v("prune_min_observations", prune_min_observations, "sources with at least this many DOAs are never pruned");
+    v("prune_behind_sigmas", prune_behind_sigmas,
+      "remove a source whose inverse depth is below zero by this many standard deviations (0: never)");
+    v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
+      "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
+    v("mirror_prune_misses", mirror_prune_misses,
+      "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
   }
   void Validate(common::Validator& check) const {
     check.Positive("initial_range_m", initial_range_m);
@@ -79,7 +109,15 @@ struct OnlineSoundMapOptions {
     check.NonNegative("motion_noise_rad_per_rad", motion_noise_rad_per_rad);
     check.Positive("converged_sigma_m", converged_sigma_m);
     check.Positive("silent_after_s", silent_after_s);
-    check.NonNegative("reassociate_after_silence_s", reassociate_after_silence_s);
+    check.That(birth_min_observations >= 1, "birth_min_observations", "must be at least 1");
+    check.Positive("birth_window_s", birth_window_s);
+    check.Positive("birth_gate_chi2", birth_gate_chi2);
+    check.NonNegative("birth_drift_deg_per_s", birth_drift_deg_per_s);
+    check.Positive("prune_after_s", prune_after_s);
+    check.NonNegative("prune_min_observations", prune_min_observations);
+    check.NonNegative("prune_behind_sigmas", prune_behind_sigmas);
+    check.NonNegative("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s);
+    check.That(mirror_prune_misses >= 1, "mirror_prune_misses", "must be at least 1");
   }
 };
 
@@ -107,6 +145,8 @@ class OnlineSoundMap {
     int64_t doa_used = 0, doa_new_sources = 0, doa_reassociated = 0, doa_gated_out = 0;
     int64_t doa_unsupported_kind = 0, doa_before_pose = 0, back_propagations = 0, bad_anchors = 0;
     int64_t bad_poses = 0;
+    int64_t doa_tentative = 0, tentatives_expired = 0, sources_pruned = 0, mirrors_pruned = 0;
+    int64_t doa_angle_1d = 0, doa_while_turning = 0, sources_behind = 0;
   };
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
@@ -136,12 +176,41 @@ class OnlineSoundMap {
     bool is_person = false;
     int64_t first = 0, last = 0;
     int n = 0;
+    int64_t twin = -1;  // linear arrays: the mirror source born with this one
+    int mirror_misses = 0;
   };
+  // A bearing-only track in the map frame waiting for enough support to become a source.
+  struct Tentative {
+    int64_t first = 0, last = 0;
+    double bearing_map_rad = 0;  // latest map-frame bearing
+    double variance = 0;         // its variance, rad^2
+    int n = 0;
+    int64_t track_id = -1;
+    std::string device;
+    int64_t twin = -1;  // index key of the mirror tentative (linear arrays)
+  };
+  // Observation of one DOA in the form the EKF takes, with its mirror for linear arrays.
+  struct Obs {
+    Eigen::VectorXd z;
+    Eigen::MatrixXd r;
+    bool mirrored = false;  // z[0] may also be -z[0]
+  };
+  bool MakeObs(const Doa& doa, Obs* obs) const;
+  // Chi-square of obs against a source, choosing the mirror sign; *z_used the observation to apply.
+  double Chi2(int64_t source, const Obs& obs, Eigen::VectorXd* z_used) const;
+  void Tentate(int64_t utime, const std::string& device, const Doa& doa, const Obs& obs);
+  void Birth(int64_t utime, int64_t key, const Obs& obs, double azimuth_rad);
+  void Prune(int64_t utime);
+  void Remove(int64_t source);
+  std::map<int64_t, Tentative> tentatives_;
+  int64_t next_tentative_ = 1;
   OnlineSoundMapOptions options_;
   IdpEkf ekf_;
   SourceAssociator associator_;
   bool have_pose_ = false;
   Pose2 last_pose_;
+  int64_t last_pose_utime_ = 0;
+  double turn_rate_rad_per_s_ = 0;  // between the last two poses
   int64_t last_node_id_ = -1;
   int64_t next_local_anchor_ = -2;  // anchors without a SLAM node: negative ids
   int64_t next_source_id_ = 1;

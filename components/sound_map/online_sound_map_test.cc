@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <map>
+#include <random>
 
 #include "sound_map/experiments.h"
 #include "sound_map/simulation.h"
@@ -154,12 +155,113 @@ TEST(OnlineSoundMap, RejectsBadAnchorsAndUnsupportedKinds) {
   map.OnPose(0, Pose2(0, NAN, 0), Eigen::Matrix3d::Identity(), 0);
   EXPECT_EQ(map.counters().bad_poses, 1);
   OnlineSoundMap::Doa doa;
-  doa.kind = OnlineSoundMap::kAngle1d;
+  doa.kind = 0;  // not a DOA kind
   map.OnPose(0, Pose2(), Eigen::Matrix3d::Identity() * 1e-4, 0);
   map.OnDoa(0, "a", {doa});
   EXPECT_EQ(map.counters().doa_unsupported_kind, 1);
+  OnlineSoundMapOptions o3;
+  o3.three_d = true;  // cone angles only enter the planar map
+  OnlineSoundMap map3(o3, ArrayMount{});
+  map3.OnPose(0, Pose2(), Eigen::Matrix3d::Identity() * 1e-4, 0);
+  doa.kind = OnlineSoundMap::kAngle1d;
+  map3.OnDoa(0, "a", {doa});
+  EXPECT_EQ(map3.counters().doa_unsupported_kind, 1);
   EXPECT_EQ(map.counters().bad_anchors, 3);
   EXPECT_TRUE(map.Sources(0).empty());
+}
+
+// A robot drives past two static sources (a 6 m leg along x, then a turn); the localiser's
+// track ids churn (a fresh id every 4 DOAs, some DOAs untracked) and every 10th block carries
+// a spurious DOA (a reflection). The map must keep one source per emitter, place both, and
+// never let a lone spurious bearing become a source.
+struct DriveBy {
+  std::vector<Eigen::Vector2d> sources{{3.0, 2.5}, {5.0, -2.0}};
+  std::vector<Pose2> poses;
+  DriveBy() {
+    for (int k = 0; k <= 240; ++k) poses.emplace_back(0.025 * k, 0.0, 0.0);  // 0.25 m/s, 10 Hz
+    for (int k = 1; k <= 60; ++k) poses.emplace_back(6.0, 0.0, k * (M_PI / 2) / 60);  // turn left
+    for (int k = 1; k <= 80; ++k) poses.emplace_back(6.0, 0.025 * k, M_PI / 2);
+  }
+  static double Bearing(const Pose2& p, const Eigen::Vector2d& s) {
+    return WrapAngleD(std::atan2(s.y() - p.y, s.x() - p.x) - p.yaw);
+  }
+};
+
+TEST(OnlineSoundMap, ChurningTrackIdsAndSpuriousDoasGiveOneSourcePerEmitter) {
+  DriveBy w;
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 3 * M_PI / 180);
+  std::uniform_real_distribution<double> any(-M_PI, M_PI);
+  int64_t next_track = 0;
+  std::vector<int64_t> track(w.sources.size(), -1);
+  std::vector<int> age(w.sources.size(), 0);
+  for (size_t k = 0; k < w.poses.size(); ++k) {
+    const int64_t t = static_cast<int64_t>(k) * 100000;
+    map.OnPose(t, w.poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+    std::vector<OnlineSoundMap::Doa> doas;
+    for (size_t j = 0; j < w.sources.size(); ++j) {
+      if (age[j]++ % 4 == 0) track[j] = next_track++;  // the localiser lost and re-found it
+      OnlineSoundMap::Doa d;
+      d.track_id = (k % 7 == 3) ? -1 : track[j];
+      d.azimuth_rad = WrapAngleD(DriveBy::Bearing(w.poses[k], w.sources[j]) + noise(rng));
+      d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+      doas.push_back(d);
+    }
+    if (k % 10 == 5) {
+      OnlineSoundMap::Doa d;
+      d.track_id = next_track++;
+      d.azimuth_rad = any(rng);
+      d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+      doas.push_back(d);
+    }
+    map.OnDoa(t, "respeaker", doas);
+  }
+  const int64_t end = static_cast<int64_t>(w.poses.size()) * 100000 + 20000000;  // 20 s later: prune
+  map.OnPose(end, w.poses.back(), Eigen::Matrix3d::Identity() * 1e-6, 9999);
+  const auto sources = map.Sources(end);
+  const auto& c = map.counters();
+  printf("tracks %ld: sources %zu, born %ld, pruned %ld, tentative DOAs %ld\n", static_cast<long>(next_track),
+         sources.size(), static_cast<long>(c.doa_new_sources), static_cast<long>(c.sources_pruned),
+         static_cast<long>(c.doa_tentative));
+  ASSERT_EQ(sources.size(), w.sources.size());
+  for (const auto& truth : w.sources) {
+    double best = 1e9;
+    for (const auto& s : sources) best = std::min(best, (s.position_m.head<2>() - truth).norm());
+    printf("source (%.1f, %.1f): error %.3f m\n", truth.x(), truth.y(), best);
+    EXPECT_LT(best, 0.3);
+  }
+  for (const auto& s : sources) EXPECT_EQ(s.state, OnlineSoundMap::Source::kConverged);
+}
+
+// A linear array (angle to its x axis, 0..pi): each DOA fits two mirror bearings. Both are
+// born; once the robot turns only the true side keeps explaining the DOAs.
+TEST(OnlineSoundMap, LinearArrayMirrorIsResolvedByTheTurn) {
+  DriveBy w;
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 3 * M_PI / 180);
+  const Eigen::Vector2d source = w.sources[0];
+  for (size_t k = 0; k < w.poses.size(); ++k) {
+    const int64_t t = static_cast<int64_t>(k) * 100000;
+    map.OnPose(t, w.poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+    OnlineSoundMap::Doa d;
+    d.kind = OnlineSoundMap::kAngle1d;
+    d.track_id = static_cast<int64_t>(k / 5);
+    d.azimuth_rad = std::min(M_PI, std::max(0.0, std::abs(DriveBy::Bearing(w.poses[k], source)) + noise(rng)));
+    d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+    map.OnDoa(t, "kinect", {d});
+  }
+  const int64_t end = static_cast<int64_t>(w.poses.size()) * 100000;
+  const auto sources = map.Sources(end);
+  const auto& c = map.counters();
+  printf("linear array: %zu source(s) left, born %ld, mirrors pruned %ld\n", sources.size(),
+         static_cast<long>(c.doa_new_sources), static_cast<long>(c.mirrors_pruned));
+  ASSERT_EQ(sources.size(), 1u);
+  EXPECT_EQ(sources[0].hypotheses_left, 1);
+  printf("linear array source error %.3f m\n", (sources[0].position_m.head<2>() - source).norm());
+  EXPECT_LT((sources[0].position_m.head<2>() - source).norm(), 0.3);
+  EXPECT_GE(c.mirrors_pruned, 1);
 }
 
 }  // namespace

@@ -21,64 +21,13 @@
 #include "sarmap/slam_anchors_t.hpp"
 #include "sarmap/sound_map_t.hpp"
 #include "sound_map/online_sound_map.h"
+#include "sound_map/sound_map_messages.h"
 
 namespace {
-
 using sarmap::common::Utime;
 using sarmap::sound_map::OnlineSoundMap;
 using sarmap::sound_map::Pose2;
-
-struct SoundMapNodeOptions {
-  std::string client_id = "sarmap-sound-map";
-  std::string robot_config = "config/robot.yaml";
-  std::string doa_channel = "DOA";
-  std::string people_audio_channel = "PEOPLE_AUDIO";
-  std::string pose_channel = "POSE";
-  std::string anchors_channel = "SLAM_ANCHORS";
-  std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
-  std::string sound_map_channel = "SOUND_MAP";
-  double reorder_delay_s = 0.3;
-  double publish_period_s = 0.5;
-  double request_repeat_s = 5.0;
-  sarmap::sound_map::OnlineSoundMapOptions map;
-  template <class V>
-  void Visit(V& v) {
-    v("client_id", client_id, "client id in SLAM_ANCHOR_REQUEST");
-    v("robot_config", robot_config, "robot description with base_from_mic_array");
-    v("doa_channel", doa_channel, "directions of arrival in");
-    v("people_audio_channel", people_audio_channel, "heard people in (marks sources as persons)");
-    v("pose_channel", pose_channel, "current map_from_base pose in");
-    v("anchors_channel", anchors_channel, "SLAM anchors and joint covariance in");
-    v("anchor_request_channel", anchor_request_channel, "anchor node requests out");
-    v("sound_map_channel", sound_map_channel, "the sound map out");
-    v("reorder_delay_s", reorder_delay_s, "inputs are processed in time order once this much newer data arrived");
-    v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
-    v("request_repeat_s", request_repeat_s, "re-send the anchor request this often (wall clock; 0: only on change)");
-    v("map", map, "sound map estimator");
-  }
-  void Validate(sarmap::common::Validator& check) const {
-    check.NonNegative("reorder_delay_s", reorder_delay_s);
-    check.Positive("publish_period_s", publish_period_s);
-    check.NonNegative("request_repeat_s", request_repeat_s);
-    check.That(!robot_config.empty(), "robot_config", "must name the robot description");
-  }
-};
-
-// (common/message_conversions.h's FromCovariance6 does not compile when instantiated, so
-// the two conversions needed here are local.)
-Pose2 PlanarPose(const sarmap::pose_t& msg) {
-  const Eigen::Quaterniond q(msg.orientation[0], msg.orientation[1], msg.orientation[2], msg.orientation[3]);
-  const Eigen::Vector3d x = q.normalized() * Eigen::Vector3d::UnitX();
-  return Pose2(msg.position_m[0], msg.position_m[1], std::atan2(x.y(), x.x()));
-}
-Eigen::Matrix3d PlanarCovariance(const double (&cov)[36]) {
-  const int idx[3] = {0, 1, 5};  // x y yaw of (x y z roll pitch yaw)
-  Eigen::Matrix3d out;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(r, c) = cov[6 * idx[r] + idx[c]];
-  return out;
-}
-
+using sarmap::sound_map::SoundMapNodeOptions;
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -95,11 +44,7 @@ int main(int argc, char** argv) {
     if (!parsed) return 0;
     const SoundMapNodeOptions& options = *parsed;
     const auto robot = sarmap::common::LoadRobot(options.robot_config);
-    sarmap::sound_map::ArrayMount mount;
-    mount.x_m = robot.base_from_mic_array.x_m;
-    mount.y_m = robot.base_from_mic_array.y_m;
-    mount.z_m = robot.base_from_mic_array.z_m;
-    mount.yaw_rad = robot.base_from_mic_array.yaw_rad;
+    const sarmap::sound_map::ArrayMount mount = sarmap::sound_map::MountFromRobot(robot);
     if (std::abs(robot.base_from_mic_array.roll_rad) > 1e-6 || std::abs(robot.base_from_mic_array.pitch_rad) > 1e-6) {
       SARMAP_LOG(WARN) << "base_from_mic_array roll/pitch are ignored by the planar sound map";
     }
@@ -123,24 +68,7 @@ int main(int argc, char** argv) {
       request_pub.Publish(&req);
     };
     auto publish_map = [&](Utime utime) {
-      sarmap::sound_map_t msg;
-      msg.header.utime = utime;
-      msg.header.frame = "map";
-      for (const auto& s : map.Sources(utime)) {
-        sarmap::sound_source_t out;
-        out.id = s.id;
-        for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
-        out.state = static_cast<int8_t>(s.state);
-        out.hypotheses_left = s.hypotheses_left;
-        out.is_person = s.is_person;
-        out.first_heard_utime = s.first_heard_utime;
-        out.last_heard_utime = s.last_heard_utime;
-        out.num_observations = s.num_observations;
-        msg.sources.push_back(out);
-      }
-      msg.num_sources = static_cast<int32_t>(msg.sources.size());
+      sarmap::sound_map_t msg = sarmap::sound_map::SoundMapMessage(map, utime);
       map_pub.Publish(&msg);
       last_publish = utime;
     };
@@ -153,8 +81,8 @@ int main(int argc, char** argv) {
         static sarmap::common::RateLimiter limit(10.0);
         if (limit.Allow(sarmap::common::SteadySeconds())) {
           SARMAP_LOG(WARN) << c.doa_unsupported_kind
-                           << " DOA(s) of kind ANGLE_1D (linear array cone angle) ignored: the online "
-                              "planar map needs azimuth; see README (linear arrays)";
+                           << " DOA(s) of an unusable kind ignored (unknown kind, or ANGLE_1D cone angles "
+                              "with map.three_d: the 3D map needs azimuth + elevation)";
         }
       }
     };
@@ -168,29 +96,23 @@ int main(int argc, char** argv) {
     };
 
     node.Subscribe<sarmap::pose_t>(options.pose_channel, [&](const sarmap::pose_t& msg, const auto&) {
-      const Pose2 pose = PlanarPose(msg);
-      const Eigen::Matrix3d cov = PlanarCovariance(msg.covariance);
+      const Pose2 pose = sarmap::sound_map::PlanarPose(msg);
+      const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(msg.covariance);
       const int64_t node_id = msg.node_id;
       push(msg.header.utime, [&map, pose, cov, node_id](Utime t) { map.OnPose(t, pose, cov, node_id); });
     });
     node.Subscribe<sarmap::slam_anchors_t>(options.anchors_channel, [&](const sarmap::slam_anchors_t& msg, const auto&) {
-      const int n = msg.num_anchors;
-      const int dim = msg.covariance_dim;
-      if (dim != 3 * (1 + n) || static_cast<int>(msg.covariance.size()) != dim) {
+      Pose2 current;
+      std::vector<std::pair<int64_t, Pose2>> anchors;
+      Eigen::MatrixXd cov;
+      if (!sarmap::sound_map::AnchorsFromMessage(msg, &current, &anchors, &cov)) {
         static sarmap::common::RateLimiter limit(5.0);
         if (limit.Allow(sarmap::common::SteadySeconds())) {
-          SARMAP_LOG(WARN) << "SLAM_ANCHORS: covariance_dim " << dim << " != 3(1+" << n << "), dropped";
+          SARMAP_LOG(WARN) << "SLAM_ANCHORS: covariance_dim " << msg.covariance_dim << " != 3(1+"
+                           << msg.num_anchors << ") or rows missing, dropped";
         }
         return;
       }
-      Eigen::MatrixXd cov(dim, dim);
-      for (int r = 0; r < dim; ++r) {
-        if (static_cast<int>(msg.covariance[r].size()) != dim) return;
-        for (int c = 0; c < dim; ++c) cov(r, c) = msg.covariance[r][c];
-      }
-      const Pose2 current(msg.current.x_m, msg.current.y_m, msg.current.yaw_rad);
-      std::vector<std::pair<int64_t, Pose2>> anchors;
-      for (const auto& a : msg.anchors) anchors.emplace_back(a.node_id, Pose2(a.x_m, a.y_m, a.yaw_rad));
       push(msg.header.utime, [&map, current, anchors, cov](Utime t) {
         if (!map.OnSlamAnchors(t, current, anchors, cov)) {
           static sarmap::common::RateLimiter limit(5.0);
@@ -201,25 +123,13 @@ int main(int argc, char** argv) {
       });
     });
     node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const auto&) {
-      std::vector<OnlineSoundMap::Doa> doas;
-      for (const auto& s : msg.sources) {
-        OnlineSoundMap::Doa d;
-        d.track_id = s.track_id;
-        d.kind = s.kind;
-        d.azimuth_rad = s.azimuth_rad;
-        d.elevation_rad = s.elevation_rad;
-        d.covariance << s.covariance[0], s.covariance[1], s.covariance[2], s.covariance[3];
-        if (!std::isfinite(d.azimuth_rad) || !d.covariance.allFinite()) continue;
-        doas.push_back(d);
-      }
+      std::vector<OnlineSoundMap::Doa> doas = sarmap::sound_map::DoasFromMessage(msg);
       const std::string device = msg.device_id;
       push(msg.header.utime, [&map, device, doas](Utime t) { map.OnDoa(t, device, doas); });
     });
     node.Subscribe<sarmap::people_detections_t>(
         options.people_audio_channel, [&](const sarmap::people_detections_t& msg, const auto&) {
-          std::vector<int64_t> tracks;
-          for (const auto& d : msg.detections)
-            if (d.cue == sarmap::person_detection_t::CUE_HEARD && d.track_id >= 0) tracks.push_back(d.track_id);
+          std::vector<int64_t> tracks = sarmap::sound_map::HeardTracks(msg);
           const std::string device = msg.sensor_id;
           push(msg.header.utime, [&map, device, tracks](Utime) {
             for (int64_t t : tracks) map.OnHeardPerson(device, t);
@@ -231,7 +141,9 @@ int main(int argc, char** argv) {
       });
     node.AddTimer(1.0, [&] {
       const auto& c = map.counters();
-      node.SetStatusMessage("sources " + std::to_string(map.ekf().source_ids().size()) + ", doa used " +
+      node.SetStatusMessage("sources " + std::to_string(map.ekf().source_ids().size()) + " (born " +
+                            std::to_string(c.doa_new_sources) + ", pruned " +
+                            std::to_string(c.sources_pruned + c.mirrors_pruned) + "), doa used " +
                             std::to_string(c.doa_used) + ", gated " + std::to_string(c.doa_gated_out) +
                             ", back-propagations " + std::to_string(c.back_propagations) + ", late inputs " +
                             std::to_string(queue.dropped_late()));

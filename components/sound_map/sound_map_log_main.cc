@@ -1,0 +1,297 @@
+// sarmap-log-sound-map: replays the sound map's inputs from an LCM log (POSE, DOA,
+// SLAM_ANCHORS, PEOPLE_AUDIO) through the same OnlineSoundMap as sarmap-sound-map, in message
+// time order, deterministically and as fast as the CPU allows; prints the final map and, when
+// the log holds SIM_TRUTH, each true source's error against its nearest mapped source.
+//
+//   sarmap-log sound-map demo.lcmlog
+//   sarmap-log sound-map demo.lcmlog --no-anchors            # from POSE alone
+//   sarmap-log sound-map demo.lcmlog --set map.birth_min_observations=5
+#include <lcm/lcm-cpp.hpp>
+
+#include <algorithm>
+#include <Eigen/Eigenvalues>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+
+#include "common/args.h"
+#include "common/node_main.h"
+#include "common/robot_config.h"
+#include "sarmap/sim_truth_t.hpp"
+#include "sound_map/sound_map_messages.h"
+
+namespace {
+
+using sarmap::sound_map::OnlineSoundMap;
+using sarmap::sound_map::Pose2;
+
+template <class T>
+bool Decode(const lcm::LogEvent& e, T* msg) {
+  return msg->decode(e.data, 0, e.datalen) == e.datalen;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return sarmap::common::RunMain("sarmap-log-sound-map", [&] {
+    sarmap::common::ArgParser parser(
+        "sarmap-log-sound-map",
+        "Replays POSE, DOA, SLAM_ANCHORS and PEOPLE_AUDIO from an LCM log through the sound map\n"
+        "(as sarmap-sound-map would, in message time order) and compares the result with SIM_TRUTH.");
+    sarmap::common::NodeArgs node_args;
+    std::string log_path, truth_channel = "SIM_TRUTH", doa_trace;
+    bool no_anchors = false, doa_check = false, truth_poses_in = false;
+    double report_every_s = 0;
+    parser.AddPositional("log", &log_path, "LCM log file");
+    parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
+    parser.AddSwitch("--doa-check", &doa_check, "compare every DOA with the true bearings of the SIM_TRUTH sources");
+    parser.AddSwitch("--truth-poses", &truth_poses_in,
+                     "diagnosis: SIM_TRUTH robot poses instead of POSE and SLAM_ANCHORS (map = world frame)");
+    parser.AddFlag("--doa-trace", &doa_trace, "with --doa-check: print every DOA nearest this true source");
+    parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
+    parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
+    const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
+        &parser, &node_args, argc, argv, "config/sound_map.yaml");
+    if (!parsed) return 0;
+    const auto& options = *parsed;
+    const auto robot = sarmap::common::LoadRobot(options.robot_config);
+    OnlineSoundMap map(options.map, sarmap::sound_map::MountFromRobot(robot));
+
+    lcm::LogFile log(log_path, "r");
+    if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
+    // Inputs keyed by message time (stable: log order breaks ties), as the node's queue does.
+    std::multimap<int64_t, std::function<void()>> inputs;
+    sarmap::sim_truth_t truth;
+    bool have_truth = false;
+    // The SLAM map frame starts at the robot's first pose; the truth is in the world frame.
+    // world_from_map = truth pose ∘ POSE^-1 at the first POSE (nearest truth message).
+    std::map<int64_t, Pose2> truth_poses;  // world_from_base by utime
+    std::map<int64_t, Pose2> slam_poses;   // map_from_base by utime
+    std::vector<std::pair<int64_t, sarmap::doa_t>> doa_log;
+    sarmap::sound_map_t live;  // the last SOUND_MAP the running node published, if logged
+    int64_t live_msgs = 0;
+    int64_t doa_msgs = 0, doa_sources = 0, max_track = -1, first_utime = -1;
+    std::map<int, int64_t> kinds;
+    for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+      if (e->channel == options.pose_channel && !truth_poses_in) {
+        sarmap::pose_t m;
+        if (!Decode(*e, &m)) continue;
+        const Pose2 pose = sarmap::sound_map::PlanarPose(m);
+        const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(m.covariance);
+        const int64_t t = m.header.utime, node = m.node_id;
+        slam_poses[t] = pose;
+        inputs.emplace(t, [&map, t, pose, cov, node] { map.OnPose(t, pose, cov, node); });
+      } else if (e->channel == options.doa_channel) {
+        sarmap::doa_t m;
+        if (!Decode(*e, &m)) continue;
+        ++doa_msgs;
+        doa_log.emplace_back(m.header.utime, m);
+        for (const auto& s : m.sources) {
+          ++doa_sources;
+          ++kinds[s.kind];
+          max_track = std::max(max_track, s.track_id);
+        }
+        const auto doas = sarmap::sound_map::DoasFromMessage(m);
+        const std::string device = m.device_id;
+        const int64_t t = m.header.utime;
+        inputs.emplace(t, [&map, t, device, doas] { map.OnDoa(t, device, doas); });
+      } else if (e->channel == options.anchors_channel && !no_anchors && !truth_poses_in) {
+        sarmap::slam_anchors_t m;
+        if (!Decode(*e, &m)) continue;
+        Pose2 current;
+        std::vector<std::pair<int64_t, Pose2>> anchors;
+        Eigen::MatrixXd cov;
+        if (!sarmap::sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) continue;
+        const int64_t t = m.header.utime;
+        inputs.emplace(t, [&map, t, current, anchors, cov] { map.OnSlamAnchors(t, current, anchors, cov); });
+      } else if (e->channel == options.people_audio_channel) {
+        sarmap::people_detections_t m;
+        if (!Decode(*e, &m)) continue;
+        const auto tracks = sarmap::sound_map::HeardTracks(m);
+        const std::string device = m.sensor_id;
+        inputs.emplace(m.header.utime, [&map, device, tracks] {
+          for (int64_t tr : tracks) map.OnHeardPerson(device, tr);
+        });
+      } else if (e->channel == options.sound_map_channel) {
+        sarmap::sound_map_t m;
+        if (Decode(*e, &m)) {
+          live = m;
+          ++live_msgs;
+        }
+      } else if (e->channel == truth_channel) {
+        sarmap::sim_truth_t m;
+        if (!Decode(*e, &m)) continue;
+        truth = m;
+        have_truth = true;
+        const Eigen::Quaterniond q(m.robot_orientation[0], m.robot_orientation[1], m.robot_orientation[2],
+                                   m.robot_orientation[3]);
+        const Eigen::Vector3d x = q.normalized() * Eigen::Vector3d::UnitX();
+        const Pose2 tp(m.robot_position_m[0], m.robot_position_m[1], std::atan2(x.y(), x.x()));
+        truth_poses[m.header.utime] = tp;
+        if (truth_poses_in) {
+          const int64_t t = m.header.utime;
+          slam_poses[t] = tp;
+          inputs.emplace(t, [&map, t, tp] { map.OnPose(t, tp, Eigen::Matrix3d::Identity() * 1e-6, -1); });
+        }
+      }
+    }
+    if (inputs.empty()) throw std::runtime_error("no sound map input in " + log_path);
+    first_utime = inputs.begin()->first;
+    auto truth_at = [&](int64_t t) {
+      auto it = truth_poses.lower_bound(t);
+      if (it == truth_poses.end()) --it;
+      return it->second;
+    };
+    Pose2 world_from_map;
+    if (!truth_poses.empty() && !slam_poses.empty()) {
+      const auto& first = *slam_poses.begin();
+      world_from_map = sarmap::sound_map::Compose(truth_at(first.first), sarmap::sound_map::Between(first.second, Pose2()));
+      printf("world_from_map (first POSE vs SIM_TRUTH): (%.3f, %.3f, %.2f deg)\n", world_from_map.x,
+             world_from_map.y, world_from_map.yaw * 180 / M_PI);
+    }
+    if (!truth_poses.empty()) {
+      double max_pos = 0, max_yaw = 0, sum2 = 0;
+      for (const auto& [t, p] : slam_poses) {
+        const Pose2 w = sarmap::sound_map::Compose(world_from_map, p);
+        const Pose2 tr = truth_at(t);
+        const double e = std::hypot(w.x - tr.x, w.y - tr.y);
+        max_pos = std::max(max_pos, e);
+        sum2 += e * e;
+        max_yaw = std::max(max_yaw, std::abs(sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw)));
+      }
+      printf("POSE against SIM_TRUTH: %zu poses, RMS %.3f m, max %.3f m, max heading error %.2f deg\n",
+             slam_poses.size(), std::sqrt(sum2 / std::max<size_t>(1, slam_poses.size())), max_pos,
+             max_yaw * 180 / M_PI);
+    }
+    auto to_world = [&](const Eigen::Vector3d& p) {
+      const Pose2 w = sarmap::sound_map::Compose(world_from_map, Pose2(p.x(), p.y(), 0));
+      return Eigen::Vector2d(w.x, w.y);
+    };
+    if (doa_check && have_truth) {
+      // Each DOA's azimuth against the true bearing (truth robot pose, array mount) of the
+      // nearest true source: how good are the localiser's bearings?
+      const auto mount = sarmap::sound_map::MountFromRobot(robot);
+      std::map<std::string, std::vector<double>> errors, signed_errors;
+      std::vector<double> all;
+      for (const auto& [t, m] : doa_log) {
+        const Pose2 base = truth_at(t);
+        const Pose2 arr = sarmap::sound_map::Compose(base, Pose2(mount.x_m, mount.y_m, mount.yaw_rad));
+        for (const auto& s : m.sources) {
+          double best = 1e9, signed_best = 0;
+          std::string name;
+          for (const auto& ts : truth.sources) {
+            double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
+            // Linear arrays: the angle to the array's x axis (0..pi), in the plane |bearing|.
+            if (s.kind == sarmap::doa_source_t::KIND_ANGLE_1D) b = std::abs(sarmap::sound_map::WrapAngleD(b));
+            const double se = sarmap::sound_map::WrapAngleD(s.azimuth_rad - b) * 180 / M_PI;
+            if (std::abs(se) < best) {
+              best = std::abs(se);
+              signed_best = se;
+              name = ts.name;
+            }
+          }
+          errors[name].push_back(best);
+          if (name == doa_trace)
+            printf("  trace t=%6.2f robot (%5.2f, %5.2f, %6.1f deg) track %3ld doa %7.1f true %7.1f err %6.1f sigma %.1f\n",
+                   (t - doa_log.front().first) * 1e-6, base.x, base.y, base.yaw * 180 / M_PI,
+                   static_cast<long>(s.track_id), s.azimuth_rad * 180 / M_PI,
+                   (s.azimuth_rad * 180 / M_PI) - signed_best, signed_best, std::sqrt(s.covariance[0]) * 180 / M_PI);
+          if (best < 25) signed_errors[name].push_back(signed_best);
+          all.push_back(best);
+        }
+      }
+      auto median = [](std::vector<double> v) {
+        if (v.empty()) return std::nan("");
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+      };
+      int within10 = 0;
+      for (double e : all) within10 += e < 10;
+      printf("DOA check: %zu DOAs, %d within 10 deg of a true source, median error %.1f deg\n", all.size(), within10,
+             median(all));
+      for (const auto& [name, v] : errors)
+        printf("  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg\n", name.c_str(),
+               v.size(), median(v), median(signed_errors[name]));
+    }
+
+    auto report = [&](int64_t now, bool final_report) {
+      const auto sources = map.Sources(now);
+      int converged = 0;
+      for (const auto& s : sources) converged += s.state == OnlineSoundMap::Source::kConverged;
+      const auto& c = map.counters();
+      printf("t=%6.1f s: %zu sources (%d converged), born %ld, pruned %ld (+%ld mirrors), DOAs used %ld, "
+             "tentative %ld, gated out %ld, dropped while turning %ld\n",
+             (now - first_utime) * 1e-6, sources.size(), converged, static_cast<long>(c.doa_new_sources),
+             static_cast<long>(c.sources_pruned), static_cast<long>(c.mirrors_pruned),
+             static_cast<long>(c.doa_used), static_cast<long>(c.doa_tentative), static_cast<long>(c.doa_gated_out),
+             static_cast<long>(c.doa_while_turning));
+      if (final_report) {
+        for (const auto& s : sources) {
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.covariance.topLeftCorner<2, 2>());
+          const Eigen::Vector2d w = to_world(s.position_m);
+          printf("  source %3ld at (%6.2f, %6.2f, %5.2f) m (world %6.2f, %6.2f), std %.2f m, %s, %d DOAs%s\n",
+                 static_cast<long>(s.id), s.position_m.x(), s.position_m.y(), s.position_m.z(), w.x(), w.y(),
+                 std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())),
+                 s.state == OnlineSoundMap::Source::kConverged ? "converged"
+                 : s.state == OnlineSoundMap::Source::kSilent  ? "silent"
+                                                               : "initialising",
+                 s.num_observations, s.is_person ? ", person" : "");
+        }
+      }
+      if (!have_truth) return;
+      for (const auto& ts : truth.sources) {
+        const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
+        double best = std::numeric_limits<double>::infinity(), best_conv = best;
+        for (const auto& s : sources) {
+          const double d = (to_world(s.position_m) - p).norm();
+          best = std::min(best, d);
+          if (s.state != OnlineSoundMap::Source::kInitialising) best_conv = std::min(best_conv, d);
+        }
+        printf("  truth %-18s (%5.2f, %5.2f): nearest source %.3f m, nearest converged %.3f m\n", ts.name.c_str(),
+               p.x(), p.y(), best, best_conv);
+      }
+    };
+
+    int64_t next_report = report_every_s > 0 ? first_utime + static_cast<int64_t>(report_every_s * 1e6)
+                                             : std::numeric_limits<int64_t>::max();
+    int64_t last = first_utime;
+    for (auto& kv : inputs) {
+      while (kv.first >= next_report) {
+        report(next_report, false);
+        next_report += static_cast<int64_t>(report_every_s * 1e6);
+      }
+      kv.second();
+      last = kv.first;
+    }
+    printf("log %s: %ld DOA messages, %ld DOAs (", log_path.c_str(), static_cast<long>(doa_msgs),
+           static_cast<long>(doa_sources));
+    for (const auto& k : kinds) printf(" kind %d: %ld", k.first, static_cast<long>(k.second));
+    printf(" ), largest DOA track id %ld%s\n", static_cast<long>(max_track), no_anchors ? ", SLAM_ANCHORS ignored" : "");
+    report(last, true);
+    if (live_msgs > 0) {
+      int converged = 0;
+      int64_t max_id = 0;
+      for (const auto& s : live.sources) {
+        converged += s.state == sarmap::sound_source_t::STATE_CONVERGED;
+        max_id = std::max(max_id, s.id);
+      }
+      printf("logged %s (the live node, %ld messages): last has %d sources (%d converged), largest id %ld\n",
+             options.sound_map_channel.c_str(), static_cast<long>(live_msgs), live.num_sources, converged,
+             static_cast<long>(max_id));
+      for (const auto& ts : truth.sources) {
+        const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
+        double best = std::numeric_limits<double>::infinity(), best_conv = best;
+        for (const auto& s : live.sources) {
+          const double d = (to_world(Eigen::Vector3d(s.position_m[0], s.position_m[1], 0)) - p).norm();
+          best = std::min(best, d);
+          if (s.state == sarmap::sound_source_t::STATE_CONVERGED) best_conv = std::min(best_conv, d);
+        }
+        printf("  truth %-18s nearest live source %.3f m, nearest converged %.3f m\n", ts.name.c_str(), best, best_conv);
+      }
+    }
+    return 0;
+  });
+}

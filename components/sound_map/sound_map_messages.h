@@ -1,0 +1,150 @@
+#pragma once
+// What sarmap-sound-map and sarmap-log-sound-map share: the node's options and the
+// conversions between LCM messages and the core's OnlineSoundMap (header-only: the core
+// library has no LCM).
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "common/options.h"
+#include "common/robot_config.h"
+#include "sarmap/doa_t.hpp"
+#include "sarmap/people_detections_t.hpp"
+#include "sarmap/pose_t.hpp"
+#include "sarmap/slam_anchors_t.hpp"
+#include "sarmap/sound_map_t.hpp"
+#include "sound_map/online_sound_map.h"
+
+namespace sarmap {
+namespace sound_map {
+
+struct SoundMapNodeOptions {
+  std::string client_id = "sarmap-sound-map";
+  std::string robot_config = "config/robot.yaml";
+  std::string doa_channel = "DOA";
+  std::string people_audio_channel = "PEOPLE_AUDIO";
+  std::string pose_channel = "POSE";
+  std::string anchors_channel = "SLAM_ANCHORS";
+  std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
+  std::string sound_map_channel = "SOUND_MAP";
+  double reorder_delay_s = 0.3;
+  double publish_period_s = 0.5;
+  double request_repeat_s = 5.0;
+  OnlineSoundMapOptions map;
+  template <class V>
+  void Visit(V& v) {
+    v("client_id", client_id, "client id in SLAM_ANCHOR_REQUEST");
+    v("robot_config", robot_config, "robot description with base_from_mic_array");
+    v("doa_channel", doa_channel, "directions of arrival in");
+    v("people_audio_channel", people_audio_channel, "heard people in (marks sources as persons)");
+    v("pose_channel", pose_channel, "current map_from_base pose in");
+    v("anchors_channel", anchors_channel, "SLAM anchors and joint covariance in");
+    v("anchor_request_channel", anchor_request_channel, "anchor node requests out");
+    v("sound_map_channel", sound_map_channel, "the sound map out");
+    v("reorder_delay_s", reorder_delay_s, "inputs are processed in time order once this much newer data arrived");
+    v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
+    v("request_repeat_s", request_repeat_s, "re-send the anchor request this often (wall clock; 0: only on change)");
+    v("map", map, "sound map estimator");
+  }
+  void Validate(common::Validator& check) const {
+    check.NonNegative("reorder_delay_s", reorder_delay_s);
+    check.Positive("publish_period_s", publish_period_s);
+    check.NonNegative("request_repeat_s", request_repeat_s);
+    check.That(!robot_config.empty(), "robot_config", "must name the robot description");
+  }
+};
+
+inline ArrayMount MountFromRobot(const common::RobotOptions& robot) {
+  ArrayMount mount;
+  mount.x_m = robot.base_from_mic_array.x_m;
+  mount.y_m = robot.base_from_mic_array.y_m;
+  mount.z_m = robot.base_from_mic_array.z_m;
+  mount.yaw_rad = robot.base_from_mic_array.yaw_rad;
+  return mount;
+}
+
+// (common/message_conversions.h's FromCovariance6 does not compile when instantiated, so
+// the two conversions needed here are local.)
+inline Pose2 PlanarPose(const sarmap::pose_t& msg) {
+  const Eigen::Quaterniond q(msg.orientation[0], msg.orientation[1], msg.orientation[2], msg.orientation[3]);
+  const Eigen::Vector3d x = q.normalized() * Eigen::Vector3d::UnitX();
+  return Pose2(msg.position_m[0], msg.position_m[1], std::atan2(x.y(), x.x()));
+}
+inline Eigen::Matrix3d PlanarCovariance(const double (&cov)[36]) {
+  const int idx[3] = {0, 1, 5};  // x y yaw of (x y z roll pitch yaw)
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = cov[6 * idx[r] + idx[c]];
+  return out;
+}
+
+// DOAs with finite values (any kind; the map counts the kinds it cannot use).
+inline std::vector<OnlineSoundMap::Doa> DoasFromMessage(const sarmap::doa_t& msg) {
+  std::vector<OnlineSoundMap::Doa> doas;
+  for (const auto& s : msg.sources) {
+    OnlineSoundMap::Doa d;
+    d.track_id = s.track_id;
+    d.kind = s.kind;
+    d.azimuth_rad = s.azimuth_rad;
+    d.elevation_rad = s.elevation_rad;
+    d.covariance << s.covariance[0], s.covariance[1], s.covariance[2], s.covariance[3];
+    if (!std::isfinite(d.azimuth_rad) || !std::isfinite(d.elevation_rad) || !d.covariance.allFinite()) continue;
+    doas.push_back(d);
+  }
+  return doas;
+}
+
+// False when the covariance does not match the anchors (3(1+n) square).
+inline bool AnchorsFromMessage(const sarmap::slam_anchors_t& msg, Pose2* current,
+                               std::vector<std::pair<int64_t, Pose2>>* anchors, Eigen::MatrixXd* cov) {
+  const int n = msg.num_anchors;
+  const int dim = msg.covariance_dim;
+  if (dim != 3 * (1 + n) || static_cast<int>(msg.covariance.size()) != dim ||
+      static_cast<int>(msg.anchors.size()) != n)
+    return false;
+  cov->resize(dim, dim);
+  for (int r = 0; r < dim; ++r) {
+    if (static_cast<int>(msg.covariance[r].size()) != dim) return false;
+    for (int c = 0; c < dim; ++c) (*cov)(r, c) = msg.covariance[r][c];
+  }
+  *current = Pose2(msg.current.x_m, msg.current.y_m, msg.current.yaw_rad);
+  anchors->clear();
+  for (const auto& a : msg.anchors) anchors->emplace_back(a.node_id, Pose2(a.x_m, a.y_m, a.yaw_rad));
+  return true;
+}
+
+// DOA track ids of heard people.
+inline std::vector<int64_t> HeardTracks(const sarmap::people_detections_t& msg) {
+  std::vector<int64_t> tracks;
+  for (const auto& d : msg.detections)
+    if (d.cue == sarmap::person_detection_t::CUE_HEARD && d.track_id >= 0) tracks.push_back(d.track_id);
+  return tracks;
+}
+
+inline sarmap::sound_map_t SoundMapMessage(const OnlineSoundMap& map, int64_t utime) {
+  sarmap::sound_map_t msg;
+  msg.header.utime = utime;
+  msg.header.frame = "map";
+  for (const auto& s : map.Sources(utime)) {
+    sarmap::sound_source_t out;
+    out.id = s.id;
+    for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
+    out.state = static_cast<int8_t>(s.state);
+    out.hypotheses_left = s.hypotheses_left;
+    out.is_person = s.is_person;
+    out.first_heard_utime = s.first_heard_utime;
+    out.last_heard_utime = s.last_heard_utime;
+    out.num_observations = s.num_observations;
+    msg.sources.push_back(out);
+  }
+  msg.num_sources = static_cast<int32_t>(msg.sources.size());
+  return msg;
+}
+
+}  // namespace sound_map
+}  // namespace sarmap

@@ -1,0 +1,96 @@
+// sarmap-log perf LOG: CPU and memory of every process of the stack (from the launcher's
+// PM_INFO reports in the log) and the latency from a DEPTH frame to the PEOPLE_VISUAL and
+// PEOPLE_MAP updates it causes.
+#include <cstdio>
+#include <sstream>
+
+#include "common/args.h"
+#include "log-tools/lcm_log_reader.h"
+#include "log-tools/stack_perf.h"
+#include "sarmap/people_map_t.hpp"
+#include "sarmap/pm_info_t.hpp"
+
+namespace {
+
+std::vector<std::string> SplitComma(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return sarmap::common::RunMain("sarmap-log perf", [&] {
+    sarmap::common::ArgParser parser(
+        "sarmap-log perf",
+        "What the stack cost during a recorded mission: mean and 95th-percentile CPU (percent of one\n"
+        "core, children included) and peak memory of every process, from the launcher's PM_INFO\n"
+        "reports (the deputies sample /proc every second), the total of the robot's stack without the\n"
+        "simulator and the logger, and the latency from a DEPTH frame to the PEOPLE_VISUAL and\n"
+        "PEOPLE_MAP updates it causes (logger receive times, matched by the frame's capture time).");
+    std::string log, exclude = "sarmap-sim,logger,record";
+    std::string depth_channel = "DEPTH", visual_channel = "PEOPLE_VISUAL", map_channel = "PEOPLE_MAP",
+                info_channel = "PM_INFO";
+    parser.AddPositional("LOG", &log, "LCM log recorded while the stack ran under sarmap-procman");
+    parser.AddFlag("--exclude", &exclude, "comma-separated substrings of commands not counted in the stack total");
+    parser.AddFlag("--depth-channel", &depth_channel, "channel of the depth frames");
+    parser.AddFlag("--visual-channel", &visual_channel, "channel of the visual detections");
+    parser.AddFlag("--map-channel", &map_channel, "channel of the people map");
+    parser.AddFlag("--info-channel", &info_channel, "channel of the launcher's deputy reports");
+    if (!parser.Parse(argc, argv)) return 0;
+
+    sarmap::logtools::LcmLogReader reader(log);
+    sarmap::logtools::StackPerf perf(SplitComma(exclude));
+    sarmap::logtools::LogEvent event;
+    int64_t bad_info = 0, events = 0;
+    int64_t next_report = 64 << 20;
+    while (reader.Next(&event)) {
+      ++events;
+      if (reader.offset() > next_report) {
+        fprintf(stderr, "\r  read %.0f%% ...", 100.0 * reader.offset() / std::max<int64_t>(1, reader.file_size()));
+        next_report += 64 << 20;
+      }
+      if (event.channel == info_channel) {
+        sarmap::pm_info_t info;
+        if (info.decode(event.data.data(), 0, static_cast<int>(event.data.size())) < 0) {
+          ++bad_info;
+          continue;
+        }
+        perf.AddMachineLoad(info.cpu_load);
+        for (const auto& c : info.commands) {
+          perf.AddCommandSample(info.deputy_id, c.command_id,
+                                c.state == sarmap::pm_command_status_t::STATE_RUNNING, c.cpu_percent,
+                                c.rss_bytes, c.restart_count);
+        }
+        continue;
+      }
+      if (event.channel == map_channel) {
+        sarmap::people_map_t map;
+        if (map.decode(event.data.data(), 0, static_cast<int>(event.data.size())) >= 0) {
+          std::vector<std::array<double, 2>> xy;
+          for (const auto& p : map.people) xy.push_back({p.position_m[0], p.position_m[1]});
+          perf.AddPeopleMapSnapshot(map.header.seq, xy);
+        }
+      }
+      int64_t utime, seq;
+      if (!sarmap::logtools::ReadSarmapHeader(event.data, &utime, &seq)) continue;
+      if (event.channel == depth_channel) perf.AddDepthFrame(utime, event.timestamp_us);
+      if (event.channel == visual_channel) perf.AddPeopleVisual(utime, event.timestamp_us);
+      if (event.channel == map_channel) perf.AddPeopleMap(utime, event.timestamp_us);
+    }
+    if (next_report > (64 << 20)) fprintf(stderr, "\r                 \r");
+    for (const auto& p : reader.problems()) {
+      fprintf(stderr, "warning: the log breaks at byte %lld: %s\n", static_cast<long long>(p.file_offset),
+              p.what.c_str());
+    }
+    if (bad_info > 0) fprintf(stderr, "warning: %lld undecodable %s messages skipped\n",
+                              static_cast<long long>(bad_info), info_channel.c_str());
+    printf("log %s: %lld events\n", log.c_str(), static_cast<long long>(events));
+    fputs(sarmap::logtools::StackPerfText(perf.Summarise()).c_str(), stdout);
+    return 0;
+  });
+}

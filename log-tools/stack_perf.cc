@@ -1,0 +1,160 @@
+#include "log-tools/stack_perf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace sarmap {
+namespace logtools {
+namespace {
+
+double Quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  // Nearest rank: the smallest value with at least q of the samples at or below it.
+  const size_t rank = static_cast<size_t>(std::ceil(q * values.size()));
+  return values[std::min(values.size() - 1, rank == 0 ? 0 : rank - 1)];
+}
+
+LatencyStats Latencies(const std::map<int64_t, int64_t>& from, const std::map<int64_t, int64_t>& to) {
+  std::vector<double> ms;
+  for (const auto& [utime, receive_us] : to) {
+    const auto it = from.find(utime);
+    if (it == from.end()) continue;
+    ms.push_back((receive_us - it->second) * 1e-3);
+  }
+  LatencyStats stats;
+  stats.count = static_cast<int>(ms.size());
+  if (ms.empty()) return stats;
+  stats.median_ms = Quantile(ms, 0.5);
+  stats.p95_ms = Quantile(ms, 0.95);
+  stats.p99_ms = Quantile(ms, 0.99);
+  stats.max_ms = *std::max_element(ms.begin(), ms.end());
+  return stats;
+}
+
+}  // namespace
+
+StackPerf::StackPerf(std::vector<std::string> exclude, double keep_radius_m)
+    : exclude_(std::move(exclude)), keep_radius_m_(keep_radius_m) {}
+
+void StackPerf::AddCommandSample(const std::string& deputy, const std::string& command, bool running,
+                                 double cpu_percent, int64_t rss_bytes, int restart_count) {
+  Samples& s = commands_[deputy + "/" + command];
+  if (s.first_restarts < 0) s.first_restarts = restart_count;
+  s.last_restarts = restart_count;
+  if (!running || !std::isfinite(cpu_percent)) return;
+  s.cpu.push_back(cpu_percent);
+  s.max_rss_bytes = std::max(s.max_rss_bytes, static_cast<double>(rss_bytes));
+}
+
+void StackPerf::AddMachineLoad(double cpu_load_fraction) {
+  if (std::isfinite(cpu_load_fraction)) machine_load_.push_back(cpu_load_fraction);
+}
+
+void StackPerf::AddDepthFrame(int64_t capture_utime, int64_t receive_us) {
+  depth_receive_us_.emplace(capture_utime, receive_us);
+}
+void StackPerf::AddPeopleVisual(int64_t capture_utime, int64_t receive_us) {
+  visual_receive_us_.emplace(capture_utime, receive_us);
+}
+void StackPerf::AddPeopleMap(int64_t capture_utime, int64_t receive_us) {
+  map_receive_us_.emplace(capture_utime, receive_us);
+}
+
+void StackPerf::AddPeopleMapSnapshot(int64_t seq, const std::vector<std::array<double, 2>>& people_xy_m) {
+  if (last_map_seq_ >= 0 && seq < last_map_seq_) {
+    // A new process: compare with what the previous one reported last.
+    ++map_restarts_;
+    awaiting_first_after_restart_ = true;
+  }
+  if (awaiting_first_after_restart_) {
+    awaiting_first_after_restart_ = false;
+    people_before_restarts_ += static_cast<int>(last_map_people_.size());
+    for (const auto& before : last_map_people_) {
+      const bool kept = std::any_of(people_xy_m.begin(), people_xy_m.end(), [&](const std::array<double, 2>& p) {
+        return std::hypot(p[0] - before[0], p[1] - before[1]) <= keep_radius_m_;
+      });
+      people_kept_ += kept ? 1 : 0;
+    }
+  }
+  last_map_seq_ = seq;
+  last_map_people_ = people_xy_m;
+}
+
+StackPerfSummary StackPerf::Summarise() const {
+  StackPerfSummary out;
+  for (const auto& [name, s] : commands_) {
+    ProcessUsage u;
+    u.command = name;
+    u.samples = static_cast<int>(s.cpu.size());
+    double sum = 0.0;
+    for (double c : s.cpu) sum += c;
+    u.mean_cpu_percent = s.cpu.empty() ? 0.0 : sum / s.cpu.size();
+    u.p95_cpu_percent = Quantile(s.cpu, 0.95);
+    u.max_rss_mb = s.max_rss_bytes / 1e6;
+    u.restarts = std::max(0, s.last_restarts - std::max(0, s.first_restarts));
+    u.excluded = std::any_of(exclude_.begin(), exclude_.end(), [&](const std::string& e) {
+      return !e.empty() && name.find(e) != std::string::npos;
+    });
+    (u.excluded ? out.excluded_cpu_percent : out.stack_cpu_percent) += u.mean_cpu_percent;
+    out.processes.push_back(u);
+  }
+  double load = 0.0;
+  for (double l : machine_load_) load += l;
+  out.machine_load_percent = machine_load_.empty() ? 0.0 : 100.0 * load / machine_load_.size();
+  out.depth_frames = static_cast<int>(depth_receive_us_.size());
+  out.depth_to_people_visual = Latencies(depth_receive_us_, visual_receive_us_);
+  out.depth_to_people_map = Latencies(depth_receive_us_, map_receive_us_);
+  out.people_map_restarts = map_restarts_;
+  out.people_before_restarts = people_before_restarts_;
+  out.people_kept_across_restarts = people_kept_;
+  return out;
+}
+
+std::string StackPerfText(const StackPerfSummary& summary) {
+  std::ostringstream out;
+  char line[256];
+  if (summary.processes.empty()) {
+    out << "no launcher reports (PM_INFO) in the log: CPU per process unknown (run the stack under\n"
+           "sarmap-procman to have them recorded)\n";
+  } else {
+    snprintf(line, sizeof(line), "%-40s %8s %9s %9s %9s %8s\n", "process (deputy/command)", "samples",
+             "cpu_mean%", "cpu_p95%", "rss_MB", "restarts");
+    out << line;
+    for (const auto& p : summary.processes) {
+      snprintf(line, sizeof(line), "%-40s %8d %9.1f %9.1f %9.1f %8d%s\n", p.command.c_str(), p.samples,
+               p.mean_cpu_percent, p.p95_cpu_percent, p.max_rss_mb, p.restarts,
+               p.excluded ? "  (not counted)" : "");
+      out << line;
+    }
+    snprintf(line, sizeof(line),
+             "stack CPU: %.1f %% of one core (%.2f cores); not counted: %.1f %%; machine load %.1f %% of all cores\n",
+             summary.stack_cpu_percent, summary.stack_cpu_percent / 100.0, summary.excluded_cpu_percent,
+             summary.machine_load_percent);
+    out << line;
+  }
+  const auto latency = [&](const char* what, const LatencyStats& s) {
+    if (s.count == 0) {
+      snprintf(line, sizeof(line), "%s: no matched frames\n", what);
+    } else {
+      snprintf(line, sizeof(line), "%s: %d frames, median %.1f ms, p95 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+               what, s.count, s.median_ms, s.p95_ms, s.p99_ms, s.max_ms);
+    }
+    out << line;
+  };
+  snprintf(line, sizeof(line), "DEPTH frames: %d\n", summary.depth_frames);
+  out << line;
+  latency("latency DEPTH -> PEOPLE_VISUAL", summary.depth_to_people_visual);
+  latency("latency DEPTH -> PEOPLE_MAP", summary.depth_to_people_map);
+  if (summary.people_map_restarts > 0) {
+    snprintf(line, sizeof(line), "people map restarted %d times: %d of the %d people reported before a restart still there after it\n",
+             summary.people_map_restarts, summary.people_kept_across_restarts, summary.people_before_restarts);
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace logtools
+}  // namespace sarmap

@@ -1,0 +1,95 @@
+#pragma once
+// What the running stack cost, read back from a mission log: CPU and memory per process (from
+// the launcher's PM_INFO reports, which the deputies sample from /proc every second, children
+// included) and the latency from a DEPTH frame to the PEOPLE_VISUAL and PEOPLE_MAP updates it
+// causes (from the logger's receive time stamps: every message of the chain carries the capture
+// time of the frame in header.utime, so a frame and its consequences are matched exactly).
+// Plain C++, no LCM: the tool decodes messages and feeds this.
+
+#include <cstdint>
+#include <array>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace sarmap {
+namespace logtools {
+
+struct ProcessUsage {
+  std::string command;            // "deputy/command"
+  int samples = 0;                // PM_INFO samples while running
+  double mean_cpu_percent = 0.0;  // of one core
+  double p95_cpu_percent = 0.0;
+  double max_rss_mb = 0.0;
+  int restarts = 0;               // restart_count at the end minus at the start
+  bool excluded = false;          // not counted in the stack total (e.g. the simulator)
+};
+
+struct LatencyStats {
+  int count = 0;
+  double median_ms = 0.0, p95_ms = 0.0, p99_ms = 0.0, max_ms = 0.0;
+};
+
+struct StackPerfSummary {
+  std::vector<ProcessUsage> processes;  // by command name
+  double stack_cpu_percent = 0.0;       // sum of the means of the processes not excluded
+  double excluded_cpu_percent = 0.0;
+  double machine_load_percent = 0.0;    // mean whole-machine CPU load reported by the deputies (of all cores)
+  int depth_frames = 0;
+  LatencyStats depth_to_people_visual;
+  LatencyStats depth_to_people_map;
+  // Restarts of the people map seen in the log (its header.seq starts again from 0), and how many
+  // of the people it had reported just before each restart it still reported just after.
+  int people_map_restarts = 0;
+  int people_before_restarts = 0;
+  int people_kept_across_restarts = 0;
+};
+
+class StackPerf {
+ public:
+  // Commands whose id contains one of these substrings are reported but not counted in the
+  // stack total (default: the simulator and the logger, which are not part of the robot's stack).
+  explicit StackPerf(std::vector<std::string> exclude = {"sarmap-sim", "logger", "record"},
+                     double keep_radius_m = 0.45);
+
+  // One command's line of a PM_INFO report received at receive_us.
+  void AddCommandSample(const std::string& deputy, const std::string& command, bool running,
+                        double cpu_percent, int64_t rss_bytes, int restart_count);
+  void AddMachineLoad(double cpu_load_fraction);
+  // A message of the chain: its header.utime (the capture time of the frame it came from)
+  // and when the logger received it.
+  void AddDepthFrame(int64_t capture_utime, int64_t receive_us);
+  void AddPeopleVisual(int64_t capture_utime, int64_t receive_us);
+  void AddPeopleMap(int64_t capture_utime, int64_t receive_us);
+  // A whole PEOPLE_MAP message: its header.seq and the people's map positions (x, y in m).
+  // A person counts as kept across a restart when the first map after it has someone within
+  // keep_radius_m of where they were.
+  void AddPeopleMapSnapshot(int64_t seq, const std::vector<std::array<double, 2>>& people_xy_m);
+
+  StackPerfSummary Summarise() const;
+
+ private:
+  struct Samples {
+    std::vector<double> cpu;
+    double max_rss_bytes = 0;
+    int first_restarts = -1, last_restarts = 0;
+  };
+  std::vector<std::string> exclude_;
+  double keep_radius_m_;
+  int64_t last_map_seq_ = -1;
+  bool awaiting_first_after_restart_ = false;
+  std::vector<std::array<double, 2>> last_map_people_;
+  int map_restarts_ = 0, people_before_restarts_ = 0, people_kept_ = 0;
+  std::map<std::string, Samples> commands_;
+  std::vector<double> machine_load_;
+  std::map<int64_t, int64_t> depth_receive_us_;   // capture utime -> receive time
+  std::map<int64_t, int64_t> visual_receive_us_;  // first PEOPLE_VISUAL per capture time
+  std::map<int64_t, int64_t> map_receive_us_;     // first PEOPLE_MAP per capture time
+};
+
+// Human-readable table of a summary.
+std::string StackPerfText(const StackPerfSummary& summary);
+
+}  // namespace logtools
+}  // namespace sarmap

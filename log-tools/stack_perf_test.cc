@@ -1,0 +1,83 @@
+#include "log-tools/stack_perf.h"
+
+#include <gtest/gtest.h>
+
+namespace sarmap {
+namespace logtools {
+namespace {
+
+TEST(StackPerfTest, MeansPerProcessAndExcludesTheSimulator) {
+  StackPerf perf;
+  for (int i = 0; i < 10; ++i) {
+    perf.AddCommandSample("localhost", "sarmap-slam", true, 20.0 + i, 100000000 + i, 0);
+    perf.AddCommandSample("localhost", "sarmap-sim", true, 80.0, 50000000, 0);
+    // Stopped samples do not count towards the mean.
+    perf.AddCommandSample("localhost", "sarmap-speech", i < 5, i < 5 ? 10.0 : 99.0, 1000, i < 5 ? 0 : 1);
+    perf.AddMachineLoad(0.5);
+  }
+  const StackPerfSummary s = perf.Summarise();
+  ASSERT_EQ(s.processes.size(), 3u);
+  const ProcessUsage& sim = s.processes[0];
+  const ProcessUsage& slam = s.processes[1];
+  const ProcessUsage& speech = s.processes[2];
+  EXPECT_EQ(sim.command, "localhost/sarmap-sim");
+  EXPECT_TRUE(sim.excluded);
+  EXPECT_NEAR(slam.mean_cpu_percent, 24.5, 1e-9);
+  EXPECT_NEAR(slam.p95_cpu_percent, 29.0, 1e-9);
+  EXPECT_NEAR(slam.max_rss_mb, 100.000009, 1e-9);
+  EXPECT_EQ(speech.samples, 5);
+  EXPECT_NEAR(speech.mean_cpu_percent, 10.0, 1e-9);
+  EXPECT_EQ(speech.restarts, 1);
+  EXPECT_NEAR(s.stack_cpu_percent, 34.5, 1e-9);
+  EXPECT_NEAR(s.excluded_cpu_percent, 80.0, 1e-9);
+  EXPECT_NEAR(s.machine_load_percent, 50.0, 1e-9);
+}
+
+TEST(StackPerfTest, LatencyMatchesFramesByCaptureTimeAndKeepsTheFirstUpdate) {
+  StackPerf perf;
+  for (int i = 0; i < 100; ++i) {
+    const int64_t capture = 1000000 + i * 33333;
+    const int64_t received = 5000000 + i * 33333;
+    perf.AddDepthFrame(capture, received);
+    perf.AddPeopleVisual(capture, received + 1000 * (10 + i % 10));  // 10..19 ms
+    if (i % 2 == 0) {
+      perf.AddPeopleMap(capture, received + 50000);        // 50 ms
+      perf.AddPeopleMap(capture, received + 1500000);      // a later periodic re-publish: ignored
+    }
+  }
+  perf.AddPeopleMap(42, 43);  // no frame with this capture time: not matched
+  const StackPerfSummary s = perf.Summarise();
+  EXPECT_EQ(s.depth_frames, 100);
+  EXPECT_EQ(s.depth_to_people_visual.count, 100);
+  EXPECT_NEAR(s.depth_to_people_visual.median_ms, 14.0, 1e-9);
+  EXPECT_NEAR(s.depth_to_people_visual.max_ms, 19.0, 1e-9);
+  EXPECT_EQ(s.depth_to_people_map.count, 50);
+  EXPECT_NEAR(s.depth_to_people_map.p99_ms, 50.0, 1e-9);
+  EXPECT_NE(StackPerfText(s).find("latency DEPTH -> PEOPLE_MAP: 50 frames"), std::string::npos);
+}
+
+TEST(StackPerfTest, PeopleKeptAcrossAPeopleMapRestart) {
+  StackPerf perf;
+  perf.AddPeopleMapSnapshot(0, {{1.0, 2.0}});
+  perf.AddPeopleMapSnapshot(1, {{1.0, 2.0}, {4.0, 0.0}});
+  perf.AddPeopleMapSnapshot(2, {{1.0, 2.0}, {4.0, 0.0}});
+  perf.AddPeopleMapSnapshot(0, {{1.1, 2.1}});              // restarted: the second person is gone
+  perf.AddPeopleMapSnapshot(1, {{1.1, 2.1}, {4.0, 0.1}});
+  perf.AddPeopleMapSnapshot(0, {{1.1, 2.1}, {4.0, 0.1}});  // restarted again: both kept
+  const StackPerfSummary s = perf.Summarise();
+  EXPECT_EQ(s.people_map_restarts, 2);
+  EXPECT_EQ(s.people_before_restarts, 4);
+  EXPECT_EQ(s.people_kept_across_restarts, 3);
+  EXPECT_NE(StackPerfText(s).find("3 of the 4 people"), std::string::npos);
+}
+
+TEST(StackPerfTest, SaysSoWhenTheLogHasNoLauncherReports) {
+  StackPerf perf;
+  const std::string text = StackPerfText(perf.Summarise());
+  EXPECT_NE(text.find("no launcher reports"), std::string::npos);
+  EXPECT_NE(text.find("no matched frames"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace logtools
+}  // namespace sarmap
