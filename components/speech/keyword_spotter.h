@@ -32,6 +32,21 @@ struct KeywordOptions {
   bool verify_with_grammar = false;
   std::string cmn = "current";   // PocketSphinx cepstral mean normalisation: current, prior or none
   bool full_utterance = false;   // hand PocketSphinx each utterance as one block
+  // Acoustic verification of each kws detection (classic keyword verification): the hit's
+  // segment (padded) is force-aligned to the keyphrase and decoded with an unconstrained phone
+  // loop (allphone search, en-us phonetic LM); the per-frame log-likelihood ratio
+  //   llr = (log p(X | keyphrase) - log p(X | best phone string)) / frames   (nats, <= ~0)
+  // must be at least verify_min_llr. Close to 0: nothing explains the sound better than the keyphrase.
+  bool verify_acoustic = false;
+  double verify_min_llr = -0.5;
+  double verify_pad_s = 0.1;
+  bool verify_phone_lm = false;  // phone loop weighted by the en-us phonetic LM (else a free loop)     // segment = hit widened by this on each side
+  // Shape of a call: the hit lasts min..max duration, and covers at least this fraction of its
+  // voice-activity segment (a call is a short shouted utterance, not a word inside a sentence).
+  double min_duration_s = 0.0;
+  double max_duration_s = 10.0;
+  double min_utterance_fraction = 0.0;
+  double max_utterance_s = 0.0;  // > 0: the hit's voice-activity segment is at most this long
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
@@ -43,6 +58,15 @@ struct KeywordOptions {
     v("verify_with_grammar", verify_with_grammar, "confirm detections with a general-vocabulary word loop");
     v("cmn", cmn, "PocketSphinx cepstral mean normalisation: current, prior or none");
     v("full_utterance", full_utterance, "process each utterance as one block (batch front end)");
+    v("verify_acoustic", verify_acoustic, "verify detections: forced alignment vs phone loop, per-frame LLR");
+    v("verify_min_llr", verify_min_llr, "minimum per-frame log-likelihood ratio (nats) of the verification");
+    v("verify_phone_lm", verify_phone_lm, "weight the verification phone loop with the en-us phonetic LM");
+    v("verify_pad_s", verify_pad_s, "seconds added to each side of the hit for the verification");
+    v("min_duration_s", min_duration_s, "shortest accepted detection (s)");
+    v("max_duration_s", max_duration_s, "longest accepted detection (s)");
+    v("min_utterance_fraction", min_utterance_fraction,
+      "detection must cover at least this fraction of its voice-activity segment (0..1)");
+    v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call");
   }
   void Validate(common::Validator& check) const {
     check.That(!keywords.empty(), "keywords", "needs at least one keyword");
@@ -51,6 +75,11 @@ struct KeywordOptions {
     for (double t : thresholds) check.That(t > 0 && t < 1, "thresholds", "must be in (0, 1)");
     check.InRange("min_confidence", min_confidence, 0, 1);
     check.OneOf("cmn", cmn, {"current", "prior", "none"});
+    check.InRange("verify_pad_s", verify_pad_s, 0, 1);
+    check.That(min_duration_s >= 0 && max_duration_s > min_duration_s, "max_duration_s",
+               "needs 0 <= min_duration_s < max_duration_s");
+    check.InRange("min_utterance_fraction", min_utterance_fraction, 0, 1);
+    check.That(max_utterance_s >= 0, "max_utterance_s", "must be >= 0 (0: no limit)");
   }
 };
 
@@ -60,6 +89,9 @@ struct KeywordHit {
   double confidence = 0;          // 0..1
   double log_ratio = 0;           // natural log of the keyphrase/phone-loop likelihood ratio
   double kws_confidence = 0;      // from the likelihood ratio alone (first stage)
+  double verify_llr = 0;          // per-frame LLR of the acoustic verification (nats), if computed
+  bool verified = false;          // verify_llr was computed
+  double utterance_s = 0;         // length of the decoded utterance
 };
 
 struct DecodeResult {
@@ -88,9 +120,15 @@ class KeywordSpotter {
   std::vector<std::pair<std::string, double>> DecodeWords(const int16_t* samples, size_t count, std::string* text,
                                                           double* confidence);
   const KeywordOptions& options() const { return options_; }
+  // Per-frame log-likelihood ratio of `keyword` (forced alignment) against the phone loop over
+  // samples[begin, end) (see verify_acoustic). -inf when the alignment fails.
+  double VerificationLlr(const std::string& keyword, const int16_t* samples, size_t count);
+  // Always compute verify_llr (for evaluation) even when verify_acoustic is off.
+  void set_compute_verification(bool on) { compute_verification_ = on; }
 
  private:
   KeywordOptions options_;
+  bool compute_verification_ = false;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

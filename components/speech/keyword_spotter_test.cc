@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "audio_capture/audio_file.h"
@@ -40,6 +41,32 @@ TEST(KeywordSpotterRealData, DecodesGoForwardExactly) {
     EXPECT_GT(h.confidence, 0.5);
     EXPECT_LE(h.start_s, h.end_s);
   }
+}
+
+// Call shape: an utterance longer than max_utterance_s cannot hold a call and is not decoded;
+// acoustic verification yields a finite per-frame log-likelihood ratio for a real keyword.
+TEST(KeywordSpotterRealData, CallShapeAndVerification) {
+  const std::string path = std::string(SARMAP_DATA_DIR) + "/audio/pocketsphinx_test/goforward.raw";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data missing: " << path;
+  const auto samples = ReadRaw16k(path);  // about 2.5 s
+  KeywordOptions o;
+  o.keywords = {"forward", "go forward"};
+  o.thresholds = {1e-20};
+  o.max_utterance_s = 1.0;
+  KeywordSpotter short_only(o);
+  EXPECT_TRUE(short_only.Decode(samples).keywords.empty());
+  o.max_utterance_s = 0;
+  o.verify_acoustic = true;
+  o.verify_min_llr = -1e9;
+  KeywordSpotter verified(o);
+  const auto r = verified.Decode(samples);
+  ASSERT_FALSE(r.keywords.empty());
+  // "forward" inside "go forward" is one call: only the longer phrase is kept.
+  EXPECT_EQ(r.keywords.size(), 1u);
+  EXPECT_EQ(r.keywords[0].keyword, "go forward");
+  EXPECT_TRUE(r.keywords[0].verified);
+  EXPECT_TRUE(std::isfinite(r.keywords[0].verify_llr));
+  EXPECT_NEAR(r.keywords[0].utterance_s, samples.size() / 16000.0, 1e-9);
 }
 
 TEST(KeywordSpotter, UnknownWordIsAClearError) {
