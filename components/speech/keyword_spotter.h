@@ -20,7 +20,7 @@ struct KeywordOptions {
   std::string model_dir = "/usr/share/pocketsphinx/model/en-us";  // holds en-us/, en-us.lm.bin, cmudict-en-us.dict
   std::vector<std::string> keywords{"help", "rescue", "assist", "here"};
   // Per keyword (same order) or one for all: detection threshold (likelihood ratio).
-  std::vector<double> thresholds{1e-20};
+  std::vector<double> thresholds{1e-40};
   double min_confidence = 0.6;  // detections below are not published as keywords
   bool full_decoding = false;   // also decode each utterance with the language model (loads it)
   // Second stage: an utterance with a keyword detection is decoded with the n-gram language
@@ -35,10 +35,12 @@ struct KeywordOptions {
   // Acoustic verification of each kws detection (classic keyword verification): the hit's
   // segment (padded) is force-aligned to the keyphrase and decoded with an unconstrained phone
   // loop (allphone search, en-us phonetic LM); the per-frame log-likelihood ratio
-  //   llr = (log p(X | keyphrase) - log p(X | best phone string)) / frames   (nats, <= ~0)
+  //   llr = (log p(X | keyphrase) - log p(X | best phone string)) / frames   (<= ~0)
   // must be at least verify_min_llr. Close to 0: nothing explains the sound better than the keyphrase.
+  // Units: natural log of PocketSphinx's acoustic scores, which 5prealpha keeps scaled down
+  // (SENSCR_SHIFT), so values are small (calls and other speech both -0.004..0, see README).
   bool verify_acoustic = false;
-  double verify_min_llr = -0.5;
+  double verify_min_llr = -0.002;
   double verify_pad_s = 0.1;
   bool verify_phone_lm = false;  // phone loop weighted by the en-us phonetic LM (else a free loop)     // segment = hit widened by this on each side
   // Shape of a call: the hit lasts min..max duration, and covers at least this fraction of its
@@ -46,7 +48,10 @@ struct KeywordOptions {
   double min_duration_s = 0.0;
   double max_duration_s = 10.0;
   double min_utterance_fraction = 0.0;
-  double max_utterance_s = 0.0;  // > 0: the hit's voice-activity segment is at most this long
+  // > 0: the hit's voice-activity segment is at most this long (and longer ones are not decoded).
+  // 1.8 s with 1e-40 (README): the tuning half of sarmap-log kws-eval reaches recall 0.9 from
+  // 1.4 s, but reverberation lengthens a call's segment (a "help me" in RT60 0.3 s: 1.4-1.8 s).
+  double max_utterance_s = 1.8;
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
@@ -59,7 +64,7 @@ struct KeywordOptions {
     v("cmn", cmn, "PocketSphinx cepstral mean normalisation: current, prior or none");
     v("full_utterance", full_utterance, "process each utterance as one block (batch front end)");
     v("verify_acoustic", verify_acoustic, "verify detections: forced alignment vs phone loop, per-frame LLR");
-    v("verify_min_llr", verify_min_llr, "minimum per-frame log-likelihood ratio (nats) of the verification");
+    v("verify_min_llr", verify_min_llr, "minimum per-frame log-likelihood ratio of the verification (PocketSphinx scaled log units)");
     v("verify_phone_lm", verify_phone_lm, "weight the verification phone loop with the en-us phonetic LM");
     v("verify_pad_s", verify_pad_s, "seconds added to each side of the hit for the verification");
     v("min_duration_s", min_duration_s, "shortest accepted detection (s)");

@@ -250,8 +250,11 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       for (const auto& h : pos[i])
         found |= passes(h) && is_target(h) && h.t > data.call_start_s[i] - 0.5 &&
                  h.t < data.call_end_s[i] + 0.5;
-      (i % 2 ? r.held_calls : r.tune_calls)++;
-      (i % 2 ? r.held_hits : r.tune_hits) += found;
+      // Calls cycle through the 8 phrasings: alternate blocks of 8 so both halves hold every
+      // phrasing (phrasings differ in length, and length matters to the call-shape rule).
+      const bool held = (i / kCalls.size()) % 2 == 1;
+      (held ? r.held_calls : r.tune_calls)++;
+      (held ? r.held_hits : r.tune_hits) += found;
     }
     for (const auto& h : neg)
       if (passes(h)) {

@@ -40,8 +40,9 @@ struct KwsEvalResult {
   double negative_minutes = 0;
   double false_alarms_per_10_min = 0;
   double decode_seconds = 0;        // CPU time spent (for the curve's cost)
-  // The same on two disjoint halves: "tune" (even calls, first half of the negative stream)
-  // to choose an operating point, "held" (odd calls, second half) to report it.
+  // The same on two disjoint halves: "tune" (calls 0-7, 16-23, ...: every phrasing; first half
+  // of the negative stream) to choose an operating point, "held" (calls 8-15, 24-31, ...;
+  // second half) to report it.
   int tune_calls = 0, tune_hits = 0, tune_false_alarms = 0;
   int held_calls = 0, held_hits = 0, held_false_alarms = 0;
   double tune_recall = 0, tune_fa_per_10_min = 0, held_recall = 0, held_fa_per_10_min = 0;
