@@ -9,6 +9,7 @@
 #include "common/robot_config.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
+#include "sound_localisation/async_alignment.h"
 #include "sound_localisation/localiser.h"
 
 using namespace sarmap;
@@ -19,6 +20,12 @@ struct SoundLocalisationOptions {
   std::string array = "config/arrays/respeaker4.yaml";
   std::string device_id = "";      // accept only this device ("" = the first one heard)
   bool publish_untracked = true;   // also publish directions not (yet) in a confirmed track
+  // Asynchronous array (several cards, each its own process on AUDIO_<DEVICE>): the device of
+  // each microphone; channel_map then gives the channel within that device. The streams are
+  // aligned by sample counter, start_offsets_s and clock_drift of the array file before DOA.
+  std::vector<std::string> devices;       // device ids, e.g. [card0, card1]
+  std::vector<int> mic_devices;           // per microphone: index into devices
+  std::vector<std::string> audio_channels;  // extra input channels (AUDIO_<DEVICE>)
   sound::LocaliserOptions localiser;
   template <class V>
   void Visit(V& v) {
@@ -27,9 +34,16 @@ struct SoundLocalisationOptions {
     v("array", array, "array description (config/arrays/<name>.yaml)");
     v("device_id", device_id, "only use this device ('' = the first one heard)");
     v("publish_untracked", publish_untracked, "publish directions outside confirmed tracks with track_id -1");
+    v("devices", devices, "asynchronous array: device ids of its cards ([] = one device)");
+    v("mic_devices", mic_devices, "asynchronous array: index into devices of each microphone");
+    v("audio_channels", audio_channels, "further input channels (one per card, AUDIO_<DEVICE>)");
     v("localiser", localiser, "DOA estimation and tracking");
   }
-  void Validate(common::Validator&) const {}
+  void Validate(common::Validator& check) const {
+    for (int d : mic_devices)
+      check.That(d >= 0 && d < static_cast<int>(devices.size()), "mic_devices", "indices must point into devices");
+    check.That(devices.empty() || !mic_devices.empty(), "mic_devices", "needed with devices");
+  }
 };
 
 int8_t MethodCode(const std::string& m) {
@@ -67,6 +81,24 @@ int main(int argc, char** argv) {
     }
     int needed_channels = 0;
     for (int c : geometry.channel_map) needed_channels = std::max(needed_channels, c + 1);
+    const bool asynchronous = !options.devices.empty();
+    std::unique_ptr<sound::AsyncStreamAligner> aligner;
+    std::vector<int> needed_per_device(options.devices.size(), 0);
+    if (asynchronous) {
+      if (static_cast<int>(options.mic_devices.size()) != geometry.num_mics())
+        throw common::OptionsError("mic_devices has " + std::to_string(options.mic_devices.size()) +
+                                   " entries, array '" + geometry.name + "' has " +
+                                   std::to_string(geometry.num_mics()) + " microphones");
+      try {
+        aligner = std::make_unique<sound::AsyncStreamAligner>(geometry.sample_rate_hz, array.start_offsets_s,
+                                                              array.clock_drift, geometry.num_mics());
+      } catch (const std::invalid_argument& e) {
+        throw common::OptionsError(e.what());
+      }
+      for (int m = 0; m < geometry.num_mics(); ++m)
+        needed_per_device[options.mic_devices[m]] =
+            std::max(needed_per_device[options.mic_devices[m]], geometry.channel_map[m] + 1);
+    }
 
     common::Node node("sarmap-sound-localisation", args.lcm_url);
     auto pub = node.Advertise<sarmap::doa_t>(options.doa_channel);
@@ -85,6 +117,101 @@ int main(int argc, char** argv) {
       }
     };
 
+    // Publishes the outputs; utime of stream sample s = base_utime + (s - base_sample) / rate.
+    auto publish = [&](int64_t base_utime, int64_t base_sample) {
+      for (const auto& o : outs) {
+        sarmap::doa_t doa;
+        doa.header.utime = base_utime + common::SecondsToUtime(static_cast<double>(o.centre_sample - base_sample) /
+                                                               geometry.sample_rate_hz);
+        doa.header.frame = "mic_array";
+        doa.device_id = device;
+        auto add = [&](int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, double power, double conf) {
+          sarmap::doa_source_t s;
+          s.track_id = id;
+          s.kind = kind;
+          s.azimuth_rad = d.azimuth_rad;
+          s.elevation_rad = d.elevation_rad;
+          for (int i = 0; i < 4; ++i) s.covariance[i] = cov(i / 2, i % 2);
+          s.power = static_cast<float>(power);
+          s.confidence = static_cast<float>(conf);
+          s.method = method;
+          doa.sources.push_back(s);
+        };
+        for (const auto& t : o.tracks)
+          if (t.updated) add(t.id, t.direction, t.covariance, t.power, t.confidence);
+        if (options.publish_untracked)
+          for (const auto& d : o.directions) {
+            bool in_track = false;
+            for (const auto& t : o.tracks)
+              in_track |= t.updated && sound::AngularDistanceRad(geometry, localiser->kind(), t.direction, d.direction) <
+                                           sound::DegToRad(options.localiser.tracker.gate_deg);
+            if (!in_track) add(-1, d.direction, d.covariance, d.power, d.confidence);
+          }
+        doa.num_sources = static_cast<int32_t>(doa.sources.size());
+        pub.Publish(&doa);
+        ++published;
+      }
+    };
+
+    // Asynchronous array: each card's block goes to the aligner; aligned reference samples go to
+    // the localiser. Reference time: the card of microphone 0 (tau = 0, drift = 0).
+    std::vector<std::vector<float>> aligned;
+    std::vector<float> channel;
+    std::vector<int64_t> device_expected(options.devices.size(), -1);
+    int64_t ref_utime = 0, ref_first = 0;
+    auto on_async = [&](const sarmap::audio_frame_t& msg) {
+      const auto it = std::find(options.devices.begin(), options.devices.end(), msg.device_id);
+      if (it == options.devices.end())
+        return warn("audio from device '" + msg.device_id + "' ignored: not one of this array's devices");
+      const int d = static_cast<int>(it - options.devices.begin());
+      if (msg.sample_rate_hz != geometry.sample_rate_hz)
+        return warn("sample-rate mismatch: device '" + msg.device_id + "' is " + std::to_string(msg.sample_rate_hz) +
+                    " Hz, array '" + geometry.name + "' expects " + std::to_string(geometry.sample_rate_hz) +
+                    " Hz; block dropped");
+      if (msg.num_channels < needed_per_device[d])
+        return warn("device '" + msg.device_id + "' has " + std::to_string(msg.num_channels) + " channels, needs " +
+                    std::to_string(needed_per_device[d]) + "; block dropped");
+      if (msg.sample_format != sarmap::audio_frame_t::SAMPLE_INT16 ||
+          msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
+        return warn("malformed audio block (format or size); dropped");
+      if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d]) {
+        SARMAP_LOG(WARN) << "device '" << msg.device_id << "': gap, expected sample " << device_expected[d]
+                         << ", got " << msg.first_sample_index << " (filled with zeros)";
+      }
+      device_expected[d] = msg.first_sample_index + msg.num_samples;
+      for (int m = 0; m < geometry.num_mics(); ++m) {
+        if (options.mic_devices[m] != d) continue;
+        channel.resize(msg.num_samples);
+        for (int i = 0; i < msg.num_samples; ++i)
+          channel[i] = msg.samples[i * msg.num_channels + geometry.channel_map[m]] / 32768.0f;
+        aligner->Push(m, msg.first_sample_index, channel.data(), channel.size());
+      }
+      if (d == options.mic_devices[0]) {
+        ref_utime = msg.header.utime;
+        ref_first = msg.first_sample_index;
+      }
+      for (auto& a : aligned) a.clear();
+      const int64_t first = aligner->next_reference_sample();
+      const size_t n = aligner->Pull(&aligned);
+      if (n == 0) return;
+      const int64_t before = localiser->samples_seen();
+      outs.clear();
+      localiser->PushFloat(aligned, 0, n, &outs);
+      // Stream sample `before` is reference sample `first`.
+      publish(ref_utime, before + (ref_first - first));
+      node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped) +
+                            ", samples lost " + std::to_string(aligner->dropped_samples()));
+    };
+    if (asynchronous) {
+      device.clear();
+      for (const auto& d : options.devices) device += (device.empty() ? "" : "+") + d;
+      std::vector<std::string> channels = options.audio_channels;
+      if (channels.empty()) channels.push_back(options.audio_channel);
+      for (const auto& ch : channels)
+        node.Subscribe<sarmap::audio_frame_t>(ch, [&](const sarmap::audio_frame_t& msg, const common::ReceiveInfo&) {
+          on_async(msg);
+        });
+    } else
     node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t& msg,
                                                                       const common::ReceiveInfo&) {
       if (device.empty()) device = msg.device_id;
@@ -114,38 +241,7 @@ int main(int argc, char** argv) {
       const int64_t before = localiser->samples_seen();
       outs.clear();
       localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &outs);
-      for (const auto& o : outs) {
-        sarmap::doa_t doa;
-        doa.header.utime = msg.header.utime + common::SecondsToUtime(static_cast<double>(o.centre_sample - before) /
-                                                                     geometry.sample_rate_hz);
-        doa.header.frame = "mic_array";
-        doa.device_id = device;
-        auto add = [&](int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, double power, double conf) {
-          sarmap::doa_source_t s;
-          s.track_id = id;
-          s.kind = kind;
-          s.azimuth_rad = d.azimuth_rad;
-          s.elevation_rad = d.elevation_rad;
-          for (int i = 0; i < 4; ++i) s.covariance[i] = cov(i / 2, i % 2);
-          s.power = static_cast<float>(power);
-          s.confidence = static_cast<float>(conf);
-          s.method = method;
-          doa.sources.push_back(s);
-        };
-        for (const auto& t : o.tracks)
-          if (t.updated) add(t.id, t.direction, t.covariance, t.power, t.confidence);
-        if (options.publish_untracked)
-          for (const auto& d : o.directions) {
-            bool in_track = false;
-            for (const auto& t : o.tracks)
-              in_track |= t.updated && sound::AngularDistanceRad(geometry, localiser->kind(), t.direction, d.direction) <
-                                           sound::DegToRad(options.localiser.tracker.gate_deg);
-            if (!in_track) add(-1, d.direction, d.covariance, d.power, d.confidence);
-          }
-        doa.num_sources = static_cast<int32_t>(doa.sources.size());
-        pub.Publish(&doa);
-        ++published;
-      }
+      publish(msg.header.utime, before);
       node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped));
     });
     SARMAP_LOG(INFO) << "localising array '" << geometry.name << "' (" << geometry.num_mics() << " mics, "

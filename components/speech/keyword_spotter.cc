@@ -24,6 +24,7 @@ struct KeywordSpotter::Impl {
   cmd_ln_t* config = nullptr;
   std::string kws_file;
   int64_t kws_samples = 0;  // samples given to the decoder so far (any search)
+  bool can_verify = false;
   ~Impl() {
     if (ps) ps_free(ps);
     if (config) cmd_ln_free_r(config);
@@ -39,7 +40,10 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
   for (const auto& p : {hmm, lm, dict})
     if (!fs::exists(p)) throw std::runtime_error("PocketSphinx model missing: " + p + " (install pocketsphinx-en-us)");
   // The n-gram model is large and slow to load: only with full decoding or LM verification.
-  std::vector<std::string> args = {"-hmm", hmm, "-dict", dict, "-logfn", "/dev/null", "-cmn", options.cmn};
+  // -allphone_ci: the verification phone loop uses context-independent phones (the
+  // triphone loop with the phonetic LM costs ~50x more).
+  std::vector<std::string> args = {"-hmm", hmm,     "-dict",        dict, "-logfn", "/dev/null",
+                                   "-cmn", options.cmn, "-allphone_ci", "yes"};
   if (options.full_decoding || options.verify_with_lm) {
     args.insert(args.end(), {"-lm", lm});
     // No second (flat-lexicon) pass and bounded active HMMs/words per frame: several times
@@ -72,6 +76,21 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
   std::ofstream(impl_->kws_file) << kws.str();
   if (ps_set_kws(impl_->ps, "kws", impl_->kws_file.c_str()) < 0)
     throw std::runtime_error("PocketSphinx: cannot set the keyword list");
+  // Verification searches: one forced grammar per keyphrase and the phone loop.
+  const std::string phone_lm = options.model_dir + "/en-us-phone.lm.bin";
+  if (fs::exists(phone_lm)) {
+    if (ps_set_allphone_file(impl_->ps, "allphone", options.verify_phone_lm ? phone_lm.c_str() : nullptr) < 0)
+      throw std::runtime_error("PocketSphinx: cannot set the phone loop from " + phone_lm);
+    for (size_t i = 0; i < options.keywords.size(); ++i) {
+      const std::string jsgf = "#JSGF V1.0;\ngrammar align;\npublic <k> = " + options.keywords[i] + ";\n";
+      if (ps_set_jsgf_string(impl_->ps, ("align_" + std::to_string(i)).c_str(), jsgf.c_str()) < 0)
+        throw std::runtime_error("PocketSphinx: cannot build the alignment grammar of '" + options.keywords[i] + "'");
+    }
+    impl_->can_verify = true;
+  } else if (options.verify_acoustic) {
+    throw std::runtime_error("PocketSphinx phonetic LM missing: " + phone_lm + " (needed by verify_acoustic)");
+  }
+  ps_set_search(impl_->ps, "kws");
   if (options.verify_with_grammar) {
     // A free loop over a general vocabulary plus the keywords: the keyword must win against
     // every other word there, its sound-alikes included.
@@ -100,6 +119,11 @@ KeywordSpotter::~KeywordSpotter() = default;
 
 DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool full) {
   DecodeResult r;
+  // A call is a short utterance: longer ones cannot hold one, and are not decoded at all
+  // (unless the full text is wanted).
+  if (options_.max_utterance_s > 0 && !full && !compute_verification_ &&
+      static_cast<double>(count) / 16000.0 > options_.max_utterance_s)
+    return r;
   ps_decoder_t* ps = impl_->ps;
   logmath_t* lmath = ps_get_logmath(ps);
   ps_set_search(ps, "kws");
@@ -153,7 +177,60 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
       }
     if (!joined) merged.push_back(h);
   }
-  r.keywords = merged;
+  // Keyphrases sharing a word ("help", "help me") fire together on one call: of overlapping
+  // detections that share a word keep the longest phrase (the more specific one).
+  auto words_of = [](const std::string& k) {
+    std::set<std::string> w;
+    std::istringstream ws(k);
+    std::string x;
+    while (ws >> x) w.insert(x);
+    return w;
+  };
+  std::vector<bool> dropped(merged.size(), false);
+  for (size_t i = 0; i < merged.size(); ++i)
+    for (size_t j = 0; j < merged.size(); ++j) {
+      if (i == j || dropped[j] || merged[i].keyword == merged[j].keyword) continue;
+      const KeywordHit& a = merged[i];
+      const KeywordHit& b = merged[j];
+      if (a.end_s < b.start_s || b.end_s < a.start_s) continue;
+      const auto wa = words_of(a.keyword), wb = words_of(b.keyword);
+      bool share = false;
+      for (const auto& w : wa) share |= wb.count(w) > 0;
+      if (share && (wa.size() < wb.size() || (wa.size() == wb.size() && a.log_ratio < b.log_ratio))) {
+        dropped[i] = true;
+        break;
+      }
+    }
+  r.keywords.clear();
+  for (size_t i = 0; i < merged.size(); ++i)
+    if (!dropped[i]) r.keywords.push_back(merged[i]);
+  const double utterance_s = static_cast<double>(count) / 16000.0;
+  for (KeywordHit& h : r.keywords) h.utterance_s = utterance_s;
+  if (options_.verify_acoustic || options_.min_duration_s > 0 || options_.max_duration_s < 10 ||
+      options_.min_utterance_fraction > 0 || options_.max_utterance_s > 0 || compute_verification_) {
+    std::vector<KeywordHit> kept;
+    for (KeywordHit h : r.keywords) {
+      const double duration_s = h.end_s - h.start_s;
+      const bool shape_ok = duration_s >= options_.min_duration_s && duration_s <= options_.max_duration_s &&
+                            duration_s >= options_.min_utterance_fraction * utterance_s &&
+                            (options_.max_utterance_s <= 0 || utterance_s <= options_.max_utterance_s);
+      if ((options_.verify_acoustic && shape_ok) || compute_verification_) {
+        const size_t a = static_cast<size_t>(std::max(0.0, h.start_s - options_.verify_pad_s) * 16000);
+        const size_t b = std::min(count, static_cast<size_t>((h.end_s + options_.verify_pad_s) * 16000));
+        h.verify_llr = b > a ? VerificationLlr(h.keyword, samples + a, b - a) : -HUGE_VAL;
+        h.verified = true;
+      }
+      if (!shape_ok) continue;
+      if (options_.verify_acoustic && h.verify_llr < options_.verify_min_llr) continue;
+      if (options_.verify_acoustic) {
+        // Confidence from the verification margin: 0.5 at the threshold, 0.9 at +0.2 nats/frame.
+        const double margin = h.verify_llr - options_.verify_min_llr;
+        h.confidence = 1.0 / (1.0 + std::exp(-margin * std::log(9.0) / 0.2));
+      }
+      kept.push_back(h);
+    }
+    r.keywords = kept;
+  }
   if (options_.verify_with_grammar && !r.keywords.empty()) {
     const auto words = DecodeSearch("verify", samples, count);
     std::vector<KeywordHit> kept;
@@ -202,6 +279,42 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
     if (!full) r.text.clear();
   }
   return r;
+}
+
+double KeywordSpotter::VerificationLlr(const std::string& keyword, const int16_t* samples, size_t count) {
+  if (!impl_->can_verify) throw std::logic_error("acoustic verification needs en-us-phone.lm.bin");
+  size_t idx = 0;
+  while (idx < options_.keywords.size() && options_.keywords[idx] != keyword) ++idx;
+  if (idx == options_.keywords.size()) throw std::invalid_argument("not a keyword: " + keyword);
+  ps_decoder_t* ps = impl_->ps;
+  // Sum of the acoustic scores along the best path of a search over the segment; *ok false
+  // when the search finds no path. (Same front-end mode as the kws pass: mixing batch and live
+  // utterances trips an assertion in PocketSphinx 5prealpha's acmod.)
+  auto acoustic = [&](const std::string& search, bool* ok) {
+    ps_set_search(ps, search.c_str());
+    impl_->kws_samples += count;
+    ps_start_utt(ps);
+    ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
+    ps_end_utt(ps);
+    int64_t sum = 0;
+    int segments = 0;
+    for (ps_seg_t* seg = ps_seg_iter(ps); seg; seg = ps_seg_next(seg)) {
+      int32 a = 0, l = 0, b = 0;
+      ps_seg_prob(seg, &a, &l, &b);
+      sum += a;
+      ++segments;
+    }
+    *ok = segments > 0;
+    return sum;
+  };
+  bool ok_forced = false, ok_free = false;
+  const int64_t forced = acoustic("align_" + std::to_string(idx), &ok_forced);
+  const int64_t free = acoustic("allphone", &ok_free);
+  ps_set_search(ps, "kws");
+  if (!ok_forced || !ok_free) return -HUGE_VAL;
+  const double frames = std::max(1.0, static_cast<double>(count) / 160.0);
+  logmath_t* lmath = ps_get_logmath(ps);
+  return (logmath_log_to_ln(lmath, static_cast<int>(forced - free))) / frames;
 }
 
 std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeSearch(const std::string& search,

@@ -20,7 +20,7 @@ struct KeywordOptions {
   std::string model_dir = "/usr/share/pocketsphinx/model/en-us";  // holds en-us/, en-us.lm.bin, cmudict-en-us.dict
   std::vector<std::string> keywords{"help", "rescue", "assist", "here"};
   // Per keyword (same order) or one for all: detection threshold (likelihood ratio).
-  std::vector<double> thresholds{1e-20};
+  std::vector<double> thresholds{1e-40};
   double min_confidence = 0.6;  // detections below are not published as keywords
   bool full_decoding = false;   // also decode each utterance with the language model (loads it)
   // Second stage: an utterance with a keyword detection is decoded with the n-gram language
@@ -32,6 +32,26 @@ struct KeywordOptions {
   bool verify_with_grammar = false;
   std::string cmn = "current";   // PocketSphinx cepstral mean normalisation: current, prior or none
   bool full_utterance = false;   // hand PocketSphinx each utterance as one block
+  // Acoustic verification of each kws detection (classic keyword verification): the hit's
+  // segment (padded) is force-aligned to the keyphrase and decoded with an unconstrained phone
+  // loop (allphone search, en-us phonetic LM); the per-frame log-likelihood ratio
+  //   llr = (log p(X | keyphrase) - log p(X | best phone string)) / frames   (<= ~0)
+  // must be at least verify_min_llr. Close to 0: nothing explains the sound better than the keyphrase.
+  // Units: natural log of PocketSphinx's acoustic scores, which 5prealpha keeps scaled down
+  // (SENSCR_SHIFT), so values are small (calls and other speech both -0.004..0, see README).
+  bool verify_acoustic = false;
+  double verify_min_llr = -0.002;
+  double verify_pad_s = 0.1;
+  bool verify_phone_lm = false;  // phone loop weighted by the en-us phonetic LM (else a free loop)     // segment = hit widened by this on each side
+  // Shape of a call: the hit lasts min..max duration, and covers at least this fraction of its
+  // voice-activity segment (a call is a short shouted utterance, not a word inside a sentence).
+  double min_duration_s = 0.0;
+  double max_duration_s = 10.0;
+  double min_utterance_fraction = 0.0;
+  // > 0: the hit's voice-activity segment is at most this long (and longer ones are not decoded).
+  // 1.8 s with 1e-40 (README): the tuning half of sarmap-log kws-eval reaches recall 0.9 from
+  // 1.4 s, but reverberation lengthens a call's segment (a "help me" in RT60 0.3 s: 1.4-1.8 s).
+  double max_utterance_s = 1.8;
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
@@ -43,6 +63,15 @@ struct KeywordOptions {
     v("verify_with_grammar", verify_with_grammar, "confirm detections with a general-vocabulary word loop");
     v("cmn", cmn, "PocketSphinx cepstral mean normalisation: current, prior or none");
     v("full_utterance", full_utterance, "process each utterance as one block (batch front end)");
+    v("verify_acoustic", verify_acoustic, "verify detections: forced alignment vs phone loop, per-frame LLR");
+    v("verify_min_llr", verify_min_llr, "minimum per-frame log-likelihood ratio of the verification (PocketSphinx scaled log units)");
+    v("verify_phone_lm", verify_phone_lm, "weight the verification phone loop with the en-us phonetic LM");
+    v("verify_pad_s", verify_pad_s, "seconds added to each side of the hit for the verification");
+    v("min_duration_s", min_duration_s, "shortest accepted detection (s)");
+    v("max_duration_s", max_duration_s, "longest accepted detection (s)");
+    v("min_utterance_fraction", min_utterance_fraction,
+      "detection must cover at least this fraction of its voice-activity segment (0..1)");
+    v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call");
   }
   void Validate(common::Validator& check) const {
     check.That(!keywords.empty(), "keywords", "needs at least one keyword");
@@ -51,6 +80,11 @@ struct KeywordOptions {
     for (double t : thresholds) check.That(t > 0 && t < 1, "thresholds", "must be in (0, 1)");
     check.InRange("min_confidence", min_confidence, 0, 1);
     check.OneOf("cmn", cmn, {"current", "prior", "none"});
+    check.InRange("verify_pad_s", verify_pad_s, 0, 1);
+    check.That(min_duration_s >= 0 && max_duration_s > min_duration_s, "max_duration_s",
+               "needs 0 <= min_duration_s < max_duration_s");
+    check.InRange("min_utterance_fraction", min_utterance_fraction, 0, 1);
+    check.That(max_utterance_s >= 0, "max_utterance_s", "must be >= 0 (0: no limit)");
   }
 };
 
@@ -60,6 +94,9 @@ struct KeywordHit {
   double confidence = 0;          // 0..1
   double log_ratio = 0;           // natural log of the keyphrase/phone-loop likelihood ratio
   double kws_confidence = 0;      // from the likelihood ratio alone (first stage)
+  double verify_llr = 0;          // per-frame LLR of the acoustic verification (nats), if computed
+  bool verified = false;          // verify_llr was computed
+  double utterance_s = 0;         // length of the decoded utterance
 };
 
 struct DecodeResult {
@@ -88,9 +125,15 @@ class KeywordSpotter {
   std::vector<std::pair<std::string, double>> DecodeWords(const int16_t* samples, size_t count, std::string* text,
                                                           double* confidence);
   const KeywordOptions& options() const { return options_; }
+  // Per-frame log-likelihood ratio of `keyword` (forced alignment) against the phone loop over
+  // samples[begin, end) (see verify_acoustic). -inf when the alignment fails.
+  double VerificationLlr(const std::string& keyword, const int16_t* samples, size_t count);
+  // Always compute verify_llr (for evaluation) even when verify_acoustic is off.
+  void set_compute_verification(bool on) { compute_verification_ = on; }
 
  private:
   KeywordOptions options_;
+  bool compute_verification_ = false;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

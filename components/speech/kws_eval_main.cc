@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
     std::string confidences = "0,0.3,0.5,0.6,0.7,0.8,0.9";
     std::string verify = "none", cmn = "current";
     bool full_utt = false;
+    speech::KeywordOptions shape;  // verification and call-shape settings (defaults: off)
+    std::string split_thresholds;
     common::ArgParser p("sarmap-log-kws-eval", "Keyword-spotting recall and false alarms vs threshold.");
     p.AddFlag("--calls", &o.num_calls, "number of simulated calls");
     p.AddFlag("--negative-minutes", &o.negative_minutes, "minutes of other speech and noise");
@@ -26,9 +28,18 @@ int main(int argc, char** argv) {
     p.AddFlag("--keywords", &keyword_list, "comma-separated keyword list (all spotted, 'help' scored)");
     p.AddFlag("--min-confidence", &min_conf, "confidence cut applied to detections");
     p.AddFlag("--confidences", &confidences, "posterior cuts reported for each threshold (a post-filter)");
-    p.AddFlag("--verify", &verify, "second stage: lm, grammar or none");
+    p.AddFlag("--verify", &verify, "second stage: acoustic (forced alignment vs phone loop), lm, grammar or none");
     p.AddFlag("--cmn", &cmn, "PocketSphinx CMN: current, prior or none");
     p.AddSwitch("--full-utterance", &full_utt, "process utterances as one block");
+    p.AddFlag("--verify-min-llr", &shape.verify_min_llr, "with --verify acoustic: per-frame LLR threshold");
+    std::string max_utterances = "0";
+    p.AddFlag("--max-utterances-s", &max_utterances,
+              "comma-separated: longest utterance that can hold a call (0: any), swept as a post-filter");
+    p.AddFlag("--min-utterance-fraction", &shape.min_utterance_fraction, "hit covers at least this of its utterance");
+    p.AddFlag("--min-duration-s", &shape.min_duration_s, "shortest hit (s)");
+    p.AddFlag("--max-duration-s", &shape.max_duration_s, "longest hit (s)");
+    p.AddFlag("--keyword-thresholds", &split_thresholds,
+              "per-keyword thresholds separated by ':' (one per keyword), instead of --thresholds");
     if (!p.Parse(argc, argv)) return 0;
     if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
     auto split = [](const std::string& s) {
@@ -45,23 +56,41 @@ int main(int argc, char** argv) {
     const auto data = speech::MakeKwsEvalData(o);
     std::printf("data: %zu calls, %.1f min of other speech and noise\n", data.positives.size(),
                 data.negatives.size() / 16000.0 / 60);
-    std::printf("| threshold | min confidence | recall (help) | hits/calls | help false alarms | per 10 min | other-keyword alarms | CPU s |\n");
-    std::printf("|---|---|---|---|---|---|---|---|\n");
-    for (const auto& t : split(thresholds)) {
-      speech::KeywordOptions k;
+    std::printf("| threshold | max utterance s | min confidence | recall (help) | hits/calls | help false alarms | per 10 min | other-keyword alarms "
+                "| tune recall | tune FA/10 min | held-out recall | held-out FA/10 min | CPU s |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::vector<std::string> sweep = split(thresholds);
+    if (!split_thresholds.empty()) sweep = {split_thresholds};
+    for (const auto& t : sweep) {
+      speech::KeywordOptions k = shape;
       k.keywords = split(keyword_list);
-      k.thresholds = {std::stod(t)};
+      k.thresholds.clear();
+      size_t a = 0;
+      while (a <= t.size()) {
+        const size_t b = t.find(':', a);
+        k.thresholds.push_back(std::stod(t.substr(a, b == std::string::npos ? std::string::npos : b - a)));
+        if (b == std::string::npos) break;
+        a = b + 1;
+      }
+      k.verify_acoustic = verify == "acoustic";
       k.min_confidence = min_conf;
+      common::Validator check;
+      k.Validate(check);
+      if (!check.errors().empty()) throw common::ArgError("invalid keyword settings: " + check.errors().front());
       k.verify_with_lm = verify == "lm";
       k.verify_with_grammar = verify == "grammar";
       k.cmn = cmn;
       k.full_utterance = full_utt;
       std::vector<double> cuts;
       for (const auto& c : split(confidences)) cuts.push_back(std::stod(c));
-      const auto rs = speech::EvaluateKwsSweep(data, k, speech::VadOptions{}, o, cuts);
+      std::vector<double> max_utts;
+      for (const auto& c : split(max_utterances)) max_utts.push_back(std::stod(c));
+      const auto rs = speech::EvaluateKwsSweep(data, k, speech::VadOptions{}, o, cuts, max_utts);
       for (const auto& r : rs)
-        std::printf("| %s | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.1f |\n", t.c_str(), r.min_confidence, r.recall,
-                    r.hits, r.calls, r.target_false_alarms, r.false_alarms_per_10_min, r.other_false_alarms,
+        std::printf("| %s | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",
+                    t.c_str(), r.max_utterance_s, r.min_confidence, r.recall, r.hits, r.calls, r.target_false_alarms,
+                    r.false_alarms_per_10_min, r.other_false_alarms, r.tune_recall, r.tune_fa_per_10_min,
+                    r.held_recall, r.held_hits, r.held_calls, r.held_fa_per_10_min, r.held_false_alarms,
                     r.decode_seconds);
       std::fflush(stdout);
     }

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <sstream>
 #include <unistd.h>
 
 #include "audio_capture/audio_file.h"
@@ -170,15 +171,20 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
 
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords_in,
                                             const VadOptions& vad_options, const KwsEvalOptions& o,
-                                            const std::vector<double>& cuts) {
+                                            const std::vector<double>& cuts,
+                                            const std::vector<double>& max_utterances_s) {
   KeywordOptions keywords = keywords_in;
   keywords.min_confidence = 0;
+  keywords.max_utterance_s = 0;  // applied below as a post-filter (same rule as in the spotter)
   KeywordSpotter spotter(keywords);
+  if (std::getenv("SARMAP_KWS_DUMP")) spotter.set_compute_verification(true);
   const auto t0 = std::chrono::steady_clock::now();
   struct Hit {
+    double utterance_start_s;
     double t;
     std::string keyword;
     double confidence;
+    double utterance_s;
   };
   auto run = [&](const std::vector<float>& x, std::vector<Hit>* hits) {
     VoiceActivityDetector vad(16000, vad_options);
@@ -188,11 +194,13 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     for (const auto& u : utts) {
       const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
       for (const auto& h : d.keywords) {
-        hits->push_back({u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence});
+        hits->push_back({u.samples_start / 16000.0, u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence,
+                           u.samples.size() / 16000.0});
         if (std::getenv("SARMAP_KWS_DUMP"))
-          std::fprintf(stderr, "HIT %s %s ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f\n", &x == &data.negatives ? "neg" : "pos",
-                       h.keyword.c_str(), h.log_ratio, h.kws_confidence, h.confidence, h.end_s - h.start_s,
-                       u.samples.size() / 16000.0);
+          std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f llr %.4f\n",
+                       &x == &data.negatives ? "neg" : "pos", h.keyword.c_str(), u.samples_start / 16000.0 + h.start_s,
+                       h.log_ratio, h.kws_confidence, h.confidence, h.end_s - h.start_s, u.samples.size() / 16000.0,
+                       h.verify_llr);
       }
     }
   };
@@ -209,22 +217,57 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   run(data.negatives, &neg);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<KwsEvalResult> out;
-  for (double cut : cuts) {
+  for (double max_utt : max_utterances_s)
+  for (double cut_value : cuts) {
+    // A hit counts when its confidence reaches the cut and its utterance is short enough.
+    // Any keyphrase holding the target word ("help me" for "help") counts as the target.
+    auto is_target = [&](const Hit& h) {
+      std::istringstream ws(h.keyword);
+      std::string w;
+      while (ws >> w)
+        if (w == o.target) return true;
+      return false;
+    };
+    auto passes = [&](const Hit& h) {
+      return h.confidence >= cut_value && (max_utt <= 0 || h.utterance_s <= max_utt);
+    };
     KwsEvalResult r;
+    r.max_utterance_s = max_utt;
     r.threshold = keywords.thresholds.empty() ? 0 : keywords.thresholds[0];
-    r.min_confidence = cut;
+    r.min_confidence = cut_value;
     for (size_t i = 0; i < pos.size(); ++i) {
       bool found = false;
       for (const auto& h : pos[i])
-        found |= h.confidence >= cut && h.keyword == o.target && h.t > data.call_start_s[i] - 0.5 &&
+        found |= passes(h) && is_target(h) && h.t > data.call_start_s[i] - 0.5 &&
                  h.t < data.call_end_s[i] + 0.5;
       r.hits += found;
       ++r.calls;
     }
     r.recall = r.calls ? static_cast<double>(r.hits) / r.calls : 0;
+    const double half_s = data.negatives.size() / 16000.0 / 2;
+    for (size_t i = 0; i < pos.size(); ++i) {
+      bool found = false;
+      for (const auto& h : pos[i])
+        found |= passes(h) && is_target(h) && h.t > data.call_start_s[i] - 0.5 &&
+                 h.t < data.call_end_s[i] + 0.5;
+      // Calls cycle through the 8 phrasings: alternate blocks of 8 so both halves hold every
+      // phrasing (phrasings differ in length, and length matters to the call-shape rule).
+      const bool held = (i / kCalls.size()) % 2 == 1;
+      (held ? r.held_calls : r.tune_calls)++;
+      (held ? r.held_hits : r.tune_hits) += found;
+    }
     for (const auto& h : neg)
-      if (h.confidence >= cut) (h.keyword == o.target ? r.target_false_alarms : r.other_false_alarms)++;
+      if (passes(h)) {
+        const bool target = is_target(h);
+        (target ? r.target_false_alarms : r.other_false_alarms)++;
+        if (target) (h.utterance_start_s < half_s ? r.tune_false_alarms : r.held_false_alarms)++;
+      }
     r.negative_minutes = data.negatives.size() / 16000.0 / 60.0;
+    const double half_min = r.negative_minutes / 2;
+    r.tune_recall = r.tune_calls ? static_cast<double>(r.tune_hits) / r.tune_calls : 0;
+    r.held_recall = r.held_calls ? static_cast<double>(r.held_hits) / r.held_calls : 0;
+    r.tune_fa_per_10_min = half_min > 0 ? r.tune_false_alarms * 10.0 / half_min : 0;
+    r.held_fa_per_10_min = half_min > 0 ? r.held_false_alarms * 10.0 / half_min : 0;
     r.false_alarms_per_10_min = r.negative_minutes > 0 ? r.target_false_alarms * 10.0 / r.negative_minutes : 0;
     r.decode_seconds = seconds;
     out.push_back(r);
@@ -234,7 +277,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
 
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
                           const KwsEvalOptions& o) {
-  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}).front();
+  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}, {keywords.max_utterance_s}).front();
 }
 
 }  // namespace speech

@@ -32,6 +32,7 @@ struct KwsEvalOptions {
 struct KwsEvalResult {
   double threshold = 0;
   double min_confidence = 0;
+  double max_utterance_s = 0;       // post-filter: hits in longer utterances dropped (0: none)
   int calls = 0, hits = 0;
   double recall = 0;
   int target_false_alarms = 0;      // target keyword in the negative stream
@@ -39,6 +40,12 @@ struct KwsEvalResult {
   double negative_minutes = 0;
   double false_alarms_per_10_min = 0;
   double decode_seconds = 0;        // CPU time spent (for the curve's cost)
+  // The same on two disjoint halves: "tune" (calls 0-7, 16-23, ...: every phrasing; first half
+  // of the negative stream) to choose an operating point, "held" (calls 8-15, 24-31, ...;
+  // second half) to report it.
+  int tune_calls = 0, tune_hits = 0, tune_false_alarms = 0;
+  int held_calls = 0, held_hits = 0, held_false_alarms = 0;
+  double tune_recall = 0, tune_fa_per_10_min = 0, held_recall = 0, held_fa_per_10_min = 0;
 };
 
 struct KwsEvalData {
@@ -53,7 +60,8 @@ KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keyword
 // One decoding pass, results for each confidence cut (the cut is a pure post-filter).
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords,
                                             const VadOptions& vad, const KwsEvalOptions& options,
-                                            const std::vector<double>& min_confidences);
+                                            const std::vector<double>& min_confidences,
+                                            const std::vector<double>& max_utterances_s = {0.0});
 
 }  // namespace speech
 }  // namespace sarmap
