@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <filesystem>
 
 namespace sarmap {
@@ -29,6 +31,26 @@ TEST(WorldTest, ShippedWorldsLoad) {
   for (const Wall& w : corridor.walls) glass += w.glass;
   EXPECT_GE(glass, 2);
   EXPECT_EQ(corridor.people.size(), 2u);
+}
+
+// The robot must be able to drive its scripted path: a person standing on it blocks the robot
+// for the rest of the mission (the simulator stops it at people, as a real robot would).
+TEST(WorldTest, ScriptedPathsKeepClearOfPeople) {
+  constexpr double kClearanceM = 0.6;  // robot radius 0.25 m + a person + a margin
+  for (const char* name : {"lab_lit.yaml", "lab_dark.yaml", "corridor_glass.yaml", "open_area_sound.yaml"}) {
+    const World w = LoadWorld(std::string(SARMAP_SOURCE_DIR) + "/config/worlds/" + name);
+    std::vector<Eigen::Vector2d> path = {w.robot.pose.head<2>()};
+    path.insert(path.end(), w.robot.path.begin(), w.robot.path.end());
+    if (w.robot.path_loop) path.push_back(path.front());
+    for (size_t i = 1; i < path.size(); ++i) {
+      const Eigen::Vector2d a = path[i - 1], ab = path[i] - path[i - 1];
+      for (const Person& p : w.people) {
+        const double t = ab.squaredNorm() > 0 ? std::clamp((p.position - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+        EXPECT_GE((a + t * ab - p.position).norm(), kClearanceM)
+            << name << ": " << p.name << " stands on the path leg " << i;
+      }
+    }
+  }
 }
 
 TEST(WorldTest, SourceTakesThePersonsMouth) {
