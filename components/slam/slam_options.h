@@ -112,8 +112,8 @@ struct LoopClosureOptions {
   double translation_weight = 1.1e4;
   double rotation_weight = 1e5;
   int max_cached_precomputations = 64;
-  int max_submaps_per_node = 6;       // nearest finished submaps searched for a new node
-  int max_old_nodes_per_submap = 40;  // older nodes searched against a newly finished submap
+  int max_submaps_per_node = 8;       // nearest finished submaps searched for a new node
+  int max_old_nodes_per_submap = 60;  // older nodes searched against a newly finished submap
   template <class V> void Visit(V& v) {
     v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
     v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
