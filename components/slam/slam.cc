@@ -190,7 +190,11 @@ Rigid2d Slam::PredictLocal(double time_s) {
   }
   this_scan_has_fresh_odom_ = false;
   last_scan_has_odom_ = have_odom;
-  if (!have_odom) return have_last_scan_ ? constant_velocity : last_scan_local_;
+  this_scan_constant_velocity_ = false;
+  if (!have_odom) {
+    this_scan_constant_velocity_ = have_last_scan_;
+    return have_last_scan_ ? constant_velocity : last_scan_local_;
+  }
   last_scan_odom_ = odom;
   last_scan_segment_ = segment;
   if (resume_odom_valid_) {
@@ -213,7 +217,10 @@ Rigid2d Slam::PredictLocal(double time_s) {
   }
   const Rigid2d odom_delta = reference_odom_.inverse() * odom;
   const bool frozen = odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
-  if (frozen) return constant_velocity;
+  if (frozen) {
+    this_scan_constant_velocity_ = true;
+    return constant_velocity;
+  }
   this_scan_has_fresh_odom_ = true;
   return reference_local_ * odom_delta;
 }
@@ -298,8 +305,20 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
         local = found;
       }
     }
-    local = MatchLocal(*submaps_[active_submaps_.front()].grid, points, local,
-                       &result.match_score);
+    const ProbabilityGrid& grid = *submaps_[active_submaps_.front()].grid;
+    const Rigid2d extrapolated = local;
+    local = MatchLocal(grid, points, extrapolated, &result.match_score);
+    if (this_scan_constant_velocity_ && have_last_scan_) {
+      // Without fresh odometry the constant-velocity extrapolation can run far ahead (a
+      // mis-stamped scan in a fast turn, Intel): also track from the last pose (no motion) and
+      // keep the better match.
+      double still_score = 0;
+      const Rigid2d still = MatchLocal(grid, points, last_scan_local_, &still_score);
+      if (still_score > result.match_score) {
+        local = still;
+        result.match_score = still_score;
+      }
+    }
   }
   stats_.local_seconds += Seconds(t0);
   ++stats_.scans;
@@ -529,10 +548,10 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   return true;
 }
 
-void Slam::RunOptimisation() {
+void Slam::RunOptimisation(int max_iterations) {
   if (nodes_.empty()) return;
   PoseGraphOptions p;
-  p.max_iterations = options_.graph.max_iterations;
+  p.max_iterations = max_iterations > 0 ? max_iterations : options_.graph.max_iterations;
   p.huber_scale = options_.graph.huber_scale;
   const auto summary = OptimisePoseGraph(constraints_, &node_global_, &submap_global_, p);
   ++stats_.optimisations;
@@ -543,7 +562,7 @@ void Slam::RunOptimisation() {
   global_from_local_ = node_global_[last] * nodes_[last].local_pose.inverse();
 }
 
-void Slam::Optimise() { RunOptimisation(); }
+void Slam::Optimise() { RunOptimisation(options_.graph.final_max_iterations); }
 
 Rigid2d Slam::CurrentPose() const {
   if (localisation_only_) return last_scan_local_;

@@ -159,7 +159,7 @@ class Slam {
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
   const PrecomputationStack& Precomputation(int submap_id) const;
-  void RunOptimisation();
+  void RunOptimisation(int max_iterations = 0);  // 0: graph.max_iterations
 
   SlamOptions options_;
   bool localisation_only_ = false;
@@ -187,6 +187,7 @@ class Slam {
   Rigid2d resume_odom_;
   int last_scan_segment_ = -1;
   bool this_scan_has_fresh_odom_ = false;
+  bool this_scan_constant_velocity_ = false;  // the prediction is a constant-velocity extrapolation
   bool have_reference_ = false;
   Rigid2d reference_local_, reference_odom_;
   int reference_segment_ = -1;

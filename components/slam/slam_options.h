@@ -112,8 +112,8 @@ struct LoopClosureOptions {
   double translation_weight = 1.1e4;
   double rotation_weight = 1e5;
   int max_cached_precomputations = 64;
-  int max_submaps_per_node = 3;       // nearest finished submaps searched for a new node
-  int max_old_nodes_per_submap = 20;  // older nodes searched against a newly finished submap
+  int max_submaps_per_node = 8;       // nearest finished submaps searched for a new node
+  int max_old_nodes_per_submap = 60;  // older nodes searched against a newly finished submap
   template <class V> void Visit(V& v) {
     v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
     v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
@@ -143,16 +143,18 @@ struct LoopClosureOptions {
 struct GraphOptions {
   int optimise_every_n_nodes = 90;
   int max_iterations = 50;
+  int final_max_iterations = 200;  // the optimisation at the end of a log (Cartographer: 200)
   double huber_scale = 100.0;  // 10 (Cartographer) kept loops too weak; 1000 let bad ones in
   double intra_translation_weight = 5e2;
   double intra_rotation_weight = 1.6e3;
   double odometry_translation_weight = 1e3;
   double odometry_rotation_weight = 1e2;
-  double local_slam_translation_weight = 1e5;
+  double local_slam_translation_weight = 1e4;  // 1e5 (Cartographer) held revisits apart on Intel
   double local_slam_rotation_weight = 1e5;
   template <class V> void Visit(V& v) {
     v("optimise_every_n_nodes", optimise_every_n_nodes, "Run the global optimisation after this many new nodes (0: only at the end)");
     v("max_iterations", max_iterations, "Ceres iterations per optimisation");
+    v("final_max_iterations", final_max_iterations, "Ceres iterations of the final optimisation (Optimise())");
     v("huber_scale", huber_scale, "Huber loss scale on loop closures");
     v("intra_translation_weight", intra_translation_weight, "Node-in-submap constraints (translation)");
     v("intra_rotation_weight", intra_rotation_weight, "Node-in-submap constraints (rotation)");
@@ -164,6 +166,7 @@ struct GraphOptions {
   void Validate(Validator& c) const {
     c.That(optimise_every_n_nodes >= 0, "optimise_every_n_nodes", "must be >= 0");
     c.That(max_iterations > 0, "max_iterations", "must be > 0");
+    c.That(final_max_iterations > 0, "final_max_iterations", "must be > 0");
     c.Positive("huber_scale", huber_scale);
   }
 };
