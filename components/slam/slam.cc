@@ -257,11 +257,13 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
   m.rotation_weight = l.ceres_rotation_weight;
   m.max_iterations = l.ceres_max_iterations;
   // The translation prior is the prediction (as in Cartographer): where the scan cannot tell
-  // (a corridor), the prediction wins; the rotation prior is the correlative result.
+  // (a corridor), the prediction wins; the rotation prior is the correlative result (or the
+  // prediction, for a robot whose odometry is better than what a degenerate scan tells).
   // In localisation only the map is fixed and complete: follow the correlative result, so an
   // offset of the start pose is corrected instead of held.
   const Rigid2d prior(localisation_only_ ? initial.translation() : predicted.translation(),
-                      initial.yaw_rad());
+                      l.ceres_rotation_prior_from_prediction && !localisation_only_ ? predicted.yaw_rad()
+                                                                                     : initial.yaw_rad());
   const Rigid2d result = CeresMatch(grid, points, prior, initial, m);
   if (score) *score = ScoreAt(grid, points, result);
   return result;

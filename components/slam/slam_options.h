@@ -56,6 +56,7 @@ struct LocalOptions {
   double correlative_angular_window_deg = 15.0;
   double correlative_translation_cost = 2.0;
   double correlative_rotation_cost = 0.1;
+  bool ceres_rotation_prior_from_prediction = false;
   double wide_search_below_score = 0.5;
   double wide_linear_window_m = 0.3;
   double wide_angular_window_deg = 45.0;
@@ -77,6 +78,9 @@ struct LocalOptions {
     v("correlative_angular_window_deg", correlative_angular_window_deg, "Correlative search half-window (deg)");
     v("correlative_translation_cost", correlative_translation_cost, "Penalty weight on translation from prediction");
     v("correlative_rotation_cost", correlative_rotation_cost, "Penalty weight on rotation from prediction");
+    v("ceres_rotation_prior_from_prediction", ceres_rotation_prior_from_prediction,
+      "Scan matcher: the rotation prior is the prediction (for robots with good odometry in scenes "
+      "that barely constrain rotation, e.g. a glass corridor; wrong for Intel/ACES/MIT's odometry)");
     v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
     v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
     v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
