@@ -120,9 +120,15 @@ if ! (cd "$root" && "$bin/sarmap-procman" "$pmd" run mission) >"$out/sheriff.txt
 fi
 [ -z "$killer_pid" ] || { wait "$killer_pid" 2>/dev/null || true; sed 's/^/   /' "$out/kills.txt"; }
 stop_all
-if grep -qE "terminate called|Segmentation|Aborted" "$out"/deputy*.txt 2>/dev/null; then
-  echo "   a process crashed: see $out/deputy*.txt"
-fi
+# What each process printed (recorded from the launcher's PM_OUTPUT) into $out/output/.
+mkdir -p "$out/output"
+"$bin/sarmap-log" output "$log" -o "$out/output" 2>/dev/null || true
+for f in "$out"/output/*.txt; do
+  [ -f "$f" ] || continue
+  if grep -qE "^E |terminate called|Segmentation|Aborted|exited with code [1-9]" "$f"; then
+    echo "   $(basename "$f" .txt) reported errors: see $f"
+  fi
+done
 
 echo "== the log (sarmap-log info)"
 "$bin/sarmap-log" info "$log" || true
