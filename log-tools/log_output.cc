@@ -1,6 +1,7 @@
 // sarmap-log output LOG: what every process printed while it ran under the launcher, from the
 // deputies' PM_OUTPUT messages in the log, one file per command (or one command to stdout).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
     if (!parser.Parse(argc, argv)) return 0;
     if (dir.empty() && command.empty()) throw sarmap::common::ArgError("give -o DIR or --command NAME");
 
+    if (!dir.empty()) std::filesystem::create_directories(dir);
     sarmap::logtools::LcmLogReader reader(log);
     sarmap::logtools::LogEvent event;
     std::map<std::string, std::unique_ptr<std::ofstream>> files;
