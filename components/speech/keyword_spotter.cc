@@ -18,6 +18,28 @@
 
 namespace sarmap {
 namespace speech {
+namespace {
+
+// Whether every word of `phrase` is among the decoded `words`, and the lowest posterior among
+// them (a phrase is only as certain as its least certain word).
+bool PhraseConfidence(const std::string& phrase, const std::vector<std::pair<std::string, double>>& words,
+                      double* confidence) {
+  std::istringstream ws(phrase);
+  std::string w;
+  double conf = 1.0;
+  while (ws >> w) {
+    double best = -1;
+    for (const auto& [word, post] : words) {
+      if (word == w) best = std::max(best, post);
+    }
+    if (best < 0) return false;
+    conf = std::min(conf, best);
+  }
+  *confidence = conf;
+  return true;
+}
+
+}  // namespace
 
 struct KeywordSpotter::Impl {
   ps_decoder_t* ps = nullptr;
@@ -235,18 +257,8 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
     const auto words = DecodeSearch("verify", samples, count);
     std::vector<KeywordHit> kept;
     for (KeywordHit h : r.keywords) {
-      std::istringstream ws(h.keyword);
-      std::string w;
-      double conf = 1.0;
-      bool all = true;
-      while (ws >> w) {
-        double best = -1;
-        for (const auto& [word, post] : words)
-          if (word == w) best = std::max(best, post);
-        if (best < 0) all = false;
-        else conf = std::min(conf, best);
-      }
-      if (!all) continue;
+      double conf;
+      if (!PhraseConfidence(h.keyword, words, &conf)) continue;
       h.confidence = std::min(h.kws_confidence, conf);
       kept.push_back(h);
     }
@@ -257,20 +269,9 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
     if (options_.verify_with_lm) {
       std::vector<KeywordHit> kept;
       for (KeywordHit h : r.keywords) {
-        // Every word of the keyphrase must be in the LM hypothesis; confidence = the lowest
-        // posterior among them.
-        std::istringstream ws(h.keyword);
-        std::string w;
-        double conf = 1.0;
-        bool all = true;
-        while (ws >> w) {
-          double best = -1;
-          for (const auto& [word, post] : words)
-            if (word == w) best = std::max(best, post);
-          if (best < 0) all = false;
-          else conf = std::min(conf, best);
-        }
-        if (!all) continue;
+        // Every word of the keyphrase must be in the LM hypothesis.
+        double conf;
+        if (!PhraseConfidence(h.keyword, words, &conf)) continue;
         h.confidence = conf;
         kept.push_back(h);
       }
