@@ -140,11 +140,65 @@ YamlMap& YamlMap::operator=(const YamlMap& other) {
 }
 YamlMap::~YamlMap() = default;
 
-YamlMap YamlMap::FromFile(const std::string& path) {
+namespace {
+
+// base with every key of `over` laid on top: mappings merge key by key, anything else
+// (numbers, strings, lists) is replaced whole.
+YAML::Node Merged(const YAML::Node& base, const YAML::Node& over) {
+  if (!base.IsMap() || !over.IsMap()) return YAML::Clone(over);
+  YAML::Node out = YAML::Clone(base);
+  for (auto it = over.begin(); it != over.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    const YAML::Node existing = static_cast<const YAML::Node&>(out)[key];
+    out[key] = existing.IsDefined() ? Merged(existing, it->second) : YAML::Clone(it->second);
+  }
+  return out;
+}
+
+// A file may start with `extends: other.yaml` (relative to the file): the base is read first and
+// this file's keys are laid over it, so a robot's configuration names only what differs.
+constexpr const char* kExtendsKey = "extends";
+constexpr int kMaxExtendsDepth = 8;
+
+YamlMap FromFileExtending(const std::string& path, int depth) {
   std::ifstream in(path);
   if (!in) throw OptionsError(path + ": cannot open the configuration file");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return FromString(text, path);
+  YamlMap map = YamlMap::FromString(text, path);
+  if (!map.Has(kExtendsKey)) return map;
+  const YAML::Node extends = map.Get(kExtendsKey);
+  if (!extends.IsScalar() || extends.Scalar().empty()) {
+    throw OptionsError(map.Where(kExtendsKey) + ": '" + kExtendsKey +
+                       "' must name the configuration file this one builds on");
+  }
+  if (depth >= kMaxExtendsDepth) {
+    throw OptionsError(map.Where(kExtendsKey) + ": '" + kExtendsKey +
+                       "' nests deeper than " + std::to_string(kMaxExtendsDepth) +
+                       " files (a cycle?)");
+  }
+  // A relative base is found beside the file that names it, wherever the program runs.
+  std::string base_path = extends.Scalar();
+  const auto slash = path.find_last_of('/');
+  if (base_path[0] != '/' && slash != std::string::npos) {
+    base_path = path.substr(0, slash + 1) + base_path;
+  }
+  const YamlMap base = FromFileExtending(base_path, depth + 1);
+  return map.LaidOver(base, kExtendsKey);
+}
+
+}  // namespace
+
+YamlMap YamlMap::FromFile(const std::string& path) { return FromFileExtending(path, 0); }
+
+YamlMap YamlMap::LaidOver(const YamlMap& base, const std::string& drop_key) const {
+  YAML::Node own = YAML::Clone(*node_);
+  own.remove(drop_key);
+  YamlMap merged;
+  // Locations in errors keep the line numbers of whichever file a key came from; the name
+  // given says both files.
+  merged.source_ = source_ + " (extends " + base.source_ + ")";
+  *merged.node_ = Merged(*base.node_, own);
+  return merged;
 }
 
 YamlMap YamlMap::FromString(const std::string& text, const std::string& name) {

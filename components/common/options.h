@@ -127,7 +127,11 @@ class YamlMap {
   YamlMap(const YamlMap&);
   YamlMap& operator=(const YamlMap&);
   ~YamlMap();
+  // A file may start with `extends: other.yaml` (relative to the file): that file is read first
+  // and this one's keys are laid over it, so a robot's configuration names only what differs.
   static YamlMap FromFile(const std::string& path);
+  // *this laid over base (mappings merge key by key, other values replace), without drop_key.
+  YamlMap LaidOver(const YamlMap& base, const std::string& drop_key) const;
   static YamlMap FromString(const std::string& text, const std::string& name);
   bool Has(const std::string& key) const;
   YamlMap Child(const std::string& key, const std::string& full_key) const;

@@ -120,6 +120,40 @@ TEST(OptionsTest, SectionSelectsATopLevelKey) {
   EXPECT_THROW(LoadOptions<TestOptions>(path, {}, "missing"), OptionsError);
 }
 
+TEST(OptionsTest, ExtendsLaysTheFileOverItsBase) {
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/options_base.yaml") << "max_range_m: 3.0\nmode: exact\ngrid:\n  width: 7\n"
+                                               "  resolution_m: 0.2\nweights: [1, 2, 3]\n";
+  std::ofstream(dir + "/options_robot.yaml")
+      << "extends: options_base.yaml\ngrid:\n  width: 9\nweights: [4]\n";
+  const auto o = LoadOptions<TestOptions>(dir + "/options_robot.yaml", {"grid.resolution_m=0.1"});
+  EXPECT_DOUBLE_EQ(o.max_range_m, 3.0);  // from the base
+  EXPECT_EQ(o.mode, "exact");            // from the base
+  EXPECT_EQ(o.grid.width, 9);            // nested key overridden, its sibling kept
+  EXPECT_DOUBLE_EQ(o.grid.resolution_m, 0.1);
+  EXPECT_EQ(o.weights, std::vector<double>({4}));  // lists are replaced, not merged
+
+  // Errors still name a key's line and both files; a missing base and a cycle are clear.
+  std::ofstream(dir + "/options_robot.yaml") << "extends: options_base.yaml\ngrid:\n  widht: 9\n";
+  try {
+    LoadOptions<TestOptions>(dir + "/options_robot.yaml", {});
+    FAIL();
+  } catch (const OptionsError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("grid.widht"), std::string::npos) << what;
+    EXPECT_NE(what.find("extends"), std::string::npos) << what;
+  }
+  std::ofstream(dir + "/options_robot.yaml") << "extends: missing_base.yaml\n";
+  EXPECT_THROW(LoadOptions<TestOptions>(dir + "/options_robot.yaml", {}), OptionsError);
+  std::ofstream(dir + "/options_robot.yaml") << "extends: options_robot.yaml\n";
+  try {
+    LoadOptions<TestOptions>(dir + "/options_robot.yaml", {});
+    FAIL();
+  } catch (const OptionsError& e) {
+    EXPECT_NE(std::string(e.what()).find("cycle"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace common
 }  // namespace sarmap
