@@ -24,7 +24,7 @@ void MultiBeamEnhancer::Push(const int16_t* data, int frames, int block_channels
     it = wanted ? std::next(it) : beams_.erase(it);
   }
   stft_.PushInterleaved(data, frames, block_channels, geometry_.channel_map,
-                        [&](const Eigen::MatrixXcf& X, int64_t) { OnFrame(X, beams, out); });
+                        [&](const Eigen::MatrixXcf& X, int64_t end_sample) { OnFrame(X, end_sample, beams, out); });
 }
 
 void MultiBeamEnhancer::ComputeWeights(BeamState* s) {
@@ -56,7 +56,12 @@ void MultiBeamEnhancer::ComputeWeights(BeamState* s) {
   s->frames_since_weights = 0;
 }
 
-void MultiBeamEnhancer::OnFrame(const Eigen::MatrixXcf& X, const std::vector<Beam>& beams,
+int64_t MultiBeamEnhancer::FirstOutputIndex(int64_t id) const {
+  const auto it = beams_.find(id);
+  return it == beams_.end() ? -1 : it->second.first_output_index;
+}
+
+void MultiBeamEnhancer::OnFrame(const Eigen::MatrixXcf& X, int64_t end_sample, const std::vector<Beam>& beams,
                                 std::map<int64_t, std::vector<float>>* out) {
   const int m = geometry_.num_mics();
   const int nb = options_.fft_size / 2 + 1;
@@ -83,6 +88,8 @@ void MultiBeamEnhancer::OnFrame(const Eigen::MatrixXcf& X, const std::vector<Bea
       s.ola = std::make_unique<sound::OverlapAdd>(options_.fft_size, options_.hop_size);
       s.prev_clean.assign(nb, 0.0);
       s.direction = b.direction;
+      // Every frame adds hop_size samples to each beam; frame 0 ends at sample fft_size.
+      s.first_output_index = end_sample - options_.fft_size;
     }
     if (s.direction.dot(b.direction) < std::cos(2.0 * M_PI / 180) || s.frames_since_weights > 16) {
       s.direction = b.direction;

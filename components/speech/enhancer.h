@@ -74,6 +74,10 @@ class MultiBeamEnhancer {
   // frame) to out[beam.id]. Beams not requested any more are dropped.
   void Push(const int16_t* data, int frames, int block_channels, const std::vector<Beam>& beams,
             std::map<int64_t, std::vector<float>>* out);
+  // Where beam `id`'s output starts in the enhanced-stream numbering that every beam shares (a
+  // beam present from the first frame has its n-th sample at n): a beam that appears when a track
+  // is born mid-stream starts later. -1 for an unknown beam.
+  int64_t FirstOutputIndex(int64_t id) const;
   bool using_mvdr() const { return noise_frames_ >= options_.min_noise_frames && options_.beamformer == "mvdr"; }
   const EnhancerOptions& options() const { return options_; }
 
@@ -84,9 +88,11 @@ class MultiBeamEnhancer {
     std::vector<double> noise_psd;
     std::vector<double> prev_clean;
     int frames_since_weights = 1 << 20;
+    int64_t first_output_index = 0;
     std::unique_ptr<sound::OverlapAdd> ola;
   };
-  void OnFrame(const Eigen::MatrixXcf& X, const std::vector<Beam>& beams, std::map<int64_t, std::vector<float>>* out);
+  void OnFrame(const Eigen::MatrixXcf& X, int64_t end_sample, const std::vector<Beam>& beams,
+               std::map<int64_t, std::vector<float>>* out);
   void ComputeWeights(BeamState* s);
 
   sound::ArrayGeometry geometry_;

@@ -44,7 +44,10 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
   for (auto& [id, buf] : enhanced_) {
     if (buf.empty()) continue;
     auto& vad = vads_[id];
-    if (!vad) vad = std::make_unique<VoiceActivityDetector>(geometry_.sample_rate_hz, options_.vad);
+    if (!vad) {
+      vad = std::make_unique<VoiceActivityDetector>(geometry_.sample_rate_hz, options_.vad);
+      vad_origins_[id] = std::max<int64_t>(0, enhancer_.FirstOutputIndex(id));
+    }
     std::vector<Utterance> done;
     vad->Push(buf.data(), buf.size(), &done);
     for (const auto& u : done) Handle(id, u, results);
@@ -61,6 +64,7 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     it->second->Flush(&done);
     for (const auto& u : done) Handle(it->first, u, results);
     enhanced_.erase(it->first);
+    vad_origins_.erase(it->first);
     it = vads_.erase(it);
   }
 }
@@ -84,8 +88,11 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
     base.direction = it->second.direction;
     base.covariance = it->second.covariance;
   }
-  base.start_sample = u.start_sample - output_offset_;
-  base.end_sample = u.end_sample - output_offset_;
+  // VAD sample counts -> stream samples: where this beam's VAD started, less the enhancer's delay.
+  const auto origin_it = vad_origins_.find(id);
+  const int64_t to_stream = (origin_it == vad_origins_.end() ? 0 : origin_it->second) - output_offset_;
+  base.start_sample = u.start_sample + to_stream;
+  base.end_sample = u.end_sample + to_stream;
   base.text = d.text;
   bool any = false;
   for (const KeywordHit& h : d.keywords) {
@@ -93,7 +100,7 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
     SpeechResult r = base;
     r.keyword = h.keyword;
     r.confidence = h.confidence;
-    const int64_t s0 = u.samples_start - output_offset_;
+    const int64_t s0 = u.samples_start + to_stream;
     r.start_sample = s0 + static_cast<int64_t>(h.start_s * geometry_.sample_rate_hz);
     r.end_sample = s0 + static_cast<int64_t>(h.end_s * geometry_.sample_rate_hz);
     results->push_back(r);

@@ -79,6 +79,9 @@ class SpeechProcessor {
   KeywordSpotter spotter_;
   std::map<int64_t, TrackedSource> tracks_;
   std::map<int64_t, std::unique_ptr<VoiceActivityDetector>> vads_;
+  // Enhanced-stream index of each VAD's first sample: a VAD counts from its own start, and a
+  // track born mid-stream starts its VAD late.
+  std::map<int64_t, int64_t> vad_origins_;
   std::map<int64_t, std::vector<float>> enhanced_;
   int64_t samples_seen_ = 0, utterances_ = 0;
   int64_t output_offset_ = 0;  // enhanced stream delay (samples)
