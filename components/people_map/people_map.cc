@@ -226,6 +226,8 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     for (auto& [id, q] : people_) {
       if (q.sound_source_id == best->id) p = &q;
     }
+    // Not yet placed: an initialising source waits (UpdateSoundSources places it on convergence).
+    if (!p && options_.heard_needs_converged_source && !best->converged) continue;
     if (!p) {
       for (auto& [id, q] : people_) {
         if (q.has_heard || !q.has_seen) continue;
@@ -273,7 +275,7 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
       linked->heard_position_m = s.position_m;
       linked->heard_covariance = s.covariance;
       Refuse(linked);
-    } else if (s.is_person || recently_heard) {
+    } else if ((s.is_person || recently_heard) && (s.converged || !options_.heard_needs_converged_source)) {
       Person fresh;
       fresh.id = next_id_++;
       fresh.first_detected_utime = utime;

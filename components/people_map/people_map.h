@@ -42,6 +42,7 @@ struct PeopleMapOptions {
   double confidence_half_life_s = 300.0;
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
   double heard_person_window_s = 30.0;  // a source counts as a person this long after a heard detection
+  bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
   template <class V>
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
@@ -54,6 +55,9 @@ struct PeopleMapOptions {
     v("confidence_half_life_s", confidence_half_life_s, "confidence halves after this long without evidence");
     v("min_report_confidence", min_report_confidence, "people below this confidence are not reported");
     v("heard_person_window_s", heard_person_window_s, "a sound source stays a person this long after being heard calling");
+    v("heard_needs_converged_source", heard_needs_converged_source,
+      "a heard-only person is placed only at a converged sound source; a call towards an initialising "
+      "source is remembered and places the person when the source converges");
   }
   void Validate(common::Validator& check) const {
     check.Positive("merge_radius_m", merge_radius_m);

@@ -103,7 +103,11 @@ int main(int argc, char** argv) {
     common::Node node("sarmap-people-map", args.lcm_url);
     auto publisher = node.Advertise<people_map_t>(options.output_channel);
     common::PoseHistory poses(common::SecondsToUtime(60.0), common::SecondsToUtime(options.max_pose_gap_s));
+    // Each input is ordered within its own stream: a keyword is published only after its
+    // utterance has been decoded (0.1-2 s after it was said), later than the visual detections
+    // of the same instant, and must not be dropped as late.
     common::TimeOrderedQueue<std::function<void()>> queue(common::SecondsToUtime(options.reorder_delay_s));
+    constexpr int kHeardStream = 1, kSoundMapStream = 2;
     // After a restart from saved state, the people already found are published at once (at the
     // time of their last detection), not only after the next detection: the operator and the
     // recorder never see the map lose them.
@@ -130,7 +134,7 @@ int main(int argc, char** argv) {
         apply();
         latest_utime = std::max(latest_utime, utime);
         dirty = true;
-        publish(utime);
+        publish(latest_utime);
       });
     };
 
@@ -181,7 +185,7 @@ int main(int argc, char** argv) {
       if (heard.empty()) return;
       queue.Push(utime, [&, utime, heard] {
         if (auto pose = pose_at(utime)) map.AddHeard(utime, heard, pose->pose * base_from_mic);
-      });
+      }, kHeardStream);
       release();
     });
     node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m, const common::ReceiveInfo&) {
@@ -196,7 +200,7 @@ int main(int argc, char** argv) {
         sources.push_back(src);
       }
       const Utime utime = m.header.utime;
-      queue.Push(utime, [&, utime, sources] { map.UpdateSoundSources(utime, sources); });
+      queue.Push(utime, [&, utime, sources] { map.UpdateSoundSources(utime, sources); }, kSoundMapStream);
       release();
     });
 

@@ -84,6 +84,7 @@ TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne)
   visible.id = 8;
   visible.position_m = Eigen::Vector3d(3.1, -0.1, 1.0);
   visible.covariance = Eigen::Vector3d(0.09, 0.09, 0.2).asDiagonal();
+  hidden.converged = visible.converged = true;
   map.UpdateSoundSources(1'000'000, {hidden, visible});
   EXPECT_TRUE(map.people().empty());  // sources are not people until heard calling
 
@@ -118,6 +119,44 @@ TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne)
   EXPECT_EQ(both.sound_source_id, 8);
   EXPECT_GT(both.position_m.x(), 3.0 - 1e-9);  // seen at 3.0, heard at 3.1
   EXPECT_LT(both.position_m.x(), 3.05);        // the seen estimate is the more certain
+}
+
+// An initialising source's position is a guess: a call heard towards it is remembered, and the
+// person is placed only once the sound map says the source has converged.
+TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource caller;
+  caller.id = 3;
+  caller.position_m = Eigen::Vector3d(2.0, 5.0, 0.5);
+  caller.covariance = Eigen::Vector3d(4.0, 4.0, 1.0).asDiagonal();
+  map.UpdateSoundSources(1'000'000, {caller});
+  HeardDetection call;
+  call.azimuth_rad = std::atan2(5.0, 2.0);
+  call.keyword = "help";
+  call.confidence = 0.9;
+  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);  // points at the source...
+  EXPECT_TRUE(map.people().empty());                         // ...which is still a guess
+  map.UpdateSoundSources(3'000'000, {caller});
+  EXPECT_TRUE(map.people().empty());
+
+  caller.position_m = Eigen::Vector3d(2.2, 4.6, 0.5);
+  caller.covariance = Eigen::Vector3d(0.04, 0.04, 0.1).asDiagonal();
+  caller.converged = true;
+  map.UpdateSoundSources(4'000'000, {caller});
+  ASSERT_EQ(map.people().size(), 1u);
+  const Person& p = map.people().begin()->second;
+  EXPECT_EQ(p.sound_source_id, 3);
+  EXPECT_EQ(p.keyword, "help");
+  EXPECT_NEAR((p.position_m - caller.position_m).norm(), 0.0, 1e-9);
+
+  // Converged long after the call (outside heard_person_window_s): not a person.
+  PeopleMap late(PeopleMapOptions{});
+  caller.converged = false;
+  late.UpdateSoundSources(1'000'000, {caller});
+  late.AddHeard(2'000'000, {call}, Rigid3d());
+  caller.converged = true;
+  late.UpdateSoundSources(60'000'000, {caller});
+  EXPECT_TRUE(late.people().empty());
 }
 
 TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
