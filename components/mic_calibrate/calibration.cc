@@ -498,6 +498,9 @@ void SolverOptions::Validate(common::Validator& check) const {
   check.Positive("max_position_std_m", max_position_std_m);
   check.Positive("max_offset_std_s", max_offset_std_s);
   check.That(num_threads >= 1, "num_threads", "must be >= 1");
+  check.InRange("min_bearing_span_deg", min_bearing_span_deg, 0, 180);
+  check.NonNegative("grid_margin_m", grid_margin_m);
+  check.Positive("grid_step_m", grid_step_m);
   check.That(gauge_x_mic >= 0 && gauge_plane_mic >= 0 && gauge_z_mic >= 0, "gauge_*_mic",
              "must be >= 0");
 }
