@@ -44,6 +44,49 @@ struct PosedTdoaResidual {
   double s_z, z_s, t_s, inv_sigma, inv_c;
 };
 
+// The same edge with the array pose (x, y, yaw) an unknown (odometry drift): microphone i is
+// at (x, y) + R(yaw) a_i in the plane (a_i: its position in the array frame), at height h_i.
+struct FreePoseTdoaResidual {
+  FreePoseTdoaResidual(const Eigen::Vector3d& mic_n, const Eigen::Vector3d& mic_1, double h_n,
+                       double h_1, double s_z, double z_s, double t_s, double sigma_s, double c)
+      : a_n(mic_n), a_1(mic_1), dz_n(h_n - s_z), dz_1(h_1 - s_z), z_s(z_s), t_s(t_s),
+        inv_sigma(1 / sigma_s), inv_c(1 / c) {}
+  template <class T>
+  bool operator()(const T* clock, const T* src, const T* pose, T* residual) const {
+    const T cy = cos(pose[2]), sy = sin(pose[2]);
+    const T xn = pose[0] + cy * a_n.x() - sy * a_n.y() - src[0];
+    const T yn = pose[1] + sy * a_n.x() + cy * a_n.y() - src[1];
+    const T x1 = pose[0] + cy * a_1.x() - sy * a_1.y() - src[0];
+    const T y1 = pose[1] + sy * a_1.x() + cy * a_1.y() - src[1];
+    const T dn = sqrt(xn * xn + yn * yn + T(dz_n * dz_n + 1e-12));
+    const T d1 = sqrt(x1 * x1 + y1 * y1 + T(dz_1 * dz_1 + 1e-12));
+    const T predicted = (dn - d1) * inv_c + clock[0] / kMsPerS + t_s * clock[1] / kPpm;
+    residual[0] = (predicted - z_s) * inv_sigma;
+    return true;
+  }
+  Eigen::Vector3d a_n, a_1;
+  double dz_n, dz_1, z_s, t_s, inv_sigma, inv_c;
+};
+
+// Odometry edge between consecutive array poses a = (x, y, yaw)_{k-1}, b = (x, y, yaw)_k:
+//   r = W (R(-yaw_a) (p_b - p_a) - d_xy, wrap(yaw_b - yaw_a - d_yaw)),
+// d = the given relative motion, W = diag(1/sigma_along, 1/sigma_across, 1/sigma_yaw).
+struct OdometryEdge {
+  OdometryEdge(const Eigen::Vector3d& d, const Eigen::Vector3d& sigma) : d(d), inv(sigma.cwiseInverse()) {}
+  template <class T>
+  bool operator()(const T* a, const T* b, T* r) const {
+    const T c = cos(a[2]), s = sin(a[2]);
+    const T dx = b[0] - a[0], dy = b[1] - a[1];
+    r[0] = (c * dx + s * dy - d.x()) * inv.x();
+    r[1] = (-s * dx + c * dy - d.y()) * inv.y();
+    T dyaw = b[2] - a[2] - d.z();
+    dyaw = atan2(sin(dyaw), cos(dyaw));
+    r[2] = dyaw * inv.z();
+    return true;
+  }
+  Eigen::Vector3d d, inv;
+};
+
 double Geometric(const Eigen::Vector3d& mic_n, const Eigen::Vector3d& mic_1,
                  const Eigen::Vector3d& s, double c) {
   return ((mic_n - s).norm() - (mic_1 - s).norm()) / c;
@@ -273,11 +316,27 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
   sopt.function_tolerance = o.function_tolerance;
   sopt.num_threads = o.num_threads;
   sopt.logging_type = ceres::SILENT;
-  std::vector<double> best_clocks;
+  std::vector<double> best_clocks, best_poses;
+  std::vector<Eigen::Isometry3d> corrected_poses;
   Eigen::Vector2d best_s = Eigen::Vector2d::Zero();
   double best_cost = std::numeric_limits<double>::infinity();
   std::vector<double> clocks(2 * N, 0.0);
   double src[2];
+  // Pose graph (odometry drift): planar array poses, relative-motion edges.
+  const bool free_poses = o.pose_trans_sigma_per_sqrt_m > 0 || o.pose_rot_sigma_per_sqrt_rad > 0 ||
+                          o.pose_rot_sigma_per_sqrt_m > 0;
+  std::vector<Eigen::Vector3d> given_pose(K);  // x, y, yaw
+  for (int k = 0; k < K; ++k) {
+    const Eigen::Matrix3d& R = world_from_array[k].linear();
+    given_pose[k] = Eigen::Vector3d(world_from_array[k].translation().x(),
+                                    world_from_array[k].translation().y(), std::atan2(R(1, 0), R(0, 0)));
+  }
+  std::vector<double> poses(3 * K);
+  auto reset_poses = [&]() {
+    for (int k = 0; k < K; ++k)
+      for (int i = 0; i < 3; ++i) poses[3 * k + i] = given_pose[k][i];
+  };
+  reset_poses();
   auto build = [&](ceres::Problem* problem) {
     for (int k = 0; k < K; ++k) {
       for (int n = 1; n < N; ++n) {
@@ -286,11 +345,40 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
         ceres::LossFunction* loss = nullptr;
         if (o.loss == "huber") loss = new ceres::HuberLoss(o.loss_scale);
         if (o.loss == "cauchy") loss = new ceres::CauchyLoss(o.loss_scale);
-        problem->AddResidualBlock(
-            new ceres::AutoDiffCostFunction<PosedTdoaResidual, 1, 2, 2>(new PosedTdoaResidual(
-                mic_world[k][n], mic_world[k][0], s_z, z, data.times_s[k], sigma_of(k), c)),
-            loss, &clocks[2 * n], src);
+        if (free_poses) {
+          problem->AddResidualBlock(
+              new ceres::AutoDiffCostFunction<FreePoseTdoaResidual, 1, 2, 2, 3>(
+                  new FreePoseTdoaResidual(mic_positions_m[n], mic_positions_m[0],
+                                           mic_world[k][n].z(), mic_world[k][0].z(), s_z, z,
+                                           data.times_s[k], sigma_of(k), c)),
+              loss, &clocks[2 * n], src, &poses[3 * k]);
+        } else {
+          problem->AddResidualBlock(
+              new ceres::AutoDiffCostFunction<PosedTdoaResidual, 1, 2, 2>(new PosedTdoaResidual(
+                  mic_world[k][n], mic_world[k][0], s_z, z, data.times_s[k], sigma_of(k), c)),
+              loss, &clocks[2 * n], src);
+        }
       }
+    }
+    if (free_poses) {
+      const double floor_m = 1e-3, floor_rad = 1e-3;
+      for (int k = 1; k < K; ++k) {
+        const Eigen::Vector3d& a = given_pose[k - 1];
+        const Eigen::Vector3d& b = given_pose[k];
+        const double ca = std::cos(a.z()), sa = std::sin(a.z());
+        const Eigen::Vector2d dp = b.head<2>() - a.head<2>();
+        const Eigen::Vector3d d(ca * dp.x() + sa * dp.y(), -sa * dp.x() + ca * dp.y(),
+                                std::remainder(b.z() - a.z(), 2 * M_PI));
+        const double ds = dp.norm(), dth = std::abs(d.z());
+        const double s_yaw = std::sqrt(std::pow(o.pose_rot_sigma_per_sqrt_rad, 2) * dth +
+                                       std::pow(o.pose_rot_sigma_per_sqrt_m, 2) * ds + floor_rad * floor_rad);
+        const double s_along = std::sqrt(std::pow(o.pose_trans_sigma_per_sqrt_m, 2) * ds + floor_m * floor_m);
+        const double s_across = std::sqrt(std::pow(s_yaw * ds / 2, 2) + floor_m * floor_m);
+        problem->AddResidualBlock(new ceres::AutoDiffCostFunction<OdometryEdge, 3, 3, 3>(
+                                      new OdometryEdge(d, Eigen::Vector3d(s_along, s_across, s_yaw))),
+                                  nullptr, &poses[3 * (k - 1)], &poses[3 * k]);
+      }
+      problem->SetParameterBlockConstant(&poses[0]);  // gauge: the first pose
     }
     if (!o.estimate_drift) {
       for (int n = 1; n < N; ++n)
@@ -305,6 +393,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     }
     src[0] = seeds[i]->s.x();
     src[1] = seeds[i]->s.y();
+    reset_poses();
     ceres::Problem problem;
     build(&problem);
     ceres::Solver::Summary summary;
@@ -326,6 +415,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
       best_cost = summary.final_cost;
       best_clocks = clocks;
       best_s = Eigen::Vector2d(src[0], src[1]);
+      best_poses = poses;
       result.best_start = static_cast<int>(i);
       result.iterations = ss.iterations;
     }
@@ -334,6 +424,18 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
   if (!std::isfinite(best_cost)) throw std::runtime_error("no start produced a finite cost");
   result.final_cost = best_cost;
   clocks = best_clocks;
+  poses = best_poses;
+  if (free_poses) {  // the corrected array poses from here on
+    for (int k = 0; k < K; ++k) {
+      Eigen::Isometry3d w = Eigen::Isometry3d::Identity();
+      w.linear() = (Eigen::AngleAxisd(poses[3 * k + 2], Eigen::Vector3d::UnitZ()) *
+                    Eigen::AngleAxisd(-given_pose[k].z(), Eigen::Vector3d::UnitZ()))
+                       .toRotationMatrix() * world_from_array[k].linear();
+      w.translation() = Eigen::Vector3d(poses[3 * k], poses[3 * k + 1], world_from_array[k].translation().z());
+      corrected_poses.push_back(w);
+      for (int n = 0; n < N; ++n) mic_world[k][n] = w * mic_positions_m[n];
+    }
+  }
   src[0] = best_s.x();
   src[1] = best_s.y();
   const Eigen::Vector3d s(src[0], src[1], s_z);
@@ -382,7 +484,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     for (const auto& m : mic_positions_m) centre += m / N;
     std::vector<double> angles;
     for (int k = 0; k < K; ++k) {
-      Eigen::Vector3d p = world_from_array[k].inverse() * s - centre;
+      Eigen::Vector3d p = (free_poses ? corrected_poses[k] : world_from_array[k]).inverse() * s - centre;
       if (collinear) {
         angles.push_back(std::acos(std::clamp(p.normalized().dot(u), -1.0, 1.0)));
       } else {

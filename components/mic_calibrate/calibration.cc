@@ -501,6 +501,9 @@ void SolverOptions::Validate(common::Validator& check) const {
   check.InRange("min_bearing_span_deg", min_bearing_span_deg, 0, 180);
   check.NonNegative("grid_margin_m", grid_margin_m);
   check.Positive("grid_step_m", grid_step_m);
+  check.NonNegative("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m);
+  check.NonNegative("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad);
+  check.NonNegative("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m);
   check.That(gauge_x_mic >= 0 && gauge_plane_mic >= 0 && gauge_z_mic >= 0, "gauge_*_mic",
              "must be >= 0");
 }

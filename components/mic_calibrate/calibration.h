@@ -89,6 +89,12 @@ struct SolverOptions {
   double min_bearing_span_deg = 60.0;
   double grid_margin_m = 3.0;       // grid over the array path's bounding box +- this
   double grid_step_m = 0.1;
+  // Pose uncertainty (odometry): the array poses become unknowns of a pose graph whose edges
+  // are the given relative motions between consecutive emissions with the odometry's random-
+  // walk noise (std after 1 m driven / 1 rad turned / heading per metre). All 0 = poses exact.
+  double pose_trans_sigma_per_sqrt_m = 0.0;
+  double pose_rot_sigma_per_sqrt_rad = 0.0;
+  double pose_rot_sigma_per_sqrt_m = 0.0;
 
   template <class V>
   void Visit(V& v) {
@@ -129,6 +135,12 @@ struct SolverOptions {
       "known array poses: refuse when the source bearing in the array frame spans less");
     v("grid_margin_m", grid_margin_m, "known array poses: source search grid beyond the path");
     v("grid_step_m", grid_step_m, "known array poses: source search grid step");
+    v("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m,
+      "known array poses: odometry distance error std after 1 m (0 with the others: exact)");
+    v("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad,
+      "known array poses: odometry heading error std after turning 1 rad");
+    v("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m,
+      "known array poses: odometry heading error std after driving 1 m");
   }
   void Validate(common::Validator& check) const;
   int dim() const { return geometry == "3d" ? 3 : 2; }
@@ -242,6 +254,11 @@ void ChooseGauge(int num_mics, int dim, const std::vector<Eigen::Vector3d>& nomi
 // headings the bearing at k is fixed by the one point s and the pose, so such a pattern
 // would have to be one shift of cos beta at many different bearings, which no single s
 // gives: tau and delta become observable once the bearing in the array frame spans enough.
+// Poses from odometry drift: with options.pose_*_sigma_* > 0 the array poses (x, y, yaw) are
+// unknowns too, linked by the given relative motions between consecutive emissions with the
+// odometry's random-walk noise (a pose graph; the first pose is held as the gauge). A clock
+// pattern would need heading corrections following 1 / sin(bearing), which the random walk
+// does not allow, so the confound stays broken while the odometry drift is taken out.
 // Solve: a grid over s (clocks by linear least squares at each node, truncated cost), then
 // Ceres (SPARSE_NORMAL_CHOLESKY, SuiteSparse, robust loss) from the best grid nodes; marginal
 // covariances of s and every (tau, delta). Refuses (UnobservableError) when the array never
