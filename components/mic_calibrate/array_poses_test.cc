@@ -2,13 +2,17 @@
 // separate sound cards on a robot that turns in place near one source.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <string>
 
 #include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
 
+#include "common/robot_config.h"
 #include "mic_calibrate/calibration.h"
 #include "mic_calibrate/calibration_io.h"
+#include "sarmap/odometry_t.hpp"
 
 namespace sarmap {
 namespace mic_calibrate {
@@ -198,6 +202,60 @@ TEST(ArrayPoses, UtimesRoundTripThroughTdoaCsv) {
   ASSERT_EQ(back.data.utimes.size(), syn.data.utimes.size());
   EXPECT_EQ(back.data.utimes.front(), syn.data.utimes.front());
   EXPECT_EQ(back.data.utimes.back(), syn.data.utimes.back());
+}
+
+// The CLI: TDOA CSV with utimes + an LCM log of ODOM (odometry_t of the base, 20 Hz); the
+// array frame from config/robot.yaml's base_from_mic_array (0.1 m ahead, 0.6 m up, as above).
+TEST(ArrayPoses, CliWithOdomFromAnLcmLog) {
+  const Scenario sc;
+  Synthetic syn = Make(sc, 19);
+  const int64_t t0 = 1700000000000000LL;
+  for (double t : syn.data.times_s) syn.data.utimes.push_back(t0 + std::llround(t * 1e6));
+  const std::string dir = ::testing::TempDir();
+  const std::string csv = dir + "/array_poses_cli.csv", log = dir + "/array_poses_cli.lcmlog",
+                    yaml = dir + "/array_poses_cli.yaml";
+  WriteTdoaCsv(csv, syn.data);
+  {
+    lcm::LogFile out(log, "w");
+    ASSERT_TRUE(out.good());
+    const double dyaw = sc.turn_rad / (sc.emissions - 1);
+    for (int i = 0; i * 0.05 <= syn.data.times_s.back() + 1; ++i) {
+      const double t = i * 0.05, yaw = 0.4 + (t - 0.2) / sc.step_s * dyaw;
+      sarmap::odometry_t odom{};
+      odom.header.utime = t0 + std::llround(t * 1e6);
+      odom.header.frame = "odom";
+      odom.child_frame = "base";
+      odom.position_m[0] = sc.base.x();
+      odom.position_m[1] = sc.base.y();
+      odom.orientation[0] = std::cos(yaw / 2);
+      odom.orientation[3] = std::sin(yaw / 2);
+      std::vector<uint8_t> buf(odom.getEncodedSize());
+      odom.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      lcm::LogEvent ev;
+      ev.eventnum = i;
+      ev.timestamp = odom.header.utime;
+      ev.channel = "ODOM";
+      ev.datalen = static_cast<int32_t>(buf.size());
+      ev.data = buf.data();
+      ASSERT_EQ(out.writeEvent(&ev), 0);
+    }
+  }
+  const std::string src = SARMAP_SOURCE_DIR;
+  const std::string cmd = std::string(SARMAP_BIN_DIR) + "/sarmap-mic-calibrate " + csv +
+                          " --poses " + log + " --config " + src + "/config/mic_calibrate.yaml" +
+                          " --set array_poses.channel=ODOM --set array_poses.robot_config=" + src +
+                          "/config/robot.yaml --nominal " + src + "/config/arrays/kinect.yaml" +
+                          " --set solver.geometry=linear --set solver.speed_of_sound_mps=343" +
+                          " --set solver.tdoa_sigma_s=2e-5 --output " + yaml + " --quiet";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const common::MicArrayOptions a = common::LoadMicArray(yaml);
+  ASSERT_EQ(a.num_mics(), 4);
+  EXPECT_EQ(a.geometry, "linear");
+  for (int n = 1; n < 4; ++n) {
+    EXPECT_NEAR(a.mic_position(n).x(), sc.mics[n].x(), 1e-9);  // as given (array frame)
+    EXPECT_NEAR(a.start_offsets_s[n], sc.tau[n], 8e-6) << n;
+    EXPECT_NEAR(a.clock_drift[n], sc.delta[n], 0.1e-6) << n;
+  }
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #          the line look like a rotation of every direction (10 deg off with METHOD=path).
 #   path   the source path is unknown (random-walk prior, thesis ch. 3) and the positions known.
 # POSE_CHANNEL=SIM_TRUTH uses the true poses instead (as from a good SLAM; no pose graph).
+# SIM_SEED=n records with another simulator seed (noise, odometry drift, jitter).
 # METHOD=path ARRAY=async6 SYNC_ARRAY=sync6 GEOMETRY=3d EXTRA="--set solver.sources_in_gauge_plane=true"
 # runs the six-card 3D array (the source is at the array's height).
 #
@@ -29,6 +30,7 @@ array=${ARRAY:-async_kinect}
 sync_array=${SYNC_ARRAY:-kinect}
 EXTRA=${EXTRA:-}   # more --set options for the solver
 method=${METHOD:-poses}
+sim_seed=${SIM_SEED:-1}
 if [ "$method" = poses ]; then geometry=${GEOMETRY:-linear}; else geometry=${GEOMETRY:-planar}; fi
 pose_channel=${POSE_CHANNEL:-ODOM}
 if [ "$method" = poses ]; then
@@ -48,13 +50,13 @@ cd "$repo"
 if [ ! -s "$out/$array.lcmlog" ]; then
   "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
     --set audio.mic_array=config/arrays/$array.yaml --set audio.asynchronous=true \
-    --set camera.enabled=false --speed 0 --duration "$duration" \
+    --set camera.enabled=false --set seed=$sim_seed --speed 0 --duration "$duration" \
     --lcm-url "file://$out/$array.lcmlog?mode=w" --log-level warn
 fi
 if [ ! -s "$out/${sync_array}_sync.lcmlog" ]; then   # the same scene with the synchronous Kinect
   "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
     --set audio.mic_array=config/arrays/$sync_array.yaml --set audio.asynchronous=false \
-    --set camera.enabled=false --speed 0 --duration "$duration" \
+    --set camera.enabled=false --set seed=$sim_seed --speed 0 --duration "$duration" \
     --lcm-url "file://$out/${sync_array}_sync.lcmlog?mode=w" --log-level warn
 fi
 # All of the log (the talker included) with the source path unknown: extracts the TDOAs.
