@@ -421,6 +421,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     }
   }
   result.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.recording_end_s = *tmax;
   if (!std::isfinite(best_cost)) throw std::runtime_error("no start produced a finite cost");
   result.final_cost = best_cost;
   clocks = best_clocks;

@@ -480,6 +480,14 @@ Eigen::Vector3d GaugeSigns(const State& s, int D, int gx, int gp, int gz) {
 
 }  // namespace
 
+double ClockStdAt(const CalibrationResult& r, double t) {
+  double worst = 0;
+  for (const auto& c : r.clock_cov) {
+    worst = std::max(worst, std::sqrt(std::max(0.0, c(0, 0) + 2 * t * c(0, 1) + t * t * c(1, 1))));
+  }
+  return worst;
+}
+
 void SolverOptions::Validate(common::Validator& check) const {
   check.OneOf("geometry", geometry, {"planar", "3d", "linear"});
   check.Positive("speed_of_sound_mps", speed_of_sound_mps);
@@ -724,6 +732,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
   }
   result.solve_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.recording_end_s = *std::max_element(data.times_s.begin(), data.times_s.end());
   if (!std::isfinite(best_cost)) throw std::runtime_error("no start produced a finite cost");
   result.final_cost = best_cost;
 

@@ -203,7 +203,14 @@ struct CalibrationResult {
   // Known array poses: span of the static source's bearing in the array frame (degrees;
   // folded to 0..180 for a collinear array), -1 otherwise.
   double bearing_span_deg = -1;
+  // Last emission time (s): the clock model is extrapolated beyond it (see ClockStdAt).
+  double recording_end_s = 0;
 };
+
+// Worst standard deviation over the microphones of the clock correction tau_n + t delta_n at
+// reference time t (s), from the marginal covariances (0 without them): how far the
+// calibration can be trusted at, e.g., twice the recording's length.
+double ClockStdAt(const CalibrationResult& result, double t_s);
 
 // An initial guess for the first start (the others stay random): e.g. nominal positions.
 // Empty vectors = not given (offsets/drifts then come from a line fit, sources random).

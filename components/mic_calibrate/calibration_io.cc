@@ -344,6 +344,13 @@ std::string TextReport(const CalibrationResult& r, const TruthComparison& c,
     }
     s << "\n";
   }
+  if (r.has_covariance && !o.synchronous && r.recording_end_s > 0) {
+    const double t = r.recording_end_s;
+    s << "clock correction std (worst mic): " << std::setprecision(4) << ClockStdAt(r, t) * 1e3
+      << " ms at the last emission (t = " << std::setprecision(1) << t << " s), "
+      << std::setprecision(4) << ClockStdAt(r, 2 * t) * 1e3
+      << " ms at twice the recording's length (the drift is extrapolated beyond it)\n";
+  }
   if (c.available) {
     s << "mic-position RMS error vs nominal (mics 2..N): " << std::setprecision(4)
       << c.position_rms_m << " m\n";
