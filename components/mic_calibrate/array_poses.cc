@@ -68,6 +68,19 @@ struct FreePoseTdoaResidual {
   double dz_n, dz_1, z_s, t_s, inv_sigma, inv_c;
 };
 
+// Prior on the static source: r = (s - p) / sigma.
+struct SourcePrior {
+  SourcePrior(const Eigen::Vector2d& p, double sigma) : p(p), inv(1 / sigma) {}
+  template <class T>
+  bool operator()(const T* s, T* r) const {
+    r[0] = (s[0] - p.x()) * inv;
+    r[1] = (s[1] - p.y()) * inv;
+    return true;
+  }
+  Eigen::Vector2d p;
+  double inv;
+};
+
 // Odometry edge between consecutive array poses a = (x, y, yaw)_{k-1}, b = (x, y, yaw)_k:
 //   r = W (R(-yaw_a) (p_b - p_a) - d_xy, wrap(yaw_b - yaw_a - d_yaw)),
 // d = the given relative motion, W = diag(1/sigma_along, 1/sigma_across, 1/sigma_yaw).
@@ -268,6 +281,11 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     for (double y = lo.y(); y <= hi.y() + 1e-9; y += o.grid_step_m) {
       const Eigen::Vector3d s(x, y, s_z);
       Node node{0, s.head<2>(), std::vector<double>(N, 0.0), std::vector<double>(N, 0.0)};
+      if (o.static_source_prior_xy_m.size() == 2) {
+        node.cost += (s.head<2>() - Eigen::Vector2d(o.static_source_prior_xy_m[0],
+                                                    o.static_source_prior_xy_m[1])).squaredNorm() /
+                     std::pow(o.static_source_prior_sigma_m, 2);
+      }
       for (int n = 1; n < N; ++n) {
         for (int k = 0; k < K; ++k) {
           use[k] = usable[n][k];
@@ -379,6 +397,13 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
                                   nullptr, &poses[3 * (k - 1)], &poses[3 * k]);
       }
       problem->SetParameterBlockConstant(&poses[0]);  // gauge: the first pose
+    }
+    if (o.static_source_prior_xy_m.size() == 2) {
+      problem->AddResidualBlock(
+          new ceres::AutoDiffCostFunction<SourcePrior, 2, 2>(new SourcePrior(
+              Eigen::Vector2d(o.static_source_prior_xy_m[0], o.static_source_prior_xy_m[1]),
+              o.static_source_prior_sigma_m)),
+          nullptr, src);
     }
     if (!o.estimate_drift) {
       for (int n = 1; n < N; ++n)

@@ -509,6 +509,9 @@ void SolverOptions::Validate(common::Validator& check) const {
   check.InRange("min_bearing_span_deg", min_bearing_span_deg, 0, 180);
   check.NonNegative("grid_margin_m", grid_margin_m);
   check.Positive("grid_step_m", grid_step_m);
+  check.That(static_source_prior_xy_m.empty() || static_source_prior_xy_m.size() == 2,
+             "static_source_prior_xy_m", "must be empty or [x, y]");
+  check.Positive("static_source_prior_sigma_m", static_source_prior_sigma_m);
   check.NonNegative("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m);
   check.NonNegative("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad);
   check.NonNegative("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m);

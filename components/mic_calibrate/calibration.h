@@ -86,6 +86,12 @@ struct SolverOptions {
   // only |dz|, and barely), the smallest span of the source bearing in the array frame that
   // separates the clocks from the geometry, and the source-position grid of the first guess.
   double static_source_dz_m = 0.0;
+  // Optional prior on the static source's (x, y) in the pose frame (e.g. taped from the
+  // robot's start pose): turning in place sees the source's range only through the parallax
+  // of the array's offset from the turning centre, and a wrong range trades off with a clock
+  // pattern along a line array. Empty = no prior.
+  std::vector<double> static_source_prior_xy_m;
+  double static_source_prior_sigma_m = 0.05;
   double min_bearing_span_deg = 60.0;
   double grid_margin_m = 3.0;       // grid over the array path's bounding box +- this
   double grid_step_m = 0.1;
@@ -131,6 +137,10 @@ struct SolverOptions {
     v("verbose", verbose, "progress per start on stderr");
     v("static_source_dz_m", static_source_dz_m,
       "known array poses: height of the static source above the microphones (m)");
+    v("static_source_prior_xy_m", static_source_prior_xy_m,
+      "known array poses: prior on the static source's x, y in the pose frame (empty = none)");
+    v("static_source_prior_sigma_m", static_source_prior_sigma_m,
+      "known array poses: std of that prior");
     v("min_bearing_span_deg", min_bearing_span_deg,
       "known array poses: refuse when the source bearing in the array frame spans less");
     v("grid_margin_m", grid_margin_m, "known array poses: source search grid beyond the path");

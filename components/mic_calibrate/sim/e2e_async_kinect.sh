@@ -15,6 +15,8 @@
 #   path   the source path is unknown (random-walk prior, thesis ch. 3) and the positions known.
 # POSE_CHANNEL=SIM_TRUTH uses the true poses instead (as from a good SLAM; no pose graph).
 # SIM_SEED=n records with another simulator seed (noise, odometry drift, jitter).
+# WORLD=turn_in_place_world.yaml: the robot turns on the spot 1.5 m from the source instead of
+# driving the star (METHOD=poses only: the source is not seen from every side of the array).
 # METHOD=path ARRAY=async6 SYNC_ARRAY=sync6 GEOMETRY=3d EXTRA="--set solver.sources_in_gauge_plane=true"
 # runs the six-card 3D array (the source is at the array's height).
 #
@@ -31,6 +33,7 @@ sync_array=${SYNC_ARRAY:-kinect}
 EXTRA=${EXTRA:-}   # more --set options for the solver
 method=${METHOD:-poses}
 sim_seed=${SIM_SEED:-1}
+world=${WORLD:-calibration_world.yaml}
 if [ "$method" = poses ]; then geometry=${GEOMETRY:-linear}; else geometry=${GEOMETRY:-planar}; fi
 pose_channel=${POSE_CHANNEL:-ODOM}
 if [ "$method" = poses ]; then
@@ -48,13 +51,13 @@ fi
 mkdir -p "$out"
 cd "$repo"
 if [ ! -s "$out/$array.lcmlog" ]; then
-  "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
+  "$bin/sarmap-sim" --world "$here/$world" \
     --set audio.mic_array=config/arrays/$array.yaml --set audio.asynchronous=true \
     --set camera.enabled=false --set seed=$sim_seed --speed 0 --duration "$duration" \
     --lcm-url "file://$out/$array.lcmlog?mode=w" --log-level warn
 fi
 if [ ! -s "$out/${sync_array}_sync.lcmlog" ]; then   # the same scene with the synchronous Kinect
-  "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
+  "$bin/sarmap-sim" --world "$here/$world" \
     --set audio.mic_array=config/arrays/$sync_array.yaml --set audio.asynchronous=false \
     --set camera.enabled=false --set seed=$sim_seed --speed 0 --duration "$duration" \
     --lcm-url "file://$out/${sync_array}_sync.lcmlog?mode=w" --log-level warn
