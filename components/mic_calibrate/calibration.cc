@@ -480,6 +480,14 @@ Eigen::Vector3d GaugeSigns(const State& s, int D, int gx, int gp, int gz) {
 
 }  // namespace
 
+double ClockStdAt(const CalibrationResult& r, double t) {
+  double worst = 0;
+  for (const auto& c : r.clock_cov) {
+    worst = std::max(worst, std::sqrt(std::max(0.0, c(0, 0) + 2 * t * c(0, 1) + t * t * c(1, 1))));
+  }
+  return worst;
+}
+
 void SolverOptions::Validate(common::Validator& check) const {
   check.OneOf("geometry", geometry, {"planar", "3d", "linear"});
   check.Positive("speed_of_sound_mps", speed_of_sound_mps);
@@ -498,6 +506,15 @@ void SolverOptions::Validate(common::Validator& check) const {
   check.Positive("max_position_std_m", max_position_std_m);
   check.Positive("max_offset_std_s", max_offset_std_s);
   check.That(num_threads >= 1, "num_threads", "must be >= 1");
+  check.InRange("min_bearing_span_deg", min_bearing_span_deg, 0, 180);
+  check.NonNegative("grid_margin_m", grid_margin_m);
+  check.Positive("grid_step_m", grid_step_m);
+  check.That(static_source_prior_xy_m.empty() || static_source_prior_xy_m.size() == 2,
+             "static_source_prior_xy_m", "must be empty or [x, y]");
+  check.Positive("static_source_prior_sigma_m", static_source_prior_sigma_m);
+  check.NonNegative("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m);
+  check.NonNegative("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad);
+  check.NonNegative("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m);
   check.That(gauge_x_mic >= 0 && gauge_plane_mic >= 0 && gauge_z_mic >= 0, "gauge_*_mic",
              "must be >= 0");
 }
@@ -718,6 +735,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
   }
   result.solve_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.recording_end_s = *std::max_element(data.times_s.begin(), data.times_s.end());
   if (!std::isfinite(best_cost)) throw std::runtime_error("no start produced a finite cost");
   result.final_cost = best_cost;
 

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "common/options.h"
 
@@ -80,6 +81,26 @@ struct SolverOptions {
   double max_offset_std_s = 0.05;
   int num_threads = 1;
   bool verbose = false;             // per-start progress lines on stderr
+  // Known array motion, static source (CalibrateWithArrayPoses): the source's height above
+  // the array's microphones (known: the TDOAs of an array moving in a horizontal plane see
+  // only |dz|, and barely), the smallest span of the source bearing in the array frame that
+  // separates the clocks from the geometry, and the source-position grid of the first guess.
+  double static_source_dz_m = 0.0;
+  // Optional prior on the static source's (x, y) in the pose frame (e.g. taped from the
+  // robot's start pose): turning in place sees the source's range only through the parallax
+  // of the array's offset from the turning centre, and a wrong range trades off with a clock
+  // pattern along a line array. Empty = no prior.
+  std::vector<double> static_source_prior_xy_m;
+  double static_source_prior_sigma_m = 0.05;
+  double min_bearing_span_deg = 60.0;
+  double grid_margin_m = 3.0;       // grid over the array path's bounding box +- this
+  double grid_step_m = 0.1;
+  // Pose uncertainty (odometry): the array poses become unknowns of a pose graph whose edges
+  // are the given relative motions between consecutive emissions with the odometry's random-
+  // walk noise (std after 1 m driven / 1 rad turned / heading per metre). All 0 = poses exact.
+  double pose_trans_sigma_per_sqrt_m = 0.0;
+  double pose_rot_sigma_per_sqrt_rad = 0.0;
+  double pose_rot_sigma_per_sqrt_m = 0.0;
 
   template <class V>
   void Visit(V& v) {
@@ -114,6 +135,22 @@ struct SolverOptions {
     v("max_offset_std_s", max_offset_std_s, "refuse when a start-offset std exceeds this");
     v("num_threads", num_threads, "Ceres threads");
     v("verbose", verbose, "progress per start on stderr");
+    v("static_source_dz_m", static_source_dz_m,
+      "known array poses: height of the static source above the microphones (m)");
+    v("static_source_prior_xy_m", static_source_prior_xy_m,
+      "known array poses: prior on the static source's x, y in the pose frame (empty = none)");
+    v("static_source_prior_sigma_m", static_source_prior_sigma_m,
+      "known array poses: std of that prior");
+    v("min_bearing_span_deg", min_bearing_span_deg,
+      "known array poses: refuse when the source bearing in the array frame spans less");
+    v("grid_margin_m", grid_margin_m, "known array poses: source search grid beyond the path");
+    v("grid_step_m", grid_step_m, "known array poses: source search grid step");
+    v("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m,
+      "known array poses: odometry distance error std after 1 m (0 with the others: exact)");
+    v("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad,
+      "known array poses: odometry heading error std after turning 1 rad");
+    v("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m,
+      "known array poses: odometry heading error std after driving 1 m");
   }
   void Validate(common::Validator& check) const;
   int dim() const { return geometry == "3d" ? 3 : 2; }
@@ -125,6 +162,9 @@ struct TdoaData {
   std::vector<double> times_s;  // t_k of each emission (seconds since the reference start)
   Eigen::MatrixXd tdoa_s;       // K x (N - 1)
   std::vector<double> sigma_s;  // per emission TDOA std, or empty (use the options')
+  // Absolute time (us, the recording's clock: LCM utime) of each emission, or empty when not
+  // known (WAV input); used to look up the array pose of each emission.
+  std::vector<int64_t> utimes;
   // Optional per-edge motion prior (edge k links k and k+1): displacement and std; empty =
   // the zero-mean random walk of the options.
   std::vector<Eigen::Vector3d> motion_m;
@@ -170,7 +210,17 @@ struct CalibrationResult {
   std::vector<StartSummary> starts;
   std::vector<std::string> warnings;
   int gauge_ref = 1, gauge_x = 0, gauge_plane = 0, gauge_z = 0;  // 1-based
+  // Known array poses: span of the static source's bearing in the array frame (degrees;
+  // folded to 0..180 for a collinear array), -1 otherwise.
+  double bearing_span_deg = -1;
+  // Last emission time (s): the clock model is extrapolated beyond it (see ClockStdAt).
+  double recording_end_s = 0;
 };
+
+// Worst standard deviation over the microphones of the clock correction tau_n + t delta_n at
+// reference time t (s), from the marginal covariances (0 without them): how far the
+// calibration can be trusted at, e.g., twice the recording's length.
+double ClockStdAt(const CalibrationResult& result, double t_s);
 
 // An initial guess for the first start (the others stay random): e.g. nominal positions.
 // Empty vectors = not given (offsets/drifts then come from a line fit, sources random).
@@ -205,6 +255,36 @@ std::vector<Eigen::Vector3d> ToGaugeFrame(const std::vector<Eigen::Vector3d>& po
 // Entries already > 0 are kept.
 void ChooseGauge(int num_mics, int dim, const std::vector<Eigen::Vector3d>& nominal, int* x_mic,
                  int* plane_mic, int* z_mic);
+
+// --- Known array motion, static source -------------------------------------------------
+// A robot carries the array and turns in place or drives (poses from odometry or SLAM) while
+// one source stands still. Microphone n (known position m_n in the array frame) is at
+// m_n(k) = world_from_array_k * m_n at emission k, and
+//
+//   z_n(k) = (|m_n(k) - s| - |m_1(k) - s|) / c + tau_n + t_k delta_n
+//
+// with ONE unknown source position s = (x, y, z_array + static_source_dz_m) in the world frame
+// and the clocks (tau_n, delta_n), n >= 2. Why: with the microphones on one line and an
+// unknown source path, an offset pattern linear along the line (tau_n = a x_n) is exactly a
+// change of every source bearing (cos beta_k -> cos beta_k - a c, eq. 3.49), and a drift
+// pattern the same growing with time: unobservable however long the recording. With known
+// headings the bearing at k is fixed by the one point s and the pose, so such a pattern
+// would have to be one shift of cos beta at many different bearings, which no single s
+// gives: tau and delta become observable once the bearing in the array frame spans enough.
+// Poses from odometry drift: with options.pose_*_sigma_* > 0 the array poses (x, y, yaw) are
+// unknowns too, linked by the given relative motions between consecutive emissions with the
+// odometry's random-walk noise (a pose graph; the first pose is held as the gauge). A clock
+// pattern would need heading corrections following 1 / sin(bearing), which the random walk
+// does not allow, so the confound stays broken while the odometry drift is taken out.
+// Solve: a grid over s (clocks by linear least squares at each node, truncated cost), then
+// Ceres (SPARSE_NORMAL_CHOLESKY, SuiteSparse, robust loss) from the best grid nodes; marginal
+// covariances of s and every (tau, delta). Refuses (UnobservableError) when the array never
+// moved, when the bearing span is below options.min_bearing_span_deg (the confound above),
+// or when the covariance is rank deficient / too wide. result.source_positions_m = {s}.
+CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
+                                          const std::vector<Eigen::Isometry3d>& world_from_array,
+                                          const std::vector<Eigen::Vector3d>& mic_positions_m,
+                                          const SolverOptions& options);
 
 namespace internal_testing {
 // Compares the analytic TDOA cost with the autodiff functor at random points (dim 2 or 3).

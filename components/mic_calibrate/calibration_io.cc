@@ -110,7 +110,7 @@ TdoaCsv ReadTdoaCsv(const std::string& path, double step_s) {
   const int ct = t.Col("t_s"), ck = t.Col("k");
   if (ct < 0 && ck < 0) throw std::runtime_error(path + ": needs a 'k' or 't_s' column");
   const int cx = t.Col("src_x"), cy = t.Col("src_y"), cz = t.Col("src_z");
-  const int cinfo = t.Col("info"), csig = t.Col("sigma_s");
+  const int cinfo = t.Col("info"), csig = t.Col("sigma_s"), cutime = t.Col("utime");
   TdoaCsv out;
   out.data.num_mics = static_cast<int>(tdoa_cols.size()) + 1;
   const int K = static_cast<int>(t.rows.size());
@@ -122,6 +122,12 @@ TdoaCsv ReadTdoaCsv(const std::string& path, double step_s) {
       throw std::runtime_error(path + ":" + std::to_string(t.line_of_row[k]) + ": time/step is missing");
     }
     out.data.times_s.push_back(time);
+    if (cutime >= 0) {
+      if (!std::isfinite(row[cutime])) {
+        throw std::runtime_error(path + ":" + std::to_string(t.line_of_row[k]) + ": utime is missing");
+      }
+      out.data.utimes.push_back(std::llround(row[cutime]));
+    }
     for (size_t j = 0; j < tdoa_cols.size(); ++j) out.data.tdoa_s(k, j) = row[tdoa_cols[j]];
     if (cinfo >= 0 || csig >= 0) {
       const double sigma = csig >= 0 ? row[csig] : 1.0 / std::sqrt(row[cinfo]);
@@ -145,6 +151,8 @@ void WriteTdoaCsv(const std::string& path, const TdoaData& d) {
   out << "k,t_s";
   for (int n = 2; n <= d.num_mics; ++n) out << ",tdoa_m" << n << "_s";
   if (!d.sigma_s.empty()) out << ",sigma_s";
+  const bool utimes = static_cast<int>(d.utimes.size()) == d.num_emissions();
+  if (utimes) out << ",utime";
   out << "\n" << std::setprecision(10);
   for (int k = 0; k < d.num_emissions(); ++k) {
     out << k + 1 << "," << d.times_s[k];
@@ -153,6 +161,7 @@ void WriteTdoaCsv(const std::string& path, const TdoaData& d) {
       if (std::isfinite(d.tdoa_s(k, n))) out << d.tdoa_s(k, n); else out << "nan";
     }
     if (!d.sigma_s.empty()) out << "," << d.sigma_s[k];
+    if (utimes) out << "," << d.utimes[k];
     out << "\n";
   }
 }
@@ -294,12 +303,21 @@ std::string TextReport(const CalibrationResult& r, const TruthComparison& c,
   s << std::fixed;
   s << "microphone-array calibration (" << o.geometry << (o.synchronous ? ", synchronous" : "")
     << (o.estimate_drift ? "" : ", drift not estimated") << ")\n";
-  s << "gauge: mic 1 at origin";
-  if (r.dim != 1) {
+  const bool posed = r.bearing_span_deg >= 0;  // known array poses, static source
+  if (posed) {
+    const Eigen::Vector3d& src = r.source_positions_m.at(0);
+    s << "known array poses, static source at (" << std::setprecision(3) << src.x() << ", "
+      << src.y() << ", " << src.z() << ") m in the pose frame, std "
+      << std::sqrt(std::max(0.0, r.source_cov.at(0).trace())) << " m; its bearing in the array "
+      << "frame spans " << std::setprecision(1) << r.bearing_span_deg
+      << " deg; microphone positions known (array frame)\n";
+  }
+  if (!posed) s << "gauge: mic 1 at origin";
+  if (!posed && r.dim != 1) {
     s << ", mic " << r.gauge_x << " on +x, mic " << r.gauge_plane << " y > 0";
     if (r.dim == 3) s << " (z = 0), mic " << r.gauge_z << " z > 0";
   }
-  s << "\n";
+  if (!posed) s << "\n";
   s << "emissions " << r.tdoa_residual_s.rows() << ", starts tried " << r.starts.size()
     << " (best " << r.best_start + 1 << "), iterations " << r.iterations << " (all starts "
     << r.total_iterations << "), solve " << std::setprecision(3) << r.solve_time_s
@@ -326,6 +344,13 @@ std::string TextReport(const CalibrationResult& r, const TruthComparison& c,
     }
     s << "\n";
   }
+  if (r.has_covariance && !o.synchronous && r.recording_end_s > 0) {
+    const double t = r.recording_end_s;
+    s << "clock correction std (worst mic): " << std::setprecision(4) << ClockStdAt(r, t) * 1e3
+      << " ms at the last emission (t = " << std::setprecision(1) << t << " s), "
+      << std::setprecision(4) << ClockStdAt(r, 2 * t) * 1e3
+      << " ms at twice the recording's length (the drift is extrapolated beyond it)\n";
+  }
   if (c.available) {
     s << "mic-position RMS error vs nominal (mics 2..N): " << std::setprecision(4)
       << c.position_rms_m << " m\n";
@@ -343,6 +368,12 @@ std::string JsonReport(const CalibrationResult& r, const TruthComparison& c,
     << (o.estimate_drift ? "true" : "false") << ",\n";
   s << "  \"gauge\": {\"ref\": 1, \"x\": " << r.gauge_x << ", \"plane\": " << r.gauge_plane
     << ", \"z\": " << r.gauge_z << "},\n";
+  if (r.bearing_span_deg >= 0) {
+    s << "  \"known_array_poses\": {\"bearing_span_deg\": " << Num(r.bearing_span_deg)
+      << ", \"source_m\": [" << Num(r.source_positions_m.at(0).x()) << ", "
+      << Num(r.source_positions_m.at(0).y()) << ", " << Num(r.source_positions_m.at(0).z())
+      << "]},\n";
+  }
   s << "  \"num_emissions\": " << r.tdoa_residual_s.rows() << ", \"starts_tried\": "
     << r.starts.size() << ", \"best_start\": " << r.best_start + 1 << ", \"iterations\": "
     << r.iterations << ", \"total_iterations\": " << r.total_iterations

@@ -8,6 +8,9 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "sarmap/audio_frame_t.hpp"
+#include "sarmap/odometry_t.hpp"
+#include "sarmap/pose_t.hpp"
+#include "sarmap/sim_truth_t.hpp"
 
 namespace sarmap {
 namespace mic_calibrate {
@@ -95,6 +98,7 @@ Recording ReadLcmAudioLog(const std::string& path, const std::string& prefix,
     if (!have_ref) {
       t_ref = t0;
       have_ref = true;
+      rec.reference_start_utime = std::llround(t0 * 1e6);
     }
     int64_t gaps = 0, covered = 0;
     std::vector<std::vector<float>> chans(d.num_channels, std::vector<float>(len, 0.0f));
@@ -118,6 +122,56 @@ Recording ReadLcmAudioLog(const std::string& path, const std::string& prefix,
   }
   if (stats) *stats = st;
   return rec;
+}
+
+std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std::string& channel,
+                                              LcmAudioLogStats* stats) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw std::runtime_error("cannot open LCM log " + path);
+  std::vector<common::StampedPose> poses;
+  int bad = 0;
+  auto make = [](int64_t utime, const double* p, const double* q) {
+    common::StampedPose sp;
+    sp.utime = utime;
+    sp.pose = common::Rigid3d(Eigen::Vector3d(p[0], p[1], p[2]),
+                              Eigen::Quaterniond(q[0], q[1], q[2], q[3]));
+    return sp;
+  };
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel != channel) continue;
+    sarmap::odometry_t odom;
+    sarmap::pose_t pose;
+    sarmap::sim_truth_t truth;
+    const double* q = nullptr;
+    if (odom.decode(ev->data, 0, ev->datalen) >= 0) {
+      poses.push_back(make(odom.header.utime, odom.position_m, odom.orientation));
+      q = odom.orientation;
+    } else if (pose.decode(ev->data, 0, ev->datalen) >= 0) {
+      poses.push_back(make(pose.header.utime, pose.position_m, pose.orientation));
+      q = pose.orientation;
+    } else if (truth.decode(ev->data, 0, ev->datalen) >= 0) {
+      poses.push_back(make(truth.header.utime, truth.robot_position_m, truth.robot_orientation));
+      q = truth.robot_orientation;
+    } else {
+      ++bad;
+      continue;
+    }
+    const double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(std::abs(qn - 1) < 1e-3) || !poses.back().pose.translation().allFinite()) {
+      poses.pop_back();
+      ++bad;
+    }
+  }
+  if (stats && bad > 0) {
+    stats->warnings.push_back(channel + ": " + std::to_string(bad) +
+                              " messages that are not a valid odometry_t / pose_t / sim_truth_t skipped");
+  }
+  if (poses.empty()) {
+    throw std::runtime_error(path + ": no odometry_t, pose_t or sim_truth_t on channel '" + channel + "'");
+  }
+  std::stable_sort(poses.begin(), poses.end(),
+                   [](const common::StampedPose& a, const common::StampedPose& b) { return a.utime < b.utime; });
+  return poses;
 }
 
 void WriteLcmAudioLog(const std::string& path, const Recording& rec,

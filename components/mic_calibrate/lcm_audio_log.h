@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/pose_history.h"
 #include "mic_calibrate/tdoa_extraction.h"
 
 namespace sarmap {
@@ -24,6 +25,12 @@ struct LcmAudioLogStats {
 // log or no audio; bad frames are counted and skipped.
 Recording ReadLcmAudioLog(const std::string& path, const std::string& channel_prefix,
                           LcmAudioLogStats* stats);
+
+// The poses on `channel` of an LCM log, in time order: odometry_t (ODOM), pose_t (POSE, e.g.
+// map_from_base from SLAM) or sim_truth_t (SIM_TRUTH), recognised by the message's type
+// fingerprint. Throws when the channel holds none of them.
+std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std::string& channel,
+                                              LcmAudioLogStats* stats);
 
 // Writes `rec` as an LCM log: one AUDIO_<name> channel per entry of `devices` (each a list of
 // recording channels), blocks of `block` samples, utime = start_utime + (channel start +

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -20,12 +21,30 @@ namespace sarmap {
 namespace mic_calibrate {
 namespace {
 
+// Known array motion (CalibrateWithArrayPoses): the robot carrying the array turned/drove
+// while one source stood still; the poses of the base come from a channel of an LCM log.
+struct ArrayPosesOptions {
+  std::string channel;                          // "" = off; ODOM, POSE or SIM_TRUTH
+  std::string robot_config = "config/robot.yaml";  // base_from_mic_array
+  double max_gap_s = 0.25;                      // an emission this far from any pose is dropped
+  template <class V>
+  void Visit(V& v) {
+    v("channel", channel,
+      "pose channel (odometry_t, pose_t or sim_truth_t) of the robot carrying the array while "
+      "a static source sounded; empty = off (the source moved around a static array)");
+    v("robot_config", robot_config, "robot YAML with base_from_mic_array");
+    v("max_gap_s", max_gap_s, "largest time from an emission to a pose (interpolation)");
+  }
+  void Validate(common::Validator& check) const { check.Positive("max_gap_s", max_gap_s); }
+};
+
 struct MicCalibrateOptions {
   std::string array_name = "calibrated";
   double step_s = 0.5;  // TDOA CSV without t_s: t_k = k * step_s (thesis: a chirp every 0.5 s)
   std::string lcm_channel_prefix = "AUDIO";
   SolverOptions solver;
   ExtractionOptions extraction;
+  ArrayPosesOptions array_poses;
   template <class V>
   void Visit(V& v) {
     v("array_name", array_name, "name written into the array YAML");
@@ -33,6 +52,7 @@ struct MicCalibrateOptions {
     v("lcm_channel_prefix", lcm_channel_prefix, "LCM log input: audio channels with this prefix");
     v("solver", solver, "graph least-squares calibration");
     v("extraction", extraction, "TDOA extraction from audio");
+    v("array_poses", array_poses, "known array motion with a static source");
   }
   void Validate(common::Validator& check) const { check.Positive("step_s", step_s); }
 };
@@ -51,9 +71,103 @@ std::vector<Eigen::Vector3d> PositionsOf(const common::MicArrayOptions& a) {
   return p;
 }
 
+// Known array motion, static source: the pose of every emission from the log, then
+// CalibrateWithArrayPoses. Returns the exit code.
+template <class Progress>
+int RunWithArrayPoses(const MicCalibrateOptions& opt, const std::string& input,
+                      const std::string& input_type, std::string poses_log, TdoaData data,
+                      const std::vector<Eigen::Vector3d>& nominal, const std::string& output,
+                      const std::string& report, int sample_rate_hz, bool quiet,
+                      const Progress& progress) {
+  const ArrayPosesOptions& po = opt.array_poses;
+  if (nominal.empty()) {
+    throw common::ArgError("array_poses needs the microphone positions in the array frame (--nominal)");
+  }
+  if (poses_log.empty()) {
+    if (input_type != "lcm") {
+      throw common::ArgError("array_poses: give --poses LOG (the input is not an LCM log)");
+    }
+    poses_log = input;
+  }
+  if (static_cast<int>(data.utimes.size()) != data.num_emissions()) {
+    throw common::ArgError("array_poses: the TDOAs carry no absolute times (utime); use an LCM "
+                           "log, or a TDOA CSV written by --write-tdoa from one");
+  }
+  LcmAudioLogStats st;
+  const std::vector<common::StampedPose> poses = ReadLcmPoses(poses_log, po.channel, &st);
+  for (const auto& w : st.warnings) progress("warning: " + w);
+  const int64_t gap_us = static_cast<int64_t>(po.max_gap_s * 1e6);
+  common::PoseHistory history(std::numeric_limits<int64_t>::max() / 4, gap_us);
+  for (const auto& p : poses) history.Add(p);
+  const common::RobotOptions robot = common::LoadRobot(po.robot_config);
+  const common::Rigid3d base_from_array = robot.base_from_mic_array.ToRigid3d();
+  // Keep the emissions that have a pose.
+  TdoaData kept = data;
+  kept.times_s.clear();
+  kept.utimes.clear();
+  kept.sigma_s.clear();
+  std::vector<int> rows;
+  std::vector<Eigen::Isometry3d> world_from_array;
+  for (int k = 0; k < data.num_emissions(); ++k) {
+    const auto p = history.At(data.utimes[k]);
+    if (!p) continue;
+    const common::Rigid3d w = p->pose * base_from_array;
+    Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
+    iso.linear() = w.rotation().toRotationMatrix();
+    iso.translation() = w.translation();
+    world_from_array.push_back(iso);
+    rows.push_back(k);
+  }
+  kept.tdoa_s.resize(static_cast<long>(rows.size()), data.num_mics - 1);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const int k = rows[i];
+    kept.tdoa_s.row(static_cast<long>(i)) = data.tdoa_s.row(k);
+    kept.times_s.push_back(data.times_s[k]);
+    kept.utimes.push_back(data.utimes[k]);
+    if (!data.sigma_s.empty()) kept.sigma_s.push_back(data.sigma_s[k]);
+  }
+  progress(std::to_string(poses.size()) + " poses on " + po.channel + " from " + poses_log + "; " +
+           std::to_string(rows.size()) + " of " + std::to_string(data.num_emissions()) +
+           " emissions have one; solving (static source, known array poses)");
+  SolverOptions so = opt.solver;
+  so.verbose = so.verbose || !quiet;
+  CalibrationResult result;
+  try {
+    result = CalibrateWithArrayPoses(kept, world_from_array, nominal, so);
+  } catch (const UnobservableError& e) {
+    fprintf(stderr, "sarmap-mic-calibrate: refused: %s\n", e.what());
+    return 3;
+  }
+  if (rows.size() < data.utimes.size()) {
+    result.warnings.push_back(std::to_string(data.utimes.size() - rows.size()) +
+                              " emissions had no pose within " + std::to_string(po.max_gap_s) +
+                              " s on " + po.channel + " and were left out");
+  }
+  const TruthComparison cmp = CompareWithNominal(result, {}, {});
+  const std::string text = TextReport(result, cmp, so);
+  if (!quiet) fprintf(stderr, "%s", text.c_str());
+  if (!output.empty()) {
+    const common::MicArrayOptions array = ToArrayOptions(result, so, opt.array_name, sample_rate_hz);
+    WriteArrayYaml(output, array,
+                   "Written by sarmap-mic-calibrate from " + input + " with the array poses of " +
+                       po.channel + " (static source)\nTDOA residual std " +
+                       std::to_string(result.residual_std_s * 1e3) +
+                       " ms; microphone positions as given (array frame).");
+    common::LoadMicArray(output);
+    progress("array written to " + output);
+  }
+  if (!report.empty()) {
+    std::ofstream(report + ".txt") << text;
+    std::ofstream(report + ".json") << JsonReport(result, cmp, so);
+    WritePlot(report + ".png", result, cmp);
+    progress("report written to " + report + ".{txt,json,png}");
+  }
+  return 0;
+}
+
 int Run(int argc, char** argv) {
   std::string input, input_type = "auto", output, report, nominal_path, mics_csv, motion_csv,
-              write_tdoa, config_path;
+              write_tdoa, config_path, poses_log;
   std::vector<std::string> overrides;
   std::string mic_list;
   bool print_config = false, init_from_nominal = false, quiet = false;
@@ -75,6 +189,8 @@ int Run(int argc, char** argv) {
                "use only these microphones, e.g. 1,2,3,4 (the first is the reference)");
   args.AddFlag("--motion-csv", &motion_csv, "source motion prior edges (k_from,k_to,dx,..,info_x,..)");
   args.AddFlag("--write-tdoa", &write_tdoa, "also write the extracted TDOAs as CSV");
+  args.AddFlag("--poses", &poses_log,
+               "LCM log with the array's poses (array_poses.channel; default: the input log)");
   args.AddFlag("--config", &config_path, "options YAML (config/mic_calibrate.yaml)");
   args.AddRepeated("--set", &overrides, "override an option: key=value (e.g. solver.geometry=3d)");
   args.AddSwitch("--print-config", &print_config, "print the effective options and exit");
@@ -197,6 +313,10 @@ int Run(int argc, char** argv) {
     }
   }
   SolverOptions so = opt.solver;
+  if (!opt.array_poses.channel.empty()) {
+    return RunWithArrayPoses(opt, input, input_type, poses_log, data, nominal, output, report,
+                             sample_rate_hz, quiet, progress);
+  }
   if (so.known_positions && so.geometry != "linear") {
     if (nominal.empty()) {
       throw common::ArgError("solver.known_positions needs --nominal (the known positions)");

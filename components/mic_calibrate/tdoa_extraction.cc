@@ -195,6 +195,10 @@ TdoaData ExtractTdoas(const Recording& rec, const ExtractionOptions& o, Extracti
       row[n - 1] = (lag + frac_shift) / fs;
     }
     data.times_s.push_back(r0 / fs + pre / fs);
+    if (rec.reference_start_utime != 0) {
+      data.utimes.push_back(rec.reference_start_utime +
+                            std::llround((start[0] + data.times_s.back()) * 1e6));
+    }
     rows.push_back(row);
   }
   local.events = static_cast<int>(rows.size());

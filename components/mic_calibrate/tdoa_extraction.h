@@ -24,6 +24,9 @@ struct Recording {
   std::vector<std::vector<float>> channels;  // one per microphone, mic order
   std::vector<double> channel_start_s;       // per channel (empty = all 0)
   std::vector<std::string> channel_names;    // for messages (device:channel)
+  // Absolute time (us, e.g. LCM utime) of reference time 0; 0 = unknown (WAV). Lets the
+  // emissions be matched with array poses (TdoaData::utimes).
+  int64_t reference_start_utime = 0;
 };
 
 struct ExtractionOptions {

@@ -6,8 +6,19 @@
 #
 #   components/mic_calibrate/sim/e2e_async_kinect.sh [BUILD_BIN_DIR] [OUT_DIR] [DURATION_S]
 #
-# ARRAY=async6 SYNC_ARRAY=sync6 GEOMETRY=3d EXTRA="--set solver.sources_in_gauge_plane=true" ...
-# runs the same with the six-card 3D array (the source is at the array's height).
+# METHOD (default poses):
+#   poses  the array's motion is known (the robot's ODOM, with the simulator's odometry noise
+#          model as a pose graph) and the noise source stands still: one source position,
+#          offsets and drifts (CalibrateWithArrayPoses). Needed for the Kinect-like array: with
+#          the microphones on one line and an unknown source path, clock errors growing along
+#          the line look like a rotation of every direction (10 deg off with METHOD=path).
+#   path   the source path is unknown (random-walk prior, thesis ch. 3) and the positions known.
+# POSE_CHANNEL=SIM_TRUTH uses the true poses instead (as from a good SLAM; no pose graph).
+# SIM_SEED=n records with another simulator seed (noise, odometry drift, jitter).
+# WORLD=turn_in_place_world.yaml: the robot turns on the spot 1.5 m from the source instead of
+# driving the star (METHOD=poses only: the source is not seen from every side of the array).
+# METHOD=path ARRAY=async6 SYNC_ARRAY=sync6 GEOMETRY=3d EXTRA="--set solver.sources_in_gauge_plane=true"
+# runs the six-card 3D array (the source is at the array's height).
 #
 # The log is written directly by the simulator through LCM's file provider (no network).
 set -eu
@@ -19,22 +30,39 @@ duration=${3:-250}
 cal_end=205   # the noise bursts stop here (world file); the talker follows
 array=${ARRAY:-async_kinect}
 sync_array=${SYNC_ARRAY:-kinect}
-geometry=${GEOMETRY:-planar}
 EXTRA=${EXTRA:-}   # more --set options for the solver
+method=${METHOD:-poses}
+sim_seed=${SIM_SEED:-1}
+world=${WORLD:-calibration_world.yaml}
+if [ "$method" = poses ]; then geometry=${GEOMETRY:-linear}; else geometry=${GEOMETRY:-planar}; fi
+pose_channel=${POSE_CHANNEL:-ODOM}
+if [ "$method" = poses ]; then
+  # The robot's poses during the recording (same log); with ODOM the simulator's odometry
+  # noise (components/sim OdometryOptions defaults) is the pose graph's edge noise.
+  if [ "$pose_channel" = ODOM ]; then
+    pose_noise="--set solver.pose_trans_sigma_per_sqrt_m=0.02 --set solver.pose_rot_sigma_per_sqrt_rad=0.02 --set solver.pose_rot_sigma_per_sqrt_m=0.005"
+  else
+    pose_noise=""
+  fi
+  cal_opts="--set array_poses.channel=$pose_channel --poses $out/$array.lcmlog $pose_noise $EXTRA"
+else
+  cal_opts="--set solver.known_positions=true $EXTRA"
+fi
 mkdir -p "$out"
 cd "$repo"
 if [ ! -s "$out/$array.lcmlog" ]; then
-  "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
+  "$bin/sarmap-sim" --world "$here/$world" \
     --set audio.mic_array=config/arrays/$array.yaml --set audio.asynchronous=true \
-    --set camera.enabled=false --speed 0 --duration "$duration" \
+    --set camera.enabled=false --set seed=$sim_seed --speed 0 --duration "$duration" \
     --lcm-url "file://$out/$array.lcmlog?mode=w" --log-level warn
 fi
 if [ ! -s "$out/${sync_array}_sync.lcmlog" ]; then   # the same scene with the synchronous Kinect
-  "$bin/sarmap-sim" --world "$here/calibration_world.yaml" \
+  "$bin/sarmap-sim" --world "$here/$world" \
     --set audio.mic_array=config/arrays/$sync_array.yaml --set audio.asynchronous=false \
-    --set camera.enabled=false --speed 0 --duration "$duration" \
+    --set camera.enabled=false --set seed=$sim_seed --speed 0 --duration "$duration" \
     --lcm-url "file://$out/${sync_array}_sync.lcmlog?mode=w" --log-level warn
 fi
+# All of the log (the talker included) with the source path unknown: extracts the TDOAs.
 "$bin/sarmap-mic-calibrate" "$out/$array.lcmlog" --config config/mic_calibrate.yaml \
   --set solver.geometry=$geometry --set solver.known_positions=true $EXTRA \
   --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=${array}_calibrated \
@@ -44,7 +72,7 @@ fi
 awk -F, -v end="$cal_end" '/^#/ || /^k/ { print; next } $2 <= end { print }' \
   "$out/${array}_tdoa.csv" > "$out/${array}_tdoa_calibration.csv"
 "$bin/sarmap-mic-calibrate" "$out/${array}_tdoa_calibration.csv" --config config/mic_calibrate.yaml \
-  --set solver.geometry=$geometry --set solver.known_positions=true $EXTRA \
+  --set solver.geometry=$geometry $cal_opts \
   --set solver.speed_of_sound_mps=343 --set solver.tdoa_sigma_s=0.00005 --set array_name=${array}_calibrated \
   --nominal config/arrays/$sync_array.yaml --output "$out/${array}_calibrated.yaml" \
   --report "$out/${array}_report" --quiet
