@@ -296,14 +296,14 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
         // The sensor keeps facing along the side while it side-steps round the source.
         path.hold_yaw = a;
         path.Arc(centre, 2.0, a0, a0 + M_PI / 2, NAN);
-        path.UpDown(0.6);
+        path.UpDown(c.updown_m);
         path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, NAN);
         path.hold_yaw = NAN;
       } else {
         // On the arcs the sensor looks c.arc_face_offset_rad to the side of the source.
         path.Arc(centre, 2.0, a0, a0 + M_PI / 2, c.arc_face_offset_rad);
         path.hold_yaw = a0 + M_PI / 2 + M_PI + c.arc_face_offset_rad;
-        path.UpDown(0.6);
+        path.UpDown(c.updown_m);
         path.hold_yaw = NAN;
         path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, c.arc_face_offset_rad);
       }
@@ -321,7 +321,7 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
       for (int part = 1; part <= 3; ++part) {
         const Eigen::Vector2d p = s + 4.0 * part * dir;
         path.LineTo(Eigen::Vector3d(p.x(), p.y(), 0));
-        if (part < 3) path.UpDown(0.6);
+        if (part < 3) path.UpDown(c.updown_m);
       }
     }
     path.LineTo(Eigen::Vector3d(12, 12, 0));
@@ -510,7 +510,8 @@ class Mapper {
     const size_t n = d_.truth.size();
     int last_full = -1000;
     for (size_t k = 0; k < n; ++k) {
-      poses_.push_back(k == 0 ? Pose6::From(d_.truth[0]) : Pose6::From(poses_.back().iso() * d_.odometry[k]));
+      poses_.push_back(k == 0 || o_.oracle_poses ? Pose6::From(d_.truth[k])
+                                                 : Pose6::From(poses_.back().iso() * d_.odometry[k]));
       bool loop = false;
       for (const auto& o : d_.landmark_obs[k]) {
         auto it = last_seen_.find(o.id);
@@ -574,6 +575,11 @@ class Mapper {
         }
         fprintf(stderr, " err %.3f\n", (tr.point - d_.sources[kv.first]).norm());
       }
+      for (size_t k = 0; k < n; k += 20) {
+        const Eigen::Isometry3d e = d_.truth[k].inverse() * poses_[k].iso();
+        fprintf(stderr, "pose %zu: %zu landmark obs, error %.3f m %.2f deg\n", k, d_.landmark_obs[k].size(),
+                e.translation().norm(), Eigen::AngleAxisd(e.linear()).angle() * 180 / M_PI);
+      }
       const Eigen::Vector3d e = poses_.back().t - d_.truth.back().translation();
       fprintf(stderr, "final pose error %.3f m, %zu keyframes\n", e.norm(), n);
     }
@@ -593,6 +599,14 @@ class Mapper {
     }
     res.rms_m = res.converged ? std::sqrt(sum2 / res.converged) : 0;
     res.axis_rms_m = res.rms_m / std::sqrt(3.0);
+    double pt2 = 0, pr2 = 0;
+    for (size_t k = 0; k < n; ++k) {
+      const Eigen::Isometry3d e = d_.truth[k].inverse() * poses_[k].iso();
+      pt2 += e.translation().squaredNorm();
+      pr2 += std::pow(Eigen::AngleAxisd(e.linear()).angle(), 2);
+    }
+    res.pose_rms_m = std::sqrt(pt2 / n);
+    res.pose_rms_rad = std::sqrt(pr2 / n);
     res.floor_rms_m = FloorRms();
     res.convergence_rate = static_cast<double>(res.converged) / d_.sources.size();
     int correct = 0;
@@ -651,7 +665,7 @@ class Mapper {
       if (used_poses.insert(k).second) {
         problem.AddParameterBlock(poses_[k].q.coeffs().data(), 4, &quat);
         problem.AddParameterBlock(poses_[k].t.data(), 3);
-        if (k < first || k == 0) {
+        if (k < first || k == 0 || o_.oracle_poses) {
           problem.SetParameterBlockConstant(poses_[k].q.coeffs().data());
           problem.SetParameterBlockConstant(poses_[k].t.data());
         }

@@ -101,12 +101,14 @@ struct LinearSimConfig {
   double step_m = 0.2;            // Table 5.1
   double odo_sigma_m = 0.01;      // per step and axis (our choice: the thesis tracks with ORB-SLAM)
   double odo_sigma_rad = 0.5 * M_PI / 180;
-  double landmark_density_per_m2 = 0.6;
+  double landmark_density_per_m2 = 2.0;  // our choice: RGB-D features are dense (0.6 left poses 1.2-1.6 deg off)
   double landmark_range_m = 4.0;
   double landmark_fov_rad = 60 * M_PI / 180;  // half angle
   double landmark_sigma_m = 0.01;             // Table 5.1
   double landmark_sigma_rad = 1.0 * M_PI / 180;
   double sound_range_m = 3.0;                 // Table 5.1
+  // Height of the "up and down" moves (the thesis does not give it; our choice).
+  double updown_m = 0.6;
   double heard_probability = 1.0;
   // Trajectory 1: on the arcs round a source the sensor faces the source turned by this
   // much; NaN (default): it faces along the path like a walking operator. (0 would put
@@ -172,6 +174,8 @@ struct LinearMapperOptions {
   // Diagnostic: every source is known at its true position from its first observation
   // (skips the multi-hypothesis initialisation; shows the accuracy floor of the data).
   bool oracle_init = false;
+  // Diagnostic: the keyframe poses are the true ones and held fixed.
+  bool oracle_poses = false;
 };
 
 struct LinearRunResult {
@@ -180,6 +184,7 @@ struct LinearRunResult {
   // Accuracy floor: per source, least squares of its DOAs from the TRUE poses, started at
   // the truth; RMS over all heard sources.
   double floor_rms_m = 0;
+  double pose_rms_m = 0, pose_rms_rad = 0;  // final keyframe poses against the truth
   std::vector<double> errors_m;   // per source (NaN: not converged)
   double convergence_rate = 0;    // converged (linearity index) / number of sources
   double correct_convergence_rate = 0;  // converged and within converged_error_m of the truth
