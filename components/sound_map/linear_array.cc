@@ -7,6 +7,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <stdexcept>
 #include <map>
 #include <random>
 #include <set>
@@ -87,8 +89,10 @@ void MultiHypothesisSource::Update(const Eigen::Isometry3d& pose, double beta, d
     const J3 zh = PredictBeta(axis_, pose, s);
     const Eigen::RowVector3d hj = zh.v.transpose();
     const double nu = Wrap(beta - zh.a);
-    const double sv = hj * h.p * hj.transpose() + var;
-    h.chi2_sum += nu * nu / sv;  // (5.21-5.22), with the observation noise in S
+    const double hph = hj * h.p * hj.transpose();
+    const double sv = hph + var;
+    // (5.21-5.22): the thesis prints S = H P H'; the innovation covariance adds Q.
+    h.chi2_sum += nu * nu / (options_.chi2_with_noise ? sv : std::max(hph, 1e-12));
     ++h.updates;
     const Eigen::Vector3d k = h.p * hj.transpose() / sv;  // (5.16)
     h.s += k * nu;                                         // (5.17)
@@ -100,7 +104,7 @@ void MultiHypothesisSource::Update(const Eigen::Isometry3d& pose, double beta, d
     //   L = 4 sigma_d |cos alpha| / |h|,  sigma_d = sigma_rho / rho^2,
     // h from the current sensor to the point, alpha between h and the anchor ray m.
     const Eigen::Vector3d p = HypothesisPoint(axis_, h.s);
-    const Eigen::Vector3d hv = p - pose.translation();
+    const Eigen::Vector3d hv = p - (options_.linearity_from_anchor ? axis_.origin : pose.translation());
     const Eigen::Vector3d m = (p - axis_.origin).normalized();
     const double sigma_d = std::sqrt(std::max(h.p(2, 2), 0.0)) / (h.s[2] * h.s[2]);
     h.linearity = 4 * sigma_d * std::abs(m.dot(hv.normalized())) / std::max(hv.norm(), 1e-6);
@@ -292,14 +296,14 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
         // The sensor keeps facing along the side while it side-steps round the source.
         path.hold_yaw = a;
         path.Arc(centre, 2.0, a0, a0 + M_PI / 2, NAN);
-        path.UpDown(0.6);
+        path.UpDown(c.updown_m);
         path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, NAN);
         path.hold_yaw = NAN;
       } else {
         // On the arcs the sensor looks c.arc_face_offset_rad to the side of the source.
         path.Arc(centre, 2.0, a0, a0 + M_PI / 2, c.arc_face_offset_rad);
         path.hold_yaw = a0 + M_PI / 2 + M_PI + c.arc_face_offset_rad;
-        path.UpDown(0.6);
+        path.UpDown(c.updown_m);
         path.hold_yaw = NAN;
         path.Arc(centre, 2.0, a0 + M_PI / 2, a0 + M_PI, c.arc_face_offset_rad);
       }
@@ -317,7 +321,7 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
       for (int part = 1; part <= 3; ++part) {
         const Eigen::Vector2d p = s + 4.0 * part * dir;
         path.LineTo(Eigen::Vector3d(p.x(), p.y(), 0));
-        if (part < 3) path.UpDown(0.6);
+        if (part < 3) path.UpDown(c.updown_m);
       }
     }
     path.LineTo(Eigen::Vector3d(12, 12, 0));
@@ -358,11 +362,43 @@ LinearSimData SimulateLinear(const LinearSimConfig& c) {
       if ((d.sources[j] - d.truth[k].translation()).norm() > c.sound_range_m) continue;
       if (u01(rng) > c.heard_probability) continue;
       const double beta = LinearArrayBeta(d.truth[k], d.sources[j]);
-      const double raw = std::clamp(beta + c.doa_noise_scale * SimulatedDoaSigma(beta) * n01(rng), -M_PI / 2, M_PI / 2);
+      double raw;
+      if (c.doa_generator) {
+        double mean, var;
+        c.doa_generator->Predict(beta, &mean, &var);
+        raw = mean + c.doa_noise_scale * std::sqrt(var) * n01(rng);
+      } else {
+        raw = beta + c.doa_noise_scale * SimulatedDoaSigma(beta) * n01(rng);
+      }
+      if (c.doa_quantum_rad > 0) raw = c.doa_quantum_rad * std::round(raw / c.doa_quantum_rad);
+      raw = std::clamp(raw, -M_PI / 2, M_PI / 2);
       d.sound_obs[k].push_back({static_cast<int64_t>(j), raw});
     }
   }
   return d;
+}
+
+void LoadDoaCalibrationCsv(const std::string& path, std::vector<double>* raw, std::vector<double>* truth) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot read DOA calibration file " + path);
+  raw->clear();
+  truth->clear();
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    double a, b;
+    if (sscanf(line.c_str(), "%lf,%lf", &a, &b) != 2) continue;  // header
+    raw->push_back(a * M_PI / 180);
+    truth->push_back(b * M_PI / 180);
+  }
+  if (raw->size() < 3) throw std::invalid_argument("DOA calibration file " + path + " holds fewer than 3 pairs");
+}
+
+CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw, const std::vector<double>& truth) {
+  CalibratedDoa c;
+  c.generator = GpDoaModel::Fit(truth, raw);    // true -> raw: the simulated sensor
+  c.sensor_model = GpDoaModel::Fit(raw, truth);  // raw -> true: the mapper's model (5.5-5.6)
+  return c;
 }
 
 void SimulatedCalibration(uint64_t seed, std::vector<double>* raw, std::vector<double>* truth) {
@@ -474,7 +510,8 @@ class Mapper {
     const size_t n = d_.truth.size();
     int last_full = -1000;
     for (size_t k = 0; k < n; ++k) {
-      poses_.push_back(k == 0 ? Pose6::From(d_.truth[0]) : Pose6::From(poses_.back().iso() * d_.odometry[k]));
+      poses_.push_back(k == 0 || o_.oracle_poses ? Pose6::From(d_.truth[k])
+                                                 : Pose6::From(poses_.back().iso() * d_.odometry[k]));
       bool loop = false;
       for (const auto& o : d_.landmark_obs[k]) {
         auto it = last_seen_.find(o.id);
@@ -513,6 +550,10 @@ class Mapper {
           MultiHypothesisOptions mo = o_.hypotheses;
           mo.num_hypotheses = o_.num_hypotheses;
           tr.mh = std::make_unique<MultiHypothesisSource>(mo, pose, ob.beta, ob.var);
+          if (o_.oracle_init) {
+            tr.converged = true;
+            tr.point = d_.sources[s.source];
+          }
           continue;
         }
         tr.mh->Update(pose, ob.beta, ob.var);
@@ -534,6 +575,11 @@ class Mapper {
         }
         fprintf(stderr, " err %.3f\n", (tr.point - d_.sources[kv.first]).norm());
       }
+      for (size_t k = 0; k < n; k += 20) {
+        const Eigen::Isometry3d e = d_.truth[k].inverse() * poses_[k].iso();
+        fprintf(stderr, "pose %zu: %zu landmark obs, error %.3f m %.2f deg\n", k, d_.landmark_obs[k].size(),
+                e.translation().norm(), Eigen::AngleAxisd(e.linear()).angle() * 180 / M_PI);
+      }
       const Eigen::Vector3d e = poses_.back().t - d_.truth.back().translation();
       fprintf(stderr, "final pose error %.3f m, %zu keyframes\n", e.norm(), n);
     }
@@ -542,14 +588,26 @@ class Mapper {
     double sum2 = 0;
     res.estimates.assign(d_.sources.size(), Eigen::Vector3d::Constant(NAN));
     res.source_converged.assign(d_.sources.size(), false);
+    res.errors_m.assign(d_.sources.size(), NAN);
     for (auto& kv : tracks_) {
       if (!kv.second.converged) continue;
       res.estimates[kv.first] = kv.second.point;
       res.source_converged[kv.first] = true;
+      res.errors_m[kv.first] = (kv.second.point - d_.sources[kv.first]).norm();
       sum2 += (kv.second.point - d_.sources[kv.first]).squaredNorm();
       ++res.converged;
     }
     res.rms_m = res.converged ? std::sqrt(sum2 / res.converged) : 0;
+    res.axis_rms_m = res.rms_m / std::sqrt(3.0);
+    double pt2 = 0, pr2 = 0;
+    for (size_t k = 0; k < n; ++k) {
+      const Eigen::Isometry3d e = d_.truth[k].inverse() * poses_[k].iso();
+      pt2 += e.translation().squaredNorm();
+      pr2 += std::pow(Eigen::AngleAxisd(e.linear()).angle(), 2);
+    }
+    res.pose_rms_m = std::sqrt(pt2 / n);
+    res.pose_rms_rad = std::sqrt(pr2 / n);
+    res.floor_rms_m = FloorRms();
     res.convergence_rate = static_cast<double>(res.converged) / d_.sources.size();
     int correct = 0;
     for (size_t j = 0; j < d_.sources.size(); ++j)
@@ -559,6 +617,40 @@ class Mapper {
   }
 
  private:
+  // Per source: least squares of its DOAs from the true poses, started at the truth.
+  double FloorRms() {
+    double sum2 = 0;
+    int n = 0;
+    for (auto& kv : tracks_) {
+      Eigen::Vector3d p = d_.sources[kv.first];
+      std::vector<Pose6> truth;
+      truth.reserve(kv.second.obs.size());
+      for (const auto& ob : kv.second.obs) truth.push_back(Pose6::From(d_.truth[ob.k]));
+      ceres::Problem::Options po;
+      po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+      ceres::Problem problem(po);
+      ceres::EigenQuaternionManifold quat;
+      for (size_t i = 0; i < truth.size(); ++i) {
+        const auto& ob = kv.second.obs[i];
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
+                                     new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}),
+                                 nullptr, truth[i].q.coeffs().data(), truth[i].t.data(), p.data());
+        problem.SetManifold(truth[i].q.coeffs().data(), &quat);
+        problem.SetParameterBlockConstant(truth[i].q.coeffs().data());
+        problem.SetParameterBlockConstant(truth[i].t.data());
+      }
+      if (truth.empty()) continue;
+      ceres::Solver::Options so;
+      so.max_num_iterations = 50;
+      so.logging_type = ceres::SILENT;
+      ceres::Solver::Summary sum;
+      ceres::Solve(so, &problem, &sum);
+      sum2 += (p - d_.sources[kv.first]).squaredNorm();
+      ++n;
+    }
+    return n ? std::sqrt(sum2 / n) : 0;
+  }
+
   // Joint optimisation (5.29) over keyframes first..last (first == 0: everything, the first
   // pose held as gauge), the landmarks and converged sources they observe; observations
   // of those from older keyframes enter with the older poses held constant.
@@ -573,7 +665,7 @@ class Mapper {
       if (used_poses.insert(k).second) {
         problem.AddParameterBlock(poses_[k].q.coeffs().data(), 4, &quat);
         problem.AddParameterBlock(poses_[k].t.data(), 3);
-        if (k < first || k == 0) {
+        if (k < first || k == 0 || o_.oracle_poses) {
           problem.SetParameterBlockConstant(poses_[k].q.coeffs().data());
           problem.SetParameterBlockConstant(poses_[k].t.data());
         }

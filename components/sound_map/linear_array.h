@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "sound_map/doa_sensor_model.h"
@@ -48,6 +49,11 @@ struct MultiHypothesisOptions {
   double prune_z = 3.09;
   int prune_min_observations = 3;
   double linearity_threshold = 0.3;  // converged when L_d < this (Civera: 0.1)
+  // (5.23): h from the anchor (the thesis; then L_d = 4 sigma_rho / rho) or, false, from the
+  // current sensor position (Civera et al.'s original linearity index).
+  bool linearity_from_anchor = false;
+  // (5.21): S = H P H' as printed in the thesis, or, true, H P H' + Q (the innovation covariance).
+  bool chi2_with_noise = true;
   int min_observations = 8;          // and at least this many updates
   // Survivors that have converged to different places (a mirror image of the cone) are not
   // averaged: all must lie within this radius of their mean, else the ones whose mean
@@ -95,12 +101,14 @@ struct LinearSimConfig {
   double step_m = 0.2;            // Table 5.1
   double odo_sigma_m = 0.01;      // per step and axis (our choice: the thesis tracks with ORB-SLAM)
   double odo_sigma_rad = 0.5 * M_PI / 180;
-  double landmark_density_per_m2 = 0.6;
+  double landmark_density_per_m2 = 2.0;  // our choice: RGB-D features are dense (0.6 left poses 1.2-1.6 deg off)
   double landmark_range_m = 4.0;
   double landmark_fov_rad = 60 * M_PI / 180;  // half angle
   double landmark_sigma_m = 0.01;             // Table 5.1
   double landmark_sigma_rad = 1.0 * M_PI / 180;
   double sound_range_m = 3.0;                 // Table 5.1
+  // Height of the "up and down" moves (the thesis does not give it; our choice).
+  double updown_m = 0.6;
   double heard_probability = 1.0;
   // Trajectory 1: on the arcs round a source the sensor faces the source turned by this
   // much; NaN (default): it faces along the path like a walking operator. (0 would put
@@ -109,8 +117,27 @@ struct LinearSimConfig {
   // Trajectory 1: keep facing along the side (+x on the first) through the arcs instead.
   bool fixed_heading = false;
   double doa_noise_scale = 1.0;   // multiplies SimulatedDoaSigma (1: Table 5.1's 10-20 deg)
+  // The DOA method's raw angle given the true one (§5.5.1: the error of a real array's DOA
+  // method, measured every 5 deg, modelled by a GP over the true angle and added to the
+  // truth): raw = mean + sqrt(var) n of doa_generator->Predict(true beta). Null: Gaussian
+  // noise of SimulatedDoaSigma, unbiased (the 10-20 deg of Table 5.1 read as pure noise).
+  std::shared_ptr<const DoaSensorModel> doa_generator;
+  double doa_quantum_rad = 0;     // raw angles rounded to this grid (the SRP-PHAT grid: 5 deg); 0: off
   uint64_t seed = 1;
 };
+
+// The real calibration pairs (raw DOA estimate, true angle), radians, from a CSV with columns
+// raw_deg,true_deg (shared/data/audio/ssm/gp_doa_calibration.csv: the thesis' PS3-Eye/Kinect
+// array, 37 angles x 10 trials). Throws std::invalid_argument when unreadable.
+void LoadDoaCalibrationCsv(const std::string& path, std::vector<double>* raw_rad, std::vector<double>* true_rad);
+// Both GPs of §5.5.1 from calibration pairs: `generator` maps the true angle to the raw
+// estimate's mean and variance (the simulated sensor), `sensor_model` maps the raw estimate
+// back to the true angle (5.5-5.6, what the mapper uses).
+struct CalibratedDoa {
+  std::shared_ptr<const DoaSensorModel> generator;
+  std::shared_ptr<const DoaSensorModel> sensor_model;
+};
+CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw_rad, const std::vector<double>& true_rad);
 // DOA noise of the simulated array: 10 deg broadside growing to 20 deg at endfire
 // (Table 5.1: "10-20 deg").
 double SimulatedDoaSigma(double true_beta_rad);
@@ -144,10 +171,21 @@ struct LinearMapperOptions {
   int loop_gap_keyframes = 60;  // a landmark re-seen after this many keyframes: loop closure
   std::shared_ptr<const DoaSensorModel> sensor_model;  // default: GP fitted on SimulatedCalibration
   double converged_error_m = 1.0;  // for the score only
+  // Diagnostic: every source is known at its true position from its first observation
+  // (skips the multi-hypothesis initialisation; shows the accuracy floor of the data).
+  bool oracle_init = false;
+  // Diagnostic: the keyframe poses are the true ones and held fixed.
+  bool oracle_poses = false;
 };
 
 struct LinearRunResult {
-  double rms_m = 0;               // over sources that converged
+  double rms_m = 0;               // over sources that converged: sqrt(mean |p - p_true|^2)
+  double axis_rms_m = 0;          // same errors per axis: sqrt(mean over sources and x,y,z)
+  // Accuracy floor: per source, least squares of its DOAs from the TRUE poses, started at
+  // the truth; RMS over all heard sources.
+  double floor_rms_m = 0;
+  double pose_rms_m = 0, pose_rms_rad = 0;  // final keyframe poses against the truth
+  std::vector<double> errors_m;   // per source (NaN: not converged)
   double convergence_rate = 0;    // converged (linearity index) / number of sources
   double correct_convergence_rate = 0;  // converged and within converged_error_m of the truth
   int converged = 0;

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <memory>
+#include <random>
 
 namespace sarmap {
 namespace sound_map {
@@ -74,27 +77,125 @@ TEST(GpDoaModel, RealCalibrationData) {
   EXPECT_GT(v80, v0);
 }
 
-TEST(LinearArray, Table51FirstTrajectory) {
-  LinearSimConfig c;
-  c.trajectory = 1;
-  c.seed = 3000;
-  const LinearRunResult r = RunLinearArrayMapping(SimulateLinear(c), LinearMapperOptions());
-  printf("traj1 rms %.4f conv %.3f (%d), %.2f s, full opt %d\n", r.rms_m, r.convergence_rate, r.converged, r.seconds, r.full_optimisations);
-  // Thesis: all 8 converge, RMS 0.1302 m. Reached here (seed 3000): 4 of 8, RMS 0.45 m;
-  // assert what is reached, not the thesis figure (see README).
-  EXPECT_GE(r.converged, 4);
-  EXPECT_LT(r.rms_m, 0.6);
+// (5.23-5.27) as printed: h runs from the anchor, so the linearity index reduces to
+// L = 4 sigma_d / |h| = 4 sigma_rho / rho.
+TEST(LinearArray, LinearityIndexFromTheAnchorIsFourRelativeInverseDepthSigmas) {
+  MultiHypothesisOptions o;
+  o.linearity_from_anchor = true;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  MultiHypothesisSource src(o, pose, 0.3, 0.01);
+  pose.translation() = Eigen::Vector3d(0.3, 0.1, 0.2);
+  src.Update(pose, 0.25, 0.01);
+  for (const auto& h : src.hypotheses()) {
+    if (!h.alive) continue;
+    EXPECT_NEAR(h.linearity, 4 * std::sqrt(h.p(2, 2)) / h.s[2], 1e-9);
+  }
 }
 
-TEST(LinearArray, Table51SecondTrajectory) {
+// (5.21-5.22): the printed S = H P H' leaves out the observation noise, so the same
+// innovations score a larger chi-square than with the innovation covariance H P H' + Q.
+TEST(LinearArray, ChiSquareAsPrintedLeavesOutTheObservationNoise) {
+  MultiHypothesisOptions with_q, without_q;
+  without_q.chi2_with_noise = false;
+  with_q.prune_z = without_q.prune_z = 0;
+  with_q.prune_mean_chi2 = without_q.prune_mean_chi2 = 1e9;
+  with_q.relative_prune_chi2 = without_q.relative_prune_chi2 = 0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  MultiHypothesisSource a(with_q, pose, 0.3, 0.01), b(without_q, pose, 0.3, 0.01);
+  pose.translation() = Eigen::Vector3d(0.4, 0.0, 0.0);
+  a.Update(pose, 0.35, 0.01);
+  b.Update(pose, 0.35, 0.01);
+  for (size_t i = 0; i < a.hypotheses().size(); ++i) {
+    const auto& ha = a.hypotheses()[i];
+    const auto& hb = b.hypotheses()[i];
+    EXPECT_GT(hb.chi2_sum, ha.chi2_sum);
+  }
+}
+
+// §5.5.1's simulated sensor: a GP over the true angle reproduces the calibration's bias and
+// spread, and the GP over the raw angle (5.5-5.6) maps the biased estimate back.
+TEST(LinearArray, CalibratedDoaReproducesBiasAndSpread) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n01(0, 1);
+  std::vector<double> raw, truth;
+  const double deg = M_PI / 180;
+  for (int a = -90; a <= 90; a += 5)
+    for (int t = 0; t < 5; ++t) {
+      truth.push_back(a * deg);
+      raw.push_back(0.8 * a * deg + 3 * deg * n01(rng));  // compressed by 20 %, 3 deg spread
+    }
+  const CalibratedDoa cal = FitCalibratedDoa(raw, truth);
+  double m, v;
+  cal.generator->Predict(30 * deg, &m, &v);
+  EXPECT_NEAR(m / deg, 24, 2.0);
+  EXPECT_NEAR(std::sqrt(v) / deg, 3, 1.0);
+  cal.sensor_model->Predict(24 * deg, &m, &v);
+  EXPECT_NEAR(m / deg, 30, 2.5);
+}
+
+// End to end with nearly exact DOAs (0.5 deg) and the true poses: every source converges,
+// and the mapped sources sit on the truth (pins 5.1-5.2, 5.8-5.22 and 5.30-5.31 together).
+TEST(LinearArray, NearlyExactDoasMapEverySource) {
   LinearSimConfig c;
   c.trajectory = 2;
-  c.seed = 3000;
-  const LinearRunResult r = RunLinearArrayMapping(SimulateLinear(c), LinearMapperOptions());
-  printf("traj2 rms %.4f conv %.3f (%d), %.2f s, full opt %d\n", r.rms_m, r.convergence_rate, r.converged, r.seconds, r.full_optimisations);
-  // Thesis: RMS 0.2688 m. Reached here (seed 3000): 8 of 8 converged, RMS 0.44 m.
-  EXPECT_GE(r.converged, 7);
-  EXPECT_LT(r.rms_m, 0.6);
+  c.seed = 11;
+  c.landmark_density_per_m2 = 0.3;  // poses are given
+  c.doa_generator = std::make_shared<ConstantDoaModel>(0.5 * M_PI / 180);
+  LinearMapperOptions o;
+  o.sensor_model = std::make_shared<ConstantDoaModel>(0.5 * M_PI / 180);
+  o.oracle_poses = true;
+  const LinearRunResult r = RunLinearArrayMapping(SimulateLinear(c), o);
+  printf("exact DOAs: rms %.4f floor %.4f converged %d\n", r.rms_m, r.floor_rms_m, r.converged);
+  EXPECT_EQ(r.converged, 8);
+  EXPECT_LT(r.floor_rms_m, 0.03);
+  EXPECT_LT(r.rms_m, 0.03);
+}
+
+// Table 5.1 as §5.5.1 simulates it: the DOA error of the real array (its calibration pairs,
+// shared/data/audio/ssm) modelled by a GP over the true angle and added to the truth, the
+// mapper correcting it with the GP over the raw angle.
+class Table51 : public ::testing::Test {
+ protected:
+  static std::string Path() { return std::string(SARMAP_DATA_DIR) + "/audio/ssm/gp_doa_calibration.csv"; }
+  static void SetUpTestSuite() {
+    if (!std::ifstream(Path())) return;
+    std::vector<double> raw, truth;
+    LoadDoaCalibrationCsv(Path(), &raw, &truth);
+    cal_ = FitCalibratedDoa(raw, truth);
+  }
+  void SetUp() override {
+    if (!cal_.generator) GTEST_SKIP() << "shared data missing: " << Path();
+  }
+  LinearRunResult Run(int trajectory) {
+    LinearSimConfig c;
+    c.trajectory = trajectory;
+    c.fixed_heading = trajectory == 1;  // facing along the side (see README)
+    c.seed = 3000;
+    c.doa_generator = cal_.generator;
+    c.doa_quantum_rad = 5 * M_PI / 180;
+    LinearMapperOptions o;
+    o.sensor_model = cal_.sensor_model;
+    const LinearRunResult r = RunLinearArrayMapping(SimulateLinear(c), o);
+    printf("traj%d rms %.4f floor %.4f conv %.3f (%d), poses %.3f m, %.2f s\n", trajectory, r.rms_m, r.floor_rms_m,
+           r.convergence_rate, r.converged, r.pose_rms_m, r.seconds);
+    return r;
+  }
+  static CalibratedDoa cal_;
+};
+CalibratedDoa Table51::cal_;
+
+TEST_F(Table51, FirstTrajectory) {
+  const LinearRunResult r = Run(1);
+  // Thesis: 0.1302 m. NOT reached: the data's own least-squares floor is ~0.2 m here (see
+  // README); assert what is reached.
+  EXPECT_EQ(r.converged, 8);
+  EXPECT_LT(r.rms_m, 0.3);
+}
+
+TEST_F(Table51, SecondTrajectory) {
+  const LinearRunResult r = Run(2);
+  EXPECT_EQ(r.converged, 8);
+  EXPECT_LE(r.rms_m, 0.2688);  // thesis
 }
 
 // Fig. 5.8 (reduced: 2 runs of trajectory 2): one hypothesis lands on the wrong part of the
@@ -106,6 +207,7 @@ TEST(LinearArray, Fig58MoreHypothesesMapBetter) {
     for (int r = 0; r < 2; ++r) {
       LinearSimConfig c;
       c.trajectory = 2;
+      c.landmark_density_per_m2 = 0.6;  // keeps the test short
       c.seed = 4000 + r;
       LinearMapperOptions o;
       o.num_hypotheses = nh[i];

@@ -1,6 +1,9 @@
 // sarmap-sound-map-experiments: prints the tables of Su 2017 §4.4.1 (Fig. 4.5, Fig. 4.11)
 // and §5.5.1 (Table 5.1, Fig. 5.8) from the simulation harness.
+#include <cmath>
 #include <cstdio>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -79,30 +82,87 @@ void Fig411(int runs) {
   }
 }
 
+// Knobs of the §5.5.1 runs (defaults: the library's defaults).
+struct Knobs {
+  LinearMapperOptions mapper;
+  double noise_scale = 1.0;
+  int seed0 = 3000;
+  bool verbose = false;
+  std::shared_ptr<const DoaSensorModel> doa_generator;  // null: Gaussian 10-20 deg
+  double doa_quantum_rad = 0;
+  double updown_m = 0.6;
+  double landmark_density = -1;
+  std::vector<int> variants = {1, 3, 4, 2};  // table5.1 rows  // per m^2 (-1: the simulation's default)
+  Eigen::Vector3d axis_sq = Eigen::Vector3d::Zero();  // summed squared error per axis (converged)
+  int axis_n = 0;
+};
+Knobs g_knobs;
+
+LinearRunResult RunTable51(LinearSimConfig c, int r, int num_hypotheses = 0) {
+  c.doa_noise_scale = g_knobs.noise_scale;
+  c.doa_generator = g_knobs.doa_generator;
+  c.doa_quantum_rad = g_knobs.doa_quantum_rad;
+  c.seed = g_knobs.seed0 + r;
+  LinearMapperOptions o = g_knobs.mapper;
+  if (num_hypotheses > 0) o.num_hypotheses = num_hypotheses;
+  c.updown_m = g_knobs.updown_m;
+  if (g_knobs.landmark_density > 0) c.landmark_density_per_m2 = g_knobs.landmark_density;
+  const LinearSimData d = SimulateLinear(c);
+  LinearRunResult res = RunLinearArrayMapping(d, o);
+  for (size_t j = 0; j < d.sources.size(); ++j)
+    if (res.source_converged[j]) {
+      g_knobs.axis_sq += (res.estimates[j] - d.sources[j]).cwiseAbs2();
+      ++g_knobs.axis_n;
+    }
+  return res;
+}
+
 void Table51(int runs) {
   printf("== Table 5.1 / Figs. 5.6-5.7: linear array, 8 sources, %d runs (thesis RMS 0.1302 m, 0.2688 m)\n", runs);
+  printf("rms: sqrt(mean |error|^2) over converged sources, averaged over runs; floor: least squares from the\n"
+         "true poses started at the truth (all heard sources); per source: mean error when converged (m) / runs converged\n");
   // Variants of trajectory 1 (the thesis' sensor orientation cannot be read back): 1 faces
   // along the path, 3 is turned 80 deg from facing the source on the arcs, 4 keeps facing
   // along the side while side-stepping round the source.
-  for (int traj : {1, 3, 4, 2}) {
-    std::vector<double> rms, conv, ok;
+  for (int traj : g_knobs.variants) {
+    std::vector<double> rms, conv, ok, floor, pooled, pose_t, pose_r;
+    std::vector<double> err_sum(8, 0.0);
+    std::vector<int> err_n(8, 0);
+    g_knobs.axis_sq.setZero();
+    g_knobs.axis_n = 0;
     for (int r = 0; r < runs; ++r) {
       LinearSimConfig c;
       c.trajectory = traj >= 3 ? 1 : traj;
       if (traj == 3) c.arc_face_offset_rad = 80 * M_PI / 180;
       if (traj == 4) c.fixed_heading = true;
-      c.seed = 3000 + r;
-      const LinearRunResult res = RunLinearArrayMapping(SimulateLinear(c), LinearMapperOptions());
+      const LinearRunResult res = RunTable51(c, r);
       rms.push_back(res.rms_m);
       conv.push_back(res.convergence_rate);
       ok.push_back(res.correct_convergence_rate);
+      floor.push_back(res.floor_rms_m);
+      for (size_t j = 0; j < res.errors_m.size() && j < 8; ++j)
+        if (!std::isnan(res.errors_m[j])) {
+          err_sum[j] += res.errors_m[j];
+          ++err_n[j];
+          pooled.push_back(res.errors_m[j] * res.errors_m[j]);
+        }
+      pose_t.push_back(res.pose_rms_m);
+      pose_r.push_back(res.pose_rms_rad * 180 / M_PI);
+      if (g_knobs.verbose) printf("  run %d: rms %.4f conv %.3f floor %.4f\n", r, res.rms_m, res.convergence_rate, res.floor_rms_m);
     }
-    printf("trajectory %s: rms %.4f m (std %.4f), convergence rate %.3f (within 1 m: %.3f)\n",
+    printf("trajectory %s: rms %.4f m (std %.4f, pooled %.4f), convergence rate %.3f (within 1 m: %.3f), floor %.4f m\n",
            traj == 1   ? "1 (facing along the path)"
            : traj == 3 ? "1 (arcs: 80 deg off the source)"
            : traj == 4 ? "1 (facing along the side)"
                        : "2",
-           Mean(rms), Std(rms), Mean(conv), Mean(ok));
+           Mean(rms), Std(rms), std::sqrt(Mean(pooled)), Mean(conv), Mean(ok), Mean(floor));
+    const Eigen::Vector3d axis_rms = (g_knobs.axis_sq / std::max(1, g_knobs.axis_n)).cwiseSqrt();
+    printf("   rms per axis x %.3f y %.3f z %.3f;", axis_rms.x(), axis_rms.y(), axis_rms.z());
+    printf(" poses rms %.3f m %.2f deg;", Mean(pose_t), Mean(pose_r));
+    printf(" per source:");
+    for (int j = 0; j < 8; ++j) printf(" %.3f/%d", err_n[j] ? err_sum[j] / err_n[j] : NAN, err_n[j]);
+    printf("\n");
+    fflush(stdout);
   }
 }
 
@@ -117,8 +177,7 @@ void Table51Offsets(int runs) {
       LinearSimConfig c;
       c.trajectory = 1;
       c.arc_face_offset_rad = offset_deg * M_PI / 180;
-      c.seed = 3000 + r;
-      const LinearRunResult res = RunLinearArrayMapping(SimulateLinear(c), LinearMapperOptions());
+      const LinearRunResult res = RunTable51(c, r);
       rms.push_back(res.rms_m);
       conv.push_back(res.convergence_rate);
       ok.push_back(res.correct_convergence_rate);
@@ -140,10 +199,7 @@ void Fig58(int runs) {
       for (int r = 0; r < runs; ++r) {
         LinearSimConfig c;
         c.trajectory = traj;
-        c.seed = 4000 + r;
-        LinearMapperOptions o;
-        o.num_hypotheses = nh;
-        const LinearRunResult res = RunLinearArrayMapping(SimulateLinear(c), o);
+        const LinearRunResult res = RunTable51(c, 1000 + r, nh);
         rms.push_back(res.rms_m);
         conv.push_back(res.convergence_rate);
         ok.push_back(res.correct_convergence_rate);
@@ -164,7 +220,58 @@ int main(int argc, char** argv) {
     int runs = 20;
     parser.AddFlag("--table", &which, "fig4.5 | fig4.11 | table5.1 | table5.1-offsets | fig5.8 | all");
     parser.AddFlag("--runs", &runs, "Monte Carlo runs per cell (thesis: 20; Fig. 4.11: 10)");
+    MultiHypothesisOptions& h = g_knobs.mapper.hypotheses;
+    int anchor_ld = h.linearity_from_anchor, chi2_noise = h.chi2_with_noise, oracle = 0, verbose = 0;
+    parser.AddFlag("--nh", &g_knobs.mapper.num_hypotheses, "number of hypotheses N_h (table5.1)");
+    parser.AddFlag("--ld", &h.linearity_threshold, "linearity-index threshold of convergence (5.27)");
+    parser.AddFlag("--anchor-ld", &anchor_ld, "1: linearity index from the anchor as printed (5.23); 0: from the sensor");
+    parser.AddFlag("--chi2-noise", &chi2_noise, "1: chi-square with S = HPH' + Q; 0: S = HPH' as printed (5.21)");
+    parser.AddFlag("--prune-mean", &h.prune_mean_chi2, "prune when the mean chi-square exceeds this (5.22)");
+    parser.AddFlag("--prune-z", &h.prune_z, "also prune above the chi2(n)/n quantile at this z (0: off)");
+    parser.AddFlag("--relative-prune", &h.relative_prune_chi2, "likelihood-ratio pruning margin (0: off)");
+    parser.AddFlag("--cluster", &h.cluster_radius_m, "survivors must agree within this radius (m)");
+    parser.AddFlag("--min-obs", &h.min_observations, "updates before a hypothesis may converge");
+    parser.AddFlag("--dmin", &h.min_distance_m, "d_min (rho_0 = 1/(3 d_min))");
+    parser.AddFlag("--window", &g_knobs.mapper.window_keyframes, "keyframes of the online joint optimisation");
+    parser.AddFlag("--updown", &g_knobs.updown_m, "height of the up-and-down moves (m)");
+    parser.AddFlag("--landmark-density", &g_knobs.landmark_density, "RGB-D landmarks per m^2 of floor (-1: default)");
+    parser.AddFlag("--noise-scale", &g_knobs.noise_scale, "multiplies the simulated DOA noise (1: 10-20 deg)");
+    parser.AddFlag("--seed0", &g_knobs.seed0, "first seed of the Monte Carlo runs");
+    parser.AddFlag("--oracle", &oracle, "1: sources start converged at the truth (diagnostic)");
+    int oracle_poses = 0;
+    parser.AddFlag("--oracle-poses", &oracle_poses, "1: the mapper uses the true poses (diagnostic)");
+    parser.AddFlag("--verbose", &verbose, "1: one line per run");
+    std::string doa = "calibration";
+    std::string doa_file = std::string(SARMAP_DATA_DIR) + "/audio/ssm/gp_doa_calibration.csv";
+    double quantum_deg = 5;
+    parser.AddFlag("--doa", &doa,
+                   "simulated DOA error (table5.1, fig5.8): calibration (a GP of the real array's error "
+                   "against the true angle, as §5.5.1) | gaussian (unbiased 10-20 deg noise)");
+    parser.AddFlag("--doa-file", &doa_file, "calibration pairs raw_deg,true_deg (--doa calibration)");
+    parser.AddFlag("--quantum-deg", &quantum_deg, "raw DOAs rounded to this grid (--doa calibration; 0: off)");
+    std::string variants = "1,3,4,2";
+    parser.AddFlag("--variants", &variants,
+                   "table5.1 rows: 1 (trajectory 1 facing along the path), 3 (arcs 80 deg off the source), "
+                   "4 (facing along the side), 2 (trajectory 2)");
     if (!parser.Parse(argc, argv)) return 0;
+    g_knobs.variants.clear();
+    for (char ch : variants)
+      if (ch >= '1' && ch <= '4') g_knobs.variants.push_back(ch - '0');
+    if (doa == "calibration") {
+      std::vector<double> raw, truth;
+      LoadDoaCalibrationCsv(doa_file, &raw, &truth);
+      const CalibratedDoa cal = FitCalibratedDoa(raw, truth);
+      g_knobs.doa_generator = cal.generator;
+      g_knobs.mapper.sensor_model = cal.sensor_model;
+      g_knobs.doa_quantum_rad = quantum_deg * M_PI / 180;
+    } else if (doa != "gaussian") {
+      throw std::invalid_argument("--doa must be calibration or gaussian, not " + doa);
+    }
+    h.linearity_from_anchor = anchor_ld;
+    h.chi2_with_noise = chi2_noise;
+    g_knobs.mapper.oracle_init = oracle;
+    g_knobs.mapper.oracle_poses = oracle_poses;
+    g_knobs.verbose = verbose;
     if (which == "fig4.5" || which == "all") Fig45(runs);
     if (which == "fig4.11" || which == "all") Fig411(which == "all" ? std::min(runs, 10) : runs);
     if (which == "table5.1" || which == "all") Table51(runs);
