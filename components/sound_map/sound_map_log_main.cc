@@ -6,6 +6,9 @@
 //   sarmap-log sound-map demo.lcmlog
 //   sarmap-log sound-map demo.lcmlog --no-anchors            # from POSE alone
 //   sarmap-log sound-map demo.lcmlog --set map.birth_min_observations=5
+//   sarmap-log sound-map demo.lcmlog --truth-poses --doa-check --doa-trace carol_voice
+//   # re-run the localiser over the log's AUDIO (e.g. to try localiser options offline):
+//   sarmap-log sound-map demo.lcmlog --relocalise config/sound_localisation.yaml --loc-set onset_rise_db=0
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -50,6 +53,8 @@ int main(int argc, char** argv) {
     std::string relocalise_config;
     std::vector<std::string> relocalise_overrides;
     std::string relocalise_array = "config/arrays/respeaker4.yaml";
+    double doa_shift_s = 0;
+    bool pose_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
     parser.AddSwitch("--doa-check", &doa_check, "compare every DOA with the true bearings of the SIM_TRUTH sources");
@@ -61,6 +66,10 @@ int main(int argc, char** argv) {
                    "re-run sarmap-sound-localisation (this config file) over the log's AUDIO instead of its DOA");
     parser.AddFlag("--array", &relocalise_array, "with --relocalise: the microphone array file");
     parser.AddRepeated("--loc-set", &relocalise_overrides, "with --relocalise: override a localiser option (k=v)");
+    parser.AddFlag("--doa-shift", &doa_shift_s,
+                   "diagnosis: add this many seconds to every DOA time (does the map improve with a timing fix?)");
+    parser.AddSwitch("--pose-check", &pose_check,
+                     "print POSE against SIM_TRUTH along the path (every 3 s) and its RMS against a time lag");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -102,6 +111,7 @@ int main(int argc, char** argv) {
     }
     int64_t expected_index = -1;
     std::vector<sarmap::sound::LocaliserOutput> outs;
+    const int64_t doa_shift_us = static_cast<int64_t>(std::llround(doa_shift_s * 1e6));
     auto on_doa = [&](const sarmap::doa_t& m) {
       ++doa_msgs;
       doa_log.emplace_back(m.header.utime, m);
@@ -112,7 +122,7 @@ int main(int argc, char** argv) {
       }
       const auto doas = sarmap::sound_map::DoasFromMessage(m);
       const std::string device = m.device_id;
-      const int64_t t = m.header.utime;
+      const int64_t t = m.header.utime + doa_shift_us;
       inputs.emplace(t, [&map, t, device, doas] { map.OnDoa(t, device, doas); });
     };
 
@@ -231,7 +241,7 @@ int main(int argc, char** argv) {
       printf("POSE against SIM_TRUTH: %zu poses, RMS %.3f m, max %.3f m, max heading error %.2f deg\n",
              slam_poses.size(), std::sqrt(sum2 / std::max<size_t>(1, slam_poses.size())), max_pos,
              max_yaw * 180 / M_PI);
-      if (getenv("SM_LAG_CHECK")) {
+      if (pose_check) {
         int64_t next = slam_poses.begin()->first;
         for (const auto& [t, p] : slam_poses) {
           if (t < next) continue;
@@ -266,7 +276,7 @@ int main(int argc, char** argv) {
       std::map<std::string, std::vector<double>> errors, signed_errors;
       std::vector<double> all;
       for (const auto& [t, m] : doa_log) {
-        const Pose2 base = truth_at(t);
+        const Pose2 base = truth_at(t + doa_shift_us);
         const Pose2 arr = sarmap::sound_map::Compose(base, Pose2(mount.x_m, mount.y_m, mount.yaw_rad));
         for (const auto& s : m.sources) {
           double best = 1e9, signed_best = 0;
