@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     std::string relocalise_config;
     std::vector<std::string> relocalise_overrides;
     std::string relocalise_array = "config/arrays/respeaker4.yaml";
+    std::string relocalise_section = "map_localiser";
     double doa_shift_s = 0;
     bool pose_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
@@ -64,6 +65,8 @@ int main(int argc, char** argv) {
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
     parser.AddFlag("--relocalise", &relocalise_config,
                    "re-run sarmap-sound-localisation (this config file) over the log's AUDIO instead of its DOA");
+    parser.AddFlag("--loc-section", &relocalise_section,
+                   "with --relocalise: the localiser section of that file (map_localiser: the sound map's stream)");
     parser.AddFlag("--array", &relocalise_array, "with --relocalise: the microphone array file");
     parser.AddRepeated("--loc-set", &relocalise_overrides, "with --relocalise: override a localiser option (k=v)");
     parser.AddFlag("--doa-shift", &doa_shift_s,
@@ -101,7 +104,7 @@ int main(int argc, char** argv) {
       const std::string path = sarmap::common::ResolveConfigPath(relocalise_config);
       std::vector<std::string> loc_over;
       for (const auto& o : relocalise_overrides) loc_over.push_back(o);
-      loc_options = sarmap::common::LoadOptions<sarmap::sound::LocaliserOptions>(path, loc_over, "localiser");
+      loc_options = sarmap::common::LoadOptions<sarmap::sound::LocaliserOptions>(path, loc_over, relocalise_section);
       const auto array_path = sarmap::common::ResolveConfigPath(relocalise_array);
       const auto array = sarmap::common::LoadMicArray(array_path);
       geometry = sarmap::sound::ArrayGeometry::FromOptions(array);
