@@ -91,6 +91,8 @@ int main(int argc, char** argv) {
     // world_from_map = truth pose ∘ POSE^-1 at the first POSE (nearest truth message).
     std::map<int64_t, Pose2> truth_poses;  // world_from_base by utime
     std::map<int64_t, Pose2> slam_poses;   // map_from_base by utime
+    std::map<int64_t, int64_t> node_utime;  // SLAM node id -> first POSE time naming it
+    std::vector<std::pair<int64_t, std::vector<std::pair<int64_t, Pose2>>>> anchor_log;
     std::vector<std::pair<int64_t, sarmap::doa_t>> doa_log;
     sarmap::sound_map_t live;  // the last SOUND_MAP the running node published, if logged
     int64_t live_msgs = 0;
@@ -136,6 +138,7 @@ int main(int argc, char** argv) {
         const Pose2 pose = sarmap::sound_map::PlanarPose(m);
         const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(m.covariance);
         const int64_t t = m.header.utime, node = m.node_id;
+        if (node >= 0 && !node_utime.count(node)) node_utime[node] = t;
         slam_poses[t] = pose;
         inputs.emplace(t, [&map, t, pose, cov, node] { map.OnPose(t, pose, cov, node); });
       } else if (e->channel == options.doa_channel && !localiser) {
@@ -185,6 +188,7 @@ int main(int argc, char** argv) {
         Eigen::MatrixXd cov;
         if (!sarmap::sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) continue;
         const int64_t t = m.header.utime;
+        anchor_log.emplace_back(t, anchors);
         inputs.emplace(t, [&map, t, current, anchors, cov] { map.OnSlamAnchors(t, current, anchors, cov); });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t m;
@@ -265,6 +269,23 @@ int main(int argc, char** argv) {
           }
           printf("  lag %+.1f s: RMS %.3f m, heading RMS %.2f deg\n", lag, std::sqrt(s2 / slam_poses.size()),
                  std::sqrt(y2 / slam_poses.size()) * 180 / M_PI);
+        }
+        // The sound map's anchors (SLAM nodes) as SLAM_ANCHORS gives them, against the truth at
+        // the time their node was current, every 5 s.
+        int64_t next_anchor = 0;
+        for (const auto& [t, anchors] : anchor_log) {
+          if (t < next_anchor) continue;
+          next_anchor = t + 5000000;
+          for (const auto& [id, pose] : anchors) {
+            auto nt = node_utime.find(id);
+            if (nt == node_utime.end()) continue;
+            const Pose2 w = sarmap::sound_map::Compose(world_from_map, pose);
+            const Pose2 tr = truth_at(nt->second);
+            printf("  anchors t %5.1f: node %ld (current at %5.1f s) err (%+.2f %+.2f m, %+.2f deg)\n",
+                   (t - slam_poses.begin()->first) * 1e-6, static_cast<long>(id),
+                   (nt->second - slam_poses.begin()->first) * 1e-6, w.x - tr.x, w.y - tr.y,
+                   sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw) * 180 / M_PI);
+          }
         }
       }
     }
