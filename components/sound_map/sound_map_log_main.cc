@@ -193,10 +193,9 @@ int main(int argc, char** argv) {
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t m;
         if (!Decode(*e, &m)) continue;
-        const auto tracks = sarmap::sound_map::HeardTracks(m);
-        const std::string device = m.sensor_id;
-        inputs.emplace(m.header.utime, [&map, device, tracks] {
-          for (int64_t tr : tracks) map.OnHeardPerson(device, tr);
+        const auto heard = sarmap::sound_map::HeardDirections(m);
+        inputs.emplace(m.header.utime, [&map, heard] {
+          for (const auto& d : heard) map.OnHeardDirection(d);
         });
       } else if (e->channel == options.sound_map_channel) {
         sarmap::sound_map_t m;
