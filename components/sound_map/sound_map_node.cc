@@ -1,5 +1,5 @@
 // sarmap-sound-map: the CI sound-source map (Su 2017 §4.3) as an LCM node.
-//   in:  DOA (doa_t), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
+//   in:  DOA_MAP (doa_t, doa_channel), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
 //   out: SLAM_ANCHOR_REQUEST (slam_anchor_request_t), SOUND_MAP (sound_map_t)
 // Inputs go through a time-ordered queue; results depend on message time only.
 #include <cstdio>
