@@ -79,6 +79,23 @@ void Localiser::DirectPathMask(const Eigen::MatrixXcf& spectra, std::vector<Eige
   }
 }
 
+void Localiser::OnsetMask(const Eigen::MatrixXcf& spectra, std::vector<double>* level, std::vector<char>* mask) const {
+  if (options_.onset_rise_db <= 0) return;
+  const int nb = bin_hi_ - bin_lo_ + 1;
+  const bool first = static_cast<int>(level->size()) != nb;
+  if (first) level->assign(nb, 0.0);
+  // level_k <- a level_k + (1 - a) p_k, a = exp(-hop / memory); bin used when
+  // p_k > level_k * 10^(rise / 10) (compared before the update).
+  const double hop_s = static_cast<double>(options_.hop_size) / geometry_.sample_rate_hz;
+  const double a = std::exp(-hop_s / options_.onset_memory_s);
+  const double rise = std::pow(10.0, options_.onset_rise_db / 10);
+  for (int b = 0; b < nb; ++b) {
+    const double p = spectra.row(bin_lo_ + b).squaredNorm();
+    if (first || !(p > (*level)[b] * rise)) (*mask)[b] = 0;
+    (*level)[b] = first ? p : a * (*level)[b] + (1 - a) * p;
+  }
+}
+
 void Localiser::Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* stats, const std::vector<char>* mask) const {
   const int m = geometry_.num_mics();
   Eigen::VectorXcd x(m), y(m);
@@ -128,6 +145,7 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, std
   else noise_floor_ *= std::pow(10.0, options_.noise_rise_db_per_s * hop_s / 10);
   noise_floor_ = std::max(noise_floor_, 1e-20);
   DirectPathMask(spectra, &smoothed_, &mask_);
+  OnsetMask(spectra, &onset_level_, &mask_);
   if (active) {
     Accumulate(spectra, &current_, &mask_);
   } else {

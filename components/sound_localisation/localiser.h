@@ -43,6 +43,13 @@ struct LocaliserOptions {
   double min_confidence = 0.05;
   double direct_path_threshold = 0.0;
   double direct_path_smoothing = 0.5;
+  // Precedence effect: a reflection repeats the direct sound a few ms later, so while a bin's
+  // power is rising the direct path dominates it. With onset_rise_db > 0 a time-frequency bin
+  // enters the statistics only when its power exceeds its own recent level (exponential
+  // average over onset_memory_s) by that many dB. Needs short frames (fft/hop of a few ms) to
+  // separate early reflections.
+  double onset_rise_db = 0.0;
+  double onset_memory_s = 0.01;
   TrackerOptions tracker;
 
   template <class V>
@@ -72,6 +79,9 @@ struct LocaliserOptions {
       "use a time-frequency bin only when its short-time covariance is this close to rank 1 "
       "(|R|_F^2 / tr(R)^2, 1/M diffuse .. 1 one plane wave); 0 uses every bin");
     v("direct_path_smoothing", direct_path_smoothing, "weight of the past in that short-time covariance (0..1)");
+    v("onset_rise_db", onset_rise_db,
+      "precedence effect: use a bin only when its power rose this many dB above its recent level (0: all)");
+    v("onset_memory_s", onset_memory_s, "time constant of that recent level");
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {
@@ -96,6 +106,8 @@ struct LocaliserOptions {
     check.InRange("min_confidence", min_confidence, 0, 1);
     check.InRange("direct_path_threshold", direct_path_threshold, 0, 1);
     check.InRange("direct_path_smoothing", direct_path_smoothing, 0, 0.99);
+    check.NonNegative("onset_rise_db", onset_rise_db);
+    check.Positive("onset_memory_s", onset_memory_s);
   }
 };
 
@@ -141,6 +153,9 @@ class Localiser {
   // Marks the bins of this frame dominated by one plane wave (direct-path dominance test on
   // the smoothed covariance `state`, updated in place).
   void DirectPathMask(const Eigen::MatrixXcf& spectra, std::vector<Eigen::MatrixXcd>* state, std::vector<char>* mask) const;
+  // Precedence effect: clears the mask of the bins whose power did not rise onset_rise_db
+  // above their recent level `level` (updated in place).
+  void OnsetMask(const Eigen::MatrixXcf& spectra, std::vector<double>* level, std::vector<char>* mask) const;
   int64_t samples_seen() const { return samples_seen_; }
 
  private:
@@ -161,6 +176,7 @@ class Localiser {
   std::vector<Eigen::MatrixXcd> noise_;
   std::vector<Eigen::MatrixXcd> smoothed_;
   std::vector<char> mask_;
+  std::vector<double> onset_level_;
   int64_t noise_frames_ = 0;
   double noise_floor_ = -1;
   int64_t samples_seen_ = 0;

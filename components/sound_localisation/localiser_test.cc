@@ -7,6 +7,7 @@
 
 #include "common/robot_config.h"
 #include "sound_localisation/doa_evaluation.h"
+#include "sound_localisation/test_util.h"
 
 namespace sarmap {
 namespace sound {
@@ -55,6 +56,72 @@ TEST(LocaliserRealData, RespeakerSingleTalkerAllMethods) {
       EXPECT_LE(mel, 5.0) << method;
     }
   }
+}
+
+// Adds gain * x delayed by delay_samples (windowed sinc) to y.
+void AddDelayed(const std::vector<float>& x, double delay_samples, double gain, std::vector<float>* y) {
+  const int half = 16;
+  for (int k = -half; k <= half; ++k) {
+    const int n = static_cast<int>(std::floor(delay_samples)) + k;
+    const double t = n - delay_samples;
+    const double sinc = std::abs(t) < 1e-9 ? 1.0 : std::sin(M_PI * t) / (M_PI * t);
+    const double w = 0.5 * (1 + std::cos(M_PI * t / (half + 1)));
+    const float h = static_cast<float>(gain * sinc * w);
+    for (size_t i = 0; i < x.size(); ++i) {
+      const long j = static_cast<long>(i) + n;
+      if (j >= 0 && j < static_cast<long>(y->size())) (*y)[j] += h * x[i];
+    }
+  }
+}
+
+// Precedence effect: a source near a wall, its mirror image 25 deg away arriving 2.5 ms later
+// at 0.85 of its amplitude (the hidden caller of the simulated lab). Sound events start
+// sharply and decay. Without onset weighting the strongest direction is pulled towards the
+// image; with it the direct path wins.
+TEST(LocaliserSynthetic, OnsetWeightingRejectsAnEarlyReflection) {
+  const ArrayGeometry g = LoadArray("respeaker4");
+  const double fs = g.sample_rate_hz;
+  const size_t n = static_cast<size_t>(3.0 * fs);
+  std::vector<float> s = testing_util::WhiteNoise(n, 7);
+  for (size_t i = 0; i < n; ++i) {  // events every 0.2 s: instant rise, 40 ms decay
+    const double t = std::fmod(i / fs, 0.2);
+    s[i] *= static_cast<float>(std::exp(-t / 0.04));
+  }
+  const double direct_az = DegToRad(-20), image_az = DegToRad(-45);
+  auto unit = [](double az) { return Eigen::Vector3d(std::cos(az), std::sin(az), 0.0); };
+  const Eigen::VectorXd d_direct = g.Delays(unit(direct_az)), d_image = g.Delays(unit(image_az));
+  std::vector<std::vector<float>> mics(g.num_mics(), std::vector<float>(n, 0.0f));
+  const auto noise = testing_util::WhiteNoise(n * g.num_mics(), 11);
+  for (int m = 0; m < g.num_mics(); ++m) {
+    AddDelayed(s, 40 + d_direct[m] * fs, 1.0, &mics[m]);
+    AddDelayed(s, 40 + 0.0025 * fs + d_image[m] * fs, 0.85, &mics[m]);
+    for (size_t i = 0; i < n; ++i) mics[m][i] += 0.01f * noise[m * n + i];
+  }
+  auto median_error_deg = [&](LocaliserOptions o) {
+    o.max_sources = 1;
+    o.search = "azimuth";
+    Localiser localiser(g, o, nullptr);
+    std::vector<LocaliserOutput> outs;
+    localiser.PushFloat(mics, 0, n, &outs);
+    std::vector<double> errors;
+    for (const auto& out : outs)
+      if (!out.directions.empty())
+        errors.push_back(std::abs(RadToDeg(std::remainder(out.directions[0].direction.azimuth_rad - direct_az, 2 * M_PI))));
+    EXPECT_GE(errors.size(), 10u);
+    return Median(errors);
+  };
+  LocaliserOptions plain;
+  plain.fft_size = 256;
+  plain.hop_size = 64;
+  LocaliserOptions onset = plain;
+  onset.onset_rise_db = 3;
+  onset.onset_memory_s = 0.02;
+  const double e_plain = median_error_deg(plain), e_onset = median_error_deg(onset);
+  std::printf("median azimuth error: every bin %.1f deg, onset bins only %.1f deg\n", e_plain, e_onset);
+  // Measured: 8.4 deg with every bin, 3.4 deg with onset bins only.
+  EXPECT_GT(e_plain, 6.0);
+  EXPECT_LT(e_onset, 4.0);
+  EXPECT_LT(e_onset, 0.5 * e_plain);
 }
 
 }  // namespace

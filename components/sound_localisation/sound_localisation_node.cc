@@ -27,6 +27,11 @@ struct SoundLocalisationOptions {
   std::vector<int> mic_devices;           // per microphone: index into devices
   std::vector<std::string> audio_channels;  // extra input channels (AUDIO_<DEVICE>)
   sound::LocaliserOptions localiser;
+  // A second DOA stream for the sound map, from its own localiser over the same audio (e.g.
+  // precedence-effect onset bins, which place a talker near a wall better but give sparser
+  // tracks than sarmap-speech's beams want). Empty: none.
+  std::string map_doa_channel = "";
+  sound::LocaliserOptions map_localiser;
   template <class V>
   void Visit(V& v) {
     v("audio_channel", audio_channel, "input audio_frame_t channel");
@@ -38,6 +43,8 @@ struct SoundLocalisationOptions {
     v("mic_devices", mic_devices, "asynchronous array: index into devices of each microphone");
     v("audio_channels", audio_channels, "further input channels (one per card, AUDIO_<DEVICE>)");
     v("localiser", localiser, "DOA estimation and tracking");
+    v("map_doa_channel", map_doa_channel, "second doa_t stream for the sound map, from map_localiser ('' = none)");
+    v("map_localiser", map_localiser, "DOA estimation and tracking of the map_doa_channel stream");
   }
   void Validate(common::Validator& check) const {
     for (int d : mic_devices)
@@ -71,11 +78,14 @@ int main(int argc, char** argv) {
     const auto array = common::LoadMicArray(options.array);
     const std::string array_dir = options.array.substr(0, options.array.find_last_of('/') + 1);
     sound::ArrayGeometry geometry;
-    std::unique_ptr<sound::Localiser> localiser;
+    std::unique_ptr<sound::Localiser> localiser, map_localiser;
     try {
       geometry = sound::ArrayGeometry::FromOptions(array);
       localiser = std::make_unique<sound::Localiser>(geometry, options.localiser,
                                                      sound::SensorModel::FromArray(array, array_dir));
+      if (!options.map_doa_channel.empty())
+        map_localiser = std::make_unique<sound::Localiser>(geometry, options.map_localiser,
+                                                           sound::SensorModel::FromArray(array, array_dir));
     } catch (const std::invalid_argument& e) {
       throw common::OptionsError(e.what());
     }
@@ -102,12 +112,13 @@ int main(int argc, char** argv) {
 
     common::Node node("sarmap-sound-localisation", args.lcm_url);
     auto pub = node.Advertise<sarmap::doa_t>(options.doa_channel);
+    std::vector<common::Node::Publisher<sarmap::doa_t>> map_pub;
+    if (map_localiser) map_pub.push_back(node.Advertise<sarmap::doa_t>(options.map_doa_channel));
     std::string device = options.device_id;
     int64_t expected_index = -1, last_overrun = 0, dropped = 0, published = 0;
     common::RateLimiter warn_limit(5.0);
-    const int8_t method = MethodCode(options.localiser.method);
     const int8_t kind = static_cast<int8_t>(localiser->kind());
-    std::vector<sound::LocaliserOutput> outs;
+    std::vector<sound::LocaliserOutput> outs, map_outs;
 
     auto warn = [&](const std::string& what) {
       ++dropped;
@@ -118,8 +129,10 @@ int main(int argc, char** argv) {
     };
 
     // Publishes the outputs; utime of stream sample s = base_utime + (s - base_sample) / rate.
-    auto publish = [&](int64_t base_utime, int64_t base_sample) {
-      for (const auto& o : outs) {
+    auto publish_stream = [&](const std::vector<sound::LocaliserOutput>& stream, const sound::LocaliserOptions& lo,
+                              common::Node::Publisher<sarmap::doa_t>* to, int64_t base_utime, int64_t base_sample) {
+      const int8_t method = MethodCode(lo.method);
+      for (const auto& o : stream) {
         sarmap::doa_t doa;
         doa.header.utime = base_utime + common::SecondsToUtime(static_cast<double>(o.centre_sample - base_sample) /
                                                                geometry.sample_rate_hz);
@@ -144,13 +157,17 @@ int main(int argc, char** argv) {
             bool in_track = false;
             for (const auto& t : o.tracks)
               in_track |= t.updated && sound::AngularDistanceRad(geometry, localiser->kind(), t.direction, d.direction) <
-                                           sound::DegToRad(options.localiser.tracker.gate_deg);
+                                           sound::DegToRad(lo.tracker.gate_deg);
             if (!in_track) add(-1, d.direction, d.covariance, d.power, d.confidence);
           }
         doa.num_sources = static_cast<int32_t>(doa.sources.size());
-        pub.Publish(&doa);
+        to->Publish(&doa);
         ++published;
       }
+    };
+    auto publish = [&](int64_t base_utime, int64_t base_sample) {
+      publish_stream(outs, options.localiser, &pub, base_utime, base_sample);
+      if (map_localiser) publish_stream(map_outs, options.map_localiser, &map_pub[0], base_utime, base_sample);
     };
 
     // Asynchronous array: each card's block goes to the aligner; aligned reference samples go to
@@ -197,6 +214,10 @@ int main(int argc, char** argv) {
       const int64_t before = localiser->samples_seen();
       outs.clear();
       localiser->PushFloat(aligned, 0, n, &outs);
+      if (map_localiser) {
+        map_outs.clear();
+        map_localiser->PushFloat(aligned, 0, n, &map_outs);
+      }
       // Stream sample `before` is reference sample `first`.
       publish(ref_utime, before + (ref_first - first));
       node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped) +
@@ -236,16 +257,22 @@ int main(int argc, char** argv) {
         SARMAP_LOG(WARN) << "audio gap: expected sample " << expected_index << ", got " << msg.first_sample_index
                          << "; restarting the analysis";
         localiser->ResetStream();
+        if (map_localiser) map_localiser->ResetStream();
       }
       expected_index = msg.first_sample_index + msg.num_samples;
       const int64_t before = localiser->samples_seen();
       outs.clear();
       localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &outs);
+      if (map_localiser) {
+        map_outs.clear();
+        map_localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &map_outs);
+      }
       publish(msg.header.utime, before);
       node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped));
     });
     SARMAP_LOG(INFO) << "localising array '" << geometry.name << "' (" << geometry.num_mics() << " mics, "
-                     << options.localiser.method << ") from " << options.audio_channel << " -> " << options.doa_channel;
+                     << options.localiser.method << ") from " << options.audio_channel << " -> " << options.doa_channel
+                     << (map_localiser ? " and " + options.map_doa_channel + " (map_localiser)" : "");
     return node.Run();
   });
 }

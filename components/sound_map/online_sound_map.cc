@@ -360,6 +360,25 @@ void OnlineSoundMap::OnHeardPerson(const std::string& device, int64_t track_id) 
   }
 }
 
+int64_t OnlineSoundMap::OnHeardDirection(const Doa& doa) {
+  Obs obs;
+  if (!have_pose_ || !MakeObs(doa, &obs)) return -1;
+  int64_t best = -1;
+  double best_chi2 = options_.gate_chi2;
+  for (int64_t id : ekf_.source_ids()) {
+    const double c = Chi2(id, obs, nullptr);
+    if (c <= best_chi2) {
+      best_chi2 = c;
+      best = id;
+    }
+  }
+  if (best < 0) return -1;
+  meta_[best].is_person = true;
+  const int64_t twin = meta_[best].twin;
+  if (twin >= 0 && ekf_.HasSource(twin)) meta_[twin].is_person = true;
+  return best;
+}
+
 std::vector<int64_t> OnlineSoundMap::AnchorNodeIds() const {
   std::set<int64_t> ids;
   for (int64_t s : ekf_.source_ids()) {

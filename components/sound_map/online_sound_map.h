@@ -158,6 +158,11 @@ class OnlineSoundMap {
                      const Eigen::MatrixXd& covariance);
   void OnDoa(int64_t utime, const std::string& device, const std::vector<Doa>& doas);
   void OnHeardPerson(const std::string& device, int64_t track_id);
+  // PEOPLE_AUDIO by direction (array frame, at the current pose): the source whose predicted
+  // bearing gates it best (chi-square gate_chi2) is a person. For when the heard person's track
+  // ids come from another DOA stream than the map's (sarmap-speech beams at DOA, the map reads
+  // DOA_MAP). Returns the source marked, -1 if none.
+  int64_t OnHeardDirection(const Doa& doa);
 
   // SLAM node ids this map needs kept (the anchors of its sources that came from SLAM).
   std::vector<int64_t> AnchorNodeIds() const;

@@ -170,6 +170,33 @@ TEST(OnlineSoundMap, RejectsBadAnchorsAndUnsupportedKinds) {
   EXPECT_TRUE(map.Sources(0).empty());
 }
 
+// PEOPLE_AUDIO names sarmap-speech's tracks, not the map stream's: a heard person marks the
+// source its direction gates, whatever the track id.
+TEST(OnlineSoundMap, HeardDirectionMarksThePerson) {
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  const Eigen::Vector2d source(4.0, 3.0);
+  for (int k = 0; k < 30; ++k) {
+    const int64_t t = k * 128000;
+    const Pose2 pose(0.1 * k, 0, 0);
+    map.OnPose(t, pose, Eigen::Matrix3d::Identity() * 1e-6, k);
+    OnlineSoundMap::Doa doa;
+    doa.track_id = 7;
+    doa.azimuth_rad = std::atan2(source.y() - pose.y, source.x() - pose.x);
+    doa.covariance = Eigen::Matrix2d::Identity() * std::pow(2 * M_PI / 180, 2);
+    map.OnDoa(t, "a", {doa});
+  }
+  ASSERT_EQ(map.Sources(30 * 128000).size(), 1u);
+  OnlineSoundMap::Doa heard;
+  heard.track_id = 1234;  // another stream's id
+  heard.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+  heard.azimuth_rad = std::atan2(3.0, 4.0 - 2.9) + 40 * M_PI / 180;  // elsewhere
+  EXPECT_EQ(map.OnHeardDirection(heard), -1);
+  EXPECT_FALSE(map.Sources(30 * 128000)[0].is_person);
+  heard.azimuth_rad = std::atan2(3.0, 4.0 - 2.9) + 2 * M_PI / 180;
+  EXPECT_EQ(map.OnHeardDirection(heard), map.Sources(30 * 128000)[0].id);
+  EXPECT_TRUE(map.Sources(30 * 128000)[0].is_person);
+}
+
 // A robot drives past two static sources (a 6 m leg along x, then a turn); the localiser's
 // track ids churn (a fresh id every 4 DOAs, some DOAs untracked) and every 10th block carries
 // a spurious DOA (a reflection). The map must keep one source per emitter, place both, and

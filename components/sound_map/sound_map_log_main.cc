@@ -6,6 +6,9 @@
 //   sarmap-log sound-map demo.lcmlog
 //   sarmap-log sound-map demo.lcmlog --no-anchors            # from POSE alone
 //   sarmap-log sound-map demo.lcmlog --set map.birth_min_observations=5
+//   sarmap-log sound-map demo.lcmlog --truth-poses --doa-check --doa-trace carol_voice
+//   # re-run the localiser over the log's AUDIO (e.g. to try localiser options offline):
+//   sarmap-log sound-map demo.lcmlog --relocalise config/sound_localisation.yaml --loc-set onset_rise_db=0
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -20,7 +23,9 @@
 #include "common/args.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
+#include "sarmap/audio_frame_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
+#include "sound_localisation/localiser.h"
 #include "sound_map/sound_map_messages.h"
 
 namespace {
@@ -45,6 +50,12 @@ int main(int argc, char** argv) {
     std::string log_path, truth_channel = "SIM_TRUTH", doa_trace;
     bool no_anchors = false, doa_check = false, truth_poses_in = false;
     double report_every_s = 0;
+    std::string relocalise_config;
+    std::vector<std::string> relocalise_overrides;
+    std::string relocalise_array = "config/arrays/respeaker4.yaml";
+    std::string relocalise_section = "map_localiser";
+    double doa_shift_s = 0;
+    bool pose_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
     parser.AddSwitch("--doa-check", &doa_check, "compare every DOA with the true bearings of the SIM_TRUTH sources");
@@ -52,6 +63,16 @@ int main(int argc, char** argv) {
                      "diagnosis: SIM_TRUTH robot poses instead of POSE and SLAM_ANCHORS (map = world frame)");
     parser.AddFlag("--doa-trace", &doa_trace, "with --doa-check: print every DOA nearest this true source");
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
+    parser.AddFlag("--relocalise", &relocalise_config,
+                   "re-run sarmap-sound-localisation (this config file) over the log's AUDIO instead of its DOA");
+    parser.AddFlag("--loc-section", &relocalise_section,
+                   "with --relocalise: the localiser section of that file (map_localiser: the sound map's stream)");
+    parser.AddFlag("--array", &relocalise_array, "with --relocalise: the microphone array file");
+    parser.AddRepeated("--loc-set", &relocalise_overrides, "with --relocalise: override a localiser option (k=v)");
+    parser.AddFlag("--doa-shift", &doa_shift_s,
+                   "diagnosis: add this many seconds to every DOA time (does the map improve with a timing fix?)");
+    parser.AddSwitch("--pose-check", &pose_check,
+                     "print POSE against SIM_TRUTH along the path (every 3 s) and its RMS against a time lag");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -70,11 +91,46 @@ int main(int argc, char** argv) {
     // world_from_map = truth pose ∘ POSE^-1 at the first POSE (nearest truth message).
     std::map<int64_t, Pose2> truth_poses;  // world_from_base by utime
     std::map<int64_t, Pose2> slam_poses;   // map_from_base by utime
+    std::map<int64_t, int64_t> node_utime;  // SLAM node id -> first POSE time naming it
+    std::vector<std::pair<int64_t, std::vector<std::pair<int64_t, Pose2>>>> anchor_log;
     std::vector<std::pair<int64_t, sarmap::doa_t>> doa_log;
     sarmap::sound_map_t live;  // the last SOUND_MAP the running node published, if logged
     int64_t live_msgs = 0;
     int64_t doa_msgs = 0, doa_sources = 0, max_track = -1, first_utime = -1;
     std::map<int, int64_t> kinds;
+    // --relocalise: the localiser over the logged AUDIO, as the node runs it.
+    std::unique_ptr<sarmap::sound::Localiser> localiser;
+    sarmap::sound::ArrayGeometry geometry;
+    sarmap::sound::LocaliserOptions loc_options;
+    if (!relocalise_config.empty()) {
+      const std::string path = sarmap::common::ResolveConfigPath(relocalise_config);
+      std::vector<std::string> loc_over;
+      for (const auto& o : relocalise_overrides) loc_over.push_back(o);
+      loc_options = sarmap::common::LoadOptions<sarmap::sound::LocaliserOptions>(path, loc_over, relocalise_section);
+      const auto array_path = sarmap::common::ResolveConfigPath(relocalise_array);
+      const auto array = sarmap::common::LoadMicArray(array_path);
+      geometry = sarmap::sound::ArrayGeometry::FromOptions(array);
+      localiser = std::make_unique<sarmap::sound::Localiser>(
+          geometry, loc_options,
+          sarmap::sound::SensorModel::FromArray(array, array_path.substr(0, array_path.find_last_of('/') + 1)));
+    }
+    int64_t expected_index = -1;
+    std::vector<sarmap::sound::LocaliserOutput> outs;
+    const int64_t doa_shift_us = static_cast<int64_t>(std::llround(doa_shift_s * 1e6));
+    auto on_doa = [&](const sarmap::doa_t& m) {
+      ++doa_msgs;
+      doa_log.emplace_back(m.header.utime, m);
+      for (const auto& s : m.sources) {
+        ++doa_sources;
+        ++kinds[s.kind];
+        max_track = std::max(max_track, s.track_id);
+      }
+      const auto doas = sarmap::sound_map::DoasFromMessage(m);
+      const std::string device = m.device_id;
+      const int64_t t = m.header.utime + doa_shift_us;
+      inputs.emplace(t, [&map, t, device, doas] { map.OnDoa(t, device, doas); });
+    };
+
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
       if (e->channel == options.pose_channel && !truth_poses_in) {
         sarmap::pose_t m;
@@ -82,22 +138,48 @@ int main(int argc, char** argv) {
         const Pose2 pose = sarmap::sound_map::PlanarPose(m);
         const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(m.covariance);
         const int64_t t = m.header.utime, node = m.node_id;
+        if (node >= 0 && !node_utime.count(node)) node_utime[node] = t;
         slam_poses[t] = pose;
         inputs.emplace(t, [&map, t, pose, cov, node] { map.OnPose(t, pose, cov, node); });
-      } else if (e->channel == options.doa_channel) {
+      } else if (e->channel == options.doa_channel && !localiser) {
         sarmap::doa_t m;
         if (!Decode(*e, &m)) continue;
-        ++doa_msgs;
-        doa_log.emplace_back(m.header.utime, m);
-        for (const auto& s : m.sources) {
-          ++doa_sources;
-          ++kinds[s.kind];
-          max_track = std::max(max_track, s.track_id);
+        on_doa(m);
+      } else if (e->channel == "AUDIO" && localiser) {
+        sarmap::audio_frame_t a;
+        if (!Decode(*e, &a) || a.sample_format != sarmap::audio_frame_t::SAMPLE_INT16) continue;
+        if (expected_index >= 0 && a.first_sample_index != expected_index) localiser->ResetStream();
+        expected_index = a.first_sample_index + a.num_samples;
+        const int64_t before = localiser->samples_seen();
+        outs.clear();
+        localiser->Push(a.samples.data(), a.num_samples, a.num_channels, &outs);
+        for (const auto& o : outs) {  // as sarmap-sound-localisation publishes them
+          sarmap::doa_t d;
+          d.header.utime = a.header.utime + static_cast<int64_t>(std::llround(
+                                                static_cast<double>(o.centre_sample - before) / geometry.sample_rate_hz * 1e6));
+          d.device_id = a.device_id;
+          auto add = [&](int64_t id, const sarmap::sound::Direction& dir, const Eigen::Matrix2d& cov) {
+            sarmap::doa_source_t s;
+            s.track_id = id;
+            s.kind = static_cast<int8_t>(localiser->kind());
+            s.azimuth_rad = dir.azimuth_rad;
+            s.elevation_rad = dir.elevation_rad;
+            for (int i = 0; i < 4; ++i) s.covariance[i] = cov(i / 2, i % 2);
+            d.sources.push_back(s);
+          };
+          for (const auto& t : o.tracks)
+            if (t.updated) add(t.id, t.direction, t.covariance);
+          for (const auto& dir : o.directions) {
+            bool in_track = false;
+            for (const auto& t : o.tracks)
+              in_track |= t.updated && sarmap::sound::AngularDistanceRad(geometry, localiser->kind(), t.direction,
+                                                                          dir.direction) <
+                                           sarmap::sound::DegToRad(loc_options.tracker.gate_deg);
+            if (!in_track) add(-1, dir.direction, dir.covariance);
+          }
+          d.num_sources = static_cast<int32_t>(d.sources.size());
+          on_doa(d);
         }
-        const auto doas = sarmap::sound_map::DoasFromMessage(m);
-        const std::string device = m.device_id;
-        const int64_t t = m.header.utime;
-        inputs.emplace(t, [&map, t, device, doas] { map.OnDoa(t, device, doas); });
       } else if (e->channel == options.anchors_channel && !no_anchors && !truth_poses_in) {
         sarmap::slam_anchors_t m;
         if (!Decode(*e, &m)) continue;
@@ -106,14 +188,14 @@ int main(int argc, char** argv) {
         Eigen::MatrixXd cov;
         if (!sarmap::sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) continue;
         const int64_t t = m.header.utime;
+        anchor_log.emplace_back(t, anchors);
         inputs.emplace(t, [&map, t, current, anchors, cov] { map.OnSlamAnchors(t, current, anchors, cov); });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t m;
         if (!Decode(*e, &m)) continue;
-        const auto tracks = sarmap::sound_map::HeardTracks(m);
-        const std::string device = m.sensor_id;
-        inputs.emplace(m.header.utime, [&map, device, tracks] {
-          for (int64_t tr : tracks) map.OnHeardPerson(device, tr);
+        const auto heard = sarmap::sound_map::HeardDirections(m);
+        inputs.emplace(m.header.utime, [&map, heard] {
+          for (const auto& d : heard) map.OnHeardDirection(d);
         });
       } else if (e->channel == options.sound_map_channel) {
         sarmap::sound_map_t m;
@@ -165,6 +247,46 @@ int main(int argc, char** argv) {
       printf("POSE against SIM_TRUTH: %zu poses, RMS %.3f m, max %.3f m, max heading error %.2f deg\n",
              slam_poses.size(), std::sqrt(sum2 / std::max<size_t>(1, slam_poses.size())), max_pos,
              max_yaw * 180 / M_PI);
+      if (pose_check) {
+        int64_t next = slam_poses.begin()->first;
+        for (const auto& [t, p] : slam_poses) {
+          if (t < next) continue;
+          next = t + 3000000;
+          const Pose2 w = sarmap::sound_map::Compose(world_from_map, p);
+          const Pose2 tr = truth_at(t);
+          printf("  t %5.1f truth (%5.2f %5.2f %6.1f) err (%+.2f %+.2f %+.2f deg)\n", (t - slam_poses.begin()->first) * 1e-6,
+                 tr.x, tr.y, tr.yaw * 180 / M_PI, w.x - tr.x, w.y - tr.y,
+                 sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw) * 180 / M_PI);
+        }
+        for (double lag = -0.6; lag <= 0.61; lag += 0.1) {
+          double s2 = 0, y2 = 0;
+          for (const auto& [t, p] : slam_poses) {
+            const Pose2 w = sarmap::sound_map::Compose(world_from_map, p);
+            const Pose2 tr = truth_at(t + static_cast<int64_t>(lag * 1e6));
+            s2 += std::pow(w.x - tr.x, 2) + std::pow(w.y - tr.y, 2);
+            y2 += std::pow(sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw), 2);
+          }
+          printf("  lag %+.1f s: RMS %.3f m, heading RMS %.2f deg\n", lag, std::sqrt(s2 / slam_poses.size()),
+                 std::sqrt(y2 / slam_poses.size()) * 180 / M_PI);
+        }
+        // The sound map's anchors (SLAM nodes) as SLAM_ANCHORS gives them, against the truth at
+        // the time their node was current, every 5 s.
+        int64_t next_anchor = 0;
+        for (const auto& [t, anchors] : anchor_log) {
+          if (t < next_anchor) continue;
+          next_anchor = t + 5000000;
+          for (const auto& [id, pose] : anchors) {
+            auto nt = node_utime.find(id);
+            if (nt == node_utime.end()) continue;
+            const Pose2 w = sarmap::sound_map::Compose(world_from_map, pose);
+            const Pose2 tr = truth_at(nt->second);
+            printf("  anchors t %5.1f: node %ld (current at %5.1f s) err (%+.2f %+.2f m, %+.2f deg)\n",
+                   (t - slam_poses.begin()->first) * 1e-6, static_cast<long>(id),
+                   (nt->second - slam_poses.begin()->first) * 1e-6, w.x - tr.x, w.y - tr.y,
+                   sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw) * 180 / M_PI);
+          }
+        }
+      }
     }
     auto to_world = [&](const Eigen::Vector3d& p) {
       const Pose2 w = sarmap::sound_map::Compose(world_from_map, Pose2(p.x(), p.y(), 0));
@@ -177,7 +299,7 @@ int main(int argc, char** argv) {
       std::map<std::string, std::vector<double>> errors, signed_errors;
       std::vector<double> all;
       for (const auto& [t, m] : doa_log) {
-        const Pose2 base = truth_at(t);
+        const Pose2 base = truth_at(t + doa_shift_us);
         const Pose2 arr = sarmap::sound_map::Compose(base, Pose2(mount.x_m, mount.y_m, mount.yaw_rad));
         for (const auto& s : m.sources) {
           double best = 1e9, signed_best = 0;

@@ -124,6 +124,25 @@ inline std::vector<int64_t> HeardTracks(const sarmap::people_detections_t& msg) 
   return tracks;
 }
 
+// Heard people of PEOPLE_AUDIO as azimuth observations in the array frame (by direction, not
+// by track id: their track ids belong to the DOA stream sarmap-speech beams at).
+inline std::vector<OnlineSoundMap::Doa> HeardDirections(const sarmap::people_detections_t& msg) {
+  std::vector<OnlineSoundMap::Doa> out;
+  for (const auto& d : msg.detections) {
+    if (d.cue != sarmap::person_detection_t::CUE_HEARD) continue;
+    OnlineSoundMap::Doa doa;
+    doa.track_id = d.track_id;
+    doa.kind = OnlineSoundMap::kAzimuth;
+    doa.azimuth_rad = d.azimuth_rad;
+    doa.elevation_rad = d.elevation_rad;
+    doa.covariance << d.direction_covariance[0], d.direction_covariance[1], d.direction_covariance[2],
+        d.direction_covariance[3];
+    if (!std::isfinite(doa.azimuth_rad) || !doa.covariance.allFinite()) continue;
+    out.push_back(doa);
+  }
+  return out;
+}
+
 inline sarmap::sound_map_t SoundMapMessage(const OnlineSoundMap& map, int64_t utime) {
   sarmap::sound_map_t msg;
   msg.header.utime = utime;

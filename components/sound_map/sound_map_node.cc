@@ -1,5 +1,5 @@
 // sarmap-sound-map: the CI sound-source map (Su 2017 §4.3) as an LCM node.
-//   in:  DOA (doa_t), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
+//   in:  DOA_MAP (doa_t, doa_channel), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
 //   out: SLAM_ANCHOR_REQUEST (slam_anchor_request_t), SOUND_MAP (sound_map_t)
 // Inputs go through a time-ordered queue; results depend on message time only.
 #include <cstdio>
@@ -129,10 +129,11 @@ int main(int argc, char** argv) {
     });
     node.Subscribe<sarmap::people_detections_t>(
         options.people_audio_channel, [&](const sarmap::people_detections_t& msg, const auto&) {
-          std::vector<int64_t> tracks = sarmap::sound_map::HeardTracks(msg);
-          const std::string device = msg.sensor_id;
-          push(msg.header.utime, [&map, device, tracks](Utime) {
-            for (int64_t t : tracks) map.OnHeardPerson(device, t);
+          // By direction: the heard people's track ids are sarmap-speech's (DOA), not the
+          // map stream's (DOA_MAP).
+          const auto heard = sarmap::sound_map::HeardDirections(msg);
+          push(msg.header.utime, [&map, heard](Utime) {
+            for (const auto& d : heard) map.OnHeardDirection(d);
           });
         });
     if (options.request_repeat_s > 0)

@@ -1,5 +1,5 @@
 // sarmap-sound-map as a process over real LCM (run in a private network namespace by
-// CTest): POSE + DOA + SLAM_ANCHORS in, SLAM_ANCHOR_REQUEST and SOUND_MAP out.
+// CTest): POSE + DOA (DOA_MAP) + SLAM_ANCHORS in, SLAM_ANCHOR_REQUEST and SOUND_MAP out.
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
@@ -73,7 +73,7 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
     s.covariance[3] = 1;
     doa.sources.push_back(s);
     doa.num_sources = 1;
-    lcm.publish("DOA", &doa);
+    lcm.publish("DOA_MAP", &doa);  // config/sound_map.yaml: the localiser's map stream
     sarmap::slam_anchors_t a{};
     a.header.utime = t + 2;
     a.header.frame = "map";
