@@ -186,6 +186,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     double confidence;
     double utterance_s;
   };
+  int scene = 0;  // positive scene being decoded (for SARMAP_KWS_SEGDIR names)
   auto run = [&](const std::vector<float>& x, std::vector<Hit>* hits) {
     VoiceActivityDetector vad(16000, vad_options);
     std::vector<Utterance> utts;
@@ -193,6 +194,19 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     vad.Flush(&utts);
     for (const auto& u : utts) {
       const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
+      if (const char* segdir = std::getenv("SARMAP_KWS_SEGDIR")) {
+        // Each utterance with a hit, as raw s16le, named by its label and time (for offline probes).
+        if (!d.keywords.empty() && u.samples.size() <= 2.0 * 16000) {
+          char name[256];
+          std::snprintf(name, sizeof(name), "%s/%s_%03d_%07.2f_%.2f_%s.raw", segdir,
+                        &x == &data.negatives ? "neg" : "pos", scene, u.samples_start / 16000.0,
+                        u.samples.size() / 16000.0, d.keywords[0].keyword.c_str());
+          if (FILE* f = std::fopen(name, "wb")) {
+            std::fwrite(u.samples.data(), 2, u.samples.size(), f);
+            std::fclose(f);
+          }
+        }
+      }
       for (const auto& h : d.keywords) {
         hits->push_back({u.samples_start / 16000.0, u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence,
                            u.samples.size() / 16000.0});
@@ -206,6 +220,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   };
   std::vector<std::vector<Hit>> pos(data.positives.size());
   for (size_t i = 0; i < data.positives.size(); ++i) {
+    scene = static_cast<int>(i);
     run(data.positives[i], &pos[i]);
     if (std::getenv("SARMAP_KWS_DUMP")) {
       std::fprintf(stderr, "POS %zu call %.2f-%.2f:", i, data.call_start_s[i], data.call_end_s[i]);
