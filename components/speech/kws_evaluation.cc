@@ -172,12 +172,15 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords_in,
                                             const VadOptions& vad_options, const KwsEvalOptions& o,
                                             const std::vector<double>& cuts,
-                                            const std::vector<double>& max_utterances_s) {
+                                            const std::vector<double>& max_utterances_s,
+                                            const std::vector<double>& call_joins_s) {
   KeywordOptions keywords = keywords_in;
   keywords.min_confidence = 0;
   keywords.max_utterance_s = 0;  // applied below as a post-filter (same rule as in the spotter)
   KeywordSpotter spotter(keywords);
-  if (std::getenv("SARMAP_KWS_DUMP")) spotter.set_compute_verification(true);
+  // SARMAP_KWS_DUMP=llr also computes the (slow) acoustic verification of every hit.
+  if (const char* dump = std::getenv("SARMAP_KWS_DUMP"); dump && std::string(dump) == "llr")
+    spotter.set_compute_verification(true);
   const auto t0 = std::chrono::steady_clock::now();
   struct Hit {
     double utterance_start_s;
@@ -185,6 +188,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     std::string keyword;
     double confidence;
     double utterance_s;
+    std::vector<double> call_s;  // per call_joins_s value: length of the call (CallGroups) holding the hit
   };
   int scene = 0;  // positive scene being decoded (for SARMAP_KWS_SEGDIR names)
   auto run = [&](const std::vector<float>& x, std::vector<Hit>* hits) {
@@ -192,7 +196,22 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     std::vector<Utterance> utts;
     for (size_t i = 0; i < x.size(); i += 4096) vad.Push(x.data() + i, std::min<size_t>(4096, x.size() - i), &utts);
     vad.Flush(&utts);
-    for (const auto& u : utts) {
+    // Per join value: the length of the call (utterances joined across short pauses) of each utterance.
+    std::vector<std::vector<double>> call_s(call_joins_s.size(), std::vector<double>(utts.size()));
+    for (size_t j = 0; j < call_joins_s.size(); ++j) {
+      const int64_t join = static_cast<int64_t>(call_joins_s[j] * 16000);
+      for (size_t a = 0; a < utts.size();) {
+        size_t b = a + 1;
+        while (b < utts.size() && utts[b].start_sample - utts[b - 1].end_sample < join) ++b;
+        for (size_t k = a; k < b; ++k) call_s[j][k] = (utts[b - 1].end_sample - utts[a].samples_start) / 16000.0;
+        a = b;
+      }
+    }
+    for (size_t k = 0; k < utts.size(); ++k) {
+      const Utterance& u = utts[k];
+      if (std::getenv("SARMAP_KWS_DUMP"))
+        std::fprintf(stderr, "UTT %s %.3f %.3f\n", &x == &data.negatives ? "neg" : "pos", u.start_sample / 16000.0,
+                     u.end_sample / 16000.0);
       const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
       if (const char* segdir = std::getenv("SARMAP_KWS_SEGDIR")) {
         // Each utterance with a hit, as raw s16le, named by its label and time (for offline probes).
@@ -209,12 +228,13 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       }
       for (const auto& h : d.keywords) {
         hits->push_back({u.samples_start / 16000.0, u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence,
-                           u.samples.size() / 16000.0});
+                         u.samples.size() / 16000.0, {}});
+        for (const auto& c : call_s) hits->back().call_s.push_back(c[k]);
         if (std::getenv("SARMAP_KWS_DUMP"))
-          std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f llr %.4f\n",
+          std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f call %.2f llr %.4f\n",
                        &x == &data.negatives ? "neg" : "pos", h.keyword.c_str(), u.samples_start / 16000.0 + h.start_s,
                        h.log_ratio, h.kws_confidence, h.confidence, h.end_s - h.start_s, u.samples.size() / 16000.0,
-                       h.verify_llr);
+                       call_s.back()[k], h.verify_llr);
       }
     }
   };
@@ -232,6 +252,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   run(data.negatives, &neg);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<KwsEvalResult> out;
+  for (size_t j = 0; j < call_joins_s.size(); ++j)
   for (double max_utt : max_utterances_s)
   for (double cut_value : cuts) {
     // A hit counts when its confidence reaches the cut and its utterance is short enough.
@@ -244,10 +265,11 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       return false;
     };
     auto passes = [&](const Hit& h) {
-      return h.confidence >= cut_value && (max_utt <= 0 || h.utterance_s <= max_utt);
+      return h.confidence >= cut_value && (max_utt <= 0 || h.call_s[j] <= max_utt);
     };
     KwsEvalResult r;
     r.max_utterance_s = max_utt;
+    r.call_join_s = call_joins_s[j];
     r.threshold = keywords.thresholds.empty() ? 0 : keywords.thresholds[0];
     r.min_confidence = cut_value;
     for (size_t i = 0; i < pos.size(); ++i) {
@@ -292,7 +314,8 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
 
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
                           const KwsEvalOptions& o) {
-  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}, {keywords.max_utterance_s}).front();
+  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}, {keywords.max_utterance_s},
+                          {keywords.call_join_s}).front();
 }
 
 }  // namespace speech

@@ -33,6 +33,7 @@ struct KwsEvalResult {
   double threshold = 0;
   double min_confidence = 0;
   double max_utterance_s = 0;       // post-filter: hits in longer utterances dropped (0: none)
+  double call_join_s = 0;           // utterances closer than this are one call for max_utterance_s
   int calls = 0, hits = 0;
   double recall = 0;
   int target_false_alarms = 0;      // target keyword in the negative stream
@@ -61,7 +62,8 @@ KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keyword
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords,
                                             const VadOptions& vad, const KwsEvalOptions& options,
                                             const std::vector<double>& min_confidences,
-                                            const std::vector<double>& max_utterances_s = {0.0});
+                                            const std::vector<double>& max_utterances_s = {0.0},
+                                            const std::vector<double>& call_joins_s = {0.0});
 
 }  // namespace speech
 }  // namespace sarmap

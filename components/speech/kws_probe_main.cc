@@ -4,6 +4,7 @@
 #include <pocketsphinx.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -14,6 +15,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> args = {"-hmm", model + "/en-us", "-dict", model + "/cmudict-en-us.dict",
                                    "-lm", model + "/en-us.lm.bin", "-logfn", "/dev/null", "-cmn", "current"};
   std::string word = "help";
+  for (int i = 1; i < argc; ++i)  // another search instead of the n-gram LM
+    if (std::string(argv[i]) == "-jsgf" || std::string(argv[i]) == "-kws" || std::string(argv[i]) == "-lm")
+      args.erase(args.begin() + 4, args.begin() + 6);
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "-word" && i + 1 < argc) {
       word = argv[++i];
@@ -46,6 +50,11 @@ int main(int argc, char** argv) {
       const size_t paren = w.find('(');
       if (paren != std::string::npos) w = w.substr(0, paren);
       int32 a, l, b;
+      if (std::getenv("PROBE_SEGS")) {
+        int sf, ef;
+        ps_seg_frames(seg, &sf, &ef);
+        std::printf("  seg %s %d-%d prob %d\n", w.c_str(), sf, ef, ps_seg_prob(seg, &a, &l, &b));
+      }
       if (w == word) best_1 = std::max(best_1, logmath_exp(lmath, ps_seg_prob(seg, &a, &l, &b)));
     }
     if (ps_lattice_t* dag = ps_get_lattice(ps)) {

@@ -48,6 +48,12 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     std::vector<Utterance> done;
     vad->Push(buf.data(), buf.size(), &done);
     for (const auto& u : done) Handle(id, u, results);
+    // A call ends when no new speech began within call_join_s of its last segment.
+    auto c = calls_.find(id);
+    if (c != calls_.end() && c->second.open && !vad->in_speech() &&
+        vad->position() - c->second.end_sample >=
+            static_cast<int64_t>(options_.keywords.call_join_s * geometry_.sample_rate_hz))
+      FinishCall(id, results);
   }
   // Beams that ended: flush their VAD.
   for (auto it = vads_.begin(); it != vads_.end();) {
@@ -60,6 +66,7 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     std::vector<Utterance> done;
     it->second->Flush(&done);
     for (const auto& u : done) Handle(it->first, u, results);
+    FinishCall(it->first, results);
     enhanced_.erase(it->first);
     it = vads_.erase(it);
   }
@@ -70,7 +77,22 @@ void SpeechProcessor::Flush(std::vector<SpeechResult>* results) {
     std::vector<Utterance> done;
     vad->Flush(&done);
     for (const auto& u : done) Handle(id, u, results);
+    FinishCall(id, results);
   }
+}
+
+bool SpeechProcessor::joins_calls() const {
+  return options_.keywords.call_join_s > 0 && options_.keywords.max_utterance_s > 0;
+}
+
+void SpeechProcessor::FinishCall(int64_t id, std::vector<SpeechResult>* results) {
+  auto it = calls_.find(id);
+  if (it == calls_.end() || !it->second.open) return;
+  PendingCall& c = it->second;
+  const double call_s = static_cast<double>(c.end_sample - c.samples_start) / geometry_.sample_rate_hz;
+  if (call_s <= options_.keywords.max_utterance_s)
+    results->insert(results->end(), c.results.begin(), c.results.end());
+  calls_.erase(it);
 }
 
 void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results) {
@@ -87,6 +109,20 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
   base.start_sample = u.start_sample - output_offset_;
   base.end_sample = u.end_sample - output_offset_;
   base.text = d.text;
+  // With joined calls, keyword results wait for the end of their call (text does not).
+  std::vector<SpeechResult>* keyword_out = results;
+  if (joins_calls()) {
+    const int64_t join = static_cast<int64_t>(options_.keywords.call_join_s * geometry_.sample_rate_hz);
+    auto c = calls_.find(id);
+    if (c != calls_.end() && c->second.open && u.start_sample - c->second.end_sample >= join) FinishCall(id, results);
+    PendingCall& call = calls_[id];
+    if (!call.open) {
+      call.open = true;
+      call.samples_start = u.samples_start;
+    }
+    call.end_sample = u.end_sample;
+    keyword_out = &call.results;
+  }
   bool any = false;
   for (const KeywordHit& h : d.keywords) {
     if (h.confidence < options_.keywords.min_confidence) continue;
@@ -96,7 +132,7 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
     const int64_t s0 = u.samples_start - output_offset_;
     r.start_sample = s0 + static_cast<int64_t>(h.start_s * geometry_.sample_rate_hz);
     r.end_sample = s0 + static_cast<int64_t>(h.end_s * geometry_.sample_rate_hz);
-    results->push_back(r);
+    keyword_out->push_back(r);
     any = true;
   }
   if (!any && !d.text.empty()) {
