@@ -55,8 +55,11 @@ struct KeywordOptions {
   // The call-shape rule applies to a call: voice-activity segments separated by less than this
   // much non-speech (s, after the VAD's hangover) are one call, and the whole call must be at
   // most max_utterance_s long (a "help" that starts or ends a longer stretch of talk is dropped;
-  // results wait this long after the segment's end). 0: each segment on its own.
-  double call_join_s = 0.0;
+  // results wait this long after the segment's end). 0: each segment on its own. 0.5 s (README):
+  // bridges pauses up to ~0.8 s of silence (with the VAD's 0.3 s hangover), the scale of pauses
+  // inside a sentence; longer values only look better on sarmap-log kws-eval because its stream
+  // of other speech has 0.3-1.5 s gaps (>= ~1.2 s joins all of it).
+  double call_join_s = 0.5;
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
