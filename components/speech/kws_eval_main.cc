@@ -44,6 +44,13 @@ int main(int argc, char** argv) {
     p.AddFlag("--max-duration-s", &shape.max_duration_s, "longest hit (s)");
     p.AddFlag("--keyword-thresholds", &split_thresholds,
               "per-keyword thresholds separated by ':' (one per keyword), instead of --thresholds");
+    std::string array_recall;
+    double call_az = 60, babble_az = -60;
+    p.AddFlag("--array-recall", &array_recall,
+              "also: recall of the multichannel path (MVDR beam per track) on this array file, e.g. "
+              "config/arrays/respeaker4.yaml, for each --max-utterances-s x --call-joins-s");
+    p.AddFlag("--call-azimuth-deg", &call_az, "with --array-recall: caller's azimuth");
+    p.AddFlag("--babble-azimuth-deg", &babble_az, "with --array-recall: other talker's azimuth");
     if (!p.Parse(argc, argv)) return 0;
     if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
     auto split = [](const std::string& s) {
@@ -91,6 +98,22 @@ int main(int argc, char** argv) {
       for (const auto& c : split(max_utterances)) max_utts.push_back(std::stod(c));
       std::vector<double> gaps;
       for (const auto& c : split(call_joins)) gaps.push_back(std::stod(c));
+      if (!array_recall.empty()) {
+        for (double join : gaps)
+          for (double mu : max_utts) {
+            speech::KeywordOptions ka = k;
+            ka.max_utterance_s = mu;
+            ka.call_join_s = join;
+            int calls = 0;
+            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls);
+            std::printf("array %s, caller %.0f deg, other talker %.0f deg: threshold %s, call join %.2f s, max call "
+                        "%.1f s: recall %.3f (%d/%d)\n",
+                        array_recall.c_str(), call_az, babble_az, t.c_str(), join, mu,
+                        calls ? static_cast<double>(hits) / calls : 0.0, hits, calls);
+            std::fflush(stdout);
+          }
+        continue;
+      }
       const auto rs = speech::EvaluateKwsSweep(data, k, speech::VadOptions{}, o, cuts, max_utts, gaps);
       for (const auto& r : rs)
         std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",

@@ -11,6 +11,7 @@
 
 #include "speech/enhancer.h"
 #include "speech/keyword_spotter.h"
+#include "speech/speech_processor.h"
 
 namespace sarmap {
 namespace speech {
@@ -53,7 +54,17 @@ struct KwsEvalData {
   std::vector<std::vector<float>> positives;  // 16 kHz scenes, call at call_start_s
   std::vector<double> call_start_s, call_end_s;
   std::vector<float> negatives;               // one long 16 kHz stream
+  // The parts of each positive scene (summed in `positives`): the call (placed), other talker, noise.
+  std::vector<std::vector<float>> positive_call, positive_babble, positive_noise;
 };
+
+// Recall of the multichannel path (SpeechProcessor: per-track MVDR beam -> VAD -> keywords, with
+// its call-shape rule) on the positive scenes rendered on `array` in an anechoic room: the call
+// from azimuth call_azimuth_deg, the other talker from babble_azimuth_deg, the noise from a third
+// direction; both talkers given as tracks (as the localiser would), a call counts when "help" is
+// heard on the caller's track within its window. Returns hits; *calls gets the number of scenes.
+int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
+                   double call_azimuth_deg, double babble_azimuth_deg, int* calls);
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
