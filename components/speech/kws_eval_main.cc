@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
               "config/arrays/respeaker4.yaml, for each --max-utterances-s x --call-joins-s");
     p.AddFlag("--call-azimuth-deg", &call_az, "with --array-recall: caller's azimuth");
     p.AddFlag("--babble-azimuth-deg", &babble_az, "with --array-recall: other talker's azimuth");
+    speech::VadOptions vad;
+    p.AddFlag("--vad-threshold-db", &vad.threshold_db, "voice activity: speech this far above the noise floor (dB)");
     if (!p.Parse(argc, argv)) return 0;
     if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
     auto split = [](const std::string& s) {
@@ -105,7 +107,7 @@ int main(int argc, char** argv) {
             ka.max_utterance_s = mu;
             ka.call_join_s = join;
             int calls = 0;
-            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls);
+            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls, vad);
             std::printf("array %s, caller %.0f deg, other talker %.0f deg: threshold %s, call join %.2f s, max call "
                         "%.1f s: recall %.3f (%d/%d)\n",
                         array_recall.c_str(), call_az, babble_az, t.c_str(), join, mu,
@@ -114,7 +116,7 @@ int main(int argc, char** argv) {
           }
         continue;
       }
-      const auto rs = speech::EvaluateKwsSweep(data, k, speech::VadOptions{}, o, cuts, max_utts, gaps);
+      const auto rs = speech::EvaluateKwsSweep(data, k, vad, o, cuts, max_utts, gaps);
       for (const auto& r : rs)
         std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",
                     t.c_str(), r.call_join_s, r.max_utterance_s, r.min_confidence, r.recall, r.hits, r.calls, r.target_false_alarms,

@@ -64,7 +64,8 @@ struct KwsEvalData {
 // direction; both talkers given as tracks (as the localiser would), a call counts when "help" is
 // heard on the caller's track within its window. Returns hits; *calls gets the number of scenes.
 int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
-                   double call_azimuth_deg, double babble_azimuth_deg, int* calls);
+                   double call_azimuth_deg, double babble_azimuth_deg, int* calls,
+                   const VadOptions& vad = VadOptions());
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
