@@ -53,6 +53,8 @@ int main(int argc, char** argv) {
     p.AddFlag("--babble-azimuth-deg", &babble_az, "with --array-recall: other talker's azimuth");
     speech::VadOptions vad;
     p.AddFlag("--vad-threshold-db", &vad.threshold_db, "voice activity: speech this far above the noise floor (dB)");
+    bool no_post_filter = false;
+    p.AddSwitch("--no-post-filter", &no_post_filter, "with --array-recall: beam without the spectral-gain post-filter");
     if (!p.Parse(argc, argv)) return 0;
     if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
     auto split = [](const std::string& s) {
@@ -107,7 +109,7 @@ int main(int argc, char** argv) {
             ka.max_utterance_s = mu;
             ka.call_join_s = join;
             int calls = 0;
-            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls, vad);
+            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls, vad, !no_post_filter);
             std::printf("array %s, caller %.0f deg, other talker %.0f deg: threshold %s, call join %.2f s, max call "
                         "%.1f s: recall %.3f (%d/%d)\n",
                         array_recall.c_str(), call_az, babble_az, t.c_str(), join, mu,

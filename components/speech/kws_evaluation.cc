@@ -320,12 +320,13 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
 }
 
 int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
-                   double call_az_deg, double babble_az_deg, int* calls, const VadOptions& vad) {
+                   double call_az_deg, double babble_az_deg, int* calls, const VadOptions& vad, bool post_filter) {
   const auto geometry = sound::ArrayGeometry::FromOptions(common::LoadMicArray(array_yaml));
   SpeechOptions so;
   so.keywords = keywords;
   so.keywords.min_confidence = 0;
   so.vad = vad;
+  so.enhancer.post_filter = post_filter;
   sound::Room room;
   const Eigen::Vector3d centre(3, 2.5, 1.0);
   auto at = [&](double az_deg, double el_deg, double r) {

@@ -65,7 +65,7 @@ struct KwsEvalData {
 // heard on the caller's track within its window. Returns hits; *calls gets the number of scenes.
 int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
                    double call_azimuth_deg, double babble_azimuth_deg, int* calls,
-                   const VadOptions& vad = VadOptions());
+                   const VadOptions& vad = VadOptions(), bool post_filter = true);
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
