@@ -1,6 +1,8 @@
 #include "speech/speech_processor.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 
 namespace sarmap {
 namespace speech {
@@ -97,6 +99,11 @@ void SpeechProcessor::FinishCall(int64_t id, std::vector<SpeechResult>* results)
 
 void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results) {
   ++utterances_;
+  if (std::getenv("SARMAP_KWS_DUMP"))
+    std::fprintf(stderr, "SEGMENT beam %lld %.2f-%.2f s (%.2f s)\n", static_cast<long long>(id),
+                 u.start_sample / static_cast<double>(geometry_.sample_rate_hz),
+                 u.end_sample / static_cast<double>(geometry_.sample_rate_hz),
+                 u.samples.size() / static_cast<double>(geometry_.sample_rate_hz));
   const DecodeResult d = spotter_.Decode(u.samples.data(), u.samples.size(), full_decoding_);
   SpeechResult base;
   base.track_id = id;
