@@ -1,5 +1,5 @@
-// doa_log_check LOGFILE AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES: reads an LCM log, decodes every doa_t
-// on DOA, and checks that the median direction of the strongest source is within TOL of the
+// doa_log_check LOGFILE AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES [DOA_CHANNEL]: reads an LCM log, decodes
+// every doa_t on DOA (or DOA_CHANNEL), and checks that the median direction of the strongest source is within TOL of the
 // truth. Used by the multi-process test; prints what it found.
 #include <lcm/lcm-cpp.hpp>
 
@@ -14,7 +14,7 @@
 
 int main(int argc, char** argv) {
   if (argc < 6) {
-    std::fprintf(stderr, "usage: doa_log_check LOG AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES\n");
+    std::fprintf(stderr, "usage: doa_log_check LOG AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES [DOA_CHANNEL]\n");
     return 2;
   }
   lcm::LogFile log(argv[1], "r");
@@ -24,18 +24,19 @@ int main(int argc, char** argv) {
   }
   const double az = std::stod(argv[2]), el = std::stod(argv[3]), tol = std::stod(argv[4]);
   const int min_messages = std::stoi(argv[5]);
+  const std::string doa_channel = argc > 6 ? argv[6] : "DOA";
   std::vector<double> azs, els;
   int doa_messages = 0, audio_messages = 0, tracked = 0;
   int64_t last_audio_utime = 0;
   while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel == "AUDIO") {
+    if (e->channel.rfind("AUDIO", 0) == 0) {
       sarmap::audio_frame_t a;
       if (a.decode(e->data, 0, e->datalen) > 0) {
         ++audio_messages;
         last_audio_utime = a.header.utime;
       }
     }
-    if (e->channel != "DOA") continue;
+    if (e->channel != doa_channel) continue;
     sarmap::doa_t d;
     if (d.decode(e->data, 0, e->datalen) < 0) continue;
     ++doa_messages;

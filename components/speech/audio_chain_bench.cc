@@ -41,7 +41,8 @@ int main() {
     bool call_shape;  // the default call-shape rule (max_utterance_s); off = every utterance decoded
   };
   for (const Config& cfg : {Config{"srp_phat", false, true}, Config{"srp_phat", false, false},
-                            Config{"srp_phat", true, false}, Config{"music", false, true}}) {
+                            Config{"srp_phat", true, false}, Config{"srp_phat", true, true},
+                            Config{"music", false, true}}) {
     const std::string method = cfg.method;
     sound::LocaliserOptions lo;
     lo.method = method;

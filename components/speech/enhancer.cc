@@ -133,13 +133,20 @@ void VoiceActivityDetector::Push(const float* x, size_t count, std::vector<Utter
     for (float s : frame_) e += static_cast<double>(s) * s;
     frame_.clear();
     const double db = 10 * std::log10(e / frame_len_ + 1e-14);
-    if (!floor_init_) {
+    // Digital silence (exact zeros: a beam's first overlap-add samples, zeros filling a dropout
+    // of an asynchronous card) says nothing about the room's noise: it neither sets nor lowers the
+    // floor. Otherwise the floor fell to -140 dB and, at its slow rise (2 dB/s), the VAD read
+    // everything after it as speech for about a minute.
+    const bool digital_silence = db < -120.0;
+    if (!floor_init_ && !digital_silence) {
       floor_ = db;
       floor_init_ = true;
     }
-    const bool loud = db > floor_ + options_.threshold_db;
-    if (db < floor_) floor_ = db;
-    else floor_ += options_.floor_rise_db_per_s * options_.frame_s;
+    const bool loud = floor_init_ && !digital_silence && db > floor_ + options_.threshold_db;
+    if (floor_init_ && !digital_silence) {
+      if (db < floor_) floor_ = db;
+      else floor_ += options_.floor_rise_db_per_s * options_.frame_s;
+    }
     if (!in_speech_ && loud) {
       in_speech_ = true;
       speech_start_ = position_ - frame_len_;

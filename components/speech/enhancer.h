@@ -144,6 +144,7 @@ class VoiceActivityDetector {
   void Push(const float* samples, size_t count, std::vector<Utterance>* done);
   void Flush(std::vector<Utterance>* done);
   bool in_speech() const { return in_speech_; }
+  int64_t position() const { return position_; }  // stream samples analysed so far
 
  private:
   void Close(std::vector<Utterance>* done);

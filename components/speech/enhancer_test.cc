@@ -91,6 +91,23 @@ TEST(VoiceActivityDetector, FindsOneUtteranceWithItsBounds) {
   EXPECT_EQ(static_cast<int64_t>(u[0].samples.size()), u[0].end_sample - u[0].samples_start);
 }
 
+// Exact zeros (a beam's first overlap-add samples, a dropout filled with zeros) must not drag
+// the noise floor down: after 0.5 s of zeros, noise and then a 1 s tone give one ~1 s utterance,
+// not one that starts with the noise.
+TEST(VoiceActivityDetector, DigitalSilenceDoesNotSetTheFloor) {
+  auto noise = sound::testing_util::WhiteNoise(56000, 4);
+  std::vector<float> x(56000, 0.0f);
+  for (size_t i = 8000; i < x.size(); ++i) x[i] = 0.001f * noise[i];
+  for (size_t i = 32000; i < 48000; ++i) x[i] += 0.2f * std::sin(2 * M_PI * 300 * i / 16000.0);
+  VoiceActivityDetector vad(16000, VadOptions{});
+  std::vector<Utterance> u;
+  vad.Push(x.data(), x.size(), &u);
+  vad.Flush(&u);
+  ASSERT_EQ(u.size(), 1u);
+  EXPECT_NEAR(u[0].start_sample / 16000.0, 2.0, 0.05);
+  EXPECT_LT((u[0].end_sample - u[0].start_sample) / 16000.0, 1.5);
+}
+
 TEST(Resample, PreservesASineAcrossRates) {
   std::vector<float> x(22050);
   for (size_t i = 0; i < x.size(); ++i) x[i] = std::sin(2 * M_PI * 1000 * i / 22050.0);

@@ -52,6 +52,14 @@ struct KeywordOptions {
   // 1.8 s with 1e-40 (README): the tuning half of sarmap-log kws-eval reaches recall 0.9 from
   // 1.4 s, but reverberation lengthens a call's segment (a "help me" in RT60 0.3 s: 1.4-1.8 s).
   double max_utterance_s = 1.8;
+  // The call-shape rule applies to a call: voice-activity segments separated by less than this
+  // much non-speech (s, after the VAD's hangover) are one call, and the whole call must be at
+  // most max_utterance_s long (a "help" that starts or ends a longer stretch of talk is dropped;
+  // results wait this long after the segment's end). 0: each segment on its own. 0.5 s (README):
+  // bridges pauses up to ~0.8 s of silence (with the VAD's 0.3 s hangover), the scale of pauses
+  // inside a sentence; longer values only look better on sarmap-log kws-eval because its stream
+  // of other speech has 0.3-1.5 s gaps (>= ~1.2 s joins all of it).
+  double call_join_s = 0.5;
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
@@ -72,6 +80,8 @@ struct KeywordOptions {
     v("min_utterance_fraction", min_utterance_fraction,
       "detection must cover at least this fraction of its voice-activity segment (0..1)");
     v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call");
+    v("call_join_s", call_join_s,
+      "with max_utterance_s: segments closer than this (s) count as one call for the length limit (0: off)");
   }
   void Validate(common::Validator& check) const {
     check.That(!keywords.empty(), "keywords", "needs at least one keyword");
@@ -85,6 +95,7 @@ struct KeywordOptions {
                "needs 0 <= min_duration_s < max_duration_s");
     check.InRange("min_utterance_fraction", min_utterance_fraction, 0, 1);
     check.That(max_utterance_s >= 0, "max_utterance_s", "must be >= 0 (0: no limit)");
+    check.InRange("call_join_s", call_join_s, 0, 5);
   }
 };
 

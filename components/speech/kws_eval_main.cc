@@ -35,11 +35,26 @@ int main(int argc, char** argv) {
     std::string max_utterances = "0";
     p.AddFlag("--max-utterances-s", &max_utterances,
               "comma-separated: longest utterance that can hold a call (0: any), swept as a post-filter");
+    std::string call_joins = "0";
+    p.AddFlag("--call-joins-s", &call_joins,
+              "comma-separated: utterances separated by less non-speech are one call for the call-shape rule "
+              "(call_join_s), swept as a post-filter");
     p.AddFlag("--min-utterance-fraction", &shape.min_utterance_fraction, "hit covers at least this of its utterance");
     p.AddFlag("--min-duration-s", &shape.min_duration_s, "shortest hit (s)");
     p.AddFlag("--max-duration-s", &shape.max_duration_s, "longest hit (s)");
     p.AddFlag("--keyword-thresholds", &split_thresholds,
               "per-keyword thresholds separated by ':' (one per keyword), instead of --thresholds");
+    std::string array_recall;
+    double call_az = 60, babble_az = -60;
+    p.AddFlag("--array-recall", &array_recall,
+              "also: recall of the multichannel path (MVDR beam per track) on this array file, e.g. "
+              "config/arrays/respeaker4.yaml, for each --max-utterances-s x --call-joins-s");
+    p.AddFlag("--call-azimuth-deg", &call_az, "with --array-recall: caller's azimuth");
+    p.AddFlag("--babble-azimuth-deg", &babble_az, "with --array-recall: other talker's azimuth");
+    speech::VadOptions vad;
+    p.AddFlag("--vad-threshold-db", &vad.threshold_db, "voice activity: speech this far above the noise floor (dB)");
+    bool no_post_filter = false;
+    p.AddSwitch("--no-post-filter", &no_post_filter, "with --array-recall: beam without the spectral-gain post-filter");
     if (!p.Parse(argc, argv)) return 0;
     if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
     auto split = [](const std::string& s) {
@@ -56,9 +71,9 @@ int main(int argc, char** argv) {
     const auto data = speech::MakeKwsEvalData(o);
     std::printf("data: %zu calls, %.1f min of other speech and noise\n", data.positives.size(),
                 data.negatives.size() / 16000.0 / 60);
-    std::printf("| threshold | max utterance s | min confidence | recall (help) | hits/calls | help false alarms | per 10 min | other-keyword alarms "
+    std::printf("| threshold | call join s | max call s | min confidence | recall (help) | hits/calls | help false alarms | per 10 min | other-keyword alarms "
                 "| tune recall | tune FA/10 min | held-out recall | held-out FA/10 min | CPU s |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::vector<std::string> sweep = split(thresholds);
     if (!split_thresholds.empty()) sweep = {split_thresholds};
     for (const auto& t : sweep) {
@@ -85,10 +100,28 @@ int main(int argc, char** argv) {
       for (const auto& c : split(confidences)) cuts.push_back(std::stod(c));
       std::vector<double> max_utts;
       for (const auto& c : split(max_utterances)) max_utts.push_back(std::stod(c));
-      const auto rs = speech::EvaluateKwsSweep(data, k, speech::VadOptions{}, o, cuts, max_utts);
+      std::vector<double> gaps;
+      for (const auto& c : split(call_joins)) gaps.push_back(std::stod(c));
+      if (!array_recall.empty()) {
+        for (double join : gaps)
+          for (double mu : max_utts) {
+            speech::KeywordOptions ka = k;
+            ka.max_utterance_s = mu;
+            ka.call_join_s = join;
+            int calls = 0;
+            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls, vad, !no_post_filter);
+            std::printf("array %s, caller %.0f deg, other talker %.0f deg: threshold %s, call join %.2f s, max call "
+                        "%.1f s: recall %.3f (%d/%d)\n",
+                        array_recall.c_str(), call_az, babble_az, t.c_str(), join, mu,
+                        calls ? static_cast<double>(hits) / calls : 0.0, hits, calls);
+            std::fflush(stdout);
+          }
+        continue;
+      }
+      const auto rs = speech::EvaluateKwsSweep(data, k, vad, o, cuts, max_utts, gaps);
       for (const auto& r : rs)
-        std::printf("| %s | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",
-                    t.c_str(), r.max_utterance_s, r.min_confidence, r.recall, r.hits, r.calls, r.target_false_alarms,
+        std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",
+                    t.c_str(), r.call_join_s, r.max_utterance_s, r.min_confidence, r.recall, r.hits, r.calls, r.target_false_alarms,
                     r.false_alarms_per_10_min, r.other_false_alarms, r.tune_recall, r.tune_fa_per_10_min,
                     r.held_recall, r.held_hits, r.held_calls, r.held_fa_per_10_min, r.held_false_alarms,
                     r.decode_seconds);

@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include "audio_capture/audio_file.h"
+#include "common/robot_config.h"
+#include "sound_localisation/room_simulation.h"
 
 namespace sarmap {
 namespace speech {
@@ -140,6 +142,11 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
     Scale(&noise, noise_rms / std::max(1e-9, Rms(noise)));
     for (size_t k = 0; k < scene.size(); ++k) scene[k] = noise[k] + babble[k];
     for (size_t k = 0; k < call.size(); ++k) scene[start + k] += call[k];
+    std::vector<float> placed(scene.size(), 0.0f);
+    std::copy(call.begin(), call.end(), placed.begin() + start);
+    data.positive_call.push_back(std::move(placed));
+    data.positive_babble.push_back(babble);
+    data.positive_noise.push_back(noise);
     data.positives.push_back(std::move(scene));
     data.call_start_s.push_back(1.0);
     data.call_end_s.push_back(1.0 + call.size() / 16000.0);
@@ -172,12 +179,15 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords_in,
                                             const VadOptions& vad_options, const KwsEvalOptions& o,
                                             const std::vector<double>& cuts,
-                                            const std::vector<double>& max_utterances_s) {
+                                            const std::vector<double>& max_utterances_s,
+                                            const std::vector<double>& call_joins_s) {
   KeywordOptions keywords = keywords_in;
   keywords.min_confidence = 0;
   keywords.max_utterance_s = 0;  // applied below as a post-filter (same rule as in the spotter)
   KeywordSpotter spotter(keywords);
-  if (std::getenv("SARMAP_KWS_DUMP")) spotter.set_compute_verification(true);
+  // SARMAP_KWS_DUMP=llr also computes the (slow) acoustic verification of every hit.
+  if (const char* dump = std::getenv("SARMAP_KWS_DUMP"); dump && std::string(dump) == "llr")
+    spotter.set_compute_verification(true);
   const auto t0 = std::chrono::steady_clock::now();
   struct Hit {
     double utterance_start_s;
@@ -185,27 +195,59 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     std::string keyword;
     double confidence;
     double utterance_s;
+    std::vector<double> call_s;  // per call_joins_s value: length of the call (CallGroups) holding the hit
   };
+  int scene = 0;  // positive scene being decoded (for SARMAP_KWS_SEGDIR names)
   auto run = [&](const std::vector<float>& x, std::vector<Hit>* hits) {
     VoiceActivityDetector vad(16000, vad_options);
     std::vector<Utterance> utts;
     for (size_t i = 0; i < x.size(); i += 4096) vad.Push(x.data() + i, std::min<size_t>(4096, x.size() - i), &utts);
     vad.Flush(&utts);
-    for (const auto& u : utts) {
+    // Per join value: the length of the call (utterances joined across short pauses) of each utterance.
+    std::vector<std::vector<double>> call_s(call_joins_s.size(), std::vector<double>(utts.size()));
+    for (size_t j = 0; j < call_joins_s.size(); ++j) {
+      const int64_t join = static_cast<int64_t>(call_joins_s[j] * 16000);
+      for (size_t a = 0; a < utts.size();) {
+        size_t b = a + 1;
+        while (b < utts.size() && utts[b].start_sample - utts[b - 1].end_sample < join) ++b;
+        for (size_t k = a; k < b; ++k) call_s[j][k] = (utts[b - 1].end_sample - utts[a].samples_start) / 16000.0;
+        a = b;
+      }
+    }
+    for (size_t k = 0; k < utts.size(); ++k) {
+      const Utterance& u = utts[k];
+      if (std::getenv("SARMAP_KWS_DUMP"))
+        std::fprintf(stderr, "UTT %s %.3f %.3f\n", &x == &data.negatives ? "neg" : "pos", u.start_sample / 16000.0,
+                     u.end_sample / 16000.0);
       const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
+      if (const char* segdir = std::getenv("SARMAP_KWS_SEGDIR")) {
+        // Each utterance with a hit, as raw s16le, named by its label and time (for offline probes).
+        if (!d.keywords.empty() && u.samples.size() <= 2.0 * 16000) {
+          char name[256];
+          std::snprintf(name, sizeof(name), "%s/%s_%03d_%07.2f_%.2f_%s.raw", segdir,
+                        &x == &data.negatives ? "neg" : "pos", scene, u.samples_start / 16000.0,
+                        u.samples.size() / 16000.0, d.keywords[0].keyword.c_str());
+          if (FILE* f = std::fopen(name, "wb")) {
+            std::fwrite(u.samples.data(), 2, u.samples.size(), f);
+            std::fclose(f);
+          }
+        }
+      }
       for (const auto& h : d.keywords) {
         hits->push_back({u.samples_start / 16000.0, u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence,
-                           u.samples.size() / 16000.0});
+                         u.samples.size() / 16000.0, {}});
+        for (const auto& c : call_s) hits->back().call_s.push_back(c[k]);
         if (std::getenv("SARMAP_KWS_DUMP"))
-          std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f llr %.4f\n",
+          std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f call %.2f llr %.4f\n",
                        &x == &data.negatives ? "neg" : "pos", h.keyword.c_str(), u.samples_start / 16000.0 + h.start_s,
                        h.log_ratio, h.kws_confidence, h.confidence, h.end_s - h.start_s, u.samples.size() / 16000.0,
-                       h.verify_llr);
+                       call_s.back()[k], h.verify_llr);
       }
     }
   };
   std::vector<std::vector<Hit>> pos(data.positives.size());
   for (size_t i = 0; i < data.positives.size(); ++i) {
+    scene = static_cast<int>(i);
     run(data.positives[i], &pos[i]);
     if (std::getenv("SARMAP_KWS_DUMP")) {
       std::fprintf(stderr, "POS %zu call %.2f-%.2f:", i, data.call_start_s[i], data.call_end_s[i]);
@@ -217,6 +259,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   run(data.negatives, &neg);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<KwsEvalResult> out;
+  for (size_t j = 0; j < call_joins_s.size(); ++j)
   for (double max_utt : max_utterances_s)
   for (double cut_value : cuts) {
     // A hit counts when its confidence reaches the cut and its utterance is short enough.
@@ -229,10 +272,11 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       return false;
     };
     auto passes = [&](const Hit& h) {
-      return h.confidence >= cut_value && (max_utt <= 0 || h.utterance_s <= max_utt);
+      return h.confidence >= cut_value && (max_utt <= 0 || h.call_s[j] <= max_utt);
     };
     KwsEvalResult r;
     r.max_utterance_s = max_utt;
+    r.call_join_s = call_joins_s[j];
     r.threshold = keywords.thresholds.empty() ? 0 : keywords.thresholds[0];
     r.min_confidence = cut_value;
     for (size_t i = 0; i < pos.size(); ++i) {
@@ -275,9 +319,70 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   return out;
 }
 
+int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
+                   double call_az_deg, double babble_az_deg, int* calls, const VadOptions& vad, bool post_filter) {
+  const auto geometry = sound::ArrayGeometry::FromOptions(common::LoadMicArray(array_yaml));
+  SpeechOptions so;
+  so.keywords = keywords;
+  so.keywords.min_confidence = 0;
+  so.vad = vad;
+  so.enhancer.post_filter = post_filter;
+  sound::Room room;
+  const Eigen::Vector3d centre(3, 2.5, 1.0);
+  auto at = [&](double az_deg, double el_deg, double r) {
+    const double az = az_deg * M_PI / 180, el = el_deg * M_PI / 180;
+    return Eigen::Vector3d(centre + r * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                                                        std::sin(el)));
+  };
+  const sound::Direction call_dir{call_az_deg * M_PI / 180, 10 * M_PI / 180};
+  const sound::Direction babble_dir{babble_az_deg * M_PI / 180, 10 * M_PI / 180};
+  int hits = 0;
+  *calls = 0;
+  for (size_t i = 0; i < data.positive_call.size(); ++i) {
+    // A fresh processor per scene (as the mono evaluation starts a fresh VAD per scene): its VAD
+    // learns the floor from the scene's own background.
+    SpeechProcessor processor(geometry, sound::DoaKind::kAzimuthElevation, so);
+    const size_t n = data.positive_call[i].size();
+    const auto mics = sound::SimulateRoom(room, geometry.positions_m.colwise() + centre,
+                                          {{at(call_az_deg, 10, 1.5), data.positive_call[i]},
+                                           {at(babble_az_deg, 10, 1.5), data.positive_babble[i]},
+                                           {at(180, 40, 2.0), data.positive_noise[i]}},
+                                          n, 1e-4, static_cast<uint32_t>(i + 1));
+    // Warm-up: the scene's background alone first (the node runs continuously, so its noise
+    // estimates, beam and VAD floor have heard the room before a call). Calls are counted in the
+    // second part.
+    auto warm = sound::SimulateRoom(room, geometry.positions_m.colwise() + centre,
+                                    {{at(babble_az_deg, 10, 1.5), data.positive_babble[i]},
+                                     {at(180, 40, 2.0), data.positive_noise[i]}},
+                                    n, 1e-4, static_cast<uint32_t>(i + 1000));
+    for (size_t m = 0; m < warm.size(); ++m) warm[m].insert(warm[m].end(), mics[m].begin(), mics[m].end());
+    const auto pcm = audio::ToInterleavedInt16(warm, 0, 2 * n);
+    const int64_t offset = static_cast<int64_t>(n);
+    std::vector<SpeechResult> results;
+    const int ch = geometry.num_mics();
+    for (size_t k = 0; k < 2 * n; k += 512) {
+      processor.UpdateTrack(1, call_dir, Eigen::Matrix2d::Identity() * 0.003, static_cast<int64_t>(k));
+      if (data.positive_babble[i].size() == n && Rms(data.positive_babble[i]) > 1e-6)
+        processor.UpdateTrack(2, babble_dir, Eigen::Matrix2d::Identity() * 0.003, static_cast<int64_t>(k));
+      processor.Push(pcm.data() + k * ch, static_cast<int>(std::min<size_t>(512, 2 * n - k)), ch, &results);
+    }
+    processor.Flush(&results);  // ends the scene's last call
+    bool found = false;
+    for (const auto& r : results) {
+      const double t = (r.start_sample - offset) / 16000.0;
+      found |= r.track_id == 1 && r.keyword.find("help") != std::string::npos && t > data.call_start_s[i] - 0.5 &&
+               t < data.call_end_s[i] + 0.5;
+    }
+    hits += found;
+    ++*calls;
+  }
+  return hits;
+}
+
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
                           const KwsEvalOptions& o) {
-  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}, {keywords.max_utterance_s}).front();
+  return EvaluateKwsSweep(data, keywords, vad, o, {keywords.min_confidence}, {keywords.max_utterance_s},
+                          {keywords.call_join_s}).front();
 }
 
 }  // namespace speech

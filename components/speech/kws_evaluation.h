@@ -11,6 +11,7 @@
 
 #include "speech/enhancer.h"
 #include "speech/keyword_spotter.h"
+#include "speech/speech_processor.h"
 
 namespace sarmap {
 namespace speech {
@@ -33,6 +34,7 @@ struct KwsEvalResult {
   double threshold = 0;
   double min_confidence = 0;
   double max_utterance_s = 0;       // post-filter: hits in longer utterances dropped (0: none)
+  double call_join_s = 0;           // utterances closer than this are one call for max_utterance_s
   int calls = 0, hits = 0;
   double recall = 0;
   int target_false_alarms = 0;      // target keyword in the negative stream
@@ -52,7 +54,18 @@ struct KwsEvalData {
   std::vector<std::vector<float>> positives;  // 16 kHz scenes, call at call_start_s
   std::vector<double> call_start_s, call_end_s;
   std::vector<float> negatives;               // one long 16 kHz stream
+  // The parts of each positive scene (summed in `positives`): the call (placed), other talker, noise.
+  std::vector<std::vector<float>> positive_call, positive_babble, positive_noise;
 };
+
+// Recall of the multichannel path (SpeechProcessor: per-track MVDR beam -> VAD -> keywords, with
+// its call-shape rule) on the positive scenes rendered on `array` in an anechoic room: the call
+// from azimuth call_azimuth_deg, the other talker from babble_azimuth_deg, the noise from a third
+// direction; both talkers given as tracks (as the localiser would), a call counts when "help" is
+// heard on the caller's track within its window. Returns hits; *calls gets the number of scenes.
+int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
+                   double call_azimuth_deg, double babble_azimuth_deg, int* calls,
+                   const VadOptions& vad = VadOptions(), bool post_filter = true);
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
@@ -61,7 +74,8 @@ KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keyword
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords,
                                             const VadOptions& vad, const KwsEvalOptions& options,
                                             const std::vector<double>& min_confidences,
-                                            const std::vector<double>& max_utterances_s = {0.0});
+                                            const std::vector<double>& max_utterances_s = {0.0},
+                                            const std::vector<double>& call_joins_s = {0.0});
 
 }  // namespace speech
 }  // namespace sarmap

@@ -1,6 +1,8 @@
 #include "speech/speech_processor.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 
 namespace sarmap {
 namespace speech {
@@ -51,6 +53,12 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     std::vector<Utterance> done;
     vad->Push(buf.data(), buf.size(), &done);
     for (const auto& u : done) Handle(id, u, results);
+    // A call ends when no new speech began within call_join_s of its last segment.
+    auto c = calls_.find(id);
+    if (c != calls_.end() && c->second.open && !vad->in_speech() &&
+        vad->position() - c->second.end_sample >=
+            static_cast<int64_t>(options_.keywords.call_join_s * geometry_.sample_rate_hz))
+      FinishCall(id, results);
   }
   // Beams that ended: flush their VAD.
   for (auto it = vads_.begin(); it != vads_.end();) {
@@ -63,6 +71,7 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     std::vector<Utterance> done;
     it->second->Flush(&done);
     for (const auto& u : done) Handle(it->first, u, results);
+    FinishCall(it->first, results);
     enhanced_.erase(it->first);
     vad_origins_.erase(it->first);
     it = vads_.erase(it);
@@ -74,11 +83,31 @@ void SpeechProcessor::Flush(std::vector<SpeechResult>* results) {
     std::vector<Utterance> done;
     vad->Flush(&done);
     for (const auto& u : done) Handle(id, u, results);
+    FinishCall(id, results);
   }
+}
+
+bool SpeechProcessor::joins_calls() const {
+  return options_.keywords.call_join_s > 0 && options_.keywords.max_utterance_s > 0;
+}
+
+void SpeechProcessor::FinishCall(int64_t id, std::vector<SpeechResult>* results) {
+  auto it = calls_.find(id);
+  if (it == calls_.end() || !it->second.open) return;
+  PendingCall& c = it->second;
+  const double call_s = static_cast<double>(c.end_sample - c.samples_start) / geometry_.sample_rate_hz;
+  if (call_s <= options_.keywords.max_utterance_s)
+    results->insert(results->end(), c.results.begin(), c.results.end());
+  calls_.erase(it);
 }
 
 void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results) {
   ++utterances_;
+  if (std::getenv("SARMAP_KWS_DUMP"))
+    std::fprintf(stderr, "SEGMENT beam %lld %.2f-%.2f s (%.2f s)\n", static_cast<long long>(id),
+                 u.start_sample / static_cast<double>(geometry_.sample_rate_hz),
+                 u.end_sample / static_cast<double>(geometry_.sample_rate_hz),
+                 u.samples.size() / static_cast<double>(geometry_.sample_rate_hz));
   const DecodeResult d = spotter_.Decode(u.samples.data(), u.samples.size(), full_decoding_);
   SpeechResult base;
   base.track_id = id;
@@ -94,6 +123,20 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
   base.start_sample = u.start_sample + to_stream;
   base.end_sample = u.end_sample + to_stream;
   base.text = d.text;
+  // With joined calls, keyword results wait for the end of their call (text does not).
+  std::vector<SpeechResult>* keyword_out = results;
+  if (joins_calls()) {
+    const int64_t join = static_cast<int64_t>(options_.keywords.call_join_s * geometry_.sample_rate_hz);
+    auto c = calls_.find(id);
+    if (c != calls_.end() && c->second.open && u.start_sample - c->second.end_sample >= join) FinishCall(id, results);
+    PendingCall& call = calls_[id];
+    if (!call.open) {
+      call.open = true;
+      call.samples_start = u.samples_start;
+    }
+    call.end_sample = u.end_sample;
+    keyword_out = &call.results;
+  }
   bool any = false;
   for (const KeywordHit& h : d.keywords) {
     if (h.confidence < options_.keywords.min_confidence) continue;
@@ -103,7 +146,7 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
     const int64_t s0 = u.samples_start + to_stream;
     r.start_sample = s0 + static_cast<int64_t>(h.start_s * geometry_.sample_rate_hz);
     r.end_sample = s0 + static_cast<int64_t>(h.end_s * geometry_.sample_rate_hz);
-    results->push_back(r);
+    keyword_out->push_back(r);
     any = true;
   }
   if (!any && !d.text.empty()) {

@@ -72,6 +72,16 @@ class SpeechProcessor {
 
  private:
   void Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results);
+  // Call-shape rule over joined segments (keywords.call_join_s): keyword results of a beam wait
+  // until its call ends, and are released only if the whole call is short enough.
+  struct PendingCall {
+    bool open = false;
+    int64_t samples_start = 0, end_sample = 0;  // enhanced-stream samples (first segment with pre-roll, last end)
+    std::vector<SpeechResult> results;
+  };
+  bool joins_calls() const;
+  void FinishCall(int64_t id, std::vector<SpeechResult>* results);
+  std::map<int64_t, PendingCall> calls_;
   sound::ArrayGeometry geometry_;
   sound::DoaKind kind_;
   SpeechOptions options_;

@@ -84,6 +84,54 @@ TEST(SpeechProcessor, KeywordTimeIsRightForATrackBornMidStream) {
   EXPECT_TRUE(found);
 }
 
+// Call-shape rule over joined segments (call_join_s): "help me" alone is a call; the same
+// "help me" followed 0.4 s later by a sentence is the start of a longer stretch of talk, not a
+// call. Without joining, the rule looks at each voice-activity segment alone and keeps it.
+bool HeardHelp(const std::vector<float>& mono, double call_join_s) {
+  const auto g = sound::testing_util::LoadArray("respeaker4");
+  sound::Room room;
+  const Eigen::Vector3d centre(3, 2.5, 1.0);
+  const double az = sound::DegToRad(60), el = sound::DegToRad(15);
+  const Eigen::Vector3d u(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  const size_t n = mono.size();
+  const auto mics = sound::SimulateRoom(room, g.positions_m.colwise() + centre, {{centre + 1.5 * u, mono}}, n, 0.003, 5);
+  const auto pcm = audio::ToInterleavedInt16(mics, 0, n);
+  SpeechOptions o;
+  o.keywords.keywords = {"help"};
+  o.keywords.thresholds = {1e-40};
+  o.keywords.min_confidence = 0.5;
+  o.keywords.call_join_s = call_join_s;
+  SpeechProcessor p(g, sound::DoaKind::kAzimuthElevation, o);
+  std::vector<SpeechResult> results;
+  for (size_t i = 0; i < n; i += 512) {
+    p.UpdateTrack(4, {az, el}, Eigen::Matrix2d::Identity() * 0.003, static_cast<int64_t>(i));
+    p.Push(pcm.data() + i * 4, static_cast<int>(std::min<size_t>(512, n - i)), 4, &results);
+  }
+  p.Flush(&results);
+  for (const auto& r : results)
+    if (r.keyword == "help") return true;
+  return false;
+}
+
+TEST(SpeechProcessor, CallJoinDropsHelpThatStartsALongerStretchOfTalk) {
+  if (!EspeakAvailable()) GTEST_SKIP() << "espeak-ng not installed";
+  const auto call = RenderEspeak("help me", "en-us", 150, 50);
+  const auto more = RenderEspeak("we walked along the river in the evening", "en-us", 150, 50);
+  ASSERT_FALSE(call.empty());
+  ASSERT_FALSE(more.empty());
+  auto scene = [&](bool with_more) {
+    const size_t lead = 24000, pause = 6400;  // 1.5 s of noise, 0.4 s between call and sentence
+    std::vector<float> x(lead + call.size() + pause + more.size() + 24000, 0.0f);
+    for (size_t i = 0; i < call.size(); ++i) x[lead + i] = call[i] * 8;
+    if (with_more)
+      for (size_t i = 0; i < more.size(); ++i) x[lead + call.size() + pause + i] = more[i] * 8;
+    return x;
+  };
+  EXPECT_TRUE(HeardHelp(scene(false), 0.5));
+  EXPECT_TRUE(HeardHelp(scene(true), 0.0));   // each segment alone: the call's segment is short
+  EXPECT_FALSE(HeardHelp(scene(true), 0.5));  // joined: a 3 s stretch of talk
+}
+
 }  // namespace
 }  // namespace speech
 }  // namespace sarmap
