@@ -476,23 +476,15 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
   }
   result.source_positions_m = {s};
   result.tdoa_residual_s = Eigen::MatrixXd::Constant(K, N - 1, std::nan(""));
-  double s1 = 0, s2 = 0, cnt = 0;
   for (int k = 0; k < K; ++k) {
     for (int n = 1; n < N; ++n) {
       const double z = data.tdoa_s(k, n - 1);
       if (!std::isfinite(z)) continue;
-      const double res = Geometric(mic_world[k][n], mic_world[k][0], s, c) +
-                         result.start_offsets_s[n] + data.times_s[k] * result.clock_drift[n] - z;
-      result.tdoa_residual_s(k, n - 1) = res;
-      s1 += res;
-      s2 += res * res;
-      cnt += 1;
-      result.residual_max_abs_s = std::max(result.residual_max_abs_s, std::abs(res));
+      result.tdoa_residual_s(k, n - 1) = Geometric(mic_world[k][n], mic_world[k][0], s, c) +
+                                         result.start_offsets_s[n] + data.times_s[k] * result.clock_drift[n] - z;
     }
   }
-  result.residual_rms_s = std::sqrt(s2 / std::max(cnt, 1.0));
-  const double mean = s1 / std::max(cnt, 1.0);
-  result.residual_std_s = std::sqrt(std::max(0.0, s2 / std::max(cnt, 1.0) - mean * mean));
+  SetResidualStatistics(&result);
 
   // --- The bearing of the source in the array frame: does it span enough? ---
   {

@@ -623,6 +623,23 @@ void ApplyGuess(const TdoaData& data, const SolverOptions& o, const InitialGuess
 
 }  // namespace
 
+void SetResidualStatistics(CalibrationResult* result) {
+  double s1 = 0, s2 = 0, count = 0, max_abs = 0;
+  const Eigen::MatrixXd& r = result->tdoa_residual_s;
+  for (Eigen::Index i = 0; i < r.size(); ++i) {
+    const double v = r.data()[i];
+    if (!std::isfinite(v)) continue;
+    s1 += v;
+    s2 += v * v;
+    count += 1;
+    max_abs = std::max(max_abs, std::abs(v));
+  }
+  const double n = std::max(count, 1.0), mean = s1 / n;
+  result->residual_rms_s = std::sqrt(s2 / n);
+  result->residual_std_s = std::sqrt(std::max(0.0, s2 / n - mean * mean));
+  result->residual_max_abs_s = max_abs;
+}
+
 CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
                             const InitialGuess* guess) {
   common::ValidateOptions(options);
@@ -772,7 +789,6 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
 
   // Residuals without the robust loss, in seconds.
   result.tdoa_residual_s = Eigen::MatrixXd::Constant(K, N - 1, std::nan(""));
-  double s1 = 0, s2 = 0, cnt = 0;
   for (int k = 0; k < K; ++k) {
     for (int n = 1; n < N; ++n) {
       const double z = data.tdoa_s(k, n - 1);
@@ -785,17 +801,10 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
         pred = ((result.mic_positions_m[n] - s).norm() - s.norm()) / o.speed_of_sound_mps;
       }
       pred += result.start_offsets_s[n] + data.times_s[k] * result.clock_drift[n];
-      const double r = pred - z;
-      result.tdoa_residual_s(k, n - 1) = r;
-      s1 += r;
-      s2 += r * r;
-      cnt += 1;
-      result.residual_max_abs_s = std::max(result.residual_max_abs_s, std::abs(r));
+      result.tdoa_residual_s(k, n - 1) = pred - z;
     }
   }
-  result.residual_rms_s = std::sqrt(s2 / std::max(cnt, 1.0));
-  const double mean = s1 / std::max(cnt, 1.0);
-  result.residual_std_s = std::sqrt(std::max(0.0, s2 / std::max(cnt, 1.0) - mean * mean));
+  SetResidualStatistics(&result);
 
   // Marginal covariances at the solution (robust loss applied, as in the solve).
   result.mic_position_cov.assign(N, Eigen::Matrix3d::Zero());

@@ -233,6 +233,9 @@ struct InitialGuess {
 
 // Checks what the data can determine (refuses with UnobservableError), solves, fixes the
 // gauge signs, computes covariances. Throws std::invalid_argument on malformed input.
+// residual_rms_s, residual_std_s and residual_max_abs_s over the finite tdoa_residual_s.
+void SetResidualStatistics(CalibrationResult* result);
+
 CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
                             const InitialGuess* guess = nullptr);
 

@@ -16,29 +16,6 @@ namespace {
 using testing_util::LoadArray;
 using testing_util::WhiteNoise;
 
-// Band-limited value of x at fractional sample p (long windowed sinc, independent of the
-// aligner's interpolator).
-double SincAt(const std::vector<float>& x, double p, int h = 64) {
-  const int64_t i0 = static_cast<int64_t>(std::floor(p));
-  double y = 0;
-  for (int64_t k = i0 - h + 1; k <= i0 + h; ++k) {
-    if (k < 0 || k >= static_cast<int64_t>(x.size())) continue;
-    const double d = p - k;
-    const double s = std::abs(d) < 1e-12 ? 1.0 : std::sin(M_PI * d) / (M_PI * d);
-    y += x[k] * s * (0.5 + 0.5 * std::cos(M_PI * d / h));
-  }
-  return y;
-}
-
-// A card with start offset tau and drift delta records, at its sample k, the synchronous
-// signal at reference sample r = (k - tau fs) / (1 + delta).
-std::vector<float> RecordAsynchronously(const std::vector<float>& sync, double tau_s, double delta, int fs) {
-  std::vector<float> x(sync.size());
-  for (size_t k = 0; k < x.size(); ++k)
-    x[k] = static_cast<float>(SincAt(sync, (static_cast<double>(k) - tau_s * fs) / (1.0 + delta)));
-  return x;
-}
-
 // Mean absolute azimuth error (deg) of the per-block SRP-PHAT estimates after `skip_samples`.
 double MeanAzimuthError(const ArrayGeometry& g, const std::vector<std::vector<float>>& mics, double az_rad,
                         int64_t skip_samples, size_t* blocks) {
@@ -100,7 +77,7 @@ TEST(AsyncStreamAligner, RestoresDoaAccuracyOfAnAsynchronousArray) {
   const std::vector<double> tau_s = {0.0, 0.0013, -0.0007, 0.0021};
   const std::vector<double> delta = {0.0, 80e-6, -120e-6, 50e-6};
   std::vector<std::vector<float>> async(4);
-  for (int m = 0; m < 4; ++m) async[m] = RecordAsynchronously(sync[m], tau_s[m], delta[m], fs);
+  for (int m = 0; m < 4; ++m) async[m] = RecordAsynchronously(sync[m], tau_s[m], delta[m], fs);  // room_simulation.h
 
   // Each card delivers its own blocks with its own counter.
   AsyncStreamAligner aligner(fs, tau_s, delta, 4);

@@ -25,30 +25,6 @@
 #include "audio_capture/audio_file.h"
 #include "sound_localisation/room_simulation.h"
 
-namespace {
-
-// Band-limited value of x at fractional sample p (Hann-windowed sinc, 2h taps).
-double SincAt(const std::vector<float>& x, double p, int h = 48) {
-  const int64_t i0 = static_cast<int64_t>(std::floor(p));
-  double y = 0;
-  for (int64_t k = i0 - h + 1; k <= i0 + h; ++k) {
-    if (k < 0 || k >= static_cast<int64_t>(x.size())) continue;
-    const double d = p - static_cast<double>(k);
-    const double s = std::abs(d) < 1e-12 ? 1.0 : std::sin(M_PI * d) / (M_PI * d);
-    y += x[k] * s * (0.5 + 0.5 * std::cos(M_PI * d / h));
-  }
-  return y;
-}
-
-std::vector<float> RecordAsynchronously(const std::vector<float>& sync, double tau_s, double delta, int fs) {
-  std::vector<float> x(sync.size());
-  for (size_t k = 0; k < x.size(); ++k)
-    x[k] = static_cast<float>(SincAt(sync, (static_cast<double>(k) - tau_s * fs) / (1.0 + delta)));
-  return x;
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
   using namespace sarmap;
   if (argc < 2) {
@@ -86,7 +62,7 @@ int main(int argc, char** argv) {
     for (auto& ch : buf.channels)
       for (float& v : ch) v = 2e-4f * normal(rng);  // channels without a microphone: noise
     for (int m = 0; m < 4; ++m)
-      if (mic_card[m] == c) buf.channels[mic_channel[m]] = RecordAsynchronously(sync[m], card_tau_s[c], card_drift[c], fs);
+      if (mic_card[m] == c) buf.channels[mic_channel[m]] = sarmap::sound::RecordAsynchronously(sync[m], card_tau_s[c], card_drift[c], fs, 48);
     audio::WriteWav(dir + "/card" + std::to_string(c) + ".wav", buf);
   }
   std::ofstream y(dir + "/array.yaml");

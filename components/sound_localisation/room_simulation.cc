@@ -101,5 +101,30 @@ std::vector<std::vector<float>> SimulateRoom(const Room& room, const Eigen::Matr
   return out;
 }
 
+namespace {
+
+// Band-limited value of x at fractional sample p (Hann-windowed sinc, 2h taps).
+double SincAt(const std::vector<float>& x, double p, int h) {
+  const int64_t i0 = static_cast<int64_t>(std::floor(p));
+  double y = 0;
+  for (int64_t k = i0 - h + 1; k <= i0 + h; ++k) {
+    if (k < 0 || k >= static_cast<int64_t>(x.size())) continue;
+    const double d = p - static_cast<double>(k);
+    const double s = std::abs(d) < 1e-12 ? 1.0 : std::sin(M_PI * d) / (M_PI * d);
+    y += x[k] * s * (0.5 + 0.5 * std::cos(M_PI * d / h));
+  }
+  return y;
+}
+
+}  // namespace
+
+std::vector<float> RecordAsynchronously(const std::vector<float>& sync, double tau_s, double delta, int fs,
+                                        int half_taps) {
+  std::vector<float> x(sync.size());
+  for (size_t k = 0; k < x.size(); ++k)
+    x[k] = static_cast<float>(SincAt(sync, (static_cast<double>(k) - tau_s * fs) / (1.0 + delta), half_taps));
+  return x;
+}
+
 }  // namespace sound
 }  // namespace sarmap

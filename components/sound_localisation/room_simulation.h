@@ -39,5 +39,11 @@ std::vector<std::vector<float>> SimulateRoom(const Room& room, const Eigen::Matr
                                              const std::vector<SimSource>& sources, size_t num_samples,
                                              double noise_std, uint32_t seed);
 
+// What a sound card with its own clock records of a synchronous signal: its sample k is the
+// signal at reference sample r = (k - tau fs) / (1 + delta) (async_alignment.h's clock model),
+// band-limited by a Hann-windowed sinc of 2 * half_taps taps.
+std::vector<float> RecordAsynchronously(const std::vector<float>& sync, double tau_s, double delta, int fs,
+                                        int half_taps = 64);
+
 }  // namespace sound
 }  // namespace sarmap
