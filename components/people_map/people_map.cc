@@ -200,6 +200,7 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     const double sigma_det = std::max(d.azimuth_sigma_rad, options_.min_direction_sigma_rad);
     const SoundSource* best = nullptr;
     double best_score = options_.heard_gate_chi2;
+    int in_gate = 0;  // sources this direction could be pointing at
     for (const auto& [id, s] : sources_) {
       const Eigen::Vector3d v = mic_from_map * s.position_m;
       const double range = v.head<2>().norm();
@@ -211,6 +212,7 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
       const double var_across = across_map.dot(s.covariance * across_map);
       const double variance = sigma_det * sigma_det + var_across / (range * range);
       const double score = error * error / variance;
+      if (score <= options_.heard_gate_chi2) ++in_gate;
       if (score <= best_score) {
         best_score = score;
         best = &s;
@@ -219,13 +221,16 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     (void)origin;
     if (!best) continue;
     ++associated;
-    source_heard_utime_[best->id] = utime;
-    if (!d.keyword.empty()) source_keyword_[best->id] = d.keyword;
     // The person this source is, found or made.
     Person* p = nullptr;
     for (auto& [id, q] : people_) {
       if (q.sound_source_id == best->id) p = &q;
     }
+    // A direction through two sound sources (one behind the other, as along a corridor) does not
+    // say which of them called: it makes no one a person.
+    if (!p && in_gate > 1) continue;
+    source_heard_utime_[best->id] = utime;
+    if (!d.keyword.empty()) source_keyword_[best->id] = d.keyword;
     // Not yet placed: an initialising source waits (UpdateSoundSources places it on convergence).
     if (!p && options_.heard_needs_converged_source && !best->converged) continue;
     if (!p) {

@@ -159,6 +159,36 @@ TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
   EXPECT_TRUE(late.people().empty());
 }
 
+// Along a corridor two sources can lie on one bearing: a call from that bearing names neither.
+TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource near_source, far_source;
+  near_source.id = 1;
+  near_source.position_m = Eigen::Vector3d(4.0, 0.1, 0.5);
+  far_source.id = 2;
+  far_source.position_m = Eigen::Vector3d(7.0, 0.1, 0.5);
+  for (SoundSource* s : {&near_source, &far_source}) {
+    s->covariance = Eigen::Vector3d(0.01, 0.01, 0.1).asDiagonal();
+    s->converged = true;
+  }
+  map.UpdateSoundSources(1'000'000, {near_source, far_source});
+  HeardDetection call;
+  call.azimuth_rad = 0.02;
+  call.keyword = "here";
+  call.confidence = 0.9;
+  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  EXPECT_TRUE(map.people().empty());
+  map.UpdateSoundSources(3'000'000, {near_source, far_source});  // nor later, as "recently heard"
+  EXPECT_TRUE(map.people().empty());
+
+  // From the side the two are told apart, and the far one is the caller.
+  const Rigid3d beside(Eigen::Vector3d(7.0, -3.0, 0.0), Eigen::Quaterniond::Identity());
+  call.azimuth_rad = M_PI / 2;
+  EXPECT_EQ(map.AddHeard(4'000'000, {call}, beside), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 2);
+}
+
 TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
   PeopleMapOptions options;
   options.confidence_half_life_s = 10;
