@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -191,6 +192,16 @@ void PeopleMap::MergeCloseSeenPeople() {
   }
 }
 
+int PeopleMap::RecentCalls(int64_t source_id, Utime utime) const {
+  const auto it = source_call_utimes_.find(source_id);
+  if (it == source_call_utimes_.end()) return 0;
+  int count = 0;
+  for (Utime t : it->second) {
+    if (std::abs(common::UtimeToSeconds(utime - t)) <= options_.heard_person_window_s) ++count;
+  }
+  return count;
+}
+
 int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detections,
                         const common::Rigid3d& map_from_mic) {
   const Eigen::Vector3d origin = map_from_mic.translation();
@@ -231,7 +242,16 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     if (!p && in_gate > 1) continue;
     source_heard_utime_[best->id] = utime;
     if (!d.keyword.empty()) source_keyword_[best->id] = d.keyword;
-    // Not yet placed: an initialising source waits (UpdateSoundSources places it on convergence).
+    auto& calls = source_call_utimes_[best->id];
+    calls.erase(std::remove_if(calls.begin(), calls.end(),
+                               [&](Utime t) {
+                                 return common::UtimeToSeconds(utime - t) > options_.heard_person_window_s;
+                               }),
+                calls.end());
+    calls.push_back(utime);
+    // Not yet placed: one call may be a keyword false alarm, and an initialising source's
+    // position is a guess; UpdateSoundSources places the person once both are settled.
+    if (!p && RecentCalls(best->id, utime) < options_.min_heard_calls) continue;
     if (!p && options_.heard_needs_converged_source && !best->converged) continue;
     if (!p) {
       for (auto& [id, q] : people_) {
@@ -280,7 +300,8 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
       linked->heard_position_m = s.position_m;
       linked->heard_covariance = s.covariance;
       Refuse(linked);
-    } else if ((s.is_person || recently_heard) && (s.converged || !options_.heard_needs_converged_source)) {
+    } else if ((s.is_person || recently_heard) && (s.converged || !options_.heard_needs_converged_source) &&
+               RecentCalls(s.id, utime) >= options_.min_heard_calls) {
       Person fresh;
       fresh.id = next_id_++;
       fresh.first_detected_utime = utime;

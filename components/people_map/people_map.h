@@ -43,6 +43,7 @@ struct PeopleMapOptions {
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
   double heard_person_window_s = 30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
+  int min_heard_calls = 2;  // calls towards a source (within heard_person_window_s) to make it a person
   template <class V>
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
@@ -58,6 +59,9 @@ struct PeopleMapOptions {
     v("heard_needs_converged_source", heard_needs_converged_source,
       "a heard-only person is placed only at a converged sound source; a call towards an initialising "
       "source is remembered and places the person when the source converges");
+    v("min_heard_calls", min_heard_calls,
+      "a sound source becomes a heard person only after this many keyword calls towards it within "
+      "heard_person_window_s: one keyword false alarm is not a person");
   }
   void Validate(common::Validator& check) const {
     check.Positive("merge_radius_m", merge_radius_m);
@@ -70,6 +74,7 @@ struct PeopleMapOptions {
     check.Positive("confidence_half_life_s", confidence_half_life_s);
     check.InRange("min_report_confidence", min_report_confidence, 0.0, 1.0);
     check.Positive("heard_person_window_s", heard_person_window_s);
+    check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
   }
 };
 
@@ -156,6 +161,8 @@ class PeopleMap {
   std::map<int64_t, SoundSource> sources_;
   std::map<int64_t, common::Utime> source_heard_utime_;  // source -> last heard calling
   std::map<int64_t, std::string> source_keyword_;
+  std::map<int64_t, std::vector<common::Utime>> source_call_utimes_;  // not saved: a restart recounts
+  int RecentCalls(int64_t source_id, common::Utime utime) const;
   int64_t next_id_ = 1;
 };
 

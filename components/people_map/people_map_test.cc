@@ -75,6 +75,7 @@ TEST(PeopleMapTest, PoseUncertaintyGrowsTheCovarianceAcrossTheBearing) {
 
 TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne) {
   PeopleMapOptions options;
+  options.min_heard_calls = 1;  // one call places a person (the default asks for two)
   PeopleMap map(options);
   SoundSource hidden;  // behind furniture: never seen
   hidden.id = 7;
@@ -123,8 +124,14 @@ TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne)
 
 // An initialising source's position is a guess: a call heard towards it is remembered, and the
 // person is placed only once the sound map says the source has converged.
+PeopleMapOptions OneCallIsAPerson() {
+  PeopleMapOptions options;
+  options.min_heard_calls = 1;
+  return options;
+}
+
 TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
-  PeopleMap map(PeopleMapOptions{});
+  PeopleMap map(OneCallIsAPerson());
   SoundSource caller;
   caller.id = 3;
   caller.position_m = Eigen::Vector3d(2.0, 5.0, 0.5);
@@ -150,7 +157,7 @@ TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
   EXPECT_NEAR((p.position_m - caller.position_m).norm(), 0.0, 1e-9);
 
   // Converged long after the call (outside heard_person_window_s): not a person.
-  PeopleMap late(PeopleMapOptions{});
+  PeopleMap late(OneCallIsAPerson());
   caller.converged = false;
   late.UpdateSoundSources(1'000'000, {caller});
   late.AddHeard(2'000'000, {call}, Rigid3d());
@@ -161,7 +168,7 @@ TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
 
 // Along a corridor two sources can lie on one bearing: a call from that bearing names neither.
 TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
-  PeopleMap map(PeopleMapOptions{});
+  PeopleMap map(OneCallIsAPerson());
   SoundSource near_source, far_source;
   near_source.id = 1;
   near_source.position_m = Eigen::Vector3d(4.0, 0.1, 0.5);
@@ -187,6 +194,33 @@ TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
   EXPECT_EQ(map.AddHeard(4'000'000, {call}, beside), 1);
   ASSERT_EQ(map.people().size(), 1u);
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 2);
+}
+
+// One keyword false alarm is not a person: by default a source needs two calls within
+// heard_person_window_s.
+TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource source;
+  source.id = 5;
+  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
+  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
+  source.converged = true;
+  map.UpdateSoundSources(1'000'000, {source});
+  HeardDetection call;
+  call.azimuth_rad = M_PI / 4;
+  call.keyword = "help";
+  call.confidence = 0.9;
+  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  map.UpdateSoundSources(3'000'000, {source});
+  EXPECT_TRUE(map.people().empty());
+  // The next call comes after the window: still one recent call.
+  EXPECT_EQ(map.AddHeard(40'000'000, {call}, Rigid3d()), 1);
+  map.UpdateSoundSources(41'000'000, {source});
+  EXPECT_TRUE(map.people().empty());
+  // A second call 6 s later: a person.
+  EXPECT_EQ(map.AddHeard(46'000'000, {call}, Rigid3d()), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 5);
 }
 
 TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
