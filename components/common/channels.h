@@ -22,6 +22,7 @@ inline const std::vector<ChannelSpec>& DefaultChannels() {
       {"SCAN", "laser_scan_t"},
       {"AUDIO", "audio_frame_t"},
       {"DOA", "doa_t"},
+      {"DOA_MAP", "doa_t"},  // onset-weighted directions for the sound map
       {"SPEECH", "speech_event_t"},
       {"PEOPLE_VISUAL", "people_detections_t"},
       {"PEOPLE_AUDIO", "people_detections_t"},
