@@ -218,11 +218,11 @@ double IdpEkf::UpdateSource(int64_t id, const Eigen::VectorXd& z, const Eigen::M
   SourceJacobian(sources_.at(id), &pred, &h, &cols);
   Eigen::VectorXd nu = z - pred;
   nu[0] = WrapAngleD(nu[0]);
-  return Correct(cols, h, nu, r, gate);
+  return Correct(cols, h, nu, r, gate, !options_.source_updates_move_poses);
 }
 
 double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
-                       const Eigen::VectorXd& nu, const Eigen::MatrixXd& r, double gate) {
+                       const Eigen::VectorXd& nu, const Eigen::MatrixXd& r, double gate, bool fix_poses) {
   // K = P H' (H P H' + R)^-1, x += K nu, P -= K S K'  (eqs. 4.8-4.10), with H non-zero
   // only on `cols`: P H' = P(:, cols) H'.
   const Eigen::MatrixXd pht = p_(Eigen::all, cols) * h.transpose();
@@ -230,7 +230,18 @@ double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
   const double chi2 = nu.dot(ldlt.solve(nu));
   if (gate > 0 && chi2 > gate) return chi2;
-  const Eigen::MatrixXd k = ldlt.solve(pht.transpose()).transpose();
+  Eigen::MatrixXd k = ldlt.solve(pht.transpose()).transpose();
+  if (fix_poses) {
+    // Schmidt-Kalman: no gain on the pose states; P+ = P - K HP - (K HP)' + K S K'.
+    k.topRows<3>().setZero();
+    for (const auto& kv : anchors_) k.middleRows<3>(kv.second).setZero();
+    x_ += k * nu;
+    const Eigen::MatrixXd khp = k * pht.transpose();
+    p_ -= khp + khp.transpose();
+    p_.noalias() += k * s * k.transpose();
+    WrapAngles();
+    return chi2;
+  }
   x_ += k * nu;
   // P -= K S K' written as K (P H')' keeps P symmetric up to rounding; it is re-symmetrised
   // at every back-propagation.

@@ -34,6 +34,12 @@ class IdpEkf {
     double initial_inverse_depth = 0.25;  // rho_0 at first observation, 1/m
     double inverse_depth_sigma = 0.25;    // sigma_rho at first observation, 1/m
     double initial_elevation_sigma_rad = 0;  // extra elevation variance at init (3D), rad
+    // false: DOA updates only correct the sources (Schmidt-Kalman: the current pose and the
+    // anchors are "consider" states whose mean and covariance stay what the localisation map
+    // said). The CI sound map fed by SLAM wants this: its poses are copies of SLAM's, which
+    // the next POSE and SLAM_ANCHORS overwrite, so a DOA that nudged them would leave the
+    // sources offset against the anchors they hang from.
+    bool source_updates_move_poses = true;
   };
 
   explicit IdpEkf(const Options& options);
@@ -114,7 +120,7 @@ class IdpEkf {
   int Append(int n, bool angle_first);
   // Generic EKF correction with the observation Jacobian over the columns `cols`.
   double Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h, const Eigen::VectorXd& nu,
-                 const Eigen::MatrixXd& r, double gate);
+                 const Eigen::MatrixXd& r, double gate, bool fix_poses = false);
   void SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,
                       std::vector<int>* cols) const;
   void WrapAngles();
