@@ -251,7 +251,7 @@ double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
 }
 
 void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int64_t, Pose2>>& anchors,
-                           const Eigen::MatrixXd& covariance) {
+                           const Eigen::MatrixXd& covariance, bool keep_covariance) {
   const int m = 3 * (1 + static_cast<int>(anchors.size()));
   if (covariance.rows() != m || covariance.cols() != m)
     throw std::invalid_argument("IdpEkf::BackPropagate: covariance must be 3(1+n) square");
@@ -294,9 +294,18 @@ void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int
     const Eigen::MatrixXd p_s = p_(s_idx, s_idx) + k12 * (p_ab - p_a) * k12.transpose();  // (4.24)
     const Eigen::MatrixXd p_scb = k12 * covariance(a_rows, c_rows);                        // (4.23)
     x_(s_idx) = x_(s_idx) + k12 * dx;                                                      // (4.25)
+    if (keep_covariance) {
+      x_(c_idx) = xb(c_rows);
+      WrapAngles();
+      return;
+    }
     p_(s_idx, s_idx) = 0.5 * (p_s + p_s.transpose());
     p_(s_idx, c_idx) = p_scb;
     p_(c_idx, s_idx) = p_scb.transpose();
+  } else if (keep_covariance) {
+    x_(c_idx) = xb(c_rows);
+    WrapAngles();
+    return;
   } else if (!s_idx.empty()) {
     p_(s_idx, c_idx).setZero();
     p_(c_idx, s_idx).setZero();

@@ -80,8 +80,10 @@ class IdpEkf {
   // current pose and the listed anchors (those this map holds); `covariance` is the joint
   // covariance of [current, anchors...] in the order given (3 per pose). Everything else
   // (IDP rays, inverse depths, anchors not listed) is x_S and moves by K12 = P_SC P_C^-1.
+  // keep_covariance: only the means move (x_C = SLAM's, x_S += K12 dx with this map's own
+  // K12); P stays this map's (for a localisation map whose covariance is not trusted).
   void BackPropagate(const Pose2& current, const std::vector<std::pair<int64_t, Pose2>>& anchors,
-                     const Eigen::MatrixXd& covariance);
+                     const Eigen::MatrixXd& covariance, bool keep_covariance = false);
 
   // Mean and joint covariance of [current, anchors in `ids` order] (what a localisation
   // map hands the sound map; slam_anchors_t carries the same).

@@ -111,15 +111,8 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
       cov(i + 1, i + 1) += fp * fp;
       cov(i + 2, i + 2) += fy * fy;
     }
-    if (!options_.use_slam_covariance) {
-      // Means only: the shared block keeps this map's covariance (P_S unchanged, x_S += K12 dx).
-      std::vector<int64_t> ids;
-      for (const auto& a : mine) ids.push_back(a.first);
-      Pose2 own_current;
-      std::vector<std::pair<int64_t, Pose2>> own_anchors;
-      ekf_.SharedState(ids, &own_current, &own_anchors, &cov);
-    }
-    ekf_.BackPropagate(now, mine, 0.5 * (cov + cov.transpose()));
+    // use_slam_covariance false: means only (x_S += K12 dx), P stays this map's.
+    ekf_.BackPropagate(now, mine, 0.5 * (cov + cov.transpose()), !options_.use_slam_covariance);
     last_pose_ = now;
     ++counters_.back_propagations;
   }
