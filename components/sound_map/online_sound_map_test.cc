@@ -217,7 +217,7 @@ TEST(OnlineSoundMap, TrueAnchorsAtSparseNodesDoNotMoveSources) {
   EXPECT_LT((with_anchors - source).norm(), 0.15);
   EXPECT_LT((with_slam_cov - source).norm(), 0.15);
   // True anchors, means only: nothing to correct, the source must not move at all (anchoring
-  // the ray at the node pose instead of the pose it was heard from moved it 6 cm here).
+  // the ray at the node pose instead of the pose it was heard from moved it 0.29 m here).
   EXPECT_LT(apart_max(track_anchors), 1e-3);
   // SLAM's covariance replaces this map's pose covariance: a small difference is expected.
   EXPECT_LT(apart_max(track_slam_cov), 0.1);
