@@ -70,7 +70,7 @@ struct OnlineSoundMapOptions {
   double max_turn_rate_deg_per_s = 10.0;
   // DOA updates also correct the current pose and anchors (plain EKF) instead of only the
   // sources (Schmidt-Kalman, the poses being SLAM's).
-  bool doa_moves_poses = false;
+  bool doa_moves_poses = true;
   // SLAM's joint covariance comes from the pose graph's weights and is far tighter than its
   // real error (simulated lab: ~0.2 mm / 0.005 deg reported, 0.07 m / 1 deg RMS measured).
   // Taken as is, the sound map trusts every pose exactly and the DOAs' disagreement caused by
