@@ -218,11 +218,11 @@ double IdpEkf::UpdateSource(int64_t id, const Eigen::VectorXd& z, const Eigen::M
   SourceJacobian(sources_.at(id), &pred, &h, &cols);
   Eigen::VectorXd nu = z - pred;
   nu[0] = WrapAngleD(nu[0]);
-  return Correct(cols, h, nu, r, gate);
+  return Correct(cols, h, nu, r, gate, !options_.source_updates_move_poses);
 }
 
 double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
-                       const Eigen::VectorXd& nu, const Eigen::MatrixXd& r, double gate) {
+                       const Eigen::VectorXd& nu, const Eigen::MatrixXd& r, double gate, bool fix_poses) {
   // K = P H' (H P H' + R)^-1, x += K nu, P -= K S K'  (eqs. 4.8-4.10), with H non-zero
   // only on `cols`: P H' = P(:, cols) H'.
   const Eigen::MatrixXd pht = p_(Eigen::all, cols) * h.transpose();
@@ -230,7 +230,18 @@ double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
   const double chi2 = nu.dot(ldlt.solve(nu));
   if (gate > 0 && chi2 > gate) return chi2;
-  const Eigen::MatrixXd k = ldlt.solve(pht.transpose()).transpose();
+  Eigen::MatrixXd k = ldlt.solve(pht.transpose()).transpose();
+  if (fix_poses) {
+    // Schmidt-Kalman: no gain on the pose states; P+ = P - K HP - (K HP)' + K S K'.
+    k.topRows<3>().setZero();
+    for (const auto& kv : anchors_) k.middleRows<3>(kv.second).setZero();
+    x_ += k * nu;
+    const Eigen::MatrixXd khp = k * pht.transpose();
+    p_ -= khp + khp.transpose();
+    p_.noalias() += k * s * k.transpose();
+    WrapAngles();
+    return chi2;
+  }
   x_ += k * nu;
   // P -= K S K' written as K (P H')' keeps P symmetric up to rounding; it is re-symmetrised
   // at every back-propagation.
@@ -240,7 +251,7 @@ double IdpEkf::Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h,
 }
 
 void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int64_t, Pose2>>& anchors,
-                           const Eigen::MatrixXd& covariance) {
+                           const Eigen::MatrixXd& covariance, bool keep_covariance) {
   const int m = 3 * (1 + static_cast<int>(anchors.size()));
   if (covariance.rows() != m || covariance.cols() != m)
     throw std::invalid_argument("IdpEkf::BackPropagate: covariance must be 3(1+n) square");
@@ -283,9 +294,18 @@ void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int
     const Eigen::MatrixXd p_s = p_(s_idx, s_idx) + k12 * (p_ab - p_a) * k12.transpose();  // (4.24)
     const Eigen::MatrixXd p_scb = k12 * covariance(a_rows, c_rows);                        // (4.23)
     x_(s_idx) = x_(s_idx) + k12 * dx;                                                      // (4.25)
+    if (keep_covariance) {
+      x_(c_idx) = xb(c_rows);
+      WrapAngles();
+      return;
+    }
     p_(s_idx, s_idx) = 0.5 * (p_s + p_s.transpose());
     p_(s_idx, c_idx) = p_scb;
     p_(c_idx, s_idx) = p_scb.transpose();
+  } else if (keep_covariance) {
+    x_(c_idx) = xb(c_rows);
+    WrapAngles();
+    return;
   } else if (!s_idx.empty()) {
     p_(s_idx, c_idx).setZero();
     p_(c_idx, s_idx).setZero();

@@ -34,6 +34,12 @@ class IdpEkf {
     double initial_inverse_depth = 0.25;  // rho_0 at first observation, 1/m
     double inverse_depth_sigma = 0.25;    // sigma_rho at first observation, 1/m
     double initial_elevation_sigma_rad = 0;  // extra elevation variance at init (3D), rad
+    // false: DOA updates only correct the sources (Schmidt-Kalman: the current pose and the
+    // anchors are "consider" states whose mean and covariance stay what the localisation map
+    // said). The CI sound map fed by SLAM wants this: its poses are copies of SLAM's, which
+    // the next POSE and SLAM_ANCHORS overwrite, so a DOA that nudged them would leave the
+    // sources offset against the anchors they hang from.
+    bool source_updates_move_poses = true;
   };
 
   explicit IdpEkf(const Options& options);
@@ -74,8 +80,10 @@ class IdpEkf {
   // current pose and the listed anchors (those this map holds); `covariance` is the joint
   // covariance of [current, anchors...] in the order given (3 per pose). Everything else
   // (IDP rays, inverse depths, anchors not listed) is x_S and moves by K12 = P_SC P_C^-1.
+  // keep_covariance: only the means move (x_C = SLAM's, x_S += K12 dx with this map's own
+  // K12); P stays this map's (for a localisation map whose covariance is not trusted).
   void BackPropagate(const Pose2& current, const std::vector<std::pair<int64_t, Pose2>>& anchors,
-                     const Eigen::MatrixXd& covariance);
+                     const Eigen::MatrixXd& covariance, bool keep_covariance = false);
 
   // Mean and joint covariance of [current, anchors in `ids` order] (what a localisation
   // map hands the sound map; slam_anchors_t carries the same).
@@ -114,7 +122,7 @@ class IdpEkf {
   int Append(int n, bool angle_first);
   // Generic EKF correction with the observation Jacobian over the columns `cols`.
   double Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h, const Eigen::VectorXd& nu,
-                 const Eigen::MatrixXd& r, double gate);
+                 const Eigen::MatrixXd& r, double gate, bool fix_poses = false);
   void SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,
                       std::vector<int>* cols) const;
   void WrapAngles();

@@ -1,6 +1,7 @@
 #include "sound_map/online_sound_map.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -15,6 +16,7 @@ IdpEkf::Options EkfOptions(const OnlineSoundMapOptions& o, const ArrayMount& mou
   e.mount = mount;
   e.initial_inverse_depth = 1.0 / o.initial_range_m;
   e.inverse_depth_sigma = o.inverse_depth_sigma;
+  e.source_updates_move_poses = o.doa_moves_poses;
   return e;
 }
 }  // namespace
@@ -47,8 +49,21 @@ void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matri
   last_pose_utime_ = utime;
   last_pose_ = pose;
   last_node_id_ = node_id;
+  // The first POSE naming a node is the scan that made it: its pose is the node's pose.
+  if (node_id >= 0 && !node_poses_.count(node_id)) node_poses_[node_id] = pose;
   Prune(utime);
 }
+
+namespace {
+// d(node o offset) / d(node) for a fixed offset.
+Eigen::Matrix3d ComposeJacobian(const Pose2& node, const Pose2& offset) {
+  const double c = std::cos(node.yaw), s = std::sin(node.yaw);
+  Eigen::Matrix3d j = Eigen::Matrix3d::Identity();
+  j(0, 2) = -s * offset.x - c * offset.y;
+  j(1, 2) = c * offset.x - s * offset.y;
+  return j;
+}
+}  // namespace
 
 bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
                                    const std::vector<std::pair<int64_t, Pose2>>& anchors,
@@ -62,16 +77,67 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
     ++counters_.bad_anchors;
     return false;
   }
+  // SLAM_ANCHORS' current is the latest node (the scan of the optimisation), not necessarily
+  // the robot's latest POSE: carry it to the latest POSE by the offset between them.
+  Pose2 node_from_current;
+  auto np = node_poses_.find(last_node_id_);
+  if (have_pose_ && np != node_poses_.end()) node_from_current = Between(np->second, last_pose_);
+  const Pose2 now = Compose(current, node_from_current);
   if (!have_pose_) {
-    ekf_.Reset(current, covariance.topLeftCorner<3, 3>());
+    ekf_.Reset(now, covariance.topLeftCorner<3, 3>());
     have_pose_ = true;
-    last_pose_ = current;
-    return true;
+    last_pose_ = now;
+  } else {
+    // The shared state of this map: the current pose and every EKF anchor whose node is in
+    // the message, each = node o node_from_anchor; its covariance J C J'.
+    std::map<int64_t, int> node_index;
+    for (size_t k = 0; k < anchors.size(); ++k) node_index[anchors[k].first] = static_cast<int>(k);
+    std::vector<std::pair<int64_t, Pose2>> mine;
+    std::vector<std::pair<int, Eigen::Matrix3d>> rows;  // message block, Jacobian
+    rows.emplace_back(0, ComposeJacobian(current, node_from_current));
+    for (const auto& [id, link] : anchor_links_) {
+      auto it = node_index.find(link.node);
+      if (it == node_index.end() || !ekf_.HasAnchor(id)) continue;
+      const Pose2& node = anchors[it->second].second;
+      mine.emplace_back(id, Compose(node, link.node_from_anchor));
+      rows.emplace_back(1 + it->second, ComposeJacobian(node, link.node_from_anchor));
+    }
+    Eigen::MatrixXd j = Eigen::MatrixXd::Zero(3 * static_cast<int>(rows.size()), m);
+    for (size_t r = 0; r < rows.size(); ++r) j.block<3, 3>(3 * r, 3 * rows[r].first) = rows[r].second;
+    Eigen::MatrixXd cov = j * covariance * j.transpose();
+    const double fp = options_.anchor_sigma_floor_m, fy = options_.anchor_sigma_floor_deg * M_PI / 180;
+    for (int i = 0; i < cov.rows(); i += 3) {
+      cov(i, i) += fp * fp;
+      cov(i + 1, i + 1) += fp * fp;
+      cov(i + 2, i + 2) += fy * fy;
+    }
+    // use_slam_covariance false: means only (x_S += K12 dx), P stays this map's.
+    ekf_.BackPropagate(now, mine, 0.5 * (cov + cov.transpose()), !options_.use_slam_covariance);
+    last_pose_ = now;
+    ++counters_.back_propagations;
   }
-  ekf_.BackPropagate(current, anchors, covariance);
-  last_pose_ = current;
-  ++counters_.back_propagations;
+  for (const auto& a : anchors) node_poses_[a.first] = a.second;
+  // The message's current is the latest node's new estimate.
+  if (last_node_id_ >= 0) node_poses_[last_node_id_] = current;
   return true;
+}
+
+int64_t OnlineSoundMap::AnchorForBirth() {
+  if (last_node_id_ < 0) return next_local_anchor_--;  // no SLAM node: a local anchor
+  Pose2 node_from_anchor;
+  auto np = node_poses_.find(last_node_id_);
+  if (np != node_poses_.end()) node_from_anchor = Between(np->second, ekf_.current());
+  // Sources born from the same pose share its anchor.
+  for (const auto& [id, link] : anchor_links_) {
+    if (link.node != last_node_id_ || !ekf_.HasAnchor(id)) continue;
+    const Pose2 d = Between(link.node_from_anchor, node_from_anchor);
+    if (std::hypot(d.x, d.y) < 1e-3 && std::abs(WrapAngleD(d.yaw)) < 1e-3) return id;
+  }
+  const auto before = AnchorNodeIds();
+  const int64_t id = next_anchor_id_++;
+  anchor_links_[id] = AnchorLink{last_node_id_, node_from_anchor};
+  if (std::find(before.begin(), before.end(), last_node_id_) == before.end()) anchors_changed_ = true;
+  return id;
 }
 
 bool OnlineSoundMap::MakeObs(const Doa& doa, Obs* obs) const {
@@ -285,9 +351,7 @@ void OnlineSoundMap::Birth(int64_t utime, int64_t key, const Obs& obs, double az
   const Tentative t = tentatives_.at(key);
   auto make = [&](const Tentative& from, double az) {
     const int64_t source = next_source_id_++;
-    int64_t anchor = last_node_id_;
-    if (anchor < 0) anchor = next_local_anchor_--;
-    if (!ekf_.HasAnchor(anchor) && anchor >= 0) anchors_changed_ = true;
+    const int64_t anchor = AnchorForBirth();
     Eigen::VectorXd z = obs.z;
     z[0] = az;
     ekf_.AddSource(source, anchor, z, obs.r);
@@ -319,7 +383,7 @@ void OnlineSoundMap::Remove(int64_t source) {
   for (int64_t s : ekf_.source_ids()) anchor_used = anchor_used || ekf_.source_anchor(s) == anchor;
   if (!anchor_used) {
     ekf_.RemoveAnchor(anchor);
-    if (anchor >= 0) anchors_changed_ = true;
+    if (anchor_links_.erase(anchor)) anchors_changed_ = true;
   }
   auto it = meta_.find(source);
   if (it != meta_.end()) {
@@ -382,8 +446,8 @@ int64_t OnlineSoundMap::OnHeardDirection(const Doa& doa) {
 std::vector<int64_t> OnlineSoundMap::AnchorNodeIds() const {
   std::set<int64_t> ids;
   for (int64_t s : ekf_.source_ids()) {
-    const int64_t a = ekf_.source_anchor(s);
-    if (a >= 0) ids.insert(a);
+    auto link = anchor_links_.find(ekf_.source_anchor(s));
+    if (link != anchor_links_.end()) ids.insert(link->second.node);
   }
   return std::vector<int64_t>(ids.begin(), ids.end());
 }

@@ -68,6 +68,22 @@ struct OnlineSoundMapOptions {
   // while the robot turns fast they lag its heading by tens of degrees. They are dropped when
   // the heading changed faster than this between the last two poses (0: keep all).
   double max_turn_rate_deg_per_s = 10.0;
+  // DOA updates also correct the current pose and anchors (plain EKF) instead of only the
+  // sources (Schmidt-Kalman, the poses being SLAM's).
+  bool doa_moves_poses = true;
+  // SLAM's joint covariance comes from the pose graph's weights and is far tighter than its
+  // real error (simulated lab: ~0.2 mm / 0.005 deg reported, 0.07 m / 1 deg RMS measured).
+  // Taken as is, the sound map trusts every pose exactly and the DOAs' disagreement caused by
+  // the pose errors drives the inverse depths astray. Each pose of SLAM_ANCHORS gets at least
+  // this much independent uncertainty (added to its diagonal block; 0: SLAM's as is).
+  double anchor_sigma_floor_m = 0.0;
+  double anchor_sigma_floor_deg = 0.0;
+  // false: SLAM_ANCHORS moves the current pose and the anchors (and, by K12, the sources) to
+  // SLAM's means but keeps this map's own covariance of them (grown by the motion noise since
+  // each anchor was made) instead of SLAM's. SLAM's relative node covariance is orders of
+  // magnitude below its real error (see above), and every SLAM_ANCHORS (after each
+  // optimisation, seconds apart) would reset the current-to-anchor uncertainty to it.
+  bool use_slam_covariance = true;
   template <class V>
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
@@ -93,6 +109,14 @@ struct OnlineSoundMapOptions {
       "remove a source whose inverse depth is below zero by this many standard deviations (0: never)");
     v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
       "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
+    v("doa_moves_poses", doa_moves_poses,
+      "DOA updates also correct the current pose and anchors (false: only the sources; the poses are SLAM's)");
+    v("anchor_sigma_floor_m", anchor_sigma_floor_m,
+      "position std added to every pose of SLAM_ANCHORS (SLAM's covariance is overconfident; 0: as is)");
+    v("anchor_sigma_floor_deg", anchor_sigma_floor_deg,
+      "heading std added to every pose of SLAM_ANCHORS (0: as is)");
+    v("use_slam_covariance", use_slam_covariance,
+      "take SLAM_ANCHORS' joint covariance (true) or only its means, keeping this map's pose covariance (false)");
     v("mirror_prune_misses", mirror_prune_misses,
       "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
   }
@@ -117,6 +141,8 @@ struct OnlineSoundMapOptions {
     check.NonNegative("prune_min_observations", prune_min_observations);
     check.NonNegative("prune_behind_sigmas", prune_behind_sigmas);
     check.NonNegative("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s);
+    check.NonNegative("anchor_sigma_floor_m", anchor_sigma_floor_m);
+    check.NonNegative("anchor_sigma_floor_deg", anchor_sigma_floor_deg);
     check.That(mirror_prune_misses >= 1, "mirror_prune_misses", "must be at least 1");
   }
 };
@@ -173,6 +199,11 @@ class OnlineSoundMap {
   int64_t SourceOfTrack(const std::string& device, int64_t track_id) const {
     return associator_.SourceOfTrack(device, track_id);
   }
+  // The SLAM node an EKF anchor (ekf().source_anchor()) hangs from, -1 for a local anchor.
+  int64_t AnchorNode(int64_t ekf_anchor) const {
+    auto it = anchor_links_.find(ekf_anchor);
+    return it == anchor_links_.end() ? -1 : it->second.node;
+  }
   const Counters& counters() const { return counters_; }
   const IdpEkf& ekf() const { return ekf_; }
 
@@ -223,6 +254,19 @@ class OnlineSoundMap {
   bool Converged(int64_t id) const;
   bool anchors_changed_ = false;
   Counters counters_;
+  // A source's anchor is the pose it was first heard from, which is the SLAM node named by
+  // the POSE of that moment composed with an offset (POSE is the latest scan's pose; nodes
+  // are only made every node_max_distance/angle/time). The EKF's anchors therefore have their
+  // own ids; each remembers its node and node_from_anchor, and SLAM_ANCHORS' node poses are
+  // carried to the anchors through that offset before the back-propagation.
+  struct AnchorLink {
+    int64_t node = -1;
+    Pose2 node_from_anchor;
+  };
+  std::map<int64_t, AnchorLink> anchor_links_;  // EKF anchor id -> node (+ offset)
+  std::map<int64_t, Pose2> node_poses_;          // latest estimate of each SLAM node seen
+  int64_t next_anchor_id_ = 0;
+  int64_t AnchorForBirth();
 };
 
 }  // namespace sound_map

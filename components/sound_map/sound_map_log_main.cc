@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <Eigen/Eigenvalues>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <map>
@@ -128,7 +129,14 @@ int main(int argc, char** argv) {
       const auto doas = sarmap::sound_map::DoasFromMessage(m);
       const std::string device = m.device_id;
       const int64_t t = m.header.utime + doa_shift_us;
-      inputs.emplace(t, [&map, t, device, doas] { map.OnDoa(t, device, doas); });
+      inputs.emplace(t, [&map, t, device, doas] {
+        map.OnDoa(t, device, doas);
+        if (std::getenv("SOUND_MAP_DEBUG_DOA"))
+          for (const auto& s : map.Sources(t))
+            printf("DOA t=%.2f source %ld (%.3f %.3f) cur (%.3f %.3f %.2f) ccov %.2e %.2e\n", t * 1e-6, static_cast<long>(s.id), s.position_m.x(), s.position_m.y(),
+                   map.ekf().current().x, map.ekf().current().y, map.ekf().current().yaw * 180 / M_PI,
+                   map.ekf().current_covariance()(0, 0), map.ekf().current_covariance()(2, 2));
+      });
     };
 
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
@@ -189,7 +197,25 @@ int main(int argc, char** argv) {
         if (!sarmap::sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) continue;
         const int64_t t = m.header.utime;
         anchor_log.emplace_back(t, anchors);
-        inputs.emplace(t, [&map, t, current, anchors, cov] { map.OnSlamAnchors(t, current, anchors, cov); });
+        inputs.emplace(t, [&map, t, current, anchors, cov] {
+          const bool debug = std::getenv("SOUND_MAP_DEBUG") != nullptr;
+          if (debug) {
+            printf("ANCHORS t=%.2f current (%.3f %.3f %.2f) ekf current (%.3f %.3f %.2f) cov diag", t * 1e-6, current.x, current.y, current.yaw * 180 / M_PI, map.ekf().current().x, map.ekf().current().y, map.ekf().current().yaw * 180 / M_PI);
+            for (int i = 0; i < std::min<int>(6, cov.rows()); ++i) printf(" %.2e", cov(i, i));
+            printf("\n");
+            for (const auto& a : anchors) {
+              printf("  node %ld (%.3f %.3f %.2f)", static_cast<long>(a.first), a.second.x, a.second.y, a.second.yaw * 180 / M_PI);
+              for (int64_t e : map.ekf().anchor_ids())
+                if (map.AnchorNode(e) == a.first) printf(" ekf anchor %ld (%.3f %.3f %.2f)", static_cast<long>(e), map.ekf().anchor(e).x, map.ekf().anchor(e).y, map.ekf().anchor(e).yaw * 180 / M_PI);
+              printf("\n");
+            }
+            for (const auto& s : map.Sources(t)) printf("  before: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
+          }
+          const char* scale = std::getenv("SOUND_MAP_COV_SCALE");
+          map.OnSlamAnchors(t, current, anchors, scale ? Eigen::MatrixXd(cov * std::atof(scale)) : cov);
+          if (debug)
+            for (const auto& s : map.Sources(t)) printf("  after: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
+        });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t m;
         if (!Decode(*e, &m)) continue;
