@@ -12,6 +12,7 @@
 #include <ceres/covariance.h>
 
 #include "mic_calibrate/calibration.h"
+#include "mic_calibrate/solver_summary.h"
 
 namespace sarmap {
 namespace mic_calibrate {
@@ -423,12 +424,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     build(&problem);
     ceres::Solver::Summary summary;
     ceres::Solve(sopt, &problem, &summary);
-    StartSummary ss;
-    ss.start = static_cast<int>(i);
-    ss.final_cost = summary.final_cost;
-    ss.iterations = static_cast<int>(summary.iterations.size()) - 1;
-    ss.converged = summary.termination_type == ceres::CONVERGENCE;
-    ss.normalised_rms = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals));
+    const StartSummary ss = SummariseStart(static_cast<int>(i), summary);
     result.total_iterations += ss.iterations;
     result.starts.push_back(ss);
     if (o.verbose) {

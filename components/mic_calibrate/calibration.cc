@@ -13,6 +13,8 @@
 #include <ceres/covariance.h>
 #include <ceres/manifold.h>
 
+#include "mic_calibrate/solver_summary.h"
+
 namespace sarmap {
 namespace mic_calibrate {
 namespace {
@@ -727,12 +729,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     Problem p = Build(data, o, gx, gp, &state, true);
     ceres::Solver::Summary summary;
     ceres::Solve(sopt, p.problem.get(), &summary);
-    StartSummary ss;
-    ss.start = s;
-    ss.final_cost = summary.final_cost;
-    ss.iterations = static_cast<int>(summary.iterations.size()) - 1;
-    ss.converged = summary.termination_type == ceres::CONVERGENCE;
-    ss.normalised_rms = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals));
+    const StartSummary ss = SummariseStart(s, summary);
     result.total_iterations += ss.iterations;
     result.starts.push_back(ss);
     if (o.verbose) {

@@ -71,6 +71,31 @@ std::vector<Eigen::Vector3d> PositionsOf(const common::MicArrayOptions& a) {
   return p;
 }
 
+// The text report on stderr, then the array YAML (`output`, checked to load back) and the report
+// files (`report`.txt/.json/.png), when asked for.
+template <class Progress>
+void WriteOutputs(const CalibrationResult& result, const TruthComparison& cmp, const SolverOptions& so,
+                  const std::string& array_name, int sample_rate_hz, const std::string& output,
+                  const std::string& report, bool quiet, const std::string& written_from,
+                  const std::string& positions_note, const Progress& progress) {
+  const std::string text = TextReport(result, cmp, so);
+  if (!quiet) fprintf(stderr, "%s", text.c_str());
+  if (!output.empty()) {
+    const common::MicArrayOptions array = ToArrayOptions(result, so, array_name, sample_rate_hz);
+    WriteArrayYaml(output, array,
+                   written_from + "\nTDOA residual std " + std::to_string(result.residual_std_s * 1e3) +
+                       " ms; " + positions_note);
+    common::LoadMicArray(output);  // what we wrote must load
+    progress("array written to " + output);
+  }
+  if (!report.empty()) {
+    std::ofstream(report + ".txt") << text;
+    std::ofstream(report + ".json") << JsonReport(result, cmp, so);
+    WritePlot(report + ".png", result, cmp);
+    progress("report written to " + report + ".{txt,json,png}");
+  }
+}
+
 // Known array motion, static source: the pose of every emission from the log, then
 // CalibrateWithArrayPoses. Returns the exit code.
 template <class Progress>
@@ -144,24 +169,10 @@ int RunWithArrayPoses(const MicCalibrateOptions& opt, const std::string& input,
                               " s on " + po.channel + " and were left out");
   }
   const TruthComparison cmp = CompareWithNominal(result, {}, {});
-  const std::string text = TextReport(result, cmp, so);
-  if (!quiet) fprintf(stderr, "%s", text.c_str());
-  if (!output.empty()) {
-    const common::MicArrayOptions array = ToArrayOptions(result, so, opt.array_name, sample_rate_hz);
-    WriteArrayYaml(output, array,
-                   "Written by sarmap-mic-calibrate from " + input + " with the array poses of " +
-                       po.channel + " (static source)\nTDOA residual std " +
-                       std::to_string(result.residual_std_s * 1e3) +
-                       " ms; microphone positions as given (array frame).");
-    common::LoadMicArray(output);
-    progress("array written to " + output);
-  }
-  if (!report.empty()) {
-    std::ofstream(report + ".txt") << text;
-    std::ofstream(report + ".json") << JsonReport(result, cmp, so);
-    WritePlot(report + ".png", result, cmp);
-    progress("report written to " + report + ".{txt,json,png}");
-  }
+  WriteOutputs(result, cmp, so, opt.array_name, sample_rate_hz, output, report, quiet,
+               "Written by sarmap-mic-calibrate from " + input + " with the array poses of " +
+                   po.channel + " (static source)",
+               "microphone positions as given (array frame).", progress);
   return 0;
 }
 
@@ -357,24 +368,9 @@ int Run(int argc, char** argv) {
   // Known positions are the nominal ones (translated to mic 1): nothing to compare.
   const TruthComparison cmp = CompareWithNominal(
       result, so.known_positions ? std::vector<Eigen::Vector3d>() : nominal, source_truth);
-  const std::string text = TextReport(result, cmp, so);
-  if (!quiet) fprintf(stderr, "%s", text.c_str());
-  if (!output.empty()) {
-    const common::MicArrayOptions array =
-        ToArrayOptions(result, so, opt.array_name, sample_rate_hz);
-    WriteArrayYaml(output, array,
-                   "Written by sarmap-mic-calibrate from " + input + "\nTDOA residual std " +
-                       std::to_string(result.residual_std_s * 1e3) +
-                       " ms; positions in the calibration gauge frame (mic 1 at the origin).");
-    common::LoadMicArray(output);  // what we wrote must load
-    progress("array written to " + output);
-  }
-  if (!report.empty()) {
-    std::ofstream(report + ".txt") << text;
-    std::ofstream(report + ".json") << JsonReport(result, cmp, so);
-    WritePlot(report + ".png", result, cmp);
-    progress("report written to " + report + ".{txt,json,png}");
-  }
+  WriteOutputs(result, cmp, so, opt.array_name, sample_rate_hz, output, report, quiet,
+               "Written by sarmap-mic-calibrate from " + input,
+               "positions in the calibration gauge frame (mic 1 at the origin).", progress);
   return 0;
 }
 

@@ -1,0 +1,27 @@
+#pragma once
+// What one start of a calibration solve reports (shared by Calibrate and
+// CalibrateWithArrayPoses; only the .cc files that run Ceres include this).
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "mic_calibrate/calibration.h"
+
+namespace sarmap {
+namespace mic_calibrate {
+
+// normalised_rms = sqrt(2 * cost / residuals): Ceres' cost is half the sum of squares.
+inline StartSummary SummariseStart(int start, const ceres::Solver::Summary& summary) {
+  StartSummary ss;
+  ss.start = start;
+  ss.final_cost = summary.final_cost;
+  ss.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  ss.converged = summary.termination_type == ceres::CONVERGENCE;
+  ss.normalised_rms = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals));
+  return ss;
+}
+
+}  // namespace mic_calibrate
+}  // namespace sarmap
