@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,11 +25,30 @@ Eigen::Matrix3d Floor(const Eigen::Matrix3d& cov, double min_variance) {
 }
 
 // Information-form fusion of two Gaussian estimates.
+// Product of two Gaussians in covariance form, x = xa + K (xb - xa), P = (I - K) Pa with
+// K = Pa (Pa + Pb)^-1: unlike the information form it takes a covariance that is singular in one
+// direction (a planar sound source says nothing about height, z variance 0). If the sum is
+// singular too, a's estimate stands.
 void Fuse(const Eigen::Vector3d& xa, const Eigen::Matrix3d& Pa, const Eigen::Vector3d& xb,
           const Eigen::Matrix3d& Pb, Eigen::Vector3d* x, Eigen::Matrix3d* P) {
-  const Eigen::Matrix3d Ia = Pa.inverse(), Ib = Pb.inverse();
-  *P = (Ia + Ib).inverse();
-  *x = *P * (Ia * xa + Ib * xb);
+  const Eigen::Matrix3d S = Pa + Pb;
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(S);
+  if (!lu.isInvertible()) {
+    *x = xa;
+    *P = Pa;
+    return;
+  }
+  const Eigen::Matrix3d K = Pa * lu.inverse();
+  const Eigen::Vector3d fused_x = xa + K * (xb - xa);
+  Eigen::Matrix3d fused_P = (Eigen::Matrix3d::Identity() - K) * Pa;
+  fused_P = 0.5 * (fused_P + fused_P.transpose());
+  if (!fused_x.allFinite() || !fused_P.allFinite()) {
+    *x = xa;
+    *P = Pa;
+    return;
+  }
+  *x = fused_x;
+  *P = fused_P;
 }
 
 double PlanarMahalanobis2(const Eigen::Vector3d& a, const Eigen::Matrix3d& Pa,
@@ -212,7 +232,8 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     const SoundSource* best = nullptr;
     double best_score = options_.heard_gate_chi2;
     int in_gate = 0;  // sources this direction could be pointing at
-    for (const auto& [id, s] : sources_) {
+    for (const auto& entry : sources_) {
+    const SoundSource& s = entry.second;
       const Eigen::Vector3d v = mic_from_map * s.position_m;
       const double range = v.head<2>().norm();
       if (range < 1e-3) continue;
@@ -285,8 +306,13 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
 
 void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& sources) {
   sources_.clear();
-  for (const auto& s : sources) sources_[s.id] = s;
   for (const auto& s : sources) {
+    // A source without a finite position and covariance is garbage, never a place for a person.
+    if (!s.position_m.allFinite() || !s.covariance.allFinite()) continue;
+    sources_[s.id] = s;
+  }
+  for (const auto& entry : sources_) {
+    const SoundSource& s = entry.second;
     const auto heard = source_heard_utime_.find(s.id);
     const bool recently_heard =
         heard != source_heard_utime_.end() &&

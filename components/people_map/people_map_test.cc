@@ -223,6 +223,37 @@ TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 5);
 }
 
+// A planar sound map gives no height (z variance 0): fusing it with a seen person must stay
+// finite, and a source with NaN in it is ignored.
+TEST(PeopleMapTest, PlanarSoundSourceFusesFiniteAndGarbageSourcesAreIgnored) {
+  PeopleMap map(OneCallIsAPerson());
+  const Rigid2d pose(0, 0, 0);
+  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+  SoundSource planar;
+  planar.id = 4;
+  planar.position_m = Eigen::Vector3d(3.1, 0.05, 0.6);
+  planar.covariance = Eigen::Matrix3d::Zero();
+  planar.covariance.topLeftCorner<2, 2>() = Eigen::Matrix2d::Identity() * 0.04;
+  planar.converged = true;
+  SoundSource garbage = planar;
+  garbage.id = 5;
+  garbage.position_m.x() = std::nan("");
+  map.UpdateSoundSources(2'000'000, {planar, garbage});
+  HeardDetection call;
+  call.azimuth_rad = std::atan2(0.05, 3.1);
+  call.keyword = "here";
+  call.confidence = 0.9;
+  EXPECT_EQ(map.AddHeard(3'000'000, {call}, Rigid3d()), 1);
+  map.UpdateSoundSources(4'000'000, {planar, garbage});
+  ASSERT_EQ(map.people().size(), 1u);
+  const Person& both = map.people().begin()->second;
+  EXPECT_EQ(both.cues & kHeard, kHeard);
+  EXPECT_TRUE(both.position_m.allFinite());
+  EXPECT_TRUE(both.covariance.allFinite());
+  EXPECT_NEAR(both.position_m.x(), 3.05, 0.1);
+  for (const auto& [id, p] : map.people()) EXPECT_NE(p.sound_source_id, 5);
+}
+
 TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
   PeopleMapOptions options;
   options.confidence_half_life_s = 10;
