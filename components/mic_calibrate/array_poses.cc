@@ -534,12 +534,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     const auto tc = std::chrono::steady_clock::now();
     ceres::Problem problem;
     build(&problem);
-    ceres::Covariance::Options copt;
-    copt.algorithm_type = ceres::SPARSE_QR;
-    copt.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-    copt.num_threads = o.num_threads;
-    copt.min_reciprocal_condition_number = 1e-14;
-    ceres::Covariance cov(copt);
+    ceres::Covariance cov(CovarianceOptions(o.num_threads));
     std::vector<std::pair<const double*, const double*>> blocks = {{src, src}};
     for (int n = 1; n < N; ++n)
       if (problem.HasParameterBlock(&clocks[2 * n])) blocks.emplace_back(&clocks[2 * n], &clocks[2 * n]);

@@ -811,12 +811,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     const auto tc = std::chrono::steady_clock::now();
     State state = best;
     Problem p = Build(data, o, gx, gp, &state, true);
-    ceres::Covariance::Options copt;
-    copt.algorithm_type = ceres::SPARSE_QR;
-    copt.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-    copt.num_threads = o.num_threads;
-    copt.min_reciprocal_condition_number = 1e-14;
-    ceres::Covariance cov(copt);
+    ceres::Covariance cov(CovarianceOptions(o.num_threads));
     std::vector<std::pair<const double*, const double*>> blocks;
     const int src_stride = linear ? 1 : 3;
     for (int n = 1; n < N; ++n) {

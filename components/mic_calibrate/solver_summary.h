@@ -3,6 +3,7 @@
 // CalibrateWithArrayPoses; only the .cc files that run Ceres include this).
 
 #include <ceres/ceres.h>
+#include <ceres/covariance.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +22,17 @@ inline StartSummary SummariseStart(int start, const ceres::Solver::Summary& summ
   ss.converged = summary.termination_type == ceres::CONVERGENCE;
   ss.normalised_rms = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals));
   return ss;
+}
+
+// Marginal covariances at the solution: sparse QR in SuiteSparse, which also copes with the
+// rank-deficient directions that a fixed gauge leaves.
+inline ceres::Covariance::Options CovarianceOptions(int num_threads) {
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::SPARSE_QR;
+  options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  options.num_threads = num_threads;
+  options.min_reciprocal_condition_number = 1e-14;
+  return options;
 }
 
 }  // namespace mic_calibrate
