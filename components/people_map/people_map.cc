@@ -24,7 +24,6 @@ Eigen::Matrix3d Floor(const Eigen::Matrix3d& cov, double min_variance) {
   return eig.eigenvectors() * values.asDiagonal() * eig.eigenvectors().transpose();
 }
 
-// Information-form fusion of two Gaussian estimates.
 // Product of two Gaussians in covariance form, x = xa + K (xb - xa), P = (I - K) Pa with
 // K = Pa (Pa + Pb)^-1: unlike the information form it takes a covariance that is singular in one
 // direction (a planar sound source says nothing about height, z variance 0). If the sum is
@@ -233,7 +232,7 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     double best_score = options_.heard_gate_chi2;
     int in_gate = 0;  // sources this direction could be pointing at
     for (const auto& entry : sources_) {
-    const SoundSource& s = entry.second;
+      const SoundSource& s = entry.second;
       const Eigen::Vector3d v = mic_from_map * s.position_m;
       const double range = v.head<2>().norm();
       if (range < 1e-3) continue;
