@@ -51,7 +51,35 @@ void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matri
   last_node_id_ = node_id;
   // The first POSE naming a node is the scan that made it: its pose is the node's pose.
   if (node_id >= 0 && !node_poses_.count(node_id)) node_poses_[node_id] = pose;
+  AddToTrail(Eigen::Vector2d(pose.x, pose.y));
   Prune(utime);
+}
+
+void OnlineSoundMap::AddToTrail(const Eigen::Vector2d& p) {
+  if (options_.path_clearance_m <= 0) return;
+  if (!((last_trail_point_ - p).norm() < trail_step_m_)) {  // NaN at the start: add
+    const double cell = options_.path_clearance_m;
+    trail_cells_[TrailCell(static_cast<int64_t>(std::floor(p.x() / cell)),
+                           static_cast<int64_t>(std::floor(p.y() / cell)))]
+        .push_back(p);
+    last_trail_point_ = p;
+  }
+}
+
+bool OnlineSoundMap::OnTrail(const Eigen::Vector2d& p) const {
+  if (!p.allFinite()) return false;
+  const double cell = options_.path_clearance_m;
+  const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell));
+  const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell));
+  for (int64_t dx = -1; dx <= 1; ++dx) {
+    for (int64_t dy = -1; dy <= 1; ++dy) {
+      auto it = trail_cells_.find(TrailCell(ix + dx, iy + dy));
+      if (it == trail_cells_.end()) continue;
+      for (const Eigen::Vector2d& q : it->second)
+        if ((q - p).norm() < cell) return true;
+    }
+  }
+  return false;
 }
 
 namespace {
@@ -192,6 +220,11 @@ void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::
     Obs obs;
     if (!MakeObs(doa, &obs)) {
       ++counters_.doa_unsupported_kind;
+      continue;
+    }
+    if (doa.kind == kAzimuthElevation && options_.max_abs_elevation_deg > 0 &&
+        !(std::abs(doa.elevation_rad) <= options_.max_abs_elevation_deg * M_PI / 180)) {
+      ++counters_.doa_too_steep;
       continue;
     }
     if (!have_pose_) {
@@ -407,6 +440,16 @@ void OnlineSoundMap::Prune(int64_t utime) {
     if (options_.prune_behind_sigmas > 0 && rho < -options_.prune_behind_sigmas * std::sqrt(std::max(0.0, var))) {
       drop.push_back(id);
       ++counters_.sources_behind;
+      continue;
+    }
+    if (options_.path_clearance_m > 0 && Converged(id)) {
+      Eigen::Vector3d point;
+      Eigen::Matrix3d cov;
+      ekf_.SourcePoint(id, &point, &cov);
+      if (OnTrail(point.head<2>())) {
+        drop.push_back(id);
+        ++counters_.sources_on_path;
+      }
     }
   }
   for (int64_t id : drop) {

@@ -21,6 +21,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "common/options.h"
@@ -68,6 +69,17 @@ struct OnlineSoundMapOptions {
   // while the robot turns fast they lag its heading by tens of degrees. They are dropped when
   // the heading changed faster than this between the last two poses (0: keep all).
   double max_turn_rate_deg_per_s = 10.0;
+  // Azimuth + elevation DOAs steeper than this above or below the array plane are dropped
+  // (0: keep all). A planar array cannot tell up from down, and a direction that steep is the
+  // robot's own motors under the array (simulated robot: 77 deg) or a source within a few
+  // decimetres of it; as a bearing on the map it is a source that follows the robot, and it
+  // converged on the robot's own path as a ghost (corridor: a "person" on the path).
+  double max_abs_elevation_deg = 60.0;
+  // A converged source whose planar position lies within this distance of where the robot's
+  // base has been is removed (0: never): a sound source cannot stand where the robot drove.
+  // Such sources are ghosts: the robot's own noise, or a far talker's slightly biased bearings
+  // seen straight ahead with no parallax (corridor: triangulated onto the path).
+  double path_clearance_m = 0.25;
   // DOA updates also correct the current pose and anchors (plain EKF) instead of only the
   // sources (Schmidt-Kalman, the poses being SLAM's).
   bool doa_moves_poses = true;
@@ -109,6 +121,10 @@ struct OnlineSoundMapOptions {
       "remove a source whose inverse depth is below zero by this many standard deviations (0: never)");
     v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
       "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
+    v("max_abs_elevation_deg", max_abs_elevation_deg,
+      "DOAs steeper than this above or below the array plane are dropped (robot's own motors; 0: keep all)");
+    v("path_clearance_m", path_clearance_m,
+      "a converged source within this distance of where the robot drove is removed as a ghost (0: never)");
     v("doa_moves_poses", doa_moves_poses,
       "DOA updates also correct the current pose and anchors (false: only the sources; the poses are SLAM's)");
     v("anchor_sigma_floor_m", anchor_sigma_floor_m,
@@ -141,6 +157,8 @@ struct OnlineSoundMapOptions {
     check.NonNegative("prune_min_observations", prune_min_observations);
     check.NonNegative("prune_behind_sigmas", prune_behind_sigmas);
     check.NonNegative("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s);
+    check.InRange("max_abs_elevation_deg", max_abs_elevation_deg, 0, 90);
+    check.NonNegative("path_clearance_m", path_clearance_m);
     check.NonNegative("anchor_sigma_floor_m", anchor_sigma_floor_m);
     check.NonNegative("anchor_sigma_floor_deg", anchor_sigma_floor_deg);
     check.That(mirror_prune_misses >= 1, "mirror_prune_misses", "must be at least 1");
@@ -172,7 +190,8 @@ class OnlineSoundMap {
     int64_t doa_unsupported_kind = 0, doa_before_pose = 0, back_propagations = 0, bad_anchors = 0;
     int64_t bad_poses = 0;
     int64_t doa_tentative = 0, tentatives_expired = 0, sources_pruned = 0, mirrors_pruned = 0;
-    int64_t doa_angle_1d = 0, doa_while_turning = 0, sources_behind = 0;
+    int64_t doa_angle_1d = 0, doa_while_turning = 0, sources_behind = 0, doa_too_steep = 0;
+    int64_t sources_on_path = 0;
   };
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
@@ -265,6 +284,14 @@ class OnlineSoundMap {
   };
   std::map<int64_t, AnchorLink> anchor_links_;  // EKF anchor id -> node (+ offset)
   std::map<int64_t, Pose2> node_poses_;          // latest estimate of each SLAM node seen
+  // Where the base has been (map frame, POSE as received, a point every trail_step_m_),
+  // hashed in square cells of path_clearance_m so a lookup reads the 3x3 cells around it.
+  std::unordered_map<int64_t, std::vector<Eigen::Vector2d>> trail_cells_;
+  Eigen::Vector2d last_trail_point_{NAN, NAN};
+  static constexpr double trail_step_m_ = 0.1;
+  int64_t TrailCell(int64_t ix, int64_t iy) const { return (ix << 32) ^ (iy & 0xffffffff); }
+  void AddToTrail(const Eigen::Vector2d& p);
+  bool OnTrail(const Eigen::Vector2d& p) const;
   int64_t next_anchor_id_ = 0;
   int64_t AnchorForBirth();
 };

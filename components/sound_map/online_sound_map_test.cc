@@ -367,6 +367,76 @@ TEST(OnlineSoundMap, LinearArrayMirrorIsResolvedByTheTurn) {
   EXPECT_GE(c.mirrors_pruned, 1);
 }
 
+// The simulated robot's motors sit under its planar array: their noise arrives 77 deg below
+// it, behind (a planar array reports it as +77 deg). As a bearing on the map it is a source
+// that follows the robot; the map must not take it.
+TEST(OnlineSoundMap, SteepDirectionsOfTheRobotsOwnMotorsAreDropped) {
+  auto run = [](double max_abs_elevation_deg) {
+    OnlineSoundMapOptions options;
+    options.max_abs_elevation_deg = max_abs_elevation_deg;
+    OnlineSoundMap map(options, ArrayMount{});
+    std::mt19937 rng(3);
+    std::normal_distribution<double> noise(0.0, 2 * M_PI / 180);
+    for (int k = 0; k < 60; ++k) {
+      const int64_t t = k * 128000;
+      map.OnPose(t, Pose2(0.05 * k, 0, 0), Eigen::Matrix3d::Identity() * 1e-6, k);
+      OnlineSoundMap::Doa motor;
+      motor.kind = OnlineSoundMap::kAzimuthElevation;
+      motor.track_id = 1;
+      motor.azimuth_rad = WrapAngleD(M_PI + noise(rng));
+      motor.elevation_rad = 77 * M_PI / 180 + noise(rng);
+      motor.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+      map.OnDoa(t, "respeaker", {motor});
+    }
+    return std::make_pair(map.Sources(60 * 128000).size(), map.counters().doa_too_steep);
+  };
+  const auto kept = run(0.0);  // the filter off: the motor becomes a source
+  EXPECT_GE(kept.first, 1u);
+  EXPECT_EQ(kept.second, 0);
+  const auto dropped = run(60.0);
+  EXPECT_EQ(dropped.first, 0u);
+  EXPECT_EQ(dropped.second, 60);
+}
+
+// A converged source that the robot later drives through cannot be a sound source (a ghost of
+// biased bearings or of the robot's own noise); one it never drove through stays.
+TEST(OnlineSoundMap, ASourceWhereTheRobotDroveIsRemoved) {
+  auto run = [](double path_clearance_m) {
+    OnlineSoundMapOptions options;
+    options.path_clearance_m = path_clearance_m;
+    OnlineSoundMap map(options, ArrayMount{});
+    const std::vector<Eigen::Vector2d> sources{{3.0, 1.0}, {4.0, -2.0}};
+    std::vector<Pose2> poses;
+    for (int k = 0; k <= 100; ++k) poses.emplace_back(0.025 * k, 0.0, 0.0);      // heard from here
+    for (int k = 1; k <= 20; ++k) poses.emplace_back(2.5 + 0.025 * k, 0.0, 0.0);  // silent from here
+    for (int k = 1; k <= 60; ++k) poses.emplace_back(3.0, 0.025 * k, M_PI / 2);   // through (3, 1)
+    std::mt19937 rng(4);
+    std::normal_distribution<double> noise(0.0, 1 * M_PI / 180);
+    for (size_t k = 0; k < poses.size(); ++k) {
+      const int64_t t = static_cast<int64_t>(k) * 100000;
+      map.OnPose(t, poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+      if (k > 100) continue;
+      std::vector<OnlineSoundMap::Doa> doas;
+      for (size_t j = 0; j < sources.size(); ++j) {
+        OnlineSoundMap::Doa d;
+        d.track_id = static_cast<int64_t>(j);
+        d.azimuth_rad = WrapAngleD(DriveBy::Bearing(poses[k], sources[j]) + noise(rng));
+        d.covariance = Eigen::Matrix2d::Identity() * std::pow(2 * M_PI / 180, 2);
+        doas.push_back(d);
+      }
+      map.OnDoa(t, "respeaker", doas);
+    }
+    return std::make_pair(map.Sources(static_cast<int64_t>(poses.size()) * 100000), map.counters().sources_on_path);
+  };
+  const auto off = run(0.0);
+  ASSERT_EQ(off.first.size(), 2u);
+  for (const auto& s : off.first) EXPECT_EQ(s.state, OnlineSoundMap::Source::kConverged);
+  const auto on = run(0.25);
+  EXPECT_EQ(on.second, 1);
+  ASSERT_EQ(on.first.size(), 1u);
+  EXPECT_LT((on.first[0].position_m.head<2>() - Eigen::Vector2d(4.0, -2.0)).norm(), 0.3);
+}
+
 }  // namespace
 }  // namespace sound_map
 }  // namespace sarmap

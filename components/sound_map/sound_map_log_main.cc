@@ -371,11 +371,13 @@ int main(int argc, char** argv) {
       for (const auto& s : sources) converged += s.state == OnlineSoundMap::Source::kConverged;
       const auto& c = map.counters();
       printf("t=%6.1f s: %zu sources (%d converged), born %ld, pruned %ld (+%ld mirrors), DOAs used %ld, "
-             "tentative %ld, gated out %ld, dropped while turning %ld\n",
+             "tentative %ld, gated out %ld, dropped while turning %ld, too steep %ld, "
+             "on the robot's path %ld\n",
              (now - first_utime) * 1e-6, sources.size(), converged, static_cast<long>(c.doa_new_sources),
              static_cast<long>(c.sources_pruned), static_cast<long>(c.mirrors_pruned),
              static_cast<long>(c.doa_used), static_cast<long>(c.doa_tentative), static_cast<long>(c.doa_gated_out),
-             static_cast<long>(c.doa_while_turning));
+             static_cast<long>(c.doa_while_turning), static_cast<long>(c.doa_too_steep),
+             static_cast<long>(c.sources_on_path));
       if (final_report) {
         for (const auto& s : sources) {
           const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.covariance.topLeftCorner<2, 2>());

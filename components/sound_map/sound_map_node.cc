@@ -146,6 +146,8 @@ int main(int argc, char** argv) {
                             std::to_string(c.doa_new_sources) + ", pruned " +
                             std::to_string(c.sources_pruned + c.mirrors_pruned) + "), doa used " +
                             std::to_string(c.doa_used) + ", gated " + std::to_string(c.doa_gated_out) +
+                            ", too steep " + std::to_string(c.doa_too_steep) + ", on path " +
+                            std::to_string(c.sources_on_path) +
                             ", back-propagations " + std::to_string(c.back_propagations) + ", late inputs " +
                             std::to_string(queue.dropped_late()));
     });
