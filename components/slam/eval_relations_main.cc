@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <stdexcept>
 
 #include "common/args.h"
 #include "slam/relations.h"
@@ -61,7 +62,7 @@ void Plot(const std::vector<slam::StampedPose2>& traj, const std::vector<slam::R
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-log-eval-relations", [&]() -> int {
-    std::string traj_path, rel_path, plot_path;
+    std::string traj_path, rel_path, plot_path, dump_path;
     double tolerance_s = 1e-3, max_gap_s = 0.5;
     common::ArgParser args(
         "sarmap-log-eval-relations",
@@ -70,6 +71,9 @@ int main(int argc, char** argv) {
     args.AddPositional("TRAJECTORY", &traj_path, "estimated trajectory: 't x y yaw' lines (or TUM)");
     args.AddPositional("RELATIONS", &rel_path, "relations: 't1 t2 x y z roll pitch yaw' lines");
     args.AddFlag("--plot", &plot_path, "write a trajectory plot (PNG) here");
+    args.AddFlag("--dump", &dump_path,
+                 "write one line per evaluated relation: t1 t2 trans_err_m rot_err_deg x1 y1 x2 y2 "
+                 "(estimated positions at t1, t2), to find where the large errors are");
     args.AddFlag("--tolerance", &tolerance_s, "time match tolerance (s)");
     args.AddFlag("--max-gap", &max_gap_s, "interpolate only between poses this close in time (s)");
     if (!args.Parse(argc, argv)) return 0;
@@ -84,6 +88,21 @@ int main(int argc, char** argv) {
     });
     std::fprintf(stderr, "\n");
     std::cout << err.Summary();
+    if (!dump_path.empty()) {
+      std::FILE* f = std::fopen(dump_path.c_str(), "w");
+      if (!f) throw std::runtime_error("cannot write '" + dump_path + "'");
+      std::fprintf(f, "# t1 t2 trans_err_m rot_err_deg x1 y1 x2 y2\n");
+      for (size_t k = 0; k < err.used_index.size(); ++k) {
+        const auto& r = rel[err.used_index[k]];
+        slam::StampedPose2 a, b;
+        slam::PoseAt(traj, r.t1_s, tolerance_s, max_gap_s, &a);
+        slam::PoseAt(traj, r.t2_s, tolerance_s, max_gap_s, &b);
+        std::fprintf(f, "%.6f %.6f %.6f %.5f %.4f %.4f %.4f %.4f\n", r.t1_s, r.t2_s,
+                     err.trans_errors_m[k], err.rot_errors_deg[k], a.x_m, a.y_m, b.x_m, b.y_m);
+      }
+      std::fclose(f);
+      std::cout << "per-relation errors: " << dump_path << "\n";
+    }
     if (!plot_path.empty()) {
       Plot(traj, rel, err, plot_path, traj_path.substr(traj_path.find_last_of('/') + 1));
       std::cout << "plot: " << plot_path << "\n";

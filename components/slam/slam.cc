@@ -84,8 +84,9 @@ bool Slam::OdometryAt(double time_s, Rigid2d* pose, int* segment) const {
   if (odometry_.empty()) return false;
   auto it = std::lower_bound(odometry_.begin(), odometry_.end(), time_s,
                              [](const OdomSample& s, double t) { return s.time_s < t; });
-  if (it == odometry_.end()) {
-    // Slightly newer than the last odometry: hold the last pose.
+  if (it == odometry_.end() || time_s >= odometry_.back().time_s) {
+    // Slightly newer than the last odometry: hold the last pose. (At the time of the last
+    // odometry, too: samples kept in arrival order share that time, the last one is newest.)
     if (time_s - odometry_.back().time_s > 0.5) return false;
     *pose = odometry_.back().pose;
     *segment = odometry_.back().segment;
@@ -276,6 +277,28 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
     return result;
   }
   expected_num_ranges_ = static_cast<int>(scan.ranges_m.size());
+  // A scan stamped slightly earlier than the previous one (the Intel log does this 631 times,
+  // by up to 0.9 s, in bursts whose line order is the recording order: its relations confirm
+  // it) is taken in arrival order, as odometry is: it is processed at the newest input time,
+  // so the prediction uses the newest odometry instead of odometry from before the previous
+  // scan, and it keeps its own stamp in the trajectory.
+  LaserScan reordered;
+  const LaserScan* in = &scan;
+  if (have_last_scan_ && scan.time_s < last_scan_time_) {
+    ++stats_.reordered_scans;
+    reordered = scan;
+    reordered.time_s = last_scan_time_;
+    if (!odometry_.empty() && odometry_.back().time_s > reordered.time_s &&
+        odometry_.back().time_s - reordered.time_s < 1.0) {
+      reordered.time_s = odometry_.back().time_s;
+    }
+    in = &reordered;
+  }
+  return AddScanInOrder(*in, scan.time_s);
+}
+
+ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
+  ScanResult result;
   const auto t0 = std::chrono::steady_clock::now();
   RangeData data;
   ScanToRangeData(scan, &data);
@@ -284,7 +307,11 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
   const PointCloud points =
       AdaptiveVoxelFilter(voxel_hits, static_cast<float>(so.adaptive_max_length_m),
                           so.adaptive_min_points, static_cast<float>(so.max_range_m));
-  if (localisation_only_) return AddScanLocalisation(scan, data, points);
+  if (localisation_only_) {
+    ScanResult r = AddScanLocalisation(scan, data, points);
+    scans_.back().time_s = stamp_s;
+    return r;
+  }
 
   const Rigid2d predicted = PredictLocal(scan.time_s);
   Rigid2d local = predicted;
@@ -400,7 +427,7 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
     }
     (void)node_id;
   }
-  scans_.push_back({scan.time_s, local, static_cast<int>(nodes_.size()) - 1});
+  scans_.push_back({stamp_s, local, static_cast<int>(nodes_.size()) - 1});
   result.accepted = true;
   result.node_id = static_cast<int>(nodes_.size()) - 1;
   result.map_from_base = CurrentPose();

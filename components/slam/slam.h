@@ -53,7 +53,7 @@ struct ScanResult {
 
 struct SlamStats {
   int64_t scans = 0, nodes = 0, submaps = 0;
-  int64_t rejected_scans = 0, rejected_odometry = 0, reordered_odometry = 0;
+  int64_t rejected_scans = 0, rejected_odometry = 0, reordered_odometry = 0, reordered_scans = 0;
   int64_t loop_searches = 0, loop_closures = 0;
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
@@ -147,6 +147,9 @@ class Slam {
 
   bool CheckScan(const LaserScan& scan, std::string* why);
   void ScanToRangeData(const LaserScan& scan, RangeData* data) const;
+  // AddScan after the time-order check: `scan.time_s` is the processing time, `stamp_s` the
+  // scan's own stamp (kept in the trajectory).
+  ScanResult AddScanInOrder(const LaserScan& scan, double stamp_s);
   bool OdometryAt(double time_s, Rigid2d* pose, int* segment) const;
   Rigid2d PredictLocal(double time_s);
   Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& predicted,

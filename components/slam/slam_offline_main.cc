@@ -42,8 +42,10 @@ bool EndsWith(const std::string& s, const std::string& e) {
   return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
 }
 
-std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOptions& options) {
+std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOptions& options,
+                             bool* is_carmen) {
   std::vector<Input> inputs;
+  *is_carmen = false;
   if (EndsWith(path, ".log") || EndsWith(path, ".clf") || EndsWith(path, ".carmen")) {
     // CARMEN text log (unless it is an LCM log with a .log name: LCM logs start with a magic).
     FILE* f = std::fopen(path.c_str(), "rb");
@@ -74,6 +76,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
         inputs.push_back(std::move(in));
       };
       slam::ReadCarmenFile(path, &reader);
+      *is_carmen = true;
       return inputs;
     }
   }
@@ -112,7 +115,7 @@ int main(int argc, char** argv) {
   return common::RunMain("sarmap-slam-offline", [&]() -> int {
     std::string input, output, map_prefix, save_path, config;
     std::vector<std::string> overrides;
-    bool print_config = false, quiet = false, no_final = false, log_order = false;
+    bool print_config = false, quiet = false, no_final = false, log_order = false, time_order = false;
     common::ArgParser args("sarmap-slam-offline",
                            "Runs SLAM over a CARMEN or LCM log as fast as possible and writes "
                            "the trajectory (t x y yaw per scan).");
@@ -124,7 +127,12 @@ int main(int argc, char** argv) {
     args.AddFlag("--save", &save_path, "write the pose-graph file here");
     args.AddSwitch("--print-config", &print_config, "print the effective options and exit");
     args.AddSwitch("--quiet", &quiet, "no progress output");
-    args.AddSwitch("--log-order", &log_order, "process inputs in log order instead of time order");
+    args.AddSwitch("--log-order", &log_order,
+                   "process inputs in log order (the default for CARMEN logs: their line order is "
+                   "the recording order)");
+    args.AddSwitch("--time-order", &time_order,
+                   "process inputs in time order (the default for LCM logs, as the node's "
+                   "time-ordered queue does)");
     args.AddSwitch("--no-final-optimisation", &no_final, "skip the optimisation at the end (to see local SLAM alone)");
     if (!args.Parse(argc, argv)) return 0;
     const auto options = common::LoadOptions<slam::SlamNodeOptions>(config, overrides);
@@ -135,9 +143,14 @@ int main(int argc, char** argv) {
     if (output.empty()) throw common::ArgError("--output is required");
 
     auto start = std::chrono::steady_clock::now();
-    std::vector<Input> inputs = ReadInput(input, options);
-    if (!log_order) {
-      // As the node's time-ordered queue does.
+    if (log_order && time_order) throw common::ArgError("--log-order and --time-order exclude each other");
+    bool is_carmen = false;
+    std::vector<Input> inputs = ReadInput(input, options, &is_carmen);
+    // A CARMEN log's lines are in recording order; its stamps are not always (Intel has 631
+    // scans stamped up to 0.9 s before the scan above them, and its relations follow the line
+    // order), so CARMEN logs are processed in line order by default. An LCM log is sorted by
+    // time, as the node's time-ordered queue does.
+    if (time_order || (!log_order && !is_carmen)) {
       std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
         return (a.is_scan ? a.scan.time_s : a.odom_time_s) < (b.is_scan ? b.scan.time_s : b.odom_time_s);
       });
@@ -205,8 +218,10 @@ int main(int argc, char** argv) {
     getrusage(RUSAGE_SELF, &ru);
     const auto& s = slam.stats();
     std::printf("dataset %s\n", input.c_str());
-    std::printf("scans %lld (rejected %lld), odometry rejected %lld, nodes %lld, submaps %lld\n",
-                (long long)s.scans, (long long)s.rejected_scans, (long long)s.rejected_odometry,
+    std::printf("scans %lld (rejected %lld, out of time order %lld), odometry rejected %lld, nodes %lld, "
+                "submaps %lld\n",
+                (long long)s.scans, (long long)s.rejected_scans, (long long)s.reordered_scans,
+                (long long)s.rejected_odometry,
                 (long long)s.nodes, (long long)s.submaps);
     std::printf("loop closures %lld of %lld searches, optimisations %lld\n",
                 (long long)s.loop_closures, (long long)s.loop_searches, (long long)s.optimisations);

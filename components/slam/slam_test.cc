@@ -128,8 +128,50 @@ TEST(SlamInputTest, GarbageScansAndOdometryJumpsAreRejectedAndCounted) {
   EXPECT_EQ(slam.stats().rejected_odometry, 4);
 }
 
-// Feeds the Intel log in time order (as the node's time-ordered queue and
-// sarmap-slam-offline do), scans [first_scan, max_scans) and the odometry between them.
+// Range from (x, y) along `angle` to the walls of the room [-5, 5] x [-3, 3] (from inside).
+float RoomRange(double x, double y, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  double r = 1e9;
+  if (c > 1e-9) r = std::min(r, (5 - x) / c);
+  if (c < -1e-9) r = std::min(r, (-5 - x) / c);
+  if (s > 1e-9) r = std::min(r, (3 - y) / s);
+  if (s < -1e-9) r = std::min(r, (-3 - y) / s);
+  return static_cast<float>(r);
+}
+
+TEST(SlamInputTest, ScansStampedEarlierThanThePreviousOneAreTakenInArrivalOrder) {
+  // A robot drives along x at 0.05 m per scan (0.1 s). Scans 20-24 and their odometry are
+  // stamped 0.75 s too early, as in the Intel log's bursts, but arrive in recording order.
+  // They must be placed where they were made (processed at the newest input time, with the
+  // newest odometry) and keep their own stamps in the trajectory.
+  Slam slam{SlamOptions()};
+  std::vector<std::pair<double, double>> stamp_and_true_x;
+  for (int k = 0; k < 40; ++k) {
+    const double x = -2.0 + 0.05 * k;
+    const double stamp = 0.1 * k - (k >= 20 && k < 25 ? 0.75 : 0.0);
+    slam.AddOdometry(stamp, Rigid2d(x, 0, 0));
+    LaserScan scan = MakeScan(stamp);
+    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      scan.ranges_m[i] = RoomRange(x, 0, scan.angle_min_rad + i * scan.angle_increment_rad);
+    }
+    ASSERT_TRUE(slam.AddScan(scan).accepted) << k;
+    stamp_and_true_x.emplace_back(stamp, x);
+  }
+  EXPECT_EQ(slam.stats().reordered_scans, 5);
+  const auto traj = slam.Trajectory();
+  ASSERT_EQ(traj.size(), 40u);
+  for (const auto& [stamp, x] : stamp_and_true_x) {
+    const auto it = std::find_if(traj.begin(), traj.end(),
+                                 [&](const StampedPose2& p) { return std::abs(p.time_s - stamp) < 1e-9; });
+    ASSERT_NE(it, traj.end()) << stamp;
+    // The map frame starts at the first scan (x = -2).
+    EXPECT_NEAR(it->x_m, x + 2.0, 0.05) << "scan stamped " << stamp;
+    EXPECT_NEAR(it->y_m, 0.0, 0.05) << "scan stamped " << stamp;
+  }
+}
+
+// Feeds the Intel log in line (recording) order, as sarmap-slam-offline does with CARMEN logs,
+// scans [first_scan, max_scans) and the odometry between them.
 int FeedIntel(Slam* slam, int first_scan, int max_scans) {
   struct Item {
     double t;
@@ -154,7 +196,6 @@ int FeedIntel(Slam* slam, int first_scan, int max_scans) {
       items.push_back({l.time_s, true, {}, s});
     };
     ReadCarmenFile(kIntel, &reader);
-    std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.t < b.t; });
   }
   int scans = 0, fed = 0;
   for (const Item& it : items) {
