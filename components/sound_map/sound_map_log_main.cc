@@ -221,7 +221,8 @@ int main(int argc, char** argv) {
         if (!sarmap::sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) continue;
         const int64_t t = m.header.utime;
         anchor_log.emplace_back(t, anchors);
-        inputs.emplace(t, [&map, t, current, anchors, cov] {
+        const bool loop_closed = m.loop_closed;
+        inputs.emplace(t, [&map, t, current, anchors, cov, loop_closed] {
           const bool debug = std::getenv("SOUND_MAP_DEBUG") != nullptr;
           if (debug) {
             printf("ANCHORS t=%.2f current (%.3f %.3f %.2f) ekf current (%.3f %.3f %.2f) cov diag", t * 1e-6, current.x, current.y, current.yaw * 180 / M_PI, map.ekf().current().x, map.ekf().current().y, map.ekf().current().yaw * 180 / M_PI);
@@ -236,7 +237,7 @@ int main(int argc, char** argv) {
             for (const auto& s : map.Sources(t)) printf("  before: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
           }
           const char* scale = std::getenv("SOUND_MAP_COV_SCALE");
-          map.OnSlamAnchors(t, current, anchors, scale ? Eigen::MatrixXd(cov * std::atof(scale)) : cov);
+          map.OnSlamAnchors(t, current, anchors, scale ? Eigen::MatrixXd(cov * std::atof(scale)) : cov, loop_closed);
           if (debug)
             for (const auto& s : map.Sources(t)) printf("  after: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
         });
