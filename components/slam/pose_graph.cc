@@ -40,7 +40,7 @@ struct Blocks {
 };
 
 void BuildProblem(const std::vector<Constraint>& constraints, Blocks* b, ceres::Problem* problem,
-                  const PoseGraphOptions& options) {
+                  const PoseGraphOptions& options, const CovarianceModel* model = nullptr) {
   for (auto& p : b->submaps) problem->AddParameterBlock(p.data(), 3);
   for (auto& p : b->nodes) problem->AddParameterBlock(p.data(), 3);
   if (!b->submaps.empty()) problem->SetParameterBlockConstant(b->submaps[0].data());
@@ -58,9 +58,9 @@ void BuildProblem(const std::vector<Constraint>& constraints, Blocks* b, ceres::
     }
     ceres::LossFunction* loss =
         c.kind == Constraint::LOOP_CLOSURE ? new ceres::HuberLoss(options.huber_scale) : nullptr;
+    const auto [wt, wr] = model ? model->Weights(c) : std::make_pair(c.translation_weight, c.rotation_weight);
     problem->AddResidualBlock(
-        new ceres::AutoDiffCostFunction<RelativePoseCost, 3, 3, 3>(
-            new RelativePoseCost(c.relative, c.translation_weight, c.rotation_weight)),
+        new ceres::AutoDiffCostFunction<RelativePoseCost, 3, 3, 3>(new RelativePoseCost(c.relative, wt, wr)),
         loss, from, to);
   }
 }
@@ -73,6 +73,21 @@ Blocks ToBlocks(const std::vector<Rigid2d>& nodes, const std::vector<Rigid2d>& s
 }
 
 }  // namespace
+
+const ConstraintNoise& CovarianceModel::For(int kind) const {
+  switch (kind) {
+    case Constraint::INTRA_SUBMAP: return intra_submap;
+    case Constraint::LOOP_CLOSURE: return loop_closure;
+    case Constraint::ODOMETRY: return odometry;
+    default: return local_slam;
+  }
+}
+
+std::pair<double, double> CovarianceModel::Weights(const Constraint& c) const {
+  const ConstraintNoise& n = For(c.kind);
+  return {n.translation_sigma_m > 0 ? 1.0 / n.translation_sigma_m : c.translation_weight,
+          n.rotation_sigma_rad > 0 ? 1.0 / n.rotation_sigma_rad : c.rotation_weight};
+}
 
 OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints,
                                       std::vector<Rigid2d>* node_poses,
@@ -107,10 +122,11 @@ OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints
 bool NodeCovariance(const std::vector<Constraint>& constraints,
                     const std::vector<Rigid2d>& node_poses,
                     const std::vector<Rigid2d>& submap_poses, const std::vector<int>& node_ids,
-                    Eigen::MatrixXd* covariance, const PoseGraphOptions& options) {
+                    Eigen::MatrixXd* covariance, const PoseGraphOptions& options,
+                    const CovarianceModel& model) {
   Blocks b = ToBlocks(node_poses, submap_poses);
   ceres::Problem problem;
-  BuildProblem(constraints, &b, &problem, options);
+  BuildProblem(constraints, &b, &problem, options, &model);
   ceres::Covariance::Options cov_options;
   cov_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
   cov_options.algorithm_type = ceres::SPARSE_QR;

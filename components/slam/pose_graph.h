@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,6 +38,22 @@ struct PoseGraphOptions {
   double huber_scale = 10.0;
 };
 
+// What NodeCovariance assumes about each constraint's noise. The optimiser's weights are tuning
+// weights (a local-matching weight of 1e5 says "1e-5 m"), so the covariance they imply is ~1e5 too
+// tight in variance. Here each kind may state the standard deviation of one constraint instead:
+// the covariance's information for it is diag(1/sigma_t^2, 1/sigma_t^2, 1/sigma_r^2). 0 keeps the
+// optimiser's weight (information w^2).
+struct ConstraintNoise {
+  double translation_sigma_m = 0;
+  double rotation_sigma_rad = 0;
+};
+struct CovarianceModel {
+  ConstraintNoise intra_submap, loop_closure, odometry, local_slam;
+  const ConstraintNoise& For(int kind) const;
+  // The (translation, rotation) square-root information this model gives constraint c.
+  std::pair<double, double> Weights(const Constraint& c) const;
+};
+
 struct OptimisationSummary {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
@@ -55,7 +72,8 @@ OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints
 bool NodeCovariance(const std::vector<Constraint>& constraints,
                     const std::vector<Rigid2d>& node_poses,
                     const std::vector<Rigid2d>& submap_poses, const std::vector<int>& node_ids,
-                    Eigen::MatrixXd* covariance, const PoseGraphOptions& options);
+                    Eigen::MatrixXd* covariance, const PoseGraphOptions& options,
+                    const CovarianceModel& model = CovarianceModel());
 
 }  // namespace slam
 }  // namespace sarmap

@@ -669,7 +669,14 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
 bool Slam::JointCovariance(const std::vector<int>& node_ids, Eigen::MatrixXd* covariance) const {
   PoseGraphOptions p;
   p.huber_scale = options_.graph.huber_scale;
-  return NodeCovariance(constraints_, node_global_, submap_global_, node_ids, covariance, p);
+  const CovarianceOptions& o = options_.covariance;
+  const double deg = M_PI / 180;
+  CovarianceModel model;
+  model.intra_submap = {o.intra_sigma_m, o.intra_sigma_deg * deg};
+  model.loop_closure = {o.loop_sigma_m, o.loop_sigma_deg * deg};
+  model.odometry = {o.odometry_sigma_m, o.odometry_sigma_deg * deg};
+  model.local_slam = {o.local_slam_sigma_m, o.local_slam_sigma_deg * deg};
+  return NodeCovariance(constraints_, node_global_, submap_global_, node_ids, covariance, p, model);
 }
 
 OccupancyMap Slam::RenderMap() const {

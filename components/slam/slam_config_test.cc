@@ -23,13 +23,18 @@ std::vector<std::string> Lines(const std::string& text) {
   return lines;
 }
 
-TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsAndLocalTies) {
+TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsLocalTiesAndCovariance) {
   const auto base = common::LoadOptions<SlamNodeOptions>(kConfigDir + "slam.yaml", {});
   const auto robot = common::LoadOptions<SlamNodeOptions>(kConfigDir + "slam_kinect_robot.yaml", {});
   EXPECT_FALSE(base.slam.local.ceres_rotation_prior_from_prediction);
   EXPECT_TRUE(robot.slam.local.ceres_rotation_prior_from_prediction);
   EXPECT_GT(robot.slam.graph.local_slam_translation_weight,
             base.slam.graph.local_slam_translation_weight);
+
+  // The laser logs keep the covariance of the weights; the robot states its constraints' noise.
+  EXPECT_EQ(base.slam.covariance.intra_sigma_m, 0);
+  EXPECT_GT(robot.slam.covariance.intra_sigma_m, 0);
+  EXPECT_GT(robot.slam.covariance.local_slam_sigma_deg, 0);
 
   // Good odometry: the scan matcher's priors stay strong.
   EXPECT_GE(robot.slam.local.ceres_translation_weight, base.slam.local.ceres_translation_weight);
@@ -45,7 +50,10 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsAndLocalTies)
   }
   const std::vector<std::string> allowed = {"ceres_translation_weight", "ceres_rotation_weight",
                                             "ceres_rotation_prior_from_prediction",
-                                            "local_slam_translation_weight"};
+                                            "local_slam_translation_weight", "intra_sigma_m",
+                                            "intra_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
+                                            "odometry_sigma_m", "odometry_sigma_deg",
+                                            "local_slam_sigma_m", "local_slam_sigma_deg"};
   EXPECT_GE(differing.size(), 2u);
   for (const auto& line : differing) {
     bool known = false;

@@ -113,7 +113,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-slam-offline", [&]() -> int {
-    std::string input, output, map_prefix, save_path, config;
+    std::string input, output, map_prefix, save_path, config, live_output;
     std::vector<std::string> overrides;
     bool print_config = false, quiet = false, no_final = false, log_order = false, time_order = false;
     common::ArgParser args("sarmap-slam-offline",
@@ -121,6 +121,8 @@ int main(int argc, char** argv) {
                            "the trajectory (t x y yaw per scan).");
     args.AddPositional("LOG", &input, "CARMEN log (.log/.clf) or LCM log (ODOM + SCAN)");
     args.AddFlag("--output", &output, "trajectory file to write (t x y yaw)");
+    args.AddFlag("--live-output", &live_output,
+                 "also write each scan's pose as the node publishes it on POSE, at that time (t x y yaw)");
     args.AddFlag("--config", &config, "options YAML (config/slam.yaml)");
     args.AddRepeated("--set", &overrides, "override an option, e.g. --set slam.local.resolution_m=0.05");
     args.AddFlag("--map", &map_prefix, "write the map as PREFIX.pgm + PREFIX.yaml");
@@ -173,6 +175,7 @@ int main(int argc, char** argv) {
     start = std::chrono::steady_clock::now();
     int64_t done = 0, rejected_scans = 0, rejected_odom = 0;
     int last_percent = -1;
+    std::vector<std::pair<double, slam::Rigid2d>> live_poses;
     for (const auto& in : inputs) {
       if (!in.is_scan) {
         std::string why;
@@ -186,6 +189,7 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       const slam::ScanResult r = slam.AddScan(in.scan);
       latencies.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      if (r.accepted) live_poses.emplace_back(in.scan.time_s, r.map_from_base);
       if (!r.accepted && ++rejected_scans <= 5) {
         SARMAP_LOG(WARN) << "scan rejected: " << r.reason;
       }
@@ -209,6 +213,15 @@ int main(int argc, char** argv) {
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!quiet) std::fprintf(stderr, "\n");
     slam::SaveTrajectory(output, slam.Trajectory());
+    if (!live_output.empty()) {
+      FILE* f = std::fopen(live_output.c_str(), "w");
+      if (!f) throw std::runtime_error("cannot write " + live_output);
+      std::fprintf(f, "# t_s x_m y_m yaw_rad (map_from_base as published live)\n");
+      for (const auto& [t, p] : live_poses) {
+        std::fprintf(f, "%.6f %.6f %.6f %.6f\n", t, p.translation().x(), p.translation().y(), p.yaw_rad());
+      }
+      std::fclose(f);
+    }
 
     std::sort(latencies.begin(), latencies.end());
     auto pct = [&](double p) {

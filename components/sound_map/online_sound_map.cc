@@ -95,7 +95,7 @@ Eigen::Matrix3d ComposeJacobian(const Pose2& node, const Pose2& offset) {
 
 bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
                                    const std::vector<std::pair<int64_t, Pose2>>& anchors,
-                                   const Eigen::MatrixXd& covariance) {
+                                   const Eigen::MatrixXd& covariance, bool loop_closed) {
   const int m = 3 * (1 + static_cast<int>(anchors.size()));
   bool ok = covariance.rows() == m && covariance.cols() == m && covariance.allFinite() &&
             current.vec().allFinite();
@@ -104,6 +104,10 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
   if (!ok) {  // wrong size, non-finite values or a node listed twice
     ++counters_.bad_anchors;
     return false;
+  }
+  if (options_.anchors_after_loop_closure_only && !loop_closed && have_pose_) {
+    ++counters_.anchors_skipped;
+    return true;
   }
   // SLAM_ANCHORS' current is the latest node (the scan of the optimisation), not necessarily
   // the robot's latest POSE: carry it to the latest POSE by the offset between them.

@@ -15,6 +15,8 @@
 #include <Eigen/Eigenvalues>
 #include <cstdio>
 #include <cstdlib>
+#include <cmath>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
@@ -57,6 +59,7 @@ int main(int argc, char** argv) {
     std::string relocalise_section = "map_localiser";
     double doa_shift_s = 0;
     bool pose_check = false;
+    std::string trajectory_path;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
     parser.AddSwitch("--doa-check", &doa_check, "compare every DOA with the true bearings of the SIM_TRUTH sources");
@@ -74,6 +77,9 @@ int main(int argc, char** argv) {
                    "diagnosis: add this many seconds to every DOA time (does the map improve with a timing fix?)");
     parser.AddSwitch("--pose-check", &pose_check,
                      "print POSE against SIM_TRUTH along the path (every 3 s) and its RMS against a time lag");
+    parser.AddFlag("--trajectory", &trajectory_path,
+                   "diagnosis: poses from this file (t x y yaw per line, sarmap-slam-offline --output on the "
+                   "same log) instead of POSE, SLAM_ANCHORS ignored: try SLAM settings offline");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -139,8 +145,26 @@ int main(int argc, char** argv) {
       });
     };
 
+    const bool poses_from_file = !trajectory_path.empty();
+    if (poses_from_file) {
+      if (truth_poses_in) throw std::runtime_error("--trajectory and --truth-poses exclude each other");
+      no_anchors = true;
+      std::ifstream in(trajectory_path);
+      if (!in) throw std::runtime_error("cannot read trajectory " + trajectory_path);
+      // What sarmap-slam adds to a node's covariance for the local match (pose_sigma_*).
+      const Eigen::Matrix3d cov = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, std::pow(M_PI / 180, 2)).asDiagonal();
+      for (std::string line; std::getline(in, line);) {
+        double ts, x, y, yaw;
+        if (line.empty() || line[0] == '#' || std::sscanf(line.c_str(), "%lf %lf %lf %lf", &ts, &x, &y, &yaw) != 4) continue;
+        const int64_t t = std::llround(ts * 1e6);
+        const Pose2 pose(x, y, yaw);
+        slam_poses[t] = pose;
+        inputs.emplace(t, [&map, t, pose, cov] { map.OnPose(t, pose, cov, -1); });
+      }
+      if (slam_poses.empty()) throw std::runtime_error("no poses in " + trajectory_path);
+    }
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-      if (e->channel == options.pose_channel && !truth_poses_in) {
+      if (e->channel == options.pose_channel && !truth_poses_in && !poses_from_file) {
         sarmap::pose_t m;
         if (!Decode(*e, &m)) continue;
         const Pose2 pose = sarmap::sound_map::PlanarPose(m);
@@ -197,7 +221,8 @@ int main(int argc, char** argv) {
         if (!sarmap::sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) continue;
         const int64_t t = m.header.utime;
         anchor_log.emplace_back(t, anchors);
-        inputs.emplace(t, [&map, t, current, anchors, cov] {
+        const bool loop_closed = m.loop_closed;
+        inputs.emplace(t, [&map, t, current, anchors, cov, loop_closed] {
           const bool debug = std::getenv("SOUND_MAP_DEBUG") != nullptr;
           if (debug) {
             printf("ANCHORS t=%.2f current (%.3f %.3f %.2f) ekf current (%.3f %.3f %.2f) cov diag", t * 1e-6, current.x, current.y, current.yaw * 180 / M_PI, map.ekf().current().x, map.ekf().current().y, map.ekf().current().yaw * 180 / M_PI);
@@ -212,7 +237,7 @@ int main(int argc, char** argv) {
             for (const auto& s : map.Sources(t)) printf("  before: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
           }
           const char* scale = std::getenv("SOUND_MAP_COV_SCALE");
-          map.OnSlamAnchors(t, current, anchors, scale ? Eigen::MatrixXd(cov * std::atof(scale)) : cov);
+          map.OnSlamAnchors(t, current, anchors, scale ? Eigen::MatrixXd(cov * std::atof(scale)) : cov, loop_closed);
           if (debug)
             for (const auto& s : map.Sources(t)) printf("  after: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
         });

@@ -113,8 +113,9 @@ int main(int argc, char** argv) {
         }
         return;
       }
-      push(msg.header.utime, [&map, current, anchors, cov](Utime t) {
-        if (!map.OnSlamAnchors(t, current, anchors, cov)) {
+      const bool loop_closed = msg.loop_closed;
+      push(msg.header.utime, [&map, current, anchors, cov, loop_closed](Utime t) {
+        if (!map.OnSlamAnchors(t, current, anchors, cov, loop_closed)) {
           static sarmap::common::RateLimiter limit(5.0);
           if (limit.Allow(sarmap::common::SteadySeconds())) {
             SARMAP_LOG(WARN) << "SLAM_ANCHORS rejected (non-finite covariance)";
@@ -148,7 +149,8 @@ int main(int argc, char** argv) {
                             std::to_string(c.doa_used) + ", gated " + std::to_string(c.doa_gated_out) +
                             ", too steep " + std::to_string(c.doa_too_steep) + ", on path " +
                             std::to_string(c.sources_on_path) +
-                            ", back-propagations " + std::to_string(c.back_propagations) + ", late inputs " +
+                            ", back-propagations " + std::to_string(c.back_propagations) + " (anchors skipped " +
+                            std::to_string(c.anchors_skipped) + "), late inputs " +
                             std::to_string(queue.dropped_late()));
     });
     return node.Run();

@@ -1,0 +1,69 @@
+// The covariance the pose graph publishes: each constraint kind's stated noise, not the
+// optimiser's tuning weights.
+
+#include "slam/pose_graph.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace sarmap {
+namespace slam {
+namespace {
+
+// Submap 0 (fixed) at the origin; node 0 tied to it; nodes 1..n-1 along x, 0.2 m apart, tied
+// to their predecessor by local matching.
+std::vector<Constraint> Chain(int n, std::vector<Rigid2d>* nodes, std::vector<Rigid2d>* submaps) {
+  std::vector<Constraint> constraints;
+  submaps->assign(1, Rigid2d(0, 0, 0));
+  nodes->clear();
+  for (int i = 0; i < n; ++i) nodes->push_back(Rigid2d(0.2 * i, 0, 0));
+  constraints.push_back({Constraint::INTRA_SUBMAP, 0, 0, Rigid2d(0, 0, 0), 500, 1600});
+  for (int i = 0; i + 1 < n; ++i) {
+    constraints.push_back({Constraint::LOCAL_SLAM, i, i + 1, Rigid2d(0.2, 0, 0), 1e5, 1e5});
+  }
+  return constraints;
+}
+
+// In a chain, yaw variances add (rotation is linear) and so do the along-track x variances
+// (a heading error does not move a node along its own heading):
+//   var(yaw_k) = s_intra_r^2 + k s_local_r^2,   var(x_k) = s_intra_t^2 + k s_local_t^2.
+TEST(PoseGraphCovariance, StatedNoisePerKindReplacesTheWeights) {
+  std::vector<Rigid2d> nodes, submaps;
+  const int n = 11;
+  const auto constraints = Chain(n, &nodes, &submaps);
+  CovarianceModel model;
+  model.intra_submap = {0.05, 1.0 * M_PI / 180};
+  model.local_slam = {0.02, 0.3 * M_PI / 180};
+  Eigen::MatrixXd cov;
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {0, n - 1}, &cov, PoseGraphOptions(), model));
+  ASSERT_EQ(cov.rows(), 6);
+  const double k = n - 1;
+  const double r_i = M_PI / 180, r_l = 0.3 * M_PI / 180;
+  EXPECT_NEAR(cov(5, 5), r_i * r_i + k * r_l * r_l, 1e-9);
+  EXPECT_NEAR(cov(3, 3), 0.05 * 0.05 + k * 0.02 * 0.02, 1e-9);
+  // The two nodes share the intra-submap error: their cross-covariance is its variance.
+  EXPECT_NEAR(cov(2, 5), r_i * r_i, 1e-9);
+  // Cross-track: the heading errors swing the last node sideways, so y grows faster than x.
+  EXPECT_GT(cov(4, 4), cov(3, 3));
+}
+
+TEST(PoseGraphCovariance, ZeroSigmaKeepsTheOptimiserWeights) {
+  std::vector<Rigid2d> nodes, submaps;
+  const auto constraints = Chain(5, &nodes, &submaps);
+  Eigen::MatrixXd cov;
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {4}, &cov, PoseGraphOptions()));
+  // Weights are square-root information: 1600 on the intra yaw, 1e5 on each of 4 local yaws.
+  EXPECT_NEAR(cov(2, 2), 1.0 / (1600.0 * 1600.0) + 4.0 / 1e10, 1e-12);
+  // A model naming only the local-matching rotation leaves every other weight as it was.
+  CovarianceModel model;
+  model.local_slam.rotation_sigma_rad = 0.01;
+  Eigen::MatrixXd cov2;
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {4}, &cov2, PoseGraphOptions(), model));
+  EXPECT_NEAR(cov2(2, 2), 1.0 / (1600.0 * 1600.0) + 4.0 * 1e-4, 1e-12);
+  EXPECT_NEAR(cov2(0, 0), cov(0, 0), 1e-12);
+}
+
+}  // namespace
+}  // namespace slam
+}  // namespace sarmap
