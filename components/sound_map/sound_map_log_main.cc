@@ -230,7 +230,8 @@ int main(int argc, char** argv) {
         const auto heard = sarmap::sound_map::HeardDirections(m);
         std::vector<std::string> keywords;  // HeardDirections' detections, in order
         for (const auto& d : m.detections)
-          if (d.cue == sarmap::person_detection_t::CUE_HEARD && std::isfinite(d.azimuth_rad)) keywords.push_back(d.keyword);
+          if (d.cue == sarmap::person_detection_t::CUE_HEARD && std::isfinite(d.azimuth_rad))
+            keywords.push_back(d.keyword + "' conf " + std::to_string(d.confidence).substr(0, 4) + " '");
         const int64_t t = m.header.utime;
         inputs.emplace(t, [&map, &on_heard_check, t, heard, keywords] {
           for (size_t i = 0; i < heard.size(); ++i) {
