@@ -268,7 +268,9 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
                                  return common::UtimeToSeconds(utime - t) > options_.heard_person_window_s;
                                }),
                 calls.end());
-    calls.push_back(utime);
+    // Several keywords of one utterance are one call.
+    if (calls.empty() || std::abs(common::UtimeToSeconds(utime - calls.back())) >= options_.same_call_s)
+      calls.push_back(utime);
     // Not yet placed: one call may be a keyword false alarm, and an initialising source's
     // position is a guess; UpdateSoundSources places the person once both are settled.
     if (!p && RecentCalls(best->id, utime) < options_.min_heard_calls) continue;

@@ -223,6 +223,42 @@ TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 5);
 }
 
+// A keyword false alarm on one utterance often fires several keywords within a fraction of a
+// second (the open-area mission: "assist", "rescue", "help", "here" 0.1-0.9 s apart towards a
+// generator's beam). Those hits are one call, not the two calls a heard person needs.
+TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource source;
+  source.id = 4;
+  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
+  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
+  source.converged = true;
+  map.UpdateSoundSources(1'000'000, {source});
+  HeardDetection call;
+  call.azimuth_rad = M_PI / 4;
+  call.confidence = 0.99;
+  for (const auto& [utime, keyword] : std::vector<std::pair<int64_t, std::string>>{
+           {2'000'000, "assist"}, {2'070'000, "rescue"}, {2'760'000, "help"}, {2'870'000, "here"}}) {
+    call.keyword = keyword;
+    EXPECT_EQ(map.AddHeard(utime, {call}, Rigid3d()), 1);
+  }
+  map.UpdateSoundSources(3'000'000, {source});
+  EXPECT_TRUE(map.people().empty());
+  // The same source calling again 5 s later: two calls, a person.
+  call.keyword = "help";
+  EXPECT_EQ(map.AddHeard(8'000'000, {call}, Rigid3d()), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 4);
+  // With same_call_s 0 every hit is a call (the previous behaviour): the burst alone is a person.
+  PeopleMapOptions every_hit;
+  every_hit.same_call_s = 0;
+  PeopleMap old_map(every_hit);
+  old_map.UpdateSoundSources(1'000'000, {source});
+  old_map.AddHeard(2'000'000, {call}, Rigid3d());
+  old_map.AddHeard(2'070'000, {call}, Rigid3d());
+  EXPECT_EQ(old_map.people().size(), 1u);
+}
+
 // A planar sound map gives no height (z variance 0): fusing it with a seen person must stay
 // finite, and a source with NaN in it is ignored.
 TEST(PeopleMapTest, PlanarSoundSourceFusesFiniteAndGarbageSourcesAreIgnored) {
