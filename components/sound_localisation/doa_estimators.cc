@@ -224,10 +224,18 @@ BandSrpPhat::BandSrpPhat(const ArrayGeometry& geometry, const BlockStatistics& s
   if (band_first_.size() > 1 && nb - band_first_.back() < per_band / 2) band_first_.pop_back();
   band_first_.push_back(nb);
   bin_weight_.assign(nb, 0.0);
+  tonality_.assign(band_first_.size() - 1, 0.0);
   for (int b = 0; b + 1 < static_cast<int>(band_first_.size()); ++b) {
     double total_power = 0;
-    for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) total_power += std::max(0.0, stats.raw[k].trace().real());
+    std::vector<double> powers;
+    for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) {
+      powers.push_back(std::max(0.0, stats.raw[k].trace().real()));
+      total_power += powers.back();
+    }
     if (total_power <= 0) continue;
+    const size_t top = std::min<size_t>(3, powers.size());
+    std::partial_sort(powers.begin(), powers.begin() + top, powers.end(), std::greater<>());
+    tonality_[b] = std::accumulate(powers.begin(), powers.begin() + top, 0.0) / total_power;
     for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) {
       const double frames = stats.phat[k].trace().real() / m;  // n_k: each frame adds |y_i|^2 = 1 per mic
       if (frames <= 0) continue;

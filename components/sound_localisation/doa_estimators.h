@@ -126,6 +126,9 @@ class BandSrpPhat {
   // Returns the broadband SRP-PHAT value (as SrpPhat); bands (optional) gets P_b(u) per band.
   double Evaluate(const Eigen::Vector3d& u, std::vector<double>* bands) const;
   double Band(const Eigen::Vector3d& u, int b) const;
+  // Fraction of band b's power in its 3 strongest bins: a tone or two harmonics ~1, noise and
+  // voiced speech (many harmonics per band) lower.
+  double band_tonality(int b) const { return tonality_[b]; }
 
  private:
   SteeredQuadraticForm form_;
@@ -133,6 +136,7 @@ class BandSrpPhat {
   double broadband_scale_;
   std::vector<int> band_first_;        // band b holds bins [band_first_[b], band_first_[b + 1]) (index - bin_lo)
   std::vector<double> bin_weight_;     // w_k / (n_k M (M - 1)): per-bin value -> weighted coherence
+  std::vector<double> tonality_;
   mutable std::vector<double> per_bin_;
 };
 

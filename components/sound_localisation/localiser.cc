@@ -241,6 +241,7 @@ std::vector<DoaEstimate> Localiser::EstimateWithBands(const BlockStatistics& sta
   std::vector<std::pair<double, int>> order;
   std::vector<size_t> best_index(nb, 0);
   for (int b = 0; b < nb; ++b) {
+    if (bands.band_tonality(b) < options_.band_min_tonality) continue;
     const auto& v = band_values[b];
     best_index[b] = static_cast<size_t>(std::max_element(v.begin(), v.end()) - v.begin());
     if (v[best_index[b]] >= options_.band_min_coherence) order.emplace_back(v[best_index[b]], b);

@@ -57,6 +57,7 @@ struct LocaliserOptions {
   double band_hz = 0.0;
   double band_min_coherence = 0.6;
   int band_max_sources = 2;
+  double band_min_tonality = 0.0;  // a band peak needs this share of its band's power in 3 bins
   TrackerOptions tracker;
 
   template <class V>
@@ -94,6 +95,9 @@ struct LocaliserOptions {
       "dominates its own band is heard beside broadband ones (0: broadband only)");
     v("band_min_coherence", band_min_coherence, "a band's peak needs this weighted PHAT coherence (0..1)");
     v("band_max_sources", band_max_sources, "most band peaks added per block");
+    v("band_min_tonality", band_min_tonality,
+      "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise and "
+      "voiced speech lower); 0: any band");
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {
@@ -123,6 +127,7 @@ struct LocaliserOptions {
     check.NonNegative("band_hz", band_hz);
     check.InRange("band_min_coherence", band_min_coherence, 0, 1);
     check.That(band_max_sources >= 0, "band_max_sources", "must be >= 0");
+    check.InRange("band_min_tonality", band_min_tonality, 0, 1);
   }
 };
 
