@@ -259,6 +259,54 @@ TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
   EXPECT_EQ(old_map.people().size(), 1u);
 }
 
+// The sound map can split one voice into two sources a few decimetres apart (bearings from two
+// stretches of the path; the open-area mission put frank twice, 0.40 m apart). Two heard people
+// within merge_radius_m are one caller; calls towards either stay evidence for that one person.
+TEST(PeopleMapTest, TwoSoundSourcesOfOneCallerAreOnePerson) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource first, second;
+  first.id = 1;
+  first.position_m = Eigen::Vector3d(1.0, 0.0, 0.5);
+  second.id = 2;
+  second.position_m = Eigen::Vector3d(1.0, 0.4, 0.5);
+  first.covariance = second.covariance = Eigen::Vector3d(0.002, 0.002, 0.01).asDiagonal();
+  first.converged = second.converged = true;
+  map.UpdateSoundSources(1'000'000, {first, second});
+  HeardDetection call;
+  call.azimuth_sigma_rad = 0.05;
+  call.keyword = "help";
+  call.confidence = 0.9;
+  auto call_towards = [&](const SoundSource& s, int64_t utime) {
+    call.azimuth_rad = std::atan2(s.position_m.y(), s.position_m.x());
+    return map.AddHeard(utime, {call}, Rigid3d());
+  };
+  EXPECT_EQ(call_towards(first, 2'000'000), 1);
+  EXPECT_EQ(call_towards(first, 6'000'000), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(call_towards(second, 10'000'000), 1);
+  EXPECT_EQ(call_towards(second, 14'000'000), 1);
+  map.UpdateSoundSources(15'000'000, {first, second});
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 1);
+  const int detections = map.people().begin()->second.num_detections;
+  EXPECT_EQ(call_towards(second, 18'000'000), 1);
+  map.UpdateSoundSources(19'000'000, {first, second});
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_GT(map.people().begin()->second.num_detections, detections);
+  // Further apart than merge_radius_m they are two callers.
+  PeopleMap apart(PeopleMapOptions{});
+  second.position_m = Eigen::Vector3d(1.0, 0.8, 0.5);
+  apart.UpdateSoundSources(1'000'000, {first, second});
+  for (int64_t t : {2'000'000, 6'000'000}) {
+    call.azimuth_rad = 0.0;
+    apart.AddHeard(t, {call}, Rigid3d());
+    call.azimuth_rad = std::atan2(0.8, 1.0);
+    apart.AddHeard(t + 100'000, {call}, Rigid3d());
+  }
+  apart.UpdateSoundSources(7'000'000, {first, second});
+  EXPECT_EQ(apart.people().size(), 2u);
+}
+
 // A planar sound map gives no height (z variance 0): fusing it with a seen person must stay
 // finite, and a source with NaN in it is ignored.
 TEST(PeopleMapTest, PlanarSoundSourceFusesFiniteAndGarbageSourcesAreIgnored) {
