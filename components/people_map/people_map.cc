@@ -257,6 +257,15 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     for (auto& [id, q] : people_) {
       if (q.sound_source_id == best->id) p = &q;
     }
+    if (!p && source_alias_.count(best->id)) {
+      auto alias = people_.find(source_alias_[best->id]);
+      if (alias != people_.end()) {
+        // A call towards a merged duplicate source is evidence for the caller it was merged into.
+        source_heard_utime_[best->id] = utime;
+        AddEvidence(&alias->second, utime, d.confidence);
+        continue;
+      }
+    }
     // A direction through two sound sources (one behind the other, as along a corridor) does not
     // say which of them called: it makes no one a person.
     if (!p && in_gate > 1) continue;
@@ -268,7 +277,9 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
                                  return common::UtimeToSeconds(utime - t) > options_.heard_person_window_s;
                                }),
                 calls.end());
-    calls.push_back(utime);
+    // Several keywords of one utterance are one call.
+    if (calls.empty() || std::abs(common::UtimeToSeconds(utime - calls.back())) >= options_.same_call_s)
+      calls.push_back(utime);
     // Not yet placed: one call may be a keyword false alarm, and an initialising source's
     // position is a guess; UpdateSoundSources places the person once both are settled.
     if (!p && RecentCalls(best->id, utime) < options_.min_heard_calls) continue;
@@ -320,6 +331,7 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
     for (auto& [id, q] : people_) {
       if (q.sound_source_id == s.id) linked = &q;
     }
+    if (!linked && source_alias_.count(s.id) && people_.count(source_alias_[s.id])) continue;  // merged duplicate
     if (linked) {
       // The sound map refines the position as the robot moves.
       linked->heard_position_m = s.position_m;
@@ -366,6 +378,21 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
           merged = true;
           break;
         }
+      }
+    }
+    // A heard-only person within merge_radius_m of another heard person is the same caller: the
+    // sound map split one voice into two sources (its bearings from two stretches of the path).
+    if (!merged && heard.has_heard && !heard.has_seen) {
+      for (auto& [id, other] : people_) {
+        if (id == heard.id || !other.has_heard || (!other.has_seen && id > heard.id)) continue;
+        if ((other.position_m - heard.heard_position_m).head<2>().norm() > options_.merge_radius_m) continue;
+        source_alias_[heard.sound_source_id] = id;
+        other.num_detections += heard.num_detections;
+        other.confidence = std::max(other.confidence, heard.confidence);
+        other.first_detected_utime = std::min(other.first_detected_utime, heard.first_detected_utime);
+        other.last_detected_utime = std::max(other.last_detected_utime, heard.last_detected_utime);
+        merged = true;
+        break;
       }
     }
     h = merged ? people_.erase(h) : std::next(h);

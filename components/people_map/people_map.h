@@ -44,6 +44,9 @@ struct PeopleMapOptions {
   double heard_person_window_s = 30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
   int min_heard_calls = 2;  // calls towards a source (within heard_person_window_s) to make it a person
+  // One utterance often fires several keywords at once ("here", "help", "assist" within 0.3 s): the
+  // hits towards one source closer than this to its previous call are that same call.
+  double same_call_s = 2.0;
   template <class V>
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
@@ -62,6 +65,9 @@ struct PeopleMapOptions {
     v("min_heard_calls", min_heard_calls,
       "a sound source becomes a heard person only after this many keyword calls towards it within "
       "heard_person_window_s: one keyword false alarm is not a person");
+    v("same_call_s", same_call_s,
+      "keyword hits towards a source within this long of its previous call are one call (one utterance "
+      "often fires several keywords); 0: every hit is a call");
   }
   void Validate(common::Validator& check) const {
     check.Positive("merge_radius_m", merge_radius_m);
@@ -75,6 +81,7 @@ struct PeopleMapOptions {
     check.InRange("min_report_confidence", min_report_confidence, 0.0, 1.0);
     check.Positive("heard_person_window_s", heard_person_window_s);
     check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
+    check.NonNegative("same_call_s", same_call_s);
   }
 };
 
@@ -162,6 +169,9 @@ class PeopleMap {
   std::map<int64_t, common::Utime> source_heard_utime_;  // source -> last heard calling
   std::map<int64_t, std::string> source_keyword_;
   std::map<int64_t, std::vector<common::Utime>> source_call_utimes_;  // not saved: a restart recounts
+  // A second sound source of one caller (the sound map split one voice in two): source -> the
+  // person it was merged into (not saved: a restart merges again).
+  std::map<int64_t, int64_t> source_alias_;
   int RecentCalls(int64_t source_id, common::Utime utime) const;
   int64_t next_id_ = 1;
 };

@@ -223,6 +223,90 @@ TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 5);
 }
 
+// A keyword false alarm on one utterance often fires several keywords within a fraction of a
+// second (the open-area mission: "assist", "rescue", "help", "here" 0.1-0.9 s apart towards a
+// generator's beam). Those hits are one call, not the two calls a heard person needs.
+TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource source;
+  source.id = 4;
+  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
+  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
+  source.converged = true;
+  map.UpdateSoundSources(1'000'000, {source});
+  HeardDetection call;
+  call.azimuth_rad = M_PI / 4;
+  call.confidence = 0.99;
+  for (const auto& [utime, keyword] : std::vector<std::pair<int64_t, std::string>>{
+           {2'000'000, "assist"}, {2'070'000, "rescue"}, {2'760'000, "help"}, {2'870'000, "here"}}) {
+    call.keyword = keyword;
+    EXPECT_EQ(map.AddHeard(utime, {call}, Rigid3d()), 1);
+  }
+  map.UpdateSoundSources(3'000'000, {source});
+  EXPECT_TRUE(map.people().empty());
+  // The same source calling again 5 s later: two calls, a person.
+  call.keyword = "help";
+  EXPECT_EQ(map.AddHeard(8'000'000, {call}, Rigid3d()), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 4);
+  // With same_call_s 0 every hit is a call (the previous behaviour): the burst alone is a person.
+  PeopleMapOptions every_hit;
+  every_hit.same_call_s = 0;
+  PeopleMap old_map(every_hit);
+  old_map.UpdateSoundSources(1'000'000, {source});
+  old_map.AddHeard(2'000'000, {call}, Rigid3d());
+  old_map.AddHeard(2'070'000, {call}, Rigid3d());
+  EXPECT_EQ(old_map.people().size(), 1u);
+}
+
+// The sound map can split one voice into two sources a few decimetres apart (bearings from two
+// stretches of the path; the open-area mission put frank twice, 0.40 m apart). Two heard people
+// within merge_radius_m are one caller; calls towards either stay evidence for that one person.
+TEST(PeopleMapTest, TwoSoundSourcesOfOneCallerAreOnePerson) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource first, second;
+  first.id = 1;
+  first.position_m = Eigen::Vector3d(1.0, 0.0, 0.5);
+  second.id = 2;
+  second.position_m = Eigen::Vector3d(1.0, 0.4, 0.5);
+  first.covariance = second.covariance = Eigen::Vector3d(0.002, 0.002, 0.01).asDiagonal();
+  first.converged = second.converged = true;
+  map.UpdateSoundSources(1'000'000, {first, second});
+  HeardDetection call;
+  call.azimuth_sigma_rad = 0.05;
+  call.keyword = "help";
+  call.confidence = 0.9;
+  auto call_towards = [&](const SoundSource& s, int64_t utime) {
+    call.azimuth_rad = std::atan2(s.position_m.y(), s.position_m.x());
+    return map.AddHeard(utime, {call}, Rigid3d());
+  };
+  EXPECT_EQ(call_towards(first, 2'000'000), 1);
+  EXPECT_EQ(call_towards(first, 6'000'000), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(call_towards(second, 10'000'000), 1);
+  EXPECT_EQ(call_towards(second, 14'000'000), 1);
+  map.UpdateSoundSources(15'000'000, {first, second});
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 1);
+  const int detections = map.people().begin()->second.num_detections;
+  EXPECT_EQ(call_towards(second, 18'000'000), 1);
+  map.UpdateSoundSources(19'000'000, {first, second});
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_GT(map.people().begin()->second.num_detections, detections);
+  // Further apart than merge_radius_m they are two callers.
+  PeopleMap apart(PeopleMapOptions{});
+  second.position_m = Eigen::Vector3d(1.0, 0.8, 0.5);
+  apart.UpdateSoundSources(1'000'000, {first, second});
+  for (int64_t t : {2'000'000, 6'000'000}) {
+    call.azimuth_rad = 0.0;
+    apart.AddHeard(t, {call}, Rigid3d());
+    call.azimuth_rad = std::atan2(0.8, 1.0);
+    apart.AddHeard(t + 100'000, {call}, Rigid3d());
+  }
+  apart.UpdateSoundSources(7'000'000, {first, second});
+  EXPECT_EQ(apart.people().size(), 2u);
+}
+
 // A planar sound map gives no height (z variance 0): fusing it with a seen person must stay
 // finite, and a source with NaN in it is ignored.
 TEST(PeopleMapTest, PlanarSoundSourceFusesFiniteAndGarbageSourcesAreIgnored) {

@@ -59,20 +59,35 @@ Grid MakeGrid(const SearchOptions& o) {
 
 }  // namespace
 
+std::vector<Eigen::Vector3d> SearchGridUnits(const ArrayGeometry& geometry, const SearchOptions& o) {
+  const Grid grid = MakeGrid(o);
+  std::vector<Eigen::Vector3d> units;
+  units.reserve(grid.az.size() * grid.el.size());
+  for (double el : grid.el)
+    for (double az : grid.az) units.push_back(geometry.Unit(o.kind, {az, el}));
+  return units;
+}
+
 std::vector<DoaEstimate> FindPeaks(const ArrayGeometry& geometry, const SearchOptions& o,
                                    const SpatialSpectrum& spectrum, double* grid_mean) {
+  const std::vector<Eigen::Vector3d> units = SearchGridUnits(geometry, o);
+  std::vector<double> values(units.size());
+  for (size_t i = 0; i < units.size(); ++i) values[i] = spectrum(units[i]);
+  return FindPeaksOnGrid(geometry, o, values, spectrum, grid_mean);
+}
+
+std::vector<DoaEstimate> FindPeaksOnGrid(const ArrayGeometry& geometry, const SearchOptions& o,
+                                         const std::vector<double>& values, const SpatialSpectrum& spectrum,
+                                         double* grid_mean) {
   const Grid grid = MakeGrid(o);
   const int na = static_cast<int>(grid.az.size()), ne = static_cast<int>(grid.el.size());
-  std::vector<double> values(static_cast<size_t>(na) * ne);
+  if (values.size() != static_cast<size_t>(na) * ne) throw std::invalid_argument("grid values do not fit the search grid");
   double vmin = INFINITY, vmax = -INFINITY, sum = 0;
-  for (int e = 0; e < ne; ++e)
-    for (int a = 0; a < na; ++a) {
-      const double v = spectrum(geometry.Unit(o.kind, {grid.az[a], grid.el[e]}));
-      values[e * na + a] = v;
-      vmin = std::min(vmin, v);
-      vmax = std::max(vmax, v);
-      sum += v;
-    }
+  for (double v : values) {
+    vmin = std::min(vmin, v);
+    vmax = std::max(vmax, v);
+    sum += v;
+  }
   if (grid_mean) *grid_mean = sum / values.size();
   if (!std::isfinite(vmax)) return {};
   struct Candidate {
@@ -195,6 +210,62 @@ SrpPhat::SrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats)
 double SrpPhat::operator()(const Eigen::Vector3d& u) const {
   form_.Evaluate(u, stats_.phat, true, &per_bin_);
   return std::accumulate(per_bin_.begin(), per_bin_.end(), 0.0) * scale_;
+}
+
+BandSrpPhat::BandSrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats, double band_hz)
+    : form_(geometry, stats), stats_(stats) {
+  const int m = geometry.num_mics();
+  const int nb = stats.num_bins();
+  broadband_scale_ = 1.0 / (std::max(1, stats.num_frames) * std::max(1, nb) * m * (m - 1));
+  const double bin_hz = static_cast<double>(stats.sample_rate_hz) / stats.fft_size;
+  const int per_band = std::max(1, static_cast<int>(std::round(band_hz / bin_hz)));
+  for (int k = 0; k < nb; k += per_band) band_first_.push_back(k);
+  // A last band shorter than half a band joins the one before it.
+  if (band_first_.size() > 1 && nb - band_first_.back() < per_band / 2) band_first_.pop_back();
+  band_first_.push_back(nb);
+  bin_weight_.assign(nb, 0.0);
+  tonality_.assign(band_first_.size() - 1, 0.0);
+  for (int b = 0; b + 1 < static_cast<int>(band_first_.size()); ++b) {
+    double total_power = 0;
+    std::vector<double> powers;
+    for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) {
+      powers.push_back(std::max(0.0, stats.raw[k].trace().real()));
+      total_power += powers.back();
+    }
+    if (total_power <= 0) continue;
+    const size_t top = std::min<size_t>(3, powers.size());
+    std::partial_sort(powers.begin(), powers.begin() + top, powers.end(), std::greater<>());
+    tonality_[b] = std::accumulate(powers.begin(), powers.begin() + top, 0.0) / total_power;
+    for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) {
+      const double frames = stats.phat[k].trace().real() / m;  // n_k: each frame adds |y_i|^2 = 1 per mic
+      if (frames <= 0) continue;
+      bin_weight_[k] = std::max(0.0, stats.raw[k].trace().real()) / total_power / (frames * m * (m - 1));
+    }
+  }
+}
+
+double BandSrpPhat::band_centre_hz(int b) const {
+  const double bin_hz = static_cast<double>(stats_.sample_rate_hz) / stats_.fft_size;
+  return (stats_.bin_lo + 0.5 * (band_first_[b] + band_first_[b + 1] - 1)) * bin_hz;
+}
+
+double BandSrpPhat::Evaluate(const Eigen::Vector3d& u, std::vector<double>* bands) const {
+  form_.Evaluate(u, stats_.phat, true, &per_bin_);
+  double total = 0;
+  for (double v : per_bin_) total += v;
+  if (bands) {
+    bands->assign(num_bands(), 0.0);
+    for (int b = 0; b < num_bands(); ++b)
+      for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) (*bands)[b] += bin_weight_[k] * per_bin_[k];
+  }
+  return total * broadband_scale_;
+}
+
+double BandSrpPhat::Band(const Eigen::Vector3d& u, int b) const {
+  form_.Evaluate(u, stats_.phat, true, &per_bin_);
+  double value = 0;
+  for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) value += bin_weight_[k] * per_bin_[k];
+  return value;
 }
 
 Music::Music(const ArrayGeometry& geometry, const BlockStatistics& stats, int num_sources, bool generalized)

@@ -52,6 +52,8 @@ struct DoaEstimate {
   Direction direction;
   double power = 0;       // spectrum value at the peak (method units)
   double confidence = 0;  // 0..1
+  int band = -1;          // BandSrpPhat band that found it; -1: the broadband spectrum
+  double band_hz = 0;     // that band's centre frequency
 };
 
 struct SearchOptions {
@@ -75,6 +77,12 @@ using SpatialSpectrum = std::function<double(const Eigen::Vector3d& u)>;
 // gets the spectrum's mean over the coarse grid.
 std::vector<DoaEstimate> FindPeaks(const ArrayGeometry& geometry, const SearchOptions& options,
                                    const SpatialSpectrum& spectrum, double* grid_mean = nullptr);
+// The coarse grid's directions (unit vectors), in the order FindPeaksOnGrid expects values.
+std::vector<Eigen::Vector3d> SearchGridUnits(const ArrayGeometry& geometry, const SearchOptions& options);
+// FindPeaks on spectrum values already computed at SearchGridUnits; `spectrum` refines.
+std::vector<DoaEstimate> FindPeaksOnGrid(const ArrayGeometry& geometry, const SearchOptions& options,
+                                         const std::vector<double>& values, const SpatialSpectrum& spectrum,
+                                         double* grid_mean = nullptr);
 
 // Per-bin quadratic forms a_k(u)^H Q_k a_k(u) (real parts) for steering vectors of u.
 class SteeredQuadraticForm {
@@ -97,6 +105,38 @@ class SrpPhat {
   SteeredQuadraticForm form_;
   const BlockStatistics& stats_;
   double scale_;
+  mutable std::vector<double> per_bin_;
+};
+
+// Narrowband sources (a ring tone, an alarm's harmonics) fill only a few bins. In the broadband
+// SRP-PHAT sum every bin votes with the same weight, so broadband sources (voices, engines)
+// win every direction vote while the tonal source is only heard in its own bins. Per band b
+// of the analysed range (width band_hz), with the bins weighted by their power, the tonal
+// bins dominate their band:
+//   c_k(u) = sum_{i != j} Re(Rphat_ij(k) e^{j w_k (tau_i(u) - tau_j(u))}) / (n_k M (M - 1)),
+//            the mean PHAT coherence of bin k over the n_k frames that hold it (in [-1, 1]),
+//   P_b(u) = sum_{k in b} w_k c_k(u),   w_k = tr R(k) / sum_{k' in b} tr R(k').
+// The broadband spectrum (SrpPhat's value) is sum_k n_k c_k / (N K) over all K bins of the
+// N frames; Evaluate gives both from one steering pass.
+class BandSrpPhat {
+ public:
+  BandSrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats, double band_hz);
+  int num_bands() const { return static_cast<int>(band_first_.size()) - 1; }
+  double band_centre_hz(int b) const;
+  // Returns the broadband SRP-PHAT value (as SrpPhat); bands (optional) gets P_b(u) per band.
+  double Evaluate(const Eigen::Vector3d& u, std::vector<double>* bands) const;
+  double Band(const Eigen::Vector3d& u, int b) const;
+  // Fraction of band b's power in its 3 strongest bins: a tone or two harmonics ~1, noise and
+  // voiced speech (many harmonics per band) lower.
+  double band_tonality(int b) const { return tonality_[b]; }
+
+ private:
+  SteeredQuadraticForm form_;
+  const BlockStatistics& stats_;
+  double broadband_scale_;
+  std::vector<int> band_first_;        // band b holds bins [band_first_[b], band_first_[b + 1]) (index - bin_lo)
+  std::vector<double> bin_weight_;     // w_k / (n_k M (M - 1)): per-bin value -> weighted coherence
+  std::vector<double> tonality_;
   mutable std::vector<double> per_bin_;
 };
 

@@ -187,6 +187,8 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, std
       d.covariance = sensor_model_->Apply(kind_, &d.direction);
       d.power = e.power;
       d.confidence = e.confidence;
+      d.band = e.band;
+      d.band_hz = e.band_hz;
       o.directions.push_back(d);
       TrackMeasurement tm;
       tm.direction = d.direction;
@@ -205,6 +207,7 @@ std::vector<DoaEstimate> Localiser::Estimate(const BlockStatistics& stats) const
   const std::string& method = options_.method;
   if (method == "gcc_phat") return GccPhatDirection(geometry_, stats, kind_);
   if (method == "esprit") return Esprit(geometry_, stats, options_.music_num_sources, options_.min_separation_deg);
+  if (method == "srp_phat" && options_.band_hz > 0) return EstimateWithBands(stats);
   if (method == "srp_phat") {
     SrpPhat srp(geometry_, stats);
     auto peaks = FindPeaks(geometry_, search_, std::ref(srp));
@@ -216,6 +219,57 @@ std::vector<DoaEstimate> Localiser::Estimate(const BlockStatistics& stats) const
   auto peaks = FindPeaks(geometry_, search_, std::ref(music), &mean);
   for (auto& p : peaks) p.confidence = p.power > 0 ? std::clamp(1.0 - mean / p.power, 0.0, 1.0) : 0.0;
   return peaks;
+}
+
+std::vector<DoaEstimate> Localiser::EstimateWithBands(const BlockStatistics& stats) const {
+  // One steering pass over the coarse grid gives the broadband spectrum and every band's.
+  const BandSrpPhat bands(geometry_, stats, options_.band_hz);
+  const std::vector<Eigen::Vector3d> units = SearchGridUnits(geometry_, search_);
+  const int nb = bands.num_bands();
+  std::vector<double> total(units.size()), per_band;
+  std::vector<std::vector<double>> band_values(nb, std::vector<double>(units.size()));
+  for (size_t i = 0; i < units.size(); ++i) {
+    total[i] = bands.Evaluate(units[i], &per_band);
+    for (int b = 0; b < nb; ++b) band_values[b][i] = per_band[b];
+  }
+  const SrpPhat srp(geometry_, stats);
+  std::vector<DoaEstimate> out = FindPeaksOnGrid(geometry_, search_, total, std::cref(srp));
+  for (auto& p : out) p.confidence = std::clamp(p.power, 0.0, 1.0);
+
+  // Bands by their best coarse value; each adds its refined peak when it is coherent enough and
+  // far from every direction already reported.
+  std::vector<std::pair<double, int>> order;
+  std::vector<size_t> best_index(nb, 0);
+  for (int b = 0; b < nb; ++b) {
+    if (bands.band_tonality(b) < options_.band_min_tonality) continue;
+    const auto& v = band_values[b];
+    best_index[b] = static_cast<size_t>(std::max_element(v.begin(), v.end()) - v.begin());
+    if (v[best_index[b]] >= options_.band_min_coherence) order.emplace_back(v[best_index[b]], b);
+  }
+  std::sort(order.begin(), order.end(), std::greater<>());
+  const double min_sep = DegToRad(options_.min_separation_deg);
+  SearchOptions one = search_;
+  one.max_sources = 1;
+  int added = 0;
+  auto far_from_all = [&](const Direction& d) {
+    for (const auto& e : out)
+      if (AngularDistanceRad(geometry_, kind_, e.direction, d) < min_sep) return false;
+    return true;
+  };
+  for (const auto& [value, b] : order) {
+    if (added >= options_.band_max_sources) break;
+    if (!far_from_all(geometry_.FromUnit(kind_, units[best_index[b]]))) continue;
+    auto peak = FindPeaksOnGrid(geometry_, one, band_values[b],
+                                [&bands, b = b](const Eigen::Vector3d& u) { return bands.Band(u, b); });
+    if (peak.empty() || !far_from_all(peak.front().direction)) continue;
+    DoaEstimate e = peak.front();
+    e.confidence = std::clamp(e.power, 0.0, 1.0);
+    e.band = b;
+    e.band_hz = bands.band_centre_hz(b);
+    out.push_back(e);
+    ++added;
+  }
+  return out;
 }
 
 }  // namespace sound

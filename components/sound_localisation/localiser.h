@@ -50,6 +50,14 @@ struct LocaliserOptions {
   // separate early reflections.
   double onset_rise_db = 0.0;
   double onset_memory_s = 0.01;
+  // Narrowband sources (srp_phat): besides the broadband peaks, each band of band_hz reports
+  // its own power-weighted SRP-PHAT peak (BandSrpPhat) when its coherence reaches
+  // band_min_coherence and it is min_separation_deg from every direction already reported;
+  // at most band_max_sources such peaks per block. band_hz 0: broadband only.
+  double band_hz = 0.0;
+  double band_min_coherence = 0.6;
+  int band_max_sources = 2;
+  double band_min_tonality = 0.0;  // a band peak needs this share of its band's power in 3 bins
   TrackerOptions tracker;
 
   template <class V>
@@ -82,6 +90,14 @@ struct LocaliserOptions {
     v("onset_rise_db", onset_rise_db,
       "precedence effect: use a bin only when its power rose this many dB above its recent level (0: all)");
     v("onset_memory_s", onset_memory_s, "time constant of that recent level");
+    v("band_hz", band_hz,
+      "srp_phat: also report each band's (this wide) power-weighted peak, so a narrowband source that "
+      "dominates its own band is heard beside broadband ones (0: broadband only)");
+    v("band_min_coherence", band_min_coherence, "a band's peak needs this weighted PHAT coherence (0..1)");
+    v("band_max_sources", band_max_sources, "most band peaks added per block");
+    v("band_min_tonality", band_min_tonality,
+      "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise and "
+      "voiced speech lower); 0: any band");
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {
@@ -108,6 +124,10 @@ struct LocaliserOptions {
     check.InRange("direct_path_smoothing", direct_path_smoothing, 0, 0.99);
     check.NonNegative("onset_rise_db", onset_rise_db);
     check.Positive("onset_memory_s", onset_memory_s);
+    check.NonNegative("band_hz", band_hz);
+    check.InRange("band_min_coherence", band_min_coherence, 0, 1);
+    check.That(band_max_sources >= 0, "band_max_sources", "must be >= 0");
+    check.InRange("band_min_tonality", band_min_tonality, 0, 1);
   }
 };
 
@@ -115,6 +135,8 @@ struct LocalisedDirection {
   Direction direction;           // after the sensor model
   Eigen::Matrix2d covariance;    // rad^2
   double power = 0, confidence = 0;
+  int band = -1;                 // band peak (BandSrpPhat band index); -1 broadband
+  double band_hz = 0;            // that band's centre
 };
 
 struct LocaliserOutput {
@@ -145,6 +167,8 @@ class Localiser {
 
   // One estimate from given statistics (offline use, tests).
   std::vector<DoaEstimate> Estimate(const BlockStatistics& stats) const;
+  // srp_phat with band peaks (band_hz > 0): broadband peaks first, then band peaks.
+  std::vector<DoaEstimate> EstimateWithBands(const BlockStatistics& stats) const;
   // Empty statistics shaped for this localiser's band.
   BlockStatistics MakeStatistics() const;
   // Adds one frame of spectra (num_bins x mics) to `stats` (as active).

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -51,7 +52,7 @@ int main(int argc, char** argv) {
         "(as sarmap-sound-map would, in message time order) and compares the result with SIM_TRUTH.");
     sarmap::common::NodeArgs node_args;
     std::string log_path, truth_channel = "SIM_TRUTH", doa_trace;
-    bool no_anchors = false, doa_check = false, truth_poses_in = false;
+    bool no_anchors = false, doa_check = false, truth_poses_in = false, heard_check = false;
     double report_every_s = 0;
     std::string relocalise_config;
     std::vector<std::string> relocalise_overrides;
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
     std::string trajectory_path;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
+    parser.AddSwitch("--heard-check", &heard_check,
+                     "print every heard keyword direction (PEOPLE_AUDIO) against the true bearings, and the source it marks");
     parser.AddSwitch("--doa-check", &doa_check, "compare every DOA with the true bearings of the SIM_TRUTH sources");
     parser.AddSwitch("--truth-poses", &truth_poses_in,
                      "diagnosis: SIM_TRUTH robot poses instead of POSE and SLAM_ANCHORS (map = world frame)");
@@ -122,6 +125,9 @@ int main(int argc, char** argv) {
           sarmap::sound::SensorModel::FromArray(array, array_path.substr(0, array_path.find_last_of('/') + 1)));
     }
     int64_t expected_index = -1;
+    // --heard-check: each heard keyword direction against the truth, and the source it marks.
+    std::function<void(int64_t, const OnlineSoundMap::Doa&, const std::string&, int64_t)> on_heard_check;
+    double localiser_cpu_s = 0;  // --relocalise: the localiser's own CPU time
     std::vector<sarmap::sound::LocaliserOutput> outs;
     const int64_t doa_shift_us = static_cast<int64_t>(std::llround(doa_shift_s * 1e6));
     auto on_doa = [&](const sarmap::doa_t& m) {
@@ -184,7 +190,9 @@ int main(int argc, char** argv) {
         expected_index = a.first_sample_index + a.num_samples;
         const int64_t before = localiser->samples_seen();
         outs.clear();
+        const std::clock_t cpu0 = std::clock();
         localiser->Push(a.samples.data(), a.num_samples, a.num_channels, &outs);
+        localiser_cpu_s += static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
         for (const auto& o : outs) {  // as sarmap-sound-localisation publishes them
           sarmap::doa_t d;
           d.header.utime = a.header.utime + static_cast<int64_t>(std::llround(
@@ -245,8 +253,16 @@ int main(int argc, char** argv) {
         sarmap::people_detections_t m;
         if (!Decode(*e, &m)) continue;
         const auto heard = sarmap::sound_map::HeardDirections(m);
-        inputs.emplace(m.header.utime, [&map, heard] {
-          for (const auto& d : heard) map.OnHeardDirection(d);
+        std::vector<std::string> keywords;  // HeardDirections' detections, in order
+        for (const auto& d : m.detections)
+          if (d.cue == sarmap::person_detection_t::CUE_HEARD && std::isfinite(d.azimuth_rad))
+            keywords.push_back(d.keyword + "' conf " + std::to_string(d.confidence).substr(0, 4) + " '");
+        const int64_t t = m.header.utime;
+        inputs.emplace(t, [&map, &on_heard_check, t, heard, keywords] {
+          for (size_t i = 0; i < heard.size(); ++i) {
+            const int64_t id = map.OnHeardDirection(heard[i]);
+            if (on_heard_check) on_heard_check(t, heard[i], i < keywords.size() ? keywords[i] : "", id);
+          }
         });
       } else if (e->channel == options.sound_map_channel) {
         sarmap::sound_map_t m;
@@ -343,6 +359,32 @@ int main(int argc, char** argv) {
       const Pose2 w = sarmap::sound_map::Compose(world_from_map, Pose2(p.x(), p.y(), 0));
       return Eigen::Vector2d(w.x, w.y);
     };
+    if (heard_check && have_truth) {
+      const auto mount = sarmap::sound_map::MountFromRobot(robot);
+      on_heard_check = [&, mount](int64_t t, const OnlineSoundMap::Doa& d, const std::string& keyword, int64_t id) {
+        const Pose2 base = truth_at(t);
+        const Pose2 arr = sarmap::sound_map::Compose(base, Pose2(mount.x_m, mount.y_m, mount.yaw_rad));
+        std::string nearest;
+        double best = 1e9;
+        for (const auto& ts : truth.sources) {
+          const double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
+          const double e = sarmap::sound_map::WrapAngleD(d.azimuth_rad - b) * 180 / M_PI;
+          if (std::abs(e) < std::abs(best)) {
+            best = e;
+            nearest = ts.name;
+          }
+        }
+        printf("  heard t=%6.2f track %3ld '%s' az %7.1f: nearest true %s (%+.1f deg) -> source %ld", (t - first_utime) * 1e-6,
+               static_cast<long>(d.track_id), keyword.c_str(), d.azimuth_rad * 180 / M_PI, nearest.c_str(), best,
+               static_cast<long>(id));
+        for (const auto& s : map.Sources(t))
+          if (s.id == id) {
+            const Eigen::Vector2d w = to_world(s.position_m);
+            printf(" at (%.2f, %.2f)", w.x(), w.y());
+          }
+        printf("\n");
+      };
+    }
     if (doa_check && have_truth) {
       // Each DOA's azimuth against the true bearing (truth robot pose, array mount) of the
       // nearest true source: how good are the localiser's bearings?
@@ -445,6 +487,10 @@ int main(int argc, char** argv) {
            static_cast<long>(doa_sources));
     for (const auto& k : kinds) printf(" kind %d: %ld", k.first, static_cast<long>(k.second));
     printf(" ), largest DOA track id %ld%s\n", static_cast<long>(max_track), no_anchors ? ", SLAM_ANCHORS ignored" : "");
+    if (localiser && localiser->samples_seen() > 0)
+      printf("relocalised: the localiser took %.2f s of CPU for %.1f s of audio = %.2f%% of a core\n", localiser_cpu_s,
+             static_cast<double>(localiser->samples_seen()) / geometry.sample_rate_hz,
+             100 * localiser_cpu_s * geometry.sample_rate_hz / static_cast<double>(localiser->samples_seen()));
     report(last, true);
     if (live_msgs > 0) {
       int converged = 0;
