@@ -28,6 +28,14 @@ struct KwsEvalOptions {
   uint32_t seed = 1;
   std::string data_dir;             // shared data (real negative speech)
   std::string target = "help";
+  // Fit the keyword verifier (keyword_verifier.h) on the TUNING half's hits with these features
+  // (empty: use keywords.verifier as given): calls = "help" hits inside the call window of tuning
+  // scenes whose call is at most fit_max_call_s long (at the last call join); other speech = every
+  // "help" hit of the tuning half of the negative stream (any length: far more examples than the
+  // few that pass the call-shape rule).
+  std::vector<std::string> fit_verifier_features;
+  double fit_l2 = 0.01;
+  double fit_max_call_s = 1.8;
 };
 
 struct KwsEvalResult {
@@ -48,12 +56,30 @@ struct KwsEvalResult {
   int tune_calls = 0, tune_hits = 0, tune_false_alarms = 0;
   int held_calls = 0, held_hits = 0, held_false_alarms = 0;
   double tune_recall = 0, tune_fa_per_10_min = 0, held_recall = 0, held_fa_per_10_min = 0;
+  // Keyword verifier (-1: none). False alarms split by the kind of negative recording (real
+  // recordings vs espeak-ng sentences), and the verifier's pass rate alone (no call-shape rule)
+  // on every "help" hit of each kind: a verifier that only learnt "synthetic voice" would pass
+  // the synthetic negatives like the calls.
+  double verifier_min_probability = -1;
+  int tune_fa_real = 0, tune_fa_synthetic = 0, held_fa_real = 0, held_fa_synthetic = 0;
+  double verifier_pass_calls = 0, verifier_pass_real = 0, verifier_pass_synthetic = 0;
+  VerifierOptions verifier;  // the verifier used (fitted when fit_verifier_features was given)
 };
 
 struct KwsEvalData {
   std::vector<std::vector<float>> positives;  // 16 kHz scenes, call at call_start_s
   std::vector<double> call_start_s, call_end_s;
   std::vector<float> negatives;               // one long 16 kHz stream
+  // What the negative stream is made of: each recording's span (samples, without the noise gap
+  // before it), its name, and whether it is an espeak-ng sentence (synthetic) or a real recording.
+  struct NegativeSource {
+    int64_t start_sample = 0, end_sample = 0;
+    std::string name;
+    bool synthetic = false;
+  };
+  std::vector<NegativeSource> negative_sources;
+  // Label of the negative source at stream time t (s): "real:<file>" / "espeak:<n>", "gap" between.
+  std::string NegativeSourceAt(double t_s, bool* synthetic = nullptr) const;
   // The parts of each positive scene (summed in `positives`): the call (placed), other talker, noise.
   std::vector<std::vector<float>> positive_call, positive_babble, positive_noise;
 };
@@ -75,7 +101,8 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
                                             const VadOptions& vad, const KwsEvalOptions& options,
                                             const std::vector<double>& min_confidences,
                                             const std::vector<double>& max_utterances_s = {0.0},
-                                            const std::vector<double>& call_joins_s = {0.0});
+                                            const std::vector<double>& call_joins_s = {0.0},
+                                            const std::vector<double>& verifier_min_probabilities = {});
 
 }  // namespace speech
 }  // namespace sarmap
