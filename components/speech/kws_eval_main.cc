@@ -58,12 +58,14 @@ int main(int argc, char** argv) {
     p.AddFlag("--fit-verifier", &fit_features,
               "comma-separated hit features: fit the keyword verifier on the tuning half and apply it "
               "(keyword_verifier.h; e.g. tilt_db)");
+    p.AddFlag("--confusers", &o.num_confusers,
+              "also: this many short espeak-ng phrases without 'help' in the calls' noise (synthetic false alarms)");
     p.AddFlag("--fit-l2", &o.fit_l2, "with --fit-verifier: L2 penalty on the standardised weights");
     p.AddFlag("--verifier-probabilities", &verifier_probs,
               "comma-separated verifier min_probability values, swept as a post-filter");
     std::string config_path;
     p.AddFlag("--config", &config_path,
-              "speech YAML: take speech.keywords.verifier from it (e.g. config/speech.yaml)");
+              "speech YAML: evaluate its speech.keywords.verifier (even when off there), e.g. config/speech.yaml");
     bool no_post_filter = false;
     p.AddSwitch("--no-post-filter", &no_post_filter, "with --array-recall: beam without the spectral-gain post-filter");
     if (!p.Parse(argc, argv)) return 0;
@@ -84,6 +86,7 @@ int main(int argc, char** argv) {
     if (!config_path.empty()) {
       const auto so = common::LoadOptions<speech::SpeechOptions>(common::ResolveConfigPath(config_path), {}, "speech");
       config_verifier = so.keywords.verifier;
+      config_verifier.enabled = true;  // evaluated even when the node has it off
     }
     std::vector<double> vprobs;
     if (!verifier_probs.empty())
@@ -155,13 +158,13 @@ int main(int argc, char** argv) {
                     list(v.means).c_str(), list(v.scales).c_str(), list(v.weights).c_str(), v.bias);
         std::printf("| call join s | max call s | verifier p >= | tune recall | tune FA/10 min (real+synthetic) | "
                     "held-out recall | held-out FA/10 min (real+synthetic) | verifier passes: calls / real / synthetic "
-                    "negative hits |\n|---|---|---|---|---|---|---|---|\n");
+                    "negative hits | synthetic confusers with a 'help' |\n|---|---|---|---|---|---|---|---|---|\n");
         for (const auto& r : rs)
-          std::printf("| %.2f | %.1f | %.3f | %.3f | %.1f (%d+%d) | %.3f (%d/%d) | %.1f (%d+%d) | %.2f / %.2f / %.2f |\n",
+          std::printf("| %.2f | %.1f | %.3f | %.3f | %.1f (%d+%d) | %.3f (%d/%d) | %.1f (%d+%d) | %.2f / %.2f / %.2f | %d/%d |\n",
                       r.call_join_s, r.max_utterance_s, r.verifier_min_probability, r.tune_recall,
                       r.tune_fa_per_10_min, r.tune_fa_real, r.tune_fa_synthetic, r.held_recall, r.held_hits,
                       r.held_calls, r.held_fa_per_10_min, r.held_fa_real, r.held_fa_synthetic, r.verifier_pass_calls,
-                      r.verifier_pass_real, r.verifier_pass_synthetic);
+                      r.verifier_pass_real, r.verifier_pass_synthetic, r.confuser_false_alarms, r.confuser_scenes);
         std::fflush(stdout);
         continue;
       }

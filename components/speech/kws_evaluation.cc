@@ -154,6 +154,27 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
     data.call_start_s.push_back(1.0);
     data.call_end_s.push_back(1.0 + call.size() / 16000.0);
   }
+  // Short synthetic confusers (own random stream: the main set is unchanged by them).
+  {
+    const std::vector<std::string> phrases = {"hello", "hold on", "well done", "yes", "thank you", "go away",
+                                              "over there", "hello there", "I am fine", "come in", "held",
+                                              "yelp", "self", "hell", "health", "stop"};
+    std::mt19937 crng(o.seed + 1000);
+    std::uniform_int_distribution<int> cspeed(130, 180), cpitch(35, 65);
+    for (int i = 0; i < o.num_confusers; ++i) {
+      std::vector<float> c = RenderEspeak(phrases[i % phrases.size()],
+                                          kVoices[(i / phrases.size() + i) % kVoices.size()], cspeed(crng), cpitch(crng));
+      if (c.empty()) break;
+      const size_t start = 16000;
+      std::vector<float> scene(std::max<size_t>(56000, start + c.size() + 8000), 0.0f);
+      std::vector<float> noise = PinkishNoise(scene.size(), &crng);
+      Scale(&c, 0.1 / ActiveRms(c));
+      Scale(&noise, 0.1 * std::pow(10.0, -o.call_snr_db / 20) / std::max(1e-9, Rms(noise)));
+      for (size_t k = 0; k < scene.size(); ++k) scene[k] = noise[k];
+      for (size_t k = 0; k < c.size(); ++k) scene[start + k] += c[k];
+      data.confusers.push_back(std::move(scene));
+    }
+  }
   // Negatives: other speech in noise until negative_minutes.
   const size_t total = static_cast<size_t>(o.negative_minutes * 60 * 16000);
   std::vector<std::vector<float>> pool = real;
@@ -295,15 +316,18 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
           bool synthetic = true;
           std::string source = "call";
           bool in_call = false;
+          const bool confuser = !negative && scene >= 1000;
           if (negative) {
             source = data.NegativeSourceAt(t, &synthetic);
+          } else if (confuser) {
+            source = "confuser";
           } else {
             in_call = t > data.call_start_s[scene] - 0.5 && t < data.call_end_s[scene] + 0.5;
           }
           const bool held = negative ? u.samples_start / 16000.0 >= half_stream_s : (scene / 8) % 2 == 1;
           std::fprintf(features_csv,
                        "%s,%s,%d,%s,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.3f,%.1f,%.2f,%.2f,%.3f,%s\n",
-                       negative ? "neg" : "pos", held ? "held" : "tune", negative ? -1 : scene, source.c_str(),
+                       negative ? "neg" : confuser ? "conf" : "pos", held ? "held" : "tune", negative ? -1 : scene, source.c_str(),
                        synthetic ? 1 : 0, in_call ? 1 : 0, h.keyword.c_str(), t, call_s.empty() ? 0.0 : call_s.back()[k],
                        f.log_ratio, f.duration_s, f.ratio_per_s, f.utterance_s, f.lead_s, f.trail_s, f.snr_db,
                        f.hit_level_db, f.voiced_fraction, f.pitch_hz, f.pitch_range_st, f.tilt_db,
@@ -326,6 +350,11 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       for (const auto& h : pos[i]) std::fprintf(stderr, " %s@%.2f(%.2f)", h.keyword.c_str(), h.t, h.confidence);
       std::fprintf(stderr, "\n");
     }
+  }
+  std::vector<std::vector<Hit>> conf(data.confusers.size());
+  for (size_t i = 0; i < data.confusers.size(); ++i) {
+    scene = 1000 + static_cast<int>(i);
+    run(data.confusers[i], &conf[i]);
   }
   std::vector<Hit> neg;
   run(data.negatives, &neg);
@@ -408,6 +437,12 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       ++r.calls;
     }
     r.recall = r.calls ? static_cast<double>(r.hits) / r.calls : 0;
+    for (const auto& c : conf) {
+      bool any = false;
+      for (const auto& h : c) any |= passes(h) && is_target(h);
+      r.confuser_false_alarms += any;
+      ++r.confuser_scenes;
+    }
     for (size_t i = 0; i < pos.size(); ++i) {
       bool found = false;
       for (const auto& h : pos[i])

@@ -34,6 +34,11 @@ struct KwsEvalOptions {
   // "help" hit of the tuning half of the negative stream (any length: far more examples than the
   // few that pass the call-shape rule).
   std::vector<std::string> fit_verifier_features;
+  // Short synthetic confusers: this many scenes built like the calls (same espeak-ng voices,
+  // rates, pitches, noise and SNR) but saying a short phrase WITHOUT "help" ("hello", "hold on",
+  // "well done"...). "help" detections there are false alarms on synthetic speech of a call's
+  // shape: the test of a verifier that might only have learnt "synthetic voice".
+  int num_confusers = 0;
   double fit_l2 = 0.01;
   double fit_max_call_s = 1.8;
 };
@@ -63,12 +68,14 @@ struct KwsEvalResult {
   double verifier_min_probability = -1;
   int tune_fa_real = 0, tune_fa_synthetic = 0, held_fa_real = 0, held_fa_synthetic = 0;
   double verifier_pass_calls = 0, verifier_pass_real = 0, verifier_pass_synthetic = 0;
+  int confuser_scenes = 0, confuser_false_alarms = 0;  // scenes with a passing "help" / scenes
   VerifierOptions verifier;  // the verifier used (fitted when fit_verifier_features was given)
 };
 
 struct KwsEvalData {
   std::vector<std::vector<float>> positives;  // 16 kHz scenes, call at call_start_s
   std::vector<double> call_start_s, call_end_s;
+  std::vector<std::vector<float>> confusers;  // short synthetic non-calls (num_confusers)
   std::vector<float> negatives;               // one long 16 kHz stream
   // What the negative stream is made of: each recording's span (samples, without the noise gap
   // before it), its name, and whether it is an espeak-ng sentence (synthetic) or a real recording.
