@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
               "(keyword_verifier.h; e.g. tilt_db)");
     p.AddFlag("--confusers", &o.num_confusers,
               "also: this many short espeak-ng phrases without 'help' in the calls' noise (synthetic false alarms)");
+    p.AddFlag("--tts", &o.tts, "synthesiser of the calls, confusers and synthetic negatives: espeak or flite");
     p.AddFlag("--fit-l2", &o.fit_l2, "with --fit-verifier: L2 penalty on the standardised weights");
     p.AddFlag("--verifier-probabilities", &verifier_probs,
               "comma-separated verifier min_probability values, swept as a post-filter");
@@ -69,7 +70,10 @@ int main(int argc, char** argv) {
     bool no_post_filter = false;
     p.AddSwitch("--no-post-filter", &no_post_filter, "with --array-recall: beam without the spectral-gain post-filter");
     if (!p.Parse(argc, argv)) return 0;
-    if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
+    if (o.tts != "espeak" && o.tts != "flite") throw common::ArgError("--tts: espeak or flite");
+    if (o.tts == "espeak" && !speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
+    if (o.tts == "flite" && !speech::FliteAvailable())
+      throw common::ArgError("flite is needed for --tts flite (apt-get install flite)");
     auto split = [](const std::string& s) {
       std::vector<std::string> out;
       size_t a = 0;
@@ -95,8 +99,8 @@ int main(int argc, char** argv) {
     std::printf("data: %zu calls, %.1f min of other speech and noise\n", data.positives.size(),
                 data.negatives.size() / 16000.0 / 60);
     std::printf("| threshold | call join s | max call s | min confidence | recall (help) | hits/calls | help false alarms | per 10 min | other-keyword alarms "
-                "| tune recall | tune FA/10 min | held-out recall | held-out FA/10 min | CPU s |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "| tune recall | tune FA/10 min | held-out recall | held-out FA/10 min | CPU s | synthetic confusers with a 'help' |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::vector<std::string> sweep = split(thresholds);
     if (!split_thresholds.empty()) sweep = {split_thresholds};
     for (const auto& t : sweep) {
@@ -169,11 +173,11 @@ int main(int argc, char** argv) {
         continue;
       }
       for (const auto& r : rs)
-        std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",
+        std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f | %d/%d |\n",
                     t.c_str(), r.call_join_s, r.max_utterance_s, r.min_confidence, r.recall, r.hits, r.calls, r.target_false_alarms,
                     r.false_alarms_per_10_min, r.other_false_alarms, r.tune_recall, r.tune_fa_per_10_min,
                     r.held_recall, r.held_hits, r.held_calls, r.held_fa_per_10_min, r.held_false_alarms,
-                    r.decode_seconds);
+                    r.decode_seconds, r.confuser_false_alarms, r.confuser_scenes);
       std::fflush(stdout);
     }
     return 0;

@@ -36,7 +36,36 @@ std::vector<float> RenderEspeak(const std::string& text, const std::string& voic
   return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
 }
 
+bool FliteAvailable() { return std::system("flite -lv > /dev/null 2>&1") == 0; }
+
+std::vector<float> RenderFlite(const std::string& text, const std::string& voice, double stretch) {
+  const std::string path =
+      (fs::temp_directory_path() / ("sarmap_flite_" + std::to_string(::getpid()) + ".wav")).string();
+  std::string safe;
+  for (char c : text)
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == ' ' || c == ',' || c == '.' || c == '!') safe += c;
+  char stretch_text[32];
+  std::snprintf(stretch_text, sizeof(stretch_text), "%.3f", stretch);
+  const std::string cmd = "flite -voice " + voice + " --setf duration_stretch=" + stretch_text + " -t \"" + safe +
+                          "\" -o " + path + " > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) return {};
+  auto buf = audio::ReadAudioFile(path);
+  fs::remove(path);
+  if (buf.channels.empty()) return {};
+  return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
+}
+
 namespace {
+
+const std::vector<std::string> kFliteVoices = {"kal16", "awb", "rms", "slt"};
+
+// Renders with the chosen synthesiser; espeak: voice, words per minute and pitch as given;
+// flite: voice index modulo its 4 voices, the rate as a duration stretch (155 wpm = 1).
+std::vector<float> Render(const std::string& tts, const std::string& text, const std::string& espeak_voice,
+                          size_t voice_index, int wpm, int pitch) {
+  if (tts == "flite") return RenderFlite(text, kFliteVoices[voice_index % kFliteVoices.size()], 155.0 / wpm);
+  return RenderEspeak(text, espeak_voice, wpm, pitch);
+}
 
 double Rms(const std::vector<float>& x) {
   double e = 0;
@@ -124,8 +153,11 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
   std::uniform_int_distribution<int> speed(130, 180), pitch(35, 65);
   // Positives: 3.5 s scenes, call starting at 1.0 s.
   for (int i = 0; i < o.num_calls; ++i) {
-    std::vector<float> call = RenderEspeak(kCalls[i % kCalls.size()], kVoices[(i / kCalls.size() + i) % kVoices.size()],
-                                           speed(rng), pitch(rng));
+    // (espeak: the exact expression of sessions 2-3, so that its data set is unchanged)
+    const size_t voice = (i / kCalls.size() + i) % kVoices.size();
+    std::vector<float> call = o.tts == "flite"
+                                  ? Render(o.tts, kCalls[i % kCalls.size()], "", voice, speed(rng), 50)
+                                  : RenderEspeak(kCalls[i % kCalls.size()], kVoices[voice], speed(rng), pitch(rng));
     if (call.empty()) break;
     const size_t n = 56000, start = 16000;
     std::vector<float> scene(std::max(n, start + call.size() + 8000), 0.0f);
@@ -162,8 +194,10 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
     std::mt19937 crng(o.seed + 1000);
     std::uniform_int_distribution<int> cspeed(130, 180), cpitch(35, 65);
     for (int i = 0; i < o.num_confusers; ++i) {
-      std::vector<float> c = RenderEspeak(phrases[i % phrases.size()],
-                                          kVoices[(i / phrases.size() + i) % kVoices.size()], cspeed(crng), cpitch(crng));
+      const size_t voice = (i / phrases.size() + i) % kVoices.size();
+      std::vector<float> c = o.tts == "flite"
+                                 ? Render(o.tts, phrases[i % phrases.size()], "", voice, cspeed(crng), 50)
+                                 : RenderEspeak(phrases[i % phrases.size()], kVoices[voice], cspeed(crng), cpitch(crng));
       if (c.empty()) break;
       const size_t start = 16000;
       std::vector<float> scene(std::max<size_t>(56000, start + c.size() + 8000), 0.0f);
@@ -181,7 +215,7 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
   std::vector<std::string> pool_names = real_names;
   std::vector<bool> pool_synthetic(real.size(), false);
   for (size_t i = 0; i < kNegativeSentences.size(); ++i) {
-    auto s = RenderEspeak(kNegativeSentences[i], kVoices[i % kVoices.size()], 150 + 10 * (i % 5), 40 + 5 * (i % 6));
+    auto s = Render(o.tts, kNegativeSentences[i], kVoices[i % kVoices.size()], i, 150 + 10 * (i % 5), 40 + 5 * (i % 6));
     if (!s.empty()) {
       pool.push_back(std::move(s));
       pool_names.push_back(std::to_string(i));

@@ -19,6 +19,11 @@ namespace speech {
 // Renders `text` with espeak-ng at 16 kHz (empty if espeak-ng is unavailable).
 std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int words_per_minute, int pitch);
 bool EspeakAvailable();
+// Renders `text` with flite (voice kal16, awb, rms or slt; duration_stretch > 1 is slower) at
+// 16 kHz (empty if flite is unavailable). flite's voices are built from recorded speech, and the
+// en-us acoustic model recognises them, unlike espeak-ng's formant synthesis (README).
+std::vector<float> RenderFlite(const std::string& text, const std::string& voice, double duration_stretch);
+bool FliteAvailable();
 
 struct KwsEvalOptions {
   int num_calls = 40;
@@ -39,6 +44,9 @@ struct KwsEvalOptions {
   // "well done"...). "help" detections there are false alarms on synthetic speech of a call's
   // shape: the test of a verifier that might only have learnt "synthetic voice".
   int num_confusers = 0;
+  // Synthesiser of the calls, the confusers and the synthetic negative sentences: "espeak"
+  // (espeak-ng, sessions 2-3) or "flite".
+  std::string tts = "espeak";
   double fit_l2 = 0.01;
   double fit_max_call_s = 1.8;
 };
