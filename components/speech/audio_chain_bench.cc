@@ -39,10 +39,11 @@ int main() {
     std::string method;
     bool verify;
     bool call_shape;  // the default call-shape rule (max_utterance_s); off = every utterance decoded
+    bool verifier = false;  // config/speech.yaml's keyword verifier, switched on
   };
   for (const Config& cfg : {Config{"srp_phat", false, true}, Config{"srp_phat", false, false},
                             Config{"srp_phat", true, false}, Config{"srp_phat", true, true},
-                            Config{"music", false, true}}) {
+                            Config{"music", false, true}, Config{"srp_phat", false, true, true}}) {
     const std::string method = cfg.method;
     sound::LocaliserOptions lo;
     lo.method = method;
@@ -50,6 +51,12 @@ int main() {
     speech::SpeechOptions so;  // defaults (= config/speech.yaml): MVDR + post-filter, VAD, kws + call shape
     so.keywords.verify_with_lm = cfg.verify;
     if (!cfg.call_shape) so.keywords.max_utterance_s = 0;
+    if (cfg.verifier) {
+      so.keywords.verifier = common::LoadOptions<speech::SpeechOptions>(
+                                 std::string(SARMAP_SOURCE_DIR) + "/config/speech.yaml", {}, "speech")
+                                 .keywords.verifier;
+      so.keywords.verifier.enabled = true;
+    }
     speech::SpeechProcessor processor(geometry, localiser.kind(), so);
     double t_capture = 0, t_doa = 0, t_speech = 0, audio_s = 0;
     int doa_outputs = 0, results = 0;
@@ -88,8 +95,8 @@ int main() {
       }
     }
     const double total = t_capture + t_doa + t_speech;
-    std::printf("[%s, LM verification %s, call-shape rule %s] %.1f s of 4-ch 16 kHz audio (%zu real ReSpeaker "
-                "files), one thread:\n", method.c_str(), cfg.verify ? "on" : "off",
+    std::printf("[%s, LM verification %s, keyword verifier %s, call-shape rule %s] %.1f s of 4-ch 16 kHz audio (%zu real ReSpeaker "
+                "files), one thread:\n", method.c_str(), cfg.verify ? "on" : "off", cfg.verifier ? "on" : "off",
                 cfg.call_shape ? "on (default)" : "off (every utterance decoded)", audio_s, files.size());
     std::printf("  capture (libsndfile + checks) %.4f s  = %.2f%% of a core\n", t_capture, 100 * t_capture / audio_s);
     std::printf("  DOA + tracking                %.3f s  = %.2f%% of a core (%d outputs, worst %.1f ms each)\n", t_doa,

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <unistd.h>
 
+#include "speech/hit_features.h"
 #include "speech/verification_vocabulary.h"
 
 namespace sarmap {
@@ -54,7 +55,8 @@ struct KeywordSpotter::Impl {
   }
 };
 
-KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options), impl_(new Impl) {
+KeywordSpotter::KeywordSpotter(const KeywordOptions& options)
+    : options_(options), verifier_(options.verifier), impl_(new Impl) {
   namespace fs = std::filesystem;
   const std::string hmm = options.model_dir + "/en-us";
   const std::string lm = options.model_dir + "/en-us.lm.bin";
@@ -109,7 +111,7 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
         throw std::runtime_error("PocketSphinx: cannot build the alignment grammar of '" + options.keywords[i] + "'");
     }
     impl_->can_verify = true;
-  } else if (options.verify_acoustic) {
+  } else if (options.verify_acoustic || (options.verifier.enabled && NeedsPhoneLoop(options.verifier))) {
     throw std::runtime_error("PocketSphinx phonetic LM missing: " + phone_lm + " (needed by verify_acoustic)");
   }
   ps_set_search(impl_->ps, "kws");
@@ -139,7 +141,25 @@ KeywordSpotter::KeywordSpotter(const KeywordOptions& options) : options_(options
 
 KeywordSpotter::~KeywordSpotter() = default;
 
-DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool full) {
+HitFeatures KeywordSpotter::Features(const int16_t* samples, size_t count, const KeywordHit& h, double onset_s,
+                                     double end_s, bool with_phones) {
+  const double utterance_s = static_cast<double>(count) / 16000.0;
+  HitFeatures f = ComputeHitFeatures(samples, count, onset_s < 0 ? 0.0 : onset_s, end_s < 0 ? utterance_s : end_s,
+                                     h.start_s, h.end_s, h.log_ratio);
+  if (with_phones) {
+    // The phone loop over the hit widened by 0.1 s, against the keyword's dictionary phones.
+    const size_t a = static_cast<size_t>(std::max(0.0, h.start_s - 0.1) * 16000);
+    const size_t b = std::min(count, static_cast<size_t>((h.end_s + 0.1) * 16000));
+    const auto phones = b > a ? PhoneLoop(samples + a, b - a) : std::vector<std::string>{};
+    const auto want = KeywordPhones(h.keyword);
+    for (const auto& p : phones) f.phones += (f.phones.empty() ? "" : " ") + p;
+    f.phone_distance = want.empty() ? -1.0 : static_cast<double>(PhoneEditDistance(phones, want)) / want.size();
+  }
+  return f;
+}
+
+DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool full, double speech_onset_s,
+                                    double speech_end_s) {
   DecodeResult r;
   // A call is a short utterance: longer ones cannot hold one, and are not decoded at all
   // (unless the full text is wanted).
@@ -229,7 +249,8 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
   const double utterance_s = static_cast<double>(count) / 16000.0;
   for (KeywordHit& h : r.keywords) h.utterance_s = utterance_s;
   if (options_.verify_acoustic || options_.min_duration_s > 0 || options_.max_duration_s < 10 ||
-      options_.min_utterance_fraction > 0 || options_.max_utterance_s > 0 || compute_verification_) {
+      options_.min_utterance_fraction > 0 || options_.max_utterance_s > 0 || compute_verification_ ||
+      options_.verifier.enabled) {
     std::vector<KeywordHit> kept;
     for (KeywordHit h : r.keywords) {
       const double duration_s = h.end_s - h.start_s;
@@ -244,6 +265,11 @@ DecodeResult KeywordSpotter::Decode(const int16_t* samples, size_t count, bool f
       }
       if (!shape_ok) continue;
       if (options_.verify_acoustic && h.verify_llr < options_.verify_min_llr) continue;
+      if (verifier_.options().enabled) {
+        h.features = Features(samples, count, h, speech_onset_s, speech_end_s, NeedsPhoneLoop(verifier_.options()));
+        h.verifier_probability = verifier_.Probability(h.features);
+        if (h.verifier_probability < verifier_.options().min_probability) continue;
+      }
       if (options_.verify_acoustic) {
         // Confidence from the verification margin: 0.5 at the threshold, 0.9 at +0.2 nats/frame.
         const double margin = h.verify_llr - options_.verify_min_llr;
@@ -316,6 +342,39 @@ double KeywordSpotter::VerificationLlr(const std::string& keyword, const int16_t
   const double frames = std::max(1.0, static_cast<double>(count) / 160.0);
   logmath_t* lmath = ps_get_logmath(ps);
   return (logmath_log_to_ln(lmath, static_cast<int>(forced - free))) / frames;
+}
+
+std::vector<std::string> KeywordSpotter::PhoneLoop(const int16_t* samples, size_t count) {
+  if (!impl_->can_verify) throw std::logic_error("the phone loop needs en-us-phone.lm.bin");
+  ps_decoder_t* ps = impl_->ps;
+  ps_set_search(ps, "allphone");
+  impl_->kws_samples += count;
+  ps_start_utt(ps);
+  ps_process_raw(ps, samples, count, FALSE, options_.full_utterance ? TRUE : FALSE);
+  ps_end_utt(ps);
+  std::vector<std::string> phones;
+  for (ps_seg_t* seg = ps_seg_iter(ps); seg; seg = ps_seg_next(seg)) {
+    const std::string p = ps_seg_word(seg);
+    if (p.empty() || p == "SIL" || p[0] == '+' || p[0] == '<' || p[0] == '[') continue;
+    phones.push_back(p);
+  }
+  ps_set_search(ps, "kws");
+  return phones;
+}
+
+std::vector<std::string> KeywordSpotter::KeywordPhones(const std::string& keyword) {
+  std::vector<std::string> phones;
+  std::istringstream words(keyword);
+  std::string w;
+  while (words >> w) {
+    char* pron = ps_lookup_word(impl_->ps, w.c_str());
+    if (!pron) throw std::invalid_argument("word '" + w + "' is not in the dictionary");
+    std::istringstream ps(pron);
+    std::string p;
+    while (ps >> p) phones.push_back(p);
+    ckd_free(pron);
+  }
+  return phones;
 }
 
 std::vector<std::pair<std::string, double>> KeywordSpotter::DecodeSearch(const std::string& search,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/options.h"
+#include "speech/keyword_verifier.h"
 
 namespace sarmap {
 namespace speech {
@@ -60,6 +61,9 @@ struct KeywordOptions {
   // inside a sentence; longer values only look better on sarmap-log kws-eval because its stream
   // of other speech has 0.3-1.5 s gaps (>= ~1.2 s joins all of it).
   double call_join_s = 0.5;
+  // Verifier of each detection that passed the call-shape rule (keyword_verifier.h; README:
+  // what it learns on the evaluation set, and why it is off by default).
+  VerifierOptions verifier;
   template <class V>
   void Visit(V& v) {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
@@ -82,6 +86,7 @@ struct KeywordOptions {
     v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call");
     v("call_join_s", call_join_s,
       "with max_utterance_s: segments closer than this (s) count as one call for the length limit (0: off)");
+    v("verifier", verifier, "logistic-regression verifier over per-hit features (README)");
   }
   void Validate(common::Validator& check) const {
     check.That(!keywords.empty(), "keywords", "needs at least one keyword");
@@ -108,6 +113,8 @@ struct KeywordHit {
   double verify_llr = 0;          // per-frame LLR of the acoustic verification (nats), if computed
   bool verified = false;          // verify_llr was computed
   double utterance_s = 0;         // length of the decoded utterance
+  double verifier_probability = -1;  // keyword verifier's probability (-1: not computed)
+  HitFeatures features;           // set when the verifier ran (or features were asked for)
 };
 
 struct DecodeResult {
@@ -124,8 +131,11 @@ class KeywordSpotter {
   KeywordSpotter(const KeywordSpotter&) = delete;
   KeywordSpotter& operator=(const KeywordSpotter&) = delete;
 
-  // Decodes one utterance of 16 kHz mono int16 samples.
-  DecodeResult Decode(const int16_t* samples, size_t count, bool full_decoding);
+  // Decodes one utterance of 16 kHz mono int16 samples. speech_onset_s / speech_end_s: where the
+  // voice activity starts and ends within it (after the pre-roll, before the end; < 0: unknown,
+  // taken as 0 and the utterance's end); used by the verifier's lead_s / trail_s features.
+  DecodeResult Decode(const int16_t* samples, size_t count, bool full_decoding, double speech_onset_s = -1,
+                      double speech_end_s = -1);
   DecodeResult Decode(const std::vector<int16_t>& s) { return Decode(s.data(), s.size(), options_.full_decoding); }
   // Language-model decoding only (text).
   std::string DecodeText(const std::vector<int16_t>& samples, double* confidence = nullptr);
@@ -139,11 +149,20 @@ class KeywordSpotter {
   // Per-frame log-likelihood ratio of `keyword` (forced alignment) against the phone loop over
   // samples[begin, end) (see verify_acoustic). -inf when the alignment fails.
   double VerificationLlr(const std::string& keyword, const int16_t* samples, size_t count);
+  // Best phone string of an unconstrained phone loop (allphone search, context-independent
+  // phones, SIL and fillers dropped) over the samples; needs en-us-phone.lm.bin.
+  std::vector<std::string> PhoneLoop(const int16_t* samples, size_t count);
+  // Dictionary phones of a keyphrase ("help" -> HH EH L P).
+  std::vector<std::string> KeywordPhones(const std::string& keyword);
+  // Features of a hit (hit_features.h), phone_distance included when with_phones.
+  HitFeatures Features(const int16_t* samples, size_t count, const KeywordHit& hit, double speech_onset_s,
+                       double speech_end_s, bool with_phones);
   // Always compute verify_llr (for evaluation) even when verify_acoustic is off.
   void set_compute_verification(bool on) { compute_verification_ = on; }
 
  private:
   KeywordOptions options_;
+  KeywordVerifier verifier_;
   bool compute_verification_ = false;
   struct Impl;
   std::unique_ptr<Impl> impl_;

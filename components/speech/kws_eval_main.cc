@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "common/args.h"
+#include "common/robot_config.h"
 #include "speech/kws_evaluation.h"
 
 using namespace sarmap;
@@ -53,10 +54,26 @@ int main(int argc, char** argv) {
     p.AddFlag("--babble-azimuth-deg", &babble_az, "with --array-recall: other talker's azimuth");
     speech::VadOptions vad;
     p.AddFlag("--vad-threshold-db", &vad.threshold_db, "voice activity: speech this far above the noise floor (dB)");
+    std::string fit_features, verifier_probs;
+    p.AddFlag("--fit-verifier", &fit_features,
+              "comma-separated hit features: fit the keyword verifier on the tuning half and apply it "
+              "(keyword_verifier.h; e.g. tilt_db)");
+    p.AddFlag("--confusers", &o.num_confusers,
+              "also: this many short espeak-ng phrases without 'help' in the calls' noise (synthetic false alarms)");
+    p.AddFlag("--tts", &o.tts, "synthesiser of the calls, confusers and synthetic negatives: espeak or flite");
+    p.AddFlag("--fit-l2", &o.fit_l2, "with --fit-verifier: L2 penalty on the standardised weights");
+    p.AddFlag("--verifier-probabilities", &verifier_probs,
+              "comma-separated verifier min_probability values, swept as a post-filter");
+    std::string config_path;
+    p.AddFlag("--config", &config_path,
+              "speech YAML: evaluate its speech.keywords.verifier (even when off there), e.g. config/speech.yaml");
     bool no_post_filter = false;
     p.AddSwitch("--no-post-filter", &no_post_filter, "with --array-recall: beam without the spectral-gain post-filter");
     if (!p.Parse(argc, argv)) return 0;
-    if (!speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
+    if (o.tts != "espeak" && o.tts != "flite") throw common::ArgError("--tts: espeak or flite");
+    if (o.tts == "espeak" && !speech::EspeakAvailable()) throw common::ArgError("espeak-ng is needed to render the calls");
+    if (o.tts == "flite" && !speech::FliteAvailable())
+      throw common::ArgError("flite is needed for --tts flite (apt-get install flite)");
     auto split = [](const std::string& s) {
       std::vector<std::string> out;
       size_t a = 0;
@@ -68,16 +85,27 @@ int main(int argc, char** argv) {
       }
       return out;
     };
+    if (!fit_features.empty()) o.fit_verifier_features = split(fit_features);
+    speech::VerifierOptions config_verifier;
+    if (!config_path.empty()) {
+      const auto so = common::LoadOptions<speech::SpeechOptions>(common::ResolveConfigPath(config_path), {}, "speech");
+      config_verifier = so.keywords.verifier;
+      config_verifier.enabled = true;  // evaluated even when the node has it off
+    }
+    std::vector<double> vprobs;
+    if (!verifier_probs.empty())
+      for (const auto& c : split(verifier_probs)) vprobs.push_back(std::stod(c));
     const auto data = speech::MakeKwsEvalData(o);
     std::printf("data: %zu calls, %.1f min of other speech and noise\n", data.positives.size(),
                 data.negatives.size() / 16000.0 / 60);
     std::printf("| threshold | call join s | max call s | min confidence | recall (help) | hits/calls | help false alarms | per 10 min | other-keyword alarms "
-                "| tune recall | tune FA/10 min | held-out recall | held-out FA/10 min | CPU s |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "| tune recall | tune FA/10 min | held-out recall | held-out FA/10 min | CPU s | synthetic confusers with a 'help' |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::vector<std::string> sweep = split(thresholds);
     if (!split_thresholds.empty()) sweep = {split_thresholds};
     for (const auto& t : sweep) {
       speech::KeywordOptions k = shape;
+      k.verifier = config_verifier;
       k.keywords = split(keyword_list);
       k.thresholds.clear();
       size_t a = 0;
@@ -118,13 +146,38 @@ int main(int argc, char** argv) {
           }
         continue;
       }
-      const auto rs = speech::EvaluateKwsSweep(data, k, vad, o, cuts, max_utts, gaps);
+      const auto rs = speech::EvaluateKwsSweep(data, k, vad, o, cuts, max_utts, gaps, vprobs);
+      if (!rs.empty() && rs.front().verifier.enabled) {
+        const auto& v = rs.front().verifier;
+        std::printf("verifier%s (config/speech.yaml speech.keywords.verifier):\n",
+                    o.fit_verifier_features.empty() ? "" : " fitted on the tuning half");
+        auto list = [](const std::vector<double>& xs) {
+          std::string s;
+          for (double x : xs) s += (s.empty() ? "" : ", ") + std::to_string(x);
+          return "[" + s + "]";
+        };
+        std::string names;
+        for (const auto& n : v.features) names += (names.empty() ? "" : ", ") + n;
+        std::printf("  features: [%s]\n  means: %s\n  scales: %s\n  weights: %s\n  bias: %f\n", names.c_str(),
+                    list(v.means).c_str(), list(v.scales).c_str(), list(v.weights).c_str(), v.bias);
+        std::printf("| call join s | max call s | verifier p >= | tune recall | tune FA/10 min (real+synthetic) | "
+                    "held-out recall | held-out FA/10 min (real+synthetic) | verifier passes: calls / real / synthetic "
+                    "negative hits | synthetic confusers with a 'help' |\n|---|---|---|---|---|---|---|---|---|\n");
+        for (const auto& r : rs)
+          std::printf("| %.2f | %.1f | %.3f | %.3f | %.1f (%d+%d) | %.3f (%d/%d) | %.1f (%d+%d) | %.2f / %.2f / %.2f | %d/%d |\n",
+                      r.call_join_s, r.max_utterance_s, r.verifier_min_probability, r.tune_recall,
+                      r.tune_fa_per_10_min, r.tune_fa_real, r.tune_fa_synthetic, r.held_recall, r.held_hits,
+                      r.held_calls, r.held_fa_per_10_min, r.held_fa_real, r.held_fa_synthetic, r.verifier_pass_calls,
+                      r.verifier_pass_real, r.verifier_pass_synthetic, r.confuser_false_alarms, r.confuser_scenes);
+        std::fflush(stdout);
+        continue;
+      }
       for (const auto& r : rs)
-        std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f |\n",
+        std::printf("| %s | %.2f | %.1f | %.2f | %.3f | %d/%d | %d | %.2f | %d | %.3f | %.2f | %.3f (%d/%d) | %.2f (%d) | %.1f | %d/%d |\n",
                     t.c_str(), r.call_join_s, r.max_utterance_s, r.min_confidence, r.recall, r.hits, r.calls, r.target_false_alarms,
                     r.false_alarms_per_10_min, r.other_false_alarms, r.tune_recall, r.tune_fa_per_10_min,
                     r.held_recall, r.held_hits, r.held_calls, r.held_fa_per_10_min, r.held_false_alarms,
-                    r.decode_seconds);
+                    r.decode_seconds, r.confuser_false_alarms, r.confuser_scenes);
       std::fflush(stdout);
     }
     return 0;

@@ -11,6 +11,7 @@
 
 #include "audio_capture/audio_file.h"
 #include "common/robot_config.h"
+#include "speech/hit_features.h"
 #include "sound_localisation/room_simulation.h"
 
 namespace sarmap {
@@ -35,7 +36,36 @@ std::vector<float> RenderEspeak(const std::string& text, const std::string& voic
   return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
 }
 
+bool FliteAvailable() { return std::system("flite -lv > /dev/null 2>&1") == 0; }
+
+std::vector<float> RenderFlite(const std::string& text, const std::string& voice, double stretch) {
+  const std::string path =
+      (fs::temp_directory_path() / ("sarmap_flite_" + std::to_string(::getpid()) + ".wav")).string();
+  std::string safe;
+  for (char c : text)
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == ' ' || c == ',' || c == '.' || c == '!') safe += c;
+  char stretch_text[32];
+  std::snprintf(stretch_text, sizeof(stretch_text), "%.3f", stretch);
+  const std::string cmd = "flite -voice " + voice + " --setf duration_stretch=" + stretch_text + " -t \"" + safe +
+                          "\" -o " + path + " > /dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) return {};
+  auto buf = audio::ReadAudioFile(path);
+  fs::remove(path);
+  if (buf.channels.empty()) return {};
+  return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
+}
+
 namespace {
+
+const std::vector<std::string> kFliteVoices = {"kal16", "awb", "rms", "slt"};
+
+// Renders with the chosen synthesiser; espeak: voice, words per minute and pitch as given;
+// flite: voice index modulo its 4 voices, the rate as a duration stretch (155 wpm = 1).
+std::vector<float> Render(const std::string& tts, const std::string& text, const std::string& espeak_voice,
+                          size_t voice_index, int wpm, int pitch) {
+  if (tts == "flite") return RenderFlite(text, kFliteVoices[voice_index % kFliteVoices.size()], 155.0 / wpm);
+  return RenderEspeak(text, espeak_voice, wpm, pitch);
+}
 
 double Rms(const std::vector<float>& x) {
   double e = 0;
@@ -76,7 +106,7 @@ std::vector<float> PinkishNoise(size_t n, std::mt19937* rng) {
   return x;
 }
 
-std::vector<std::vector<float>> RealSpeech(const std::string& data_dir) {
+std::vector<std::vector<float>> RealSpeech(const std::string& data_dir, std::vector<std::string>* names = nullptr) {
   std::vector<std::vector<float>> out;
   for (const std::string sub : {"audio/cmu_arctic", "audio/pocketsphinx_test/librivox", "audio/pocketsphinx_test/cards",
                                 "audio/sphinx4_digits", "audio/pocketsphinx_test"}) {
@@ -91,6 +121,7 @@ std::vector<std::vector<float>> RealSpeech(const std::string& data_dir) {
         auto b = audio::ReadAudioFile(f.string(), audio::RawFormat{16000, 1, "s16le"});
         if (b.sample_rate_hz != 16000 || b.channels.empty()) continue;
         out.push_back(b.channels[0]);
+        if (names) names->push_back(f.filename().string());
       } catch (const std::exception&) {
       }
     }
@@ -117,12 +148,16 @@ const std::vector<std::string> kNegativeSentences = {
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
   KwsEvalData data;
   std::mt19937 rng(o.seed);
-  const auto real = RealSpeech(o.data_dir);
+  std::vector<std::string> real_names;
+  const auto real = RealSpeech(o.data_dir, &real_names);
   std::uniform_int_distribution<int> speed(130, 180), pitch(35, 65);
   // Positives: 3.5 s scenes, call starting at 1.0 s.
   for (int i = 0; i < o.num_calls; ++i) {
-    std::vector<float> call = RenderEspeak(kCalls[i % kCalls.size()], kVoices[(i / kCalls.size() + i) % kVoices.size()],
-                                           speed(rng), pitch(rng));
+    // (espeak: the exact expression of sessions 2-3, so that its data set is unchanged)
+    const size_t voice = (i / kCalls.size() + i) % kVoices.size();
+    std::vector<float> call = o.tts == "flite"
+                                  ? Render(o.tts, kCalls[i % kCalls.size()], "", voice, speed(rng), 50)
+                                  : RenderEspeak(kCalls[i % kCalls.size()], kVoices[voice], speed(rng), pitch(rng));
     if (call.empty()) break;
     const size_t n = 56000, start = 16000;
     std::vector<float> scene(std::max(n, start + call.size() + 8000), 0.0f);
@@ -151,24 +186,58 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
     data.call_start_s.push_back(1.0);
     data.call_end_s.push_back(1.0 + call.size() / 16000.0);
   }
+  // Short synthetic confusers (own random stream: the main set is unchanged by them).
+  {
+    const std::vector<std::string> phrases = {"hello", "hold on", "well done", "yes", "thank you", "go away",
+                                              "over there", "hello there", "I am fine", "come in", "held",
+                                              "yelp", "self", "hell", "health", "stop"};
+    std::mt19937 crng(o.seed + 1000);
+    std::uniform_int_distribution<int> cspeed(130, 180), cpitch(35, 65);
+    for (int i = 0; i < o.num_confusers; ++i) {
+      const size_t voice = (i / phrases.size() + i) % kVoices.size();
+      std::vector<float> c = o.tts == "flite"
+                                 ? Render(o.tts, phrases[i % phrases.size()], "", voice, cspeed(crng), 50)
+                                 : RenderEspeak(phrases[i % phrases.size()], kVoices[voice], cspeed(crng), cpitch(crng));
+      if (c.empty()) break;
+      const size_t start = 16000;
+      std::vector<float> scene(std::max<size_t>(56000, start + c.size() + 8000), 0.0f);
+      std::vector<float> noise = PinkishNoise(scene.size(), &crng);
+      Scale(&c, 0.1 / ActiveRms(c));
+      Scale(&noise, 0.1 * std::pow(10.0, -o.call_snr_db / 20) / std::max(1e-9, Rms(noise)));
+      for (size_t k = 0; k < scene.size(); ++k) scene[k] = noise[k];
+      for (size_t k = 0; k < c.size(); ++k) scene[start + k] += c[k];
+      data.confusers.push_back(std::move(scene));
+    }
+  }
   // Negatives: other speech in noise until negative_minutes.
   const size_t total = static_cast<size_t>(o.negative_minutes * 60 * 16000);
   std::vector<std::vector<float>> pool = real;
+  std::vector<std::string> pool_names = real_names;
+  std::vector<bool> pool_synthetic(real.size(), false);
   for (size_t i = 0; i < kNegativeSentences.size(); ++i) {
-    auto s = RenderEspeak(kNegativeSentences[i], kVoices[i % kVoices.size()], 150 + 10 * (i % 5), 40 + 5 * (i % 6));
-    if (!s.empty()) pool.push_back(std::move(s));
+    auto s = Render(o.tts, kNegativeSentences[i], kVoices[i % kVoices.size()], i, 150 + 10 * (i % 5), 40 + 5 * (i % 6));
+    if (!s.empty()) {
+      pool.push_back(std::move(s));
+      pool_names.push_back(std::to_string(i));
+      pool_synthetic.push_back(true);
+    }
   }
   if (pool.empty()) return data;
   std::uniform_real_distribution<double> gap_s(0.3, 1.5), level_db(-30, -14), rate(0.9, 1.1), snr(5, 20);
   data.negatives.reserve(total + 16000 * 10);
   size_t idx = 0;
   while (data.negatives.size() < total) {
-    const auto& src = pool[idx++ % pool.size()];
+    const size_t which = idx++ % pool.size();
+    const auto& src = pool[which];
     std::vector<float> s = Resample(src, 16000, static_cast<int>(16000 * rate(rng)));  // speaking-rate change
     Scale(&s, std::pow(10.0, level_db(rng) / 20) / std::max(1e-9, ActiveRms(s)));
     const size_t gap = static_cast<size_t>(gap_s(rng) * 16000);
     std::vector<float> seg(gap + s.size(), 0.0f);
     std::copy(s.begin(), s.end(), seg.begin() + gap);
+    const int64_t at = static_cast<int64_t>(data.negatives.size() + gap);
+    data.negative_sources.push_back({at, at + static_cast<int64_t>(s.size()),
+                                     (pool_synthetic[which] ? "espeak:" : "real:") + pool_names[which],
+                                     pool_synthetic[which]});
     std::vector<float> noise = PinkishNoise(seg.size(), &rng);
     Scale(&noise, ActiveRms(s) * std::pow(10.0, -snr(rng) / 20) / std::max(1e-9, Rms(noise)));
     for (size_t k = 0; k < seg.size(); ++k) data.negatives.push_back(seg[k] + noise[k]);
@@ -176,15 +245,33 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
   return data;
 }
 
+std::string KwsEvalData::NegativeSourceAt(double t_s, bool* synthetic) const {
+  const int64_t k = static_cast<int64_t>(t_s * 16000);
+  for (const auto& src : negative_sources)
+    if (k >= src.start_sample - 1600 && k < src.end_sample + 1600) {  // 0.1 s tolerance (pre-roll)
+      if (synthetic) *synthetic = src.synthetic;
+      return src.name;
+    }
+  if (synthetic) *synthetic = false;
+  return "gap";
+}
+
 std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords_in,
                                             const VadOptions& vad_options, const KwsEvalOptions& o,
                                             const std::vector<double>& cuts,
                                             const std::vector<double>& max_utterances_s,
-                                            const std::vector<double>& call_joins_s) {
+                                            const std::vector<double>& call_joins_s,
+                                            const std::vector<double>& verifier_min_probabilities) {
   KeywordOptions keywords = keywords_in;
   keywords.min_confidence = 0;
   keywords.max_utterance_s = 0;  // applied below as a post-filter (same rule as in the spotter)
+  VerifierOptions verifier_options = keywords.verifier;  // applied below as a post-filter too
+  keywords.verifier.enabled = false;
   KeywordSpotter spotter(keywords);
+  const bool want_features = verifier_options.enabled || !o.fit_verifier_features.empty() ||
+                             std::getenv("SARMAP_KWS_FEATURES") != nullptr;
+  bool with_phones = std::getenv("SARMAP_KWS_FEATURES") != nullptr || NeedsPhoneLoop(verifier_options);
+  for (const auto& n : o.fit_verifier_features) with_phones |= n == "phone_distance";
   // SARMAP_KWS_DUMP=llr also computes the (slow) acoustic verification of every hit.
   if (const char* dump = std::getenv("SARMAP_KWS_DUMP"); dump && std::string(dump) == "llr")
     spotter.set_compute_verification(true);
@@ -196,8 +283,22 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     double confidence;
     double utterance_s;
     std::vector<double> call_s;  // per call_joins_s value: length of the call (CallGroups) holding the hit
+    HitFeatures features;
+    bool synthetic = false;      // negatives: the hit fell in an espeak-ng sentence
   };
   int scene = 0;  // positive scene being decoded (for SARMAP_KWS_SEGDIR names)
+  // SARMAP_KWS_FEATURES=path: one CSV row per hit with its features (hit_features.h), its half
+  // (tune / held) and, in the negative stream, the recording it fell in.
+  FILE* features_csv = nullptr;
+  if (const char* path = std::getenv("SARMAP_KWS_FEATURES")) {
+    features_csv = std::fopen(path, "w");
+    if (features_csv)
+      std::fprintf(features_csv,
+                   "set,half,scene,source,synthetic,in_call,keyword,t,call_s,log_ratio,duration_s,ratio_per_s,"
+                   "utterance_s,lead_s,trail_s,snr_db,hit_level_db,voiced_fraction,pitch_hz,pitch_range_st,tilt_db,"
+                   "phone_distance,phones\n");
+  }
+  const double half_stream_s = data.negatives.size() / 16000.0 / 2;
   auto run = [&](const std::vector<float>& x, std::vector<Hit>* hits) {
     VoiceActivityDetector vad(16000, vad_options);
     std::vector<Utterance> utts;
@@ -235,8 +336,37 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       }
       for (const auto& h : d.keywords) {
         hits->push_back({u.samples_start / 16000.0, u.samples_start / 16000.0 + h.start_s, h.keyword, h.confidence,
-                         u.samples.size() / 16000.0, {}});
+                         u.samples.size() / 16000.0, {}, {}, false});
         for (const auto& c : call_s) hits->back().call_s.push_back(c[k]);
+        const bool negative = &x == &data.negatives;
+        if (negative) data.NegativeSourceAt(hits->back().t, &hits->back().synthetic);
+        if (want_features)
+          hits->back().features = spotter.Features(u.samples.data(), u.samples.size(), h,
+                                                   (u.start_sample - u.samples_start) / 16000.0,
+                                                   (u.end_sample - u.samples_start) / 16000.0, with_phones);
+        if (features_csv) {
+          const HitFeatures& f = hits->back().features;
+          const double t = u.samples_start / 16000.0 + h.start_s;
+          bool synthetic = true;
+          std::string source = "call";
+          bool in_call = false;
+          const bool confuser = !negative && scene >= 1000;
+          if (negative) {
+            source = data.NegativeSourceAt(t, &synthetic);
+          } else if (confuser) {
+            source = "confuser";
+          } else {
+            in_call = t > data.call_start_s[scene] - 0.5 && t < data.call_end_s[scene] + 0.5;
+          }
+          const bool held = negative ? u.samples_start / 16000.0 >= half_stream_s : (scene / 8) % 2 == 1;
+          std::fprintf(features_csv,
+                       "%s,%s,%d,%s,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.3f,%.1f,%.2f,%.2f,%.3f,%s\n",
+                       negative ? "neg" : confuser ? "conf" : "pos", held ? "held" : "tune", negative ? -1 : scene, source.c_str(),
+                       synthetic ? 1 : 0, in_call ? 1 : 0, h.keyword.c_str(), t, call_s.empty() ? 0.0 : call_s.back()[k],
+                       f.log_ratio, f.duration_s, f.ratio_per_s, f.utterance_s, f.lead_s, f.trail_s, f.snr_db,
+                       f.hit_level_db, f.voiced_fraction, f.pitch_hz, f.pitch_range_st, f.tilt_db,
+                       f.phone_distance, f.phones.c_str());
+        }
         if (std::getenv("SARMAP_KWS_DUMP"))
           std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f call %.2f llr %.4f\n",
                        &x == &data.negatives ? "neg" : "pos", h.keyword.c_str(), u.samples_start / 16000.0 + h.start_s,
@@ -255,26 +385,79 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       std::fprintf(stderr, "\n");
     }
   }
+  std::vector<std::vector<Hit>> conf(data.confusers.size());
+  for (size_t i = 0; i < data.confusers.size(); ++i) {
+    scene = 1000 + static_cast<int>(i);
+    run(data.confusers[i], &conf[i]);
+  }
   std::vector<Hit> neg;
   run(data.negatives, &neg);
+  if (features_csv) std::fclose(features_csv);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Any keyphrase holding the target word ("help me" for "help") counts as the target.
+  auto is_target = [&](const Hit& h) {
+    std::istringstream ws(h.keyword);
+    std::string w;
+    while (ws >> w)
+      if (w == o.target) return true;
+    return false;
+  };
+  auto in_call = [&](size_t i, const Hit& h) {
+    return h.t > data.call_start_s[i] - 0.5 && h.t < data.call_end_s[i] + 0.5;
+  };
+  const double half_s = data.negatives.size() / 16000.0 / 2;
+  if (!o.fit_verifier_features.empty()) {
+    std::vector<HitFeatures> x;
+    std::vector<int> y;
+    for (size_t i = 0; i < pos.size(); ++i) {
+      if ((i / kCalls.size()) % 2 == 1) continue;  // held-out scene
+      for (const auto& h : pos[i])
+        if (is_target(h) && in_call(i, h) && (h.call_s.empty() || h.call_s.back() <= o.fit_max_call_s)) {
+          x.push_back(h.features);
+          y.push_back(1);
+        }
+    }
+    for (const auto& h : neg)
+      if (is_target(h) && h.utterance_start_s < half_s) {
+        x.push_back(h.features);
+        y.push_back(0);
+      }
+    verifier_options = FitKeywordVerifier(x, y, o.fit_verifier_features, o.fit_l2);
+  }
+  KeywordVerifier verifier(verifier_options);
+  std::vector<double> vcuts = verifier_min_probabilities;
+  if (vcuts.empty()) vcuts = {verifier_options.enabled ? verifier_options.min_probability : -1.0};
   std::vector<KwsEvalResult> out;
   for (size_t j = 0; j < call_joins_s.size(); ++j)
   for (double max_utt : max_utterances_s)
-  for (double cut_value : cuts) {
-    // A hit counts when its confidence reaches the cut and its utterance is short enough.
-    // Any keyphrase holding the target word ("help me" for "help") counts as the target.
-    auto is_target = [&](const Hit& h) {
-      std::istringstream ws(h.keyword);
-      std::string w;
-      while (ws >> w)
-        if (w == o.target) return true;
-      return false;
-    };
+  for (double cut_value : cuts)
+  for (double vcut : vcuts) {
+    // A hit counts when its confidence reaches the cut, its utterance is short enough and the
+    // verifier (if any) accepts it.
+    auto verified = [&](const Hit& h) { return vcut < 0 || verifier.Probability(h.features) >= vcut; };
     auto passes = [&](const Hit& h) {
-      return h.confidence >= cut_value && (max_utt <= 0 || h.call_s[j] <= max_utt);
+      return h.confidence >= cut_value && (max_utt <= 0 || h.call_s[j] <= max_utt) && verified(h);
     };
     KwsEvalResult r;
+    r.verifier_min_probability = vcut;
+    r.verifier = verifier_options;
+    if (vcut >= 0) {
+      int calls_hits = 0, calls_pass = 0, real_hits = 0, real_pass = 0, syn_hits = 0, syn_pass = 0;
+      for (size_t i = 0; i < pos.size(); ++i)
+        for (const auto& h : pos[i])
+          if (is_target(h) && in_call(i, h)) {
+            ++calls_hits;
+            calls_pass += verified(h);
+          }
+      for (const auto& h : neg)
+        if (is_target(h)) {
+          (h.synthetic ? syn_hits : real_hits)++;
+          (h.synthetic ? syn_pass : real_pass) += verified(h);
+        }
+      r.verifier_pass_calls = calls_hits ? static_cast<double>(calls_pass) / calls_hits : 0;
+      r.verifier_pass_real = real_hits ? static_cast<double>(real_pass) / real_hits : 0;
+      r.verifier_pass_synthetic = syn_hits ? static_cast<double>(syn_pass) / syn_hits : 0;
+    }
     r.max_utterance_s = max_utt;
     r.call_join_s = call_joins_s[j];
     r.threshold = keywords.thresholds.empty() ? 0 : keywords.thresholds[0];
@@ -288,7 +471,12 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
       ++r.calls;
     }
     r.recall = r.calls ? static_cast<double>(r.hits) / r.calls : 0;
-    const double half_s = data.negatives.size() / 16000.0 / 2;
+    for (const auto& c : conf) {
+      bool any = false;
+      for (const auto& h : c) any |= passes(h) && is_target(h);
+      r.confuser_false_alarms += any;
+      ++r.confuser_scenes;
+    }
     for (size_t i = 0; i < pos.size(); ++i) {
       bool found = false;
       for (const auto& h : pos[i])
@@ -305,6 +493,8 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
         const bool target = is_target(h);
         (target ? r.target_false_alarms : r.other_false_alarms)++;
         if (target) (h.utterance_start_s < half_s ? r.tune_false_alarms : r.held_false_alarms)++;
+        if (target && h.utterance_start_s < half_s) (h.synthetic ? r.tune_fa_synthetic : r.tune_fa_real)++;
+        if (target && h.utterance_start_s >= half_s) (h.synthetic ? r.held_fa_synthetic : r.held_fa_real)++;
       }
     r.negative_minutes = data.negatives.size() / 16000.0 / 60.0;
     const double half_min = r.negative_minutes / 2;

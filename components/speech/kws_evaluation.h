@@ -19,6 +19,11 @@ namespace speech {
 // Renders `text` with espeak-ng at 16 kHz (empty if espeak-ng is unavailable).
 std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int words_per_minute, int pitch);
 bool EspeakAvailable();
+// Renders `text` with flite (voice kal16, awb, rms or slt; duration_stretch > 1 is slower) at
+// 16 kHz (empty if flite is unavailable). flite's voices are built from recorded speech, and the
+// en-us acoustic model recognises them, unlike espeak-ng's formant synthesis (README).
+std::vector<float> RenderFlite(const std::string& text, const std::string& voice, double duration_stretch);
+bool FliteAvailable();
 
 struct KwsEvalOptions {
   int num_calls = 40;
@@ -28,6 +33,22 @@ struct KwsEvalOptions {
   uint32_t seed = 1;
   std::string data_dir;             // shared data (real negative speech)
   std::string target = "help";
+  // Fit the keyword verifier (keyword_verifier.h) on the TUNING half's hits with these features
+  // (empty: use keywords.verifier as given): calls = "help" hits inside the call window of tuning
+  // scenes whose call is at most fit_max_call_s long (at the last call join); other speech = every
+  // "help" hit of the tuning half of the negative stream (any length: far more examples than the
+  // few that pass the call-shape rule).
+  std::vector<std::string> fit_verifier_features;
+  // Short synthetic confusers: this many scenes built like the calls (same espeak-ng voices,
+  // rates, pitches, noise and SNR) but saying a short phrase WITHOUT "help" ("hello", "hold on",
+  // "well done"...). "help" detections there are false alarms on synthetic speech of a call's
+  // shape: the test of a verifier that might only have learnt "synthetic voice".
+  int num_confusers = 0;
+  // Synthesiser of the calls, the confusers and the synthetic negative sentences: "espeak"
+  // (espeak-ng, sessions 2-3) or "flite".
+  std::string tts = "espeak";
+  double fit_l2 = 0.01;
+  double fit_max_call_s = 1.8;
 };
 
 struct KwsEvalResult {
@@ -48,12 +69,32 @@ struct KwsEvalResult {
   int tune_calls = 0, tune_hits = 0, tune_false_alarms = 0;
   int held_calls = 0, held_hits = 0, held_false_alarms = 0;
   double tune_recall = 0, tune_fa_per_10_min = 0, held_recall = 0, held_fa_per_10_min = 0;
+  // Keyword verifier (-1: none). False alarms split by the kind of negative recording (real
+  // recordings vs espeak-ng sentences), and the verifier's pass rate alone (no call-shape rule)
+  // on every "help" hit of each kind: a verifier that only learnt "synthetic voice" would pass
+  // the synthetic negatives like the calls.
+  double verifier_min_probability = -1;
+  int tune_fa_real = 0, tune_fa_synthetic = 0, held_fa_real = 0, held_fa_synthetic = 0;
+  double verifier_pass_calls = 0, verifier_pass_real = 0, verifier_pass_synthetic = 0;
+  int confuser_scenes = 0, confuser_false_alarms = 0;  // scenes with a passing "help" / scenes
+  VerifierOptions verifier;  // the verifier used (fitted when fit_verifier_features was given)
 };
 
 struct KwsEvalData {
   std::vector<std::vector<float>> positives;  // 16 kHz scenes, call at call_start_s
   std::vector<double> call_start_s, call_end_s;
+  std::vector<std::vector<float>> confusers;  // short synthetic non-calls (num_confusers)
   std::vector<float> negatives;               // one long 16 kHz stream
+  // What the negative stream is made of: each recording's span (samples, without the noise gap
+  // before it), its name, and whether it is an espeak-ng sentence (synthetic) or a real recording.
+  struct NegativeSource {
+    int64_t start_sample = 0, end_sample = 0;
+    std::string name;
+    bool synthetic = false;
+  };
+  std::vector<NegativeSource> negative_sources;
+  // Label of the negative source at stream time t (s): "real:<file>" / "espeak:<n>", "gap" between.
+  std::string NegativeSourceAt(double t_s, bool* synthetic = nullptr) const;
   // The parts of each positive scene (summed in `positives`): the call (placed), other talker, noise.
   std::vector<std::vector<float>> positive_call, positive_babble, positive_noise;
 };
@@ -75,7 +116,8 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
                                             const VadOptions& vad, const KwsEvalOptions& options,
                                             const std::vector<double>& min_confidences,
                                             const std::vector<double>& max_utterances_s = {0.0},
-                                            const std::vector<double>& call_joins_s = {0.0});
+                                            const std::vector<double>& call_joins_s = {0.0},
+                                            const std::vector<double>& verifier_min_probabilities = {});
 
 }  // namespace speech
 }  // namespace sarmap

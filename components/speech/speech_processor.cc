@@ -108,7 +108,9 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
                  u.start_sample / static_cast<double>(geometry_.sample_rate_hz),
                  u.end_sample / static_cast<double>(geometry_.sample_rate_hz),
                  u.samples.size() / static_cast<double>(geometry_.sample_rate_hz));
-  const DecodeResult d = spotter_.Decode(u.samples.data(), u.samples.size(), full_decoding_);
+  const DecodeResult d = spotter_.Decode(u.samples.data(), u.samples.size(), full_decoding_,
+                                         static_cast<double>(u.start_sample - u.samples_start) / geometry_.sample_rate_hz,
+                                         static_cast<double>(u.end_sample - u.samples_start) / geometry_.sample_rate_hz);
   SpeechResult base;
   base.track_id = id;
   auto it = tracks_.find(id);
