@@ -14,7 +14,7 @@ PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
   libopencv-dev libopencv-contrib-dev libpcl-dev libceres-dev libsuitesparse-dev \
   libopenni2-dev libpocketsphinx-dev pocketsphinx-en-us libfftw3-dev libsndfile1-dev \
   libasound2-dev libssl-dev libcpp-httplib-dev nlohmann-json3-dev \
-  iproute2 util-linux espeak-ng sox chromium
+  iproute2 util-linux espeak-ng flite sox chromium
 # Java types for lcm-spy: installed when available, never required.
 OPTIONAL_PACKAGES = liblcm-java default-jdk-headless
 
