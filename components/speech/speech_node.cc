@@ -164,7 +164,8 @@ int main(int argc, char** argv) {
       }
       node.SetStatusMessage("utterances " + std::to_string(processor->utterances()) + ", events " +
                             std::to_string(events) + ", people " + std::to_string(people) + ", dropped " +
-                            std::to_string(dropped));
+                            std::to_string(dropped) + ", leaked hits " +
+                            std::to_string(processor->leaked_hits_dropped()));
     });
     SARMAP_LOG(INFO) << "listening to array '" << geometry.name << "' on " << options.audio_channel << " + "
                      << options.doa_channel;

@@ -1,6 +1,7 @@
 #include "speech/speech_processor.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -9,11 +10,54 @@ namespace speech {
 
 SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind kind, SpeechOptions options)
     : geometry_(geometry), kind_(kind), options_(options), enhancer_(geometry, options.enhancer),
-      spotter_(options.keywords), full_decoding_(options.keywords.full_decoding) {
+      spotter_(options.keywords), full_decoding_(options.keywords.full_decoding),
+      arbiter_(static_cast<int64_t>(options.beam_arbitration_s * geometry.sample_rate_hz)) {
   if (geometry_.sample_rate_hz != 16000)
     throw std::invalid_argument("the PocketSphinx en-us model needs 16 kHz audio; array '" + geometry_.name + "' is " +
                                 std::to_string(geometry_.sample_rate_hz) + " Hz");
   output_offset_ = options.enhancer.fft_size - options.enhancer.hop_size;
+  if (options_.beam_arbitration_s > 0) {
+    constexpr int kFft = 512;
+    band_stft_ = std::make_unique<sound::MultichannelStft>(geometry_.num_mics(), kFft, kFft);
+    band_lo_ = static_cast<int>(300.0 * kFft / geometry_.sample_rate_hz);
+    band_hi_ = static_cast<int>(3400.0 * kFft / geometry_.sample_rate_hz);
+  }
+}
+
+std::vector<double> SpeechProcessor::BeamPowers(const sound::Direction& direction, int64_t begin,
+                                                int64_t end) const {
+  std::vector<double> powers;
+  if (band_frames_.empty()) return powers;
+  // X_m(f) = S(f) exp(-j 2 pi f tau_m): steering by exp(+j 2 pi f tau_m) aligns the mics.
+  const Eigen::VectorXd tau = geometry_.Delays(geometry_.Unit(kind_, direction));
+  const int n = band_hi_ - band_lo_ + 1, mics = geometry_.num_mics();
+  Eigen::MatrixXcf steer(n, mics);
+  for (int b = 0; b < n; ++b) {
+    const double f = (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) / band_stft_->fft_size();
+    for (int m = 0; m < mics; ++m)
+      steer(b, m) = std::polar(1.0f / mics, static_cast<float>(2 * M_PI * f * tau[m]));
+  }
+  for (const BandFrame& frame : band_frames_) {
+    if (frame.end_sample <= begin || frame.end_sample > end) continue;
+    powers.push_back(frame.bins.cwiseProduct(steer).rowwise().sum().squaredNorm());
+  }
+  return powers;
+}
+
+double SpeechProcessor::GainPower(const sound::Direction& direction, int64_t start_sample, int64_t end_sample) const {
+  const int64_t floor_span = 5 * geometry_.sample_rate_hz;
+  std::vector<double> before = BeamPowers(direction, start_sample - floor_span, start_sample);
+  const std::vector<double> during = BeamPowers(direction, start_sample, end_sample + band_stft_->fft_size());
+  if (during.empty()) return 0;
+  double floor = 0;
+  if (!before.empty()) {
+    auto q = before.begin() + before.size() / 10;
+    std::nth_element(before.begin(), q, before.end());
+    floor = *q;
+  }
+  double mean = 0;
+  for (double p : during) mean += p / during.size();
+  return mean - floor;
 }
 
 void SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, int64_t sample) {
@@ -24,8 +68,21 @@ void SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const E
   t.last_sample = sample;
 }
 
-void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, std::vector<SpeechResult>* results) {
+void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, std::vector<SpeechResult>* out) {
+  std::vector<SpeechResult>* results = &fresh_;
   samples_seen_ += frames;
+  if (band_stft_) {
+    band_stft_->PushInterleaved(data, frames, block_channels, geometry_.channel_map,
+                                [&](const Eigen::MatrixXcf& spectra, int64_t end_sample) {
+                                  band_frames_.push_back(
+                                      {end_sample, spectra.middleRows(band_lo_, band_hi_ - band_lo_ + 1)});
+                                });
+    // Kept: the floor span before the oldest hit still waiting, and that hit.
+    const int64_t keep = static_cast<int64_t>((options_.beam_arbitration_s + 12.0) * geometry_.sample_rate_hz);
+    size_t old = 0;
+    while (old < band_frames_.size() && samples_seen_ - band_frames_[old].end_sample > keep) ++old;
+    band_frames_.erase(band_frames_.begin(), band_frames_.begin() + old);
+  }
   const int64_t timeout = static_cast<int64_t>(options_.track_timeout_s * geometry_.sample_rate_hz);
   for (auto it = tracks_.begin(); it != tracks_.end();)
     it = samples_seen_ - it->second.last_sample > timeout ? tracks_.erase(it) : std::next(it);
@@ -76,15 +133,56 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     vad_origins_.erase(it->first);
     it = vads_.erase(it);
   }
+  arbiter_.Push(&fresh_, samples_seen_, false, out);
 }
 
-void SpeechProcessor::Flush(std::vector<SpeechResult>* results) {
+void SpeechProcessor::Flush(std::vector<SpeechResult>* out) {
   for (auto& [id, vad] : vads_) {
     std::vector<Utterance> done;
     vad->Flush(&done);
-    for (const auto& u : done) Handle(id, u, results);
-    FinishCall(id, results);
+    for (const auto& u : done) Handle(id, u, &fresh_);
+    FinishCall(id, &fresh_);
   }
+  arbiter_.Push(&fresh_, samples_seen_, true, out);
+}
+
+void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush, std::vector<SpeechResult>* out) {
+  for (SpeechResult& r : *fresh) {
+    if (hold_samples_ <= 0 || r.keyword.empty())
+      out->push_back(std::move(r));
+    else
+      held_.push_back(std::move(r));
+  }
+  fresh->clear();
+  if (held_.empty()) return;
+  // A louder hit of another beam over the same stretch of the stream: this one is its leak.
+  auto louder_elsewhere = [](const SpeechResult& r, const std::vector<SpeechResult>& others) {
+    for (const SpeechResult& o : others)
+      if (o.track_id != r.track_id && o.start_sample < r.end_sample && r.start_sample < o.end_sample &&
+          o.gain_power > r.gain_power)
+        return true;
+    return false;
+  };
+  std::vector<SpeechResult> waiting, now_decided;
+  for (SpeechResult& r : held_) {
+    if (!flush && now - r.end_sample < hold_samples_) {
+      waiting.push_back(std::move(r));
+      continue;
+    }
+    now_decided.push_back(std::move(r));
+  }
+  for (const SpeechResult& r : now_decided) {
+    if (louder_elsewhere(r, now_decided) || louder_elsewhere(r, waiting) || louder_elsewhere(r, decided_))
+      ++dropped_;
+    else
+      out->push_back(r);
+  }
+  decided_.insert(decided_.end(), now_decided.begin(), now_decided.end());
+  held_ = std::move(waiting);
+  // Decided hits matter only to hits that end at most hold_samples_ after them.
+  decided_.erase(std::remove_if(decided_.begin(), decided_.end(),
+                                [&](const SpeechResult& d) { return now - d.end_sample > 4 * hold_samples_; }),
+                 decided_.end());
 }
 
 bool SpeechProcessor::joins_calls() const {
@@ -148,6 +246,7 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
     const int64_t s0 = u.samples_start + to_stream;
     r.start_sample = s0 + static_cast<int64_t>(h.start_s * geometry_.sample_rate_hz);
     r.end_sample = s0 + static_cast<int64_t>(h.end_s * geometry_.sample_rate_hz);
+    if (band_stft_ && r.has_direction) r.gain_power = GainPower(r.direction, r.start_sample, r.end_sample);
     keyword_out->push_back(r);
     any = true;
   }

@@ -132,6 +132,41 @@ TEST(SpeechProcessor, CallJoinDropsHelpThatStartsALongerStretchOfTalk) {
   EXPECT_FALSE(HeardHelp(scene(true), 0.5));  // joined: a 3 s stretch of talk
 }
 
+// The arbiter alone: overlapping hits of two beams keep the louder; hits that do not overlap,
+// hits of one beam and results without a keyword all pass; nothing is decided before the hold.
+TEST(BeamArbiter, KeepsTheLoudestBeamOfOneUtterance) {
+  auto hit = [](int64_t track, int64_t start, int64_t end, double level, const char* keyword = "help") {
+    SpeechResult r;
+    r.track_id = track;
+    r.start_sample = start;
+    r.end_sample = end;
+    r.gain_power = level;
+    r.keyword = keyword;
+    return r;
+  };
+  BeamArbiter arbiter(32000);
+  std::vector<SpeechResult> fresh{hit(1, 1000, 9000, -30), hit(2, 2000, 8000, -24), hit(2, 3000, 9000, -24, "here"),
+                                  hit(3, 50000, 60000, -40), hit(1, 1000, 9000, -30, "")},
+      out;
+  arbiter.Push(&fresh, 20000, false, &out);
+  ASSERT_EQ(out.size(), 1u);  // the text-only result, at once
+  EXPECT_TRUE(out[0].keyword.empty());
+  out.clear();
+  // Track 1's hit arrives late from its own beam; it still meets track 2's.
+  std::vector<SpeechResult> none;
+  arbiter.Push(&none, 45000, false, &out);
+  ASSERT_EQ(out.size(), 2u);  // track 2's two hits (one beam may say two keywords)
+  for (const auto& r : out) EXPECT_EQ(r.track_id, 2);
+  out.clear();
+  std::vector<SpeechResult> late{hit(1, 4000, 9500, -35)};
+  arbiter.Push(&late, 46000, false, &out);
+  EXPECT_TRUE(out.empty());
+  arbiter.Push(&none, 0, true, &out);
+  ASSERT_EQ(out.size(), 1u);  // track 3's, which overlaps nothing
+  EXPECT_EQ(out[0].track_id, 3);
+  EXPECT_EQ(arbiter.dropped(), 2);
+}
+
 }  // namespace
 }  // namespace speech
 }  // namespace sarmap
