@@ -12,32 +12,10 @@
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/speech_event_t.hpp"
 #include "sound_localisation/localiser.h"
-#include "speech/speech_processor.h"
+#include "speech/speech_messages.h"
 
 using namespace sarmap;
 
-struct SpeechNodeOptions {
-  std::string audio_channel = "AUDIO";
-  std::string doa_channel = "DOA";
-  std::string speech_channel = "SPEECH";
-  std::string people_channel = "PEOPLE_AUDIO";
-  std::string array = "config/arrays/respeaker4.yaml";
-  std::string device_id = "";
-  std::string search = "auto";  // must match the localiser's (1d for linear arrays)
-  speech::SpeechOptions speech;
-  template <class V>
-  void Visit(V& v) {
-    v("audio_channel", audio_channel, "input audio_frame_t");
-    v("doa_channel", doa_channel, "input doa_t (tracked directions)");
-    v("speech_channel", speech_channel, "output speech_event_t");
-    v("people_channel", people_channel, "output people_detections_t (CUE_HEARD)");
-    v("array", array, "array description (config/arrays/<name>.yaml)");
-    v("device_id", device_id, "only this device ('' = the first heard)");
-    v("search", search, "direction kind of the DOA input: auto, 1d, azimuth, azimuth_elevation");
-    v("speech", speech, "enhancement, VAD and keyword spotting");
-  }
-  void Validate(common::Validator&) const {}
-};
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-speech", [&]() {
@@ -48,7 +26,7 @@ int main(int argc, char** argv) {
                 "Full decoding on request: --set speech.keywords.full_decoding=true");
     if (!p.Parse(argc, argv)) return 0;
     common::SetLogLevel(common::ParseLogLevel(args.log_level));
-    const auto options = common::LoadOptions<SpeechNodeOptions>(args.config_path, args.overrides);
+    const auto options = common::LoadOptions<speech::SpeechNodeOptions>(args.config_path, args.overrides);
     if (args.print_config) {
       std::printf("%s", common::OptionsToYaml(options, true).c_str());
       return 0;
@@ -123,49 +101,22 @@ int main(int argc, char** argv) {
       results.clear();
       processor->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &results);
       for (const auto& r : results) {
-        sarmap::speech_event_t e;
-        e.header.utime = to_utime(r.start_sample);
-        e.header.frame = "mic_array";
-        e.track_id = r.track_id;
-        e.text = r.text;
-        e.keyword = r.keyword;
-        e.confidence = static_cast<float>(r.confidence);
-        e.azimuth_rad = r.has_direction ? r.direction.azimuth_rad : NAN;
-        e.elevation_rad = r.has_direction ? r.direction.elevation_rad : NAN;
-        e.start_utime = to_utime(r.start_sample);
-        e.end_utime = to_utime(r.end_sample);
-        e.is_final = true;
+        sarmap::speech_event_t e = speech::ToSpeechEvent(r, to_utime(r.start_sample), to_utime(r.end_sample));
         speech_pub.Publish(&e);
         ++events;
         SARMAP_LOG(INFO) << "heard" << (r.keyword.empty() ? "" : " keyword '" + r.keyword + "'")
                          << (r.text.empty() ? "" : " \"" + r.text + "\"") << " track " << r.track_id << " conf "
                          << r.confidence;
         if (r.keyword.empty() || !r.has_direction) continue;
-        sarmap::people_detections_t d;
-        d.header.utime = e.end_utime;
-        d.header.frame = "mic_array";
-        d.sensor_id = device;
-        sarmap::person_detection_t person{};
-        person.track_id = r.track_id;
-        person.cue = sarmap::person_detection_t::CUE_HEARD;
-        person.has_range = false;
-        for (double& v : person.position_m) v = 0;
-        for (double& v : person.position_covariance) v = 0;
-        person.azimuth_rad = r.direction.azimuth_rad;
-        person.elevation_rad = r.direction.elevation_rad;
-        for (int i = 0; i < 4; ++i) person.direction_covariance[i] = r.covariance(i / 2, i % 2);
-        person.height_m = 0;
-        person.confidence = static_cast<float>(r.confidence);
-        person.keyword = r.keyword;
-        d.detections.push_back(person);
-        d.num_detections = 1;
+        sarmap::people_detections_t d = speech::ToPeopleAudio(r, device, e.end_utime);
         people_pub.Publish(&d);
         ++people;
       }
       node.SetStatusMessage("utterances " + std::to_string(processor->utterances()) + ", events " +
                             std::to_string(events) + ", people " + std::to_string(people) + ", dropped " +
                             std::to_string(dropped) + ", leaked hits " +
-                            std::to_string(processor->leaked_hits_dropped()));
+                            std::to_string(processor->leaked_hits_dropped()) + ", re-attributed " +
+                            std::to_string(processor->hits_reattributed()));
     });
     SARMAP_LOG(INFO) << "listening to array '" << geometry.name << "' on " << options.audio_channel << " + "
                      << options.doa_channel;

@@ -24,41 +24,45 @@ SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind k
   }
 }
 
-std::vector<double> SpeechProcessor::BeamPowers(const sound::Direction& direction, int64_t begin,
-                                                int64_t end) const {
-  std::vector<double> powers;
-  if (band_frames_.empty()) return powers;
-  // X_m(f) = S(f) exp(-j 2 pi f tau_m): steering by exp(+j 2 pi f tau_m) aligns the mics.
-  const Eigen::VectorXd tau = geometry_.Delays(geometry_.Unit(kind_, direction));
+double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, int64_t start_sample, int64_t end_sample) const {
+  if (band_frames_.empty()) return 0;
   const int n = band_hi_ - band_lo_ + 1, mics = geometry_.num_mics();
-  Eigen::MatrixXcf steer(n, mics);
+  const int64_t floor_span = 5 * geometry_.sample_rate_hz;
+  // Per-bin floor: a low percentile of the mics' mean power over the 5 s before the hit.
+  std::vector<std::vector<float>> history(n);
+  for (const BandFrame& f : band_frames_) {
+    if (f.end_sample <= start_sample - floor_span || f.end_sample > start_sample) continue;
+    for (int b = 0; b < n; ++b) history[b].push_back(f.bins.row(b).squaredNorm() / mics);
+  }
+  std::vector<float> floor(n, 0.0f);
   for (int b = 0; b < n; ++b) {
-    const double f = (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) / band_stft_->fft_size();
-    for (int m = 0; m < mics; ++m)
-      steer(b, m) = std::polar(1.0f / mics, static_cast<float>(2 * M_PI * f * tau[m]));
+    if (history[b].empty()) continue;
+    auto q = history[b].begin() + history[b].size() / 5;
+    std::nth_element(history[b].begin(), q, history[b].end());
+    floor[b] = *q;
   }
-  for (const BandFrame& frame : band_frames_) {
-    if (frame.end_sample <= begin || frame.end_sample > end) continue;
-    powers.push_back(frame.bins.cwiseProduct(steer).rowwise().sum().squaredNorm());
+  const Eigen::VectorXd tau = geometry_.Delays(geometry_.Unit(kind_, direction));
+  double score = 0;
+  int used = 0;
+  for (const BandFrame& f : band_frames_) {
+    if (f.end_sample <= start_sample || f.end_sample > end_sample + band_stft_->fft_size()) continue;
+    for (int b = 0; b < n; ++b) {
+      if (f.bins.row(b).squaredNorm() / mics < 4.0f * floor[b]) continue;  // not 6 dB over its floor
+      const double w = 2 * M_PI * (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) / band_stft_->fft_size();
+      // PHAT: each mic's phase only, aligned for the direction; |sum|^2 is mics^2 when they agree.
+      std::complex<double> sum = 0;
+      for (int m = 0; m < mics; ++m) {
+        const std::complex<double> x(f.bins(b, m).real(), f.bins(b, m).imag());
+        if (std::abs(x) < 1e-12) continue;
+        sum += x / std::abs(x) * std::polar(1.0, w * tau[m]);
+      }
+      score += std::norm(sum) / (mics * mics);
+      ++used;
+    }
   }
-  return powers;
+  return used ? score / used : 0;
 }
 
-double SpeechProcessor::GainPower(const sound::Direction& direction, int64_t start_sample, int64_t end_sample) const {
-  const int64_t floor_span = 5 * geometry_.sample_rate_hz;
-  std::vector<double> before = BeamPowers(direction, start_sample - floor_span, start_sample);
-  const std::vector<double> during = BeamPowers(direction, start_sample, end_sample + band_stft_->fft_size());
-  if (during.empty()) return 0;
-  double floor = 0;
-  if (!before.empty()) {
-    auto q = before.begin() + before.size() / 10;
-    std::nth_element(before.begin(), q, before.end());
-    floor = *q;
-  }
-  double mean = 0;
-  for (double p : during) mean += p / during.size();
-  return mean - floor;
-}
 
 void SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, int64_t sample) {
   TrackedSource& t = tracks_[id];
@@ -246,7 +250,24 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
     const int64_t s0 = u.samples_start + to_stream;
     r.start_sample = s0 + static_cast<int64_t>(h.start_s * geometry_.sample_rate_hz);
     r.end_sample = s0 + static_cast<int64_t>(h.end_s * geometry_.sample_rate_hz);
-    if (band_stft_ && r.has_direction) r.gain_power = GainPower(r.direction, r.start_sample, r.end_sample);
+    if (band_stft_) {
+      // The hit belongs to the tracked direction its speech came from (SpeechDirectionScore),
+      // which need not be the beam that decoded it (a talker leaks into every beam, and his own
+      // track may have no beam when more than max_sources are tracked).
+      if (r.has_direction) r.gain_power = SpeechDirectionScore(r.direction, r.start_sample, r.end_sample);
+      for (const auto& [track_id, track] : tracks_) {
+        if (track_id == r.track_id) continue;
+        const double g = SpeechDirectionScore(track.direction, r.start_sample, r.end_sample);
+        if (g > r.gain_power) {
+          r.gain_power = g;
+          r.track_id = track_id;
+          r.has_direction = true;
+          r.direction = track.direction;
+          r.covariance = track.covariance;
+          ++reattributed_;
+        }
+      }
+    }
     keyword_out->push_back(r);
     any = true;
   }

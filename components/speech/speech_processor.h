@@ -29,12 +29,12 @@ struct SpeechOptions {
   // removes that noise) passes the talker's speech leaking through its side lobes, and the
   // keyword spotter finds the talker's words there too, with the noise source's direction
   // (open-area mission: 63 of 136 keyword directions pointed at the generator). Keyword hits of
-  // different beams that overlap in time are one utterance: only the hit of the beam whose
-  // direction gained the most power is kept. The gain is measured on the raw microphones with a
-  // delay-and-sum beam (its gain off its own direction is at most 1, unlike MVDR's and the
-  // post-filter's): speech-band power over the hit less the direction's floor (10th percentile
-  // over the 5 s before it), in linear power, so a loud steady source does not win. Hits wait
-  // this long after their end for the other beams' (0: off).
+  // different beams that overlap in time are one utterance. Each hit is given to the tracked
+  // direction (beam or not) its speech came from: on the raw microphones, the time-frequency
+  // bins (300-3400 Hz) 6 dB above their floor, i.e. the speech and not a steady source, and
+  // the SRP-PHAT of those bins towards each tracked direction (PHAT: a 4.6 cm array's power
+  // beams are nearly omnidirectional at speech frequencies, its phases are not). Of overlapping
+  // hits only the best-scoring one is kept. Hits wait this long after their end (0: off).
   double beam_arbitration_s = 2.0;
   template <class V>
   void Visit(V& v) {
@@ -70,7 +70,7 @@ struct SpeechResult {
   std::string text, keyword;
   double confidence = 0;
   int64_t start_sample = 0, end_sample = 0;  // stream samples
-  double gain_power = 0;  // speech-band power its direction gained over [start, end) (BeamArbiter)
+  double gain_power = 0;  // how well its speech fits its direction (SpeechDirectionScore; BeamArbiter)
 };
 
 // Keeps, of keyword hits on different beams that overlap in time, only the one with the largest
@@ -103,6 +103,8 @@ class SpeechProcessor {
   int64_t utterances() const { return utterances_; }
   // Keyword hits dropped as another beam's louder hit of the same utterance.
   int64_t leaked_hits_dropped() const { return arbiter_.dropped(); }
+  // Keyword hits given to another tracked direction than their beam's.
+  int64_t hits_reattributed() const { return reattributed_; }
 
  private:
   void Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results);
@@ -132,7 +134,8 @@ class SpeechProcessor {
   bool full_decoding_;
   BeamArbiter arbiter_;
   std::vector<SpeechResult> fresh_;
-  // Speech-band spectra of the raw microphones (no overlap), kept a few seconds for GainPower.
+  int64_t reattributed_ = 0;
+  // Speech-band spectra of the raw microphones (no overlap), kept a few seconds for the scores.
   struct BandFrame {
     int64_t end_sample = 0;
     Eigen::MatrixXcf bins;  // band bins x mics
@@ -140,9 +143,9 @@ class SpeechProcessor {
   std::unique_ptr<sound::MultichannelStft> band_stft_;
   std::vector<BandFrame> band_frames_;  // oldest first
   int band_lo_ = 0, band_hi_ = 0;
-  // Delay-and-sum power of frames ending in (begin, end] towards `direction`, mean per frame.
-  std::vector<double> BeamPowers(const sound::Direction& direction, int64_t begin, int64_t end) const;
-  double GainPower(const sound::Direction& direction, int64_t start_sample, int64_t end_sample) const;
+  // How well the speech of [start, end) fits `direction`: over the time-frequency bins 6 dB above
+  // their floor (20th percentile of the 5 s before), the mean SRP-PHAT towards it (0..1).
+  double SpeechDirectionScore(const sound::Direction& direction, int64_t start_sample, int64_t end_sample) const;
 };
 
 }  // namespace speech
