@@ -235,6 +235,37 @@ Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const 
   return Rigid2d(pose[0], pose[1], pose[2]);
 }
 
+double RotationInformation(const ProbabilityGrid& grid, const PointCloud& points,
+                           const Rigid2d& pose, double occupied_space_weight,
+                           double translation_weight) {
+  if (points.empty()) return 0;
+  const int n = static_cast<int>(points.size());
+  ceres::AutoDiffCostFunction<OccupiedSpaceCost, ceres::DYNAMIC, 3> cost(
+      new OccupiedSpaceCost(occupied_space_weight / std::sqrt(double(n)), points, grid), n);
+  const double x[3] = {pose.translation().x(), pose.translation().y(), pose.yaw_rad()};
+  const double* parameters[1] = {x};
+  std::vector<double> residuals(n), jacobian(static_cast<size_t>(n) * 3);
+  double* jacobians[1] = {jacobian.data()};
+  if (!cost.Evaluate(parameters, residuals.data(), jacobians)) return 0;
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> j(
+      jacobian.data(), n, 3);
+  Eigen::Matrix3d h = j.transpose() * j;
+  h(0, 0) += translation_weight * translation_weight;
+  h(1, 1) += translation_weight * translation_weight;
+  const Eigen::Matrix2d h_xx = h.topLeftCorner<2, 2>();
+  const Eigen::Vector2d h_xt = h.topRightCorner<2, 1>();
+  const double info = h(2, 2) - h_xt.dot(h_xx.ldlt().solve(h_xt));
+  return std::max(0.0, info);
+}
+
+double AdaptiveRotationWeight(double info, double base_weight, double informative_weight,
+                              double info_low, double info_high) {
+  if (informative_weight <= 0 || !(info > info_low)) return base_weight;
+  if (info >= info_high) return informative_weight;
+  const double f = std::log(info / info_low) / std::log(info_high / info_low);
+  return std::exp((1 - f) * std::log(base_weight) + f * std::log(informative_weight));
+}
+
 PrecomputationStack::PrecomputationStack(const ProbabilityGrid& grid, int depth) {
   depth = std::max(1, depth);
   offset_ = (1 << (depth - 1)) - 1;

@@ -57,6 +57,23 @@ struct CeresMatcherOptions {
 Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& prior,
                    const Rigid2d& initial, const CeresMatcherOptions& options);
 
+// What the map term of CeresMatch can tell about the heading at `pose`: with J the Jacobian of
+// its residuals r_i = w_o / sqrt(N) * (1 - P(T p_i)) with respect to (x, y, theta) and
+// H = J^T J (Gauss-Newton information, + w_t^2 on x and y for the translation prior), the
+// information on theta once the translation is left free (Schur complement):
+//   I_theta = H_tt - H_tx H_xx^-1 H_xt     [1 / rad^2, same units as w_r^2]
+// A scan that sees corners is large here; a corridor seen over a narrow field of view, where
+// turning the scan can be traded for sliding it, is small.
+double RotationInformation(const ProbabilityGrid& grid, const PointCloud& points,
+                           const Rigid2d& pose, double occupied_space_weight,
+                           double translation_weight);
+
+// The rotation prior weight for a scan with heading information `info`: `base_weight` while
+// info <= info_low, `informative_weight` once info >= info_high, log-linear (in both) between.
+// informative_weight <= 0 means off: base_weight always.
+double AdaptiveRotationWeight(double info, double base_weight, double informative_weight,
+                              double info_low, double info_high);
+
 // Max-pooled copies of a grid for branch and bound: level h holds, for cell (x, y), the
 // maximum over cells [x, x + 2^h) x [y, y + 2^h), as 0..255 for [kMinProbability,
 // kMaxProbability] (unknown = 0). An upper bound of the score of every pose whose offsets lie

@@ -131,6 +131,36 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
   EXPECT_FALSE(BranchAndBoundMatch(*grid_, stack, points_, start, b, 0.95, &found, &score));
 }
 
+TEST_F(ScanMatcherTest, RotationInformationIsWhatTurningTellsBeyondSliding) {
+  // The whole room (corners, a pillar) pins the heading.
+  const double room = RotationInformation(*grid_, points_, truth_, 1.0, 10.0);
+  EXPECT_GT(room, 100.0);
+  // Freeing the translation can only lose heading information (Schur complement): with the
+  // translation held fixed by a huge prior it is the plain H_theta_theta.
+  const double held = RotationInformation(*grid_, points_, truth_, 1.0, 1e6);
+  const double free = RotationInformation(*grid_, points_, truth_, 1.0, 0.0);
+  EXPECT_GE(held, room);
+  EXPECT_GE(room, free);
+  // The same points seen in a narrow, distant sector (a depth camera looking down a room):
+  // turning the scan looks like sliding it sideways, little heading information is left.
+  PointCloud sector;
+  for (const auto& p : points_) {
+    if (p.norm() > 3.0f && std::abs(std::atan2(p.y(), p.x())) < 0.15f) sector.push_back(p);
+  }
+  ASSERT_GE(sector.size(), 5u);
+  EXPECT_LT(RotationInformation(*grid_, sector, truth_, 1.0, 0.0), 0.2 * free);
+  EXPECT_EQ(RotationInformation(*grid_, PointCloud(), truth_, 1.0, 10.0), 0.0);
+}
+
+TEST(AdaptiveRotationWeightTest, BaseBelowLowInformativeAboveHighLogLinearBetween) {
+  EXPECT_DOUBLE_EQ(AdaptiveRotationWeight(500, 40, 10, 1e3, 1e4), 40);
+  EXPECT_DOUBLE_EQ(AdaptiveRotationWeight(2e4, 40, 10, 1e3, 1e4), 10);
+  // Geometric middle of the information range: geometric middle of the weights.
+  EXPECT_NEAR(AdaptiveRotationWeight(std::sqrt(1e7), 40, 10, 1e3, 1e4), 20, 1e-9);
+  // Off: the base weight whatever the information.
+  EXPECT_DOUBLE_EQ(AdaptiveRotationWeight(2e4, 40, 0, 1e3, 1e4), 40);
+}
+
 }  // namespace
 }  // namespace slam
 }  // namespace sarmap

@@ -257,6 +257,19 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
   m.translation_weight = l.ceres_translation_weight;
   m.rotation_weight = l.ceres_rotation_weight;
   m.max_iterations = l.ceres_max_iterations;
+  if (l.ceres_rotation_weight_informative > 0) {
+    // Trust the odometry's heading less where the scan itself pins the heading (corners in
+    // view), keep it where the scan cannot tell turning from sliding (a corridor).
+    // The matcher's cost is a mean over the points; counted per point (x N), a scan of 20
+    // points through glass tells less than one of 200 that sees the same walls.
+    const double info = points.size() * RotationInformation(grid, points, initial,
+                                                            l.ceres_occupied_weight,
+                                                            l.ceres_translation_weight);
+    m.rotation_weight = AdaptiveRotationWeight(info, l.ceres_rotation_weight,
+                                               l.ceres_rotation_weight_informative,
+                                               l.rotation_information_low,
+                                               l.rotation_information_high);
+  }
   // The translation prior is the prediction (as in Cartographer): where the scan cannot tell
   // (a corridor), the prediction wins; the rotation prior is the correlative result (or the
   // prediction, for a robot whose odometry is better than what a degenerate scan tells).

@@ -40,6 +40,10 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsLocalTiesAndC
   EXPECT_GE(robot.slam.local.ceres_translation_weight, base.slam.local.ceres_translation_weight);
   EXPECT_GE(robot.slam.local.ceres_rotation_weight, base.slam.local.ceres_rotation_weight);
 
+  // The laser benchmark keeps a fixed rotation prior; the robot adapts it to each scan.
+  EXPECT_EQ(base.slam.local.ceres_rotation_weight_informative, 0);
+  EXPECT_GT(robot.slam.local.ceres_rotation_weight_informative, 0);
+
   // Everything else is inherited: the printed options differ only in those lines.
   const auto base_lines = Lines(common::OptionsToYaml(base, false));
   const auto robot_lines = Lines(common::OptionsToYaml(robot, false));
@@ -50,6 +54,8 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsLocalTiesAndC
   }
   const std::vector<std::string> allowed = {"ceres_translation_weight", "ceres_rotation_weight",
                                             "ceres_rotation_prior_from_prediction",
+                                            "ceres_rotation_weight_informative",
+                                            "rotation_information_low", "rotation_information_high",
                                             "local_slam_translation_weight", "intra_sigma_m",
                                             "intra_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
                                             "odometry_sigma_m", "odometry_sigma_deg",

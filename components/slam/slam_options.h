@@ -64,6 +64,13 @@ struct LocalOptions {
   double ceres_translation_weight = 10.0;
   double ceres_rotation_weight = 40.0;
   int ceres_max_iterations = 20;
+  // Rotation prior adapted to what the scan tells about heading (I = number of points x
+  // RotationInformation at the correlative result): the weight is ceres_rotation_weight while I <= info_low and
+  // ceres_rotation_weight_informative once I >= info_high, log-linear in between.
+  // 0 (the default) keeps ceres_rotation_weight for every scan.
+  double ceres_rotation_weight_informative = 0;
+  double rotation_information_low = 3e3;
+  double rotation_information_high = 1e4;
   // Motion filter: a scan becomes a graph node (and is inserted) only when the robot moved.
   double node_max_time_s = 5.0;
   double node_max_distance_m = 0.2;
@@ -88,6 +95,13 @@ struct LocalOptions {
     v("ceres_translation_weight", ceres_translation_weight, "Scan matcher: weight of staying at the prior translation");
     v("ceres_rotation_weight", ceres_rotation_weight, "Scan matcher: weight of staying at the prior rotation");
     v("ceres_max_iterations", ceres_max_iterations, "Scan matcher iterations");
+    v("ceres_rotation_weight_informative", ceres_rotation_weight_informative,
+      "Scan matcher: rotation prior weight for a scan whose heading information (1/rad^2) is at "
+      "least rotation_information_high (0: off, ceres_rotation_weight always)");
+    v("rotation_information_low", rotation_information_low,
+      "Scan matcher: heading information at or below which ceres_rotation_weight applies");
+    v("rotation_information_high", rotation_information_high,
+      "Scan matcher: heading information at or above which ceres_rotation_weight_informative applies");
     v("node_max_time_s", node_max_time_s, "Motion filter: new node after this time");
     v("node_max_distance_m", node_max_distance_m, "Motion filter: new node after this distance");
     v("node_max_angle_deg", node_max_angle_deg, "Motion filter: new node after this rotation");
@@ -100,6 +114,9 @@ struct LocalOptions {
     c.NonNegative("correlative_linear_window_m", correlative_linear_window_m);
     c.NonNegative("correlative_angular_window_deg", correlative_angular_window_deg);
     c.That(ceres_max_iterations > 0, "ceres_max_iterations", "must be > 0");
+    c.NonNegative("ceres_rotation_weight_informative", ceres_rotation_weight_informative);
+    c.That(rotation_information_low > 0 && rotation_information_high > rotation_information_low,
+           "rotation_information_high", "must be > rotation_information_low > 0");
   }
 };
 
