@@ -33,7 +33,7 @@ void Write(lcm::LogFile* out, int64_t timestamp, const std::string& channel, T& 
   e.channel = channel;
   e.datalen = static_cast<int32_t>(buffer.size());
   e.data = buffer.data();
-  out->writeEvent(&e);
+  if (out->writeEvent(&e) != 0) throw std::runtime_error("error writing the output log");
 }
 
 }  // namespace
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     std::vector<sarmap::speech::SpeechResult> results;
     for (const lcm::LogEvent* e = in.readNextEvent(); e; e = in.readNextEvent()) {
       if (e->channel == options.speech_channel || e->channel == options.people_channel) continue;
-      out.writeEvent(const_cast<lcm::LogEvent*>(e));
+      if (out.writeEvent(const_cast<lcm::LogEvent*>(e)) != 0) throw std::runtime_error("error writing " + out_path);
       if (e->channel == options.doa_channel) {
         sarmap::doa_t msg;
         if (!Decode(*e, &msg) || anchor_sample < 0 || (!device.empty() && msg.device_id != device)) continue;
