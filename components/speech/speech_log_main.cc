@@ -1,10 +1,10 @@
 // sarmap-log-speech: re-runs sarmap-speech over a recorded log (its AUDIO and DOA, in log order)
 // and writes a copy of the log whose SPEECH and PEOPLE_AUDIO are the new ones, to try speech
-// settings on a mission without running it again (then e.g. `sarmap-log sound-map OUT --heard-check`).
-#include <lcm/lcm-cpp.hpp>
-
+// settings on a mission without running it again (then e.g. `sarmap-log sound-map OUT
+// --heard-check`).
 #include <cmath>
 #include <cstdio>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <stdexcept>
 
@@ -42,7 +42,8 @@ int main(int argc, char** argv) {
   return sarmap::common::RunMain("sarmap-log-speech", [&]() {
     sarmap::common::ArgParser parser(
         "sarmap-log-speech",
-        "Re-runs sarmap-speech over a log's AUDIO and DOA and writes a copy of the log with the new SPEECH and\n"
+        "Re-runs sarmap-speech over a log's AUDIO and DOA and writes a copy of the log with the "
+        "new SPEECH and\n"
         "PEOPLE_AUDIO (the old ones are left out). Options as sarmap-speech's (--config, --set).");
     std::string in_path, out_path;
     parser.AddPositional("log", &in_path, "LCM log file to read");
@@ -74,16 +75,20 @@ int main(int argc, char** argv) {
     std::string device = options.device_id;
     int64_t anchor_sample = -1, anchor_utime = 0, blocks = 0, events = 0, people = 0, skipped = 0;
     auto to_utime = [&](int64_t sample) {
-      return anchor_utime + static_cast<int64_t>(std::llround((sample - anchor_sample) / rate * 1e6));
+      return anchor_utime +
+             static_cast<int64_t>(std::llround((sample - anchor_sample) / rate * 1e6));
     };
     std::vector<sarmap::speech::SpeechResult> results;
     for (const lcm::LogEvent* e = in.readNextEvent(); e; e = in.readNextEvent()) {
       if (e->channel == options.speech_channel || e->channel == options.people_channel) continue;
-      if (out.writeEvent(const_cast<lcm::LogEvent*>(e)) != 0) throw std::runtime_error("error writing " + out_path);
+      if (out.writeEvent(const_cast<lcm::LogEvent*>(e)) != 0)
+        throw std::runtime_error("error writing " + out_path);
       if (e->channel == options.doa_channel) {
         sarmap::doa_t msg;
-        if (!Decode(*e, &msg) || anchor_sample < 0 || (!device.empty() && msg.device_id != device)) continue;
-        const int64_t sample = anchor_sample + std::llround((msg.header.utime - anchor_utime) * 1e-6 * rate);
+        if (!Decode(*e, &msg) || anchor_sample < 0 || (!device.empty() && msg.device_id != device))
+          continue;
+        const int64_t sample =
+            anchor_sample + std::llround((msg.header.utime - anchor_utime) * 1e-6 * rate);
         for (const auto& s : msg.sources) {
           if (s.track_id < 0 || s.kind != static_cast<int8_t>(kind)) continue;
           Eigen::Matrix2d cov;
@@ -94,7 +99,8 @@ int main(int argc, char** argv) {
         sarmap::audio_frame_t msg;
         if (!Decode(*e, &msg)) continue;
         if (device.empty()) device = msg.device_id;
-        if (msg.device_id != device || msg.sample_rate_hz != geometry.sample_rate_hz || msg.num_channels < needed ||
+        if (msg.device_id != device || msg.sample_rate_hz != geometry.sample_rate_hz ||
+            msg.num_channels < needed ||
             msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples) {
           ++skipped;
           continue;
@@ -104,7 +110,8 @@ int main(int argc, char** argv) {
         results.clear();
         processor->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &results);
         for (const auto& r : results) {
-          auto event = sarmap::speech::ToSpeechEvent(r, to_utime(r.start_sample), to_utime(r.end_sample));
+          auto event =
+              sarmap::speech::ToSpeechEvent(r, to_utime(r.start_sample), to_utime(r.end_sample));
           Write(&out, e->timestamp, options.speech_channel, event);
           ++events;
           if (r.keyword.empty() || !r.has_direction) continue;
@@ -112,21 +119,27 @@ int main(int argc, char** argv) {
           Write(&out, e->timestamp, options.people_channel, heard);
           ++people;
         }
-        if (++blocks % 2000 == 0) std::fprintf(stderr, "  %.0f s of audio ...\n", processor->samples_seen() / rate);
+        if (++blocks % 2000 == 0)
+          std::fprintf(stderr, "  %.0f s of audio ...\n", processor->samples_seen() / rate);
       }
     }
     results.clear();
     processor->Flush(&results);
-    for (const auto& r : results) {  // utterances still open at the end: stamped after the last block
-      auto event = sarmap::speech::ToSpeechEvent(r, to_utime(r.start_sample), to_utime(r.end_sample));
+    for (const auto& r :
+         results) {  // utterances still open at the end: stamped after the last block
+      auto event =
+          sarmap::speech::ToSpeechEvent(r, to_utime(r.start_sample), to_utime(r.end_sample));
       Write(&out, anchor_utime, options.speech_channel, event);
       ++events;
     }
-    std::printf("%.1f s of audio from '%s' (%ld blocks skipped): %ld SPEECH, %ld PEOPLE_AUDIO; %ld keyword hits "
-                "re-attributed to another track, %ld dropped as another beam's leak -> %s\n",
-                processor->samples_seen() / rate, device.c_str(), static_cast<long>(skipped), static_cast<long>(events),
-                static_cast<long>(people), static_cast<long>(processor->hits_reattributed()),
-                static_cast<long>(processor->leaked_hits_dropped()), out_path.c_str());
+    std::printf(
+        "%.1f s of audio from '%s' (%ld blocks skipped): %ld SPEECH, %ld PEOPLE_AUDIO; %ld keyword "
+        "hits "
+        "re-attributed to another track, %ld dropped as another beam's leak -> %s\n",
+        processor->samples_seen() / rate, device.c_str(), static_cast<long>(skipped),
+        static_cast<long>(events), static_cast<long>(people),
+        static_cast<long>(processor->hits_reattributed()),
+        static_cast<long>(processor->leaked_hits_dropped()), out_path.c_str());
     return 0;
   });
 }

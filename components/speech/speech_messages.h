@@ -53,7 +53,8 @@ inline speech_event_t ToSpeechEvent(const SpeechResult& r, int64_t start_utime, 
 }
 
 // A heard person: the direction only (no range), with the keyword. r must have a direction.
-inline people_detections_t ToPeopleAudio(const SpeechResult& r, const std::string& device, int64_t utime) {
+inline people_detections_t ToPeopleAudio(const SpeechResult& r, const std::string& device,
+                                         int64_t utime) {
   people_detections_t d;
   d.header.utime = utime;
   d.header.frame = "mic_array";

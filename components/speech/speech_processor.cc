@@ -24,7 +24,8 @@ SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind k
   }
 }
 
-double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, int64_t start_sample, int64_t end_sample) const {
+double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, int64_t start_sample,
+                                             int64_t end_sample) const {
   if (band_frames_.empty()) return 0;
   const int n = band_hi_ - band_lo_ + 1, mics = geometry_.num_mics();
   const int64_t floor_span = 5 * geometry_.sample_rate_hz;
@@ -48,7 +49,8 @@ double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, 
     if (f.end_sample <= start_sample || f.end_sample > end_sample + band_stft_->fft_size()) continue;
     for (int b = 0; b < n; ++b) {
       if (f.bins.row(b).squaredNorm() / mics < 4.0f * floor[b]) continue;  // not 6 dB over its floor
-      const double w = 2 * M_PI * (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) / band_stft_->fft_size();
+      const double w =
+          2 * M_PI * (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) / band_stft_->fft_size();
       // PHAT: each mic's phase only, aligned for the direction; |sum|^2 is mics^2 when they agree.
       std::complex<double> sum = 0;
       for (int m = 0; m < mics; ++m) {
@@ -62,7 +64,6 @@ double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, 
   }
   return used ? score / used : 0;
 }
-
 
 void SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, int64_t sample) {
   TrackedSource& t = tracks_[id];
