@@ -164,7 +164,7 @@ void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush
   auto louder_elsewhere = [](const SpeechResult& r, const std::vector<SpeechResult>& others) {
     for (const SpeechResult& o : others)
       if (o.track_id != r.track_id && o.start_sample < r.end_sample && r.start_sample < o.end_sample &&
-          o.gain_power > r.gain_power)
+          o.direction_score > r.direction_score)
         return true;
     return false;
   };
@@ -255,12 +255,12 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
       // The hit belongs to the tracked direction its speech came from (SpeechDirectionScore),
       // which need not be the beam that decoded it (a talker leaks into every beam, and his own
       // track may have no beam when more than max_sources are tracked).
-      if (r.has_direction) r.gain_power = SpeechDirectionScore(r.direction, r.start_sample, r.end_sample);
+      if (r.has_direction) r.direction_score = SpeechDirectionScore(r.direction, r.start_sample, r.end_sample);
       for (const auto& [track_id, track] : tracks_) {
         if (track_id == r.track_id) continue;
         const double g = SpeechDirectionScore(track.direction, r.start_sample, r.end_sample);
-        if (g > r.gain_power) {
-          r.gain_power = g;
+        if (g > r.direction_score) {
+          r.direction_score = g;
           r.track_id = track_id;
           r.has_direction = true;
           r.direction = track.direction;

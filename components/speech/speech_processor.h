@@ -45,8 +45,8 @@ struct SpeechOptions {
     v("track_timeout_s", track_timeout_s, "forget a direction not refreshed for this long");
     v("untracked_beam", untracked_beam, "without tracks, listen on one beam (track_id -1, no direction)");
     v("beam_arbitration_s", beam_arbitration_s,
-      "keyword hits on several beams at once are one talker leaking: keep the loudest beam's; hits wait this "
-      "long (s) for the other beams' (0: off)");
+      "keyword hits go to the tracked direction their speech came from; of hits of several tracks at once "
+      "(one talker leaking into other beams) the best-fitting is kept; hits wait this long (s) (0: off)");
   }
   void Validate(common::Validator& check) const {
     check.That(max_sources >= 1, "max_sources", "must be >= 1");
@@ -70,11 +70,11 @@ struct SpeechResult {
   std::string text, keyword;
   double confidence = 0;
   int64_t start_sample = 0, end_sample = 0;  // stream samples
-  double gain_power = 0;  // how well its speech fits its direction (SpeechDirectionScore; BeamArbiter)
+  double direction_score = 0;  // how well its speech fits its direction (SpeechDirectionScore; BeamArbiter)
 };
 
 // Keeps, of keyword hits on different beams that overlap in time, only the one with the largest
-// gain_power (see SpeechOptions::beam_arbitration_s). Results without a keyword pass at once.
+// direction_score (see SpeechOptions::beam_arbitration_s). Results without a keyword pass at once.
 class BeamArbiter {
  public:
   explicit BeamArbiter(int64_t hold_samples) : hold_samples_(hold_samples) {}

@@ -140,7 +140,7 @@ TEST(BeamArbiter, KeepsTheLoudestBeamOfOneUtterance) {
     r.track_id = track;
     r.start_sample = start;
     r.end_sample = end;
-    r.gain_power = level;
+    r.direction_score = level;
     r.keyword = keyword;
     return r;
   };
