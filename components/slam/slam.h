@@ -54,6 +54,7 @@ struct ScanResult {
 struct SlamStats {
   int64_t scans = 0, nodes = 0, submaps = 0;
   int64_t rejected_scans = 0, rejected_odometry = 0, reordered_odometry = 0, reordered_scans = 0;
+  int64_t stopped_scans = 0;  // matched at the stop pose (unchanged_odometry_means_stopped)
   int64_t loop_searches = 0, loop_closures = 0;
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;

@@ -57,6 +57,9 @@ struct LocalOptions {
   double correlative_translation_cost = 2.0;
   double correlative_rotation_cost = 0.1;
   bool ceres_rotation_prior_from_prediction = false;
+  // Odometry that does not change between scans: a stale stream (CARMEN logs freeze it while the
+  // robot moves, false) or a robot standing still (a live driver, true).
+  bool unchanged_odometry_means_stopped = false;
   double wide_search_below_score = 0.5;
   double wide_linear_window_m = 0.3;
   double wide_angular_window_deg = 45.0;
@@ -88,6 +91,10 @@ struct LocalOptions {
     v("ceres_rotation_prior_from_prediction", ceres_rotation_prior_from_prediction,
       "Scan matcher: the rotation prior is the prediction (for robots with good odometry in scenes "
       "that barely constrain rotation, e.g. a glass corridor; wrong for Intel/ACES/MIT's odometry)");
+    v("unchanged_odometry_means_stopped", unchanged_odometry_means_stopped,
+      "Odometry that does not change means the robot stands still: the scan is matched against "
+      "the pose where it stopped, so a featureless view cannot creep (false: the stream is stale "
+      "and a constant-velocity model predicts, for logs that freeze odometry while moving)");
     v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
     v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
     v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
