@@ -180,6 +180,8 @@ Rigid2d Slam::PredictLocal(double time_s) {
   Rigid2d odom;
   int segment;
   const bool have_odom = OdometryAt(time_s, &odom, &segment);
+  const bool was_standing_still = standing_still_;
+  standing_still_ = false;
   const double dt = time_s - last_scan_time_;
   Rigid2d constant_velocity = last_scan_local_;
   if (have_prev_scan_ && last_scan_time_ >= prev_scan_time_ && dt >= 0 && dt < 1.0) {
@@ -218,7 +220,13 @@ Rigid2d Slam::PredictLocal(double time_s) {
   }
   const Rigid2d odom_delta = reference_odom_.inverse() * odom;
   const bool frozen = odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
-  if (frozen && options_.local.unchanged_odometry_means_stopped) {
+  // Odometry readings on both sides of the scan (not only the last one, held) that did not change
+  // show a robot standing still; the held last reading alone shows nothing yet.
+  // Once standing, a scan ahead of the newest reading is still standing.
+  const bool odometry_after_scan = time_s <= odometry_.back().time_s;
+  standing_still_ = frozen && options_.local.unchanged_odometry_means_stopped &&
+                    (odometry_after_scan || was_standing_still);
+  if (standing_still_) {
     // Standing still. Each scan is matched with the stop pose as its prior, not the previous
     // match: chaining priors is a proximal-point descent that walks down any slope of a weak
     // map (3 cm/s and 0.4 deg/s in the open-area simulation). The reference stays put.
