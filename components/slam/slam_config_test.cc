@@ -23,7 +23,7 @@ std::vector<std::string> Lines(const std::string& text) {
   return lines;
 }
 
-TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsLocalTiesAndCovariance) {
+TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
   const auto base = common::LoadOptions<SlamNodeOptions>(kConfigDir + "slam.yaml", {});
   const auto robot = common::LoadOptions<SlamNodeOptions>(kConfigDir + "slam_kinect_robot.yaml", {});
   EXPECT_FALSE(base.slam.local.ceres_rotation_prior_from_prediction);
@@ -44,6 +44,14 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsLocalTiesAndC
   EXPECT_EQ(base.slam.local.ceres_rotation_weight_informative, 0);
   EXPECT_GT(robot.slam.local.ceres_rotation_weight_informative, 0);
 
+  // A live driver repeats odometry while the robot stands; CARMEN logs freeze it while moving.
+  EXPECT_FALSE(base.slam.local.unchanged_odometry_means_stopped);
+  EXPECT_TRUE(robot.slam.local.unchanged_odometry_means_stopped);
+  EXPECT_EQ(base.slam.local.odometry_extrapolation_s, 0);
+  EXPECT_GT(robot.slam.local.odometry_extrapolation_s, 0);
+  // The robot's loop-closure search stays near its own estimate (a Kinect scan is ambiguous).
+  EXPECT_LT(robot.slam.loop.linear_window_m, base.slam.loop.linear_window_m);
+
   // Everything else is inherited: the printed options differ only in those lines.
   const auto base_lines = Lines(common::OptionsToYaml(base, false));
   const auto robot_lines = Lines(common::OptionsToYaml(robot, false));
@@ -59,7 +67,9 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyTheScanMatcherPriorsLocalTiesAndC
                                             "local_slam_translation_weight", "intra_sigma_m",
                                             "intra_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
                                             "odometry_sigma_m", "odometry_sigma_deg",
-                                            "local_slam_sigma_m", "local_slam_sigma_deg"};
+                                            "local_slam_sigma_m", "local_slam_sigma_deg",
+                                            "unchanged_odometry_means_stopped",
+                                            "odometry_extrapolation_s", "linear_window_m"};
   EXPECT_GE(differing.size(), 2u);
   for (const auto& line : differing) {
     bool known = false;

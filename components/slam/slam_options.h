@@ -60,6 +60,11 @@ struct LocalOptions {
   // Odometry that does not change between scans: a stale stream (CARMEN logs freeze it while the
   // robot moves, false) or a robot standing still (a live driver, true).
   bool unchanged_odometry_means_stopped = false;
+  // A scan newer than the last odometry reading, in a turn at least min_turn_radps: extrapolate
+  // the last odometry step up to this far ahead (s) instead of holding the last reading
+  // (0: always hold, as for CARMEN logs).
+  double odometry_extrapolation_s = 0;
+  double odometry_extrapolation_min_turn_radps = 0.1;
   double wide_search_below_score = 0.5;
   double wide_linear_window_m = 0.3;
   double wide_angular_window_deg = 45.0;
@@ -95,6 +100,11 @@ struct LocalOptions {
       "Odometry that does not change means the robot stands still: the scan is matched against "
       "the pose where it stopped, so a featureless view cannot creep (false: the stream is stale "
       "and a constant-velocity model predicts, for logs that freeze odometry while moving)");
+    v("odometry_extrapolation_s", odometry_extrapolation_s,
+      "A scan up to this much newer than the last odometry reading is predicted by extrapolating "
+      "the last odometry step, in turns (0: the last reading is held)");
+    v("odometry_extrapolation_min_turn_radps", odometry_extrapolation_min_turn_radps,
+      "Odometry extrapolation only while the odometry turns at least this fast (rad/s)");
     v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
     v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
     v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
@@ -122,6 +132,8 @@ struct LocalOptions {
     c.NonNegative("correlative_angular_window_deg", correlative_angular_window_deg);
     c.That(ceres_max_iterations > 0, "ceres_max_iterations", "must be > 0");
     c.NonNegative("ceres_rotation_weight_informative", ceres_rotation_weight_informative);
+    c.InRange("odometry_extrapolation_s", odometry_extrapolation_s, 0.0, 0.5);
+    c.NonNegative("odometry_extrapolation_min_turn_radps", odometry_extrapolation_min_turn_radps);
     c.That(rotation_information_low > 0 && rotation_information_high > rotation_information_low,
            "rotation_information_high", "must be > rotation_information_low > 0");
   }
