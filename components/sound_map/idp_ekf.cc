@@ -293,7 +293,20 @@ void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int
     const Eigen::MatrixXd k12 = p_a_reg.ldlt().solve(p_sa.transpose()).transpose();
     const Eigen::MatrixXd p_s = p_(s_idx, s_idx) + k12 * (p_ab - p_a) * k12.transpose();  // (4.24)
     const Eigen::MatrixXd p_scb = k12 * covariance(a_rows, c_rows);                        // (4.23)
-    x_(s_idx) = x_(s_idx) + k12 * dx;                                                      // (4.25)
+    if (options_.back_propagate_sources) {
+      x_(s_idx) = x_(s_idx) + k12 * dx;  // (4.25)
+    } else {
+      // Rigidly with the anchors: the ray's origin follows its anchor's array position, and its
+      // azimuth (a map-frame angle) turns with the anchor's heading.
+      for (auto& [id, src] : sources_) {
+        auto it = anchors_.find(src.anchor);
+        if (it == anchors_.end()) continue;
+        for (size_t k = 0; k < a_idx.size(); k += 3) {
+          if (a_idx[k] != it->second) continue;
+          x_[src.index] += WrapAngleD(dx[k + 2]);
+        }
+      }
+    }
     if (keep_covariance) {
       x_(c_idx) = xb(c_rows);
       WrapAngles();

@@ -113,6 +113,54 @@ TEST(IdpEkf, BackPropagationMovesSourcesWithAnchors) {
   EXPECT_NEAR(after.x() - before.x(), 0.0, 0.05);
 }
 
+// Without the regression of eq. 4.25, SLAM's correction of an anchor moves its sources rigidly
+// with it and moves nothing else. For one anchor whose source hangs fully from it, that is what
+// the regression does too; they part where the bearings have correlated the inverse depth with
+// several poses (the lab's caller: 2.3 m by regression, 0.1 m rigidly, for one correction).
+// Returns the source after the correction; *rigid: where a rigid move with the anchor takes it,
+// *moved_m: how far that is from where it was.
+Eigen::Vector3d SourceAfterAnchorCorrection(bool back_propagate_sources, Eigen::Vector3d* rigid,
+                                            double* moved_m) {
+  IdpEkf::Options o;
+  o.back_propagate_sources = back_propagate_sources;
+  IdpEkf snd(o);
+  snd.Reset(Pose2(0, 0, 0), Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal());
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(1, 1) * 1e-3;
+  const Eigen::Vector3d src(5, 2, 0);
+  for (int k = 0; k < 15; ++k) {
+    if (k > 0) snd.Predict(Pose2(0.2, 0, 0), Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal());
+    const Pose2 x = snd.current();
+    const double pose[3] = {x.x, x.y, x.yaw};
+    double z[2];
+    PointObservation(pose, src.data(), false, o.mount, z);
+    if (k == 0) snd.AddSource(1, 0, Eigen::VectorXd::Constant(1, z[0]), r);
+    else snd.UpdateSource(1, Eigen::VectorXd::Constant(1, z[0] + 0.01), r);  // biased bearings
+  }
+  Eigen::Matrix3d c;
+  Eigen::Vector3d before;
+  snd.SourcePoint(1, &before, &c);
+  // SLAM re-estimates the anchor 0.1 m to the side and 1.5 deg turned.
+  const Pose2 old_anchor = snd.anchor(0);
+  const Pose2 new_anchor(old_anchor.x, old_anchor.y + 0.1, old_anchor.yaw + 1.5 * M_PI / 180);
+  snd.BackPropagate(snd.current(), {{0, new_anchor}}, Eigen::MatrixXd::Identity(6, 6) * 1e-6);
+  Eigen::Vector3d after;
+  snd.SourcePoint(1, &after, &c);
+  const Pose2 moved = Compose(new_anchor, Between(old_anchor, Pose2(before.x(), before.y(), 0)));
+  *rigid = Eigen::Vector3d(moved.x, moved.y, before.z());
+  *moved_m = (*rigid - before).head<2>().norm();
+  return after;
+}
+
+TEST(IdpEkf, WithoutRegressionSourcesMoveRigidlyWithTheirAnchors) {
+  Eigen::Vector3d rigid;
+  double moved_m = 0;
+  const Eigen::Vector3d kept = SourceAfterAnchorCorrection(false, &rigid, &moved_m);
+  EXPECT_GT(moved_m, 0.1);  // 0.1 m and 1.5 deg at ~5 m
+  EXPECT_LT((kept - rigid).head<2>().norm(), 1e-9);
+  const Eigen::Vector3d regressed = SourceAfterAnchorCorrection(true, &rigid, &moved_m);
+  EXPECT_LT((regressed - rigid).head<2>().norm(), 0.01);
+}
+
 TEST(Experiments, MapsSourcesWithTable41Settings) {
   Sim2dConfig c;
   c.seed = 5;

@@ -17,6 +17,7 @@ IdpEkf::Options EkfOptions(const OnlineSoundMapOptions& o, const ArrayMount& mou
   e.initial_inverse_depth = 1.0 / o.initial_range_m;
   e.inverse_depth_sigma = o.inverse_depth_sigma;
   e.source_updates_move_poses = o.doa_moves_poses;
+  e.back_propagate_sources = o.back_propagate_sources;
   return e;
 }
 }  // namespace

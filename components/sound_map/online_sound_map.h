@@ -97,13 +97,12 @@ struct OnlineSoundMapOptions {
   // optimisation, seconds apart) would reset the current-to-anchor uncertainty to it.
   bool use_slam_covariance = true;
   // true: SLAM_ANCHORS is applied only when its optimisation found new loop closures (and the
-  // first one). Between closures SLAM's re-estimate of an old node moves it by noise (lab:
-  // <= 0.06 m / 0.3 deg), while this map's copy of the anchor has been corrected by the
-  // bearings (doa_moves_poses) to agree with the current poses' heading bias; resetting it to
-  // SLAM's every few seconds threw that away (hidden caller, six lab logs: see
-  // config/sound_map.yaml). A loop closure is a real correction of the old trajectory, which
-  // the sources must follow.
+  // first one); false: after every optimisation, as the thesis does.
   bool anchors_after_loop_closure_only = false;
+  // SLAM_ANCHORS also moves the sources by eq. 4.25's regression on the anchors' correction
+  // (true), or only rigidly with their anchors, keeping their anchor-relative IDP parameters
+  // (false). See IdpEkf::Options::back_propagate_sources.
+  bool back_propagate_sources = true;
   template <class V>
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
@@ -143,6 +142,9 @@ struct OnlineSoundMapOptions {
       "take SLAM_ANCHORS' joint covariance (true) or only its means, keeping this map's pose covariance (false)");
     v("anchors_after_loop_closure_only", anchors_after_loop_closure_only,
       "apply SLAM_ANCHORS only when SLAM found new loop closures (false: after every optimisation, as the thesis)");
+    v("back_propagate_sources", back_propagate_sources,
+      "SLAM_ANCHORS also regresses the sources on the anchors' correction (eq. 4.25; false: sources move "
+      "rigidly with their anchors)");
     v("mirror_prune_misses", mirror_prune_misses,
       "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
   }
