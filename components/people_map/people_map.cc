@@ -221,6 +221,16 @@ int PeopleMap::RecentCalls(int64_t source_id, Utime utime) const {
   return count;
 }
 
+bool PeopleMap::Placed(const SoundSource& s) const {
+  if (!options_.heard_needs_converged_source || s.converged) return true;
+  if (options_.heard_max_source_sigma_m <= 0) return false;
+  // Largest eigenvalue of the planar covariance.
+  const Eigen::Matrix2d c = 0.5 * (s.covariance.topLeftCorner<2, 2>() + s.covariance.topLeftCorner<2, 2>().transpose());
+  const double half_trace = 0.5 * c.trace();
+  const double largest = half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - c.determinant()));
+  return std::isfinite(largest) && std::sqrt(largest) <= options_.heard_max_source_sigma_m;
+}
+
 int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detections,
                         const common::Rigid3d& map_from_mic) {
   const Eigen::Vector3d origin = map_from_mic.translation();
@@ -283,7 +293,7 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     // Not yet placed: one call may be a keyword false alarm, and an initialising source's
     // position is a guess; UpdateSoundSources places the person once both are settled.
     if (!p && RecentCalls(best->id, utime) < options_.min_heard_calls) continue;
-    if (!p && options_.heard_needs_converged_source && !best->converged) continue;
+    if (!p && !Placed(*best)) continue;
     if (!p) {
       for (auto& [id, q] : people_) {
         if (q.has_heard || !q.has_seen) continue;
@@ -337,7 +347,7 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
       linked->heard_position_m = s.position_m;
       linked->heard_covariance = s.covariance;
       Refuse(linked);
-    } else if ((s.is_person || recently_heard) && (s.converged || !options_.heard_needs_converged_source) &&
+    } else if ((s.is_person || recently_heard) && Placed(s) &&
                RecentCalls(s.id, utime) >= options_.min_heard_calls) {
       Person fresh;
       fresh.id = next_id_++;

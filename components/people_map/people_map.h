@@ -43,6 +43,8 @@ struct PeopleMapOptions {
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
   double heard_person_window_s = 30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
+  // ... or one known to this largest planar std (m), converged or not (0: converged only).
+  double heard_max_source_sigma_m = 0.0;
   int min_heard_calls = 2;  // calls towards a source (within heard_person_window_s) to make it a person
   // One utterance often fires several keywords at once ("here", "help", "assist" within 0.3 s): the
   // hits towards one source closer than this to its previous call are that same call.
@@ -62,6 +64,9 @@ struct PeopleMapOptions {
     v("heard_needs_converged_source", heard_needs_converged_source,
       "a heard-only person is placed only at a converged sound source; a call towards an initialising "
       "source is remembered and places the person when the source converges");
+    v("heard_max_source_sigma_m", heard_max_source_sigma_m,
+      "with heard_needs_converged_source: a source whose largest planar position std is at most this is "
+      "placed too, converged or not (0: converged sources only)");
     v("min_heard_calls", min_heard_calls,
       "a sound source becomes a heard person only after this many keyword calls towards it within "
       "heard_person_window_s: one keyword false alarm is not a person");
@@ -80,6 +85,7 @@ struct PeopleMapOptions {
     check.Positive("confidence_half_life_s", confidence_half_life_s);
     check.InRange("min_report_confidence", min_report_confidence, 0.0, 1.0);
     check.Positive("heard_person_window_s", heard_person_window_s);
+    check.NonNegative("heard_max_source_sigma_m", heard_max_source_sigma_m);
     check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
     check.NonNegative("same_call_s", same_call_s);
   }
@@ -173,6 +179,8 @@ class PeopleMap {
   // person it was merged into (not saved: a restart merges again).
   std::map<int64_t, int64_t> source_alias_;
   int RecentCalls(int64_t source_id, common::Utime utime) const;
+  // The source's position is settled enough to place a heard-only person there.
+  bool Placed(const SoundSource& s) const;
   int64_t next_id_ = 1;
 };
 

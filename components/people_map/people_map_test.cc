@@ -166,6 +166,33 @@ TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
   EXPECT_TRUE(late.people().empty());
 }
 
+// With heard_max_source_sigma_m, a source known to within that std places the person before
+// the sound map calls it converged; a wider one still waits.
+TEST(PeopleMapTest, HeardPersonIsPlacedAtASourceKnownWellEnough) {
+  PeopleMapOptions options = OneCallIsAPerson();
+  options.heard_max_source_sigma_m = 0.6;
+  HeardDetection call;
+  call.azimuth_rad = std::atan2(5.0, 2.0);
+  call.keyword = "help";
+  call.confidence = 0.9;
+  SoundSource caller;
+  caller.id = 3;
+  caller.position_m = Eigen::Vector3d(2.0, 5.0, 0.5);
+  // Largest planar std 0.65 m along a tilted axis (eigenvalues 0.4225 and 0.04): not yet.
+  const double a = 0.5 * (0.4225 + 0.04), b = 0.5 * (0.4225 - 0.04);
+  caller.covariance << a, b, 0, b, a, 0, 0, 0, 1;
+  PeopleMap map(options);
+  map.UpdateSoundSources(1'000'000, {caller});
+  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  EXPECT_TRUE(map.people().empty());
+  // 0.5 m: placed, though not converged.
+  const double c = 0.5 * (0.25 + 0.04), d = 0.5 * (0.25 - 0.04);
+  caller.covariance << c, d, 0, d, c, 0, 0, 0, 1;
+  map.UpdateSoundSources(3'000'000, {caller});
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 3);
+}
+
 // Along a corridor two sources can lie on one bearing: a call from that bearing names neither.
 TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
   PeopleMap map(OneCallIsAPerson());
