@@ -225,9 +225,11 @@ bool PeopleMap::Placed(const SoundSource& s) const {
   if (!options_.heard_needs_converged_source || s.converged) return true;
   if (options_.heard_max_source_sigma_m <= 0) return false;
   // Largest eigenvalue of the planar covariance.
-  const Eigen::Matrix2d c = 0.5 * (s.covariance.topLeftCorner<2, 2>() + s.covariance.topLeftCorner<2, 2>().transpose());
+  const Eigen::Matrix2d c =
+      0.5 * (s.covariance.topLeftCorner<2, 2>() + s.covariance.topLeftCorner<2, 2>().transpose());
   const double half_trace = 0.5 * c.trace();
-  const double largest = half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - c.determinant()));
+  const double largest =
+      half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - c.determinant()));
   return std::isfinite(largest) && std::sqrt(largest) <= options_.heard_max_source_sigma_m;
 }
 

@@ -65,8 +65,8 @@ struct PeopleMapOptions {
       "a heard-only person is placed only at a converged sound source; a call towards an initialising "
       "source is remembered and places the person when the source converges");
     v("heard_max_source_sigma_m", heard_max_source_sigma_m,
-      "with heard_needs_converged_source: a source whose largest planar position std is at most this is "
-      "placed too, converged or not (0: converged sources only)");
+      "with heard_needs_converged_source: a source whose largest planar position std is at most "
+      "this is placed too, converged or not (0: converged sources only)");
     v("min_heard_calls", min_heard_calls,
       "a sound source becomes a heard person only after this many keyword calls towards it within "
       "heard_person_window_s: one keyword false alarm is not a person");

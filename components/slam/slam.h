@@ -191,7 +191,7 @@ class Slam {
   Rigid2d resume_odom_;
   int last_scan_segment_ = -1;
   bool this_scan_has_fresh_odom_ = false;
-  bool standing_still_ = false;  // unchanged odometry on both sides of the last scan
+  bool standing_still_ = false;               // unchanged odometry on both sides of the last scan
   bool this_scan_constant_velocity_ = false;  // the prediction is a constant-velocity extrapolation
   bool have_reference_ = false;
   Rigid2d reference_local_, reference_odom_;

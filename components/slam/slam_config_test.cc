@@ -60,16 +60,24 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
   for (size_t i = 0; i < base_lines.size(); ++i) {
     if (base_lines[i] != robot_lines[i]) differing.push_back(robot_lines[i]);
   }
-  const std::vector<std::string> allowed = {"ceres_translation_weight", "ceres_rotation_weight",
+  const std::vector<std::string> allowed = {"ceres_translation_weight",
+                                            "ceres_rotation_weight",
                                             "ceres_rotation_prior_from_prediction",
                                             "ceres_rotation_weight_informative",
-                                            "rotation_information_low", "rotation_information_high",
-                                            "local_slam_translation_weight", "intra_sigma_m",
-                                            "intra_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
-                                            "odometry_sigma_m", "odometry_sigma_deg",
-                                            "local_slam_sigma_m", "local_slam_sigma_deg",
+                                            "rotation_information_low",
+                                            "rotation_information_high",
+                                            "local_slam_translation_weight",
+                                            "intra_sigma_m",
+                                            "intra_sigma_deg",
+                                            "loop_sigma_m",
+                                            "loop_sigma_deg",
+                                            "odometry_sigma_m",
+                                            "odometry_sigma_deg",
+                                            "local_slam_sigma_m",
+                                            "local_slam_sigma_deg",
                                             "unchanged_odometry_means_stopped",
-                                            "odometry_extrapolation_s", "linear_window_m"};
+                                            "odometry_extrapolation_s",
+                                            "linear_window_m"};
   EXPECT_GE(differing.size(), 2u);
   for (const auto& line : differing) {
     bool known = false;

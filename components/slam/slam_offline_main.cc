@@ -231,11 +231,12 @@ int main(int argc, char** argv) {
     getrusage(RUSAGE_SELF, &ru);
     const auto& s = slam.stats();
     std::printf("dataset %s\n", input.c_str());
-    std::printf("scans %lld (rejected %lld, out of time order %lld, standing still %lld), odometry rejected %lld, nodes %lld, "
-                "submaps %lld\n",
-                (long long)s.scans, (long long)s.rejected_scans, (long long)s.reordered_scans,
-                (long long)s.stopped_scans, (long long)s.rejected_odometry,
-                (long long)s.nodes, (long long)s.submaps);
+    std::printf(
+        "scans %lld (rejected %lld, out of time order %lld, standing still %lld), "
+        "odometry rejected %lld, nodes %lld, submaps %lld\n",
+        (long long)s.scans, (long long)s.rejected_scans, (long long)s.reordered_scans,
+        (long long)s.stopped_scans, (long long)s.rejected_odometry, (long long)s.nodes,
+        (long long)s.submaps);
     std::printf("loop closures %lld of %lld searches, optimisations %lld\n",
                 (long long)s.loop_closures, (long long)s.loop_searches, (long long)s.optimisations);
     std::printf("data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final %.2f) "

@@ -181,7 +181,8 @@ LaserScan WallOnlyScan(double t) {
 }
 
 // Drives 1 m along the wall, then stands still for 10 s while its odometry repeats the last
-// reading (at half the scan rate). Returns the distance SLAM says the robot travelled while it stood still.
+// reading (at half the scan rate). Returns the distance SLAM says the robot travelled while it
+// stood still.
 double DriftWhileStopped(bool unchanged_odometry_means_stopped) {
   SlamOptions o;
   o.local.unchanged_odometry_means_stopped = unchanged_odometry_means_stopped;
@@ -264,12 +265,15 @@ double LargestHeadingErrorInATurn(double odometry_extrapolation_s) {
     scan.angle_min_rad = -M_PI / 4;
     scan.angle_increment_rad = (M_PI / 2) / 359;
     for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      scan.ranges_m[i] = RoomRange(0, 0, 0.5 * t + scan.angle_min_rad + i * scan.angle_increment_rad);
+      scan.ranges_m[i] =
+          RoomRange(0, 0, 0.5 * t + scan.angle_min_rad + i * scan.angle_increment_rad);
     }
     const ScanResult r = slam.AddScan(scan);
     EXPECT_TRUE(r.accepted);
     if (k < 3) continue;  // the first readings: nothing to extrapolate from yet
-    worst_deg = std::max(worst_deg, std::abs(std::remainder(r.map_from_base.yaw_rad() - 0.5 * t, 2 * M_PI)) * 180 / M_PI);
+    worst_deg = std::max(
+        worst_deg,
+        std::abs(std::remainder(r.map_from_base.yaw_rad() - 0.5 * t, 2 * M_PI)) * 180 / M_PI);
   }
   return worst_deg;
 }

@@ -42,9 +42,10 @@ class IdpEkf {
     bool source_updates_move_poses = true;
     // BackPropagate: true, eq. 4.25 also moves the sources by their regression on the anchors'
     // correction (x_S += K12 dx); false, the sources move rigidly with their anchors (the ray's
-    // origin is the anchor's array position; its azimuth turns by the anchor's heading change). The regression is exact for a
-    // joint Gaussian; with a weakly observed inverse depth and anchors that DOAs nudged, K12
-    // can turn a 0.1 m / 1.4 deg anchor correction into a 2 m move of the source.
+    // origin is the anchor's array position; its azimuth turns by the anchor's heading change).
+    // The regression is exact for a joint Gaussian; with a weakly observed inverse depth and
+    // anchors that DOAs nudged, K12 can turn a 0.1 m / 1.4 deg anchor correction into a 2 m move
+    // of the source.
     bool back_propagate_sources = true;
   };
 

@@ -133,8 +133,10 @@ Eigen::Vector3d SourceAfterAnchorCorrection(bool back_propagate_sources, Eigen::
     const double pose[3] = {x.x, x.y, x.yaw};
     double z[2];
     PointObservation(pose, src.data(), false, o.mount, z);
-    if (k == 0) snd.AddSource(1, 0, Eigen::VectorXd::Constant(1, z[0]), r);
-    else snd.UpdateSource(1, Eigen::VectorXd::Constant(1, z[0] + 0.01), r);  // biased bearings
+    if (k == 0)
+      snd.AddSource(1, 0, Eigen::VectorXd::Constant(1, z[0]), r);
+    else
+      snd.UpdateSource(1, Eigen::VectorXd::Constant(1, z[0] + 0.01), r);  // biased bearings
   }
   Eigen::Matrix3d c;
   Eigen::Vector3d before;

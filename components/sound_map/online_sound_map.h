@@ -143,8 +143,8 @@ struct OnlineSoundMapOptions {
     v("anchors_after_loop_closure_only", anchors_after_loop_closure_only,
       "apply SLAM_ANCHORS only when SLAM found new loop closures (false: after every optimisation, as the thesis)");
     v("back_propagate_sources", back_propagate_sources,
-      "SLAM_ANCHORS also regresses the sources on the anchors' correction (eq. 4.25; false: sources move "
-      "rigidly with their anchors)");
+      "SLAM_ANCHORS also regresses the sources on the anchors' correction (eq. 4.25; false: "
+      "sources move rigidly with their anchors)");
     v("mirror_prune_misses", mirror_prune_misses,
       "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
   }
