@@ -350,6 +350,26 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
 
 ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
   ScanResult result;
+  if (resume_odom_valid_ && !localisation_only_) {
+    // Restarted from saved state: the first odometry bridges the motion made while we were down
+    // (PredictLocal). A scan that arrives before it would be placed at the saved pose, and the
+    // bridge then added on top of wherever the matcher put it (0.5-1 m off in the lab when the
+    // first scans beat the odometry by 0.05-0.4 s). Such scans wait, up to kMaxResumeWaitS;
+    // without odometry by then the wide search finds the robot.
+    constexpr double kMaxResumeWaitS = 1.0;
+    Rigid2d odom;
+    int segment;
+    if (!OdometryAt(scan.time_s, &odom, &segment)) {
+      if (resume_wait_start_s_ < 0) resume_wait_start_s_ = scan.time_s;
+      if (scan.time_s - resume_wait_start_s_ < kMaxResumeWaitS) {
+        ++stats_.scans_waiting_for_odometry;
+        result.waiting_for_odometry = true;
+        result.reason = "restarted: waiting for the first odometry to bridge the gap";
+        return result;
+      }
+      resume_odom_valid_ = false;
+    }
+  }
   const auto t0 = std::chrono::steady_clock::now();
   RangeData data;
   ScanToRangeData(scan, &data);
@@ -996,6 +1016,7 @@ void Slam::Load(const std::string& path) {
   // only when it is plausible (PredictLocal), and the scan matcher (wide search on the first
   // scan) finds the robot.
   resume_odom_valid_ = last_scan_has_odom_ && !localisation_only_;
+  resume_wait_start_s_ = -1;
   resume_bridged_ = false;
   resume_odom_ = last_scan_odom_;
   last_scan_has_odom_ = false;

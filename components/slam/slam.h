@@ -49,12 +49,14 @@ struct ScanResult {
   bool optimised = false;    // a global optimisation ran after this scan
   bool loop_closed = false;  // ... and it included new loop closures
   double match_score = 0;
+  bool waiting_for_odometry = false;  // not used: restarted, the first odometry has not come yet
 };
 
 struct SlamStats {
   int64_t scans = 0, nodes = 0, submaps = 0;
   int64_t rejected_scans = 0, rejected_odometry = 0, reordered_odometry = 0, reordered_scans = 0;
   int64_t stopped_scans = 0;  // matched at the stop pose (unchanged_odometry_means_stopped)
+  int64_t scans_waiting_for_odometry = 0;  // after a restart, before the first odometry
   int64_t loop_searches = 0, loop_closures = 0;
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
@@ -187,6 +189,7 @@ class Slam {
   Rigid2d last_scan_odom_;
   // Odometry of the last scan before a restart from saved state (Load), to bridge the gap.
   bool resume_odom_valid_ = false;
+  double resume_wait_start_s_ = -1;  // first scan that waited for odometry after a restart
   bool resume_bridged_ = false;  // the first scan after Load was predicted across the gap
   Rigid2d resume_odom_;
   int last_scan_segment_ = -1;

@@ -136,7 +136,13 @@ class SlamNode {
     const slam::ScanResult r = slam_.AddScan(scan);
     if (!r.accepted) {
       if (scan_log_.Allow(common::SteadySeconds())) {
-        SARMAP_LOG(WARN) << "scan rejected (" << slam_.stats().rejected_scans << " so far): " << r.reason;
+        if (r.waiting_for_odometry) {
+          SARMAP_LOG(INFO) << "scan held back (" << slam_.stats().scans_waiting_for_odometry
+                           << " so far): " << r.reason;
+        } else {
+          SARMAP_LOG(WARN) << "scan rejected (" << slam_.stats().rejected_scans
+                           << " so far): " << r.reason;
+        }
       }
       return;
     }
