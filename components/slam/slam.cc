@@ -7,6 +7,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "common/binary_io.h"
+
 namespace sarmap {
 namespace slam {
 namespace {
@@ -782,11 +784,9 @@ OccupancyMap Slam::RenderMap() const {
 
 namespace {
 
-class Writer {
+class Writer : public common::BinaryWriter {
  public:
-  explicit Writer(std::ofstream* out) : out_(out) {}
-  template <class T>
-  void Pod(const T& v) { out_->write(reinterpret_cast<const char*>(&v), sizeof(T)); }
+  explicit Writer(std::ofstream* out) : BinaryWriter(out), out_(out) {}
   void Pose(const Rigid2d& p) {
     Pod(p.translation().x()), Pod(p.translation().y()), Pod(p.yaw_rad());
   }
@@ -799,24 +799,12 @@ class Writer {
   std::ofstream* out_;
 };
 
-class Reader {
+class Reader : public common::BinaryReader {
  public:
-  explicit Reader(std::ifstream* in) : in_(in) {}
-  template <class T>
-  T Pod() {
-    T v;
-    in_->read(reinterpret_cast<char*>(&v), sizeof(T));
-    if (!*in_) throw std::runtime_error("pose-graph file truncated");
-    return v;
-  }
+  explicit Reader(std::ifstream* in) : BinaryReader(in, "pose-graph file"), in_(in) {}
   Rigid2d Pose() {
     const double x = Pod<double>(), y = Pod<double>(), t = Pod<double>();
     return Rigid2d(x, y, t);
-  }
-  int64_t Count(int64_t max) {
-    const int64_t n = Pod<int64_t>();
-    if (n < 0 || n > max) throw std::runtime_error("pose-graph file corrupt (bad count)");
-    return n;
   }
   PointCloud Cloud() {
     PointCloud c(Count(10000000));

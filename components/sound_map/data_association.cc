@@ -70,5 +70,41 @@ int64_t SourceAssociator::SourceOfTrack(const std::string& device, int64_t track
   return it == track_to_source_.end() ? -1 : it->second;
 }
 
+void SourceAssociator::Save(common::BinaryWriter* w) const {
+  w->Pod<int64_t>(static_cast<int64_t>(track_to_source_.size()));
+  for (const auto& [key, source] : track_to_source_) {
+    w->String(key.first);
+    w->Pod<int64_t>(key.second), w->Pod<int64_t>(source);
+  }
+  w->Pod<int64_t>(static_cast<int64_t>(signatures_.size()));
+  for (const auto& [source, sig] : signatures_) {
+    w->Pod<int64_t>(source), w->Pod<int32_t>(sig.count);
+    w->Matrix(Eigen::Map<const Eigen::VectorXd>(sig.mean.data(),
+                                                static_cast<Eigen::Index>(sig.mean.size())));
+  }
+}
+
+void SourceAssociator::Load(common::BinaryReader* r) {
+  std::map<std::pair<std::string, int64_t>, int64_t> tracks;
+  const int64_t num_tracks = r->Count(10000000);
+  for (int64_t k = 0; k < num_tracks; ++k) {
+    std::string device = r->String();
+    const int64_t track = r->Pod<int64_t>();
+    tracks[{std::move(device), track}] = r->Pod<int64_t>();
+  }
+  std::map<int64_t, Signature> signatures;
+  const int64_t num_signatures = r->Count(10000000);
+  for (int64_t k = 0; k < num_signatures; ++k) {
+    const int64_t source = r->Pod<int64_t>();
+    Signature& sig = signatures[source];
+    sig.count = r->Pod<int32_t>();
+    const Eigen::MatrixXd mean = r->Matrix(1 << 16);
+    if (mean.cols() > 1) r->Corrupt("signature shape");
+    sig.mean.assign(mean.data(), mean.data() + mean.size());
+  }
+  track_to_source_ = std::move(tracks);
+  signatures_ = std::move(signatures);
+}
+
 }  // namespace sound_map
 }  // namespace sarmap

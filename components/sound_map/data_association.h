@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "common/binary_io.h"
+
 namespace sarmap {
 namespace sound_map {
 
@@ -38,6 +40,9 @@ class SourceAssociator {
   // Sources a track was tied to (for PEOPLE_AUDIO, which names DOA track ids).
   int64_t SourceOfTrack(const std::string& device, int64_t track_id) const;
   static double CosineDistance(const std::vector<double>& a, const std::vector<double>& b);
+  // What it has learnt (tracks, signatures), for a restart from a state file.
+  void Save(common::BinaryWriter* w) const;
+  void Load(common::BinaryReader* r);
 
  private:
   Options options_;

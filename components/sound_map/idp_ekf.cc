@@ -374,5 +374,59 @@ std::vector<int64_t> IdpEkf::anchor_ids() const {
   return ids;
 }
 
+void IdpEkf::Save(common::BinaryWriter* w) const {
+  w->Matrix(x_);
+  w->Matrix(p_);
+  for (char a : is_angle_) w->Pod<int8_t>(a);
+  auto blocks = [w](const std::map<int64_t, int>& m) {
+    w->Pod<int64_t>(static_cast<int64_t>(m.size()));
+    for (const auto& [id, index] : m) w->Pod<int64_t>(id), w->Pod<int32_t>(index);
+  };
+  blocks(anchors_);
+  blocks(landmarks_);
+  w->Pod<int64_t>(static_cast<int64_t>(sources_.size()));
+  for (const auto& [id, s] : sources_)
+    w->Pod<int64_t>(id), w->Pod<int32_t>(s.index), w->Pod<int64_t>(s.anchor);
+}
+
+void IdpEkf::Load(common::BinaryReader* r) {
+  const Eigen::MatrixXd x = r->Matrix(), p = r->Matrix();
+  const int n = static_cast<int>(x.rows());
+  if (x.cols() != 1 || n < 3 || p.rows() != n || p.cols() != n) r->Corrupt("EKF dimensions");
+  std::vector<char> is_angle(static_cast<size_t>(n));
+  for (char& a : is_angle) a = r->Pod<int8_t>();
+  auto blocks = [r, n](int size, std::map<int64_t, int>* m) {
+    m->clear();
+    const int64_t count = r->Count(n);
+    for (int64_t k = 0; k < count; ++k) {
+      const int64_t id = r->Pod<int64_t>();
+      const int index = r->Pod<int32_t>();
+      if (index < 3 || index + size > n) r->Corrupt("EKF block index");
+      (*m)[id] = index;
+    }
+  };
+  std::map<int64_t, int> anchors, landmarks;
+  blocks(3, &anchors);
+  blocks(2, &landmarks);
+  std::map<int64_t, Source> sources;
+  const int64_t count = r->Count(n);
+  for (int64_t k = 0; k < count; ++k) {
+    const int64_t id = r->Pod<int64_t>();
+    Source s;
+    s.index = r->Pod<int32_t>();
+    s.anchor = r->Pod<int64_t>();
+    if (s.index < 3 || s.index + source_dim() > n) r->Corrupt("EKF source index");
+    if (!anchors.count(s.anchor)) r->Corrupt("EKF source without its anchor");
+    sources[id] = s;
+  }
+  if (!x.allFinite() || !p.allFinite()) r->Corrupt("EKF state not finite");
+  x_ = x.col(0);
+  p_ = p;
+  is_angle_ = std::move(is_angle);
+  anchors_ = std::move(anchors);
+  landmarks_ = std::move(landmarks);
+  sources_ = std::move(sources);
+}
+
 }  // namespace sound_map
 }  // namespace sarmap

@@ -21,6 +21,7 @@
 #include <map>
 #include <vector>
 
+#include "common/binary_io.h"
 #include "sound_map/sound_geometry.h"
 
 namespace sarmap {
@@ -115,6 +116,9 @@ class IdpEkf {
   std::vector<int64_t> source_ids() const;
   std::vector<int64_t> anchor_ids() const;
   int dim() const { return static_cast<int>(x_.size()); }
+  // The filter's state (not its options), for a restart from a state file.
+  void Save(common::BinaryWriter* w) const;
+  void Load(common::BinaryReader* r);
   const Eigen::VectorXd& mean() const { return x_; }
   const Eigen::MatrixXd& covariance() const { return p_; }
   const Options& options() const { return options_; }

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <set>
 
@@ -531,6 +532,126 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
     out.push_back(s);
   }
   return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// State file: little-endian binary, "SARMAPSM" + version, then the state field by field.
+
+namespace {
+constexpr char kStateMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'S', 'M'};
+constexpr int32_t kStateVersion = 1;
+
+void WritePose(common::BinaryWriter* w, const Pose2& p) { w->Pod(p.x), w->Pod(p.y), w->Pod(p.yaw); }
+Pose2 ReadPose(common::BinaryReader* r) {
+  const double x = r->Pod<double>(), y = r->Pod<double>(), yaw = r->Pod<double>();
+  return Pose2(x, y, yaw);
+}
+}  // namespace
+
+void OnlineSoundMap::Save(const std::string& path) const {
+  common::WriteAtomically(path, [this](common::BinaryWriter* w) {
+    for (char c : kStateMagic) w->Pod(c);
+    w->Pod(kStateVersion);
+    w->Pod<int8_t>(options_.three_d);
+    ekf_.Save(w);
+    associator_.Save(w);
+    w->Pod<int64_t>(static_cast<int64_t>(tentatives_.size()));
+    for (const auto& [key, t] : tentatives_) {
+      w->Pod(key), w->Pod(t.first), w->Pod(t.last), w->Pod(t.bearing_map_rad), w->Pod(t.variance);
+      w->Pod<int32_t>(t.n), w->Pod(t.track_id), w->Pod(t.twin);
+      w->String(t.device);
+    }
+    w->Pod(next_tentative_);
+    w->Pod<int8_t>(have_pose_);
+    WritePose(w, last_pose_);
+    w->Pod(last_pose_utime_), w->Pod(turn_rate_rad_per_s_), w->Pod(last_node_id_);
+    w->Pod(next_local_anchor_), w->Pod(next_source_id_), w->Pod(next_anchor_id_);
+    w->Pod<int64_t>(static_cast<int64_t>(meta_.size()));
+    for (const auto& [id, m] : meta_) {
+      w->Pod(id), w->Pod<int8_t>(m.is_person), w->Pod(m.first), w->Pod(m.last);
+      w->Pod<int32_t>(m.n), w->Pod(m.twin), w->Pod<int32_t>(m.mirror_misses);
+    }
+    w->Pod(counters_);
+    w->Pod<int64_t>(static_cast<int64_t>(anchor_links_.size()));
+    for (const auto& [id, link] : anchor_links_)
+      w->Pod(id), w->Pod(link.node), WritePose(w, link.node_from_anchor);
+    w->Pod<int64_t>(static_cast<int64_t>(node_poses_.size()));
+    for (const auto& [id, pose] : node_poses_) w->Pod(id), WritePose(w, pose);
+    w->Pod<int64_t>(static_cast<int64_t>(trail_cells_.size()));
+    for (const auto& [cell, points] : trail_cells_) {
+      w->Pod(cell), w->Pod<int64_t>(static_cast<int64_t>(points.size()));
+      for (const auto& p : points) w->Pod(p.x()), w->Pod(p.y());
+    }
+    w->Pod(last_trail_point_.x()), w->Pod(last_trail_point_.y());
+    for (char c : kStateMagic) w->Pod(c);  // trailer: a complete file
+  });
+}
+
+bool OnlineSoundMap::Load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  common::BinaryReader r(&in, "sound-map state '" + path + "'");
+  auto magic = [&r] {
+    for (char c : kStateMagic)
+      if (r.Pod<char>() != c) r.Corrupt("not a sound-map state file");
+  };
+  magic();
+  if (r.Pod<int32_t>() != kStateVersion) r.Corrupt("unknown version");
+  if ((r.Pod<int8_t>() != 0) != options_.three_d)
+    r.Corrupt("saved by a map with the other three_d");
+  // Read into a fresh map and swap, so a bad file leaves this one untouched.
+  OnlineSoundMap m(options_, ekf_.options().mount);
+  m.ekf_.Load(&r);
+  m.associator_.Load(&r);
+  const int64_t num_tentatives = r.Count(1000000);
+  for (int64_t k = 0; k < num_tentatives; ++k) {
+    const int64_t key = r.Pod<int64_t>();
+    Tentative& t = m.tentatives_[key];
+    t.first = r.Pod<int64_t>(), t.last = r.Pod<int64_t>();
+    t.bearing_map_rad = r.Pod<double>(), t.variance = r.Pod<double>();
+    t.n = r.Pod<int32_t>(), t.track_id = r.Pod<int64_t>(), t.twin = r.Pod<int64_t>();
+    t.device = r.String();
+  }
+  m.next_tentative_ = r.Pod<int64_t>();
+  m.have_pose_ = r.Pod<int8_t>() != 0;
+  m.last_pose_ = ReadPose(&r);
+  m.last_pose_utime_ = r.Pod<int64_t>(), m.turn_rate_rad_per_s_ = r.Pod<double>();
+  m.last_node_id_ = r.Pod<int64_t>();
+  m.next_local_anchor_ = r.Pod<int64_t>(), m.next_source_id_ = r.Pod<int64_t>();
+  m.next_anchor_id_ = r.Pod<int64_t>();
+  const int64_t num_meta = r.Count(1000000);
+  for (int64_t k = 0; k < num_meta; ++k) {
+    Meta& meta = m.meta_[r.Pod<int64_t>()];
+    meta.is_person = r.Pod<int8_t>() != 0;
+    meta.first = r.Pod<int64_t>(), meta.last = r.Pod<int64_t>();
+    meta.n = r.Pod<int32_t>(), meta.twin = r.Pod<int64_t>(), meta.mirror_misses = r.Pod<int32_t>();
+  }
+  m.counters_ = r.Pod<Counters>();
+  const int64_t num_links = r.Count(1000000);
+  for (int64_t k = 0; k < num_links; ++k) {
+    AnchorLink& link = m.anchor_links_[r.Pod<int64_t>()];
+    link.node = r.Pod<int64_t>();
+    link.node_from_anchor = ReadPose(&r);
+  }
+  const int64_t num_nodes = r.Count(10000000);
+  for (int64_t k = 0; k < num_nodes; ++k) {
+    const int64_t id = r.Pod<int64_t>();
+    m.node_poses_[id] = ReadPose(&r);
+  }
+  const int64_t num_cells = r.Count(10000000);
+  for (int64_t k = 0; k < num_cells; ++k) {
+    auto& points = m.trail_cells_[r.Pod<int64_t>()];
+    points.resize(static_cast<size_t>(r.Count(10000000)));
+    for (auto& p : points) p.x() = r.Pod<double>(), p.y() = r.Pod<double>();
+  }
+  m.last_trail_point_.x() = r.Pod<double>(), m.last_trail_point_.y() = r.Pod<double>();
+  magic();
+  for (const auto& [id, meta] : m.meta_)
+    if (!m.ekf_.HasSource(id)) r.Corrupt("source " + std::to_string(id) + " not in the EKF");
+  // A restarted node asks SLAM to keep its anchors again.
+  m.anchors_changed_ = true;
+  *this = std::move(m);
+  return true;
 }
 
 }  // namespace sound_map

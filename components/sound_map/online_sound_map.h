@@ -240,6 +240,12 @@ class OnlineSoundMap {
   const Counters& counters() const { return counters_; }
   const IdpEkf& ekf() const { return ekf_; }
 
+  // The whole state (not the options), crash-safe (written beside and renamed over path), so a
+  // restarted node continues where it was. Load returns false when there is no file and throws
+  // for one that is truncated, corrupt or from a map of the other dimension (three_d).
+  void Save(const std::string& path) const;
+  bool Load(const std::string& path);
+
  private:
   struct Meta {
     bool is_person = false;

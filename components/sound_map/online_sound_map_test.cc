@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
 
@@ -20,6 +22,7 @@ struct Harness {
   Sim2dData d;
   IdpEkf loc;
   OnlineSoundMap map;
+  std::vector<OnlineSoundMap*> twins;  // fed exactly what map is fed
   bool loop_closed = true;  // what SLAM_ANCHORS says of the optimisation
   explicit Harness(const Sim2dConfig& c, const OnlineSoundMapOptions& options = OnlineSoundMapOptions{})
       : d(Simulate2d(c)), loc(IdpEkf::Options{}), map(options, ArrayMount{}) {
@@ -33,6 +36,8 @@ struct Harness {
     }
     const int64_t t = static_cast<int64_t>(k) * 200000;
     map.OnPose(t, loc.current(), loc.current_covariance(), static_cast<int64_t>(k));
+    for (auto* m : twins)
+      m->OnPose(t, loc.current(), loc.current_covariance(), static_cast<int64_t>(k));
     std::vector<OnlineSoundMap::Doa> doas;
     for (const auto& o : d.sound_obs[k]) {
       OnlineSoundMap::Doa doa;
@@ -42,6 +47,7 @@ struct Harness {
       doas.push_back(doa);
     }
     map.OnDoa(t, "sim", doas);
+    for (auto* m : twins) m->OnDoa(t, "sim", doas);
     for (int64_t id : map.AnchorNodeIds())
       if (!loc.HasAnchor(id)) {
         // SLAM keeps the requested node: in this stand-in, the pose of step `id` is only
@@ -54,6 +60,7 @@ struct Harness {
     Eigen::MatrixXd cov;
     loc.SharedState(map.AnchorNodeIds(), &cur, &anchors, &cov);
     map.OnSlamAnchors(t, cur, anchors, cov, loop_closed);
+    for (auto* m : twins) m->OnSlamAnchors(t, cur, anchors, cov, loop_closed);
   }
 };
 
@@ -81,6 +88,56 @@ TEST(OnlineSoundMap, MapsSourcesWithSlamAnchors) {
          static_cast<long>(h.map.counters().back_propagations));
   EXPECT_LT(rms, 0.5);
   EXPECT_LE(h.map.AnchorNodeIds().size(), h.d.sources.size());  // sources first heard together share one
+}
+
+// A node killed mid-mission restarts from its state file: fed the same inputs from there on, the
+// restarted map gives exactly what the uninterrupted one gives. A damaged file is refused and
+// leaves the map as it was.
+TEST(OnlineSoundMap, ARestartFromTheStateFileContinuesExactly) {
+  Sim2dConfig c;
+  c.landmarks = true;
+  c.odo_sigma_m = 0.02;
+  c.odo_sigma_rad = 5 * M_PI / 180;
+  c.seed = 11;
+  Harness h(c);
+  const size_t half = h.d.truth.size() / 2;
+  for (size_t k = 0; k < half; ++k) h.Step(k);
+  const std::string path = ::testing::TempDir() + "/sound_map_restart.state";
+  h.map.Save(path);
+  OnlineSoundMap resumed(OnlineSoundMapOptions{}, ArrayMount{});
+  EXPECT_FALSE(resumed.Load(path + ".absent"));
+  ASSERT_TRUE(resumed.Load(path));
+  ASSERT_FALSE(h.map.Sources(0).empty());
+  EXPECT_TRUE(resumed.TakeAnchorsChanged());  // asks SLAM for its anchors again
+  h.twins.push_back(&resumed);
+  for (size_t k = half; k < h.d.truth.size(); ++k) h.Step(k);
+  const int64_t end = static_cast<int64_t>(h.d.truth.size()) * 200000;
+  const auto a = h.map.Sources(end), b = resumed.Sources(end);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].id, b[i].id);
+    EXPECT_EQ(a[i].state, b[i].state);
+    EXPECT_EQ(a[i].num_observations, b[i].num_observations);
+    EXPECT_EQ((a[i].position_m - b[i].position_m).norm(), 0.0);
+    EXPECT_EQ((a[i].covariance - b[i].covariance).norm(), 0.0);
+  }
+  EXPECT_EQ(h.map.counters().doa_used, resumed.counters().doa_used);
+  EXPECT_EQ(h.map.AnchorNodeIds(), resumed.AnchorNodeIds());
+
+  // Truncated: refused, the map unchanged.
+  {
+    std::ifstream in(path, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
+  }
+  EXPECT_THROW(resumed.Load(path), std::runtime_error);
+  EXPECT_EQ(resumed.Sources(end).size(), a.size());
+  EXPECT_EQ((resumed.Sources(end)[0].position_m - a[0].position_m).norm(), 0.0);
+  // Saved by a 3D map: refused by a planar one.
+  OnlineSoundMapOptions three_d;
+  three_d.three_d = true;
+  OnlineSoundMap(three_d, ArrayMount{}).Save(path);
+  EXPECT_THROW(resumed.Load(path), std::runtime_error);
 }
 
 // After a loop closure SLAM corrects the trajectory; the sound map moves with it.

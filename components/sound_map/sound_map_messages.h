@@ -33,6 +33,9 @@ struct SoundMapNodeOptions {
   double reorder_delay_s = 0.3;
   double publish_period_s = 0.5;
   double request_repeat_s = 5.0;
+  std::string state_file = "";  // "" = no persistence
+  double state_save_period_s = 5.0;
+  bool resume = false;
   OnlineSoundMapOptions map;
   template <class V>
   void Visit(V& v) {
@@ -47,12 +50,19 @@ struct SoundMapNodeOptions {
     v("reorder_delay_s", reorder_delay_s, "inputs are processed in time order once this much newer data arrived");
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
     v("request_repeat_s", request_repeat_s, "re-send the anchor request this often (wall clock; 0: only on change)");
+    v("state_file", state_file,
+      "where the map's state is saved (crash-safe) and resumed from (\"\": nowhere)");
+    v("state_save_period_s", state_save_period_s,
+      "save the state this often when it changed (wall clock)");
+    v("resume", resume,
+      "start from state_file if it exists (after a crash or kill, the launcher restarts us)");
     v("map", map, "sound map estimator");
   }
   void Validate(common::Validator& check) const {
     check.NonNegative("reorder_delay_s", reorder_delay_s);
     check.Positive("publish_period_s", publish_period_s);
     check.NonNegative("request_repeat_s", request_repeat_s);
+    check.Positive("state_save_period_s", state_save_period_s);
     check.That(!robot_config.empty(), "robot_config", "must name the robot description");
   }
 };

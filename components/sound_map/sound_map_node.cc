@@ -50,6 +50,16 @@ int main(int argc, char** argv) {
     }
 
     OnlineSoundMap map(options.map, mount);
+    if (options.resume && !options.state_file.empty()) {
+      try {
+        if (map.Load(options.state_file)) {
+          SARMAP_LOG(INFO) << "resumed " << map.ekf().source_ids().size() << " sources from "
+                           << options.state_file;
+        }
+      } catch (const std::exception& e) {
+        SARMAP_LOG(WARN) << "not resumed, starting empty: " << e.what();
+      }
+    }
     sarmap::common::Node node("sarmap-sound-map", node_args.lcm_url);
     auto map_pub = node.Advertise<sarmap::sound_map_t>(options.sound_map_channel);
     auto request_pub = node.Advertise<sarmap::slam_anchor_request_t>(options.anchor_request_channel);
@@ -72,9 +82,12 @@ int main(int argc, char** argv) {
       map_pub.Publish(&msg);
       last_publish = utime;
     };
+    bool changed_since_save = false;
     auto after_input = [&](Utime utime) {
+      changed_since_save = true;
       if (map.TakeAnchorsChanged()) send_request(utime);
-      if (utime - last_publish >= sarmap::common::SecondsToUtime(options.publish_period_s)) publish_map(utime);
+      if (utime - last_publish >= sarmap::common::SecondsToUtime(options.publish_period_s))
+        publish_map(utime);
       const auto& c = map.counters();
       if (c.doa_unsupported_kind > warned_kind) {
         warned_kind = c.doa_unsupported_kind;
@@ -141,6 +154,19 @@ int main(int argc, char** argv) {
       node.AddTimer(options.request_repeat_s, [&] {
         if (!map.AnchorNodeIds().empty()) send_request(newest);
       });
+    if (!options.state_file.empty()) {
+      node.AddTimer(options.state_save_period_s, [&] {
+        if (!changed_since_save) return;
+        changed_since_save = false;
+        try {
+          map.Save(options.state_file);
+        } catch (const std::exception& e) {
+          static sarmap::common::RateLimiter limit(30.0);
+          if (limit.Allow(sarmap::common::SteadySeconds()))
+            SARMAP_LOG(WARN) << "state not saved: " << e.what();
+        }
+      });
+    }
     node.AddTimer(1.0, [&] {
       const auto& c = map.counters();
       node.SetStatusMessage("sources " + std::to_string(map.ekf().source_ids().size()) + " (born " +
