@@ -253,6 +253,12 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
       const Eigen::Vector3d across_map =
           map_from_mic.rotation() * Eigen::Vector3d(-v.y(), v.x(), 0.0).normalized();
       const double var_across = across_map.dot(s.covariance * across_map);
+      // A source known only to tens of degrees (just born, or with a range of kilometres) lies in
+      // every direction's gate: it would take every call and, counted in in_gate, block the
+      // source the caller really is (a people map restarted after such a source appeared then
+      // never placed the caller). It neither names nor blocks.
+      constexpr double kMaxSourceAngleSigmaRad = 0.5;
+      if (var_across > std::pow(kMaxSourceAngleSigmaRad * range, 2)) continue;
       const double variance = sigma_det * sigma_det + var_across / (range * range);
       const double score = error * error / variance;
       if (score <= options_.heard_gate_chi2) ++in_gate;

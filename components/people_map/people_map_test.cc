@@ -193,6 +193,29 @@ TEST(PeopleMapTest, HeardPersonIsPlacedAtASourceKnownWellEnough) {
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 3);
 }
 
+// A source known only to tens of degrees (the sound map's just-born or runaway sources) lies in
+// every direction's gate. It must not take a call, nor make a call towards the real caller
+// "ambiguous".
+TEST(PeopleMapTest, ASourceOfUnknownDirectionNeitherTakesNorBlocksACall) {
+  PeopleMap map(OneCallIsAPerson());
+  SoundSource caller, runaway;
+  caller.id = 2;
+  caller.position_m = Eigen::Vector3d(6.8, -2.4, 0.6);
+  caller.covariance = Eigen::Vector3d(0.04, 0.04, 0.1).asDiagonal();
+  caller.converged = true;
+  runaway.id = 9;
+  runaway.position_m = Eigen::Vector3d(777.0, 633.0, 0.6);
+  runaway.covariance = Eigen::Vector3d(3e9, 2e9, 1.0).asDiagonal();
+  map.UpdateSoundSources(1'000'000, {caller, runaway});
+  HeardDetection call;
+  call.azimuth_rad = std::atan2(-2.4, 6.8);
+  call.keyword = "help";
+  call.confidence = 0.9;
+  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 2);
+}
+
 // Along a corridor two sources can lie on one bearing: a call from that bearing names neither.
 TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
   PeopleMap map(OneCallIsAPerson());
