@@ -130,6 +130,15 @@ PeopleMapOptions OneCallIsAPerson() {
   return options;
 }
 
+// "help" heard from the array at the origin, looking along x.
+HeardDetection HelpCallTowards(double x_m, double y_m) {
+  HeardDetection call;
+  call.azimuth_rad = std::atan2(y_m, x_m);
+  call.keyword = "help";
+  call.confidence = 0.9;
+  return call;
+}
+
 TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
   PeopleMap map(OneCallIsAPerson());
   SoundSource caller;
@@ -171,10 +180,7 @@ TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
 TEST(PeopleMapTest, HeardPersonIsPlacedAtASourceKnownWellEnough) {
   PeopleMapOptions options = OneCallIsAPerson();
   options.heard_max_source_sigma_m = 0.6;
-  HeardDetection call;
-  call.azimuth_rad = std::atan2(5.0, 2.0);
-  call.keyword = "help";
-  call.confidence = 0.9;
+  const HeardDetection call = HelpCallTowards(2.0, 5.0);
   SoundSource caller;
   caller.id = 3;
   caller.position_m = Eigen::Vector3d(2.0, 5.0, 0.5);
@@ -207,11 +213,7 @@ TEST(PeopleMapTest, ASourceOfUnknownDirectionNeitherTakesNorBlocksACall) {
   runaway.position_m = Eigen::Vector3d(777.0, 633.0, 0.6);
   runaway.covariance = Eigen::Vector3d(3e9, 2e9, 1.0).asDiagonal();
   map.UpdateSoundSources(1'000'000, {caller, runaway});
-  HeardDetection call;
-  call.azimuth_rad = std::atan2(-2.4, 6.8);
-  call.keyword = "help";
-  call.confidence = 0.9;
-  EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  EXPECT_EQ(map.AddHeard(2'000'000, {HelpCallTowards(6.8, -2.4)}, Rigid3d()), 1);
   ASSERT_EQ(map.people().size(), 1u);
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 2);
 }

@@ -64,13 +64,18 @@ struct Harness {
   }
 };
 
-TEST(OnlineSoundMap, MapsSourcesWithSlamAnchors) {
+// Table 4.1 Part II's scene: range-bearing landmarks, odometry 2 cm / 5 deg per step.
+Sim2dConfig LandmarkScene() {
   Sim2dConfig c;
   c.landmarks = true;
   c.odo_sigma_m = 0.02;
   c.odo_sigma_rad = 5 * M_PI / 180;
   c.seed = 11;
-  Harness h(c);
+  return c;
+}
+
+TEST(OnlineSoundMap, MapsSourcesWithSlamAnchors) {
+  Harness h(LandmarkScene());
   for (size_t k = 0; k < h.d.truth.size(); ++k) h.Step(k);
   const auto sources = h.map.Sources(static_cast<int64_t>(h.d.truth.size()) * 200000);
   ASSERT_EQ(sources.size(), h.d.sources.size());
@@ -94,12 +99,7 @@ TEST(OnlineSoundMap, MapsSourcesWithSlamAnchors) {
 // restarted map gives exactly what the uninterrupted one gives. A damaged file is refused and
 // leaves the map as it was.
 TEST(OnlineSoundMap, ARestartFromTheStateFileContinuesExactly) {
-  Sim2dConfig c;
-  c.landmarks = true;
-  c.odo_sigma_m = 0.02;
-  c.odo_sigma_rad = 5 * M_PI / 180;
-  c.seed = 11;
-  Harness h(c);
+  Harness h(LandmarkScene());
   const size_t half = h.d.truth.size() / 2;
   for (size_t k = 0; k < half; ++k) h.Step(k);
   const std::string path = ::testing::TempDir() + "/sound_map_restart.state";
