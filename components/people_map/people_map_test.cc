@@ -130,6 +130,17 @@ PeopleMapOptions OneCallIsAPerson() {
   return options;
 }
 
+// A sound source at (x, y, z) with diagonal position variances (m^2).
+SoundSource SourceAt(int64_t id, const Eigen::Vector3d& position_m,
+                     const Eigen::Vector3d& variances_m2, bool converged) {
+  SoundSource s;
+  s.id = id;
+  s.position_m = position_m;
+  s.covariance = variances_m2.asDiagonal();
+  s.converged = converged;
+  return s;
+}
+
 // "help" heard from the array at the origin, looking along x.
 HeardDetection HelpCallTowards(double x_m, double y_m) {
   HeardDetection call;
@@ -204,14 +215,8 @@ TEST(PeopleMapTest, HeardPersonIsPlacedAtASourceKnownWellEnough) {
 // "ambiguous".
 TEST(PeopleMapTest, ASourceOfUnknownDirectionNeitherTakesNorBlocksACall) {
   PeopleMap map(OneCallIsAPerson());
-  SoundSource caller, runaway;
-  caller.id = 2;
-  caller.position_m = Eigen::Vector3d(6.8, -2.4, 0.6);
-  caller.covariance = Eigen::Vector3d(0.04, 0.04, 0.1).asDiagonal();
-  caller.converged = true;
-  runaway.id = 9;
-  runaway.position_m = Eigen::Vector3d(777.0, 633.0, 0.6);
-  runaway.covariance = Eigen::Vector3d(3e9, 2e9, 1.0).asDiagonal();
+  const SoundSource caller = SourceAt(2, {6.8, -2.4, 0.6}, {0.04, 0.04, 0.1}, true);
+  const SoundSource runaway = SourceAt(9, {777.0, 633.0, 0.6}, {3e9, 2e9, 1.0}, false);
   map.UpdateSoundSources(1'000'000, {caller, runaway});
   EXPECT_EQ(map.AddHeard(2'000'000, {HelpCallTowards(6.8, -2.4)}, Rigid3d()), 1);
   ASSERT_EQ(map.people().size(), 1u);
@@ -221,15 +226,8 @@ TEST(PeopleMapTest, ASourceOfUnknownDirectionNeitherTakesNorBlocksACall) {
 // Along a corridor two sources can lie on one bearing: a call from that bearing names neither.
 TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
   PeopleMap map(OneCallIsAPerson());
-  SoundSource near_source, far_source;
-  near_source.id = 1;
-  near_source.position_m = Eigen::Vector3d(4.0, 0.1, 0.5);
-  far_source.id = 2;
-  far_source.position_m = Eigen::Vector3d(7.0, 0.1, 0.5);
-  for (SoundSource* s : {&near_source, &far_source}) {
-    s->covariance = Eigen::Vector3d(0.01, 0.01, 0.1).asDiagonal();
-    s->converged = true;
-  }
+  const SoundSource near_source = SourceAt(1, {4.0, 0.1, 0.5}, {0.01, 0.01, 0.1}, true);
+  const SoundSource far_source = SourceAt(2, {7.0, 0.1, 0.5}, {0.01, 0.01, 0.1}, true);
   map.UpdateSoundSources(1'000'000, {near_source, far_source});
   HeardDetection call;
   call.azimuth_rad = 0.02;
