@@ -26,6 +26,29 @@ void BlockStatistics::Add(const BlockStatistics& other) {
   num_frames += other.num_frames;
 }
 
+BlockStatistics SubtractNoiseCrossSpectra(const BlockStatistics& stats, double beta) {
+  BlockStatistics out = stats;
+  if (beta <= 0 || stats.noise.size() != stats.raw.size()) return out;
+  for (size_t k = 0; k < out.raw.size(); ++k) {
+    const Eigen::MatrixXcd& r = stats.raw[k];
+    const Eigen::MatrixXcd& noise = stats.noise[k];
+    Eigen::MatrixXcd& phat = out.phat[k];
+    const double n_k = phat.rows() > 0 ? phat(0, 0).real() : 0.0;  // |Y_m| = 1 per frame
+    if (n_k <= 0) continue;
+    for (int i = 0; i < r.rows(); ++i)
+      for (int j = i + 1; j < r.cols(); ++j) {
+        const double r_abs = std::abs(r(i, j));
+        if (r_abs <= 0) continue;
+        ComplexD g = (r(i, j) - beta * n_k * noise(i, j)) / r(i, j);
+        const double g_abs = std::abs(g);
+        if (g_abs > 1) g /= g_abs;
+        phat(i, j) *= g;
+        phat(j, i) = std::conj(phat(i, j));
+      }
+  }
+  return out;
+}
+
 // ---------------------------------------------------------------- search
 
 namespace {

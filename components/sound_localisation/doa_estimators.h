@@ -47,6 +47,17 @@ struct BlockStatistics {
   void Add(const BlockStatistics& other);  // sums (same shape)
 };
 
+// SRP-PHAT with the noise's cross-spectra removed. A steady interferer (a phone's music, an
+// engine) adds its own cross-spectrum to every bin that a voice also fills, and on a small
+// array the two peaks merge: the voice's bearing is pulled towards the interferer. With the
+// noise covariance K(k) learnt from the frames between sounds, per bin and pair
+//   S_ij(k) = R_ij(k) - beta n_k K_ij(k)       (the block's cross-power not explained by noise),
+//   Rphat_ij(k) <- Rphat_ij(k) g,  g = S_ij / R_ij with |g| clipped to 1,
+// so each PHAT cross-term turns by the phase the noise added and shrinks by the share of the
+// cross-power that was noise (n_k: frames holding bin k). Returns stats unchanged when no noise
+// is known.
+BlockStatistics SubtractNoiseCrossSpectra(const BlockStatistics& stats, double beta);
+
 // A direction found by an estimator, before tracking.
 struct DoaEstimate {
   Direction direction;

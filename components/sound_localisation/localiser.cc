@@ -202,9 +202,14 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, std
   out->push_back(std::move(o));
 }
 
-std::vector<DoaEstimate> Localiser::Estimate(const BlockStatistics& stats) const {
-  if (stats.num_frames == 0) return {};
+std::vector<DoaEstimate> Localiser::Estimate(const BlockStatistics& block) const {
+  if (block.num_frames == 0) return {};
   const std::string& method = options_.method;
+  BlockStatistics subtracted;
+  const bool subtract =
+      method == "srp_phat" && options_.noise_subtraction > 0 && !block.noise.empty();
+  if (subtract) subtracted = SubtractNoiseCrossSpectra(block, options_.noise_subtraction);
+  const BlockStatistics& stats = subtract ? subtracted : block;
   if (method == "gcc_phat") return GccPhatDirection(geometry_, stats, kind_);
   if (method == "esprit") return Esprit(geometry_, stats, options_.music_num_sources, options_.min_separation_deg);
   if (method == "srp_phat" && options_.band_hz > 0) return EstimateWithBands(stats);

@@ -58,6 +58,9 @@ struct LocaliserOptions {
   double band_min_coherence = 0.6;
   int band_max_sources = 2;
   double band_min_tonality = 0.0;  // a band peak needs this share of its band's power in 3 bins
+  // srp_phat: remove this share (0..1) of the noise covariance's cross-spectra before steering
+  // (SubtractNoiseCrossSpectra); 0 off.
+  double noise_subtraction = 0.0;
   TrackerOptions tracker;
 
   template <class V>
@@ -98,6 +101,10 @@ struct LocaliserOptions {
     v("band_min_tonality", band_min_tonality,
       "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise and "
       "voiced speech lower); 0: any band");
+    v("noise_subtraction", noise_subtraction,
+      "srp_phat: remove this share (0..1) of the steady noise's cross-spectra (learnt between "
+      "sounds) "
+      "before steering, so a steady interferer does not pull a voice's bearing; 0: off");
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {
@@ -128,6 +135,7 @@ struct LocaliserOptions {
     check.InRange("band_min_coherence", band_min_coherence, 0, 1);
     check.That(band_max_sources >= 0, "band_max_sources", "must be >= 0");
     check.InRange("band_min_tonality", band_min_tonality, 0, 1);
+    check.InRange("noise_subtraction", noise_subtraction, 0, 1);
   }
 };
 
