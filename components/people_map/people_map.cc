@@ -457,6 +457,12 @@ void PeopleMap::Save(const std::string& path) const {
     n["source_id"] = id;
     n["heard_utime"] = t;
     n["keyword"] = source_keyword_.count(id) ? source_keyword_.at(id) : "";
+    // The calls that count towards min_heard_calls: a restart that forgot them would need two
+    // more calls, and a hidden caller is heard only now and then.
+    const auto calls = source_call_utimes_.find(id);
+    n["call_utimes"] = YAML::Node(YAML::NodeType::Sequence);
+    if (calls != source_call_utimes_.end())
+      for (Utime c : calls->second) n["call_utimes"].push_back(c);
     root["heard_sources"].push_back(n);
   }
   YAML::Emitter out;
@@ -504,14 +510,19 @@ bool PeopleMap::Load(const std::string& path) {
     }
     std::map<int64_t, Utime> heard;
     std::map<int64_t, std::string> keywords;
+    std::map<int64_t, std::vector<Utime>> calls;
     for (const auto& n : root["heard_sources"]) {
-      heard[n["source_id"].as<int64_t>()] = n["heard_utime"].as<int64_t>();
-      keywords[n["source_id"].as<int64_t>()] = n["keyword"].as<std::string>();
+      const int64_t id = n["source_id"].as<int64_t>();
+      heard[id] = n["heard_utime"].as<int64_t>();
+      keywords[id] = n["keyword"].as<std::string>();
+      if (n["call_utimes"])  // absent in files saved before session 6
+        for (const auto& c : n["call_utimes"]) calls[id].push_back(c.as<int64_t>());
     }
     next_id_ = root["next_id"].as<int64_t>();
     people_ = std::move(people);
     source_heard_utime_ = std::move(heard);
     source_keyword_ = std::move(keywords);
+    source_call_utimes_ = std::move(calls);
   } catch (const std::exception& e) {
     throw std::runtime_error(path + ": corrupt people-map state (" + e.what() + ")");
   }

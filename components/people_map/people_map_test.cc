@@ -406,6 +406,35 @@ TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
   EXPECT_TRUE(map.Report(p.last_detected_utime + 100'000'000).empty());
 }
 
+// kill -9 of the people map between a hidden caller's two heard calls: the restarted map must
+// still count the first, or it needs two more (the session-6 kill mission missed her so, with her
+// sound source 0.16 m from her).
+TEST(PeopleMapTest, CallsHeardBeforeARestartStillCount) {
+  SoundSource source;
+  source.id = 5;
+  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
+  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
+  source.converged = true;
+  HeardDetection call;
+  call.azimuth_rad = M_PI / 4;
+  call.keyword = "help";
+  call.confidence = 0.9;
+  PeopleMap before{PeopleMapOptions()};
+  before.UpdateSoundSources(1'000'000, {source});
+  EXPECT_EQ(before.AddHeard(2'000'000, {call}, Rigid3d()), 1);
+  EXPECT_TRUE(before.people().empty());
+  const std::string path = ::testing::TempDir() + "/people_calls_state.yaml";
+  before.Save(path);
+
+  PeopleMap after{PeopleMapOptions()};
+  ASSERT_TRUE(after.Load(path));
+  after.UpdateSoundSources(9'000'000, {source});
+  EXPECT_TRUE(after.people().empty());
+  EXPECT_EQ(after.AddHeard(10'000'000, {call}, Rigid3d()), 1);
+  ASSERT_EQ(after.people().size(), 1u);
+  EXPECT_EQ(after.people().begin()->second.sound_source_id, 5);
+}
+
 TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0.5, 0.2, 0.3);
