@@ -174,8 +174,8 @@ class PeopleMap {
   std::map<int64_t, SoundSource> sources_;
   std::map<int64_t, common::Utime> source_heard_utime_;  // source -> last heard calling
   std::map<int64_t, std::string> source_keyword_;
-  std::map<int64_t, std::vector<common::Utime>>
-      source_call_utimes_;  // source -> its recent calls (saved)
+  // source -> its recent calls (saved)
+  std::map<int64_t, std::vector<common::Utime>> source_call_utimes_;
   // A second sound source of one caller (the sound map split one voice in two): source -> the
   // person it was merged into (not saved: a restart merges again).
   std::map<int64_t, int64_t> source_alias_;

@@ -49,7 +49,7 @@ struct BlockStatistics {
 
 // SRP-PHAT with the noise's cross-spectra removed. A steady interferer (a phone's music, an
 // engine) adds its own cross-spectrum to every bin that a voice also fills, and on a small
-// array the two peaks merge: the voice's bearing is pulled towards the interferer. With the
+// array the two peaks merge: the voice's peak is bent off its bearing. With the
 // noise covariance K(k) learnt from the frames between sounds, per bin and pair
 //   S_ij(k) = R_ij(k) - beta n_k K_ij(k)       (the block's cross-power not explained by noise),
 //   Rphat_ij(k) <- Rphat_ij(k) g,  g = S_ij / R_ij with |g| clipped to 1,

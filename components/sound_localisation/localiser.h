@@ -102,9 +102,8 @@ struct LocaliserOptions {
       "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise and "
       "voiced speech lower); 0: any band");
     v("noise_subtraction", noise_subtraction,
-      "srp_phat: remove this share (0..1) of the steady noise's cross-spectra (learnt between "
-      "sounds) "
-      "before steering, so a steady interferer does not pull a voice's bearing; 0: off");
+      "srp_phat: remove this share (0..1) of the steady noise's cross-spectra (learnt between sounds) "
+      "before steering, so a steady interferer does not bend a voice's bearing; 0: off");
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {

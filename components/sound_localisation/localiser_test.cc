@@ -235,8 +235,8 @@ TEST(LocaliserSynthetic, TonalityGateKeepsBandPeaksForTones) {
   EXPECT_EQ(with, 0);
 }
 
-// A steady interferer pulls a voice's bearing towards itself on a small array: their peaks
-// overlap. Steady white noise at 60 deg from the start, a real voice (CMU ARCTIC) at 110 deg
+// A steady interferer bends a voice's bearing on a small array: their peaks overlap (here the
+// voice's peak is pushed away from the noise's). Steady white noise at 60 deg from the start, a real voice (CMU ARCTIC) at 110 deg
 // from 1 s on. The noise covariance is learnt in the first second; removing its cross-spectra
 // (noise_subtraction) brings the voice's bearings back.
 TEST(LocaliserSynthetic, NoiseSubtractionRemovesASteadyInterferersPull) {
@@ -247,8 +247,8 @@ TEST(LocaliserSynthetic, NoiseSubtractionRemovesASteadyInterferersPull) {
   const size_t start = static_cast<size_t>(1.0 * fs), n = start + voice.size();
   const std::vector<float> noise = testing_util::WhiteNoise(n, 31);
   const double noise_az = DegToRad(60), voice_az = DegToRad(110);
-  const double noise_gain =
-      0.2;  // white: most of its power lies in the analysed 1-7 kHz, a voice's does not
+  // White: most of its power lies in the analysed 1-7 kHz, a voice's does not.
+  const double noise_gain = 0.2;
   auto unit = [](double az) { return Eigen::Vector3d(std::cos(az), std::sin(az), 0.0); };
   const Eigen::VectorXd d_noise = g.Delays(unit(noise_az)), d_voice = g.Delays(unit(voice_az));
   std::vector<std::vector<float>> mics(g.num_mics(), std::vector<float>(n, 0.0f));
@@ -281,8 +281,7 @@ TEST(LocaliserSynthetic, NoiseSubtractionRemovesASteadyInterferersPull) {
   const double full = Median(voice_errors(1.0, &n_full));
   std::printf(
       "voice's signed median bearing error: %.2f deg plain (%d blocks), %.2f deg with half the "
-      "noise's "
-      "cross-spectra removed (%d), %.2f deg with all (%d)\n",
+      "noise's cross-spectra removed (%d), %.2f deg with all (%d)\n",
       plain, n_plain, half, n_half, full, n_full);
   ASSERT_GE(std::min({n_plain, n_half, n_full}), 10);
   EXPECT_GT(std::abs(plain), 5.0);
