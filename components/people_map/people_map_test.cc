@@ -410,15 +410,8 @@ TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
 // still count the first, or it needs two more (the session-6 kill mission missed her so, with her
 // sound source 0.16 m from her).
 TEST(PeopleMapTest, CallsHeardBeforeARestartStillCount) {
-  SoundSource source;
-  source.id = 5;
-  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
-  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
-  source.converged = true;
-  HeardDetection call;
-  call.azimuth_rad = M_PI / 4;
-  call.keyword = "help";
-  call.confidence = 0.9;
+  const SoundSource source = SourceAt(5, {3.0, 3.0, 0.5}, {0.02, 0.02, 0.1}, true);
+  const HeardDetection call = HelpCallTowards(3.0, 3.0);
   PeopleMap before{PeopleMapOptions()};
   before.UpdateSoundSources(1'000'000, {source});
   EXPECT_EQ(before.AddHeard(2'000'000, {call}, Rigid3d()), 1);
