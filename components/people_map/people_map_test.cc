@@ -250,16 +250,9 @@ TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
 // heard_person_window_s.
 TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
   PeopleMap map(PeopleMapOptions{});
-  SoundSource source;
-  source.id = 5;
-  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
-  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
-  source.converged = true;
+  const SoundSource source = SourceAt(5, {3.0, 3.0, 0.5}, {0.02, 0.02, 0.1}, true);
   map.UpdateSoundSources(1'000'000, {source});
-  HeardDetection call;
-  call.azimuth_rad = M_PI / 4;
-  call.keyword = "help";
-  call.confidence = 0.9;
+  const HeardDetection call = HelpCallTowards(3.0, 3.0);
   EXPECT_EQ(map.AddHeard(2'000'000, {call}, Rigid3d()), 1);
   map.UpdateSoundSources(3'000'000, {source});
   EXPECT_TRUE(map.people().empty());
@@ -278,14 +271,9 @@ TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
 // generator's beam). Those hits are one call, not the two calls a heard person needs.
 TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
   PeopleMap map(PeopleMapOptions{});
-  SoundSource source;
-  source.id = 4;
-  source.position_m = Eigen::Vector3d(3.0, 3.0, 0.5);
-  source.covariance = Eigen::Vector3d(0.02, 0.02, 0.1).asDiagonal();
-  source.converged = true;
+  const SoundSource source = SourceAt(4, {3.0, 3.0, 0.5}, {0.02, 0.02, 0.1}, true);
   map.UpdateSoundSources(1'000'000, {source});
-  HeardDetection call;
-  call.azimuth_rad = M_PI / 4;
+  HeardDetection call = HelpCallTowards(3.0, 3.0);
   call.confidence = 0.99;
   for (const auto& [utime, keyword] : std::vector<std::pair<int64_t, std::string>>{
            {2'000'000, "assist"}, {2'070'000, "rescue"}, {2'760'000, "help"}, {2'870'000, "here"}}) {
