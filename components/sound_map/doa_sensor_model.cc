@@ -113,5 +113,52 @@ void GpDoaModel::Predict(double raw_rad, double* mean_rad, double* variance_rad2
   *variance_rad2 = (1 - t) * grid_var_[i] + t * grid_var_[i + 1];
 }
 
+BayesInvertedDoaModel::BayesInvertedDoaModel(const DoaSensorModel& forward, double quantum_rad) {
+  const int n = 721;  // 0.25 deg cells over [-90, 90] deg for both the raw and the true angle
+  grid_lo_ = -M_PI / 2;
+  grid_step_ = M_PI / (n - 1);
+  std::vector<double> g(n), s(n);
+  for (int j = 0; j < n; ++j) {
+    double var;
+    forward.Predict(grid_lo_ + j * grid_step_, &g[j], &var);
+    s[j] = std::sqrt(std::max(var, 1e-10));
+  }
+  auto phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  grid_mean_.resize(n);
+  grid_var_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const double r = grid_lo_ + i * grid_step_;
+    double w_sum = 0, b_sum = 0, b2_sum = 0;
+    for (int j = 0; j < n; ++j) {
+      const double b = grid_lo_ + j * grid_step_;
+      const double w = quantum_rad > 0 ? phi((r + 0.5 * quantum_rad - g[j]) / s[j]) -
+                                             phi((r - 0.5 * quantum_rad - g[j]) / s[j])
+                                       : std::exp(-0.5 * std::pow((r - g[j]) / s[j], 2)) / s[j];
+      w_sum += w;
+      b_sum += w * b;
+      b2_sum += w * b * b;
+    }
+    if (w_sum < 1e-300) {  // r beyond anything the sensor reports: the nearest mean's angle
+      int best = 0;
+      for (int j = 1; j < n; ++j)
+        if (std::abs(g[j] - r) < std::abs(g[best] - r)) best = j;
+      grid_mean_[i] = grid_lo_ + best * grid_step_;
+      grid_var_[i] = std::pow(s[best], 2);
+      continue;
+    }
+    grid_mean_[i] = b_sum / w_sum;
+    // The flat prior's cells add their own width (q^2 / 12 of a 0.25 deg cell: negligible).
+    grid_var_[i] = std::max(b2_sum / w_sum - grid_mean_[i] * grid_mean_[i], 1e-8);
+  }
+}
+
+void BayesInvertedDoaModel::Predict(double raw_rad, double* mean_rad, double* variance_rad2) const {
+  const double f = std::clamp((raw_rad - grid_lo_) / grid_step_, 0.0, grid_mean_.size() - 1.0);
+  const int i = std::min(static_cast<int>(f), static_cast<int>(grid_mean_.size()) - 2);
+  const double t = f - i;
+  *mean_rad = (1 - t) * grid_mean_[i] + t * grid_mean_[i + 1];
+  *variance_rad2 = (1 - t) * grid_var_[i] + t * grid_var_[i + 1];
+}
+
 }  // namespace sound_map
 }  // namespace sarmap

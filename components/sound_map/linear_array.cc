@@ -1,6 +1,7 @@
 #include "sound_map/linear_array.h"
 
 #include <ceres/ceres.h>
+#include <ceres/cubic_interpolation.h>
 #include <ceres/jet.h>
 
 #include <algorithm>
@@ -8,10 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <stdexcept>
 #include <map>
 #include <random>
 #include <set>
+#include <stdexcept>
 
 namespace sarmap {
 namespace sound_map {
@@ -394,10 +395,13 @@ void LoadDoaCalibrationCsv(const std::string& path, std::vector<double>* raw, st
   if (raw->size() < 3) throw std::invalid_argument("DOA calibration file " + path + " holds fewer than 3 pairs");
 }
 
-CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw, const std::vector<double>& truth) {
+CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw, const std::vector<double>& truth,
+                               double quantum_rad) {
   CalibratedDoa c;
-  c.generator = GpDoaModel::Fit(truth, raw);    // true -> raw: the simulated sensor
-  c.sensor_model = GpDoaModel::Fit(raw, truth);  // raw -> true: the mapper's model (5.5-5.6)
+  c.generator =
+      GpDoaModel::Fit(truth, raw);  // true -> raw: the forward model, the simulated sensor
+  c.sensor_model = std::make_shared<BayesInvertedDoaModel>(*c.generator, quantum_rad);
+  c.thesis_model = GpDoaModel::Fit(raw, truth);  // raw -> true as the thesis does it (5.5-5.6)
   return c;
 }
 
@@ -489,20 +493,70 @@ struct BetaCost {
   }
 };
 
+// The forward model's mean g(beta) tabulated for Ceres: cubic interpolation works on Jets.
+class ForwardTable {
+ public:
+  explicit ForwardTable(const DoaSensorModel& forward) : g_(kN), s2_(kN) {
+    for (int i = 0; i < kN; ++i) forward.Predict(Beta(i), &g_[i], &s2_[i]);
+    grid_ = std::make_unique<ceres::Grid1D<double>>(g_.data(), 0, kN);
+    interp_ = std::make_unique<ceres::CubicInterpolator<ceres::Grid1D<double>>>(*grid_);
+  }
+  template <class T>
+  T Mean(const T& beta) const {
+    T g;
+    interp_->Evaluate((beta + T(M_PI / 2)) / T(kStep), &g);
+    return g;
+  }
+  double Variance(double beta) const {
+    const int i = std::clamp(static_cast<int>(std::lround((beta + M_PI / 2) / kStep)), 0, kN - 1);
+    return s2_[i];
+  }
+
+ private:
+  static constexpr int kN = 721;
+  static constexpr double kStep = M_PI / (kN - 1);
+  static double Beta(int i) { return -M_PI / 2 + i * kStep; }
+  std::vector<double> g_, s2_;
+  std::unique_ptr<ceres::Grid1D<double>> grid_;
+  std::unique_ptr<ceres::CubicInterpolator<ceres::Grid1D<double>>> interp_;
+};
+
+// The same observation in the DOA method's own angle: e = (raw - g(beta)) / s, with g the
+// forward model's mean and s^2 its variance plus the grid's q^2/12. Unlike BetaCost it needs
+// no inverse of g, which is flat and folds back near endfire, and it stays unbiased where
+// a corrected angle is not (a regression of the truth on noisy raw angles flattens g^-1).
+struct RawBetaCost {
+  const ForwardTable* table;
+  double raw, inv_sigma;
+  template <class T>
+  bool operator()(const T* q_, const T* t_, const T* p_, T* r) const {
+    using std::atan2;
+    using std::sqrt;
+    Eigen::Map<const Eigen::Quaternion<T>> q(q_);
+    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), p(p_);
+    const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (p - t);
+    r[0] = (T(raw) - table->Mean(atan2(l[1], sqrt(l[0] * l[0] + l[2] * l[2])))) * T(inv_sigma);
+    return true;
+  }
+};
+
 struct SourceTrack {
   std::unique_ptr<MultiHypothesisSource> mh;
   bool converged = false;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   struct Obs {
     int k;
-    double beta, var;
+    double beta, var;  // corrected by the sensor model
+    double raw;
   };
   std::vector<Obs> obs;
 };
 
 class Mapper {
  public:
-  Mapper(const LinearSimData& d, const LinearMapperOptions& o) : d_(d), o_(o) {}
+  Mapper(const LinearSimData& d, const LinearMapperOptions& o) : d_(d), o_(o) {
+    if (o_.forward_model) forward_ = std::make_unique<ForwardTable>(*o_.forward_model);
+  }
 
   LinearRunResult Run() {
     LinearRunResult res;
@@ -529,7 +583,7 @@ class Mapper {
         SourceTrack& tr = tracks_[s.source];
         double beta, var;
         o_.sensor_model->Predict(s.raw_beta, &beta, &var);
-        tr.obs.push_back({static_cast<int>(k), beta, var});
+        tr.obs.push_back({static_cast<int>(k), beta, var, s.raw_beta});
       }
       if (k > 0) {
         if (loop && static_cast<int>(k) - last_full > o_.loop_gap_keyframes / 2) {
@@ -560,10 +614,17 @@ class Mapper {
         if (tr.mh->converged()) {
           tr.converged = true;
           tr.point = tr.mh->MeanPoint();
+          if (o_.mirror_check) MirrorCheck(&tr);
         }
       }
     }
     Optimise(0, static_cast<int>(n) - 1);  // final full optimisation (the loop is closed)
+    if (o_.mirror_check) {
+      bool flipped = false;
+      for (auto& kv : tracks_)
+        if (kv.second.converged) flipped |= MirrorCheck(&kv.second);
+      if (flipped) Optimise(0, static_cast<int>(n) - 1);
+    }
     if (std::getenv("SARMAP_SOUND_MAP_DEBUG")) {
       for (auto& kv : tracks_) {
         const SourceTrack& tr = kv.second;
@@ -617,6 +678,61 @@ class Mapper {
   }
 
  private:
+  ceres::CostFunction* SoundCost(const SourceTrack::Obs& ob) const {
+    if (!forward_)
+      return new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
+          new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)});
+    // The raw noise at the corrected angle (not at the estimate: a fixed weight keeps the
+    // problem a least-squares one).
+    const double var = forward_->Variance(ob.beta) + o_.doa_quantum_rad * o_.doa_quantum_rad / 12;
+    return new ceres::AutoDiffCostFunction<RawBetaCost, 1, 4, 3, 3>(
+        new RawBetaCost{forward_.get(), ob.raw, 1.0 / std::sqrt(var)});
+  }
+
+  // Sum of squared sound residuals of a source at p over its observations so far.
+  double SoundCostSum(const SourceTrack& tr, const Eigen::Vector3d& p) const {
+    double sum = 0;
+    for (const auto& ob : tr.obs) {
+      if (ob.k >= static_cast<int>(poses_.size())) continue;
+      const Pose6& x = poses_[ob.k];
+      double r = 0;
+      if (forward_) {
+        const double var =
+            forward_->Variance(ob.beta) + o_.doa_quantum_rad * o_.doa_quantum_rad / 12;
+        RawBetaCost{forward_.get(), ob.raw, 1.0 / std::sqrt(var)}(x.q.coeffs().data(), x.t.data(),
+                                                                  p.data(), &r);
+      } else {
+        BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}(x.q.coeffs().data(), x.t.data(), p.data(), &r);
+      }
+      sum += r * r;
+    }
+    return sum;
+  }
+
+  // A level linear array hears p and its mirror image through the horizontal plane at its
+  // own height at the same beta (the cone round the array axis is symmetric about every plane
+  // that holds the axis). Only the poses off that plane tell the two apart, and a source
+  // initialised on the wrong side stays there: the cost between them is a ridge. So compare
+  // the cost at p and at its reflection through the mean height of the observing poses.
+  // Returns true when the reflection is better and was taken.
+  bool MirrorCheck(SourceTrack* tr) const {
+    if (tr->obs.empty()) return false;
+    double z = 0;
+    int n = 0;
+    for (const auto& ob : tr->obs)
+      if (ob.k < static_cast<int>(poses_.size())) {
+        z += poses_[ob.k].t.z();
+        ++n;
+      }
+    if (n == 0) return false;
+    z /= n;
+    Eigen::Vector3d mirrored = tr->point;
+    mirrored.z() = 2 * z - tr->point.z();
+    if (SoundCostSum(*tr, mirrored) >= SoundCostSum(*tr, tr->point)) return false;
+    tr->point = mirrored;
+    return true;
+  }
+
   // Per source: least squares of its DOAs from the true poses, started at the truth.
   double FloorRms() {
     double sum2 = 0;
@@ -632,9 +748,8 @@ class Mapper {
       ceres::EigenQuaternionManifold quat;
       for (size_t i = 0; i < truth.size(); ++i) {
         const auto& ob = kv.second.obs[i];
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
-                                     new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}),
-                                 nullptr, truth[i].q.coeffs().data(), truth[i].t.data(), p.data());
+        problem.AddResidualBlock(SoundCost(ob), nullptr, truth[i].q.coeffs().data(),
+                                 truth[i].t.data(), p.data());
         problem.SetManifold(truth[i].q.coeffs().data(), &quat);
         problem.SetParameterBlockConstant(truth[i].q.coeffs().data());
         problem.SetParameterBlockConstant(truth[i].t.data());
@@ -704,9 +819,8 @@ class Mapper {
       for (const auto& ob : tr.obs) {
         if (ob.k > last) continue;
         add_pose(ob.k);
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
-                                     new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}),
-                                 nullptr, poses_[ob.k].q.coeffs().data(), poses_[ob.k].t.data(), tr.point.data());
+        problem.AddResidualBlock(SoundCost(ob), nullptr, poses_[ob.k].q.coeffs().data(),
+                                 poses_[ob.k].t.data(), tr.point.data());
       }
     }
     if (problem.NumResidualBlocks() == 0) return;
@@ -724,6 +838,7 @@ class Mapper {
 
   const LinearSimData& d_;
   const LinearMapperOptions& o_;
+  std::unique_ptr<ForwardTable> forward_;
   std::vector<Pose6> poses_;
   std::map<int64_t, Eigen::Vector3d> landmarks_;
   struct LmObs {

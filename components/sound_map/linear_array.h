@@ -130,14 +130,20 @@ struct LinearSimConfig {
 // raw_deg,true_deg (shared/data/audio/ssm/gp_doa_calibration.csv: the thesis' PS3-Eye/Kinect
 // array, 37 angles x 10 trials). Throws std::invalid_argument when unreadable.
 void LoadDoaCalibrationCsv(const std::string& path, std::vector<double>* raw_rad, std::vector<double>* true_rad);
-// Both GPs of §5.5.1 from calibration pairs: `generator` maps the true angle to the raw
-// estimate's mean and variance (the simulated sensor), `sensor_model` maps the raw estimate
-// back to the true angle (5.5-5.6, what the mapper uses).
+// The sensor models of §5.5.1 from calibration pairs. `generator` is the forward model: the
+// raw estimate's mean g(b) and variance given the true angle b (a GP over the true angle;
+// the simulated sensor, and what LinearMapperOptions::forward_model wants). `sensor_model`
+// maps a raw estimate back to the true angle by inverting the generator with Bayes' rule
+// (BayesInvertedDoaModel; raw angles on a grid of step quantum_rad). `thesis_model` is the
+// thesis' own map back, a GP of the truth over the raw angle (5.5-5.6), kept for comparison:
+// fitted on noisy inputs it flattens the correction.
 struct CalibratedDoa {
   std::shared_ptr<const DoaSensorModel> generator;
   std::shared_ptr<const DoaSensorModel> sensor_model;
+  std::shared_ptr<const DoaSensorModel> thesis_model;
 };
-CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw_rad, const std::vector<double>& true_rad);
+CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw_rad,
+                               const std::vector<double>& true_rad, double quantum_rad = 0);
 // DOA noise of the simulated array: 10 deg broadside growing to 20 deg at endfire
 // (Table 5.1: "10-20 deg").
 double SimulatedDoaSigma(double true_beta_rad);
@@ -170,6 +176,15 @@ struct LinearMapperOptions {
   int window_keyframes = 5;   // online joint optimisation over the last keyframes (§5.5.1)
   int loop_gap_keyframes = 60;  // a landmark re-seen after this many keyframes: loop closure
   std::shared_ptr<const DoaSensorModel> sensor_model;  // default: GP fitted on SimulatedCalibration
+  // The DOA method's forward model (true -> raw mean and variance). When set, the joint
+  // optimisation compares the raw angle with g(beta) of the estimate instead of the
+  // corrected angle with beta (see RawBetaCost); `sensor_model` still seeds the hypotheses.
+  std::shared_ptr<const DoaSensorModel> forward_model;
+  double doa_quantum_rad = 0;  // the raw angles' grid step (its q^2/12 joins the raw variance)
+  // On convergence and after the final optimisation, keep a source or its mirror image
+  // through the horizontal plane of the poses that heard it, whichever explains its DOAs
+  // better (a level array cannot tell them apart from one height).
+  bool mirror_check = true;
   double converged_error_m = 1.0;  // for the score only
   // Diagnostic: every source is known at its true position from its first observation
   // (skips the multi-hypothesis initialisation; shows the accuracy floor of the data).

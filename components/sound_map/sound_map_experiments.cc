@@ -232,6 +232,9 @@ int main(int argc, char** argv) {
     parser.AddFlag("--cluster", &h.cluster_radius_m, "survivors must agree within this radius (m)");
     parser.AddFlag("--min-obs", &h.min_observations, "updates before a hypothesis may converge");
     parser.AddFlag("--dmin", &h.min_distance_m, "d_min (rho_0 = 1/(3 d_min))");
+    int mirror = g_knobs.mapper.mirror_check;
+    parser.AddFlag("--mirror", &mirror,
+                   "1: keep a source or its mirror image through the poses' plane, the better");
     parser.AddFlag("--window", &g_knobs.mapper.window_keyframes, "keyframes of the online joint optimisation");
     parser.AddFlag("--updown", &g_knobs.updown_m, "height of the up-and-down moves (m)");
     parser.AddFlag("--landmark-density", &g_knobs.landmark_density, "RGB-D landmarks per m^2 of floor (-1: default)");
@@ -249,6 +252,15 @@ int main(int argc, char** argv) {
                    "against the true angle, as §5.5.1) | gaussian (unbiased 10-20 deg noise)");
     parser.AddFlag("--doa-file", &doa_file, "calibration pairs raw_deg,true_deg (--doa calibration)");
     parser.AddFlag("--quantum-deg", &quantum_deg, "raw DOAs rounded to this grid (--doa calibration; 0: off)");
+    std::string model = "forward";
+    parser.AddFlag(
+        "--sensor-model", &model,
+        "the mapper's DOA model (--doa calibration): forward (residuals in the raw angle through "
+        "the forward GP) | bayes (raw angles corrected by the forward GP inverted with Bayes' "
+        "rule) | "
+        "gp (raw angles corrected by a GP of the truth over the raw angle, eqs. 5.5-5.6); with "
+        "--doa gaussian: "
+        "constant (1 deg, a diagnostic) or anything else for the GP of a simulated calibration");
     std::string variants = "1,3,4,2";
     parser.AddFlag("--variants", &variants,
                    "table5.1 rows: 1 (trajectory 1 facing along the path), 3 (arcs 80 deg off the source), "
@@ -260,13 +272,26 @@ int main(int argc, char** argv) {
     if (doa == "calibration") {
       std::vector<double> raw, truth;
       LoadDoaCalibrationCsv(doa_file, &raw, &truth);
-      const CalibratedDoa cal = FitCalibratedDoa(raw, truth);
-      g_knobs.doa_generator = cal.generator;
-      g_knobs.mapper.sensor_model = cal.sensor_model;
       g_knobs.doa_quantum_rad = quantum_deg * M_PI / 180;
+      const CalibratedDoa cal = FitCalibratedDoa(raw, truth, g_knobs.doa_quantum_rad);
+      g_knobs.doa_generator = cal.generator;
+      if (model == "forward") {
+        g_knobs.mapper.sensor_model = cal.sensor_model;
+        g_knobs.mapper.forward_model = cal.generator;
+        g_knobs.mapper.doa_quantum_rad = g_knobs.doa_quantum_rad;
+      } else if (model == "bayes") {
+        g_knobs.mapper.sensor_model = cal.sensor_model;
+      } else if (model == "gp") {
+        g_knobs.mapper.sensor_model = cal.thesis_model;
+      } else {
+        throw std::invalid_argument("--sensor-model must be forward, bayes or gp, not " + model);
+      }
+    } else if (doa == "gaussian" && model == "constant") {
+      g_knobs.mapper.sensor_model = std::make_shared<ConstantDoaModel>(1 * M_PI / 180);
     } else if (doa != "gaussian") {
       throw std::invalid_argument("--doa must be calibration or gaussian, not " + doa);
     }
+    g_knobs.mapper.mirror_check = mirror;
     h.linearity_from_anchor = anchor_ld;
     h.chi2_with_noise = chi2_noise;
     g_knobs.mapper.oracle_init = oracle;
