@@ -478,17 +478,24 @@ struct Landmark3Cost {
   }
 };
 
+// beta of source p seen from the keyframe (q, t): l = R'(p - t), beta = atan2(l_y, |l_xz|)
+// (the array along the sensor's y axis).
+template <class T>
+T BetaFromKeyframe(const T* q_, const T* t_, const T* p_) {
+  using std::atan2;
+  using std::sqrt;
+  Eigen::Map<const Eigen::Quaternion<T>> q(q_);
+  Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), p(p_);
+  const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (p - t);
+  return atan2(l[1], sqrt(l[0] * l[0] + l[2] * l[2]));
+}
+
 // (5.30-5.32): beta of the source in the keyframe minus the GP-corrected observation.
 struct BetaCost {
   double beta, inv_sigma;
   template <class T>
-  bool operator()(const T* q_, const T* t_, const T* p_, T* r) const {
-    using std::atan2;
-    using std::sqrt;
-    Eigen::Map<const Eigen::Quaternion<T>> q(q_);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), p(p_);
-    const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (p - t);
-    r[0] = (atan2(l[1], sqrt(l[0] * l[0] + l[2] * l[2])) - T(beta)) * T(inv_sigma);
+  bool operator()(const T* q, const T* t, const T* p, T* r) const {
+    r[0] = (BetaFromKeyframe(q, t, p) - T(beta)) * T(inv_sigma);
     return true;
   }
 };
@@ -529,13 +536,8 @@ struct RawBetaCost {
   const ForwardTable* table;
   double raw, inv_sigma;
   template <class T>
-  bool operator()(const T* q_, const T* t_, const T* p_, T* r) const {
-    using std::atan2;
-    using std::sqrt;
-    Eigen::Map<const Eigen::Quaternion<T>> q(q_);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), p(p_);
-    const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (p - t);
-    r[0] = (T(raw) - table->Mean(atan2(l[1], sqrt(l[0] * l[0] + l[2] * l[2])))) * T(inv_sigma);
+  bool operator()(const T* q, const T* t, const T* p, T* r) const {
+    r[0] = (T(raw) - table->Mean(BetaFromKeyframe(q, t, p))) * T(inv_sigma);
     return true;
   }
 };
