@@ -175,7 +175,19 @@ bool MultiHypothesisSource::Clustered() const {
   return true;
 }
 
-bool MultiHypothesisSource::converged() const { return AllLinear() && Clustered(); }
+bool MultiHypothesisSource::converged() const { return AllLinear() && Clustered() && !Failed(); }
+
+bool MultiHypothesisSource::Failed() const {
+  bool any = false;
+  for (const auto& h : hypotheses_) {
+    if (!h.alive) continue;
+    if (h.updates < options_.prune_min_observations ||
+        h.chi2_sum / h.updates <= options_.prune_mean_chi2)
+      return false;
+    any = true;
+  }
+  return any;
+}
 
 Eigen::Vector3d MultiHypothesisSource::MeanPoint() const {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -613,6 +625,13 @@ class Mapper {
           continue;
         }
         tr.mh->Update(pose, ob.beta, ob.var);
+        if (tr.mh->Failed()) {  // start the cone again from this DOA
+          MultiHypothesisOptions mo = o_.hypotheses;
+          mo.num_hypotheses = o_.num_hypotheses;
+          tr.mh = std::make_unique<MultiHypothesisSource>(mo, pose, ob.beta, ob.var);
+          ++res.restarted_sources;
+          continue;
+        }
         if (tr.mh->converged()) {
           tr.converged = true;
           tr.point = tr.mh->MeanPoint();

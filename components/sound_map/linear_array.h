@@ -87,6 +87,10 @@ class MultiHypothesisSource {
   const std::vector<Hypothesis>& hypotheses() const { return hypotheses_; }
   bool AllLinear() const;   // every survivor's linearity index is below the threshold
   bool Clustered() const;   // survivors agree on one place
+  // Every survivor fails the chi-square test (5.22) that pruned the others: the cone was
+  // seeded from a bad first DOA, or the pruning removed the right part of it on an outlier.
+  // Such a source must be started again, not converged.
+  bool Failed() const;
   const ArrayAxis& axis() const { return axis_; }
 
  private:
@@ -205,6 +209,7 @@ struct LinearRunResult {
   double correct_convergence_rate = 0;  // converged and within converged_error_m of the truth
   int converged = 0;
   int full_optimisations = 0;
+  int restarted_sources = 0;  // initialisations started again (MultiHypothesisSource::Failed)
   std::vector<Eigen::Vector3d> estimates;
   std::vector<bool> source_converged;
   double seconds = 0;

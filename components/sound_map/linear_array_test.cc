@@ -45,6 +45,20 @@ TEST(LinearArray, MultiHypothesisConvergesWithParallax) {
   EXPECT_LT((src->MeanPoint() - truth).norm(), 0.3);
 }
 
+// A cone seeded from a wrong first DOA: the source's later DOAs, all from one pose, fit no
+// hypothesis. Every survivor then fails the chi-square test; the source is Failed (to be
+// started again) and never converged, however linear its hypotheses look.
+TEST(LinearArray, AConeSeededFromAWrongDoaFails) {
+  MultiHypothesisOptions o;
+  const Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  MultiHypothesisSource src(o, pose, 0.6, 1e-4);  // 34 deg
+  EXPECT_FALSE(src.Failed());
+  for (int k = 0; k < 10; ++k) src.Update(pose, -0.2, 1e-4);  // -11 deg from the same place
+  EXPECT_GE(src.alive(), 1);
+  EXPECT_TRUE(src.Failed());
+  EXPECT_FALSE(src.converged());
+}
+
 // Real data: the GP sensor model fitted on the thesis' 370 SRP-PHAT calibration pairs of a
 // real linear array corrects the bias and reports larger noise towards endfire.
 TEST(GpDoaModel, RealCalibrationData) {
