@@ -410,8 +410,8 @@ void LoadDoaCalibrationCsv(const std::string& path, std::vector<double>* raw, st
 CalibratedDoa FitCalibratedDoa(const std::vector<double>& raw, const std::vector<double>& truth,
                                double quantum_rad) {
   CalibratedDoa c;
-  c.generator =
-      GpDoaModel::Fit(truth, raw);  // true -> raw: the forward model, the simulated sensor
+  // true -> raw: the forward model, the simulated sensor
+  c.generator = GpDoaModel::Fit(truth, raw);
   c.sensor_model = std::make_shared<BayesInvertedDoaModel>(*c.generator, quantum_rad);
   c.thesis_model = GpDoaModel::Fit(raw, truth);  // raw -> true as the thesis does it (5.5-5.6)
   return c;
@@ -699,15 +699,18 @@ class Mapper {
   }
 
  private:
-  ceres::CostFunction* SoundCost(const SourceTrack::Obs& ob) const {
-    if (!forward_)
-      return new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
-          new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)});
-    // The raw noise at the corrected angle (not at the estimate: a fixed weight keeps the
-    // problem a least-squares one).
+  // The raw-angle residual of an observation. Its noise is taken at the corrected angle, not
+  // at the estimate: a fixed weight keeps the problem a least-squares one.
+  RawBetaCost RawCost(const SourceTrack::Obs& ob) const {
     const double var = forward_->Variance(ob.beta) + o_.doa_quantum_rad * o_.doa_quantum_rad / 12;
-    return new ceres::AutoDiffCostFunction<RawBetaCost, 1, 4, 3, 3>(
-        new RawBetaCost{forward_.get(), ob.raw, 1.0 / std::sqrt(var)});
+    return RawBetaCost{forward_.get(), ob.raw, 1.0 / std::sqrt(var)};
+  }
+
+  ceres::CostFunction* SoundCost(const SourceTrack::Obs& ob) const {
+    if (forward_)
+      return new ceres::AutoDiffCostFunction<RawBetaCost, 1, 4, 3, 3>(new RawBetaCost(RawCost(ob)));
+    return new ceres::AutoDiffCostFunction<BetaCost, 1, 4, 3, 3>(
+        new BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)});
   }
 
   // Sum of squared sound residuals of a source at p over its observations so far.
@@ -715,16 +718,13 @@ class Mapper {
     double sum = 0;
     for (const auto& ob : tr.obs) {
       if (ob.k >= static_cast<int>(poses_.size())) continue;
-      const Pose6& x = poses_[ob.k];
+      const double* q = poses_[ob.k].q.coeffs().data();
+      const double* t = poses_[ob.k].t.data();
       double r = 0;
-      if (forward_) {
-        const double var =
-            forward_->Variance(ob.beta) + o_.doa_quantum_rad * o_.doa_quantum_rad / 12;
-        RawBetaCost{forward_.get(), ob.raw, 1.0 / std::sqrt(var)}(x.q.coeffs().data(), x.t.data(),
-                                                                  p.data(), &r);
-      } else {
-        BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}(x.q.coeffs().data(), x.t.data(), p.data(), &r);
-      }
+      if (forward_)
+        RawCost(ob)(q, t, p.data(), &r);
+      else
+        BetaCost{ob.beta, 1.0 / std::sqrt(ob.var)}(q, t, p.data(), &r);
       sum += r * r;
     }
     return sum;

@@ -255,12 +255,11 @@ int main(int argc, char** argv) {
     std::string model = "forward";
     parser.AddFlag(
         "--sensor-model", &model,
-        "the mapper's DOA model (--doa calibration): forward (residuals in the raw angle through "
-        "the forward GP) | bayes (raw angles corrected by the forward GP inverted with Bayes' "
-        "rule) | "
-        "gp (raw angles corrected by a GP of the truth over the raw angle, eqs. 5.5-5.6); with "
-        "--doa gaussian: "
-        "constant (1 deg, a diagnostic) or anything else for the GP of a simulated calibration");
+        "the mapper's DOA model. With --doa calibration: forward (residuals in the raw angle "
+        "through the forward GP), bayes (raw angles corrected by the forward GP inverted with "
+        "Bayes' rule) or gp (raw angles corrected by a GP of the truth over the raw angle, eqs. "
+        "5.5-5.6). With --doa gaussian: constant (1 deg, a diagnostic) or anything else for the "
+        "GP of a simulated calibration");
     std::string variants = "1,3,4,2";
     parser.AddFlag("--variants", &variants,
                    "table5.1 rows: 1 (trajectory 1 facing along the path), 3 (arcs 80 deg off the source), "
