@@ -69,7 +69,7 @@ class GpDoaModel : public DoaSensorModel {
 //   mean = E[b | r],  variance = Var[b | r].
 // Why not the GP of the truth over the raw angle (5.5-5.6)? That regression is fitted on
 // noisy inputs, so it flattens the bias correction (regression dilution): with exact
-// estimates it leaves the sources of §5.5.1 0.18 m off. Inverting the forward model keeps
+// estimates it leaves the sources of §5.5.1 0.09-0.18 m off. Inverting the forward model keeps
 // the correction exact where g is steep, and its variance grows where g flattens (endfire).
 class BayesInvertedDoaModel : public DoaSensorModel {
  public:
