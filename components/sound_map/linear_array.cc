@@ -615,9 +615,7 @@ class Mapper {
         if (tr.converged) continue;
         const auto& ob = tr.obs.back();
         if (!tr.mh) {
-          MultiHypothesisOptions mo = o_.hypotheses;
-          mo.num_hypotheses = o_.num_hypotheses;
-          tr.mh = std::make_unique<MultiHypothesisSource>(mo, pose, ob.beta, ob.var);
+          tr.mh = NewCone(pose, ob);
           if (o_.oracle_init) {
             tr.converged = true;
             tr.point = d_.sources[s.source];
@@ -626,9 +624,7 @@ class Mapper {
         }
         tr.mh->Update(pose, ob.beta, ob.var);
         if (tr.mh->Failed()) {  // start the cone again from this DOA
-          MultiHypothesisOptions mo = o_.hypotheses;
-          mo.num_hypotheses = o_.num_hypotheses;
-          tr.mh = std::make_unique<MultiHypothesisSource>(mo, pose, ob.beta, ob.var);
+          tr.mh = NewCone(pose, ob);
           ++res.restarted_sources;
           continue;
         }
@@ -699,6 +695,14 @@ class Mapper {
   }
 
  private:
+  // N_h hypotheses on the cone of one DOA heard from `pose` (5.8-5.12).
+  std::unique_ptr<MultiHypothesisSource> NewCone(const Eigen::Isometry3d& pose,
+                                                 const SourceTrack::Obs& ob) const {
+    MultiHypothesisOptions mo = o_.hypotheses;
+    mo.num_hypotheses = o_.num_hypotheses;
+    return std::make_unique<MultiHypothesisSource>(mo, pose, ob.beta, ob.var);
+  }
+
   // The raw-angle residual of an observation. Its noise is taken at the corrected angle, not
   // at the estimate: a fixed weight keeps the problem a least-squares one.
   RawBetaCost RawCost(const SourceTrack::Obs& ob) const {
