@@ -7,6 +7,10 @@
 
 namespace sarmap {
 namespace speech {
+namespace {
+// The fluctuation threshold needs this many level changes below the threshold (0.25 s) first.
+constexpr int kMinChangeFrames = 16;
+}  // namespace
 
 using ComplexD = std::complex<double>;
 
@@ -140,10 +144,27 @@ void VoiceActivityDetector::Push(const float* x, size_t count, std::vector<Utter
     const bool digital_silence = db < -120.0;
     if (!floor_init_ && !digital_silence) {
       floor_ = db;
+      previous_db_ = db;
       floor_init_ = true;
     }
-    const bool loud = floor_init_ && !digital_silence && db > floor_ + options_.threshold_db;
+    double threshold_db = options_.threshold_db;
+    if (change_frames_ >= kMinChangeFrames)
+      threshold_db = std::max(threshold_db, options_.fluctuation_factor * change_sum_db_ / change_weight_);
+    const bool loud = floor_init_ && !digital_silence && db > floor_ + threshold_db;
     if (floor_init_ && !digital_silence) {
+      if (!loud && !previous_loud_ && options_.fluctuation_factor > 0) {
+        // Exponentially weighted mean of |level change| between two frames that are both below
+        // the threshold, normalised by its weight so that the first frames give their plain mean.
+        // Speech, which changes as fast, does not enter it (its loud frames are left out); the
+        // noise's own quiet frames do, even inside an utterance that the noise opened, so a VAD
+        // started on the residual does not wait for an end that never comes.
+        const double a = std::exp(-options_.frame_s / options_.fluctuation_time_s);
+        change_sum_db_ = a * change_sum_db_ + std::abs(db - previous_db_);
+        change_weight_ = a * change_weight_ + 1;
+        ++change_frames_;
+      }
+      previous_db_ = db;
+      previous_loud_ = loud;
       if (db < floor_) floor_ = db;
       else floor_ += options_.floor_rise_db_per_s * options_.frame_s;
     }

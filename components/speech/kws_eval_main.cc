@@ -54,6 +54,8 @@ int main(int argc, char** argv) {
     p.AddFlag("--babble-azimuth-deg", &babble_az, "with --array-recall: other talker's azimuth");
     speech::VadOptions vad;
     p.AddFlag("--vad-threshold-db", &vad.threshold_db, "voice activity: speech this far above the noise floor (dB)");
+    p.AddFlag("--vad-fluctuation-factor", &vad.fluctuation_factor,
+              "voice activity: threshold at least this times the noise's mean level change per frame (0: off)");
     std::string fit_features, verifier_probs;
     p.AddFlag("--fit-verifier", &fit_features,
               "comma-separated hit features: fit the keyword verifier on the tuning half and apply it "
