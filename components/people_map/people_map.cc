@@ -465,6 +465,14 @@ void PeopleMap::Save(const std::string& path) const {
       for (Utime c : calls->second) n["call_utimes"].push_back(c);
     root["heard_sources"].push_back(n);
   }
+  // Sound sources merged into a caller as duplicates: a restart that forgot them would make the
+  // duplicate a person again at its next calls.
+  for (const auto& [source_id, person_id] : source_alias_) {
+    YAML::Node n;
+    n["source_id"] = source_id;
+    n["person_id"] = person_id;
+    root["source_aliases"].push_back(n);
+  }
   YAML::Emitter out;
   out << root;
   const std::string tmp = path + ".tmp";
@@ -518,8 +526,12 @@ bool PeopleMap::Load(const std::string& path) {
       if (n["call_utimes"])  // absent in files saved before session 6
         for (const auto& c : n["call_utimes"]) calls[id].push_back(c.as<int64_t>());
     }
+    std::map<int64_t, int64_t> aliases;
+    for (const auto& n : root["source_aliases"])  // absent in files saved before session 8
+      aliases[n["source_id"].as<int64_t>()] = n["person_id"].as<int64_t>();
     next_id_ = root["next_id"].as<int64_t>();
     people_ = std::move(people);
+    source_alias_ = std::move(aliases);
     source_heard_utime_ = std::move(heard);
     source_keyword_ = std::move(keywords);
     source_call_utimes_ = std::move(calls);

@@ -416,6 +416,60 @@ TEST(PeopleMapTest, CallsHeardBeforeARestartStillCount) {
   EXPECT_EQ(after.people().begin()->second.sound_source_id, 5);
 }
 
+// A restart must remember which sound sources were merged duplicates of a caller. Otherwise each
+// later call towards the duplicate makes it a new heard person, which the merge rule folds back
+// into the caller in the same update: the map looks the same, but every fold uses up a person id,
+// and the next person found is numbered differently from an uninterrupted run.
+TEST(PeopleMapTest, AMergedDuplicateSourceStaysMergedAfterARestart) {
+  SoundSource first = SourceAt(1, {1.0, 0.0, 0.5}, {0.002, 0.002, 0.01}, true);
+  SoundSource second = SourceAt(2, {1.0, 0.4, 0.5}, {0.002, 0.002, 0.01}, true);
+  HeardDetection call;
+  call.azimuth_sigma_rad = 0.05;
+  call.keyword = "help";
+  call.confidence = 0.9;
+  auto call_towards = [&](PeopleMap* map, const SoundSource& s, int64_t utime) {
+    map->UpdateSoundSources(utime - 500'000, {first, second});
+    call.azimuth_rad = std::atan2(s.position_m.y(), s.position_m.x());
+    const int heard = map->AddHeard(utime, {call}, Rigid3d());
+    map->UpdateSoundSources(utime + 500'000, {first, second});
+    return heard;
+  };
+  // The caller's voice split into two sources; calls towards both, then a person seen elsewhere.
+  auto first_part = [&](PeopleMap* map) {
+    for (int64_t t : {2'000'000, 6'000'000}) call_towards(map, first, t);
+    for (int64_t t : {10'000'000, 14'000'000}) call_towards(map, second, t);
+  };
+  auto second_part = [&](PeopleMap* map) {
+    for (int64_t t : {18'000'000, 22'000'000, 26'000'000}) {
+      EXPECT_EQ(call_towards(map, second, t), 1);
+      ASSERT_EQ(map->people().size(), 1u);
+      EXPECT_EQ(map->people().begin()->second.sound_source_id, 1);
+    }
+    const Rigid2d pose(0.0, 0.0, 0.0);
+    map->AddSeen(30'000'000, {PersonAhead(3.0, 2.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+                 pose.translation());
+  };
+  PeopleMap uninterrupted{PeopleMapOptions()};
+  first_part(&uninterrupted);
+  second_part(&uninterrupted);
+
+  PeopleMap before{PeopleMapOptions()};
+  first_part(&before);
+  ASSERT_EQ(before.people().size(), 1u);
+  const std::string path = ::testing::TempDir() + "/people_alias_state.yaml";
+  before.Save(path);
+  PeopleMap after{PeopleMapOptions()};
+  ASSERT_TRUE(after.Load(path));
+  second_part(&after);
+
+  ASSERT_EQ(uninterrupted.people().size(), 2u);
+  ASSERT_EQ(after.people().size(), 2u);
+  for (const auto& [id, p] : uninterrupted.people()) {
+    ASSERT_EQ(after.people().count(id), 1u) << "person " << id << " is numbered differently after the restart";
+    EXPECT_EQ(after.people().at(id).num_detections, p.num_detections);
+  }
+}
+
 TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0.5, 0.2, 0.3);
