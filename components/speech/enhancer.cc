@@ -8,7 +8,8 @@
 namespace sarmap {
 namespace speech {
 namespace {
-// The fluctuation threshold needs this many level changes below the threshold (0.25 s) first.
+// The fluctuation threshold needs this many level changes below the threshold first (0.26 s
+// of 16 ms frames).
 constexpr int kMinChangeFrames = 16;
 }  // namespace
 
