@@ -104,9 +104,12 @@ struct KwsEvalData {
 // from azimuth call_azimuth_deg, the other talker from babble_azimuth_deg, the noise from a third
 // direction; both talkers given as tracks (as the localiser would), a call counts when "help" is
 // heard on the caller's track within its window. Returns hits; *calls gets the number of scenes.
+// *false_hits (if given) gets the "help" results outside the call windows, on any track (the
+// warm-up's noise alone, the other talker, the noise around each call), except in each fresh
+// processor's first second, its cold start.
 int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
                    double call_azimuth_deg, double babble_azimuth_deg, int* calls,
-                   const VadOptions& vad = VadOptions(), bool post_filter = true);
+                   const VadOptions& vad = VadOptions(), bool post_filter = true, int* false_hits = nullptr);
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
