@@ -82,23 +82,36 @@ TEST(KeywordSpotter, UnknownWordIsAClearError) {
   }
 }
 
+// The evaluation set: num_calls espeak-ng calls at call_snr_db in noise (no other talker), and
+// negative_minutes of other speech.
+KwsEvalOptions CallsInNoise(int num_calls, double negative_minutes, double call_snr_db) {
+  KwsEvalOptions o;
+  o.num_calls = num_calls;
+  o.negative_minutes = negative_minutes;
+  o.call_snr_db = call_snr_db;
+  o.babble_db = -100;
+  o.data_dir = SARMAP_DATA_DIR;
+  return o;
+}
+
+// The most permissive keyword search (threshold 1e-40, no confidence cut), the default rule.
+KeywordOptions SpotEverything() {
+  KeywordOptions k;
+  k.thresholds = {1e-40};
+  k.min_confidence = 0;
+  return k;
+}
+
 // Calls for help rendered by espeak-ng at test time (varied voices, rates, pitches) in noise
 // (20 dB), and other speech (real recordings + espeak sentences) in noise as negatives. Pins the
 // keyword-only recall without and with the default call-shape rule; false alarms are printed (the
 // full curve: sarmap-log kws-eval, see README; it does not meet 1 per 10 minutes).
 TEST(KeywordSpotterSimulated, CallsForHelpInNoise) {
   if (!EspeakAvailable()) GTEST_SKIP() << "espeak-ng not installed";
-  KwsEvalOptions o;
-  o.num_calls = 8;
-  o.negative_minutes = 0.25;
-  o.call_snr_db = 20;
-  o.babble_db = -100;
-  o.data_dir = SARMAP_DATA_DIR;
+  const KwsEvalOptions o = CallsInNoise(8, 0.25, 20);
   const auto data = MakeKwsEvalData(o);
   ASSERT_EQ(data.positives.size(), 8u);
-  KeywordOptions k;
-  k.thresholds = {1e-40};
-  k.min_confidence = 0;
+  KeywordOptions k = SpotEverything();
   k.max_utterance_s = 0;
   const auto rs = EvaluateKwsSweep(data, k, VadOptions{}, o, {0.0}, {0.0, KeywordOptions{}.max_utterance_s});
   ASSERT_EQ(rs.size(), 2u);
@@ -120,17 +133,10 @@ TEST(KeywordSpotterSimulated, CallsForHelpInNoise) {
 // short calls pass.
 TEST(KeywordSpotterSimulated, CallsOnACleanBeamPassTheCallShapeRule) {
   if (!EspeakAvailable()) GTEST_SKIP() << "espeak-ng not installed";
-  KwsEvalOptions o;
-  o.num_calls = 5;  // "help", "help me", "please help", "somebody help", "help help"
-  o.negative_minutes = 0;
-  o.call_snr_db = 10;
-  o.babble_db = -100;
-  o.data_dir = SARMAP_DATA_DIR;
-  const auto data = MakeKwsEvalData(o);
+  // "help", "help me", "please help", "somebody help", "help help"
+  const auto data = MakeKwsEvalData(CallsInNoise(5, 0, 10));
   ASSERT_EQ(data.positives.size(), 5u);
-  KeywordOptions k;
-  k.thresholds = {1e-40};
-  k.min_confidence = 0;
+  const KeywordOptions k = SpotEverything();
   ASSERT_GT(k.max_utterance_s, 0);  // the default rule is on
   const std::string array = std::string(SARMAP_SOURCE_DIR) + "/config/arrays/respeaker4.yaml";
   int calls = 0;
