@@ -125,7 +125,10 @@ void MultiBeamEnhancer::OnFrame(const Eigen::MatrixXcf& X, int64_t end_sample, c
 // ---------------------------------------------------------------- VAD
 
 VoiceActivityDetector::VoiceActivityDetector(int rate, VadOptions options)
-    : rate_(rate), options_(options), frame_len_(std::max(1, static_cast<int>(options.frame_s * rate))) {}
+    : rate_(rate),
+      options_(options),
+      frame_len_(std::max(1, static_cast<int>(options.frame_s * rate))),
+      change_decay_(std::exp(-options.frame_s / options.fluctuation_time_s)) {}
 
 void VoiceActivityDetector::Push(const float* x, size_t count, std::vector<Utterance>* done) {
   for (size_t i = 0; i < count; ++i) {
@@ -159,9 +162,8 @@ void VoiceActivityDetector::Push(const float* x, size_t count, std::vector<Utter
         // Speech, which changes as fast, does not enter it (its loud frames are left out); the
         // noise's own quiet frames do, even inside an utterance that the noise opened, so a VAD
         // started on the residual does not wait for an end that never comes.
-        const double a = std::exp(-options_.frame_s / options_.fluctuation_time_s);
-        change_sum_db_ = a * change_sum_db_ + std::abs(db - previous_db_);
-        change_weight_ = a * change_weight_ + 1;
+        change_sum_db_ = change_decay_ * change_sum_db_ + std::abs(db - previous_db_);
+        change_weight_ = change_decay_ * change_weight_ + 1;
         ++change_frames_;
       }
       previous_db_ = db;

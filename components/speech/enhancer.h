@@ -172,7 +172,9 @@ class VoiceActivityDetector {
   bool floor_init_ = false;
   double previous_db_ = 0;  // the last frame's level (valid when floor_init_)
   bool previous_loud_ = false;
-  // Weighted sum of |level change| per frame below the threshold, its weight and frame count.
+  // Weighted sum of |level change| per frame below the threshold, its weight and frame count;
+  // each frame's weight decays by change_decay_ = exp(-frame_s / fluctuation_time_s).
+  double change_decay_;
   double change_sum_db_ = 0, change_weight_ = 0;
   int64_t change_frames_ = 0;
   bool in_speech_ = false;

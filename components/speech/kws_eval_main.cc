@@ -138,17 +138,12 @@ int main(int argc, char** argv) {
             speech::KeywordOptions ka = k;
             ka.max_utterance_s = mu;
             ka.call_join_s = join;
-            int calls = 0, false_hits = 0;
-            const int hits = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, &calls, vad,
-                                                    !no_post_filter, &false_hits);
-            // Each scene is heard for twice its length (its background alone first, then the
-            // scene), less the processor's first second.
-            double heard_min = 0;
-            for (const auto& scene : data.positives) heard_min += (2.0 * scene.size() / 16000.0 - 1.0) / 60;
+            const auto r = speech::KwsArrayRecall(data, array_recall, ka, call_az, babble_az, vad, !no_post_filter);
             std::printf("array %s, caller %.0f deg, other talker %.0f deg: threshold %s, call join %.2f s, max call "
                         "%.1f s: recall %.3f (%d/%d); 'help' outside the calls (after each cold start) %d in %.1f min\n",
                         array_recall.c_str(), call_az, babble_az, t.c_str(), join, mu,
-                        calls ? static_cast<double>(hits) / calls : 0.0, hits, calls, false_hits, heard_min);
+                        r.calls ? static_cast<double>(r.hits) / r.calls : 0.0, r.hits, r.calls, r.false_hits,
+                        r.false_hit_seconds / 60);
             std::fflush(stdout);
           }
         continue;

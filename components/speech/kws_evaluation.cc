@@ -509,9 +509,9 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   return out;
 }
 
-int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
-                   double call_az_deg, double babble_az_deg, int* calls, const VadOptions& vad, bool post_filter,
-                   int* false_hits) {
+KwsArrayResult KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml,
+                              const KeywordOptions& keywords, double call_az_deg, double babble_az_deg,
+                              const VadOptions& vad, bool post_filter) {
   const auto geometry = sound::ArrayGeometry::FromOptions(common::LoadMicArray(array_yaml));
   SpeechOptions so;
   so.keywords = keywords;
@@ -527,9 +527,10 @@ int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const
   };
   const sound::Direction call_dir{call_az_deg * M_PI / 180, 10 * M_PI / 180};
   const sound::Direction babble_dir{babble_az_deg * M_PI / 180, 10 * M_PI / 180};
-  int hits = 0;
-  *calls = 0;
-  if (false_hits) *false_hits = 0;
+  // The first second is the fresh processor's cold start (no noise statistics yet: its beam
+  // passes the noise unsuppressed for ~0.3 s), which a node running all along never has.
+  constexpr int64_t kColdStartSamples = 16000;
+  KwsArrayResult result;
   for (size_t i = 0; i < data.positive_call.size(); ++i) {
     // A fresh processor per scene (as the mono evaluation starts a fresh VAD per scene): its VAD
     // learns the floor from the scene's own background.
@@ -565,15 +566,13 @@ int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const
       const double t = (r.start_sample - offset) / 16000.0;
       const bool in_call = t > data.call_start_s[i] - 0.5 && t < data.call_end_s[i] + 0.5;
       found |= r.track_id == 1 && in_call;
-      // The first second is the fresh processor's cold start (no noise statistics yet: its beam
-      // passes the noise unsuppressed for ~0.3 s), which a node running all along never has.
-      const bool cold_start = r.start_sample < 16000;
-      if (false_hits && !in_call && !cold_start) ++*false_hits;
+      if (!in_call && r.start_sample >= kColdStartSamples) ++result.false_hits;
     }
-    hits += found;
-    ++*calls;
+    result.hits += found;
+    ++result.calls;
+    result.false_hit_seconds += (2.0 * n - kColdStartSamples) / 16000.0;
   }
-  return hits;
+  return result;
 }
 
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,

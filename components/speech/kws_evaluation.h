@@ -103,13 +103,20 @@ struct KwsEvalData {
 // its call-shape rule) on the positive scenes rendered on `array` in an anechoic room: the call
 // from azimuth call_azimuth_deg, the other talker from babble_azimuth_deg, the noise from a third
 // direction; both talkers given as tracks (as the localiser would), a call counts when "help" is
-// heard on the caller's track within its window. Returns hits; *calls gets the number of scenes.
-// *false_hits (if given) gets the "help" results outside the call windows, on any track (the
-// warm-up's noise alone, the other talker, the noise around each call), except in each fresh
-// processor's first second, its cold start.
-int KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml, const KeywordOptions& keywords,
-                   double call_azimuth_deg, double babble_azimuth_deg, int* calls,
-                   const VadOptions& vad = VadOptions(), bool post_filter = true, int* false_hits = nullptr);
+// heard on the caller's track within its window.
+struct KwsArrayResult {
+  int hits = 0;   // calls heard
+  int calls = 0;  // scenes
+  // "help" results outside the call windows, on any track (the warm-up's noise alone, the other
+  // talker, the noise around each call), except in each fresh processor's first second, its cold
+  // start; and the seconds of beam output they were counted over.
+  int false_hits = 0;
+  double false_hit_seconds = 0;
+};
+KwsArrayResult KwsArrayRecall(const KwsEvalData& data, const std::string& array_yaml,
+                              const KeywordOptions& keywords, double call_azimuth_deg,
+                              double babble_azimuth_deg, const VadOptions& vad = VadOptions(),
+                              bool post_filter = true);
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
 KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
