@@ -74,5 +74,19 @@ class TimeOrderedQueue {
   std::multimap<Utime, std::pair<int, T>> items_;
 };
 
+// Keeps a job whose cost grows over a run (rendering a map of the whole graph, saving it) to a
+// fraction of the wall time: after a run of d seconds the next may start d (1 / fraction - 1)
+// seconds after it ended. Wall-clock scheduling only, like the timers.
+class BusyLimiter {
+ public:
+  explicit BusyLimiter(double fraction) : fraction_(fraction) {}
+  bool Allowed(double now_s) const { return now_s >= next_allowed_s_; }
+  void Ran(double start_s, double end_s) { next_allowed_s_ = end_s + (end_s - start_s) * (1 / fraction_ - 1); }
+
+ private:
+  double fraction_;
+  double next_allowed_s_ = -1e300;
+};
+
 }  // namespace common
 }  // namespace sarmap

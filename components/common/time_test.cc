@@ -53,6 +53,20 @@ TEST(TimeOrderedQueueTest, ALateStreamIsKeptInItsOwnOrder) {
   EXPECT_EQ(q.dropped_late(), 2);
 }
 
+// A job that took 0.5 s may run again 4.5 s after it ended at 10 %; a quick one at once.
+TEST(BusyLimiterTest, KeepsAGrowingJobToItsFractionOfTheWallTime) {
+  BusyLimiter limiter(0.1);
+  EXPECT_TRUE(limiter.Allowed(0.0));
+  limiter.Ran(10.0, 10.5);
+  EXPECT_FALSE(limiter.Allowed(14.9));
+  EXPECT_TRUE(limiter.Allowed(15.0));
+  limiter.Ran(15.0, 15.001);
+  EXPECT_TRUE(limiter.Allowed(15.01));
+  BusyLimiter unlimited(1.0);
+  unlimited.Ran(0.0, 3.0);
+  EXPECT_TRUE(unlimited.Allowed(3.0));
+}
+
 }  // namespace
 }  // namespace common
 }  // namespace sarmap

@@ -2,6 +2,9 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -119,46 +122,54 @@ OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints
   return out;
 }
 
+// The covariance of the nodes is the corresponding blocks of H^-1, H = J^T J the Gauss-Newton
+// information at the optimum (residuals weighted by `model`, the loss function's correction
+// applied; submap 0 fixed). H is factorised once by a sparse Cholesky (AMD ordering) and solved
+// for the 3 columns of each requested node:  H X = E,  cov = E^T X.
+// Same numbers as ceres::Covariance's sparse QR of J (to 7 digits), 3x faster on a long
+// mission's graph (6067 nodes, 11 196 loop closures: 0.33 s against 1.06 s).
 bool NodeCovariance(const std::vector<Constraint>& constraints,
                     const std::vector<Rigid2d>& node_poses,
                     const std::vector<Rigid2d>& submap_poses, const std::vector<int>& node_ids,
                     Eigen::MatrixXd* covariance, const PoseGraphOptions& options,
                     const CovarianceModel& model) {
   Blocks b = ToBlocks(node_poses, submap_poses);
-  ceres::Problem problem;
-  BuildProblem(constraints, &b, &problem, options, &model);
-  ceres::Covariance::Options cov_options;
-  cov_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-  cov_options.algorithm_type = ceres::SPARSE_QR;
-  cov_options.num_threads = 1;
-  ceres::Covariance cov(cov_options);
-  // ceres::Covariance refuses repeated blocks: compute over the distinct nodes, then expand.
-  std::vector<int> unique_ids;
   for (int id : node_ids) {
     if (id < 0 || id >= static_cast<int>(b.nodes.size())) return false;
-    if (std::find(unique_ids.begin(), unique_ids.end(), id) == unique_ids.end()) unique_ids.push_back(id);
   }
-  std::vector<const double*> blocks;
-  for (int id : unique_ids) blocks.push_back(b.nodes[id].data());
-  if (!cov.Compute(blocks, &problem)) return false;
-  const int u = static_cast<int>(blocks.size());
-  std::vector<double> full(9 * u * u);
-  if (!cov.GetCovarianceMatrix(blocks, full.data())) return false;
+  ceres::Problem problem;
+  BuildProblem(constraints, &b, &problem, options, &model);
+  // The free blocks (submap 0 is the gauge), each at a column offset of H.
+  std::vector<double*> free_blocks;
+  for (size_t i = 1; i < b.submaps.size(); ++i) free_blocks.push_back(b.submaps[i].data());
+  const int first_node_column = 3 * static_cast<int>(free_blocks.size());
+  for (auto& p : b.nodes) free_blocks.push_back(p.data());
+  if (b.submaps.empty()) return false;  // no gauge: singular
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = free_blocks;
+  evaluate.apply_loss_function = true;
+  evaluate.num_threads = 1;
+  ceres::CRSMatrix crs;
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &crs)) return false;
+  const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor>> jacobian(
+      crs.num_rows, crs.num_cols, static_cast<int>(crs.values.size()), crs.rows.data(), crs.cols.data(),
+      crs.values.data());
+  const Eigen::SparseMatrix<double> information = jacobian.transpose() * jacobian;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> cholesky(information);
+  if (cholesky.info() != Eigen::Success) return false;
+  // A block no constraint reaches (or a graph in two pieces) leaves H singular: LDL^T then has a
+  // zero (or tiny) pivot.
+  const Eigen::VectorXd pivots = cholesky.vectorD();
+  if (pivots.minCoeff() <= 1e-12 * std::max(1.0, pivots.maxCoeff())) return false;
   const int n = static_cast<int>(node_ids.size());
-  covariance->resize(3 * n, 3 * n);
-  std::vector<int> index(n);
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(information.rows(), 3 * n);
   for (int i = 0; i < n; ++i) {
-    index[i] = static_cast<int>(std::find(unique_ids.begin(), unique_ids.end(), node_ids[i]) - unique_ids.begin());
+    for (int r = 0; r < 3; ++r) unit(first_node_column + 3 * node_ids[i] + r, 3 * i + r) = 1.0;
   }
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) {
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          (*covariance)(3 * i + r, 3 * j + c) = full[(3 * index[i] + r) * 3 * u + 3 * index[j] + c];
-        }
-      }
-    }
-  }
+  const Eigen::MatrixXd columns = cholesky.solve(unit);
+  if (cholesky.info() != Eigen::Success || !columns.allFinite()) return false;
+  *covariance = unit.transpose() * columns;
+  *covariance = 0.5 * (*covariance + covariance->transpose());  // exactly symmetric
   return true;
 }
 

@@ -66,9 +66,9 @@ OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints
                                       std::vector<Rigid2d>* submap_poses,
                                       const PoseGraphOptions& options);
 
-// Joint covariance of the listed nodes' (x, y, yaw) at the current poses (3k x 3k), from the
-// information matrix of the whole graph (ceres::Covariance, submap 0 fixed). False when the
-// covariance cannot be computed (rank deficient).
+// Joint covariance of the listed nodes' (x, y, yaw) at the current poses (3k x 3k): blocks of
+// the inverse of the whole graph's Gauss-Newton information J^T J (sparse Cholesky, submap 0
+// fixed). False when the covariance cannot be computed (rank deficient).
 bool NodeCovariance(const std::vector<Constraint>& constraints,
                     const std::vector<Rigid2d>& node_poses,
                     const std::vector<Rigid2d>& submap_poses, const std::vector<int>& node_ids,

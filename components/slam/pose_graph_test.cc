@@ -64,6 +64,33 @@ TEST(PoseGraphCovariance, ZeroSigmaKeepsTheOptimiserWeights) {
   EXPECT_NEAR(cov2(0, 0), cov(0, 0), 1e-12);
 }
 
+// A node asked for twice gets the same block everywhere (the anchors may repeat the latest node).
+TEST(PoseGraphCovariance, ARepeatedNodeGetsTheSameBlockTwice) {
+  std::vector<Rigid2d> nodes, submaps;
+  const auto constraints = Chain(5, &nodes, &submaps);
+  Eigen::MatrixXd one, twice;
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {4}, &one, PoseGraphOptions()));
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {4, 4}, &twice, PoseGraphOptions()));
+  ASSERT_EQ(twice.rows(), 6);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) EXPECT_LT((twice.block<3, 3>(3 * i, 3 * j) - one).norm(), 1e-15);
+  }
+}
+
+// A node no constraint reaches has no covariance (the information is singular); so has an
+// unknown node.
+TEST(PoseGraphCovariance, AnUnconstrainedNodeHasNone) {
+  std::vector<Rigid2d> nodes, submaps;
+  const auto constraints = Chain(5, &nodes, &submaps);
+  nodes.push_back(Rigid2d(3, 0, 0));  // node 5: in the graph, in no constraint
+  Eigen::MatrixXd cov;
+  EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {5}, &cov, PoseGraphOptions()));
+  EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
+  EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {9}, &cov, PoseGraphOptions()));
+  nodes.pop_back();
+  EXPECT_TRUE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
+}
+
 }  // namespace
 }  // namespace slam
 }  // namespace sarmap

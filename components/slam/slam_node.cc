@@ -59,22 +59,30 @@ class SlamNode {
       SARMAP_LOG(INFO) << "resumed mapping from " << options_.state_file << " ("
                        << slam_.num_nodes() << " nodes)";
     }
-    node->Subscribe<laser_scan_t>(options_.scan_channel,
-                                  [this](const laser_scan_t& m, const common::ReceiveInfo& info) {
-                                    Push(m.header.utime, Input{slam::FromScanMessage(m), info.receive_time_s});
-                                  });
+    node->Subscribe<laser_scan_t>(
+        options_.scan_channel,
+        [this](const laser_scan_t& m, const common::ReceiveInfo& info) {
+          Push(m.header.utime, Input{slam::FromScanMessage(m), info.receive_time_s});
+        },
+        options_.input_queue_capacity);
     node->Subscribe<odometry_t>(options_.odom_channel,
                                 [this](const odometry_t& m, const common::ReceiveInfo&) {
                                   OdomInput o{common::UtimeToSeconds(m.header.utime),
                                               slam::FromOdometryMessage(m)};
                                   Push(m.header.utime, Input{o, 0.0});
-                                });
+                                },
+                                options_.input_queue_capacity);
     node->Subscribe<slam_anchor_request_t>(
         options_.anchor_request_channel,
         [this](const slam_anchor_request_t& m, const common::ReceiveInfo&) {
+          // Clients repeat their request (in case this node restarted); only a changed set is
+          // answered at once (a joint covariance over the whole graph), then after every
+          // optimisation.
+          auto known = anchor_requests_.find(m.client_id);
+          if (known != anchor_requests_.end() && known->second == m.node_ids) return;
           anchor_requests_[m.client_id] = m.node_ids;
           SARMAP_LOG(INFO) << "client '" << m.client_id << "' keeps " << m.num_node_ids << " anchors";
-          PublishAnchors(false);  // answer at once, then after every optimisation
+          if (ComputeCovariance()) PublishAnchors(false);
         });
     node->AddTimer(1.0, [this]() { UpdateStatus(); });
     // When inputs pause (end of a replay, a stalled sensor), release what waits in the queue
@@ -90,7 +98,7 @@ class SlamNode {
     queue_.Flush([this](Utime, Input& in) { Process(in); });
     if (!options_.load_map.empty()) return;
     slam_.Optimise();
-    PublishAnchors(false);
+    if (ComputeCovariance()) PublishAnchors(false);
     SaveState();
     if (!options_.map_output_prefix.empty() && slam_.num_nodes() > 0) {
       slam::SaveMapServerMap(slam_.RenderMap(), options_.map_output_prefix);
@@ -151,17 +159,23 @@ class SlamNode {
       SARMAP_LOG(INFO) << "optimisation " << slam_.optimisation_id() << " with new loop closures ("
                        << slam_.stats().loop_closures << " in total)";
     }
-    if (r.optimised) UpdateCovariance();
+    const bool have_covariance = r.optimised && ComputeCovariance();
     PublishPose(utime, r);
-    if (r.optimised) PublishAnchors(r.loop_closed);
-    if (scan.time_s - last_map_time_s_ >= options_.map_period_s && options_.load_map.empty()) {
+    if (have_covariance) PublishAnchors(r.loop_closed);
+    if (scan.time_s - last_map_time_s_ >= options_.map_period_s && options_.load_map.empty() &&
+        map_busy_.Allowed(common::SteadySeconds())) {
       last_map_time_s_ = scan.time_s;
+      const double start_s = common::SteadySeconds();
       PublishMap(utime);
+      map_busy_.Ran(start_s, common::SteadySeconds());
     }
     if (!options_.state_file.empty() && options_.load_map.empty() &&
-        scan.time_s - last_save_time_s_ >= options_.state_save_period_s) {
+        scan.time_s - last_save_time_s_ >= options_.state_save_period_s &&
+        save_busy_.Allowed(common::SteadySeconds())) {
       last_save_time_s_ = scan.time_s;
+      const double start_s = common::SteadySeconds();
       SaveState();
+      save_busy_.Ran(start_s, common::SteadySeconds());
     }
     if (in.receive_time_s > 0) {
       latency_sum_s_ += common::SteadySeconds() - in.receive_time_s;
@@ -169,11 +183,30 @@ class SlamNode {
     }
   }
 
-  void UpdateCovariance() {
-    if (slam_.num_nodes() == 0) return;
-    const int current = slam_.num_nodes() - 1;
+  // One joint covariance of the latest node and the requested anchors (the latest node's block
+  // goes on POSE): it costs a factorisation of the whole graph. False (nothing changed) when
+  // it cannot be computed.
+  bool ComputeCovariance() {
+    if (slam_.num_nodes() == 0) return false;
+    std::set<int64_t> wanted;
+    for (const auto& [client, ids] : anchor_requests_) {
+      for (int64_t id : ids) {
+        if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
+      }
+    }
+    std::vector<int> ids = {slam_.num_nodes() - 1};
+    for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
     Eigen::MatrixXd cov;
-    if (slam_.JointCovariance({current}, &cov)) node_covariance_ = cov;
+    if (!slam_.JointCovariance(ids, &cov)) {
+      if (covariance_log_.Allow(common::SteadySeconds())) {
+        SARMAP_LOG(WARN) << "joint covariance of " << ids.size() << " nodes not computable";
+      }
+      return false;
+    }
+    covariance_ids_ = std::move(ids);
+    joint_covariance_ = std::move(cov);
+    node_covariance_ = joint_covariance_.topLeftCorner<3, 3>();
+    return true;
   }
 
   void PublishPose(Utime utime, const slam::ScanResult& r) {
@@ -194,21 +227,11 @@ class SlamNode {
     pose_pub_.Publish(&msg);
   }
 
+  // SLAM_ANCHORS from the last ComputeCovariance().
   void PublishAnchors(bool loop_closed) {
-    if (slam_.num_nodes() == 0) return;
-    std::set<int64_t> wanted;
-    for (const auto& [client, ids] : anchor_requests_) {
-      for (int64_t id : ids) {
-        if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
-      }
-    }
-    std::vector<int> ids = {slam_.num_nodes() - 1};
-    for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
-    Eigen::MatrixXd cov;
-    if (!slam_.JointCovariance(ids, &cov)) {
-      SARMAP_LOG(WARN) << "joint covariance of " << ids.size() << " nodes not computable";
-      return;
-    }
+    const std::vector<int>& ids = covariance_ids_;
+    const Eigen::MatrixXd& cov = joint_covariance_;
+    if (ids.empty()) return;
     slam_anchors_t msg{};
     msg.header.utime = common::SecondsToUtime(slam_.NodeTime(ids[0]));
     msg.header.frame = "map";
@@ -286,8 +309,11 @@ class SlamNode {
   common::Node::Publisher<slam_anchors_t> anchors_pub_;
   std::map<std::string, std::vector<int64_t>> anchor_requests_;
   Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
+  std::vector<int> covariance_ids_;  // latest node first, then the anchors
+  Eigen::MatrixXd joint_covariance_;
+  common::BusyLimiter map_busy_{options_.max_busy_fraction}, save_busy_{options_.max_busy_fraction};
   double last_map_time_s_ = -1e300, last_save_time_s_ = -1e300;
-  common::RateLimiter late_log_{2.0}, odom_log_{2.0}, scan_log_{2.0};
+  common::RateLimiter late_log_{2.0}, odom_log_{2.0}, scan_log_{2.0}, covariance_log_{5.0};
   double last_input_s_ = 0;
   double latency_sum_s_ = 0;
   int64_t latency_count_ = 0;

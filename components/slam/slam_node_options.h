@@ -18,7 +18,14 @@ struct SlamNodeOptions {
   std::string anchors_channel = "SLAM_ANCHORS";
   std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
   double queue_delay_s = 0.1;        // time-ordering delay of the input queue
+  // Scans and odometry LCM holds for the node while it is busy (an optimisation, the covariance,
+  // the map): beyond this many per channel the oldest are lost. 30 (LCM's usual) is 1 s of a
+  // 30 Hz depth camera; a long mission's graph keeps the node busy for longer than that.
+  int input_queue_capacity = 600;
   double map_period_s = 5.0;         // MAP at most this often (message time)
+  // Rendering MAP and saving the state cost time in proportion to the graph; each waits until
+  // the wall time since its last run is at least its last duration / this fraction (1: no limit).
+  double max_busy_fraction = 0.1;
   std::string state_file = "";       // pose-graph file saved periodically and at exit ("" = none)
   double state_save_period_s = 10.0; // message time between periodic saves
   bool resume = false;               // load state_file at start (if it exists) and continue
@@ -36,7 +43,11 @@ struct SlamNodeOptions {
     v("anchors_channel", anchors_channel, "Output anchors with joint covariance (slam_anchors_t)");
     v("anchor_request_channel", anchor_request_channel, "Input anchor requests (slam_anchor_request_t)");
     v("queue_delay_s", queue_delay_s, "Inputs are released in time order this long after arrival (message time)");
+    v("input_queue_capacity", input_queue_capacity,
+      "Scans / odometry held per channel while the node is busy; beyond it the oldest are lost");
     v("map_period_s", map_period_s, "Publish MAP at most this often (message time)");
+    v("max_busy_fraction", max_busy_fraction,
+      "MAP rendering and state saving each use at most this fraction of the wall time (they slow with the graph)");
     v("state_file", state_file, "Pose-graph file saved periodically (temp + rename) and at exit");
     v("state_save_period_s", state_save_period_s, "Message time between periodic state saves");
     v("resume", resume, "Load state_file at start if it exists and continue mapping");
@@ -51,6 +62,8 @@ struct SlamNodeOptions {
     c.NonNegative("queue_delay_s", queue_delay_s);
     c.That(initial_pose.empty() || initial_pose.size() == 3, "initial_pose", "must be empty or [x, y, yaw]");
     c.Positive("map_period_s", map_period_s);
+    c.That(input_queue_capacity >= 1, "input_queue_capacity", "must be >= 1");
+    c.That(max_busy_fraction > 0 && max_busy_fraction <= 1, "max_busy_fraction", "must be in (0, 1]");
     c.Positive("state_save_period_s", state_save_period_s);
     c.NonNegative("pose_sigma_xy_m", pose_sigma_xy_m);
     c.NonNegative("pose_sigma_yaw_deg", pose_sigma_yaw_deg);
