@@ -183,6 +183,61 @@ TEST_F(PeopleMapProcessTest, KillNineLosesNothingAlreadyFound) {
   }
 }
 
+// SLAM publishes POSE late while it optimises. A detection made in a turn must be placed with
+// the pose of its own time (interpolated once POSE catches up), not with the last pose known when
+// it was released: here POSE lags the detections by 0.4 s while the robot swings +-0.5 rad at up
+// to 1 rad/s, so the last known pose would be up to 0.2 rad off and put the person (3 m ahead)
+// up to 0.6 m sideways.
+TEST_F(PeopleMapProcessTest, ADetectionInATurnWaitsForThePoseOfItsTime) {
+  auto node = StartNode("");
+  const common::Rigid3d base_from_camera = common::RobotOptions().base_from_camera.ToRigid3d();
+  const Eigen::Vector3d person(3.0, 0.0, 0.9);
+  auto map_from_base = [](double t) {
+    return common::Rigid3d(Eigen::Vector3d::Zero(),
+                           Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * std::sin(2 * t), Eigen::Vector3d::UnitZ())));
+  };
+  const double lag_s = 0.4;
+  for (double t = 0; t < 6.0; t += 0.05) {
+    const int64_t utime = 1'000'000'000 + static_cast<int64_t>(std::lround(t * 1e6));
+    if (t >= lag_s - 1e-9) {  // the pose of 0.4 s ago
+      const double tp = t - lag_s;
+      const common::Rigid3d pose_now = map_from_base(tp);
+      sarmap::pose_t pose{};
+      pose.header.utime = 1'000'000'000 + static_cast<int64_t>(std::lround(tp * 1e6));
+      pose.header.frame = "map";
+      pose.child_frame = "base";
+      const Eigen::Quaterniond q = pose_now.rotation();
+      pose.orientation[0] = q.w();
+      pose.orientation[3] = q.z();
+      pose.covariance[0] = pose.covariance[7] = 0.0001;
+      pose.covariance[35] = 0.0001;
+      lcm_->publish("POSE", &pose);
+    }
+    const Eigen::Vector3d c = (map_from_base(t) * base_from_camera).inverse() * person;
+    sarmap::people_detections_t seen{};
+    seen.header.utime = utime;
+    seen.header.frame = "camera";
+    sarmap::person_detection_t d{};
+    d.cue = sarmap::person_detection_t::CUE_SEEN_RGBD;
+    d.has_range = true;
+    for (int i = 0; i < 3; ++i) d.position_m[i] = c[i];
+    d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
+    d.confidence = 0.8f;
+    seen.detections.push_back(d);
+    seen.num_detections = 1;
+    lcm_->publish("PEOPLE_VISUAL", &seen);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    lcm_->handleTimeout(0);
+  }
+  Spin(1.0);
+  node->Signal(SIGINT);
+  ASSERT_EQ(node->Wait(10), 0) << node->Output();
+  Spin(0.3);
+  const std::string described = Describe(last_);
+  ASSERT_EQ(last_.num_people, 1) << described << node->Output();
+  EXPECT_LT(std::hypot(last_.people[0].position_m[0] - 3.0, last_.people[0].position_m[1]), 0.05) << described;
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace sarmap
