@@ -179,6 +179,21 @@ int main(int argc, char** argv) {
                             std::to_string(c.anchors_skipped) + "), late inputs " +
                             std::to_string(queue.dropped_late()));
     });
-    return node.Run();
+    const int code = node.Run();
+    // What still waits in the queue (the last reorder_delay_s of the mission) is applied, and the
+    // final map published and saved.
+    queue.Flush([&](Utime t, std::function<void(Utime)>& f) {
+      f(t);
+      after_input(t);
+    });
+    if (newest > 0) publish_map(newest);
+    if (!options.state_file.empty() && changed_since_save) {
+      try {
+        map.Save(options.state_file);
+      } catch (const std::exception& e) {
+        SARMAP_LOG(WARN) << "state not saved: " << e.what();
+      }
+    }
+    return code;
   });
 }
