@@ -16,6 +16,17 @@ namespace sarmap {
 namespace testing {
 namespace {
 
+// A person seen by the RGB-D detector at `c` (camera frame).
+sarmap::person_detection_t SeenAt(const Eigen::Vector3d& c) {
+  sarmap::person_detection_t d{};
+  d.cue = sarmap::person_detection_t::CUE_SEEN_RGBD;
+  d.has_range = true;
+  for (int i = 0; i < 3; ++i) d.position_m[i] = c[i];
+  d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
+  d.confidence = 0.8f;
+  return d;
+}
+
 class PeopleMapProcessTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -69,13 +80,7 @@ class PeopleMapProcessTest : public ::testing::Test {
         for (const auto& p : people) {
           const Eigen::Vector3d c = map_from_camera.inverse() * p;
           if (c.z() < 0.5 || c.z() > 4.5) continue;
-          sarmap::person_detection_t d{};
-          d.cue = sarmap::person_detection_t::CUE_SEEN_RGBD;
-          d.has_range = true;
-          for (int i = 0; i < 3; ++i) d.position_m[i] = c[i];
-          d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
-          d.confidence = 0.8f;
-          seen.detections.push_back(d);
+          seen.detections.push_back(SeenAt(c));
         }
         seen.num_detections = static_cast<int32_t>(seen.detections.size());
         lcm_->publish("PEOPLE_VISUAL", &seen);
@@ -217,13 +222,7 @@ TEST_F(PeopleMapProcessTest, ADetectionInATurnWaitsForThePoseOfItsTime) {
     sarmap::people_detections_t seen{};
     seen.header.utime = utime;
     seen.header.frame = "camera";
-    sarmap::person_detection_t d{};
-    d.cue = sarmap::person_detection_t::CUE_SEEN_RGBD;
-    d.has_range = true;
-    for (int i = 0; i < 3; ++i) d.position_m[i] = c[i];
-    d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
-    d.confidence = 0.8f;
-    seen.detections.push_back(d);
+    seen.detections.push_back(SeenAt(c));
     seen.num_detections = 1;
     lcm_->publish("PEOPLE_VISUAL", &seen);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -236,6 +235,38 @@ TEST_F(PeopleMapProcessTest, ADetectionInATurnWaitsForThePoseOfItsTime) {
   const std::string described = Describe(last_);
   ASSERT_EQ(last_.num_people, 1) << described << node->Output();
   EXPECT_LT(std::hypot(last_.people[0].position_m[0] - 3.0, last_.people[0].position_m[1]), 0.05) << described;
+}
+
+// One person seen once, then nobody in view while POSE goes on: POSE moves the node's clock, so
+// the detection is applied and published without waiting for another detection (or the stop).
+TEST_F(PeopleMapProcessTest, PoseAloneReleasesADetectionWhenNobodyElseIsSeen) {
+  auto node = StartNode("");
+  const common::Rigid3d base_from_camera = common::RobotOptions().base_from_camera.ToRigid3d();
+  for (int k = 0; k < 40; ++k) {
+    const int64_t utime = 1'000'000'000 + k * 50'000;
+    sarmap::pose_t pose{};
+    pose.header.utime = utime;
+    pose.header.frame = "map";
+    pose.child_frame = "base";
+    pose.orientation[0] = 1;
+    pose.covariance[0] = pose.covariance[7] = pose.covariance[35] = 0.0001;
+    lcm_->publish("POSE", &pose);
+    if (k == 2) {
+      sarmap::people_detections_t seen{};
+      seen.header.utime = utime;
+      seen.header.frame = "camera";
+      seen.detections.push_back(SeenAt(base_from_camera.inverse() * Eigen::Vector3d(2.0, 0.0, 0.9)));
+      seen.num_detections = 1;
+      lcm_->publish("PEOPLE_VISUAL", &seen);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    lcm_->handleTimeout(0);
+  }
+  Spin(1.5);  // the node runs on; nothing else arrives
+  const std::string described = Describe(last_);
+  EXPECT_EQ(last_.num_people, 1) << described << node->Output();
+  node->Signal(SIGINT);
+  ASSERT_EQ(node->Wait(10), 0) << node->Output();
 }
 
 }  // namespace

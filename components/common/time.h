@@ -49,6 +49,11 @@ class TimeOrderedQueue {
     return true;
   }
 
+  // Time has reached `utime` on an input that needs no ordering (e.g. POSE kept in a history of
+  // its own): without it, the queue's clock would stand still while no other input arrives, and
+  // hold what it has.
+  void AdvanceTo(Utime utime) { newest_ = std::max(newest_, utime); }
+
   // Calls `sink(utime, item)` for every item ready for release, oldest first.
   void Release(const std::function<void(Utime, T&)>& sink) { ReleaseUntil(newest_ - delay_us_, sink); }
   void Flush(const std::function<void(Utime, T&)>& sink) { ReleaseUntil(newest_, sink); }

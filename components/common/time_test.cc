@@ -53,6 +53,21 @@ TEST(TimeOrderedQueueTest, ALateStreamIsKeptInItsOwnOrder) {
   EXPECT_EQ(q.dropped_late(), 2);
 }
 
+// A clock-only input releases what waits, as a newer item would.
+TEST(TimeOrderedQueueTest, AdvanceToReleasesWithoutAnItem) {
+  TimeOrderedQueue<int> q(100);
+  std::vector<int> out;
+  q.Push(1000, 1);
+  q.Release([&](Utime, int& v) { out.push_back(v); });
+  EXPECT_TRUE(out.empty());
+  q.AdvanceTo(1050);
+  q.Release([&](Utime, int& v) { out.push_back(v); });
+  EXPECT_TRUE(out.empty());
+  q.AdvanceTo(1100);
+  q.Release([&](Utime, int& v) { out.push_back(v); });
+  EXPECT_EQ(out, std::vector<int>{1});
+}
+
 // A job that took 0.5 s may run again 4.5 s after it ended at 10 %; a quick one at once.
 TEST(BusyLimiterTest, KeepsAGrowingJobToItsFractionOfTheWallTime) {
   BusyLimiter limiter(0.1);

@@ -188,6 +188,9 @@ int main(int argc, char** argv) {
       p.covariance = common::ToCovariance6(m.covariance);
       poses.Add(p);
       newest_input_utime = std::max(newest_input_utime, p.utime);
+      // POSE is the one input that never stops (detections do when nobody is in view; the sound
+      // map publishes 3 s late): it moves the queue's clock.
+      queue.AdvanceTo(p.utime);
       release();
     });
     node.Subscribe<people_detections_t>(options.visual_channel, [&](const people_detections_t& m,
