@@ -7,6 +7,7 @@
 #include "common/args.h"
 #include "log-tools/lcm_log_reader.h"
 #include "log-tools/stack_perf.h"
+#include "sarmap/people_detections_t.hpp"
 #include "sarmap/people_map_t.hpp"
 #include "sarmap/pm_info_t.hpp"
 
@@ -79,7 +80,11 @@ int main(int argc, char** argv) {
       int64_t utime, seq;
       if (!sarmap::logtools::ReadSarmapHeader(event.data, &utime, &seq)) continue;
       if (event.channel == depth_channel) perf.AddDepthFrame(utime, event.timestamp_us);
-      if (event.channel == visual_channel) perf.AddPeopleVisual(utime, event.timestamp_us);
+      if (event.channel == visual_channel) {
+        sarmap::people_detections_t seen;
+        const bool ok = seen.decode(event.data.data(), 0, static_cast<int>(event.data.size())) >= 0;
+        perf.AddPeopleVisual(utime, event.timestamp_us, ok ? seen.num_detections : 0);
+      }
       if (event.channel == map_channel) perf.AddPeopleMap(utime, event.timestamp_us);
     }
     if (next_report > (64 << 20)) fprintf(stderr, "\r                 \r");

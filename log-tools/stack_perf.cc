@@ -56,8 +56,9 @@ void StackPerf::AddMachineLoad(double cpu_load_fraction) {
 void StackPerf::AddDepthFrame(int64_t capture_utime, int64_t receive_us) {
   depth_receive_us_.emplace(capture_utime, receive_us);
 }
-void StackPerf::AddPeopleVisual(int64_t capture_utime, int64_t receive_us) {
+void StackPerf::AddPeopleVisual(int64_t capture_utime, int64_t receive_us, int people_seen) {
   visual_receive_us_.emplace(capture_utime, receive_us);
+  if (people_seen > 0) seen_capture_utimes_.insert(capture_utime);
 }
 void StackPerf::AddPeopleMap(int64_t capture_utime, int64_t receive_us) {
   map_receive_us_.emplace(capture_utime, receive_us);
@@ -106,7 +107,12 @@ StackPerfSummary StackPerf::Summarise() const {
   out.machine_load_percent = machine_load_.empty() ? 0.0 : 100.0 * load / machine_load_.size();
   out.depth_frames = static_cast<int>(depth_receive_us_.size());
   out.depth_to_people_visual = Latencies(depth_receive_us_, visual_receive_us_);
-  out.depth_to_people_map = Latencies(depth_receive_us_, map_receive_us_);
+  std::map<int64_t, int64_t> seen_depth;
+  for (int64_t t : seen_capture_utimes_) {
+    const auto it = depth_receive_us_.find(t);
+    if (it != depth_receive_us_.end()) seen_depth.emplace(t, it->second);
+  }
+  out.depth_to_people_map = Latencies(seen_depth, map_receive_us_);
   out.people_map_restarts = map_restarts_;
   out.people_before_restarts = people_before_restarts_;
   out.people_kept_across_restarts = people_kept_;

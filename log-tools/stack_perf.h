@@ -60,7 +60,9 @@ class StackPerf {
   // A message of the chain: its header.utime (the capture time of the frame it came from)
   // and when the logger received it.
   void AddDepthFrame(int64_t capture_utime, int64_t receive_us);
-  void AddPeopleVisual(int64_t capture_utime, int64_t receive_us);
+  // people_seen: detections in it. DEPTH -> PEOPLE_MAP counts only frames with someone seen (the
+  // map is also stamped with the times of other inputs, e.g. SOUND_MAP's, 3 s old).
+  void AddPeopleVisual(int64_t capture_utime, int64_t receive_us, int people_seen = 1);
   void AddPeopleMap(int64_t capture_utime, int64_t receive_us);
   // A whole PEOPLE_MAP message: its header.seq and the people's map positions (x, y in m).
   // A person counts as kept across a restart when the first map after it has someone within
@@ -85,6 +87,7 @@ class StackPerf {
   std::vector<double> machine_load_;
   std::map<int64_t, int64_t> depth_receive_us_;   // capture utime -> receive time
   std::map<int64_t, int64_t> visual_receive_us_;  // first PEOPLE_VISUAL per capture time
+  std::set<int64_t> seen_capture_utimes_;  // PEOPLE_VISUAL with someone in it
   std::map<int64_t, int64_t> map_receive_us_;     // first PEOPLE_MAP per capture time
 };
 

@@ -46,11 +46,15 @@ TEST(StackPerfTest, LatencyMatchesFramesByCaptureTimeAndKeepsTheFirstUpdate) {
     }
   }
   perf.AddPeopleMap(42, 43);  // no frame with this capture time: not matched
+  // A frame in which nobody was seen, whose time the people map took from another input later.
+  perf.AddDepthFrame(9000000, 9000000);
+  perf.AddPeopleVisual(9000000, 9010000, 0);
+  perf.AddPeopleMap(9000000, 12000000);
   const StackPerfSummary s = perf.Summarise();
-  EXPECT_EQ(s.depth_frames, 100);
-  EXPECT_EQ(s.depth_to_people_visual.count, 100);
+  EXPECT_EQ(s.depth_frames, 101);
+  EXPECT_EQ(s.depth_to_people_visual.count, 101);
   EXPECT_NEAR(s.depth_to_people_visual.median_ms, 14.0, 1e-9);
-  EXPECT_NEAR(s.depth_to_people_visual.max_ms, 19.0, 1e-9);
+  EXPECT_NEAR(s.depth_to_people_visual.max_ms, 19.0, 1e-9);  // the empty frame's 10 ms too
   EXPECT_EQ(s.depth_to_people_map.count, 50);
   EXPECT_NEAR(s.depth_to_people_map.p99_ms, 50.0, 1e-9);
   EXPECT_NE(StackPerfText(s).find("latency DEPTH -> PEOPLE_MAP: 50 frames"), std::string::npos);
