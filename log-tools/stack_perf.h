@@ -87,7 +87,7 @@ class StackPerf {
   std::vector<double> machine_load_;
   std::map<int64_t, int64_t> depth_receive_us_;   // capture utime -> receive time
   std::map<int64_t, int64_t> visual_receive_us_;  // first PEOPLE_VISUAL per capture time
-  std::set<int64_t> seen_capture_utimes_;  // PEOPLE_VISUAL with someone in it
+  std::set<int64_t> seen_capture_utimes_;         // PEOPLE_VISUAL with someone in it
   std::map<int64_t, int64_t> map_receive_us_;     // first PEOPLE_MAP per capture time
 };
 

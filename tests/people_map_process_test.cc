@@ -198,8 +198,9 @@ TEST_F(PeopleMapProcessTest, ADetectionInATurnWaitsForThePoseOfItsTime) {
   const common::Rigid3d base_from_camera = common::RobotOptions().base_from_camera.ToRigid3d();
   const Eigen::Vector3d person(3.0, 0.0, 0.9);
   auto map_from_base = [](double t) {
-    return common::Rigid3d(Eigen::Vector3d::Zero(),
-                           Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * std::sin(2 * t), Eigen::Vector3d::UnitZ())));
+    return common::Rigid3d(
+        Eigen::Vector3d::Zero(),
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * std::sin(2 * t), Eigen::Vector3d::UnitZ())));
   };
   const double lag_s = 0.4;
   for (double t = 0; t < 6.0; t += 0.05) {
@@ -234,7 +235,8 @@ TEST_F(PeopleMapProcessTest, ADetectionInATurnWaitsForThePoseOfItsTime) {
   Spin(0.3);
   const std::string described = Describe(last_);
   ASSERT_EQ(last_.num_people, 1) << described << node->Output();
-  EXPECT_LT(std::hypot(last_.people[0].position_m[0] - 3.0, last_.people[0].position_m[1]), 0.05) << described;
+  EXPECT_LT(std::hypot(last_.people[0].position_m[0] - 3.0, last_.people[0].position_m[1]), 0.05)
+      << described;
 }
 
 // One person seen once, then nobody in view while POSE goes on: POSE moves the node's clock, so
@@ -255,7 +257,8 @@ TEST_F(PeopleMapProcessTest, PoseAloneReleasesADetectionWhenNobodyElseIsSeen) {
       sarmap::people_detections_t seen{};
       seen.header.utime = utime;
       seen.header.frame = "camera";
-      seen.detections.push_back(SeenAt(base_from_camera.inverse() * Eigen::Vector3d(2.0, 0.0, 0.9)));
+      seen.detections.push_back(
+          SeenAt(base_from_camera.inverse() * Eigen::Vector3d(2.0, 0.0, 0.9)));
       seen.num_detections = 1;
       lcm_->publish("PEOPLE_VISUAL", &seen);
     }

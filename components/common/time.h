@@ -86,7 +86,9 @@ class BusyLimiter {
  public:
   explicit BusyLimiter(double fraction) : fraction_(fraction) {}
   bool Allowed(double now_s) const { return now_s >= next_allowed_s_; }
-  void Ran(double start_s, double end_s) { next_allowed_s_ = end_s + (end_s - start_s) * (1 / fraction_ - 1); }
+  void Ran(double start_s, double end_s) {
+    next_allowed_s_ = end_s + (end_s - start_s) * (1 / fraction_ - 1);
+  }
 
  private:
   double fraction_;

@@ -6,9 +6,9 @@
 #include <deque>
 #include <functional>
 
-#include "common/node_main.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
+#include "common/node_main.h"
 #include "common/pose_history.h"
 #include "common/robot_config.h"
 #include "people_map/people_map.h"
@@ -234,11 +234,15 @@ int main(int argc, char** argv) {
       }
       if (heard.empty()) return;
       newest_input_utime = std::max(newest_input_utime, utime);
-      queue.Push(utime, [&, utime, heard] {
-        when_posed(utime, [&, utime, heard] {
-          if (auto pose = pose_at(utime)) map.AddHeard(utime, heard, pose->pose * base_from_mic);
-        });
-      }, kHeardStream);
+      queue.Push(
+          utime,
+          [&, utime, heard] {
+            when_posed(utime, [&, utime, heard] {
+              if (auto pose = pose_at(utime))
+                map.AddHeard(utime, heard, pose->pose * base_from_mic);
+            });
+          },
+          kHeardStream);
       release();
     });
     node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m, const common::ReceiveInfo&) {

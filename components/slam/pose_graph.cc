@@ -4,7 +4,6 @@
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -152,8 +151,8 @@ bool NodeCovariance(const std::vector<Constraint>& constraints,
   ceres::CRSMatrix crs;
   if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &crs)) return false;
   const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor>> jacobian(
-      crs.num_rows, crs.num_cols, static_cast<int>(crs.values.size()), crs.rows.data(), crs.cols.data(),
-      crs.values.data());
+      crs.num_rows, crs.num_cols, static_cast<int>(crs.values.size()), crs.rows.data(),
+      crs.cols.data(), crs.values.data());
   const Eigen::SparseMatrix<double> information = jacobian.transpose() * jacobian;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> cholesky(information);
   if (cholesky.info() != Eigen::Success) return false;

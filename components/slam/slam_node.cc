@@ -65,13 +65,13 @@ class SlamNode {
           Push(m.header.utime, Input{slam::FromScanMessage(m), info.receive_time_s});
         },
         options_.input_queue_capacity);
-    node->Subscribe<odometry_t>(options_.odom_channel,
-                                [this](const odometry_t& m, const common::ReceiveInfo&) {
-                                  OdomInput o{common::UtimeToSeconds(m.header.utime),
-                                              slam::FromOdometryMessage(m)};
-                                  Push(m.header.utime, Input{o, 0.0});
-                                },
-                                options_.input_queue_capacity);
+    node->Subscribe<odometry_t>(
+        options_.odom_channel,
+        [this](const odometry_t& m, const common::ReceiveInfo&) {
+          OdomInput o{common::UtimeToSeconds(m.header.utime), slam::FromOdometryMessage(m)};
+          Push(m.header.utime, Input{o, 0.0});
+        },
+        options_.input_queue_capacity);
     node->Subscribe<slam_anchor_request_t>(
         options_.anchor_request_channel,
         [this](const slam_anchor_request_t& m, const common::ReceiveInfo&) {

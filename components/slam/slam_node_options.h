@@ -47,7 +47,8 @@ struct SlamNodeOptions {
       "Scans / odometry held per channel while the node is busy; beyond it the oldest are lost");
     v("map_period_s", map_period_s, "Publish MAP at most this often (message time)");
     v("max_busy_fraction", max_busy_fraction,
-      "MAP rendering and state saving each use at most this fraction of the wall time (they slow with the graph)");
+      "MAP rendering and state saving each use at most this fraction of the wall time (they slow "
+      "with the graph)");
     v("state_file", state_file, "Pose-graph file saved periodically (temp + rename) and at exit");
     v("state_save_period_s", state_save_period_s, "Message time between periodic state saves");
     v("resume", resume, "Load state_file at start if it exists and continue mapping");
@@ -63,7 +64,8 @@ struct SlamNodeOptions {
     c.That(initial_pose.empty() || initial_pose.size() == 3, "initial_pose", "must be empty or [x, y, yaw]");
     c.Positive("map_period_s", map_period_s);
     c.That(input_queue_capacity >= 1, "input_queue_capacity", "must be >= 1");
-    c.That(max_busy_fraction > 0 && max_busy_fraction <= 1, "max_busy_fraction", "must be in (0, 1]");
+    c.That(max_busy_fraction > 0 && max_busy_fraction <= 1, "max_busy_fraction",
+           "must be in (0, 1]");
     c.Positive("state_save_period_s", state_save_period_s);
     c.NonNegative("pose_sigma_xy_m", pose_sigma_xy_m);
     c.NonNegative("pose_sigma_yaw_deg", pose_sigma_yaw_deg);

@@ -2,11 +2,11 @@
 // CTest): POSE + DOA (DOA_MAP) + SLAM_ANCHORS + PEOPLE_AUDIO in, SLAM_ANCHOR_REQUEST and
 // SOUND_MAP out, with the configured reorder delay.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
+#include <lcm/lcm-cpp.hpp>
 #include <thread>
 
 #include "sarmap/doa_t.hpp"
@@ -37,10 +37,11 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
   const std::string log = ::testing::TempDir() + "/sound-map-node-" + std::to_string(getpid()) + ".log";
-  sarmap::testing::Process node({"sarmap-sound-map", "--lcm-url", url, "--config",
-                                 std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
-                                 "robot_config=" + std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml"},
-                                log);
+  sarmap::testing::Process node(
+      {"sarmap-sound-map", "--lcm-url", url, "--config",
+       std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
+       "robot_config=" + std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml"},
+      log);
   lcm::LCM lcm(url);
   ASSERT_TRUE(lcm.good());
   Sink sink;
