@@ -1,6 +1,7 @@
 #include "log-tools/lcm_log_reader.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include <fstream>
@@ -13,7 +14,10 @@ namespace {
 
 // Writes `n` pose_t events with lcm::LogFile, the library lcm-logger itself uses.
 std::string WriteLog(int n) {
-  const std::string path = ::testing::TempDir() + "/reader_test.lcmlog";
+  // One file per test and process: CTest runs the cases of this file in parallel.
+  const std::string path = ::testing::TempDir() + "/reader_test_" +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                           std::to_string(getpid()) + ".lcmlog";
   lcm::LogFile log(path, "w");
   for (int i = 0; i < n; ++i) {
     sarmap::pose_t pose{};

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <fstream>
 
 namespace sarmap {
@@ -42,8 +44,12 @@ struct TestOptions {
   }
 };
 
+// One file per process and test: CTest runs the cases as parallel processes, and a shared name
+// let one case read another's half-written file (a flaky OptionsTest.WrongTypeIsNamed).
 std::string WriteTemp(const std::string& text) {
-  const std::string path = ::testing::TempDir() + "/options_test.yaml";
+  const std::string path = ::testing::TempDir() + "/options_test_" +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                           std::to_string(getpid()) + ".yaml";
   std::ofstream(path) << text;
   return path;
 }
