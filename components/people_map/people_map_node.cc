@@ -130,6 +130,11 @@ int main(int argc, char** argv) {
       auto msg = ToMessage(map.Report(utime), utime);
       publisher.Publish(&msg);
     };
+    // An input at `utime` changed the map.
+    const auto applied = [&](Utime utime) {
+      latest_utime = std::max(latest_utime, utime);
+      dirty = true;
+    };
     const auto pose_at = [&](Utime utime) -> std::optional<common::StampedPose> {
       auto pose = poses.At(utime);
       if (!pose) {
@@ -157,8 +162,7 @@ int main(int argc, char** argv) {
         }
         waiting_for_pose.front().second();
         waiting_for_pose.pop_front();
-        latest_utime = std::max(latest_utime, utime);
-        dirty = true;
+        applied(utime);
         publish(latest_utime);
       }
     };
@@ -174,8 +178,7 @@ int main(int argc, char** argv) {
     const auto release = [&] {
       queue.Release([&](Utime utime, std::function<void()>& apply) {
         apply();
-        latest_utime = std::max(latest_utime, utime);
-        dirty = true;
+        applied(utime);
         publish(latest_utime);
       });
       place_waiting(false);
@@ -280,8 +283,7 @@ int main(int argc, char** argv) {
     const int code = node.Run();
     queue.Flush([&](Utime utime, std::function<void()>& apply) {
       apply();
-      latest_utime = std::max(latest_utime, utime);
-      dirty = true;
+      applied(utime);
     });
     place_waiting(true);
     if (latest_utime > 0) publish(latest_utime);

@@ -99,13 +99,14 @@ int main(int argc, char** argv) {
         }
       }
     };
+    const auto apply = [&](Utime t, std::function<void(Utime)>& f) {
+      f(t);
+      after_input(t);
+    };
     auto push = [&](Utime utime, std::function<void(Utime)> fn) {
       newest = std::max(newest, utime);
       if (!queue.Push(utime, std::move(fn))) return;
-      queue.Release([&](Utime t, std::function<void(Utime)>& f) {
-        f(t);
-        after_input(t);
-      });
+      queue.Release(apply);
     };
 
     node.Subscribe<sarmap::pose_t>(options.pose_channel, [&](const sarmap::pose_t& msg, const auto&) {
@@ -154,19 +155,17 @@ int main(int argc, char** argv) {
       node.AddTimer(options.request_repeat_s, [&] {
         if (!map.AnchorNodeIds().empty()) send_request(newest);
       });
-    if (!options.state_file.empty()) {
-      node.AddTimer(options.state_save_period_s, [&] {
-        if (!changed_since_save) return;
-        changed_since_save = false;
-        try {
-          map.Save(options.state_file);
-        } catch (const std::exception& e) {
-          static sarmap::common::RateLimiter limit(30.0);
-          if (limit.Allow(sarmap::common::SteadySeconds()))
-            SARMAP_LOG(WARN) << "state not saved: " << e.what();
-        }
-      });
-    }
+    const auto save_state = [&] {
+      if (options.state_file.empty() || !changed_since_save) return;
+      changed_since_save = false;
+      try {
+        map.Save(options.state_file);
+      } catch (const std::exception& e) {
+        static sarmap::common::RateLimiter limit(30.0);
+        if (limit.Allow(sarmap::common::SteadySeconds())) SARMAP_LOG(WARN) << "state not saved: " << e.what();
+      }
+    };
+    if (!options.state_file.empty()) node.AddTimer(options.state_save_period_s, save_state);
     node.AddTimer(1.0, [&] {
       const auto& c = map.counters();
       node.SetStatusMessage("sources " + std::to_string(map.ekf().source_ids().size()) + " (born " +
@@ -182,18 +181,9 @@ int main(int argc, char** argv) {
     const int code = node.Run();
     // What still waits in the queue (the last reorder_delay_s of the mission) is applied, and the
     // final map published and saved.
-    queue.Flush([&](Utime t, std::function<void(Utime)>& f) {
-      f(t);
-      after_input(t);
-    });
+    queue.Flush(apply);
     if (newest > 0) publish_map(newest);
-    if (!options.state_file.empty() && changed_since_save) {
-      try {
-        map.Save(options.state_file);
-      } catch (const std::exception& e) {
-        SARMAP_LOG(WARN) << "state not saved: " << e.what();
-      }
-    }
+    save_state();
     return code;
   });
 }
