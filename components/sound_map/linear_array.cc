@@ -14,18 +14,18 @@
 #include <set>
 #include <stdexcept>
 
+#include "sound_map/linear_array_costs.h"
+
 namespace sarmap {
 namespace sound_map {
 
 namespace {
 
-template <class T>
-T Wrap(const T& a) {
-  using std::atan2;
-  using std::cos;
-  using std::sin;
-  return atan2(sin(a), cos(a));
-}
+using linear_costs::BetaCost;
+using linear_costs::BetaFromKeyframe;
+using linear_costs::Odometry6Cost;
+using linear_costs::Pose6;
+using linear_costs::Wrap;
 
 // beta of s = (beta, gamma, rho) seen from `pose`, in the scaled form that stays finite
 // as rho -> 0:  d = rho (o - t) + R_axis u(beta, gamma),  d_l = R' d,
@@ -435,43 +435,6 @@ void SimulatedCalibration(uint64_t seed, std::vector<double>* raw, std::vector<d
 
 namespace {
 
-struct Pose6 {
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  Eigen::Isometry3d iso() const {
-    Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
-    m.linear() = q.toRotationMatrix();
-    m.translation() = t;
-    return m;
-  }
-  static Pose6 From(const Eigen::Isometry3d& m) {
-    Pose6 p;
-    p.q = Eigen::Quaterniond(m.linear()).normalized();
-    p.t = m.translation();
-    return p;
-  }
-};
-
-// e = [ (R_i'(t_j - t_i) - t_m) / s_t ; 2 vec(q_m^-1 q_i^-1 q_j) / s_r ]
-struct Odometry6Cost {
-  Eigen::Quaterniond qm;
-  Eigen::Vector3d tm;
-  double inv_st, inv_sr;
-  template <class T>
-  bool operator()(const T* qi_, const T* ti_, const T* qj_, const T* tj_, T* r) const {
-    Eigen::Map<const Eigen::Quaternion<T>> qi(qi_), qj(qj_);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> ti(ti_), tj(tj_);
-    const Eigen::Quaternion<T> qij = qi.conjugate() * qj;
-    const Eigen::Matrix<T, 3, 1> tij = qi.conjugate() * (tj - ti);
-    const Eigen::Quaternion<T> dq = qm.cast<T>().conjugate() * qij;
-    for (int k = 0; k < 3; ++k) {
-      r[k] = (tij[k] - T(tm[k])) * T(inv_st);
-      r[3 + k] = T(2.0) * dq.vec()[k] * T(inv_sr);
-    }
-    return true;
-  }
-};
-
 struct Landmark3Cost {
   Eigen::Vector3d z;
   double inv_sr, inv_sa;
@@ -486,28 +449,6 @@ struct Landmark3Cost {
     r[0] = (sqrt(l.squaredNorm()) - T(z[0])) * T(inv_sr);
     r[1] = Wrap(T(atan2(l[1], l[0]) - T(z[1]))) * T(inv_sa);
     r[2] = (atan2(l[2], xy) - T(z[2])) * T(inv_sa);
-    return true;
-  }
-};
-
-// beta of source p seen from the keyframe (q, t): l = R'(p - t), beta = atan2(l_y, |l_xz|)
-// (the array along the sensor's y axis).
-template <class T>
-T BetaFromKeyframe(const T* q_, const T* t_, const T* p_) {
-  using std::atan2;
-  using std::sqrt;
-  Eigen::Map<const Eigen::Quaternion<T>> q(q_);
-  Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(t_), p(p_);
-  const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (p - t);
-  return atan2(l[1], sqrt(l[0] * l[0] + l[2] * l[2]));
-}
-
-// (5.30-5.32): beta of the source in the keyframe minus the GP-corrected observation.
-struct BetaCost {
-  double beta, inv_sigma;
-  template <class T>
-  bool operator()(const T* q, const T* t, const T* p, T* r) const {
-    r[0] = (BetaFromKeyframe(q, t, p) - T(beta)) * T(inv_sigma);
     return true;
   }
 };
