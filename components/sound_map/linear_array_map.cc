@@ -457,7 +457,6 @@ void LinearArraySoundMap::OnDoa(Utime utime, const std::vector<Doa>& doas) {
   }
   const int kf = static_cast<int>(m.keyframes.size()) - 1;
   const Eigen::Isometry3d kf_from_sensor = m.keyframes[kf].odom.inverse() * odom;
-  const Eigen::Isometry3d pose = m.keyframes[kf].est.iso() * kf_from_sensor;
 
   std::set<int64_t> taken;  // one DOA per source per block
   for (const Doa& d : doas) {
