@@ -1,0 +1,219 @@
+// sarmap-log-handheld-sound-map: replays a hand-held rig's log (RIG_POSE from
+// sarmap-rgbd-odometry, a linear array's DOA_MAP, PEOPLE_AUDIO) through the same
+// LinearArraySoundMap as sarmap-handheld-sound-map, in message time order, and, when the log
+// holds SIM_TRUTH, prints each true source's error against its nearest mapped source (and the
+// logged SOUND_MAP's), and the rig odometry's drift.
+//
+//   sarmap-log handheld-sound-map run.lcmlog
+//   sarmap-log handheld-sound-map run.lcmlog --truth-poses      # the map from the true rig poses
+//   sarmap-log handheld-sound-map run.lcmlog --set map.num_hypotheses=5
+#include <lcm/lcm-cpp.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <stdexcept>
+
+#include "common/args.h"
+#include "common/node_main.h"
+#include "common/robot_config.h"
+#include "sarmap/sim_truth_t.hpp"
+#include "sound_map/handheld_sound_map_messages.h"
+
+namespace {
+
+using sarmap::sound_map::LinearArraySoundMap;
+
+template <class T>
+bool Decode(const lcm::LogEvent& e, T* msg) {
+  return msg->decode(e.data, 0, e.datalen) == e.datalen;
+}
+
+Eigen::Isometry3d Iso(const sarmap::common::Rigid3d& r) {
+  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+  m.linear() = r.rotation().toRotationMatrix();
+  m.translation() = r.translation();
+  return m;
+}
+
+// The camera's body frame (x forward, y left, z up) from its optical frame (z forward, x right,
+// y down): the rig frame of sarmap-rgbd-odometry.
+Eigen::Isometry3d OpticalFromBody() {
+  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+  m.linear() << 0, -1, 0,  //
+      0, 0, -1,            //
+      1, 0, 0;
+  return m;
+}
+
+double Yaw(const Eigen::Isometry3d& m) {
+  const Eigen::Vector3d x = m.linear().col(0);
+  return std::atan2(x.y(), x.x());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return sarmap::common::RunMain("sarmap-log-handheld-sound-map", [&] {
+    sarmap::common::ArgParser parser(
+        "sarmap-log-handheld-sound-map",
+        "Replays RIG_POSE, DOA_MAP and PEOPLE_AUDIO from an LCM log through the hand-held rig's\n"
+        "linear-array sound map (as sarmap-handheld-sound-map would, in message time order) and\n"
+        "compares the result with SIM_TRUTH.");
+    sarmap::common::NodeArgs node_args;
+    std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml", live_channel;
+    bool truth_poses = false;
+    parser.AddPositional("log", &log_path, "LCM log file");
+    parser.AddSwitch("--truth-poses", &truth_poses,
+                     "diagnosis: the true rig poses (SIM_TRUTH and the camera mount) instead of RIG_POSE");
+    parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
+    parser.AddFlag("--robot-config", &robot_config,
+                   "simulated robot (base_from_camera: where the rig, the camera, sits on the robot)");
+    parser.AddFlag("--live-channel", &live_channel, "the live node's map to compare too (default: sound_map_channel)");
+    const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::HandheldSoundMapOptions>(
+        &parser, &node_args, argc, argv, "config/handheld_sound_map.yaml");
+    if (!parsed) return 0;
+    const auto& options = *parsed;
+    if (live_channel.empty()) live_channel = options.sound_map_channel;
+    const auto robot = sarmap::common::LoadRobot(robot_config);
+    const Eigen::Isometry3d base_from_rig = Iso(robot.base_from_camera.ToRigid3d()) * OpticalFromBody().inverse();
+    const Eigen::Isometry3d rig_from_sensor = sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
+
+    lcm::LogFile log(log_path, "r");
+    if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
+    std::multimap<int64_t, std::function<void(LinearArraySoundMap&)>> inputs;
+    std::map<int64_t, Eigen::Isometry3d> truth_rig;  // world_from_rig by utime
+    std::map<int64_t, Eigen::Isometry3d> odom_rig;   // odom_from_rig by utime
+    sarmap::sim_truth_t truth;
+    bool have_truth = false;
+    sarmap::sound_map_t live;
+    int64_t live_msgs = 0, other_kinds = 0, bad = 0, doa_msgs = 0;
+    for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+      if (e->channel == options.pose_channel) {
+        sarmap::pose_t msg;
+        Eigen::Isometry3d pose;
+        if (!Decode(*e, &msg) || !sarmap::sound_map::IsometryFromPose(msg, &pose)) {
+          ++bad;
+          continue;
+        }
+        odom_rig[msg.header.utime] = pose;
+      } else if (e->channel == options.doa_channel) {
+        sarmap::doa_t msg;
+        if (!Decode(*e, &msg)) {
+          ++bad;
+          continue;
+        }
+        ++doa_msgs;
+        const auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &other_kinds);
+        inputs.emplace(msg.header.utime, [doas, t = msg.header.utime](LinearArraySoundMap& m) { m.OnDoa(t, doas); });
+      } else if (e->channel == options.people_audio_channel) {
+        sarmap::people_detections_t msg;
+        if (!Decode(*e, &msg)) continue;
+        const auto heard = sarmap::sound_map::HeardLinearDirections(msg);
+        inputs.emplace(msg.header.utime, [heard, t = msg.header.utime](LinearArraySoundMap& m) {
+          for (const auto& d : heard) m.OnHeardDirection(t, d);
+        });
+      } else if (e->channel == truth_channel) {
+        if (!Decode(*e, &truth)) continue;
+        have_truth = true;
+        Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+        base.linear() = Eigen::Quaterniond(truth.robot_orientation[0], truth.robot_orientation[1],
+                                           truth.robot_orientation[2], truth.robot_orientation[3])
+                            .normalized()
+                            .toRotationMatrix();
+        base.translation() = Eigen::Vector3d(truth.robot_position_m[0], truth.robot_position_m[1], truth.robot_position_m[2]);
+        truth_rig[truth.header.utime] = base * base_from_rig;
+      } else if (e->channel == live_channel) {
+        if (Decode(*e, &live)) ++live_msgs;
+      }
+    }
+    if (truth_poses && truth_rig.empty()) throw std::runtime_error("--truth-poses: no " + truth_channel + " in the log");
+    const auto& poses = truth_poses ? truth_rig : odom_rig;
+    for (const auto& kv : poses) {
+      const Eigen::Isometry3d odom_from_sensor = kv.second * rig_from_sensor;
+      inputs.emplace(kv.first, [odom_from_sensor, t = kv.first](LinearArraySoundMap& m) { m.OnPose(t, odom_from_sensor); });
+    }
+    printf("log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld undecodable%s\n",
+           odom_rig.size(), options.pose_channel.c_str(), static_cast<long>(doa_msgs), options.doa_channel.c_str(),
+           static_cast<long>(other_kinds), static_cast<long>(bad), truth_poses ? "; map from the TRUE rig poses" : "");
+    if (poses.empty()) throw std::runtime_error("no poses on " + options.pose_channel + " (run sarmap-rgbd-odometry)");
+
+    LinearArraySoundMap map(options.map);
+    for (auto& kv : inputs) kv.second(map);
+    map.Finish();
+    const auto& c = map.counters();
+    printf("map: %ld keyframes, DOAs used %ld of %ld (no pose %ld, gated out %ld, duplicate %ld), sources born %ld, "
+           "converged %ld, merged %ld, pruned %ld, restarted %ld, mirror flips %ld\n",
+           static_cast<long>(c.keyframes), static_cast<long>(c.doas_used), static_cast<long>(c.doas),
+           static_cast<long>(c.doas_without_pose), static_cast<long>(c.doas_gated_out),
+           static_cast<long>(c.doas_duplicate), static_cast<long>(c.sources_born),
+           static_cast<long>(c.sources_converged), static_cast<long>(c.sources_merged),
+           static_cast<long>(c.sources_pruned), static_cast<long>(c.sources_restarted),
+           static_cast<long>(c.mirrors_flipped));
+
+    // world_from_odom: the odometry's frame is the rig at its first pose.
+    Eigen::Isometry3d world_from_odom = Eigen::Isometry3d::Identity();
+    if (have_truth && !truth_poses) {
+      const int64_t t0 = odom_rig.begin()->first;
+      auto it = truth_rig.lower_bound(t0);
+      if (it == truth_rig.end()) it = std::prev(it);
+      world_from_odom = it->second * odom_rig.begin()->second.inverse();
+      // The odometry's drift: its poses mapped to the world against the truth at the same time.
+      double sum2 = 0, max_err = 0, last_yaw = 0;
+      int n = 0;
+      for (const auto& kv : odom_rig) {
+        auto tr = truth_rig.lower_bound(kv.first);
+        if (tr == truth_rig.end() || tr->first - kv.first > 100000) continue;
+        const Eigen::Isometry3d est = world_from_odom * kv.second;
+        const double e = (est.translation() - tr->second.translation()).norm();
+        sum2 += e * e;
+        max_err = std::max(max_err, e);
+        last_yaw = std::remainder(Yaw(est) - Yaw(tr->second), 2 * M_PI);
+        ++n;
+      }
+      if (n) printf("rig odometry against the truth: RMS %.3f m, max %.3f m, final heading error %.1f deg\n",
+                    std::sqrt(sum2 / n), max_err, last_yaw * 180 / M_PI);
+    }
+    const auto sources = map.sources();
+    printf("\nmapped sources (world frame%s):\n", have_truth ? "" : " = odometry frame");
+    for (const auto& s : sources) {
+      const Eigen::Vector3d p = world_from_odom * s.position_m;
+      printf("  %3ld %-12s (%6.2f %6.2f %5.2f) sd_xy %.2f m, %d DOAs, hypotheses %d%s\n", static_cast<long>(s.id),
+             s.converged ? "converged" : "initialising", p.x(), p.y(), p.z(),
+             std::sqrt(s.covariance.topLeftCorner<2, 2>().trace()), s.observations, s.hypotheses_left,
+             s.is_person ? ", person" : "");
+    }
+    if (!have_truth) return 0;
+    printf("\ntrue source            nearest converged (xy / 3D)     nearest any     live node (converged)\n");
+    for (const auto& ts : truth.sources) {
+      const Eigen::Vector3d t(ts.position_m[0], ts.position_m[1], ts.position_m[2]);
+      double best_xy = 1e9, best_3d = 1e9, best_any = 1e9, best_live = 1e9;
+      for (const auto& s : sources) {
+        const Eigen::Vector3d p = world_from_odom * s.position_m;
+        best_any = std::min(best_any, (p - t).head<2>().norm());
+        if (!s.converged) continue;
+        if ((p - t).head<2>().norm() < best_xy) best_xy = (p - t).head<2>().norm(), best_3d = (p - t).norm();
+      }
+      for (const auto& s : live.sources) {
+        if (s.state != sarmap::sound_source_t::STATE_CONVERGED) continue;
+        const Eigen::Vector3d p = world_from_odom * Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);
+        best_live = std::min(best_live, (p - t).head<2>().norm());
+      }
+      auto fmt = [](double v) {
+        static char buf[4][32];
+        static int i = 0;
+        i = (i + 1) % 4;
+        if (v > 1e8)
+          snprintf(buf[i], sizeof buf[i], "none");
+        else
+          snprintf(buf[i], sizeof buf[i], "%.2f m", v);
+        return buf[i];
+      };
+      printf("  %-18s  %-10s / %-10s          %-10s      %s\n", ts.name.c_str(), fmt(best_xy), fmt(best_3d),
+             fmt(best_any), live_msgs ? fmt(best_live) : "(not logged)");
+    }
+    return 0;
+  });
+}
