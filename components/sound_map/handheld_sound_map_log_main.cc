@@ -64,10 +64,11 @@ int main(int argc, char** argv) {
         "compares the result with SIM_TRUTH.");
     sarmap::common::NodeArgs node_args;
     std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml", live_channel;
-    bool truth_poses = false;
+    bool truth_poses = false, pose_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--truth-poses", &truth_poses,
                      "diagnosis: the true rig poses (SIM_TRUTH and the camera mount) instead of RIG_POSE");
+    parser.AddSwitch("--pose-check", &pose_check, "print the rig odometry against the truth every 5 s");
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
     parser.AddFlag("--robot-config", &robot_config,
                    "simulated robot (base_from_camera: where the rig, the camera, sits on the robot)");
@@ -78,7 +79,7 @@ int main(int argc, char** argv) {
     const auto& options = *parsed;
     if (live_channel.empty()) live_channel = options.sound_map_channel;
     const auto robot = sarmap::common::LoadRobot(robot_config);
-    const Eigen::Isometry3d base_from_rig = Iso(robot.base_from_camera.ToRigid3d()) * OpticalFromBody().inverse();
+    const Eigen::Isometry3d base_from_rig = Iso(robot.base_from_camera.ToRigid3d()) * OpticalFromBody();
     const Eigen::Isometry3d rig_from_sensor = sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
 
     lcm::LogFile log(log_path, "r");
@@ -163,11 +164,19 @@ int main(int argc, char** argv) {
       // The odometry's drift: its poses mapped to the world against the truth at the same time.
       double sum2 = 0, max_err = 0, last_yaw = 0;
       int n = 0;
+      int64_t next_print = t0;
       for (const auto& kv : odom_rig) {
         auto tr = truth_rig.lower_bound(kv.first);
         if (tr == truth_rig.end() || tr->first - kv.first > 100000) continue;
         const Eigen::Isometry3d est = world_from_odom * kv.second;
         const double e = (est.translation() - tr->second.translation()).norm();
+        if (pose_check && kv.first >= next_print) {
+          next_print = kv.first + 5000000;
+          const Eigen::Vector3d a = est.translation(), b = tr->second.translation();
+          printf("  t %6.1f s  rig (%6.2f %6.2f %5.2f, yaw %6.1f)  truth (%6.2f %6.2f %5.2f, yaw %6.1f)  error %.2f m\n",
+                 (kv.first - t0) * 1e-6, a.x(), a.y(), a.z(), Yaw(est) * 180 / M_PI, b.x(), b.y(), b.z(),
+                 Yaw(tr->second) * 180 / M_PI, e);
+        }
         sum2 += e * e;
         max_err = std::max(max_err, e);
         last_yaw = std::remainder(Yaw(est) - Yaw(tr->second), 2 * M_PI);
