@@ -12,7 +12,8 @@ namespace rgbd_odometry {
 
 namespace {
 constexpr size_t kMaxRecentColor = 10;
-}
+constexpr int64_t kRestartJumpUs = 1000000;  // depth time going back more: a restart
+}  // namespace
 
 FrameAssembler::FrameAssembler(bool need_color, double max_pair_dt_s, double color_wait_s,
                                int max_pending)
@@ -34,10 +35,25 @@ void FrameAssembler::Warn(const std::string& kind, const std::string& text) {
 
 void FrameAssembler::AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready) {
   if (last_depth_utime_ != 0 && depth.header.utime <= last_depth_utime_) {
-    Warn("depth_out_of_order", "depth at " + std::to_string(depth.header.utime) +
-                                   " us is not after the previous one at " +
-                                   std::to_string(last_depth_utime_) + " us");
-    return;
+    if (last_depth_utime_ - depth.header.utime <= kRestartJumpUs) {
+      Warn("depth_out_of_order", "depth at " + std::to_string(depth.header.utime) +
+                                     " us is not after the previous one at " +
+                                     std::to_string(last_depth_utime_) + " us");
+      return;
+    }
+    // Time went far back: a log replayed again, a restarted source. Start over (keeping the
+    // colour images that may belong to this depth).
+    Warn("time_restart", "depth time went back from " + std::to_string(last_depth_utime_) + " to " +
+                             std::to_string(depth.header.utime) + " us");
+    pending_depth_.clear();
+    const int64_t t = depth.header.utime;
+    recent_color_.erase(std::remove_if(recent_color_.begin(), recent_color_.end(),
+                                       [&](const sarmap::image_t& c) {
+                                         return c.header.utime > t + color_wait_us_;
+                                       }),
+                        recent_color_.end());
+    now_utime_ = t;
+    for (const auto& c : recent_color_) now_utime_ = std::max(now_utime_, c.header.utime);
   }
   last_depth_utime_ = depth.header.utime;
   now_utime_ = std::max(now_utime_, depth.header.utime);

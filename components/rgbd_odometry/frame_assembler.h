@@ -7,8 +7,10 @@
 // ignored. need_color true (rgbd, rgbd_icp): a depth message is paired with the colour image
 // closest in time within max_pair_dt_s; it waits until message time (the newest utime seen on
 // either channel) has moved color_wait_s past it, then is dropped ("no_color"). At most
-// max_pending depth messages wait; older ones are dropped ("depth_backlog"). Every bad input is
-// counted under a named warning and skipped; nothing throws.
+// max_pending depth messages wait; older ones are dropped ("depth_backlog"). Depth older than
+// the previous depth is dropped ("depth_out_of_order"), unless it is more than 1 s older: then
+// time restarted (a log replayed again) and pairing starts over ("time_restart"). Every bad
+// input is counted under a named warning and skipped; nothing throws.
 
 #include <cstdint>
 #include <deque>
@@ -31,7 +33,7 @@ class FrameAssembler {
   void AddColor(const sarmap::image_t& color, std::vector<RgbdFrame>* ready);
 
   // Warning name -> count ("depth_decode", "color_decode", "color_size_mismatch", "no_color",
-  // "depth_backlog", "depth_out_of_order", "bad_intrinsics").
+  // "depth_backlog", "depth_out_of_order", "time_restart", "bad_intrinsics").
   const std::map<std::string, int64_t>& warnings() const { return warnings_; }
   int64_t total_warnings() const;
   const std::string& last_warning() const { return last_warning_; }

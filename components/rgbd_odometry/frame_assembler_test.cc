@@ -116,6 +116,26 @@ TEST(FrameAssembler, BadInputsAreCountedNotThrown) {
   EXPECT_EQ(ready.size(), 1u);
 }
 
+TEST(FrameAssembler, TimeGoingFarBackStartsOver) {
+  FrameAssembler a(true, 0.02, 0.2);
+  std::vector<RgbdFrame> ready;
+  a.AddColor(Color(50000000), &ready);
+  a.AddDepth(Depth(50000000), &ready);
+  ASSERT_EQ(ready.size(), 1u);
+  // A log replayed again: its colour arrives first, then its depth, 49 s earlier.
+  a.AddColor(Color(1000000), &ready);
+  a.AddDepth(Depth(1000000), &ready);
+  ASSERT_EQ(ready.size(), 2u);
+  EXPECT_EQ(ready[1].utime, 1000000);
+  EXPECT_EQ(a.warnings().at("time_restart"), 1);
+  // A small step back is a reordered message, dropped.
+  a.AddDepth(Depth(900000), &ready);
+  EXPECT_EQ(a.warnings().at("depth_out_of_order"), 1);
+  a.AddColor(Color(1033333), &ready);
+  a.AddDepth(Depth(1033333), &ready);
+  EXPECT_EQ(ready.size(), 3u);
+}
+
 }  // namespace
 }  // namespace rgbd_odometry
 }  // namespace sarmap

@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
     common::Node node("sarmap-rgbd-odometry", node_args.lcm_url);
     auto publisher = node.Advertise<pose_t>(options.pose_channel);
     common::RateLimiter warn_limit(2.0);
-    int64_t last_warnings = 0, published = 0;
+    int64_t last_warnings = 0, published = 0, last_utime = 0;
     double total_ms = 0;
     TrackingStatus last_status = TrackingStatus::kInvalidInput;
     std::string last_status_name = "waiting";
@@ -68,6 +68,13 @@ int main(int argc, char** argv) {
         }
       }
       for (const RgbdFrame& frame : ready) {
+        if (last_utime != 0 && frame.utime + 1000000 < last_utime) {
+          SARMAP_LOG(WARN) << "time went back from " << last_utime << " to " << frame.utime
+                           << " us (a log replayed again?): odometry starts over";
+          odometry.Reset();
+          total_ms = 0;
+        }
+        last_utime = frame.utime;
         const RgbdOdometryResult r = odometry.Process(frame);
         total_ms += r.compute_ms;
         if (r.status != last_status) {
