@@ -71,7 +71,7 @@ struct RgbdOdometryOptions {
     v("method", method,
       "rgbd | icp | rgbd_icp | fast_icp (OpenCV rgbd module odometry; icp and fast_icp need "
       "no colour)");
-    v("image_scale", image_scale, "resize factor before odometry (1 full, 0.5 half: ~3x faster)");
+    v("image_scale", image_scale, "resize factor before odometry (1 full, 0.5 half: ~4x faster)");
     v("min_depth_m", min_depth_m, "depth readings closer than this are invalid");
     v("max_depth_m", max_depth_m, "depth readings farther than this are invalid");
     v("max_depth_diff_m", max_depth_diff_m, "reject correspondences with a larger depth gap");
