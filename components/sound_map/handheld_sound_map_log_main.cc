@@ -64,11 +64,13 @@ int main(int argc, char** argv) {
         "compares the result with SIM_TRUTH.");
     sarmap::common::NodeArgs node_args;
     std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml", live_channel;
-    bool truth_poses = false, pose_check = false;
+    bool truth_poses = false, pose_check = false, doa_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--truth-poses", &truth_poses,
                      "diagnosis: the true rig poses (SIM_TRUTH and the camera mount) instead of RIG_POSE");
     parser.AddSwitch("--pose-check", &pose_check, "print the rig odometry against the truth every 5 s");
+    parser.AddSwitch("--doa-check", &doa_check,
+                     "compare every DOA's beta with the true betas of the SIM_TRUTH sources from the true rig pose");
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
     parser.AddFlag("--robot-config", &robot_config,
                    "simulated robot (base_from_camera: where the rig, the camera, sits on the robot)");
@@ -85,6 +87,7 @@ int main(int argc, char** argv) {
     lcm::LogFile log(log_path, "r");
     if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
     std::multimap<int64_t, std::function<void(LinearArraySoundMap&)>> inputs;
+    std::vector<std::pair<int64_t, std::vector<LinearArraySoundMap::Doa>>> doa_log;
     std::map<int64_t, Eigen::Isometry3d> truth_rig;  // world_from_rig by utime
     std::map<int64_t, Eigen::Isometry3d> odom_rig;   // odom_from_rig by utime
     sarmap::sim_truth_t truth;
@@ -108,6 +111,7 @@ int main(int argc, char** argv) {
         }
         ++doa_msgs;
         const auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &other_kinds);
+        if (doa_check && !doas.empty()) doa_log.emplace_back(msg.header.utime, doas);
         inputs.emplace(msg.header.utime, [doas, t = msg.header.utime](LinearArraySoundMap& m) { m.OnDoa(t, doas); });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t msg;
@@ -184,6 +188,34 @@ int main(int argc, char** argv) {
       }
       if (n) printf("rig odometry against the truth: RMS %.3f m, max %.3f m, final heading error %.1f deg\n",
                     std::sqrt(sum2 / n), max_err, last_yaw * 180 / M_PI);
+    }
+    if (doa_check && have_truth) {
+      // Per DOA: the true source whose beta (from the true sensor pose) is nearest.
+      std::map<std::string, std::vector<double>> errors;
+      for (const auto& [t, doas] : doa_log) {
+        auto tr = truth_rig.lower_bound(t);
+        if (tr == truth_rig.end()) continue;
+        const Eigen::Isometry3d sensor = tr->second * rig_from_sensor;
+        for (const auto& d : doas) {
+          double best = 1e9;
+          std::string name;
+          for (const auto& ts : truth.sources) {
+            const double b = sarmap::sound_map::LinearArrayBeta(
+                sensor, Eigen::Vector3d(ts.position_m[0], ts.position_m[1], ts.position_m[2]));
+            if (std::abs(d.beta_rad - b) < std::abs(best)) best = d.beta_rad - b, name = ts.name;
+          }
+          errors[name].push_back(best * 180 / M_PI);
+        }
+      }
+      printf("\nDOAs against the nearest true beta (from the true rig pose):\n");
+      for (auto& [name, e] : errors) {
+        std::vector<double> a;
+        for (double v : e) a.push_back(std::abs(v));
+        std::sort(a.begin(), a.end());
+        std::sort(e.begin(), e.end());
+        printf("  %-18s %4zu DOAs, |error| median %.1f deg, p90 %.1f deg, signed median %+.1f deg\n", name.c_str(),
+               a.size(), a[a.size() / 2], a[a.size() * 9 / 10], e[e.size() / 2]);
+      }
     }
     const auto sources = map.sources();
     printf("\nmapped sources (world frame%s):\n", have_truth ? "" : " = odometry frame");

@@ -175,7 +175,26 @@ bool MultiHypothesisSource::Clustered() const {
   return true;
 }
 
-bool MultiHypothesisSource::converged() const { return AllLinear() && Clustered() && !Failed(); }
+bool MultiHypothesisSource::ClusteredUpToMirror() const {
+  std::vector<Eigen::Vector3d> pts;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& h : hypotheses_) {
+    if (!h.alive) continue;
+    Eigen::Vector3d p = HypothesisPoint(axis_, h.s);
+    p.z() = axis_.origin.z() + std::abs(p.z() - axis_.origin.z());
+    pts.push_back(p);
+    mean += p;
+  }
+  if (pts.empty()) return false;
+  mean /= pts.size();
+  for (const auto& p : pts)
+    if ((p - mean).norm() > options_.cluster_radius_m) return false;
+  return true;
+}
+
+bool MultiHypothesisSource::converged() const {
+  return AllLinear() && (Clustered() || (options_.converge_mirror_pairs && ClusteredUpToMirror())) && !Failed();
+}
 
 bool MultiHypothesisSource::Failed() const {
   bool any = false;

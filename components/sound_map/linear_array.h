@@ -59,6 +59,11 @@ struct MultiHypothesisOptions {
   // averaged: all must lie within this radius of their mean, else the ones whose mean
   // chi-square is clearly worse than the best one's are pruned (our addition).
   double cluster_radius_m = 0.5;
+  // A level array moved only in its own plane hears a source and its reflection through that
+  // plane at the same angles: survivors in two mirror-image clusters never agree. With this,
+  // such a source converges to their mean, on the plane (its height unknown; our addition
+  // for a robot-borne or level-carried array).
+  bool converge_mirror_pairs = false;
   // Likelihood-ratio pruning against the best hypothesis (our addition; 0: off).
   double relative_prune_chi2 = 12.0;
   int relative_prune_min_observations = 10;
@@ -87,6 +92,8 @@ class MultiHypothesisSource {
   const std::vector<Hypothesis>& hypotheses() const { return hypotheses_; }
   bool AllLinear() const;   // every survivor's linearity index is below the threshold
   bool Clustered() const;   // survivors agree on one place
+  // ... once each is reflected to the upper side of the anchor's horizontal plane.
+  bool ClusteredUpToMirror() const;
   // Every survivor fails the chi-square test (5.22) that pruned the others: the cone was
   // seeded from a bad first DOA, or the pruning removed the right part of it on an outlier.
   // Such a source must be started again, not converged.

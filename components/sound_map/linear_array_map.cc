@@ -161,6 +161,17 @@ struct LinearArraySoundMap::Impl {
 
   // A level array hears p and its reflection through the horizontal plane at its own height
   // at the same beta; only poses off that plane tell them apart. Keep the better one.
+  // The poses that heard a source span less than level_height_spread_m in height: a source
+  // and its reflection through their plane explain its DOAs equally well.
+  bool HeardFromOnePlane(const Track& t) const {
+    double lo = 1e300, hi = -1e300;
+    for (const Obs& o : t.obs) {
+      const double z = ObsPose(o).translation().z();
+      lo = std::min(lo, z), hi = std::max(hi, z);
+    }
+    return hi - lo < options.level_height_spread_m;
+  }
+
   Eigen::Vector3d MirrorPoint(const Track& t) const {
     double z = 0;
     for (const Obs& o : t.obs) z += ObsPose(o).translation().z();
@@ -359,6 +370,23 @@ struct LinearArraySoundMap::Impl {
   void Converge(Track* t) {
     t->converged = true;
     t->point = t->mh->MeanPoint();
+    if (!t->mh->Clustered()) {
+      // Converged as a mirror pair (a level array that never left its plane): the survivors'
+      // mean once reflected to the upper side; which side is true is unknown (see
+      // UpdatePointCovariance). Not the plane itself: a source off the plane put on it would
+      // drag its horizontal position to keep its distance.
+      const double plane = t->mh->axis().origin.z();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      int n = 0;
+      for (const auto& h : t->mh->hypotheses()) {
+        if (!h.alive) continue;
+        Eigen::Vector3d p = HypothesisPoint(t->mh->axis(), h.s);
+        p.z() = plane + std::abs(p.z() - plane);
+        sum += p;
+        ++n;
+      }
+      if (n) t->point = sum / n;
+    }
     ++counters->sources_converged;
     if (options.mirror_check && MirrorCheck(t)) ++counters->mirrors_flipped;
     UpdatePointCovariance(t);
@@ -590,6 +618,12 @@ std::vector<LinearArraySoundMap::Source> LinearArraySoundMap::sources() const {
     if (t.converged) {
       s.position_m = t.point;
       s.covariance = t.point_cov;
+      // Heard from one height only, the source and its mirror image fit alike: the height is
+      // one of two, z or its reflection, and the reported variance says so.
+      if (impl_->HeardFromOnePlane(t)) {
+        const double half = 0.5 * (t.point.z() - impl_->MirrorPoint(t).z());
+        s.covariance(2, 2) += half * half;
+      }
       s.hypotheses_left = 1;
     } else {
       // Initialising: the survivors' mean and their spread (plus a metre: not yet a position).

@@ -64,6 +64,9 @@ struct LinearArrayMapOptions {
   double prune_after_s = 20.0;
   int prune_min_observations = 15;
   bool mirror_check = true;  // keep a source or its mirror through the poses' plane, the better
+  // Heard only from poses within this height of each other, a source's height is one of two
+  // (it and its mirror image through their plane fit alike): its z variance grows to say so.
+  double level_height_spread_m = 0.1;
   double merge_radius_m =
       0.5;  // converged duplicates (one source, several track ids) merge when this close
   template <class V>
@@ -109,6 +112,8 @@ struct LinearArrayMapOptions {
     v("prune_min_observations", prune_min_observations, "... with fewer DOAs than this");
     v("merge_radius_m", merge_radius_m,
       "two converged sources this close are one (heard under two track ids)");
+    v("level_height_spread_m", level_height_spread_m,
+      "a source heard only from poses within this height of each other has two possible heights (its z variance says so)");
     v("mirror_check", mirror_check,
       "keep a source or its reflection through the mean height of the poses that heard it, the "
       "better");
@@ -135,6 +140,7 @@ struct LinearArrayMapOptions {
     c.That(confirm_observations >= 1, "confirm_observations", "must be >= 1");
     c.That(track_release_misses >= 1, "track_release_misses", "must be >= 1");
     c.Positive("prune_after_s", prune_after_s);
+    c.NonNegative("level_height_spread_m", level_height_spread_m);
     c.NonNegative("merge_radius_m", merge_radius_m);
   }
 };
