@@ -313,6 +313,34 @@ TEST(RgbdOdometryFailures, ImplausibleJumpIsLost) {
   }
 }
 
+// Frames too small for the pyramid (OpenCV asserts inside) are a status, not a crash.
+TEST(RgbdOdometryFailures, TinyFramesAreAStatusNotACrash) {
+  for (const std::string method : {"rgbd", "icp", "rgbd_icp", "fast_icp"}) {
+    for (const double scale : {1.0, 0.5}) {
+      RgbdOdometry odo(Options(method, scale));
+      int64_t t = 1;
+      for (const auto& [w, h] :
+           std::vector<std::pair<int, int>>{{1, 1}, {7, 5}, {33, 17}, {2, 900}}) {
+        for (int repeat = 0; repeat < 2; ++repeat) {
+          RgbdFrame f;
+          f.utime = t++;
+          f.width = w;
+          f.height = h;
+          f.depth.assign(static_cast<size_t>(w) * h, 1500);
+          f.image.assign(static_cast<size_t>(w) * h, 100);
+          f.image_channels = 1;
+          f.camera = {w * 0.8, w * 0.8, w / 2.0, h / 2.0};
+          const RgbdOdometryResult r = odo.Process(f);
+          EXPECT_NE(r.status, TrackingStatus::kInvalidInput) << method << " " << w << "x" << h;
+          if (!r.ok()) {
+            EXPECT_FALSE(r.message.empty());
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(RgbdOdometryFailures, InvalidOptionsThrowAtConstruction) {
   RgbdOdometryOptions o;
   o.method = "orb";
