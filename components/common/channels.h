@@ -27,6 +27,7 @@ inline const std::vector<ChannelSpec>& DefaultChannels() {
       {"PEOPLE_VISUAL", "people_detections_t"},
       {"PEOPLE_AUDIO", "people_detections_t"},
       {"POSE", "pose_t"},
+      {"RIG_POSE", "pose_t"},  // a hand-held rig's RGB-D odometry (sarmap-rgbd-odometry)
       {"MAP", "occupancy_grid_t"},
       {"SLAM_ANCHORS", "slam_anchors_t"},
       {"SLAM_ANCHOR_REQUEST", "slam_anchor_request_t"},

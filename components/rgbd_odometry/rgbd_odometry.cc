@@ -345,14 +345,15 @@ struct RgbdOdometry::Impl {
         Fill(&r);
         return r;
       }
-      // Initial guess: the frame's motion prior, else the last motion scaled to this time step.
+      // Initial guess: the frame's motion prior, else the last motion scaled to this time step
+      // (times velocity_prior_gain).
       Eigen::Isometry3d predicted;
       if (f.has_motion_prior) {
         const Eigen::Isometry3d rig_from_optical = RigFromOptical();
         predicted = rig_from_optical.inverse() * f.previous_from_rig_prior * rig_from_optical;
       } else {
         const double k = last_dt_s > 0 ? std::clamp(dt_s / last_dt_s, 0.0, 4.0) : 1.0;
-        predicted = ScaleMotion(last_motion, k);
+        predicted = ScaleMotion(last_motion, k * options.velocity_prior_gain);
       }
       const Eigen::Isometry3d keyframe_from_last = world_from_keyframe.inverse() * world_from_last;
       const Eigen::Isometry3d guess = keyframe_from_last * predicted;

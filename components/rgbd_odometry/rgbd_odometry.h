@@ -59,6 +59,13 @@ struct RgbdOdometryOptions {
   // 30 Hz moves a few cm per frame): more than this is a failure, not a motion.
   double max_frame_translation_m = 0.25;
   double max_frame_rotation_deg = 25.0;
+  // The initial guess of a frame (without a motion prior): the last motion scaled to this
+  // time step, times this gain. 1 is a constant-velocity model; 0 starts from the last pose.
+  // Where the scene leaves a direction unconstrained (a bare wall and the floor: the aligner
+  // cannot see motion along both), constant velocity feeds back on itself and the pose runs
+  // away along that direction (simulated lab: 0.03-0.08 m per frame while the camera stood,
+  // 31 m in 90 s); from the last pose the unconstrained direction merely stands still.
+  double velocity_prior_gain = 0.0;
   double min_valid_depth_fraction = 0.10;  // of the pixels; fewer valid -> lost
   // Of the current frame's valid points (sampled), the fraction that land on the keyframe's
   // depth within max_depth_diff_m after alignment; less -> lost (a diverged alignment or a
@@ -87,6 +94,8 @@ struct RgbdOdometryOptions {
       "larger motion between consecutive frames is a failure (lost)");
     v("max_frame_rotation_deg", max_frame_rotation_deg,
       "larger rotation between consecutive frames is a failure (lost)");
+    v("velocity_prior_gain", velocity_prior_gain,
+      "initial guess = last motion x this (1: constant velocity; 0: the last pose, safer where walls are bare)");
     v("min_valid_depth_fraction", min_valid_depth_fraction,
       "fewer valid depth pixels than this fraction -> lost");
     v("min_overlap_fraction", min_overlap_fraction,
@@ -106,6 +115,7 @@ struct RgbdOdometryOptions {
     c.Positive("keyframe_translation_m", keyframe_translation_m);
     c.Positive("keyframe_rotation_deg", keyframe_rotation_deg);
     c.Positive("max_frame_translation_m", max_frame_translation_m);
+    c.InRange("velocity_prior_gain", velocity_prior_gain, 0.0, 1.0);
     c.InRange("max_frame_rotation_deg", max_frame_rotation_deg, 1e-6, 180);
     c.InRange("min_valid_depth_fraction", min_valid_depth_fraction, 0, 1);
     c.InRange("min_overlap_fraction", min_overlap_fraction, 0, 1);

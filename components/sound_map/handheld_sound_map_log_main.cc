@@ -12,7 +12,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <functional>
+#include <string>
 #include <map>
 #include <stdexcept>
 
@@ -63,11 +65,14 @@ int main(int argc, char** argv) {
         "linear-array sound map (as sarmap-handheld-sound-map would, in message time order) and\n"
         "compares the result with SIM_TRUTH.");
     sarmap::common::NodeArgs node_args;
-    std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml", live_channel;
+    std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml", live_channel, trajectory;
     bool truth_poses = false, pose_check = false, doa_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--truth-poses", &truth_poses,
                      "diagnosis: the true rig poses (SIM_TRUTH and the camera mount) instead of RIG_POSE");
+    parser.AddFlag("--trajectory", &trajectory,
+                   "rig poses from this file (utime x y z qw qx qy qz per line: sarmap-log rgbd-odometry --output) "
+                   "instead of the log's RIG_POSE: try odometry settings offline");
     parser.AddSwitch("--pose-check", &pose_check, "print the rig odometry against the truth every 5 s");
     parser.AddSwitch("--doa-check", &doa_check,
                      "compare every DOA's beta with the true betas of the SIM_TRUTH sources from the true rig pose");
@@ -95,7 +100,7 @@ int main(int argc, char** argv) {
     sarmap::sound_map_t live;
     int64_t live_msgs = 0, other_kinds = 0, bad = 0, doa_msgs = 0;
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-      if (e->channel == options.pose_channel) {
+      if (e->channel == options.pose_channel && trajectory.empty()) {
         sarmap::pose_t msg;
         Eigen::Isometry3d pose;
         if (!Decode(*e, &msg) || !sarmap::sound_map::IsometryFromPose(msg, &pose)) {
@@ -133,6 +138,22 @@ int main(int argc, char** argv) {
       } else if (e->channel == live_channel) {
         if (Decode(*e, &live)) ++live_msgs;
       }
+    }
+    if (!trajectory.empty()) {
+      std::ifstream in(trajectory);
+      if (!in) throw std::runtime_error("cannot read trajectory " + trajectory);
+      for (std::string line; std::getline(in, line);) {
+        long long t;
+        double x, y, z, qw, qx, qy, qz;
+        if (line.empty() || line[0] == '#' ||
+            std::sscanf(line.c_str(), "%lld %lf %lf %lf %lf %lf %lf %lf", &t, &x, &y, &z, &qw, &qx, &qy, &qz) != 8)
+          continue;
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+        pose.translation() = Eigen::Vector3d(x, y, z);
+        odom_rig[t] = pose;
+      }
+      if (odom_rig.empty()) throw std::runtime_error("no poses in " + trajectory);
     }
     if (truth_poses && truth_rig.empty()) throw std::runtime_error("--truth-poses: no " + truth_channel + " in the log");
     const auto& poses = truth_poses ? truth_rig : odom_rig;

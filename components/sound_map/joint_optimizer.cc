@@ -176,6 +176,55 @@ void TriangulateSources(JointProblem2d* p) {
   }
 }
 
+JointProblem2d JointProblemFromLog(const std::vector<Pose2>& poses, const std::vector<std::vector<LogBearing>>& bearings,
+                                   const std::vector<Eigen::Vector3d>& initial_sources, const ArrayMount& mount,
+                                   bool three_d, const LogJointOptions& o) {
+  JointProblem2d p;
+  p.three_d = three_d;
+  p.mount = mount;
+  p.poses = poses;
+  p.sources = initial_sources;
+  p.source_observed.assign(initial_sources.size(), false);
+  p.sound_huber_sigmas = o.huber_sigmas;
+  const double deg = M_PI / 180;
+  for (size_t k = 1; k < poses.size(); ++k) {
+    JointProblem2d::Odometry e;
+    e.from = static_cast<int>(k - 1);
+    e.to = static_cast<int>(k);
+    e.delta = Between(poses[k - 1], poses[k]);
+    const double d = std::hypot(e.delta.x, e.delta.y);
+    const double st = o.odometry_sigma_floor_m + o.odometry_sigma_m_per_m * d;
+    const double sr = (o.odometry_sigma_floor_deg + o.odometry_sigma_deg_per_m * d) * deg;
+    e.covariance = Eigen::Vector3d(st * st, st * st, sr * sr).asDiagonal();
+    p.odometry.push_back(e);
+  }
+  for (size_t k = 0; k < poses.size() && k < bearings.size(); ++k) {
+    const double pose[3] = {poses[k].x, poses[k].y, poses[k].yaw};
+    for (const LogBearing& b : bearings[k]) {
+      const double sigma = std::max(b.sigma_rad, o.doa_sigma_floor_deg * deg);
+      int best = -1;
+      double best_chi2 = o.gate_chi2;
+      for (size_t j = 0; j < initial_sources.size(); ++j) {
+        double h[2];
+        PointObservation(pose, initial_sources[j].data(), three_d, mount, h);
+        double chi2 = std::pow(WrapAngleD(b.azimuth_rad - h[0]) / sigma, 2);
+        if (three_d) chi2 += std::pow((b.elevation_rad - h[1]) / sigma, 2);
+        if (chi2 < best_chi2) best_chi2 = chi2, best = static_cast<int>(j);
+      }
+      if (best < 0) continue;
+      JointProblem2d::SoundEdge e;
+      e.pose = static_cast<int>(k);
+      e.source = best;
+      e.z = three_d ? Eigen::VectorXd(Eigen::Vector2d(b.azimuth_rad, b.elevation_rad))
+                    : Eigen::VectorXd(Eigen::VectorXd::Constant(1, b.azimuth_rad));
+      e.sigma_rad = sigma;
+      p.sound_edges.push_back(e);
+      p.source_observed[best] = true;
+    }
+  }
+  return p;
+}
+
 JointReport SolveJoint(JointProblem2d* p, int max_iterations) {
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -195,14 +244,15 @@ JointReport SolveJoint(JointProblem2d* p, int max_iterations) {
   for (const auto& e : p->sound_edges) {
     if (!p->use_sound_edges) break;
     Eigen::Vector2d z(e.z[0], e.z.size() > 1 ? e.z[1] : 0.0);
+    ceres::LossFunction* loss = p->sound_huber_sigmas > 0 ? new ceres::HuberLoss(p->sound_huber_sigmas) : nullptr;
     if (p->three_d) {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SoundCost<2>, 2, 3, 3>(
                                    new SoundCost<2>{z, 1.0 / e.sigma_rad, p->mount}),
-                               nullptr, pose_params[e.pose].data(), p->sources[e.source].data());
+                               loss, pose_params[e.pose].data(), p->sources[e.source].data());
     } else {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SoundCost<1>, 1, 3, 2>(
                                    new SoundCost<1>{z, 1.0 / e.sigma_rad, p->mount}),
-                               nullptr, pose_params[e.pose].data(), p->sources[e.source].data());
+                               loss, pose_params[e.pose].data(), p->sources[e.source].data());
     }
   }
   if (!pose_params.empty() && problem.HasParameterBlock(pose_params[0].data()))

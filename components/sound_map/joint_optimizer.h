@@ -41,7 +41,33 @@ struct JointProblem2d {
   std::vector<LandmarkEdge> landmark_edges;
   std::vector<SoundEdge> sound_edges;
   bool use_sound_edges = true;
+  // Huber loss on the whitened sound residuals, in sigmas (0: plain least squares). Real
+  // logs hold reflections and DOAs pulled by other emitters that pass the gate.
+  double sound_huber_sigmas = 0;
 };
+
+// A recorded run as a joint problem (§4.2 on a log, without landmarks): one pose node per
+// DOA block at the trajectory's pose of that time (e.g. SLAM's POSE), odometry edges between
+// consecutive nodes carrying the trajectory's own increments with
+// sigma = floor + per_m * distance; each DOA joins, as a bearing edge, the source of
+// `initial_sources` whose predicted bearing from the node is nearest within `gate_chi2`
+// (DOAs that fit none are left out). The solution keeps the trajectory's shape where the
+// sound does not bend it.
+struct LogJointOptions {
+  double odometry_sigma_floor_m = 0.01;
+  double odometry_sigma_m_per_m = 0.05;
+  double odometry_sigma_floor_deg = 0.5;
+  double odometry_sigma_deg_per_m = 2.0;
+  double doa_sigma_floor_deg = 2.0;
+  double gate_chi2 = 9.0;
+  double huber_sigmas = 2.0;
+};
+struct LogBearing {
+  double azimuth_rad = 0, elevation_rad = 0, sigma_rad = 0;
+};
+JointProblem2d JointProblemFromLog(const std::vector<Pose2>& poses, const std::vector<std::vector<LogBearing>>& bearings,
+                                   const std::vector<Eigen::Vector3d>& initial_sources, const ArrayMount& mount,
+                                   bool three_d, const LogJointOptions& options);
 
 struct JointReport {
   double solve_seconds = 0;

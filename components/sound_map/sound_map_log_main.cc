@@ -30,6 +30,7 @@
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_localisation/localiser.h"
+#include "sound_map/joint_optimizer.h"
 #include "sound_map/sound_map_messages.h"
 
 namespace {
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
     std::string relocalise_array = "config/arrays/respeaker4.yaml";
     std::string relocalise_section = "map_localiser";
     double doa_shift_s = 0;
-    bool pose_check = false;
+    bool pose_check = false, joint = false;
     std::string trajectory_path;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
@@ -83,6 +84,9 @@ int main(int argc, char** argv) {
     parser.AddFlag("--trajectory", &trajectory_path,
                    "diagnosis: poses from this file (t x y yaw per line, sarmap-slam-offline --output on the "
                    "same log) instead of POSE, SLAM_ANCHORS ignored: try SLAM settings offline");
+    parser.AddSwitch("--joint", &joint,
+                     "also solve the joint optimisation (§4.2) of the trajectory (POSE, or the truth with "
+                     "--truth-poses) and the final map's sources from every DOA, and score it");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -492,6 +496,70 @@ int main(int argc, char** argv) {
              static_cast<double>(localiser->samples_seen()) / geometry.sample_rate_hz,
              100 * localiser_cpu_s * geometry.sample_rate_hz / static_cast<double>(localiser->samples_seen()));
     report(last, true);
+    if (joint && !slam_poses.empty()) {
+      // §4.2 on the log: a pose node per DOA block at the trajectory's pose then, the CI map's
+      // sources as the initial guess and for the association, everything solved together.
+      auto pose_at = [&](int64_t t, Pose2* out) {
+        auto after = slam_poses.lower_bound(t);
+        if (after == slam_poses.end() || after == slam_poses.begin()) return false;
+        const auto before = std::prev(after);
+        if (after->first - before->first > 2000000) return false;
+        const double a = static_cast<double>(t - before->first) / static_cast<double>(after->first - before->first);
+        const Pose2 d = sarmap::sound_map::Between(before->second, after->second);
+        *out = sarmap::sound_map::Compose(before->second, Pose2(a * d.x, a * d.y, a * d.yaw));
+        return true;
+      };
+      std::vector<Pose2> poses;
+      std::vector<std::vector<sarmap::sound_map::LogBearing>> bearings;
+      const double max_el = options.map.max_abs_elevation_deg * M_PI / 180;
+      for (const auto& [t0, m] : doa_log) {
+        Pose2 pose, before, after;
+        const int64_t t = t0 + doa_shift_us;
+        if (!pose_at(t, &pose)) continue;
+        // As the map does: DOAs heard while the robot turns lag its heading (the localiser's
+        // 256 ms windows and tracker).
+        if (pose_at(t - 250000, &before) && pose_at(t + 250000, &after) &&
+            std::abs(sarmap::sound_map::WrapAngleD(after.yaw - before.yaw)) / 0.5 >
+                options.map.max_turn_rate_deg_per_s * M_PI / 180)
+          continue;
+        std::vector<sarmap::sound_map::LogBearing> b;
+        for (const auto& src : m.sources) {
+          if (src.kind == sarmap::doa_source_t::KIND_ANGLE_1D) continue;
+          if (options.map.three_d && std::abs(src.elevation_rad) > max_el) continue;  // the robot's motors
+          sarmap::sound_map::LogBearing lb;
+          lb.azimuth_rad = src.azimuth_rad;
+          lb.elevation_rad = src.elevation_rad;
+          lb.sigma_rad = std::sqrt(std::max(0.0, src.covariance[0]));
+          b.push_back(lb);
+        }
+        if (b.empty()) continue;
+        poses.push_back(pose);
+        bearings.push_back(b);
+      }
+      const auto ci = map.Sources(last);
+      std::vector<Eigen::Vector3d> init;
+      for (const auto& src : ci) init.push_back(src.position_m);
+      sarmap::sound_map::LogJointOptions jo;
+      auto problem = sarmap::sound_map::JointProblemFromLog(poses, bearings, init, sarmap::sound_map::MountFromRobot(robot),
+                                                            options.map.three_d, jo);
+      const auto rep = sarmap::sound_map::SolveJoint(&problem, 100);
+      printf("joint optimisation (§4.2) on the log: %zu pose nodes, %zu bearing edges to %zu sources, solved in %.3f s "
+             "(%d iterations), cost %.1f -> %.1f\n",
+             problem.poses.size(), problem.sound_edges.size(), init.size(), rep.solve_seconds, rep.iterations,
+             rep.initial_cost, rep.final_cost);
+      if (have_truth) {
+        for (const auto& ts : truth.sources) {
+          const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
+          double best_ci = std::numeric_limits<double>::infinity(), best_joint = best_ci;
+          for (size_t j = 0; j < init.size(); ++j) {
+            if (!problem.source_observed[j]) continue;
+            best_ci = std::min(best_ci, (to_world(init[j]) - p).norm());
+            best_joint = std::min(best_joint, (to_world(problem.sources[j]) - p).norm());
+          }
+          printf("  truth %-18s nearest source: CI map %.3f m, joint %.3f m\n", ts.name.c_str(), best_ci, best_joint);
+        }
+      }
+    }
     if (live_msgs > 0) {
       int converged = 0;
       int64_t max_id = 0;
