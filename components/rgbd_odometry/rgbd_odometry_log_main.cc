@@ -4,12 +4,11 @@
 // camera; --output writes the trajectory for sarmap-log handheld-sound-map --trajectory.
 //
 //   sarmap-log rgbd-odometry run.lcmlog [--set odometry.method=icp] [--output rig.txt]
-#include <lcm/lcm-cpp.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
 
@@ -47,12 +46,16 @@ int main(int argc, char** argv) {
     std::string log_path, output, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml";
     double check_every_s = 0;
     parser.AddPositional("log", &log_path, "LCM log file");
-    parser.AddFlag("--output", &output, "write the rig trajectory here: utime x y z qw qx qy qz per tracked frame");
+    parser.AddFlag("--output", &output,
+                   "write the rig trajectory here: utime x y z qw qx qy qz per tracked frame");
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
-    parser.AddFlag("--robot-config", &robot_config, "simulated robot (base_from_camera: where the camera sits)");
-    parser.AddFlag("--check-every", &check_every_s, "print the pose against the truth every this many seconds (0: off)");
-    const auto parsed = sarmap::common::ParseNodeOptions<sarmap::rgbd_odometry::RgbdOdometryNodeOptions>(
-        &parser, &node_args, argc, argv, "config/rgbd_odometry.yaml");
+    parser.AddFlag("--robot-config", &robot_config,
+                   "simulated robot (base_from_camera: where the camera sits)");
+    parser.AddFlag("--check-every", &check_every_s,
+                   "print the pose against the truth every this many seconds (0: off)");
+    const auto parsed =
+        sarmap::common::ParseNodeOptions<sarmap::rgbd_odometry::RgbdOdometryNodeOptions>(
+            &parser, &node_args, argc, argv, "config/rgbd_odometry.yaml");
     if (!parsed) return 0;
     const auto& options = *parsed;
     const auto robot = sarmap::common::LoadRobot(robot_config);
@@ -62,7 +65,8 @@ int main(int argc, char** argv) {
       base_from_optical.linear() = r.rotation().toRotationMatrix();
       base_from_optical.translation() = r.translation();
     }
-    const Eigen::Isometry3d base_from_rig = base_from_optical * sarmap::rgbd_odometry::RigFromOptical().inverse();
+    const Eigen::Isometry3d base_from_rig =
+        base_from_optical * sarmap::rgbd_odometry::RigFromOptical().inverse();
 
     lcm::LogFile log(log_path, "r");
     if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
@@ -73,7 +77,8 @@ int main(int argc, char** argv) {
     if (!output.empty()) {
       out.open(output);
       if (!out) throw std::runtime_error("cannot write " + output);
-      out << "# utime x y z qw qx qy qz (odom_from_rig, sarmap-log rgbd-odometry " << log_path << ")\n";
+      out << "# utime x y z qw qx qy qz (odom_from_rig, sarmap-log rgbd-odometry " << log_path
+          << ")\n";
     }
     std::map<int64_t, Eigen::Isometry3d> truth_rig;
     std::vector<RgbdOdometryResult> results;
@@ -84,10 +89,11 @@ int main(int argc, char** argv) {
       for (const auto& f : ready) {
         RgbdOdometryResult r = odometry.Process(f);
         if (std::getenv("SARMAP_RGBD_DEBUG") && r.previous_from_rig.translation().norm() > 0.03)
-          fprintf(stderr, "frame %ld: step %.3f m %.1f deg overlap %.2f valid %.2f keyframe %d %s\n",
+          fprintf(stderr,
+                  "frame %ld: step %.3f m %.1f deg overlap %.2f valid %.2f keyframe %d %s\n",
                   static_cast<long>(r.utime), r.previous_from_rig.translation().norm(),
-                  Eigen::AngleAxisd(r.previous_from_rig.linear()).angle() * 180 / M_PI, r.overlap_fraction,
-                  r.valid_depth_fraction, r.keyframe, r.message.c_str());
+                  Eigen::AngleAxisd(r.previous_from_rig.linear()).angle() * 180 / M_PI,
+                  r.overlap_fraction, r.valid_depth_fraction, r.keyframe, r.message.c_str());
         ++statuses[sarmap::rgbd_odometry::TrackingStatusName(r.status)];
         compute_ms += r.compute_ms;
         if (!r.ok()) continue;
@@ -95,8 +101,8 @@ int main(int argc, char** argv) {
         if (out) {
           const Eigen::Quaterniond q(r.world_from_rig.linear());
           const Eigen::Vector3d t = r.world_from_rig.translation();
-          out << r.utime << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.w() << ' ' << q.x() << ' '
-              << q.y() << ' ' << q.z() << '\n';
+          out << r.utime << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.w() << ' '
+              << q.x() << ' ' << q.y() << ' ' << q.z() << '\n';
         }
       }
       ready.clear();
@@ -108,7 +114,8 @@ int main(int argc, char** argv) {
         if (!Decode(*e, &m)) continue;
         assembler.AddDepth(m, &ready);
         run();
-        if (++frames % 300 == 0) fprintf(stderr, "\r%ld depth frames ...", static_cast<long>(frames));
+        if (++frames % 300 == 0)
+          fprintf(stderr, "\r%ld depth frames ...", static_cast<long>(frames));
       } else if (e->channel == options.rgb_channel && odometry.needs_image()) {
         sarmap::image_t m;
         if (!Decode(*e, &m)) continue;
@@ -118,22 +125,25 @@ int main(int argc, char** argv) {
         sarmap::sim_truth_t m;
         if (!Decode(*e, &m)) continue;
         Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-        base.linear() = Eigen::Quaterniond(m.robot_orientation[0], m.robot_orientation[1], m.robot_orientation[2],
-                                           m.robot_orientation[3])
+        base.linear() = Eigen::Quaterniond(m.robot_orientation[0], m.robot_orientation[1],
+                                           m.robot_orientation[2], m.robot_orientation[3])
                             .normalized()
                             .toRotationMatrix();
-        base.translation() = Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], m.robot_position_m[2]);
+        base.translation() =
+            Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], m.robot_position_m[2]);
         truth_rig[m.header.utime] = base * base_from_rig;
       }
     }
     if (frames >= 300) fprintf(stderr, "\n");
     const auto& st = odometry.stats();
-    printf("%ld depth frames, %ld processed: ", static_cast<long>(frames), static_cast<long>(st.frames));
+    printf("%ld depth frames, %ld processed: ", static_cast<long>(frames),
+           static_cast<long>(st.frames));
     for (const auto& [name, n] : statuses) printf("%s %ld  ", name.c_str(), static_cast<long>(n));
     printf("\n%s, image scale %.2f: %.1f ms per frame (this machine, one thread)\n",
            options.odometry.method.c_str(), options.odometry.image_scale,
            st.frames ? compute_ms / static_cast<double>(st.frames) : 0.0);
-    for (const auto& [name, n] : assembler.warnings()) printf("  pairing: %s %ld\n", name.c_str(), static_cast<long>(n));
+    for (const auto& [name, n] : assembler.warnings())
+      printf("  pairing: %s %ld\n", name.c_str(), static_cast<long>(n));
     if (truth_rig.empty() || results.empty()) return 0;
     // The odometry's world is the rig at its first frame.
     auto truth_at = [&](int64_t t) {
@@ -141,7 +151,8 @@ int main(int argc, char** argv) {
       if (it == truth_rig.end()) --it;
       return it->second;
     };
-    const Eigen::Isometry3d world_from_odom = truth_at(results.front().utime) * results.front().world_from_rig.inverse();
+    const Eigen::Isometry3d world_from_odom =
+        truth_at(results.front().utime) * results.front().world_from_rig.inverse();
     double sum2 = 0, max_err = 0, path = 0, yaw_err = 0;
     Eigen::Vector3d prev = truth_at(results.front().utime).translation();
     int64_t next_check = results.front().utime;
@@ -156,22 +167,28 @@ int main(int argc, char** argv) {
       if (check_every_s > 0 && r.utime >= next_check) {
         next_check = r.utime + static_cast<int64_t>(check_every_s * 1e6);
         printf("  t %6.1f s  error (%+.2f %+.2f %+.2f) m, yaw %+.1f deg  [%s]\n",
-               (r.utime - results.front().utime) * 1e-6, est.translation().x() - tr.translation().x(),
-               est.translation().y() - tr.translation().y(), est.translation().z() - tr.translation().z(),
-               yaw_err * 180 / M_PI, sarmap::rgbd_odometry::TrackingStatusName(r.status));
+               (r.utime - results.front().utime) * 1e-6,
+               est.translation().x() - tr.translation().x(),
+               est.translation().y() - tr.translation().y(),
+               est.translation().z() - tr.translation().z(), yaw_err * 180 / M_PI,
+               sarmap::rgbd_odometry::TrackingStatusName(r.status));
       }
     }
-    printf("against SIM_TRUTH over %.1f m of path: RMS %.3f m, max %.3f m, final %.3f m (%.1f %% of the path), "
-           "final yaw error %+.1f deg\n",
-           path, std::sqrt(sum2 / results.size()), max_err,
-           ((world_from_odom * results.back().world_from_rig).translation() - truth_at(results.back().utime).translation())
-               .norm(),
-           path > 0 ? 100 * ((world_from_odom * results.back().world_from_rig).translation() -
-                             truth_at(results.back().utime).translation())
-                                .norm() /
-                          path
-                    : 0.0,
-           yaw_err * 180 / M_PI);
+    printf(
+        "against SIM_TRUTH over %.1f m of path: RMS %.3f m, max %.3f m, final %.3f m (%.1f %% of "
+        "the path), "
+        "final yaw error %+.1f deg\n",
+        path, std::sqrt(sum2 / results.size()), max_err,
+        ((world_from_odom * results.back().world_from_rig).translation() -
+         truth_at(results.back().utime).translation())
+            .norm(),
+        path > 0 ? 100 *
+                       ((world_from_odom * results.back().world_from_rig).translation() -
+                        truth_at(results.back().utime).translation())
+                           .norm() /
+                       path
+                 : 0.0,
+        yaw_err * 180 / M_PI);
     return 0;
   });
 }

@@ -7,16 +7,15 @@
 //   sarmap-log handheld-sound-map run.lcmlog
 //   sarmap-log handheld-sound-map run.lcmlog --truth-poses      # the map from the true rig poses
 //   sarmap-log handheld-sound-map run.lcmlog --set map.num_hypotheses=5
-#include <lcm/lcm-cpp.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
-#include <string>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
+#include <string>
 
 #include "common/args.h"
 #include "common/node_main.h"
@@ -65,29 +64,39 @@ int main(int argc, char** argv) {
         "linear-array sound map (as sarmap-handheld-sound-map would, in message time order) and\n"
         "compares the result with SIM_TRUTH.");
     sarmap::common::NodeArgs node_args;
-    std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml", live_channel, trajectory;
+    std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml",
+                          live_channel, trajectory;
     bool truth_poses = false, pose_check = false, doa_check = false;
     parser.AddPositional("log", &log_path, "LCM log file");
-    parser.AddSwitch("--truth-poses", &truth_poses,
-                     "diagnosis: the true rig poses (SIM_TRUTH and the camera mount) instead of RIG_POSE");
+    parser.AddSwitch(
+        "--truth-poses", &truth_poses,
+        "diagnosis: the true rig poses (SIM_TRUTH and the camera mount) instead of RIG_POSE");
     parser.AddFlag("--trajectory", &trajectory,
-                   "rig poses from this file (utime x y z qw qx qy qz per line: sarmap-log rgbd-odometry --output) "
+                   "rig poses from this file (utime x y z qw qx qy qz per line: sarmap-log "
+                   "rgbd-odometry --output) "
                    "instead of the log's RIG_POSE: try odometry settings offline");
-    parser.AddSwitch("--pose-check", &pose_check, "print the rig odometry against the truth every 5 s");
+    parser.AddSwitch("--pose-check", &pose_check,
+                     "print the rig odometry against the truth every 5 s");
     parser.AddSwitch("--doa-check", &doa_check,
-                     "compare every DOA's beta with the true betas of the SIM_TRUTH sources from the true rig pose");
+                     "compare every DOA's beta with the true betas of the SIM_TRUTH sources from "
+                     "the true rig pose");
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
-    parser.AddFlag("--robot-config", &robot_config,
-                   "simulated robot (base_from_camera: where the rig, the camera, sits on the robot)");
-    parser.AddFlag("--live-channel", &live_channel, "the live node's map to compare too (default: sound_map_channel)");
-    const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::HandheldSoundMapOptions>(
-        &parser, &node_args, argc, argv, "config/handheld_sound_map.yaml");
+    parser.AddFlag(
+        "--robot-config", &robot_config,
+        "simulated robot (base_from_camera: where the rig, the camera, sits on the robot)");
+    parser.AddFlag("--live-channel", &live_channel,
+                   "the live node's map to compare too (default: sound_map_channel)");
+    const auto parsed =
+        sarmap::common::ParseNodeOptions<sarmap::sound_map::HandheldSoundMapOptions>(
+            &parser, &node_args, argc, argv, "config/handheld_sound_map.yaml");
     if (!parsed) return 0;
     const auto& options = *parsed;
     if (live_channel.empty()) live_channel = options.sound_map_channel;
     const auto robot = sarmap::common::LoadRobot(robot_config);
-    const Eigen::Isometry3d base_from_rig = Iso(robot.base_from_camera.ToRigid3d()) * OpticalFromBody();
-    const Eigen::Isometry3d rig_from_sensor = sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
+    const Eigen::Isometry3d base_from_rig =
+        Iso(robot.base_from_camera.ToRigid3d()) * OpticalFromBody();
+    const Eigen::Isometry3d rig_from_sensor =
+        sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
 
     lcm::LogFile log(log_path, "r");
     if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
@@ -117,7 +126,8 @@ int main(int argc, char** argv) {
         ++doa_msgs;
         const auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &other_kinds);
         if (doa_check && !doas.empty()) doa_log.emplace_back(msg.header.utime, doas);
-        inputs.emplace(msg.header.utime, [doas, t = msg.header.utime](LinearArraySoundMap& m) { m.OnDoa(t, doas); });
+        inputs.emplace(msg.header.utime,
+                       [doas, t = msg.header.utime](LinearArraySoundMap& m) { m.OnDoa(t, doas); });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t msg;
         if (!Decode(*e, &msg)) continue;
@@ -133,7 +143,8 @@ int main(int argc, char** argv) {
                                            truth.robot_orientation[2], truth.robot_orientation[3])
                             .normalized()
                             .toRotationMatrix();
-        base.translation() = Eigen::Vector3d(truth.robot_position_m[0], truth.robot_position_m[1], truth.robot_position_m[2]);
+        base.translation() = Eigen::Vector3d(truth.robot_position_m[0], truth.robot_position_m[1],
+                                             truth.robot_position_m[2]);
         truth_rig[truth.header.utime] = base * base_from_rig;
       } else if (e->channel == live_channel) {
         if (Decode(*e, &live)) ++live_msgs;
@@ -146,7 +157,8 @@ int main(int argc, char** argv) {
         long long t;
         double x, y, z, qw, qx, qy, qz;
         if (line.empty() || line[0] == '#' ||
-            std::sscanf(line.c_str(), "%lld %lf %lf %lf %lf %lf %lf %lf", &t, &x, &y, &z, &qw, &qx, &qy, &qz) != 8)
+            std::sscanf(line.c_str(), "%lld %lf %lf %lf %lf %lf %lf %lf", &t, &x, &y, &z, &qw, &qx,
+                        &qy, &qz) != 8)
           continue;
         Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
         pose.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
@@ -155,29 +167,38 @@ int main(int argc, char** argv) {
       }
       if (odom_rig.empty()) throw std::runtime_error("no poses in " + trajectory);
     }
-    if (truth_poses && truth_rig.empty()) throw std::runtime_error("--truth-poses: no " + truth_channel + " in the log");
+    if (truth_poses && truth_rig.empty())
+      throw std::runtime_error("--truth-poses: no " + truth_channel + " in the log");
     const auto& poses = truth_poses ? truth_rig : odom_rig;
     for (const auto& kv : poses) {
       const Eigen::Isometry3d odom_from_sensor = kv.second * rig_from_sensor;
-      inputs.emplace(kv.first, [odom_from_sensor, t = kv.first](LinearArraySoundMap& m) { m.OnPose(t, odom_from_sensor); });
+      inputs.emplace(kv.first, [odom_from_sensor, t = kv.first](LinearArraySoundMap& m) {
+        m.OnPose(t, odom_from_sensor);
+      });
     }
-    printf("log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld undecodable%s\n",
-           odom_rig.size(), options.pose_channel.c_str(), static_cast<long>(doa_msgs), options.doa_channel.c_str(),
-           static_cast<long>(other_kinds), static_cast<long>(bad), truth_poses ? "; map from the TRUE rig poses" : "");
-    if (poses.empty()) throw std::runtime_error("no poses on " + options.pose_channel + " (run sarmap-rgbd-odometry)");
+    printf(
+        "log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld undecodable%s\n",
+        odom_rig.size(), options.pose_channel.c_str(), static_cast<long>(doa_msgs),
+        options.doa_channel.c_str(), static_cast<long>(other_kinds), static_cast<long>(bad),
+        truth_poses ? "; map from the TRUE rig poses" : "");
+    if (poses.empty())
+      throw std::runtime_error("no poses on " + options.pose_channel +
+                               " (run sarmap-rgbd-odometry)");
 
     LinearArraySoundMap map(options.map);
     for (auto& kv : inputs) kv.second(map);
     map.Finish();
     const auto& c = map.counters();
-    printf("map: %ld keyframes, DOAs used %ld of %ld (no pose %ld, gated out %ld, duplicate %ld), sources born %ld, "
-           "converged %ld, merged %ld, pruned %ld, restarted %ld, mirror flips %ld\n",
-           static_cast<long>(c.keyframes), static_cast<long>(c.doas_used), static_cast<long>(c.doas),
-           static_cast<long>(c.doas_without_pose), static_cast<long>(c.doas_gated_out),
-           static_cast<long>(c.doas_duplicate), static_cast<long>(c.sources_born),
-           static_cast<long>(c.sources_converged), static_cast<long>(c.sources_merged),
-           static_cast<long>(c.sources_pruned), static_cast<long>(c.sources_restarted),
-           static_cast<long>(c.mirrors_flipped));
+    printf(
+        "map: %ld keyframes, DOAs used %ld of %ld (no pose %ld, gated out %ld, duplicate %ld), "
+        "sources born %ld, "
+        "converged %ld, merged %ld, pruned %ld, restarted %ld, mirror flips %ld\n",
+        static_cast<long>(c.keyframes), static_cast<long>(c.doas_used), static_cast<long>(c.doas),
+        static_cast<long>(c.doas_without_pose), static_cast<long>(c.doas_gated_out),
+        static_cast<long>(c.doas_duplicate), static_cast<long>(c.sources_born),
+        static_cast<long>(c.sources_converged), static_cast<long>(c.sources_merged),
+        static_cast<long>(c.sources_pruned), static_cast<long>(c.sources_restarted),
+        static_cast<long>(c.mirrors_flipped));
 
     // world_from_odom: the odometry's frame is the rig at its first pose.
     Eigen::Isometry3d world_from_odom = Eigen::Isometry3d::Identity();
@@ -198,17 +219,22 @@ int main(int argc, char** argv) {
         if (pose_check && kv.first >= next_print) {
           next_print = kv.first + 5000000;
           const Eigen::Vector3d a = est.translation(), b = tr->second.translation();
-          printf("  t %6.1f s  rig (%6.2f %6.2f %5.2f, yaw %6.1f)  truth (%6.2f %6.2f %5.2f, yaw %6.1f)  error %.2f m\n",
-                 (kv.first - t0) * 1e-6, a.x(), a.y(), a.z(), Yaw(est) * 180 / M_PI, b.x(), b.y(), b.z(),
-                 Yaw(tr->second) * 180 / M_PI, e);
+          printf(
+              "  t %6.1f s  rig (%6.2f %6.2f %5.2f, yaw %6.1f)  truth (%6.2f %6.2f %5.2f, yaw "
+              "%6.1f)  error %.2f m\n",
+              (kv.first - t0) * 1e-6, a.x(), a.y(), a.z(), Yaw(est) * 180 / M_PI, b.x(), b.y(),
+              b.z(), Yaw(tr->second) * 180 / M_PI, e);
         }
         sum2 += e * e;
         max_err = std::max(max_err, e);
         last_yaw = std::remainder(Yaw(est) - Yaw(tr->second), 2 * M_PI);
         ++n;
       }
-      if (n) printf("rig odometry against the truth: RMS %.3f m, max %.3f m, final heading error %.1f deg\n",
-                    std::sqrt(sum2 / n), max_err, last_yaw * 180 / M_PI);
+      if (n)
+        printf(
+            "rig odometry against the truth: RMS %.3f m, max %.3f m, final heading error %.1f "
+            "deg\n",
+            std::sqrt(sum2 / n), max_err, last_yaw * 180 / M_PI);
     }
     if (doa_check && have_truth) {
       // Per DOA: the true source whose beta (from the true sensor pose) is nearest.
@@ -234,21 +260,24 @@ int main(int argc, char** argv) {
         for (double v : e) a.push_back(std::abs(v));
         std::sort(a.begin(), a.end());
         std::sort(e.begin(), e.end());
-        printf("  %-18s %4zu DOAs, |error| median %.1f deg, p90 %.1f deg, signed median %+.1f deg\n", name.c_str(),
-               a.size(), a[a.size() / 2], a[a.size() * 9 / 10], e[e.size() / 2]);
+        printf(
+            "  %-18s %4zu DOAs, |error| median %.1f deg, p90 %.1f deg, signed median %+.1f deg\n",
+            name.c_str(), a.size(), a[a.size() / 2], a[a.size() * 9 / 10], e[e.size() / 2]);
       }
     }
     const auto sources = map.sources();
     printf("\nmapped sources (world frame%s):\n", have_truth ? "" : " = odometry frame");
     for (const auto& s : sources) {
       const Eigen::Vector3d p = world_from_odom * s.position_m;
-      printf("  %3ld %-12s (%6.2f %6.2f %5.2f) sd_xy %.2f m, %d DOAs, hypotheses %d%s\n", static_cast<long>(s.id),
-             s.converged ? "converged" : "initialising", p.x(), p.y(), p.z(),
-             std::sqrt(s.covariance.topLeftCorner<2, 2>().trace()), s.observations, s.hypotheses_left,
-             s.is_person ? ", person" : "");
+      printf("  %3ld %-12s (%6.2f %6.2f %5.2f) sd_xy %.2f m, %d DOAs, hypotheses %d%s\n",
+             static_cast<long>(s.id), s.converged ? "converged" : "initialising", p.x(), p.y(),
+             p.z(), std::sqrt(s.covariance.topLeftCorner<2, 2>().trace()), s.observations,
+             s.hypotheses_left, s.is_person ? ", person" : "");
     }
     if (!have_truth) return 0;
-    printf("\ntrue source            nearest converged (xy / 3D)     nearest any     live node (converged)\n");
+    printf(
+        "\ntrue source            nearest converged (xy / 3D)     nearest any     live node "
+        "(converged)\n");
     for (const auto& ts : truth.sources) {
       const Eigen::Vector3d t(ts.position_m[0], ts.position_m[1], ts.position_m[2]);
       double best_xy = 1e9, best_3d = 1e9, best_any = 1e9, best_live = 1e9;
@@ -256,11 +285,13 @@ int main(int argc, char** argv) {
         const Eigen::Vector3d p = world_from_odom * s.position_m;
         best_any = std::min(best_any, (p - t).head<2>().norm());
         if (!s.converged) continue;
-        if ((p - t).head<2>().norm() < best_xy) best_xy = (p - t).head<2>().norm(), best_3d = (p - t).norm();
+        if ((p - t).head<2>().norm() < best_xy)
+          best_xy = (p - t).head<2>().norm(), best_3d = (p - t).norm();
       }
       for (const auto& s : live.sources) {
         if (s.state != sarmap::sound_source_t::STATE_CONVERGED) continue;
-        const Eigen::Vector3d p = world_from_odom * Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);
+        const Eigen::Vector3d p =
+            world_from_odom * Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);
         best_live = std::min(best_live, (p - t).head<2>().norm());
       }
       auto fmt = [](double v) {
@@ -273,8 +304,8 @@ int main(int argc, char** argv) {
           snprintf(buf[i], sizeof buf[i], "%.2f m", v);
         return buf[i];
       };
-      printf("  %-18s  %-10s / %-10s          %-10s      %s\n", ts.name.c_str(), fmt(best_xy), fmt(best_3d),
-             fmt(best_any), live_msgs ? fmt(best_live) : "(not logged)");
+      printf("  %-18s  %-10s / %-10s          %-10s      %s\n", ts.name.c_str(), fmt(best_xy),
+             fmt(best_3d), fmt(best_any), live_msgs ? fmt(best_live) : "(not logged)");
     }
     return 0;
   });

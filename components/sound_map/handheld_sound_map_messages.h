@@ -2,11 +2,10 @@
 // sarmap-handheld-sound-map's options and its LCM <-> core conversions (shared by the node and
 // its tests): a hand-held RGB-D rig (RIG_POSE from sarmap-rgbd-odometry) with a linear array.
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "common/options.h"
 #include "common/robot_config.h"
@@ -36,8 +35,10 @@ struct HandheldSoundMapOptions {
     v("doa_channel", doa_channel, "the linear array's DOAs in (doa_t, KIND_ANGLE_1D)");
     v("people_audio_channel", people_audio_channel, "heard people in (marks sources as persons)");
     v("sound_map_channel", sound_map_channel, "the sound map out");
-    v("rig_from_mic_array", rig_from_mic_array, "the mic_array frame (its x axis along the linear array) in the rig frame");
-    v("reorder_delay_s", reorder_delay_s, "inputs are processed in time order once this much newer data arrived");
+    v("rig_from_mic_array", rig_from_mic_array,
+      "the mic_array frame (its x axis along the linear array) in the rig frame");
+    v("reorder_delay_s", reorder_delay_s,
+      "inputs are processed in time order once this much newer data arrived");
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
     v("map", map, "linear-array sound map (Su 2017 ch. 5)");
   }
@@ -57,13 +58,15 @@ inline Eigen::Isometry3d RigFromSensor(const common::ExtrinsicsOptions& rig_from
   rig_from_mic.linear() = r.rotation().toRotationMatrix();
   rig_from_mic.translation() = r.translation();
   Eigen::Isometry3d mic_from_sensor = Eigen::Isometry3d::Identity();
-  mic_from_sensor.linear() = Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  mic_from_sensor.linear() =
+      Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   return rig_from_mic * mic_from_sensor;
 }
 
 // pose_t (position, quaternion w x y z) as an isometry; false when not finite or not unit.
 inline bool IsometryFromPose(const sarmap::pose_t& msg, Eigen::Isometry3d* out) {
-  const Eigen::Quaterniond q(msg.orientation[0], msg.orientation[1], msg.orientation[2], msg.orientation[3]);
+  const Eigen::Quaterniond q(msg.orientation[0], msg.orientation[1], msg.orientation[2],
+                             msg.orientation[3]);
   const Eigen::Vector3d t(msg.position_m[0], msg.position_m[1], msg.position_m[2]);
   if (!q.coeffs().allFinite() || !t.allFinite() || std::abs(q.norm() - 1.0) > 1e-3) return false;
   out->setIdentity();
@@ -74,7 +77,8 @@ inline bool IsometryFromPose(const sarmap::pose_t& msg, Eigen::Isometry3d* out) 
 
 // KIND_ANGLE_1D DOAs: the angle alpha to the array's axis (0..pi) is beta = pi/2 - alpha from
 // broadside. Other kinds are counted in *skipped.
-inline std::vector<LinearArraySoundMap::Doa> LinearDoasFromMessage(const sarmap::doa_t& msg, int64_t* skipped) {
+inline std::vector<LinearArraySoundMap::Doa> LinearDoasFromMessage(const sarmap::doa_t& msg,
+                                                                   int64_t* skipped) {
   std::vector<LinearArraySoundMap::Doa> out;
   for (const auto& s : msg.sources) {
     if (s.kind != sarmap::doa_source_t::KIND_ANGLE_1D) {
@@ -91,7 +95,8 @@ inline std::vector<LinearArraySoundMap::Doa> LinearDoasFromMessage(const sarmap:
 }
 
 // Heard people (CUE_HEARD) as beta directions of the same array.
-inline std::vector<LinearArraySoundMap::Doa> HeardLinearDirections(const sarmap::people_detections_t& msg) {
+inline std::vector<LinearArraySoundMap::Doa> HeardLinearDirections(
+    const sarmap::people_detections_t& msg) {
   std::vector<LinearArraySoundMap::Doa> out;
   for (const auto& d : msg.detections) {
     if (d.cue != sarmap::person_detection_t::CUE_HEARD || !std::isfinite(d.azimuth_rad)) continue;
@@ -113,7 +118,8 @@ inline sarmap::sound_map_t LinearSoundMapMessage(const LinearArraySoundMap& map,
     for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
-    out.state = s.converged ? sarmap::sound_source_t::STATE_CONVERGED : sarmap::sound_source_t::STATE_INITIALISING;
+    out.state = s.converged ? sarmap::sound_source_t::STATE_CONVERGED
+                            : sarmap::sound_source_t::STATE_INITIALISING;
     out.hypotheses_left = s.hypotheses_left;
     out.is_person = s.is_person;
     out.first_heard_utime = s.first_heard;

@@ -3,10 +3,9 @@
 //   in:  RIG_POSE (pose_t), DOA_MAP (doa_t, KIND_ANGLE_1D), PEOPLE_AUDIO (people_detections_t)
 //   out: SOUND_MAP (sound_map_t)
 // Inputs go through a time-ordered queue; results depend on message time only.
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <functional>
-
-#include <Eigen/Geometry>
 
 #include "common/logging.h"
 #include "common/node.h"
@@ -33,13 +32,15 @@ int main(int argc, char** argv) {
     sarmap::common::NodeArgs node_args;
     parser.SetEpilog(
         "Channels in: RIG_POSE (sarmap-rgbd-odometry), DOA_MAP (sarmap-sound-localisation with a\n"
-        "linear array), PEOPLE_AUDIO. Out: SOUND_MAP, positions in the odometry's frame (the rig at\n"
+        "linear array), PEOPLE_AUDIO. Out: SOUND_MAP, positions in the odometry's frame (the rig "
+        "at\n"
         "its first frame) as corrected by the joint optimisation.");
     const auto parsed = sarmap::common::ParseNodeOptions<HandheldSoundMapOptions>(
         &parser, &node_args, argc, argv, "config/handheld_sound_map.yaml");
     if (!parsed) return 0;
     const HandheldSoundMapOptions& options = *parsed;
-    const Eigen::Isometry3d rig_from_sensor = sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
+    const Eigen::Isometry3d rig_from_sensor =
+        sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
 
     LinearArraySoundMap map(options.map);
     sarmap::common::Node node("sarmap-handheld-sound-map", node_args.lcm_url);
@@ -56,7 +57,8 @@ int main(int argc, char** argv) {
     };
     const auto apply = [&](Utime t, std::function<void(Utime)>& f) {
       f(t);
-      if (t - last_publish >= sarmap::common::SecondsToUtime(options.publish_period_s)) publish_map(t);
+      if (t - last_publish >= sarmap::common::SecondsToUtime(options.publish_period_s))
+        publish_map(t);
     };
     auto push = [&](Utime utime, std::function<void(Utime)> fn) {
       newest = std::max(newest, utime);
@@ -64,27 +66,31 @@ int main(int argc, char** argv) {
       queue.Release(apply);
     };
 
-    node.Subscribe<sarmap::pose_t>(options.pose_channel, [&](const sarmap::pose_t& msg, const auto&) {
-      Eigen::Isometry3d odom_from_rig;
-      if (!sarmap::sound_map::IsometryFromPose(msg, &odom_from_rig)) {
-        ++bad_poses;
-        static sarmap::common::RateLimiter limit(10.0);
-        if (limit.Allow(sarmap::common::SteadySeconds()))
-          SARMAP_LOG(WARN) << options.pose_channel << ": non-finite position or non-unit quaternion, dropped ("
-                           << bad_poses << " so far)";
-        return;
-      }
-      const Eigen::Isometry3d odom_from_sensor = odom_from_rig * rig_from_sensor;
-      push(msg.header.utime, [&map, odom_from_sensor](Utime t) { map.OnPose(t, odom_from_sensor); });
-    });
+    node.Subscribe<sarmap::pose_t>(
+        options.pose_channel, [&](const sarmap::pose_t& msg, const auto&) {
+          Eigen::Isometry3d odom_from_rig;
+          if (!sarmap::sound_map::IsometryFromPose(msg, &odom_from_rig)) {
+            ++bad_poses;
+            static sarmap::common::RateLimiter limit(10.0);
+            if (limit.Allow(sarmap::common::SteadySeconds()))
+              SARMAP_LOG(WARN) << options.pose_channel
+                               << ": non-finite position or non-unit quaternion, dropped ("
+                               << bad_poses << " so far)";
+            return;
+          }
+          const Eigen::Isometry3d odom_from_sensor = odom_from_rig * rig_from_sensor;
+          push(msg.header.utime,
+               [&map, odom_from_sensor](Utime t) { map.OnPose(t, odom_from_sensor); });
+        });
     node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const auto&) {
       auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &other_kinds);
       if (other_kinds > warned_kinds) {
         warned_kinds = other_kinds;
         static sarmap::common::RateLimiter limit(10.0);
         if (limit.Allow(sarmap::common::SteadySeconds()))
-          SARMAP_LOG(WARN) << other_kinds << " DOA(s) not KIND_ANGLE_1D ignored: this map needs a linear array's "
-                                             "cone angles (sarmap-sound-localisation with a linear array)";
+          SARMAP_LOG(WARN) << other_kinds
+                           << " DOA(s) not KIND_ANGLE_1D ignored: this map needs a linear array's "
+                              "cone angles (sarmap-sound-localisation with a linear array)";
       }
       push(msg.header.utime, [&map, doas](Utime t) { map.OnDoa(t, doas); });
     });
@@ -101,12 +107,14 @@ int main(int argc, char** argv) {
       const auto sources = map.sources();
       for (const auto& s : sources) converged += s.converged;
       node.SetStatusMessage(
-          "sources " + std::to_string(sources.size()) + " (" + std::to_string(converged) + " converged, born " +
-          std::to_string(c.sources_born) + ", merged " + std::to_string(c.sources_merged) + ", pruned " +
-          std::to_string(c.sources_pruned) + "), keyframes " + std::to_string(c.keyframes) + ", doa used " +
+          "sources " + std::to_string(sources.size()) + " (" + std::to_string(converged) +
+          " converged, born " + std::to_string(c.sources_born) + ", merged " +
+          std::to_string(c.sources_merged) + ", pruned " + std::to_string(c.sources_pruned) +
+          "), keyframes " + std::to_string(c.keyframes) + ", doa used " +
           std::to_string(c.doas_used) + " of " + std::to_string(c.doas) + " (no pose " +
           std::to_string(c.doas_without_pose) + ", gated out " + std::to_string(c.doas_gated_out) +
-          "), bad poses " + std::to_string(bad_poses) + ", late inputs " + std::to_string(queue.dropped_late()));
+          "), bad poses " + std::to_string(bad_poses) + ", late inputs " +
+          std::to_string(queue.dropped_late()));
     });
     const int code = node.Run();
     // The last reorder_delay_s of inputs, then one optimisation over everything, and the final map.

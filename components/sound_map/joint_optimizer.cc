@@ -225,6 +225,27 @@ JointProblem2d JointProblemFromLog(const std::vector<Pose2>& poses, const std::v
   return p;
 }
 
+JointReport SolveJointFromLog(const std::vector<Pose2>& poses, const std::vector<std::vector<LogBearing>>& bearings,
+                              const std::vector<Eigen::Vector3d>& initial_sources, const ArrayMount& mount,
+                              bool three_d, const LogJointOptions& options, JointProblem2d* problem, int rounds) {
+  std::vector<Eigen::Vector3d> sources = initial_sources;
+  JointReport total;
+  size_t last_edges = static_cast<size_t>(-1);
+  for (int round = 0; round < std::max(1, rounds); ++round) {
+    *problem = JointProblemFromLog(poses, bearings, sources, mount, three_d, options);
+    const JointReport r = SolveJoint(problem, 100);
+    total.solve_seconds += r.solve_seconds;
+    total.iterations += r.iterations;
+    total.usable = r.usable;
+    if (round == 0) total.initial_cost = r.initial_cost;
+    total.final_cost = r.final_cost;
+    if (problem->sound_edges.size() == last_edges) break;
+    last_edges = problem->sound_edges.size();
+    sources = problem->sources;
+  }
+  return total;
+}
+
 JointReport SolveJoint(JointProblem2d* p, int max_iterations) {
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

@@ -113,7 +113,8 @@ struct LinearArrayMapOptions {
     v("merge_radius_m", merge_radius_m,
       "two converged sources this close are one (heard under two track ids)");
     v("level_height_spread_m", level_height_spread_m,
-      "a source heard only from poses within this height of each other has two possible heights (its z variance says so)");
+      "a source heard only from poses within this height of each other has two possible heights "
+      "(its z variance says so)");
     v("mirror_check", mirror_check,
       "keep a source or its reflection through the mean height of the poses that heard it, the "
       "better");

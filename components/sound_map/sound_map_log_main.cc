@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
     std::string relocalise_section = "map_localiser";
     double doa_shift_s = 0;
     bool pose_check = false, joint = false;
+    double joint_pose_freedom = 1.0;
     std::string trajectory_path;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
@@ -87,6 +88,8 @@ int main(int argc, char** argv) {
     parser.AddSwitch("--joint", &joint,
                      "also solve the joint optimisation (§4.2) of the trajectory (POSE, or the truth with "
                      "--truth-poses) and the final map's sources from every DOA, and score it");
+    parser.AddFlag("--joint-pose-freedom", &joint_pose_freedom,
+                   "with --joint: multiplies the trajectory's relative-pose sigmas (larger lets the sound bend it)");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -540,9 +543,15 @@ int main(int argc, char** argv) {
       std::vector<Eigen::Vector3d> init;
       for (const auto& src : ci) init.push_back(src.position_m);
       sarmap::sound_map::LogJointOptions jo;
-      auto problem = sarmap::sound_map::JointProblemFromLog(poses, bearings, init, sarmap::sound_map::MountFromRobot(robot),
-                                                            options.map.three_d, jo);
-      const auto rep = sarmap::sound_map::SolveJoint(&problem, 100);
+      jo.doa_sigma_floor_deg = options.map.doa_sigma_floor_deg;
+      jo.gate_chi2 = options.map.gate_chi2;
+      jo.odometry_sigma_floor_m *= joint_pose_freedom;
+      jo.odometry_sigma_m_per_m *= joint_pose_freedom;
+      jo.odometry_sigma_floor_deg *= joint_pose_freedom;
+      jo.odometry_sigma_deg_per_m *= joint_pose_freedom;
+      sarmap::sound_map::JointProblem2d problem;
+      const auto rep = sarmap::sound_map::SolveJointFromLog(
+          poses, bearings, init, sarmap::sound_map::MountFromRobot(robot), options.map.three_d, jo, &problem);
       printf("joint optimisation (§4.2) on the log: %zu pose nodes, %zu bearing edges to %zu sources, solved in %.3f s "
              "(%d iterations), cost %.1f -> %.1f\n",
              problem.poses.size(), problem.sound_edges.size(), init.size(), rep.solve_seconds, rep.iterations,
