@@ -427,6 +427,24 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
     flat[k] = {to_byte(polygons_[k].shade[0]), to_byte(polygons_[k].shade[1]), to_byte(polygons_[k].shade[2])};
   }
   const std::array<uint8_t, 3> background = {to_byte(background_[0]), to_byte(background_[1]), to_byte(background_[2])};
+  // Surface texture: the cube of the map point a pixel sees, hashed to a brightness factor.
+  // map point = R z (rx, ry, 1) + t, with R, t of map_from_camera and z its depth. The cubes
+  // are offset by odd fractions of a cell: walls and floors sit at round coordinates, and a
+  // surface on a cube boundary would flicker between two cells.
+  const float texture = static_cast<float>(options_.surface_texture);
+  const Eigen::Matrix3f map_r = map_from_camera.rotation().toRotationMatrix().cast<float>();
+  const Eigen::Vector3f map_t = map_from_camera.translation().cast<float>();
+  const float inv_cell = static_cast<float>(1.0 / options_.surface_texture_cell_m);
+  auto texture_factor = [&](float x, float y, float z) {
+    x += 0.0371f, y += 0.0213f, z += 0.0297f;
+    uint32_t h = static_cast<uint32_t>(static_cast<int32_t>(std::floor(x * inv_cell))) * 73856093u ^
+                 static_cast<uint32_t>(static_cast<int32_t>(std::floor(y * inv_cell))) * 19349663u ^
+                 static_cast<uint32_t>(static_cast<int32_t>(std::floor(z * inv_cell))) * 83492791u;
+    h ^= h >> 13;
+    h *= 0x5bd1e995u;
+    h ^= h >> 15;
+    return 1.0f + texture * (static_cast<float>(h & 0xffff) * (2.0f / 65535.0f) - 1.0f);
+  };
   for (int j = 0; j < H; ++j) {
     const float ry = (j - cy) / fy;
     for (int i = 0; i < W; ++i) {
@@ -436,6 +454,14 @@ void Renderer::Render(const common::Rigid3d& map_from_camera, RenderOutput* out)
       const bool billboard = id >= 0 && (polygons_[id].flags & kBillboard) && textured;
       if (!billboard && glass_layers_[p] == 0) {
         const std::array<uint8_t, 3>& f = id >= 0 ? flat[id] : background;
+        if (texture > 0 && id >= 0) {
+          const float z = 1.0f / color_z_[p];
+          const Eigen::Vector3f w = map_r * Eigen::Vector3f(z * rx[i], z * ry, z) + map_t;
+          const float k = texture_factor(w.x(), w.y(), w.z());
+          for (int ch = 0; ch < 3; ++ch)
+            dst[ch] = static_cast<uint8_t>(std::min(255.0f, std::max(0.0f, f[ch] * k + 0.5f)));
+          continue;
+        }
         dst[0] = f[0];
         dst[1] = f[1];
         dst[2] = f[2];

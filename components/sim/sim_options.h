@@ -38,6 +38,11 @@ struct CameraOptions {
   double dark_noise = 0.035;      // lights off: noise sigma (sensor gain turned up)
   int jpeg_quality = 85;          // 0 sends raw RGB8
   bool compress_depth = true;
+  // Surface texture: the world's flat colours modulated by +-this fraction in cubes of
+  // surface_texture_cell_m fixed in the map (posters, tiles, stains). 0: flat colours. Visual
+  // odometry needs image gradients that flat walls do not give.
+  double surface_texture = 0.0;
+  double surface_texture_cell_m = 0.08;
   template <class V>
   void Visit(V& v) {
     v("enabled", enabled, "publish DEPTH and RGB");
@@ -62,6 +67,9 @@ struct CameraOptions {
     v("dark_noise", dark_noise, "lights off: colour noise sigma");
     v("jpeg_quality", jpeg_quality, "RGB JPEG quality 1..100, 0 = raw RGB8");
     v("compress_depth", compress_depth, "lossless depth compression");
+    v("surface_texture", surface_texture,
+      "modulate surface colours by +- this fraction in map-fixed cubes (0: flat; visual odometry needs texture)");
+    v("surface_texture_cell_m", surface_texture_cell_m, "size of the texture cubes");
   }
   void Validate(Validator& check) const {
     check.Positive("rate_hz", rate_hz);
@@ -83,6 +91,8 @@ struct CameraOptions {
     check.InRange("dark_gain", dark_gain, 0, 1);
     check.InRange("dark_noise", dark_noise, 0, 1);
     check.InRange("jpeg_quality", jpeg_quality, 0, 100);
+    check.InRange("surface_texture", surface_texture, 0, 1);
+    check.Positive("surface_texture_cell_m", surface_texture_cell_m);
   }
 };
 
