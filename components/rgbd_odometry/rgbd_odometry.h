@@ -44,7 +44,7 @@ struct RgbdOdometryOptions {
   // rgbd (photometric + depth warp, Steinbruecker 2011), icp (point-to-plane, KinectFusion
   // style), rgbd_icp (both energies), fast_icp (OpenCV's KinectFusion ICP; ignores the initial
   // guess, min/max depth and max_points_part). Default chosen by measurement (README).
-  std::string method = "rgbd_icp";
+  std::string method = "rgbd";
   double image_scale = 0.5;        // 1 = full resolution; 0.5 halves width and height (speed)
   double min_depth_m = 0.3;        // closer readings are invalid
   double max_depth_m = 4.0;        // farther readings are invalid (Kinect noise grows as z^2)
