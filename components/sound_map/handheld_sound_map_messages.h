@@ -118,8 +118,8 @@ inline sarmap::sound_map_t LinearSoundMapMessage(const LinearArraySoundMap& map,
     for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
-    out.state = s.converged ? sarmap::sound_source_t::STATE_CONVERGED
-                            : sarmap::sound_source_t::STATE_INITIALISING;
+    // (unary + : the LCM constants are declared, not defined; no reference to them may be taken)
+    out.state = s.converged ? +sarmap::sound_source_t::STATE_CONVERGED : +sarmap::sound_source_t::STATE_INITIALISING;
     out.hypotheses_left = s.hypotheses_left;
     out.is_person = s.is_person;
     out.first_heard_utime = s.first_heard;
