@@ -6,11 +6,14 @@
 //     landmarks and sources (thesis: 99.4 s; goal < 1 s).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <chrono>
 #include <random>
 
 #include "sound_map/experiments.h"
 #include "sound_map/idp_ekf.h"
 #include "sound_map/joint_optimizer.h"
+#include "sound_map/linear_array_map.h"
 #include "sound_map/simulation.h"
 
 namespace sm = sarmap::sound_map;
@@ -136,5 +139,50 @@ void BM_CiSubmaps185mRun(benchmark::State& state) {
                  std::to_string(r.sound_step_ms_max) + " ms; RMS " + std::to_string(r.score.rms_m) + " m");
 }
 BENCHMARK(BM_CiSubmaps185mRun)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The hand-held rig's online linear-array map (LinearArraySoundMap) on §5.5.1's trajectory 1:
+// odometry-only poses, 8 sources, 3 deg DOAs, one block per 0.2 m step (the map works per DOA
+// block, 5-30 per second in use): the time of one block, mean and worst (a windowed or full
+// optimisation falls on some blocks).
+void BM_LinearArrayMapRun(benchmark::State& state) {
+  sm::LinearSimConfig c;
+  c.trajectory = 1;
+  c.fixed_heading = true;
+  c.odo_sigma_m = 0.003;
+  c.odo_sigma_rad = 0.1 * M_PI / 180;
+  c.landmark_density_per_m2 = 0;
+  c.seed = 13;
+  static const sm::LinearSimData d = sm::SimulateLinear(c);
+  std::vector<double> block_ms;
+  for (auto _ : state) {
+    block_ms.clear();
+    sm::LinearArraySoundMap map{sm::LinearArrayMapOptions()};
+    Eigen::Isometry3d odom = d.truth[0];
+    for (size_t k = 0; k < d.truth.size(); ++k) {
+      if (k > 0) odom = odom * d.odometry[k];
+      const int64_t t = static_cast<int64_t>(k) * 400000;
+      map.OnPose(t, odom);
+      std::vector<sm::LinearArraySoundMap::Doa> doas;
+      for (const auto& s : d.sound_obs[k]) {
+        sm::LinearArraySoundMap::Doa doa;
+        doa.track_id = s.source;
+        doa.beta_rad = sm::LinearArrayBeta(d.truth[k], d.sources[s.source]);
+        doa.sigma_rad = 3 * M_PI / 180;
+        doas.push_back(doa);
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      map.OnDoa(t, doas);
+      block_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    map.Finish();
+    benchmark::DoNotOptimize(map.num_keyframes());
+  }
+  double mean = 0;
+  for (double v : block_ms) mean += v;
+  mean /= std::max<size_t>(1, block_ms.size());
+  state.SetLabel(std::to_string(block_ms.size()) + " blocks: mean " + std::to_string(mean) + " ms, max " +
+                 std::to_string(*std::max_element(block_ms.begin(), block_ms.end())) + " ms per block");
+}
+BENCHMARK(BM_LinearArrayMapRun)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace
