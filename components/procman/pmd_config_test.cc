@@ -134,7 +134,7 @@ TEST(PmdConfig, ErrorsNameFileLineAndColumn) {
 
 TEST(PmdConfig, LaunchScriptsInTheRepositoryParse) {
   for (const char* name :
-       {"sim-demo.pmd", "robot-one-computer.pmd", "robot-two-computers.pmd", "replay.pmd"}) {
+       {"sim-demo.pmd", "robot-one-computer.pmd", "robot-two-computers.pmd", "replay.pmd", "handheld.pmd"}) {
     const std::string path = std::string(SARMAP_SOURCE_DIR) + "/launch-scripts/" + name;
     SCOPED_TRACE(path);
     const Config c = LoadConfigFile(path);
