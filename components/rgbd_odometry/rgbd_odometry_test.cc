@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <ostream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -47,6 +48,8 @@ struct MethodCase {
   std::string method;
   double scale;
 };
+// Test parameters print as their method and scale (not as raw bytes in the test listing).
+void PrintTo(const MethodCase& c, std::ostream* os) { *os << c.method << " x" << c.scale; }
 std::string CaseName(const testing::TestParamInfo<MethodCase>& info) {
   return info.param.method + (info.param.scale == 1.0 ? "_full" : "_half");
 }
@@ -418,6 +421,7 @@ struct RealCase {
   double scale;
   Bound case_1, case_2;
 };
+void PrintTo(const RealCase& c, std::ostream* os) { *os << c.method << " x" << c.scale; }
 
 class TumPairs : public testing::TestWithParam<RealCase> {};
 
@@ -538,6 +542,7 @@ struct PriorCase {
   double scale;
   int min_tracked;  // of the 4 steps (measured, README)
 };
+void PrintTo(const PriorCase& c, std::ostream* os) { *os << c.method << " x" << c.scale; }
 class SlambookPrior : public testing::TestWithParam<PriorCase> {};
 
 TEST_P(SlambookPrior, TheChainIsTrackedWithinTheTruthsPrecision) {
