@@ -809,6 +809,8 @@ class Mapper {
       }
     }
     if (problem.NumResidualBlocks() == 0) return;
+    std::map<int64_t, Eigen::Vector3d> before;
+    for (int64_t id : srcs) before[id] = tracks_[id].point;
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
     so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
@@ -819,6 +821,14 @@ class Mapper {
     ceres::Solver::Summary sum;
     ceres::Solve(so, &problem, &sum);
     for (int k : used_poses) poses_[k].q.normalize();
+    // A source run off along an asymptote of its cone keeps its place from before the solve.
+    for (int64_t id : srcs) {
+      SourceTrack& tr = tracks_[id];
+      double nearest = 1e300;
+      for (const auto& ob : tr.obs)
+        if (ob.k <= last) nearest = std::min(nearest, (tr.point - poses_[ob.k].t).norm());
+      if (!(nearest <= o_.max_source_range_m)) tr.point = before[id];
+    }
   }
 
   const LinearSimData& d_;

@@ -185,6 +185,10 @@ struct LinearMapperOptions {
   MultiHypothesisOptions hypotheses;
   int num_hypotheses = 10;    // copied into hypotheses.num_hypotheses
   int window_keyframes = 5;   // online joint optimisation over the last keyframes (§5.5.1)
+  // A source the joint optimisation carries farther than this from every pose that heard it
+  // has run off along an asymptote of its cone (far away its angles barely change); it keeps
+  // its place from before that solve (our addition; Table 5.1's array hears to 3 m).
+  double max_source_range_m = 15.0;
   int loop_gap_keyframes = 60;  // a landmark re-seen after this many keyframes: loop closure
   std::shared_ptr<const DoaSensorModel> sensor_model;  // default: GP fitted on SimulatedCalibration
   // The DOA method's forward model (true -> raw mean and variance). When set, the joint

@@ -242,6 +242,8 @@ struct LinearArraySoundMap::Impl {
       }
     }
     if (problem.NumResidualBlocks() == 0) return;
+    std::vector<Eigen::Vector3d> before;
+    for (Track* t : sources) before.push_back(t->point);
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
     so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
@@ -251,6 +253,16 @@ struct LinearArraySoundMap::Impl {
     ceres::Solver::Summary summary;
     ceres::Solve(so, &problem, &summary);
     for (int k : used_poses) keyframes[k].est.q.normalize();
+    // A source run off along an asymptote of its cone (far away its angles barely change)
+    // keeps its place from before the solve.
+    for (size_t i = 0; i < sources.size(); ++i) {
+      double nearest = 1e300;
+      for (const Obs& ob : sources[i]->obs) nearest = std::min(nearest, (sources[i]->point - ObsPose(ob).translation()).norm());
+      if (!(nearest <= options.max_source_range_m)) {
+        sources[i]->point = before[i];
+        ++counters->runaway_solves;
+      }
+    }
     for (Track* t : sources) {
       if (options.mirror_check && MirrorCheck(t)) ++counters->mirrors_flipped;
       UpdatePointCovariance(t);

@@ -67,8 +67,11 @@ struct LinearArrayMapOptions {
   // Heard only from poses within this height of each other, a source's height is one of two
   // (it and its mirror image through their plane fit alike): its z variance grows to say so.
   double level_height_spread_m = 0.1;
-  double merge_radius_m =
-      0.5;  // converged duplicates (one source, several track ids) merge when this close
+  // Converged duplicates (one source, several track ids) merge when this close.
+  double merge_radius_m = 0.5;
+  // A solve that carries a source farther than this from every pose that heard it is undone
+  // for that source (it ran off along an asymptote of its cone, where its angles barely change).
+  double max_source_range_m = 15.0;
   template <class V>
   void Visit(V& v) {
     v("num_hypotheses", hypotheses.num_hypotheses,
@@ -110,6 +113,8 @@ struct LinearArrayMapOptions {
     v("prune_after_s", prune_after_s,
       "remove a source not converged and not heard for this long ...");
     v("prune_min_observations", prune_min_observations, "... with fewer DOAs than this");
+    v("max_source_range_m", max_source_range_m,
+      "a source the optimisation carries farther than this from every pose that heard it keeps its place from before");
     v("merge_radius_m", merge_radius_m,
       "two converged sources this close are one (heard under two track ids)");
     v("level_height_spread_m", level_height_spread_m,
@@ -141,6 +146,7 @@ struct LinearArrayMapOptions {
     c.That(confirm_observations >= 1, "confirm_observations", "must be >= 1");
     c.That(track_release_misses >= 1, "track_release_misses", "must be >= 1");
     c.Positive("prune_after_s", prune_after_s);
+    c.Positive("max_source_range_m", max_source_range_m);
     c.NonNegative("level_height_spread_m", level_height_spread_m);
     c.NonNegative("merge_radius_m", merge_radius_m);
   }
@@ -172,6 +178,7 @@ class LinearArraySoundMap {
     int64_t sources_born = 0, sources_restarted = 0, sources_converged = 0, sources_pruned = 0,
             sources_merged = 0;
     int64_t mirrors_flipped = 0, keyframes = 0, window_optimisations = 0, full_optimisations = 0;
+    int64_t runaway_solves = 0;  // a source carried beyond max_source_range_m, put back
   };
 
   explicit LinearArraySoundMap(const LinearArrayMapOptions& options);
