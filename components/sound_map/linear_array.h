@@ -112,7 +112,11 @@ struct LinearSimConfig {
   double step_m = 0.2;            // Table 5.1
   double odo_sigma_m = 0.01;      // per step and axis (our choice: the thesis tracks with ORB-SLAM)
   double odo_sigma_rad = 0.5 * M_PI / 180;
-  double landmark_density_per_m2 = 2.0;  // our choice: RGB-D features are dense (0.6 left poses 1.2-1.6 deg off)
+  // Landmarks per m^2 of floor (heights +-1.5 m): 15 gives ~195 seen per keyframe, the map points
+  // an ORB-SLAM2 RGB-D tracker keeps of the 1000 ORB features per image that the thesis' own
+  // settings extract (SSM_LinearArray kinect_settings.yaml: ORBextractor.nFeatures 1000).
+  // Sessions 1-9 used 2 (~25 per keyframe; 0.6 left poses 1.2-1.6 deg off).
+  double landmark_density_per_m2 = 15.0;
   double landmark_range_m = 4.0;
   double landmark_fov_rad = 60 * M_PI / 180;  // half angle
   double landmark_sigma_m = 0.01;             // Table 5.1
