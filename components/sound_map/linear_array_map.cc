@@ -547,7 +547,11 @@ void LinearArraySoundMap::OnDoa(Utime utime, const std::vector<Doa>& doas) {
     m.pending_utime[d.track_id] = utime;
     if (static_cast<int>(pending.size()) < o.confirm_observations) continue;
     int64_t sid = m.BestForAll(pending, o.gate_chi2);
-    for (const Impl::Obs& p : pending) sid = m.Feed(sid, p, utime, &taken);
+    for (const Impl::Obs& p : pending) {
+      // One DOA per source per block: the earlier DOAs of the track belong to earlier blocks.
+      std::set<int64_t> earlier_block;
+      sid = m.Feed(sid, p, p.utime, p.utime == utime ? &taken : &earlier_block);
+    }
     m.track_owner[d.track_id] = sid;
     m.pending.erase(d.track_id);
     m.pending_utime.erase(d.track_id);

@@ -192,6 +192,8 @@ TEST(LinearArraySoundMap, ALoneBurstIsPrunedAndAHeardDirectionMarksAPerson) {
   // Standing still, a track of 5 DOAs starts a source that cannot converge (no parallax) ...
   for (int i = 0; i < 5; ++i) map.OnDoa(200000 + i * 100000, {doa(4, -0.8)});
   ASSERT_EQ(map.sources().size(), 1u);
+  EXPECT_EQ(map.sources()[0].observations, 5);  // the 3 that started it count too
+  EXPECT_EQ(map.counters().doas_duplicate, 0);
   EXPECT_FALSE(map.sources()[0].converged);
   EXPECT_EQ(map.sources()[0].hypotheses_left, o.hypotheses.num_hypotheses);
   // ... and a heard direction along its cone marks it a person; one far off does not.
