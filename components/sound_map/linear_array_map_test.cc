@@ -38,7 +38,6 @@ MapRun Feed(int trajectory, double doa_sigma_deg, int churn, uint64_t seed, doub
   if (const char* e = std::getenv("SARMAP_TEST_DOA")) doa_sigma_deg = std::atof(e);
   c.landmark_density_per_m2 = 0;  // no landmarks: the pose source is the odometry alone
   c.doa_noise_scale = 0;
-  if (const char* e = std::getenv("SARMAP_TEST_SEED")) seed = std::strtoull(e, nullptr, 10);
   c.seed = seed;
   MapRun run;
   run.data = SimulateLinear(c);
