@@ -33,9 +33,6 @@ MapRun Feed(int trajectory, double doa_sigma_deg, int churn, uint64_t seed, doub
   c.fixed_heading = true;
   c.odo_sigma_m = 0.003;
   c.odo_sigma_rad = 0.1 * M_PI / 180;
-  if (const char* e = std::getenv("SARMAP_TEST_ODO"))
-    c.odo_sigma_m = std::atof(e), c.odo_sigma_rad = std::atof(e) * 0.6;
-  if (const char* e = std::getenv("SARMAP_TEST_DOA")) doa_sigma_deg = std::atof(e);
   c.landmark_density_per_m2 = 0;  // no landmarks: the pose source is the odometry alone
   c.doa_noise_scale = 0;
   c.seed = seed;
