@@ -13,6 +13,16 @@
 namespace sarmap {
 namespace common {
 
+// A camera's body frame (x forward, y left, z up) from its optical frame (z forward, x right,
+// y down, as OpenCV and PCL): the columns are the optical axes expressed in the body frame.
+inline Eigen::Matrix3d BodyFromOpticalRotation() {
+  Eigen::Matrix3d r;
+  r << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  return r;
+}
+
 // Wraps an angle to (-pi, pi].
 inline double NormalizeAngle(double angle_rad) {
   angle_rad = std::remainder(angle_rad, 2.0 * M_PI);

@@ -10,6 +10,8 @@
 #include <opencv2/rgbd.hpp>
 #include <sstream>
 
+#include "common/transform.h"
+
 namespace sarmap {
 namespace rgbd_odometry {
 
@@ -67,10 +69,7 @@ const char* TrackingStatusName(TrackingStatus status) {
 
 Eigen::Isometry3d RigFromOptical() {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  // Columns: the optical axes x, y, z expressed in the rig frame.
-  t.linear() << 0, 0, 1,  //
-      -1, 0, 0,           //
-      0, -1, 0;
+  t.linear() = common::BodyFromOpticalRotation();
   return t;
 }
 

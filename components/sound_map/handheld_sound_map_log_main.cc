@@ -20,6 +20,7 @@
 #include "common/args.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
+#include "common/transform.h"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_map/handheld_sound_map_messages.h"
 
@@ -36,16 +37,6 @@ Eigen::Isometry3d Iso(const sarmap::common::Rigid3d& r) {
   Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
   m.linear() = r.rotation().toRotationMatrix();
   m.translation() = r.translation();
-  return m;
-}
-
-// The camera's body frame (x forward, y left, z up) from its optical frame (z forward, x right,
-// y down): the rig frame of sarmap-rgbd-odometry.
-Eigen::Isometry3d OpticalFromBody() {
-  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
-  m.linear() << 0, -1, 0,  //
-      0, 0, -1,            //
-      1, 0, 0;
   return m;
 }
 
@@ -94,7 +85,8 @@ int main(int argc, char** argv) {
     if (live_channel.empty()) live_channel = options.sound_map_channel;
     const auto robot = sarmap::common::LoadRobot(robot_config);
     const Eigen::Isometry3d base_from_rig =
-        Iso(robot.base_from_camera.ToRigid3d()) * OpticalFromBody();
+        Iso(robot.base_from_camera.ToRigid3d()) *
+        Eigen::Isometry3d(sarmap::common::BodyFromOpticalRotation().transpose());
     const Eigen::Isometry3d rig_from_sensor =
         sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
 

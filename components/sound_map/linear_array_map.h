@@ -137,8 +137,8 @@ struct LinearArrayMapOptions {
     c.That(full_optimisation_keyframes >= 0, "full_optimisation_keyframes", "must be >= 0");
     c.Positive("odometry_sigma_floor_m", odometry_sigma_floor_m);
     c.Positive("odometry_sigma_floor_deg", odometry_sigma_floor_deg);
-    c.That(odometry_sigma_m_per_m >= 0, "odometry_sigma_m_per_m", "must be >= 0");
-    c.That(odometry_sigma_deg_per_m >= 0, "odometry_sigma_deg_per_m", "must be >= 0");
+    c.NonNegative("odometry_sigma_m_per_m", odometry_sigma_m_per_m);
+    c.NonNegative("odometry_sigma_deg_per_m", odometry_sigma_deg_per_m);
     c.Positive("doa_sigma_floor_deg", doa_sigma_floor_deg);
     c.Positive("gate_chi2", gate_chi2);
     c.Positive("update_gate_chi2", update_gate_chi2);
