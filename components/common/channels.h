@@ -35,7 +35,9 @@ inline const std::vector<ChannelSpec>& DefaultChannels() {
       {"PEOPLE_MAP", "people_map_t"},
       {"CMD_VEL", "velocity_command_t"},
       {"TELEOP", "teleop_t"},
+      {"EXPLORE_STATUS", "explore_status_t"},
       {"SIM_TRUTH", "sim_truth_t"},
+      {"SIM_FLOOR", "occupancy_grid_t"},  // the simulator's reachable floor (world frame)
       {"PM_ORDERS", "pm_orders_t"},
       {"PM_INFO", "pm_info_t"},
       {"PM_OUTPUT", "pm_output_t"},

@@ -229,6 +229,20 @@ std::string CheckMessage(const sarmap::sim_truth_t& m) {
       .Count(m.num_sources, m.sources.size(), "num_sources");
   for (const auto& p : m.people) c.Finite(p.position_m, "people.position_m");
   for (const auto& s : m.sources) c.Finite(s.position_m, "sources.position_m");
+  c.Finite(m.start_pose, "start_pose").Finite(m.distance_m, "distance_m")
+      .That(m.collisions >= 0, "collisions negative");
+  return c.error();
+}
+
+std::string CheckMessage(const sarmap::explore_status_t& m) {
+  Check c;
+  c.Header(m.header).Finite(m.goal_m, "goal_m")
+      .Count(m.num_path, m.path_x_m.size(), "num_path")
+      .Count(m.num_path, m.path_y_m.size(), "num_path")
+      .Finite(m.stuck_s, "stuck_s").Finite(m.elapsed_s, "elapsed_s");
+  for (size_t i = 0; i < m.path_x_m.size() && i < m.path_y_m.size(); ++i) {
+    c.Finite(m.path_x_m[i], "path_x_m").Finite(m.path_y_m[i], "path_y_m");
+  }
   return c.error();
 }
 

@@ -115,7 +115,8 @@ void Robot::Step(double t_s, double dt) {
   const common::Rigid2d next = map_from_base_ * common::Rigid2d(true_ds, 0.0, true_dtheta);
   // Blocked by an obstacle (a robot placed overlapping one may drive out of it).
   if (std::abs(true_ds) > 0 && Collides(next.translation()) && !Collides(map_from_base_.translation())) {
-    ++collisions_;
+    if (!in_contact_) ++collisions_;  // one contact, however many steps it is pushed against
+    in_contact_ = true;
     linear_ = 0;
     angular_ = w;
     const common::Rigid2d turn = map_from_base_ * common::Rigid2d(0.0, 0.0, true_dtheta);
@@ -123,6 +124,8 @@ void Robot::Step(double t_s, double dt) {
     wheel_dtheta_ += dtheta;
     return;
   }
+  if (std::abs(true_ds) > 0) in_contact_ = false;
+  distance_m_ += std::abs(true_ds);
   map_from_base_ = next;
   linear_ = v;
   angular_ = w;

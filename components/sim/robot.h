@@ -41,7 +41,9 @@ class Robot {
   double angular_radps() const { return angular_; }
   double odom_var_xy() const { return var_xy_; }
   double odom_var_yaw() const { return var_yaw_; }
+  // Contacts with obstacles: a blocked motion counts once until the robot moves freely again.
   int collisions() const { return collisions_; }
+  double distance_m() const { return distance_m_; }  // true path length driven
   bool following_path() const { return following_path_; }
 
  private:
@@ -63,6 +65,8 @@ class Robot {
   double wheel_ds_ = 0, wheel_dtheta_ = 0;  // since the last odometry update
   double var_xy_ = 0, var_yaw_ = 0;
   int collisions_ = 0;
+  bool in_contact_ = false;
+  double distance_m_ = 0;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
 };

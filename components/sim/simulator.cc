@@ -319,6 +319,9 @@ void Simulator::AdvanceTo(double target_s, SimSink* sink) {
       }
       truth.num_people = static_cast<int32_t>(truth.people.size());
       truth.num_sources = static_cast<int32_t>(truth.sources.size());
+      for (int k = 0; k < 3; ++k) truth.start_pose[k] = setup_.world.robot.pose[k];
+      truth.distance_m = m.robot->distance_m();
+      truth.collisions = m.robot->collisions();
       sink->Publish(o.channels.truth, truth);
     }
   }
