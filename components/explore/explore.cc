@@ -1,11 +1,20 @@
 #include "explore/explore.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <queue>
+
 
 namespace sarmap {
 namespace explore {
+
+namespace {
+
+bool NoInformation(float r, const Scan& scan) {
+  return !(r > 0) || (std::isfinite(r) && r < scan.range_min_m);  // 0, NaN, negative, too close
+}
+
+}  // namespace
 
 ScanMetrics AnalyseScan(const Scan& scan, const ReactiveOptions& options) {
   ScanMetrics m;
@@ -16,9 +25,12 @@ ScanMetrics AnalyseScan(const Scan& scan, const ReactiveOptions& options) {
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const double angle = scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
     const bool left = angle > 0;
-    const double r = scan.ranges_m[i];
-    const bool valid = std::isfinite(r) && r >= scan.range_min_m && r <= upper;
+    double r = scan.ranges_m[i];
     (left ? n_left : n_right)++;
+    // No return (+inf) is free space up to the sensor's range, not an unknown.
+    if (std::isinf(r) && r > 0) r = scan.range_max_m;
+    const bool no_return = r == scan.range_max_m && std::isinf(scan.ranges_m[i]);
+    const bool valid = no_return || (std::isfinite(r) && r >= scan.range_min_m && r <= upper);
     if (!valid) {
       (left ? unknown_left : unknown_right)++;
       continue;
@@ -57,214 +69,523 @@ Velocity ReactiveExplorer::Step(const Scan& scan, bool* danger) {
   return v;
 }
 
-Eigen::Vector2i Grid::CellOf(const Eigen::Vector2d& p) const {
-  return Eigen::Vector2i(static_cast<int>(std::floor((p.x() - origin_x_m) / resolution_m)),
-                         static_cast<int>(std::floor((p.y() - origin_y_m) / resolution_m)));
-}
-
-Eigen::Vector2d Grid::CentreOf(int x, int y) const {
-  return Eigen::Vector2d(origin_x_m + (x + 0.5) * resolution_m, origin_y_m + (y + 0.5) * resolution_m);
-}
-
-void FrontierExplorer::SetMap(Grid grid) {
-  grid_ = std::move(grid);
-  blocked_.assign(grid_.cells.size(), 0);
-  const int r = static_cast<int>(std::ceil(options_.robot_radius_m / grid_.resolution_m));
-  for (int y = 0; y < grid_.height; ++y) {
-    for (int x = 0; x < grid_.width; ++x) {
-      if (grid_.at(x, y) < options_.occupied_threshold) continue;
-      for (int dy = -r; dy <= r; ++dy) {
-        for (int dx = -r; dx <= r; ++dx) {
-          if (dx * dx + dy * dy > r * r || !grid_.Contains(x + dx, y + dy)) continue;
-          blocked_[static_cast<size_t>(y + dy) * grid_.width + x + dx] = 1;
-        }
-      }
+double ScanClearanceAhead(const Scan& scan, const SafetyOptions& options) {
+  double clearance = std::numeric_limits<double>::infinity();
+  const double cone = std::atan2(options.corridor_half_width_m, options.stop_distance_m);
+  int in_cone = 0, blind = 0;
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const double a = scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
+    const float r = scan.ranges_m[i];
+    if (std::abs(a) <= cone) {
+      ++in_cone;
+      if (NoInformation(r, scan)) ++blind;
     }
+    if (!std::isfinite(r) || NoInformation(r, scan)) continue;
+    const double x = r * std::cos(a), y = r * std::sin(a);
+    if (x > 0 && std::abs(y) <= options.corridor_half_width_m) clearance = std::min(clearance, x);
   }
+  // Columns without information straight ahead: something nearer than the camera can see.
+  if (in_cone > 0 && blind > options.blind_fraction * in_cone) return 0.0;
+  return clearance;
 }
 
-bool FrontierExplorer::Traversable(int x, int y) const {
-  if (!grid_.Contains(x, y)) return false;
-  const int8_t v = grid_.at(x, y);
-  return v >= 0 && v < options_.free_threshold && !blocked_[static_cast<size_t>(y) * grid_.width + x];
+ExploreController::ExploreController(const ExploreOptions& options)
+    : options_(options), reactive_(options.reactive), map_(options.planner) {
+  if (!options_.goals.look_around) state_ = State::kExploring;
 }
 
-void FrontierExplorer::Plan(const Eigen::Vector2d& robot_xy, std::vector<double>* cost,
-                            std::vector<int>* parent) const {
-  const size_t n = grid_.cells.size();
-  cost->assign(n, std::numeric_limits<double>::infinity());
-  parent->assign(n, -1);
-  const Eigen::Vector2i start = grid_.CellOf(robot_xy);
-  if (!grid_.Contains(start.x(), start.y())) return;
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
-  const int s = start.y() * grid_.width + start.x();
-  (*cost)[s] = 0;
-  open.push({0.0, s});
-  while (!open.empty()) {
-    const auto [c, i] = open.top();
-    open.pop();
-    if (c > (*cost)[i]) continue;
-    const int x = i % grid_.width, y = i / grid_.width;
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (!dx && !dy) continue;
-        const int nx = x + dx, ny = y + dy;
-        // The start cell may be inside an inflated obstacle (robot close to a wall): leave it.
-        if (!Traversable(nx, ny)) continue;
-        const int j = ny * grid_.width + nx;
-        const double step = (dx && dy ? M_SQRT2 : 1.0) * grid_.resolution_m;
-        if (c + step < (*cost)[j]) {
-          (*cost)[j] = c + step;
-          (*parent)[j] = i;
-          open.push({c + step, j});
-        }
-      }
-    }
+const char* ExploreController::StateName(State s) {
+  switch (s) {
+    case State::kLookAround: return "look_around";
+    case State::kExploring: return "exploring";
+    case State::kSeekingSound: return "seeking_sound";
+    case State::kRecovering: return "recovering";
+    case State::kReturning: return "returning";
+    case State::kHome: return "home";
+    case State::kFinished: return "finished";
   }
+  return "?";
 }
 
-std::vector<Frontier> FrontierExplorer::Frontiers(const Eigen::Vector2d& robot_xy) const {
-  std::vector<Frontier> out;
-  if (grid_.width == 0) return out;
-  std::vector<double> cost;
-  std::vector<int> parent;
-  Plan(robot_xy, &cost, &parent);
-  const auto is_frontier = [&](int x, int y) {
-    if (!Traversable(x, y)) return false;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx)
-        if (grid_.Contains(x + dx, y + dy) && grid_.at(x + dx, y + dy) < 0) return true;
-    return false;
-  };
-  std::vector<uint8_t> seen(grid_.cells.size(), 0);
-  for (int y = 0; y < grid_.height; ++y) {
-    for (int x = 0; x < grid_.width; ++x) {
-      const size_t i = static_cast<size_t>(y) * grid_.width + x;
-      if (seen[i] || !is_frontier(x, y)) continue;
-      Frontier f;
-      std::queue<Eigen::Vector2i> todo;
-      todo.push({x, y});
-      seen[i] = 1;
-      double best = std::numeric_limits<double>::infinity();
-      while (!todo.empty()) {
-        const Eigen::Vector2i c = todo.front();
-        todo.pop();
-        f.cells.push_back(c);
-        const double cc = cost[static_cast<size_t>(c.y()) * grid_.width + c.x()];
-        if (cc < best) {
-          best = cc;
-          f.goal_m = grid_.CentreOf(c.x(), c.y());
-        }
-        for (int dy = -1; dy <= 1; ++dy) {
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int nx = c.x() + dx, ny = c.y() + dy;
-            if (!grid_.Contains(nx, ny)) continue;
-            const size_t j = static_cast<size_t>(ny) * grid_.width + nx;
-            if (!seen[j] && is_frontier(nx, ny)) {
-              seen[j] = 1;
-              todo.push({nx, ny});
-            }
-          }
-        }
-      }
-      if (static_cast<int>(f.cells.size()) < options_.min_frontier_cells || !std::isfinite(best)) continue;
-      bool blacklisted = false;
-      for (const auto& b : blacklist_) blacklisted |= (b - f.goal_m).norm() < options_.blacklist_radius_m;
-      if (blacklisted) continue;
-      f.path_cost_m = best;
-      out.push_back(std::move(f));
-    }
+void ExploreController::OnMap(const Grid& grid) {
+  map_.SetMap(grid);
+  map_changed_ = true;
+}
+
+void ExploreController::OnPose(const common::Rigid2d& map_from_base) {
+  if (pose_ && state_ == State::kLookAround) {
+    look_turned_rad_ += std::abs(common::NormalizeAngle(map_from_base.yaw_rad() - pose_->yaw_rad()));
   }
-  std::sort(out.begin(), out.end(), [&](const Frontier& a, const Frontier& b) {
-    return a.path_cost_m - options_.size_weight_m * a.cells.size() <
-           b.path_cost_m - options_.size_weight_m * b.cells.size();
-  });
-  return out;
+  pose_ = map_from_base;
+  if (!home_) home_ = map_from_base.translation();
+  map_.AddTrail(map_from_base.translation());
 }
 
-void FrontierExplorer::AbandonGoal() {
-  if (goal_) blacklist_.push_back(*goal_);
+bool ExploreController::IsBlacklisted(const Eigen::Vector2d& p, double now_s) const {
+  for (const auto& b : blacklist_) {
+    if (b.until_s > now_s && (b.position_m - p).norm() < options_.goals.blacklist_radius_m) return true;
+  }
+  return false;
+}
+
+void ExploreController::GiveUpGoal(double now_s) {
+  if (goal_ && goal_->kind != "home") {
+    blacklist_.push_back({goal_->position_m, now_s + options_.goals.blacklist_expiry_s});
+    if (goal_->kind == "sound") visited_sound_.push_back(goal_->face_m.value_or(goal_->position_m));
+  }
   goal_.reset();
   path_.clear();
+  goal_recoveries_ = 0;
+  dwell_until_s_.reset();
 }
 
-std::optional<Velocity> FrontierExplorer::Step(const common::Rigid2d& map_from_base) {
-  const Eigen::Vector2d robot = map_from_base.translation();
-  if (goal_ && (robot - *goal_).norm() < options_.goal_reached_m) goal_.reset();
-  // Replan every step: the map grows as the robot moves, and planning is cheap at 5 cm.
-  const auto frontiers = Frontiers(robot);
-  if (frontiers.empty()) {
+std::optional<ExploreController::Goal> ExploreController::ChooseFrontier(
+    const CostField& field, const std::vector<Frontier>& frontiers) const {
+  std::optional<Goal> best;
+  const double yaw = pose_->yaw_rad();
+  for (const Frontier& f : frontiers) {
+    const Eigen::Vector2d d = f.goal_m - pose_->translation();
+    const double turn = d.norm() > 1e-3 ? std::abs(common::NormalizeAngle(std::atan2(d.y(), d.x()) - yaw)) : 0.0;
+    Goal g;
+    g.position_m = f.goal_m;
+    g.kind = "frontier";
+    g.face_m = f.centroid_m;
+    g.score = f.path_cost_m - options_.goals.size_weight * std::min(f.size_m, 4.0) +
+              options_.goals.heading_weight_m * turn / M_PI;
+    if (!best || g.score < best->score) best = g;
+  }
+  (void)field;
+  return best;
+}
+
+std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(const CostField& field) const {
+  const SoundGoalOptions& o = options_.sound;
+  const Grid& grid = map_.grid();
+  std::optional<Goal> best;
+  for (const HeardPerson& person : heard_) {
+    if (person.seen || person.position_std_m > o.max_position_std_m) continue;
+    bool visited = false;
+    for (const auto& v : visited_sound_) visited |= (v - person.position_m).norm() < o.revisit_radius_m;
+    if (visited) continue;
+    const Eigen::Vector2i c = grid.CellOf(person.position_m);
+    const int r = static_cast<int>(std::ceil(o.max_view_m / grid.resolution_m));
+    double best_cost = std::numeric_limits<double>::infinity();
+    Eigen::Vector2d best_cell = Eigen::Vector2d::Zero();
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (!grid.Contains(x, y)) continue;
+        const int i = grid.Index(x, y);
+        if (!field.Reached(i) || field.cost[i] >= best_cost) continue;
+        const Eigen::Vector2d p = grid.CentreOf(x, y);
+        const double dist = (p - person.position_m).norm();
+        if (dist < o.min_view_m || dist > o.max_view_m || !map_.LineOfSight(p, person.position_m)) continue;
+        best_cost = field.cost[i];
+        best_cell = p;
+      }
+    }
+    if (!std::isfinite(best_cost) || best_cost > o.max_detour_m) continue;
+    if (!best || best_cost < best->score) {
+      Goal g;
+      g.position_m = best_cell;
+      g.kind = "sound";
+      g.score = best_cost;
+      g.person_id = person.id;
+      g.face_m = person.position_m;
+      best = g;
+    }
+  }
+  return best;
+}
+
+bool ExploreController::TimeToGoHome(double now_s, const CostField& field) const {
+  if (options_.goals.time_budget_s <= 0 || !start_s_ || !home_) return false;
+  const Eigen::Vector2i h = map_.grid().CellOf(*home_);
+  double home_cost = (pose_->translation() - *home_).norm() * 1.5;
+  if (map_.grid().Contains(h.x(), h.y()) && field.Reached(map_.grid().Index(h.x(), h.y()))) {
+    home_cost = field.cost[map_.grid().Index(h.x(), h.y())];
+  }
+  // Reserve the way home at the assumed speed, plus time to turn and settle.
+  return now_s - *start_s_ + home_cost / options_.goals.return_speed_mps + 15.0 >= options_.goals.time_budget_s;
+}
+
+void ExploreController::Replan(double now_s) {
+  last_plan_s_ = now_s;
+  map_changed_ = false;
+  map_.UpdateCostMap();
+  const CostField field = map_.Plan(pose_->translation());
+  std::vector<Frontier> frontiers = map_.Frontiers(field);
+  frontiers.erase(std::remove_if(frontiers.begin(), frontiers.end(),
+                                 [&](const Frontier& f) { return IsBlacklisted(f.goal_m, now_s); }),
+                  frontiers.end());
+  frontier_count_ = static_cast<int>(frontiers.size());
+  blacklist_.erase(std::remove_if(blacklist_.begin(), blacklist_.end(),
+                                  [&](const BlacklistEntry& b) { return b.until_s <= now_s; }),
+                   blacklist_.end());
+
+  const bool going_home = state_ == State::kReturning;
+  if (!going_home && options_.goals.return_home && TimeToGoHome(now_s, field)) {
+    state_ = State::kReturning;
     goal_.reset();
+  }
+  if (state_ == State::kReturning) {
+    if (!options_.goals.return_home || !home_) {
+      state_ = State::kFinished;
+      goal_.reset();
+      path_.clear();
+      return;
+    }
+    Goal home;
+    home.position_m = *home_;
+    home.kind = "home";
+    goal_ = home;
+    path_ = map_.PathTo(field, *home_);
+    if (path_.empty()) {
+      // Home not reachable on the current map: the nearest reached cell to it.
+      double best = std::numeric_limits<double>::infinity();
+      const Grid& g = map_.grid();
+      for (int i = 0; i < static_cast<int>(field.cost.size()); ++i) {
+        if (!field.Reached(i)) continue;
+        const double d = (g.CentreOf(i % g.width, i / g.width) - *home_).norm();
+        if (d < best) {
+          best = d;
+          goal_->position_m = g.CentreOf(i % g.width, i / g.width);
+        }
+      }
+      path_ = map_.PathTo(field, goal_->position_m);
+    }
+    return;
+  }
+
+  // A heard, unseen person pre-empts the frontiers (sound-guided search).
+  if (options_.mode == "sound_guided") {
+    const auto sound = ChooseSoundGoal(field);
+    const bool seeking = goal_ && goal_->kind == "sound";
+    if (sound && (!seeking || sound->person_id != goal_->person_id || sound->score < goal_->score - 2.0)) {
+      goal_ = sound;
+      goal_recoveries_ = 0;
+      dwell_until_s_.reset();
+    } else if (seeking && !dwell_until_s_) {
+      // Keep the person, or drop them when they are no longer a goal (seen, visited).
+      if (sound && sound->person_id == goal_->person_id) {
+        goal_ = sound;
+      } else if (!sound) {
+        goal_.reset();
+      }
+    }
+  }
+
+  if (!goal_ || goal_->kind == "frontier") {
+    const auto best = ChooseFrontier(field, frontiers);
+    bool keep = false;
+    if (goal_) {
+      // The current goal stays while it is still on a frontier and not clearly beaten.
+      for (const Frontier& f : frontiers) {
+        for (const auto& c : f.cells) {
+          if ((map_.grid().CentreOf(c.x(), c.y()) - goal_->position_m).norm() < 0.25) {
+            keep = true;
+            break;
+          }
+        }
+        if (keep) break;
+      }
+      if (keep) {
+        const Eigen::Vector2i gc = map_.grid().CellOf(goal_->position_m);
+        const int gi = map_.grid().Contains(gc.x(), gc.y()) ? map_.grid().Index(gc.x(), gc.y()) : -1;
+        keep = field.Reached(gi) &&
+               !(best && best->score < field.cost[gi] - options_.goals.size_weight - options_.goals.switch_margin_m);
+      }
+    }
+    if (!keep) {
+      goal_ = best;
+      goal_recoveries_ = 0;
+    }
+  }
+
+  if (!goal_) {
+    if (!blacklist_.empty() && !cleared_blacklist_once_) {
+      // Nothing else left: the given-up goals get one more chance.
+      blacklist_.clear();
+      cleared_blacklist_once_ = true;
+      Replan(now_s);
+      return;
+    }
+    state_ = options_.goals.return_home ? State::kReturning : State::kFinished;
     path_.clear();
-    return std::nullopt;
+    if (state_ == State::kReturning) Replan(now_s);
+    return;
   }
-  goal_ = frontiers.front().goal_m;
-  std::vector<double> cost;
-  std::vector<int> parent;
-  Plan(robot, &cost, &parent);
-  path_.clear();
-  const Eigen::Vector2i g = grid_.CellOf(*goal_);
-  for (int i = g.y() * grid_.width + g.x(); i >= 0; i = parent[i]) {
-    path_.push_back(grid_.CentreOf(i % grid_.width, i / grid_.width));
+  state_ = goal_->kind == "sound" ? State::kSeekingSound : State::kExploring;
+  path_ = map_.PathTo(field, goal_->position_m);
+  if (path_.empty()) GiveUpGoal(now_s);
+}
+
+Velocity ExploreController::Follow(const Scan& scan) {
+  (void)scan;
+  Velocity v;
+  v.source = "planner";
+  if (path_.empty()) return v;
+  const Eigen::Vector2d robot = pose_->translation();
+  // The path point nearest the robot, then the first one beyond the lookahead after it.
+  size_t nearest = 0;
+  double nearest_d = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < path_.size(); ++i) {
+    const double d = (path_[i] - robot).norm();
+    if (d < nearest_d) {
+      nearest_d = d;
+      nearest = i;
+    }
   }
-  std::reverse(path_.begin(), path_.end());
-  // Pure pursuit to the first path point beyond the lookahead.
   Eigen::Vector2d target = path_.back();
-  for (const auto& p : path_) {
-    if ((p - robot).norm() >= options_.lookahead_m) {
-      target = p;
+  for (size_t i = nearest; i < path_.size(); ++i) {
+    if ((path_[i] - robot).norm() >= options_.follower.lookahead_m) {
+      target = path_[i];
       break;
     }
   }
-  const Eigen::Vector2d local = map_from_base.inverse() * target;
-  const double heading_error = std::atan2(local.y(), local.x());
-  Velocity v;
-  v.source = "frontier";
-  v.angular_radps = std::clamp(2.0 * heading_error, -options_.max_angular_radps, options_.max_angular_radps);
-  // Turn on the spot when facing away; slow down in turns.
-  v.linear_mps = std::abs(heading_error) > 0.8 ? 0.0 : options_.max_linear_mps * std::cos(heading_error);
+  const FollowerOptions& o = options_.follower;
+  const Eigen::Vector2d local = pose_->inverse() * target;
+  const double error = std::atan2(local.y(), local.x());
+  v.angular_radps = std::clamp(o.heading_gain * error, -o.max_angular_radps, o.max_angular_radps);
+  if (std::abs(error) > o.rotate_in_place_rad) return v;
+  const double to_goal = (path_.back() - robot).norm();
+  v.linear_mps = std::min(o.max_linear_mps * std::cos(error), 0.8 * to_goal + 0.05);
   return v;
 }
 
-Velocity ExploreController::OnScan(common::Utime utime, const Scan& scan) {
-  if (teleop_ && common::UtimeToSeconds(utime - teleop_->utime) <= options_.teleop_timeout_s) {
-    Velocity v;
-    if (teleop_->emergency_stop) {
-      v.source = "stop";
+Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
+  if (desired.linear_mps <= 0) return desired;
+  const SafetyOptions& o = options_.safety;
+  double clearance = ScanClearanceAhead(scan, o);
+  // The map remembers what the camera can no longer see (nearer than its minimum range).
+  const double half = 0.9 * options_.planner.robot_radius_m;
+  const double step = 0.5 * map_.grid().resolution_m;
+  const Eigen::Vector2d ahead(std::cos(pose_->yaw_rad()), std::sin(pose_->yaw_rad()));
+  const Eigen::Vector2d side(-ahead.y(), ahead.x());
+  for (double x = 0.3; x < std::min(clearance, o.slow_distance_m); x += step) {
+    bool hit = false;
+    for (double y = -half; y <= half + 1e-9; y += step) hit |= map_.Occupied(pose_->translation() + ahead * x + side * y);
+    if (hit) {
+      clearance = x;
+      break;
+    }
+  }
+  const double scale = std::clamp((clearance - o.stop_distance_m) / (o.slow_distance_m - o.stop_distance_m), 0.0, 1.0);
+  if (scale < 1.0) {
+    const double limited = desired.linear_mps * scale;
+    if (limited < desired.linear_mps - 1e-6) {
+      desired.linear_mps = limited;
+      if (scale == 0.0) desired.source = "safety";
+    }
+  }
+  return desired;
+}
+
+void ExploreController::StartRecovery(double now_s, const Scan& scan) {
+  ++recoveries_;
+  ++goal_recoveries_;
+  if (goal_ && goal_recoveries_ > options_.recovery.attempts_per_goal) GiveUpGoal(now_s);
+  resume_state_ = state_ == State::kRecovering ? resume_state_ : state_;
+  state_ = State::kRecovering;
+  recovery_phase_ = 0;
+  recovery_phase_start_s_ = now_s;
+  recovery_xy0_ = pose_->translation();
+  recovery_yaw0_ = pose_->yaw_rad();
+  const ScanMetrics m = AnalyseScan(scan, options_.reactive);
+  recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
+  blocked_since_s_.reset();
+}
+
+Velocity ExploreController::Recover(double now_s, const Scan& scan) {
+  (void)scan;
+  const RecoveryOptions& o = options_.recovery;
+  Velocity v;
+  v.source = "recovery";
+  if (recovery_phase_ == 0) {
+    // Back off while the map behind the robot is free of obstacles.
+    const Eigen::Vector2d back(-std::cos(pose_->yaw_rad()), -std::sin(pose_->yaw_rad()));
+    const Eigen::Vector2d side(-back.y(), back.x());
+    bool clear = true;
+    for (double x = 0.25; x <= 0.5; x += 0.05) {
+      for (double y = -0.2; y <= 0.2 + 1e-9; y += 0.1) clear &= !map_.Occupied(pose_->translation() + back * x + side * y);
+    }
+    const bool done = (pose_->translation() - recovery_xy0_).norm() >= o.backoff_m ||
+                      now_s - recovery_phase_start_s_ > 2.0 * o.backoff_m / o.backoff_speed_mps + 1.0;
+    if (clear && !done && o.backoff_m > 0) {
+      v.linear_mps = -o.backoff_speed_mps;
       return v;
     }
-    if (teleop_->override_active) {
-      v.linear_mps = teleop_->linear_mps;
-      v.angular_radps = teleop_->angular_radps;
-      v.source = "teleop";
-      return v;
-    }
-  } else if (teleop_ && teleop_->emergency_stop) {
-    Velocity v;  // an emergency stop holds until the operator releases it
-    v.source = "stop";
+    recovery_phase_ = 1;
+    recovery_phase_start_s_ = now_s;
+    recovery_yaw0_ = pose_->yaw_rad();
+  }
+  const double turned = std::abs(common::NormalizeAngle(pose_->yaw_rad() - recovery_yaw0_));
+  if (turned < o.turn_rad && now_s - recovery_phase_start_s_ < 2.0 * o.turn_rad / o.turn_speed_radps + 1.0) {
+    v.angular_radps = recovery_turn_sign_ * o.turn_speed_radps;
     return v;
   }
-  bool danger = false;
-  const Velocity reactive = reactive_.Step(scan, &danger);
-  if (options_.mode != "frontier" || !frontier_.has_map() || !pose_) return reactive;
-  if (danger) {
-    // The safety layer steers; if it keeps blocking the same goal, give that goal up.
-    if (++blocked_scans_ > 60) {
-      frontier_.AbandonGoal();
-      blocked_scans_ = 0;
+  // Done: replan from here.
+  state_ = resume_state_;
+  progress_xy_ = pose_->translation();
+  progress_yaw_ = pose_->yaw_rad();
+  progress_s_ = now_s;
+  last_plan_s_ = -1e9;
+  return v;
+}
+
+Velocity ExploreController::Drive(double now_s, const Scan& scan) {
+  Velocity stop;
+  stop.source = "stop";
+  switch (state_) {
+    case State::kHome:
+    case State::kFinished:
+      return stop;
+    case State::kLookAround: {
+      const bool done = look_turned_rad_ >= 2 * M_PI || (start_s_ && now_s - *start_s_ > 4 * M_PI / 0.5);
+      if (!done) {
+        Velocity v;
+        v.source = "look";
+        v.angular_radps = 0.5;
+        return v;
+      }
+      state_ = State::kExploring;
+      progress_s_ = now_s;
+      last_plan_s_ = -1e9;
+      break;
     }
-    return reactive;
+    case State::kRecovering:
+      return Recover(now_s, scan);
+    default:
+      break;
   }
-  blocked_scans_ = 0;
-  auto v = frontier_.Step(*pose_);
-  if (!v) {
-    finished_ = true;
-    Velocity stop;
-    stop.source = "stop";
+  if (now_s - last_plan_s_ >= options_.goals.replan_period_s || !goal_ || path_.empty()) Replan(now_s);
+  if (state_ == State::kHome || state_ == State::kFinished) return stop;
+  if (!goal_ || path_.empty()) {
+    // No path now (e.g. the robot stands in an inflated cell): the stuck detector decides.
+    stop.source = "planner";
+    if (now_s - progress_s_ > options_.recovery.stuck_timeout_s) StartRecovery(now_s, scan);
     return stop;
   }
-  return *v;
+  const Eigen::Vector2d robot = pose_->translation();
+  const bool reached = (robot - goal_->position_m).norm() < options_.goals.goal_reached_m;
+  if (reached || dwell_until_s_) {
+    if (goal_->kind == "home") {
+      state_ = State::kHome;
+      goal_.reset();
+      path_.clear();
+      return stop;
+    }
+    // Face what the goal was for (the frontier's unknown, the heard person), then move on.
+    if (goal_->face_m) {
+      const Eigen::Vector2d local = pose_->inverse() * *goal_->face_m;
+      const double error = std::atan2(local.y(), local.x());
+      if (std::abs(error) > 0.25 && !dwell_until_s_) {
+        Velocity v;
+        v.source = "planner";
+        v.angular_radps = std::clamp(options_.follower.heading_gain * error, -options_.follower.max_angular_radps,
+                                     options_.follower.max_angular_radps);
+        progress_s_ = now_s;
+        return v;
+      }
+    }
+    if (goal_->kind == "sound") {
+      if (!dwell_until_s_) dwell_until_s_ = now_s + options_.sound.dwell_s;
+      if (now_s < *dwell_until_s_) {
+        progress_s_ = now_s;
+        Velocity v;
+        v.source = "planner";
+        return v;
+      }
+      visited_sound_.push_back(*goal_->face_m);
+    } else {
+      // A frontier still there after looking at it is one the camera cannot resolve.
+      blacklist_.push_back({goal_->position_m, now_s + options_.goals.blacklist_expiry_s});
+    }
+    goal_.reset();
+    path_.clear();
+    dwell_until_s_.reset();
+    goal_recoveries_ = 0;
+    Replan(now_s);
+    if (!goal_ || path_.empty()) return stop;
+  }
+  const Velocity desired = Follow(scan);
+  const Velocity safe = Safe(desired, scan);
+  // Progress: moved or turned enough since the last mark.
+  if ((robot - progress_xy_).norm() > options_.recovery.progress_m ||
+      std::abs(common::NormalizeAngle(pose_->yaw_rad() - progress_yaw_)) > options_.recovery.progress_rad) {
+    progress_xy_ = robot;
+    progress_yaw_ = pose_->yaw_rad();
+    progress_s_ = now_s;
+  }
+  const bool held = desired.linear_mps > 0.02 && safe.linear_mps < 0.02;
+  if (held) {
+    if (!blocked_since_s_) blocked_since_s_ = now_s;
+    // The scan sees what the map does not yet have: plan again around it.
+    if (now_s - last_plan_s_ > 0.3) last_plan_s_ = -1e9;
+  } else {
+    blocked_since_s_.reset();
+  }
+  if (now_s - progress_s_ > options_.recovery.stuck_timeout_s ||
+      (blocked_since_s_ && now_s - *blocked_since_s_ > options_.recovery.blocked_timeout_s)) {
+    StartRecovery(now_s, scan);
+    return Recover(now_s, scan);
+  }
+  return safe;
+}
+
+Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
+  status_.driven_by.clear();
+  Velocity out;
+  // The operator first: an emergency stop holds until released; an override lasts while
+  // messages keep arriving (measured on this process's clock), with clamped speeds.
+  if (teleop_ && teleop_->emergency_stop) {
+    out.source = "stop";
+    status_.state = "override";
+    status_.driven_by = out.source;
+    return out;
+  }
+  if (teleop_ && teleop_->override_active && now_s - teleop_->receive_time_s <= options_.teleop_timeout_s &&
+      now_s >= teleop_->receive_time_s - 1e-3) {
+    out.linear_mps = std::clamp(teleop_->linear_mps, -options_.teleop_max_linear_mps, options_.teleop_max_linear_mps);
+    out.angular_radps =
+        std::clamp(teleop_->angular_radps, -options_.teleop_max_angular_radps, options_.teleop_max_angular_radps);
+    out.source = "teleop";
+    status_.state = "override";
+    status_.driven_by = out.source;
+    return out;
+  }
+  if (!start_s_) {
+    start_s_ = now_s;
+    progress_s_ = now_s;
+  }
+  status_.elapsed_s = now_s - *start_s_;
+  if (options_.mode == "reactive") {
+    out = reactive_.Step(scan);
+    status_.state = "exploring";
+  } else if (!map_.has_map() || !pose_) {
+    // Until SLAM has a map and a pose: turn on the spot (safe for a round base) so that it has
+    // something to map.
+    out.source = "look";
+    out.angular_radps = 0.5;
+    status_.state = StateName(state_);
+  } else {
+    map_.IntegrateScan(*pose_, scan);
+    out = Drive(now_s, scan);
+    status_.state = StateName(state_);
+  }
+  status_.driven_by = out.source;
+  status_.goal_m.reset();
+  status_.goal_kind.clear();
+  if (goal_) {
+    status_.goal_m = goal_->position_m;
+    status_.goal_kind = goal_->kind;
+  }
+  status_.path = path_;
+  status_.frontiers = frontier_count_;
+  status_.blacklisted = static_cast<int>(blacklist_.size());
+  status_.recoveries = recoveries_;
+  status_.stuck_s = state_ == State::kHome || state_ == State::kFinished ? 0.0 : std::max(0.0, now_s - progress_s_);
+  return out;
 }
 
 }  // namespace explore

@@ -2,17 +2,28 @@
 // Exploration for sarmap-explore, free of LCM.
 //
 // ReactiveExplorer: the Sales 2014 §4.1.3 behaviour on the (depth-derived) scan. A reading is
-// unknown when outside [range_min, range_max - margin]. When the nearest valid range is under
-// danger_distance_m (0.6 m) or more than unknown_rate_limit (15 %) of the readings are unknown,
-// the robot stops and turns: towards the side (left = positive angles) with the larger mean
-// range or, when both means are under low_average_m (1 m), towards the side with more unknown
-// readings (possible open space). It keeps turning that way until the way ahead is safe.
+// unknown when it carries no information (0, NaN, below range_min) or lies in the unreliable
+// band above range_max - margin; +inf (no return) is free space up to range_max. When the
+// nearest valid range is under danger_distance_m (0.6 m) or more than unknown_rate_limit (15 %)
+// of the readings are unknown, the robot stops and turns: towards the side (left = positive
+// angles) with the larger mean range or, when both means are under low_average_m (1 m), towards
+// the side with more unknown readings. It keeps turning that way until the way ahead is safe.
 //
-// FrontierExplorer: frontier-based exploration (Yamauchi 1997) on the occupancy grid: frontier
-// cells are known-free cells next to unknown ones, grouped 8-connected; the goal is the
-// frontier with the lowest path cost (Dijkstra over free cells inflated by the robot radius)
-// minus a size bonus; the path is followed by pure pursuit. The reactive behaviour stays in
-// front as the safety layer, and tele-operation overrides both.
+// SafetyLayer: limits the forward speed of any command to what the scan and the map allow in a
+// corridor of the robot's width ahead (stop below stop_distance_m, full speed beyond
+// slow_distance_m, linear in between). It never turns the robot: the planner chooses where to
+// go, the safety layer only decides how fast forward is safe. A corridor whose readings carry
+// no information (an obstacle nearer than the camera's minimum range blanks the columns) counts
+// as blocked.
+//
+// ExploreController: the mission. Tele-operation first (receive-time dead man, clamped), then:
+//   look_around -> exploring <-> seeking_sound -> returning -> home
+// with recovering entered from any driving state when progress stops. Goals are frontiers
+// (path cost minus a size bonus, kept until reached, gone or clearly beaten) or, in
+// sound_guided mode, people heard but not yet seen (a cell in view of them). Paths come from
+// ExploreMap's planner and are followed by pure pursuit. Stuck recovery: back off (when the
+// map behind is free), turn towards the open side, replan; a goal that needs two recoveries is
+// blacklisted for blacklist_expiry_s.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -21,31 +32,23 @@
 #include <vector>
 
 #include "common/options.h"
-#include "common/time.h"
 #include "common/transform.h"
+#include "explore/planner.h"
 
 namespace sarmap {
 namespace explore {
 
-struct Scan {
-  double angle_min_rad = 0;
-  double angle_increment_rad = 0;
-  double range_min_m = 0;
-  double range_max_m = 0;
-  std::vector<float> ranges_m;
-};
-
 struct Velocity {
   double linear_mps = 0;
   double angular_radps = 0;
-  std::string source;  // "reactive", "frontier", "teleop", "stop"
+  std::string source;  // "reactive", "planner", "safety", "recovery", "look", "teleop", "stop"
 };
 
 struct ReactiveOptions {
   double danger_distance_m = 0.6;
   double unknown_rate_limit = 0.15;
   double low_average_m = 1.0;
-  double max_range_margin_m = 1.0;  // readings above range_max - margin are unknown (Sales)
+  double max_range_margin_m = 1.0;  // finite readings above range_max - margin are unknown (Sales)
   double forward_speed_mps = 0.25;
   double turn_speed_radps = 0.5;
   template <class V>
@@ -53,7 +56,7 @@ struct ReactiveOptions {
     v("danger_distance_m", danger_distance_m, "stop and turn when the nearest valid range is below this");
     v("unknown_rate_limit", unknown_rate_limit, "stop and turn when this fraction of readings is unknown");
     v("low_average_m", low_average_m, "when both sides' mean range is below this, turn to the side with more unknown");
-    v("max_range_margin_m", max_range_margin_m, "readings above range_max minus this are unknown");
+    v("max_range_margin_m", max_range_margin_m, "finite readings above range_max minus this are unknown");
     v("forward_speed_mps", forward_speed_mps, "speed when the way is safe");
     v("turn_speed_radps", turn_speed_radps, "turn rate of the avoiding behaviour");
   }
@@ -87,133 +90,291 @@ class ReactiveExplorer {
   int turning_ = 0;  // +1 left, -1 right, 0 not turning
 };
 
-struct Grid {
-  int width = 0, height = 0;
-  double resolution_m = 0.05;
-  double origin_x_m = 0, origin_y_m = 0;  // cell (0, 0) corner; the grid is axis-aligned
-  std::vector<int8_t> cells;              // -1 unknown, 0..100 occupancy, row-major
-  int8_t at(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
-  bool Contains(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
-  Eigen::Vector2i CellOf(const Eigen::Vector2d& p) const;
-  Eigen::Vector2d CentreOf(int x, int y) const;
-};
-
-struct FrontierOptions {
-  int min_frontier_cells = 5;
-  double robot_radius_m = 0.25;
-  int free_threshold = 25;      // cells below are free
-  int occupied_threshold = 65;  // cells above are occupied
-  double size_weight_m = 0.05;  // metres of path a frontier cell is worth
-  double goal_reached_m = 0.35;
-  double lookahead_m = 0.6;
-  double max_linear_mps = 0.3;
-  double max_angular_radps = 0.8;
-  double blacklist_radius_m = 0.5;  // around goals that could not be reached
+struct SafetyOptions {
+  double stop_distance_m = 0.55;   // from the base centre: robot radius + what the camera cannot see
+  double slow_distance_m = 1.2;
+  double corridor_half_width_m = 0.3;
+  double blind_fraction = 0.5;     // of the corridor's beams without information: blocked
   template <class V>
   void Visit(V& v) {
-    v("min_frontier_cells", min_frontier_cells, "smaller frontiers are ignored");
-    v("robot_radius_m", robot_radius_m, "obstacles are inflated by this");
-    v("free_threshold", free_threshold, "occupancy below this is free");
-    v("occupied_threshold", occupied_threshold, "occupancy above this is an obstacle");
-    v("size_weight_m", size_weight_m, "path metres one frontier cell is worth");
-    v("goal_reached_m", goal_reached_m, "distance at which a goal counts as reached");
-    v("lookahead_m", lookahead_m, "pure-pursuit lookahead");
-    v("max_linear_mps", max_linear_mps, "speed limit while following a path");
-    v("max_angular_radps", max_angular_radps, "turn-rate limit while following a path");
-    v("blacklist_radius_m", blacklist_radius_m, "frontiers this close to an abandoned goal are skipped");
+    v("stop_distance_m", stop_distance_m, "no forward motion when an obstacle ahead is nearer (from the base centre)");
+    v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
+    v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
+    v("blind_fraction", blind_fraction,
+      "the corridor counts as blocked when this fraction of its beams carries no information");
   }
   void Validate(common::Validator& check) const {
-    check.That(min_frontier_cells >= 1, "min_frontier_cells", "must be >= 1");
-    check.NonNegative("robot_radius_m", robot_radius_m);
-    check.That(free_threshold >= 0 && free_threshold < occupied_threshold && occupied_threshold <= 100,
-               "occupied_threshold", "need 0 <= free_threshold < occupied_threshold <= 100");
-    check.NonNegative("size_weight_m", size_weight_m);
-    check.Positive("goal_reached_m", goal_reached_m);
+    check.Positive("stop_distance_m", stop_distance_m);
+    check.That(slow_distance_m > stop_distance_m, "slow_distance_m", "must exceed stop_distance_m");
+    check.Positive("corridor_half_width_m", corridor_half_width_m);
+    check.InRange("blind_fraction", blind_fraction, 0.0, 1.0);
+  }
+};
+
+// Free distance ahead (m, from the base centre) in the robot's corridor, from the scan.
+double ScanClearanceAhead(const Scan& scan, const SafetyOptions& options);
+
+struct FollowerOptions {
+  double lookahead_m = 0.5;
+  double max_linear_mps = 0.35;
+  double max_angular_radps = 0.8;
+  double rotate_in_place_rad = 0.7;  // heading errors above this: turn on the spot first
+  double heading_gain = 1.8;         // angular rate per radian of heading error
+  template <class V>
+  void Visit(V& v) {
+    v("lookahead_m", lookahead_m, "pure-pursuit lookahead");
+    v("max_linear_mps", max_linear_mps, "speed limit while following a path");
+    v("max_angular_radps", max_angular_radps, "turn-rate limit");
+    v("rotate_in_place_rad", rotate_in_place_rad, "turn on the spot when the heading error exceeds this");
+    v("heading_gain", heading_gain, "angular rate per radian of heading error");
+  }
+  void Validate(common::Validator& check) const {
     check.Positive("lookahead_m", lookahead_m);
     check.Positive("max_linear_mps", max_linear_mps);
     check.Positive("max_angular_radps", max_angular_radps);
-    check.NonNegative("blacklist_radius_m", blacklist_radius_m);
+    check.InRange("rotate_in_place_rad", rotate_in_place_rad, 0.05, M_PI);
+    check.Positive("heading_gain", heading_gain);
   }
 };
 
-struct Frontier {
-  std::vector<Eigen::Vector2i> cells;
-  Eigen::Vector2d goal_m;  // the frontier cell closest (by path) to the robot
-  double path_cost_m = 0;
+struct GoalOptions {
+  double size_weight = 0.5;          // path metres one metre of frontier is worth
+  double heading_weight_m = 0.6;     // path metres a half turn is worth (prefer what is ahead)
+  double switch_margin_m = 1.5;      // a new goal must be this much better to replace the current
+  double goal_reached_m = 0.3;
+  double replan_period_s = 1.0;
+  double blacklist_radius_m = 0.6;
+  double blacklist_expiry_s = 120;
+  double time_budget_s = 0;          // 0: explore until nothing is left
+  double return_speed_mps = 0.2;     // for the time the way home needs (time budget)
+  bool return_home = true;
+  bool look_around = true;           // a full turn at the start
+  template <class V>
+  void Visit(V& v) {
+    v("size_weight", size_weight, "path metres one metre of frontier is worth");
+    v("heading_weight_m", heading_weight_m, "path metres a half turn away from the heading is worth");
+    v("switch_margin_m", switch_margin_m, "a new frontier must score this much better to replace the current goal");
+    v("goal_reached_m", goal_reached_m, "distance at which a goal counts as reached");
+    v("replan_period_s", replan_period_s, "goals and paths are recomputed at most this often");
+    v("blacklist_radius_m", blacklist_radius_m, "frontiers this close to a given-up goal are skipped");
+    v("blacklist_expiry_s", blacklist_expiry_s, "a given-up goal may be tried again after this");
+    v("time_budget_s", time_budget_s, "mission time after which the robot goes home (0: none); the way home is reserved");
+    v("return_speed_mps", return_speed_mps, "average speed assumed for the way home");
+    v("return_home", return_home, "go back to the start when exploration ends");
+    v("look_around", look_around, "turn once on the spot at the start");
+  }
+  void Validate(common::Validator& check) const {
+    check.NonNegative("size_weight", size_weight);
+    check.NonNegative("heading_weight_m", heading_weight_m);
+    check.NonNegative("switch_margin_m", switch_margin_m);
+    check.Positive("goal_reached_m", goal_reached_m);
+    check.Positive("replan_period_s", replan_period_s);
+    check.NonNegative("blacklist_radius_m", blacklist_radius_m);
+    check.Positive("blacklist_expiry_s", blacklist_expiry_s);
+    check.NonNegative("time_budget_s", time_budget_s);
+    check.Positive("return_speed_mps", return_speed_mps);
+  }
 };
 
-class FrontierExplorer {
- public:
-  explicit FrontierExplorer(const FrontierOptions& options) : options_(options) {}
-  void SetMap(Grid grid);
-  // All reachable frontiers from `robot_xy`, best first.
-  std::vector<Frontier> Frontiers(const Eigen::Vector2d& robot_xy) const;
-  // The command towards the current (or a new) goal; nullopt when nothing is left to explore.
-  std::optional<Velocity> Step(const common::Rigid2d& map_from_base);
-  // Marks the current goal unreachable (e.g. the safety layer kept blocking it).
-  void AbandonGoal();
-  const std::vector<Eigen::Vector2d>& path() const { return path_; }
-  bool has_map() const { return grid_.width > 0; }
+struct RecoveryOptions {
+  double stuck_timeout_s = 6.0;      // no progress for this long while driving: stuck
+  double progress_m = 0.2;           // progress: this far from where the robot was...
+  double progress_rad = 0.6;         // ...or turned this much
+  double blocked_timeout_s = 3.0;    // the safety layer has held the robot this long: stuck
+  double backoff_m = 0.25;
+  double backoff_speed_mps = 0.1;
+  double turn_rad = 1.6;
+  double turn_speed_radps = 0.6;
+  int attempts_per_goal = 2;         // recoveries before a goal is given up
+  template <class V>
+  void Visit(V& v) {
+    v("stuck_timeout_s", stuck_timeout_s, "no progress for this long while driving counts as stuck");
+    v("progress_m", progress_m, "moving this far counts as progress");
+    v("progress_rad", progress_rad, "turning this much counts as progress");
+    v("blocked_timeout_s", blocked_timeout_s, "the safety layer holding the robot this long counts as stuck");
+    v("backoff_m", backoff_m, "recovery: reverse this far (when the map behind is free)");
+    v("backoff_speed_mps", backoff_speed_mps, "recovery: reversing speed");
+    v("turn_rad", turn_rad, "recovery: turn this much towards the open side");
+    v("turn_speed_radps", turn_speed_radps, "recovery: turn rate");
+    v("attempts_per_goal", attempts_per_goal, "recoveries on one goal before it is given up");
+  }
+  void Validate(common::Validator& check) const {
+    check.Positive("stuck_timeout_s", stuck_timeout_s);
+    check.Positive("progress_m", progress_m);
+    check.Positive("progress_rad", progress_rad);
+    check.Positive("blocked_timeout_s", blocked_timeout_s);
+    check.NonNegative("backoff_m", backoff_m);
+    check.Positive("backoff_speed_mps", backoff_speed_mps);
+    check.NonNegative("turn_rad", turn_rad);
+    check.Positive("turn_speed_radps", turn_speed_radps);
+    check.That(attempts_per_goal >= 1, "attempts_per_goal", "must be >= 1");
+  }
+};
 
- private:
-  // Dijkstra from the robot over traversable cells: cost per cell, and parents for paths.
-  void Plan(const Eigen::Vector2d& robot_xy, std::vector<double>* cost, std::vector<int>* parent) const;
-  bool Traversable(int x, int y) const;
-
-  FrontierOptions options_;
-  Grid grid_;
-  std::vector<uint8_t> blocked_;  // inflated obstacles
-  std::vector<Eigen::Vector2d> path_;
-  std::optional<Eigen::Vector2d> goal_;
-  std::vector<Eigen::Vector2d> blacklist_;
+struct SoundGoalOptions {
+  double max_position_std_m = 1.5;   // heard people placed less certainly are not goals
+  double min_view_m = 0.8;           // look at them from this far...
+  double max_view_m = 2.2;           // ...to this far, with a clear line of sight in the map
+  double dwell_s = 4.0;              // facing them, so the camera can confirm
+  double revisit_radius_m = 1.2;     // a visited place is not a goal again
+  double max_detour_m = 25;          // farther (by path) heard people wait for the frontiers
+  template <class V>
+  void Visit(V& v) {
+    v("max_position_std_m", max_position_std_m, "heard people placed less certainly than this are not goals");
+    v("min_view_m", min_view_m, "nearest viewing distance");
+    v("max_view_m", max_view_m, "farthest viewing distance");
+    v("dwell_s", dwell_s, "time spent facing a heard person so the camera can confirm");
+    v("revisit_radius_m", revisit_radius_m, "a heard person near an already visited place is not a goal again");
+    v("max_detour_m", max_detour_m, "heard people farther than this by path wait for exploration to bring the robot closer");
+  }
+  void Validate(common::Validator& check) const {
+    check.Positive("max_position_std_m", max_position_std_m);
+    check.Positive("min_view_m", min_view_m);
+    check.That(max_view_m > min_view_m, "max_view_m", "must exceed min_view_m");
+    check.NonNegative("dwell_s", dwell_s);
+    check.NonNegative("revisit_radius_m", revisit_radius_m);
+    check.Positive("max_detour_m", max_detour_m);
+  }
 };
 
 struct TeleopCommand {
-  common::Utime utime = 0;
+  double receive_time_s = 0;  // this process's clock: the dead man never trusts the sender's stamp
   bool override_active = false;
   bool emergency_stop = false;
   double linear_mps = 0, angular_radps = 0;
 };
 
+// A person heard but not seen (from PEOPLE_MAP), in the map frame.
+struct HeardPerson {
+  int64_t id = -1;
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  double position_std_m = 0;  // sqrt of the largest eigenvalue of the xy covariance
+  bool seen = false;
+};
+
 struct ExploreOptions {
-  std::string mode = "frontier";  // reactive | frontier
+  std::string mode = "frontier";  // reactive | frontier | sound_guided
   double teleop_timeout_s = 0.5;  // the operator's override ends this long after their last message
+  double teleop_max_linear_mps = 0.5;
+  double teleop_max_angular_radps = 1.5;
   ReactiveOptions reactive;
-  FrontierOptions frontier;
+  PlannerOptions planner;
+  SafetyOptions safety;
+  FollowerOptions follower;
+  GoalOptions goals;
+  RecoveryOptions recovery;
+  SoundGoalOptions sound;
   template <class V>
   void Visit(V& v) {
-    v("mode", mode, "reactive (Sales 2014) or frontier (map-driven, reactive as safety layer)");
-    v("teleop_timeout_s", teleop_timeout_s, "operator override ends this long after the last TELEOP");
-    v("reactive", reactive, "reactive behaviour");
-    v("frontier", frontier, "frontier exploration");
+    v("mode", mode, "reactive (Sales 2014), frontier (map-driven), sound_guided (frontier + people heard)");
+    v("teleop_timeout_s", teleop_timeout_s, "operator override ends this long after the last TELEOP arrived");
+    v("teleop_max_linear_mps", teleop_max_linear_mps, "operator speeds are clamped to this");
+    v("teleop_max_angular_radps", teleop_max_angular_radps, "operator turn rates are clamped to this");
+    v("reactive", reactive, "reactive behaviour (mode reactive)");
+    v("planner", planner, "cost map and planner");
+    v("safety", safety, "safety layer on the scan and the map");
+    v("follower", follower, "path following");
+    v("goals", goals, "goal selection and the mission");
+    v("recovery", recovery, "stuck detection and recovery");
+    v("sound", sound, "sound-guided goals (mode sound_guided)");
   }
   void Validate(common::Validator& check) const {
-    check.OneOf("mode", mode, {"reactive", "frontier"});
+    check.OneOf("mode", mode, {"reactive", "frontier", "sound_guided"});
     check.Positive("teleop_timeout_s", teleop_timeout_s);
+    check.Positive("teleop_max_linear_mps", teleop_max_linear_mps);
+    check.Positive("teleop_max_angular_radps", teleop_max_angular_radps);
   }
 };
 
-// Tele-operation over everything; then the reactive layer whenever it sees danger; then the
-// frontier explorer (mode frontier, with a map and a pose); else the reactive behaviour.
+// What the controller is doing, for EXPLORE_STATUS.
+struct ExploreStatus {
+  std::string state;      // look_around, exploring, seeking_sound, recovering, returning, home, finished, override
+  std::string driven_by;  // the source of the last command
+  std::optional<Eigen::Vector2d> goal_m;
+  std::string goal_kind;  // frontier, sound, home
+  std::vector<Eigen::Vector2d> path;
+  int frontiers = 0;
+  int blacklisted = 0;
+  int recoveries = 0;
+  double stuck_s = 0;
+  double elapsed_s = 0;
+};
+
 class ExploreController {
  public:
-  explicit ExploreController(const ExploreOptions& options)
-      : options_(options), reactive_(options.reactive), frontier_(options.frontier) {}
+  explicit ExploreController(const ExploreOptions& options);
   void OnTeleop(const TeleopCommand& command) { teleop_ = command; }
-  void OnMap(Grid grid) { frontier_.SetMap(std::move(grid)); }
-  void OnPose(const common::Rigid2d& map_from_base) { pose_ = map_from_base; }
-  Velocity OnScan(common::Utime utime, const Scan& scan);
-  const FrontierExplorer& frontier() const { return frontier_; }
-  bool finished() const { return finished_; }
+  void OnMap(const Grid& grid);
+  void OnPose(const common::Rigid2d& map_from_base);
+  void OnHeardPeople(std::vector<HeardPerson> people) { heard_ = std::move(people); }
+  // One command per scan. `now_s` is this process's clock (the scan's receive time live, its
+  // log time offline): every duration in the controller is measured on it.
+  Velocity OnScan(double now_s, const Scan& scan);
+
+  const ExploreStatus& status() const { return status_; }
+  bool finished() const { return state_ == State::kHome || state_ == State::kFinished; }
+  const ExploreMap& map() const { return map_; }
 
  private:
+  enum class State { kLookAround, kExploring, kSeekingSound, kRecovering, kReturning, kHome, kFinished };
+  struct Goal {
+    Eigen::Vector2d position_m;
+    std::string kind;  // frontier, sound, home
+    double score = 0;
+    int64_t person_id = -1;
+    std::optional<Eigen::Vector2d> face_m;  // sound goals: turn to face this on arrival
+  };
+  struct BlacklistEntry {
+    Eigen::Vector2d position_m;
+    double until_s;
+  };
+
+  Velocity Drive(double now_s, const Scan& scan);
+  void Replan(double now_s);
+  std::optional<Goal> ChooseFrontier(const CostField& field, const std::vector<Frontier>& frontiers) const;
+  std::optional<Goal> ChooseSoundGoal(const CostField& field) const;
+  Velocity Follow(const Scan& scan);
+  Velocity Safe(Velocity desired, const Scan& scan) const;
+  Velocity Recover(double now_s, const Scan& scan);
+  void StartRecovery(double now_s, const Scan& scan);
+  void GiveUpGoal(double now_s);
+  bool IsBlacklisted(const Eigen::Vector2d& p, double now_s) const;
+  bool TimeToGoHome(double now_s, const CostField& field) const;
+  static const char* StateName(State s);
+
   ExploreOptions options_;
   ReactiveExplorer reactive_;
-  FrontierExplorer frontier_;
+  ExploreMap map_;
   std::optional<TeleopCommand> teleop_;
   std::optional<common::Rigid2d> pose_;
-  int blocked_scans_ = 0;
-  bool finished_ = false;
+  std::optional<Eigen::Vector2d> home_;
+  std::vector<HeardPerson> heard_;
+  State state_ = State::kLookAround;
+  std::optional<double> start_s_;
+  double look_turned_rad_ = 0;
+  std::optional<double> last_yaw_;
+  std::optional<Goal> goal_;
+  std::vector<Eigen::Vector2d> path_;
+  double last_plan_s_ = -1e9;
+  bool map_changed_ = false;
+  std::vector<BlacklistEntry> blacklist_;
+  std::vector<Eigen::Vector2d> visited_sound_;
+  std::optional<double> dwell_until_s_;
+  int frontier_count_ = 0;
+  bool cleared_blacklist_once_ = false;
+  // Progress and recovery.
+  Eigen::Vector2d progress_xy_ = Eigen::Vector2d::Zero();
+  double progress_yaw_ = 0, progress_s_ = 0;
+  std::optional<double> blocked_since_s_;
+  int goal_recoveries_ = 0;
+  int recoveries_ = 0;
+  State resume_state_ = State::kExploring;
+  int recovery_phase_ = 0;  // 0 back off, 1 turn
+  double recovery_phase_start_s_ = 0;
+  double recovery_turn_sign_ = 1;
+  double recovery_yaw0_ = 0;
+  Eigen::Vector2d recovery_xy0_ = Eigen::Vector2d::Zero();
+  ExploreStatus status_;
 };
 
 }  // namespace explore

@@ -1,104 +1,197 @@
-// sarmap-explore: SCAN, MAP, POSE and TELEOP in; CMD_VEL out, one command per scan.
+// sarmap-explore: SCAN, MAP, POSE, PEOPLE_MAP and TELEOP in; CMD_VEL (one per scan) and
+// EXPLORE_STATUS out. A thin adapter around explore::ExploreController.
+#include <cmath>
 #include <cstdio>
 
-#include "common/node_main.h"
+#include <Eigen/Eigenvalues>
+
 #include "common/image_messages.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
-#include "common/robot_config.h"
+#include "common/node_main.h"
 #include "explore/explore.h"
+#include "sarmap/explore_status_t.hpp"
 
 namespace {
+
+using namespace sarmap;
 
 struct NodeOptions {
   std::string scan_channel = "SCAN";
   std::string map_channel = "MAP";
   std::string pose_channel = "POSE";
+  std::string people_channel = "PEOPLE_MAP";
   std::string teleop_channel = "TELEOP";
   std::string command_channel = "CMD_VEL";
-  sarmap::explore::ExploreOptions explore;
+  std::string status_channel = "EXPLORE_STATUS";
+  double status_period_s = 0.5;
+  explore::ExploreOptions explore;
   template <class V>
   void Visit(V& v) {
-    v("scan_channel", scan_channel, "laser scan (the safety layer)");
-    v("map_channel", map_channel, "occupancy grid for frontier exploration");
+    v("scan_channel", scan_channel, "laser scan (safety layer, and the explorer's picture between maps)");
+    v("map_channel", map_channel, "occupancy grid from SLAM");
     v("pose_channel", pose_channel, "robot pose in the map");
+    v("people_channel", people_channel, "people map: people heard but not seen become goals (mode sound_guided)");
     v("teleop_channel", teleop_channel, "operator override");
     v("command_channel", command_channel, "velocity commands out");
+    v("status_channel", status_channel, "mission state, goal and path out");
+    v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often");
     v("explore", explore, "exploration");
   }
+  void Validate(common::Validator& check) const { check.Positive("status_period_s", status_period_s); }
+};
+
+class ExploreNode {
+ public:
+  ExploreNode(const NodeOptions& options, common::Node* node)
+      : options_(options),
+        node_(node),
+        controller_(options.explore),
+        command_pub_(node->Advertise<velocity_command_t>(options.command_channel)),
+        status_pub_(node->Advertise<explore_status_t>(options.status_channel)) {
+    node->Subscribe<teleop_t>(options.teleop_channel,
+                              [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
+    node->Subscribe<pose_t>(
+        options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); }, 1);
+    node->Subscribe<occupancy_grid_t>(
+        options.map_channel, [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
+    node->Subscribe<people_map_t>(
+        options.people_channel, [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
+    node->Subscribe<laser_scan_t>(
+        options.scan_channel, [this](const laser_scan_t& m, const common::ReceiveInfo& info) { OnScan(m, info); }, 1);
+  }
+
+ private:
+  void OnTeleop(const teleop_t& m, const common::ReceiveInfo& info) {
+    explore::TeleopCommand t;
+    // The dead man runs on this process's clock: a sender's stamp ahead of ours must not
+    // keep an override alive.
+    t.receive_time_s = info.receive_time_s;
+    t.override_active = m.override_active;
+    t.emergency_stop = m.emergency_stop;
+    t.linear_mps = m.linear_mps;
+    t.angular_radps = m.angular_radps;
+    controller_.OnTeleop(t);
+  }
+
+  void OnPose(const pose_t& m) { controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d()); }
+
+  void OnMap(const occupancy_grid_t& m) {
+    if (std::abs(m.origin_yaw_rad) > 1e-6) {
+      SARMAP_LOG(WARN) << "rotated grids are not supported for exploration; map ignored";
+      return;
+    }
+    explore::Grid grid;
+    grid.width = m.width;
+    grid.height = m.height;
+    grid.resolution_m = m.resolution_m;
+    grid.origin_x_m = m.origin_x_m;
+    grid.origin_y_m = m.origin_y_m;
+    std::string error;
+    if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
+      SARMAP_LOG(WARN) << "bad MAP: " << error;
+      return;
+    }
+    controller_.OnMap(grid);
+  }
+
+  void OnPeople(const people_map_t& m) {
+    std::vector<explore::HeardPerson> heard;
+    for (const mapped_person_t& p : m.people) {
+      if (!(p.cues & mapped_person_t::CUE_HEARD)) continue;
+      explore::HeardPerson h;
+      h.id = p.id;
+      h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
+      Eigen::Matrix2d cov;
+      cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
+      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(0.5 * (cov + cov.transpose()),
+                                                                           Eigen::EigenvaluesOnly)
+                                 .eigenvalues()
+                                 .maxCoeff();
+      h.position_std_m = std::sqrt(std::max(0.0, largest));
+      h.seen = (p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH)) != 0;
+      heard.push_back(h);
+    }
+    controller_.OnHeardPeople(std::move(heard));
+  }
+
+  void OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {
+    explore::Scan scan;
+    scan.angle_min_rad = m.angle_min_rad;
+    scan.angle_increment_rad = m.angle_increment_rad;
+    scan.range_min_m = m.range_min_m;
+    scan.range_max_m = m.range_max_m;
+    scan.ranges_m = m.ranges_m;
+    const explore::Velocity v = controller_.OnScan(info.receive_time_s, scan);
+    velocity_command_t cmd;
+    cmd.header.utime = m.header.utime;
+    cmd.header.frame = "base";
+    cmd.linear_mps = v.linear_mps;
+    cmd.angular_radps = v.angular_radps;
+    cmd.source = v.source;
+    command_pub_.Publish(&cmd);
+    const explore::ExploreStatus& s = controller_.status();
+    if (s.state != last_state_) {
+      SARMAP_LOG(INFO) << "mission state " << s.state << (s.goal_kind.empty() ? "" : ", goal " + s.goal_kind);
+      last_state_ = s.state;
+      node_->SetStatusMessage(s.state + ", driven by " + v.source);
+    }
+    if (info.receive_time_s - last_status_s_ >= options_.status_period_s) {
+      last_status_s_ = info.receive_time_s;
+      PublishStatus(m.header.utime, s);
+    }
+  }
+
+  void PublishStatus(int64_t utime, const explore::ExploreStatus& s) {
+    explore_status_t out;
+    out.header.utime = utime;
+    out.header.frame = "map";
+    out.state = s.state;
+    out.driven_by = s.driven_by;
+    out.has_goal = s.goal_m.has_value();
+    out.goal_kind = s.goal_kind;
+    out.goal_m[0] = s.goal_m ? s.goal_m->x() : 0.0;
+    out.goal_m[1] = s.goal_m ? s.goal_m->y() : 0.0;
+    // Every 4th path point (20 cm) is enough to draw it.
+    for (size_t i = 0; i < s.path.size(); i += (i + 4 < s.path.size() ? 4 : 1)) {
+      out.path_x_m.push_back(static_cast<float>(s.path[i].x()));
+      out.path_y_m.push_back(static_cast<float>(s.path[i].y()));
+      if (i + 1 == s.path.size()) break;
+    }
+    out.num_path = static_cast<int32_t>(out.path_x_m.size());
+    out.frontiers = s.frontiers;
+    out.blacklisted = s.blacklisted;
+    out.recoveries = s.recoveries;
+    out.stuck_s = s.stuck_s;
+    out.elapsed_s = s.elapsed_s;
+    status_pub_.Publish(&out);
+  }
+
+  NodeOptions options_;
+  common::Node* node_;
+  explore::ExploreController controller_;
+  common::Node::Publisher<velocity_command_t> command_pub_;
+  common::Node::Publisher<explore_status_t> status_pub_;
+  std::string last_state_;
+  double last_status_s_ = -1e9;
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  return sarmap::common::RunMain("sarmap-explore", [&] {
-    using namespace sarmap;
+  return common::RunMain("sarmap-explore", [&]() -> int {
     common::ArgParser parser(
         "sarmap-explore",
-        "Drives the robot: the Sales 2014 reactive behaviour on the scan, frontier exploration on\n"
-        "the map with the reactive behaviour as safety layer, and the operator's TELEOP override\n"
-        "(with an emergency stop that holds until released).\n"
-        "In: SCAN, MAP, POSE, TELEOP.  Out: CMD_VEL.");
+        "Drives the robot through an unknown site: frontier exploration on SLAM's map (planner on\n"
+        "the inflated grid, pure pursuit, a safety layer on the scan and the map, stuck recovery),\n"
+        "people heard but not seen as goals (mode sound_guided), then home; or the Sales 2014\n"
+        "reactive behaviour (mode reactive). The operator's TELEOP overrides everything.\n"
+        "In: SCAN, MAP, POSE, PEOPLE_MAP, TELEOP.  Out: CMD_VEL, EXPLORE_STATUS.");
     common::NodeArgs args;
     const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/explore.yaml");
     if (!parsed) return 0;
-    const NodeOptions& options = *parsed;
     common::Node node("sarmap-explore", args.lcm_url);
-    explore::ExploreController controller(options.explore);
-    auto publisher = node.Advertise<velocity_command_t>(options.command_channel);
-    std::string last_source;
-
-    node.Subscribe<teleop_t>(options.teleop_channel, [&](const teleop_t& m, const common::ReceiveInfo&) {
-      explore::TeleopCommand t;
-      t.utime = m.header.utime;
-      t.override_active = m.override_active;
-      t.emergency_stop = m.emergency_stop;
-      t.linear_mps = m.linear_mps;
-      t.angular_radps = m.angular_radps;
-      controller.OnTeleop(t);
-    });
-    node.Subscribe<pose_t>(options.pose_channel, [&](const pose_t& m, const common::ReceiveInfo&) {
-      controller.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
-    }, 1);
-    node.Subscribe<occupancy_grid_t>(options.map_channel, [&](const occupancy_grid_t& m, const common::ReceiveInfo&) {
-      if (std::abs(m.origin_yaw_rad) > 1e-6) {
-        SARMAP_LOG(WARN) << "rotated grids are not supported for exploration; map ignored";
-        return;
-      }
-      explore::Grid grid;
-      grid.width = m.width;
-      grid.height = m.height;
-      grid.resolution_m = m.resolution_m;
-      grid.origin_x_m = m.origin_x_m;
-      grid.origin_y_m = m.origin_y_m;
-      std::string error;
-      if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
-        SARMAP_LOG(WARN) << "bad MAP: " << error;
-        return;
-      }
-      controller.OnMap(std::move(grid));
-    }, 1);
-    node.Subscribe<laser_scan_t>(options.scan_channel, [&](const laser_scan_t& m, const common::ReceiveInfo&) {
-      explore::Scan scan;
-      scan.angle_min_rad = m.angle_min_rad;
-      scan.angle_increment_rad = m.angle_increment_rad;
-      scan.range_min_m = m.range_min_m;
-      scan.range_max_m = m.range_max_m;
-      scan.ranges_m = m.ranges_m;
-      const explore::Velocity v = controller.OnScan(m.header.utime, scan);
-      velocity_command_t cmd;
-      cmd.header.utime = m.header.utime;
-      cmd.header.frame = "base";
-      cmd.linear_mps = v.linear_mps;
-      cmd.angular_radps = v.angular_radps;
-      cmd.source = v.source;
-      publisher.Publish(&cmd);
-      if (v.source != last_source) {
-        SARMAP_LOG(INFO) << "now driven by " << v.source;
-        last_source = v.source;
-        node.SetStatusMessage("driven by " + v.source + (controller.finished() ? " (exploration finished)" : ""));
-      }
-    }, 1);
+    ExploreNode explore_node(*parsed, &node);
     return node.Run();
   });
 }

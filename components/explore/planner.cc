@@ -1,0 +1,298 @@
+#include "explore/planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+
+namespace sarmap {
+namespace explore {
+
+namespace {
+constexpr float kInf = std::numeric_limits<float>::infinity();
+}  // namespace
+
+Eigen::Vector2i Grid::CellOf(const Eigen::Vector2d& p) const {
+  return Eigen::Vector2i(static_cast<int>(std::floor((p.x() - origin_x_m) / resolution_m)),
+                         static_cast<int>(std::floor((p.y() - origin_y_m) / resolution_m)));
+}
+
+Eigen::Vector2d Grid::CentreOf(int x, int y) const {
+  return Eigen::Vector2d(origin_x_m + (x + 0.5) * resolution_m, origin_y_m + (y + 0.5) * resolution_m);
+}
+
+void ExploreMap::SetMap(const Grid& map) {
+  const int pad = static_cast<int>(std::ceil(options_.pad_m / map.resolution_m));
+  grid_.resolution_m = map.resolution_m;
+  grid_.width = map.width + 2 * pad;
+  grid_.height = map.height + 2 * pad;
+  grid_.origin_x_m = map.origin_x_m - pad * map.resolution_m;
+  grid_.origin_y_m = map.origin_y_m - pad * map.resolution_m;
+  grid_.cells.assign(static_cast<size_t>(grid_.width) * grid_.height, -1);
+  for (int y = 0; y < map.height; ++y) {
+    std::copy(map.cells.begin() + static_cast<size_t>(y) * map.width,
+              map.cells.begin() + static_cast<size_t>(y + 1) * map.width,
+              grid_.cells.begin() + static_cast<size_t>(y + pad) * grid_.width + pad);
+  }
+  for (const auto& p : trail_) Stamp(p);
+}
+
+void ExploreMap::Stamp(const Eigen::Vector2d& p) {
+  const double res = grid_.resolution_m;
+  const int r = static_cast<int>(std::ceil(options_.assume_free_radius_m / res));
+  const Eigen::Vector2i c = grid_.CellOf(p);
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      if ((dx * dx + dy * dy) * res * res > options_.assume_free_radius_m * options_.assume_free_radius_m) continue;
+      const int x = c.x() + dx, y = c.y() + dy;
+      if (grid_.Contains(x, y) && grid_.at(x, y) < 0) grid_.at(x, y) = 0;
+    }
+  }
+}
+
+void ExploreMap::AddTrail(const Eigen::Vector2d& position_m) {
+  if (!trail_.empty() && (trail_.back() - position_m).norm() < 0.1) return;
+  trail_.push_back(position_m);
+  if (has_map()) Stamp(position_m);
+}
+
+void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan& scan) {
+  if (!has_map()) return;
+  const double res = grid_.resolution_m;
+  const Eigen::Vector2d origin = map_from_base.translation();
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const double r = scan.ranges_m[i];
+    bool hit = false;
+    double length = 0;
+    if (std::isinf(r) && r > 0) {
+      length = scan.range_max_m;
+    } else if (std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m) {
+      length = r;
+      hit = true;
+    } else {
+      continue;  // no information
+    }
+    const double angle = map_from_base.yaw_rad() + scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
+    const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
+    // Free up to one cell short of the return, sampled at half a cell.
+    const int steps = static_cast<int>((length - (hit ? res : 0.0)) / (0.5 * res));
+    for (int k = 0; k <= steps; ++k) {
+      const Eigen::Vector2i c = grid_.CellOf(origin + dir * (0.5 * res * k));
+      if (!grid_.Contains(c.x(), c.y())) break;
+      int8_t& v = grid_.at(c.x(), c.y());
+      if (v < options_.occupied_threshold) v = 0;  // unknown or uncertain: the ray passed
+    }
+    if (hit) {
+      const Eigen::Vector2i c = grid_.CellOf(origin + dir * length);
+      if (grid_.Contains(c.x(), c.y())) {
+        int8_t& v = grid_.at(c.x(), c.y());
+        if (v < options_.occupied_threshold) v = 100;
+      }
+    }
+  }
+}
+
+void ExploreMap::UpdateCostMap() {
+  // Chamfer distance transform (weights 1 and sqrt 2, two passes), in cells.
+  const int w = grid_.width, h = grid_.height;
+  std::vector<float> d(static_cast<size_t>(w) * h, kInf);
+  for (size_t i = 0; i < d.size(); ++i) {
+    if (grid_.cells[i] >= options_.occupied_threshold) d[i] = 0;
+  }
+  const float diag = static_cast<float>(M_SQRT2);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float& v = d[static_cast<size_t>(y) * w + x];
+      if (x > 0) v = std::min(v, d[static_cast<size_t>(y) * w + x - 1] + 1);
+      if (y > 0) {
+        v = std::min(v, d[static_cast<size_t>(y - 1) * w + x] + 1);
+        if (x > 0) v = std::min(v, d[static_cast<size_t>(y - 1) * w + x - 1] + diag);
+        if (x + 1 < w) v = std::min(v, d[static_cast<size_t>(y - 1) * w + x + 1] + diag);
+      }
+    }
+  }
+  for (int y = h - 1; y >= 0; --y) {
+    for (int x = w - 1; x >= 0; --x) {
+      float& v = d[static_cast<size_t>(y) * w + x];
+      if (x + 1 < w) v = std::min(v, d[static_cast<size_t>(y) * w + x + 1] + 1);
+      if (y + 1 < h) {
+        v = std::min(v, d[static_cast<size_t>(y + 1) * w + x] + 1);
+        if (x + 1 < w) v = std::min(v, d[static_cast<size_t>(y + 1) * w + x + 1] + diag);
+        if (x > 0) v = std::min(v, d[static_cast<size_t>(y + 1) * w + x - 1] + diag);
+      }
+    }
+  }
+  // Distance between cell centres understates the clearance by up to half a cell of the
+  // obstacle cell itself; take the obstacle's edge, not its centre.
+  const float res = static_cast<float>(grid_.resolution_m);
+  for (float& v : d) v = std::isfinite(v) ? std::max(0.0f, (v - 0.5f) * res) : 1e6f;
+  distance_m_ = std::move(d);
+}
+
+double ExploreMap::Clearance(int x, int y) const {
+  if (!grid_.Contains(x, y) || distance_m_.empty()) return 0;
+  return distance_m_[grid_.Index(x, y)];
+}
+
+bool ExploreMap::Traversable(int x, int y) const {
+  if (!grid_.Contains(x, y) || distance_m_.empty()) return false;
+  const int8_t v = grid_.at(x, y);
+  return v >= 0 && v < options_.free_threshold && distance_m_[grid_.Index(x, y)] >= options_.robot_radius_m;
+}
+
+bool ExploreMap::Traversable(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2i c = grid_.CellOf(p);
+  return Traversable(c.x(), c.y());
+}
+
+bool ExploreMap::Occupied(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2i c = grid_.CellOf(p);
+  return grid_.Contains(c.x(), c.y()) && grid_.at(c.x(), c.y()) >= options_.occupied_threshold;
+}
+
+bool ExploreMap::Known(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2i c = grid_.CellOf(p);
+  return grid_.Contains(c.x(), c.y()) && grid_.at(c.x(), c.y()) >= 0;
+}
+
+bool ExploreMap::LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  const double length = (b - a).norm();
+  const int steps = static_cast<int>(length / (0.5 * grid_.resolution_m)) + 1;
+  for (int k = 0; k <= steps; ++k) {
+    if (Occupied(a + (b - a) * (static_cast<double>(k) / steps))) return false;
+  }
+  return true;
+}
+
+double ExploreMap::StepCost(int index) const {
+  const double free_room = distance_m_[index] - options_.robot_radius_m;
+  const double tight = options_.clearance_m > 0 ? std::max(0.0, 1.0 - free_room / options_.clearance_m) : 0.0;
+  return 1.0 + options_.clearance_weight * tight;
+}
+
+CostField ExploreMap::Plan(const Eigen::Vector2d& from, double escape_m) const {
+  CostField field;
+  const size_t n = grid_.cells.size();
+  field.cost.assign(n, kInf);
+  field.parent.assign(n, -1);
+  if (!has_map() || distance_m_.size() != n) return field;
+  Eigen::Vector2i start = grid_.CellOf(from);
+  float start_cost = 0;
+  if (!Traversable(start.x(), start.y())) {
+    // The nearest traversable cell within escape_m, driven to in a straight line.
+    const int r = static_cast<int>(std::ceil(escape_m / grid_.resolution_m));
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::Vector2i best_cell = start;
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        const double dist = std::hypot(dx, dy) * grid_.resolution_m;
+        if (dist > escape_m || dist >= best || !Traversable(start.x() + dx, start.y() + dy)) continue;
+        best = dist;
+        best_cell = start + Eigen::Vector2i(dx, dy);
+      }
+    }
+    if (!std::isfinite(best)) return field;
+    start = best_cell;
+    start_cost = static_cast<float>(best);
+  }
+  field.start = start;
+  using Item = std::pair<float, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  const int s = grid_.Index(start.x(), start.y());
+  field.cost[s] = start_cost;
+  open.push({start_cost, s});
+  const float res = static_cast<float>(grid_.resolution_m);
+  while (!open.empty()) {
+    const auto [c, i] = open.top();
+    open.pop();
+    if (c > field.cost[i]) continue;
+    const int x = i % grid_.width, y = i / grid_.width;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (!dx && !dy) continue;
+        const int nx = x + dx, ny = y + dy;
+        if (!Traversable(nx, ny)) continue;
+        const int j = grid_.Index(nx, ny);
+        const float step = (dx && dy ? static_cast<float>(M_SQRT2) : 1.0f) * res * static_cast<float>(StepCost(j));
+        if (c + step < field.cost[j]) {
+          field.cost[j] = c + step;
+          field.parent[j] = i;
+          open.push({c + step, j});
+        }
+      }
+    }
+  }
+  return field;
+}
+
+std::vector<Eigen::Vector2d> ExploreMap::PathTo(const CostField& field, const Eigen::Vector2d& goal) const {
+  std::vector<Eigen::Vector2d> path;
+  const Eigen::Vector2i g = grid_.CellOf(goal);
+  if (!grid_.Contains(g.x(), g.y())) return path;
+  const int gi = grid_.Index(g.x(), g.y());
+  if (!field.Reached(gi)) return path;
+  for (int i = gi; i >= 0; i = field.parent[i]) path.push_back(grid_.CentreOf(i % grid_.width, i / grid_.width));
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+std::vector<Frontier> ExploreMap::Frontiers(const CostField& field) const {
+  std::vector<Frontier> out;
+  if (!has_map()) return out;
+  const auto is_frontier = [&](int x, int y) {
+    if (!field.Reached(grid_.Index(x, y))) return false;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (!grid_.Contains(x + dx, y + dy)) continue;
+        const int8_t v = grid_.at(x + dx, y + dy);
+        // Unknown, or seen too little to call free or occupied.
+        if (v < 0 || (v >= options_.free_threshold && v < options_.occupied_threshold)) return true;
+      }
+    }
+    return false;
+  };
+  std::vector<uint8_t> seen(grid_.cells.size(), 0);
+  for (int y = 0; y < grid_.height; ++y) {
+    for (int x = 0; x < grid_.width; ++x) {
+      const int i = grid_.Index(x, y);
+      if (seen[i] || !field.Reached(i) || !is_frontier(x, y)) continue;
+      Frontier f;
+      std::queue<Eigen::Vector2i> todo;
+      todo.push({x, y});
+      seen[i] = 1;
+      double best = std::numeric_limits<double>::infinity();
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      while (!todo.empty()) {
+        const Eigen::Vector2i c = todo.front();
+        todo.pop();
+        f.cells.push_back(c);
+        sum += grid_.CentreOf(c.x(), c.y());
+        const double cc = field.cost[grid_.Index(c.x(), c.y())];
+        if (cc < best) {
+          best = cc;
+          f.goal_m = grid_.CentreOf(c.x(), c.y());
+        }
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = c.x() + dx, ny = c.y() + dy;
+            if (!grid_.Contains(nx, ny)) continue;
+            const int j = grid_.Index(nx, ny);
+            if (!seen[j] && is_frontier(nx, ny)) {
+              seen[j] = 1;
+              todo.push({nx, ny});
+            }
+          }
+        }
+      }
+      if (static_cast<int>(f.cells.size()) < options_.min_frontier_cells) continue;
+      f.centroid_m = sum / static_cast<double>(f.cells.size());
+      f.path_cost_m = best;
+      f.size_m = grid_.resolution_m * static_cast<double>(f.cells.size());
+      out.push_back(std::move(f));
+    }
+  }
+  return out;
+}
+
+}  // namespace explore
+}  // namespace sarmap

@@ -1,0 +1,146 @@
+#pragma once
+// The planning side of sarmap-explore, free of LCM: the explorer's own picture of the site
+// (SLAM's MAP, refreshed between maps by the latest scans and the robot's own trail), the
+// cost map the robot plans on, a Dijkstra planner, and frontiers.
+//
+// Cost map. d(c) is the distance from cell c to the nearest occupied cell (chamfer distance
+// transform, 3-4 weights). A cell is traversable when it is known free and d(c) >= robot
+// radius; each step into it costs its length times
+//   1 + clearance_weight * max(0, 1 - (d(c) - r_robot) / clearance_m),
+// so paths keep away from walls where there is room and still pass doors.
+// Frontiers (Yamauchi 1997): traversable cells with an unknown 8-neighbour (or one seen too
+// little to be called free or occupied), grouped
+// 8-connected; a frontier is reachable when the planner reaches one of its cells.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "common/options.h"
+#include "common/transform.h"
+
+namespace sarmap {
+namespace explore {
+
+// A planar laser scan in the base frame. Ranges: finite in [range_min, range_max] a return;
+// +inf no return (free up to range_max); 0 or NaN no information.
+struct Scan {
+  double angle_min_rad = 0;
+  double angle_increment_rad = 0;
+  double range_min_m = 0;
+  double range_max_m = 0;
+  std::vector<float> ranges_m;
+};
+
+struct Grid {
+  int width = 0, height = 0;
+  double resolution_m = 0.05;
+  double origin_x_m = 0, origin_y_m = 0;  // cell (0, 0) corner; the grid is axis-aligned
+  std::vector<int8_t> cells;              // -1 unknown, 0..100 occupancy, row-major
+  int8_t at(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
+  int8_t& at(int x, int y) { return cells[static_cast<size_t>(y) * width + x]; }
+  bool Contains(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
+  Eigen::Vector2i CellOf(const Eigen::Vector2d& p) const;
+  Eigen::Vector2d CentreOf(int x, int y) const;
+  int Index(int x, int y) const { return y * width + x; }
+};
+
+struct PlannerOptions {
+  double robot_radius_m = 0.25;
+  double clearance_m = 0.35;       // extra clearance the cost prefers beyond the radius
+  double clearance_weight = 4.0;   // cost factor at the radius (1 + weight)
+  int free_threshold = 25;         // cells below are free
+  int occupied_threshold = 65;     // cells at or above are obstacles
+  int min_frontier_cells = 4;      // smaller frontiers are noise
+  double pad_m = 4.0;              // the explorer's grid extends MAP this far on each side
+  double assume_free_radius_m = 0.45;  // around every pose the robot has been: its body was there
+  template <class V>
+  void Visit(V& v) {
+    v("robot_radius_m", robot_radius_m, "cells closer than this to an obstacle are not traversable");
+    v("clearance_m", clearance_m, "paths prefer this much room beyond the radius");
+    v("clearance_weight", clearance_weight, "cost factor of a step at the radius is 1 + this");
+    v("free_threshold", free_threshold, "occupancy below this is free");
+    v("occupied_threshold", occupied_threshold, "occupancy at or above this is an obstacle");
+    v("min_frontier_cells", min_frontier_cells, "smaller frontiers are ignored");
+    v("pad_m", pad_m, "the explorer's grid extends MAP by this on each side (scans fill it)");
+    v("assume_free_radius_m", assume_free_radius_m,
+      "unknown cells this close to any pose the robot has had are free (the camera cannot see its own footprint)");
+  }
+  void Validate(common::Validator& check) const {
+    check.Positive("robot_radius_m", robot_radius_m);
+    check.NonNegative("clearance_m", clearance_m);
+    check.NonNegative("clearance_weight", clearance_weight);
+    check.That(free_threshold >= 0 && free_threshold < occupied_threshold && occupied_threshold <= 100,
+               "occupied_threshold", "need 0 <= free_threshold < occupied_threshold <= 100");
+    check.That(min_frontier_cells >= 1, "min_frontier_cells", "must be >= 1");
+    check.NonNegative("pad_m", pad_m);
+    check.NonNegative("assume_free_radius_m", assume_free_radius_m);
+  }
+};
+
+struct Frontier {
+  std::vector<Eigen::Vector2i> cells;
+  Eigen::Vector2d goal_m = Eigen::Vector2d::Zero();      // its cell nearest the robot by path
+  Eigen::Vector2d centroid_m = Eigen::Vector2d::Zero();
+  double path_cost_m = 0;
+  double size_m = 0;  // cells x resolution
+};
+
+// Dijkstra costs from one start over the cost map.
+struct CostField {
+  Eigen::Vector2i start{0, 0};
+  std::vector<float> cost;  // +inf where unreachable
+  std::vector<int> parent;  // -1 at the start and where unreachable
+  bool Reached(int index) const { return index >= 0 && index < static_cast<int>(cost.size()) && std::isfinite(cost[index]); }
+};
+
+class ExploreMap {
+ public:
+  explicit ExploreMap(const PlannerOptions& options) : options_(options) {}
+
+  // A new MAP: the explorer's grid becomes it (padded), then the trail is stamped again.
+  void SetMap(const Grid& map);
+  // Between maps: cells along each ray that are not obstacles become free, a return marks its
+  // cell occupied (something new in the way). +inf rays are free to range_max; rays without
+  // information are skipped.
+  void IntegrateScan(const common::Rigid2d& map_from_base, const Scan& scan);
+  // The robot is at this pose: unknown cells within assume_free_radius_m are free.
+  void AddTrail(const Eigen::Vector2d& position_m);
+
+  // Rebuilds the distance transform and traversability (after SetMap / IntegrateScan).
+  void UpdateCostMap();
+  bool Traversable(int x, int y) const;
+  bool Traversable(const Eigen::Vector2d& p) const;
+  // Distance (m) from the cell to the nearest obstacle; large where none is near.
+  double Clearance(int x, int y) const;
+  bool Occupied(const Eigen::Vector2d& p) const;
+  bool Known(const Eigen::Vector2d& p) const;
+  // No obstacle cell on the segment (unknown cells do not block).
+  bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+
+  // Dijkstra from `from`. When `from` is not traversable (the robot brushed a wall, or stands
+  // in a cell the map calls occupied), the search starts from the nearest traversable cell
+  // within escape_m, reached in a straight line.
+  CostField Plan(const Eigen::Vector2d& from, double escape_m = 0.6) const;
+  // The path to `goal` in the field (start first), or empty when unreachable.
+  std::vector<Eigen::Vector2d> PathTo(const CostField& field, const Eigen::Vector2d& goal) const;
+  // Reachable frontiers, unsorted, each with its cheapest cell as goal.
+  std::vector<Frontier> Frontiers(const CostField& field) const;
+
+  const Grid& grid() const { return grid_; }
+  bool has_map() const { return grid_.width > 0; }
+  const PlannerOptions& options() const { return options_; }
+
+ private:
+  void Stamp(const Eigen::Vector2d& p);
+  double StepCost(int index) const;
+
+  PlannerOptions options_;
+  Grid grid_;
+  std::vector<float> distance_m_;  // to the nearest obstacle
+  std::vector<Eigen::Vector2d> trail_;
+};
+
+}  // namespace explore
+}  // namespace sarmap

@@ -1,0 +1,303 @@
+#include "mission/mission_runner.h"
+
+#include <time.h>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "common/image_messages.h"
+#include "common/robot_config.h"
+#include "depth/depth_node_options.h"
+#include "depth/depth_to_scan.h"
+#include "explore/explore.h"
+#include "sim/simulator.h"
+#include "slam/slam.h"
+#include "slam/slam_node_options.h"
+
+namespace sarmap {
+namespace mission {
+
+namespace {
+
+double CpuSeconds(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// The part of sarmap-explore's options file that is the controller's.
+struct ExploreFile {
+  std::string scan_channel, map_channel, pose_channel, people_channel, teleop_channel, command_channel,
+      status_channel;
+  double status_period_s = 0.5;
+  explore::ExploreOptions explore;
+  template <class V>
+  void Visit(V& v) {
+    v("scan_channel", scan_channel, "");
+    v("map_channel", map_channel, "");
+    v("pose_channel", pose_channel, "");
+    v("people_channel", people_channel, "");
+    v("teleop_channel", teleop_channel, "");
+    v("command_channel", command_channel, "");
+    v("status_channel", status_channel, "");
+    v("status_period_s", status_period_s, "");
+    v("explore", explore, "");
+  }
+};
+
+class Loop : public sim::SimSink {
+ public:
+  Loop(const MissionRunOptions& options, const slam::SlamOptions& slam_options,
+       const explore::ExploreOptions& explore_options, const depth::DepthToScanOptions& scan_options,
+       const Eigen::Isometry3d& base_from_camera, sim::Simulator* simulator, MissionObserver* observer,
+       MissionResult* result)
+      : options_(options),
+        slam_(slam_options),
+        explore_(explore_options),
+        scan_options_(scan_options),
+        base_from_camera_(base_from_camera),
+        sim_(simulator),
+        observer_(observer),
+        result_(result) {}
+
+  void Publish(const std::string&, const sarmap::odometry_t& m) override {
+    const Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
+    const double yaw = std::atan2(2 * (q.w() * q.z() + q.x() * q.y()), 1 - 2 * (q.y() * q.y() + q.z() * q.z()));
+    slam_.AddOdometry(Seconds(m.header.utime), slam::Rigid2d(m.position_m[0], m.position_m[1], yaw));
+  }
+
+  void Publish(const std::string& channel, const sarmap::image_t& m) override {
+    if (channel != "DEPTH") return;
+    std::vector<uint16_t> depth_mm;
+    std::string error;
+    if (!common::DecodeDepthImage(m, &depth_mm, &error)) return;
+    if (!converter_) {
+      depth::PinholeIntrinsics in;
+      in.width = m.width;
+      in.height = m.height;
+      in.fx = m.intrinsics.fx;
+      in.fy = m.intrinsics.fy;
+      in.cx = m.intrinsics.cx;
+      in.cy = m.intrinsics.cy;
+      converter_ = std::make_unique<depth::DepthToScan>(scan_options_, in, base_from_camera_);
+    }
+    const depth::PlanarScan planar = converter_->Convert(depth_mm.data(), m.depth_unit_m);
+    slam::LaserScan scan;
+    scan.time_s = Seconds(m.header.utime);
+    scan.angle_min_rad = planar.angle_min_rad;
+    scan.angle_increment_rad = planar.angle_increment_rad;
+    scan.range_min_m = planar.range_min_m;
+    scan.range_max_m = planar.range_max_m;
+    scan.ranges_m = planar.ranges_m;
+    const slam::ScanResult r = slam_.AddScan(scan);
+    const double t = scan.time_s - start_s_;
+    const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    if (r.accepted) explore_.OnPose(r.map_from_base);
+    if (r.accepted && t - last_map_s_ >= options_.map_period_s) {
+      last_map_s_ = t;
+      PublishMap(t);
+    }
+    explore::Scan es;
+    es.angle_min_rad = scan.angle_min_rad;
+    es.angle_increment_rad = scan.angle_increment_rad;
+    es.range_min_m = scan.range_min_m;
+    es.range_max_m = scan.range_max_m;
+    es.ranges_m = scan.ranges_m;
+    const double explore0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    const explore::Velocity v = explore_.OnScan(t, es);
+    result_->explore_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - explore0;
+    (void)cpu0;
+    sim_->SetVelocityCommand(v.linear_mps, v.angular_radps);
+    if (t - last_status_s_ >= 0.5) {
+      last_status_s_ = t;
+      PublishStatus(m.header.utime, t);
+    }
+    slam_pose_ = r.map_from_base;
+  }
+
+  void Publish(const std::string&, const sarmap::audio_frame_t&) override {}
+
+  void Publish(const std::string&, const sarmap::sim_truth_t& m) override {
+    const double t = Seconds(m.header.utime) - start_s_;
+    result_->distance_m = m.distance_m;
+    result_->collisions = m.collisions;
+    if (observer_) observer_->OnTruth(t, m);
+    if (t - last_sample_s_ >= 1.0) {
+      last_sample_s_ = t;
+      MissionSample s;
+      s.t_s = t;
+      const double yaw = 2 * std::atan2(m.robot_orientation[3], m.robot_orientation[0]);
+      s.truth_pose = Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], yaw);
+      s.slam_pose = Eigen::Vector3d(slam_pose_.translation().x(), slam_pose_.translation().y(), slam_pose_.yaw_rad());
+      s.state = explore_.status().state;
+      s.collisions = m.collisions;
+      s.distance_m = m.distance_m;
+      result_->samples.push_back(s);
+    }
+  }
+
+  void Publish(const std::string&, const sarmap::occupancy_grid_t& m) {
+    if (observer_) observer_->OnFloor(Seconds(m.header.utime) - start_s_, m);
+  }
+
+  void set_start_s(double s) { start_s_ = s; }
+  const explore::ExploreController& explore() const { return explore_; }
+
+ private:
+  static double Seconds(int64_t utime) { return 1e-6 * static_cast<double>(utime); }
+
+  void PublishMap(double t) {
+    const slam::OccupancyMap map = slam_.RenderMap();
+    explore::Grid grid;
+    grid.width = map.width;
+    grid.height = map.height;
+    grid.resolution_m = map.resolution_m;
+    grid.origin_x_m = map.origin_x_m;
+    grid.origin_y_m = map.origin_y_m;
+    grid.cells = map.cells;
+    explore_.OnMap(grid);
+    if (observer_) {
+      sarmap::occupancy_grid_t m;
+      m.header.utime = static_cast<int64_t>((start_s_ + t) * 1e6);
+      m.header.seq = map_seq_++;
+      m.header.frame = "map";
+      m.resolution_m = map.resolution_m;
+      m.width = map.width;
+      m.height = map.height;
+      m.origin_x_m = map.origin_x_m;
+      m.origin_y_m = map.origin_y_m;
+      m.origin_yaw_rad = 0;
+      m.compression = sarmap::occupancy_grid_t::COMPRESSION_NONE;
+      m.data.assign(map.cells.begin(), map.cells.end());
+      m.size = static_cast<int32_t>(m.data.size());
+      observer_->OnMap(t, m);
+    }
+  }
+
+  void PublishStatus(int64_t utime, double t) {
+    const explore::ExploreStatus& s = explore_.status();
+    if (s.state == "home" && result_->home_after_s < 0) result_->home_after_s = t;
+    if (!observer_) return;
+    sarmap::explore_status_t out;
+    out.header.utime = utime;
+    out.header.seq = status_seq_++;
+    out.header.frame = "map";
+    out.state = s.state;
+    out.driven_by = s.driven_by;
+    out.has_goal = s.goal_m.has_value();
+    out.goal_kind = s.goal_kind;
+    out.goal_m[0] = s.goal_m ? s.goal_m->x() : 0.0;
+    out.goal_m[1] = s.goal_m ? s.goal_m->y() : 0.0;
+    for (const auto& p : s.path) {
+      out.path_x_m.push_back(static_cast<float>(p.x()));
+      out.path_y_m.push_back(static_cast<float>(p.y()));
+    }
+    out.num_path = static_cast<int32_t>(out.path_x_m.size());
+    out.frontiers = s.frontiers;
+    out.blacklisted = s.blacklisted;
+    out.recoveries = s.recoveries;
+    out.stuck_s = s.stuck_s;
+    out.elapsed_s = s.elapsed_s;
+    observer_->OnExploreStatus(t, out);
+  }
+
+  MissionRunOptions options_;
+  slam::Slam slam_;
+  explore::ExploreController explore_;
+  depth::DepthToScanOptions scan_options_;
+  Eigen::Isometry3d base_from_camera_;
+  std::unique_ptr<depth::DepthToScan> converter_;
+  sim::Simulator* sim_;
+  MissionObserver* observer_;
+  MissionResult* result_;
+  double start_s_ = 0;
+  double last_map_s_ = -1e9, last_status_s_ = -1e9, last_sample_s_ = -1e9;
+  int64_t map_seq_ = 0, status_seq_ = 0;
+  slam::Rigid2d slam_pose_;
+};
+
+// The explorer's grid as a PGM: unknown grey, free white, occupied black, untraversable free
+// light grey, the last path dark grey.
+void WriteExplorerMap(const explore::ExploreController& controller, const std::string& path) {
+  const explore::ExploreMap& map = controller.map();
+  const explore::Grid& g = map.grid();
+  std::vector<uint8_t> image(static_cast<size_t>(g.width) * g.height);
+  for (int y = 0; y < g.height; ++y) {
+    for (int x = 0; x < g.width; ++x) {
+      const int8_t v = g.at(x, y);
+      uint8_t c = v < 0 ? 128 : v >= 65 ? 0 : map.Traversable(x, y) ? 255 : 200;
+      image[static_cast<size_t>(g.height - 1 - y) * g.width + x] = c;
+    }
+  }
+  for (const auto& p : controller.status().path) {
+    const Eigen::Vector2i c = g.CellOf(p);
+    if (g.Contains(c.x(), c.y())) image[static_cast<size_t>(g.height - 1 - c.y()) * g.width + c.x()] = 60;
+  }
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write " + path);
+  std::fprintf(f, "P5\n%d %d\n255\n", g.width, g.height);
+  std::fwrite(image.data(), 1, image.size(), f);
+  std::fclose(f);
+}
+
+}  // namespace
+
+MissionResult RunMission(const MissionRunOptions& options, MissionObserver* observer,
+                         const std::function<void(double)>& progress) {
+  const double cpu0 = CpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
+  std::vector<std::string> sim_overrides = {
+      "world=" + options.world, "seed=" + std::to_string(options.seed), "drive=cmd_vel", "speed=0",
+      "audio.enabled=false", "camera.rate_hz=" + std::to_string(options.camera_rate_hz), "camera.jpeg_quality=0",
+      "camera.compress_depth=false"};
+  sim_overrides.insert(sim_overrides.end(), options.sim_overrides.begin(), options.sim_overrides.end());
+  const auto sim_options = common::LoadOptions<sim::SimOptions>(options.sim_config, sim_overrides);
+  const sim::SimSetup setup = sim::LoadSetup(sim_options, sim::FindRepoRoot(options.sim_config));
+  const auto slam_file = common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, {});
+  std::vector<std::string> explore_overrides = options.explore_overrides;
+  if (!options.mode.empty()) explore_overrides.push_back("explore.mode=" + options.mode);
+  const auto explore_file = common::LoadOptions<ExploreFile>(options.explore_config, explore_overrides);
+  const auto depth_file = common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, {});
+  depth::DepthToScanOptions scan_options;
+  scan_options.min_height_m = depth_file.min_height_m;
+  scan_options.max_height_m = depth_file.max_height_m;
+  scan_options.range_min_m = depth_file.range_min_m;
+  scan_options.range_max_m = depth_file.range_max_m;
+  scan_options.num_beams = depth_file.num_beams;
+  scan_options.row_step = depth_file.row_step;
+  const common::Rigid3d bc = setup.robot.base_from_camera.ToRigid3d();
+  Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();
+  base_from_camera.linear() = bc.rotation().toRotationMatrix();
+  base_from_camera.translation() = bc.translation();
+
+  sim::Simulator simulator(setup);
+  MissionResult result;
+  Loop loop(options, slam_file.slam, explore_file.explore, scan_options, base_from_camera, &simulator, observer,
+            &result);
+  loop.set_start_s(1e-6 * static_cast<double>(simulator.start_utime()));
+  const double step_s = 0.05;
+  double next_progress = 10;
+  for (double t = step_s; t <= options.duration_s + 1e-9; t += step_s) {
+    simulator.AdvanceTo(t, &loop);
+    if (progress && t >= next_progress) {
+      progress(t);
+      next_progress += 10;
+    }
+    if (loop.explore().status().state == "home" && t > 5) {
+      // Home: the mission is over; a few more seconds so that the last map is drawn.
+      simulator.AdvanceTo(t + 1.0, &loop);
+      result.simulated_s = t + 1.0;
+      break;
+    }
+    result.simulated_s = t;
+  }
+  if (!options.explorer_map_pgm.empty()) WriteExplorerMap(loop.explore(), options.explorer_map_pgm);
+  result.final_state = loop.explore().status().state;
+  result.recoveries = loop.explore().status().recoveries;
+  result.came_home = result.final_state == "home";
+  result.cpu_s = CpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
+  return result;
+}
+
+}  // namespace mission
+}  // namespace sarmap
