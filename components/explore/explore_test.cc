@@ -68,49 +68,199 @@ Grid PartlyKnownRoom() {
   return g;
 }
 
-TEST(FrontierExplorerTest, FindsTheFrontierAndDrivesTowardsIt) {
-  FrontierExplorer f{FrontierOptions()};
-  f.SetMap(PartlyKnownRoom());
-  const auto frontiers = f.Frontiers(Eigen::Vector2d(1.0, 2.0));
-  ASSERT_EQ(frontiers.size(), 1u);
-  EXPECT_NEAR(frontiers[0].goal_m.x(), 2.45, 0.11);  // the edge of the known part
-  EXPECT_GT(frontiers[0].cells.size(), 20u);
-  // Facing away from it: turn on the spot; facing it: drive.
-  auto away = f.Step(common::Rigid2d(1.0, 2.0, M_PI));
-  ASSERT_TRUE(away);
-  EXPECT_EQ(away->linear_mps, 0.0);
-  EXPECT_NE(away->angular_radps, 0.0);
-  auto towards = f.Step(common::Rigid2d(1.0, 2.0, 0.0));
-  ASSERT_TRUE(towards);
-  EXPECT_GT(towards->linear_mps, 0.1);
-  EXPECT_GT(f.path().size(), 5u);
-  // Everything known: nothing left to explore.
-  Grid done = PartlyKnownRoom();
-  for (auto& c : done.cells) c = c < 0 ? 100 : c;
-  f.SetMap(done);
-  EXPECT_FALSE(f.Step(common::Rigid2d(1.0, 2.0, 0.0)));
+ExploreOptions NoLookAround() {
+  ExploreOptions o;
+  o.goals.look_around = false;
+  return o;
 }
 
-TEST(ExploreControllerTest, TeleopOverridesUntilTimeoutAndSafetyLayerWins) {
-  ExploreController c{ExploreOptions()};
+TEST(ExploreMapTest, FrontierOfTheKnownPartAndAPathThatKeepsItsDistanceFromWalls) {
+  ExploreMap m{PlannerOptions()};
+  m.SetMap(PartlyKnownRoom());
+  m.UpdateCostMap();
+  const CostField field = m.Plan(Eigen::Vector2d(1.0, 2.0));
+  const auto frontiers = m.Frontiers(field);
+  ASSERT_EQ(frontiers.size(), 1u);
+  EXPECT_NEAR(frontiers[0].goal_m.x(), 2.45, 0.11);  // the edge of the known part
+  EXPECT_NEAR(frontiers[0].size_m, 0.1 * frontiers[0].cells.size(), 1e-9);
+  // Cells within the robot radius (0.25 m) of the wall at y = 0..0.1 are not traversable.
+  EXPECT_FALSE(m.Traversable(Eigen::Vector2d(1.0, 0.3)));
+  EXPECT_TRUE(m.Traversable(Eigen::Vector2d(1.0, 0.45)));
+  // A path along the room prefers the middle (clearance cost) over hugging the wall.
+  const auto path = m.PathTo(field, Eigen::Vector2d(2.0, 0.45));
+  ASSERT_GT(path.size(), 3u);
+  double max_y = 0;
+  for (const auto& p : path) max_y = std::max(max_y, p.y());
+  EXPECT_GT(max_y, 0.6);
+  // Everything known: no frontier left.
+  Grid done = PartlyKnownRoom();
+  for (auto& c : done.cells) c = c < 0 ? 100 : c;
+  m.SetMap(done);
+  m.UpdateCostMap();
+  EXPECT_TRUE(m.Frontiers(m.Plan(Eigen::Vector2d(1.0, 2.0))).empty());
+}
+
+TEST(ExploreMapTest, ScansFillTheGridNoReturnIsFreeToRangeAndTheRobotsOwnPlaceIsFree) {
+  ExploreMap m{PlannerOptions()};
+  m.SetMap(PartlyKnownRoom());
+  EXPECT_FALSE(m.Known(Eigen::Vector2d(4.0, 2.0)));
+  Scan s = MakeScan(INFINITY, INFINITY);  // no return anywhere: free up to 4.6 m
+  m.IntegrateScan(common::Rigid2d(1.0, 2.0, 0.0), s);
+  EXPECT_TRUE(m.Known(Eigen::Vector2d(4.0, 2.0)));
+  EXPECT_FALSE(m.Occupied(Eigen::Vector2d(4.0, 2.0)));
+  Scan wall = MakeScan(0.0f, 0.0f);  // no information anywhere...
+  wall.ranges_m[30] = 4.0f;          // ...but one return straight ahead
+  m.SetMap(PartlyKnownRoom());
+  m.IntegrateScan(common::Rigid2d(1.0, 2.0, 0.0), wall);
+  const double a = wall.angle_min_rad + 30 * wall.angle_increment_rad;
+  EXPECT_TRUE(m.Occupied(Eigen::Vector2d(1.0 + 4.0 * std::cos(a), 2.0 + 4.0 * std::sin(a))));
+  EXPECT_FALSE(m.Known(Eigen::Vector2d(4.0, 3.0)));  // rays without information are skipped
+  // The robot's own footprint is free once it has been there.
+  m.AddTrail(Eigen::Vector2d(4.0, 3.0));
+  EXPECT_TRUE(m.Known(Eigen::Vector2d(4.2, 3.2)));
+}
+
+TEST(SafetyLayerTest, NoReturnIsFreeBlindCorridorIsBlockedAndOnlyForwardSpeedIsLimited) {
+  SafetyOptions o;
+  // +inf readings (nothing within range) are free space, not unknowns that stop the robot.
+  EXPECT_TRUE(std::isinf(ScanClearanceAhead(MakeScan(INFINITY, INFINITY), o)));
+  // An obstacle 0.8 m straight ahead.
+  Scan s = MakeScan(INFINITY, INFINITY);
+  s.ranges_m[29] = s.ranges_m[30] = 0.8f;
+  EXPECT_NEAR(ScanClearanceAhead(s, o), 0.8, 0.01);
+  // The same range off to the side (outside the corridor) does not count.
+  Scan side = MakeScan(INFINITY, INFINITY);
+  side.ranges_m[2] = 0.8f;
+  EXPECT_TRUE(std::isinf(ScanClearanceAhead(side, o)));
+  // Columns straight ahead without information: something nearer than the camera sees.
+  Scan blind = MakeScan(INFINITY, INFINITY);
+  for (int i = 15; i < 45; ++i) blind.ranges_m[i] = 0.0f;
+  EXPECT_EQ(ScanClearanceAhead(blind, o), 0.0);
+}
+
+TEST(ExploreControllerTest, ExploresTowardsTheFrontierAndTheSafetyLayerNeverTurnsTheRobot) {
+  ExploreController c{NoLookAround()};
+  c.OnMap(PartlyKnownRoom());
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  Velocity v = c.OnScan(0.0, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(v.source, "planner");
+  EXPECT_GT(v.linear_mps, 0.1);
+  EXPECT_EQ(c.status().state, "exploring");
+  EXPECT_EQ(c.status().goal_kind, "frontier");
+  ASSERT_TRUE(c.status().goal_m);
+  EXPECT_GT(c.status().goal_m->x(), 2.0);
+  // An obstacle 0.5 m ahead that the map does not have: forward speed 0, heading untouched.
+  Scan blocked = MakeScan(INFINITY, INFINITY);
+  blocked.ranges_m[29] = blocked.ranges_m[30] = 0.5f;
+  const Velocity held = c.OnScan(0.1, blocked);
+  EXPECT_EQ(held.linear_mps, 0.0);
+  EXPECT_NEAR(held.angular_radps, v.angular_radps, 0.2);
+  // Facing away from the goal: turn on the spot.
+  c.OnPose(common::Rigid2d(1.0, 2.0, M_PI));
+  const Velocity turn = c.OnScan(0.2, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(turn.linear_mps, 0.0);
+  EXPECT_NE(turn.angular_radps, 0.0);
+}
+
+TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
+  ExploreOptions o = NoLookAround();
+  o.recovery.attempts_per_goal = 1;
+  ExploreController c{o};
+  c.OnMap(PartlyKnownRoom());
+  const common::Rigid2d pose(1.0, 2.0, 0.0);
+  c.OnPose(pose);
+  double t = 0;
+  // The robot never moves (wheels spinning against something the sensors miss).
+  bool backed_off = false, turned = false;
+  for (; t < 40 && c.status().recoveries < 2; t += 0.1) {
+    const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
+    backed_off |= v.source == "recovery" && v.linear_mps < 0;
+    turned |= v.source == "recovery" && v.angular_radps != 0;
+  }
+  EXPECT_GE(c.status().recoveries, 1);
+  EXPECT_TRUE(backed_off);
+  EXPECT_TRUE(turned);
+  // The first recovery happens after stuck_timeout_s, not before.
+  ExploreController fresh{o};
+  fresh.OnMap(PartlyKnownRoom());
+  fresh.OnPose(pose);
+  for (double u = 0; u < o.recovery.stuck_timeout_s - 0.5; u += 0.1) fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(fresh.status().recoveries, 0);
+  EXPECT_GT(fresh.status().stuck_s, o.recovery.stuck_timeout_s - 1.0);
+  // After two recoveries on one goal it is blacklisted.
+  EXPECT_GE(c.status().blacklisted, 1);
+}
+
+TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
+  ExploreController c{NoLookAround()};
+  Grid done = PartlyKnownRoom();
+  for (auto& cell : done.cells) cell = cell < 0 ? 100 : cell;
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));  // home
+  c.OnMap(done);
+  c.OnPose(common::Rigid2d(2.0, 2.0, M_PI));
+  double t = 0;
+  common::Rigid2d pose(2.0, 2.0, M_PI);
+  for (; t < 30 && c.status().state != "home"; t += 0.1) {
+    const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
+    // Integrate the command: the robot does what it is told.
+    pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
+    c.OnPose(pose);
+  }
+  EXPECT_EQ(c.status().state, "home");
+  EXPECT_LT((pose.translation() - Eigen::Vector2d(1.0, 2.0)).norm(), 0.35);
+  EXPECT_EQ(c.OnScan(t + 1, MakeScan(INFINITY, INFINITY)).linear_mps, 0.0);
+}
+
+TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
+  ExploreOptions o = NoLookAround();
+  o.mode = "sound_guided";
+  ExploreController c{o};
+  Grid g = PartlyKnownRoom();
+  for (int y = 1; y < g.height - 1; ++y) {
+    for (int x = 25; x < g.width - 1; ++x) g.cells[y * g.width + x] = 0;  // known now
+  }
+  c.OnMap(g);
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  HeardPerson p;
+  p.id = 7;
+  p.position_m = Eigen::Vector2d(5.0, 1.0);
+  p.position_std_m = 0.5;
+  c.OnHeardPeople({p});
+  c.OnScan(0.0, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(c.status().state, "seeking_sound");
+  ASSERT_TRUE(c.status().goal_m);
+  const double d = (*c.status().goal_m - p.position_m).norm();
+  EXPECT_GE(d, o.sound.min_view_m - 0.1);
+  EXPECT_LE(d, o.sound.max_view_m + 0.1);
+  // Placed too uncertainly: not a goal (frontier exploration instead).
+  ExploreController vague{o};
+  vague.OnMap(PartlyKnownRoom());
+  vague.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  p.position_std_m = 5.0;
+  vague.OnHeardPeople({p});
+  vague.OnScan(0.0, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(vague.status().goal_kind, "frontier");
+}
+
+TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergencyStopHolds) {
+  ExploreController c{NoLookAround()};
   c.OnMap(PartlyKnownRoom());
   c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
   TeleopCommand t;
-  t.utime = 1'000'000;
+  t.receive_time_s = 1.0;
   t.override_active = true;
-  t.linear_mps = -0.1;
+  t.linear_mps = 1e6;  // clamped
   c.OnTeleop(t);
-  EXPECT_EQ(c.OnScan(1'200'000, MakeScan(2, 2)).source, "teleop");
-  EXPECT_EQ(c.OnScan(2'000'000, MakeScan(2, 2)).source, "frontier");  // override timed out
-  Scan blocked = MakeScan(2, 2);
-  blocked.ranges_m[30] = 0.5f;  // valid (above range_min) and under 0.6 m
-  EXPECT_EQ(c.OnScan(2'100'000, blocked).source, "reactive");
-  t.utime = 3'000'000;
+  const Velocity v = c.OnScan(1.2, MakeScan(2, 2));
+  EXPECT_EQ(v.source, "teleop");
+  EXPECT_EQ(v.linear_mps, ExploreOptions().teleop_max_linear_mps);
+  EXPECT_NE(c.OnScan(2.0, MakeScan(INFINITY, INFINITY)).source, "teleop");  // override timed out
+  t.receive_time_s = 3.0;
   t.emergency_stop = true;
   c.OnTeleop(t);
-  const Velocity v = c.OnScan(9'000'000, MakeScan(2, 2));  // holds after the timeout too
-  EXPECT_EQ(v.source, "stop");
-  EXPECT_EQ(v.linear_mps, 0);
+  const Velocity stop = c.OnScan(9.0, MakeScan(2, 2));  // holds after the timeout too
+  EXPECT_EQ(stop.source, "stop");
+  EXPECT_EQ(stop.linear_mps, 0);
 }
 
 }  // namespace
