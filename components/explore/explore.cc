@@ -426,6 +426,9 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
   }
   // Done: replan from here.
   state_ = resume_state_;
+  contact_since_s_ = now_s;
+  contact_xy_ = pose_->translation();
+  commanded_m_ = 0;
   progress_xy_ = pose_->translation();
   progress_yaw_ = pose_->yaw_rad();
   progress_s_ = now_s;
@@ -508,6 +511,21 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
     Replan(now_s);
     if (!goal_ || path_.empty()) return stop;
   }
+  // Contact: told to go forward for a while, hardly moved (glass, or something below the
+  // scan's band). Mark it, and recover from there.
+  commanded_m_ += std::max(0.0, last_linear_mps_) * std::max(0.0, now_s - last_scan_s_);
+  if (now_s - contact_since_s_ >= options_.recovery.contact_window_s) {
+    const double moved = (robot - contact_xy_).norm();
+    const bool contact = commanded_m_ > 0.1 && moved < options_.recovery.contact_ratio * commanded_m_;
+    contact_since_s_ = now_s;
+    contact_xy_ = robot;
+    commanded_m_ = 0;
+    if (contact) {
+      map_.AddContact(*pose_);
+      StartRecovery(now_s, scan);
+      return Recover(now_s, scan);
+    }
+  }
   const Velocity desired = Follow(scan);
   const Velocity safe = Safe(desired, scan);
   // Progress: moved or turned enough since the last mark.
@@ -571,6 +589,7 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   } else {
     map_.IntegrateScan(*pose_, scan);
     out = Drive(now_s, scan);
+    last_linear_mps_ = out.linear_mps;
     status_.state = StateName(state_);
   }
   status_.driven_by = out.source;
@@ -584,6 +603,8 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   status_.frontiers = frontier_count_;
   status_.blacklisted = static_cast<int>(blacklist_.size());
   status_.recoveries = recoveries_;
+  status_.contacts = map_.contacts();
+  last_scan_s_ = now_s;
   status_.stuck_s = state_ == State::kHome || state_ == State::kFinished ? 0.0 : std::max(0.0, now_s - progress_s_);
   return out;
 }

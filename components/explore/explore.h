@@ -186,8 +186,13 @@ struct RecoveryOptions {
   double turn_rad = 1.6;
   double turn_speed_radps = 0.6;
   int attempts_per_goal = 2;         // recoveries before a goal is given up
+  double contact_window_s = 1.0;     // commanded forward this long...
+  double contact_ratio = 0.3;        // ...but moved less than this share of it: an unseen obstacle
   template <class V>
   void Visit(V& v) {
+    v("contact_window_s", contact_window_s, "window over which commanded and actual forward motion are compared");
+    v("contact_ratio", contact_ratio,
+      "moving less than this share of the commanded distance means an obstacle the sensors miss (glass): it is marked and avoided");
     v("stuck_timeout_s", stuck_timeout_s, "no progress for this long while driving counts as stuck");
     v("progress_m", progress_m, "moving this far counts as progress");
     v("progress_rad", progress_rad, "turning this much counts as progress");
@@ -208,6 +213,8 @@ struct RecoveryOptions {
     check.NonNegative("turn_rad", turn_rad);
     check.Positive("turn_speed_radps", turn_speed_radps);
     check.That(attempts_per_goal >= 1, "attempts_per_goal", "must be >= 1");
+    check.Positive("contact_window_s", contact_window_s);
+    check.InRange("contact_ratio", contact_ratio, 0.0, 1.0);
   }
 };
 
@@ -296,6 +303,7 @@ struct ExploreStatus {
   int frontiers = 0;
   int blacklisted = 0;
   int recoveries = 0;
+  int contacts = 0;       // obstacles found by running into them
   double stuck_s = 0;
   double elapsed_s = 0;
 };
@@ -366,6 +374,10 @@ class ExploreController {
   Eigen::Vector2d progress_xy_ = Eigen::Vector2d::Zero();
   double progress_yaw_ = 0, progress_s_ = 0;
   std::optional<double> blocked_since_s_;
+  // Contact detection: commanded forward distance against the distance actually moved.
+  double contact_since_s_ = 0, commanded_m_ = 0, last_scan_s_ = 0;
+  Eigen::Vector2d contact_xy_ = Eigen::Vector2d::Zero();
+  double last_linear_mps_ = 0;
   int goal_recoveries_ = 0;
   int recoveries_ = 0;
   State resume_state_ = State::kExploring;

@@ -180,13 +180,21 @@ TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
   EXPECT_GE(c.status().recoveries, 1);
   EXPECT_TRUE(backed_off);
   EXPECT_TRUE(turned);
-  // The first recovery happens after stuck_timeout_s, not before.
+  // Told to drive, it did not move: an obstacle the sensors miss (glass) is now in its map.
+  EXPECT_GE(c.status().contacts, 1);
+  EXPECT_TRUE(c.map().Occupied(pose * Eigen::Vector2d(o.planner.robot_radius_m + 0.1, 0.0)));
+  // Without contact detection, the first recovery comes after stuck_timeout_s, not before.
+  o.recovery.contact_ratio = 0;
   ExploreController fresh{o};
   fresh.OnMap(PartlyKnownRoom());
   fresh.OnPose(pose);
   for (double u = 0; u < o.recovery.stuck_timeout_s - 0.5; u += 0.1) fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(fresh.status().recoveries, 0);
   EXPECT_GT(fresh.status().stuck_s, o.recovery.stuck_timeout_s - 1.0);
+  for (double u = o.recovery.stuck_timeout_s - 0.5; u < o.recovery.stuck_timeout_s + 0.5; u += 0.1) {
+    fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
+  }
+  EXPECT_EQ(fresh.status().recoveries, 1);
   // After two recoveries on one goal it is blacklisted.
   EXPECT_GE(c.status().blacklisted, 1);
 }

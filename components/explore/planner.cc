@@ -35,6 +35,21 @@ void ExploreMap::SetMap(const Grid& map) {
               grid_.cells.begin() + static_cast<size_t>(y + pad) * grid_.width + pad);
   }
   for (const auto& p : trail_) Stamp(p);
+  for (const auto& c : contacts_) StampContact(c);
+}
+
+void ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
+  contacts_.push_back(map_from_base);
+  if (has_map()) StampContact(map_from_base);
+}
+
+void ExploreMap::StampContact(const common::Rigid2d& map_from_base) {
+  // Just beyond the front of the robot, as wide as the robot.
+  const double ahead = options_.robot_radius_m + grid_.resolution_m;
+  for (double y = -options_.robot_radius_m; y <= options_.robot_radius_m + 1e-9; y += 0.5 * grid_.resolution_m) {
+    const Eigen::Vector2i c = grid_.CellOf(map_from_base * Eigen::Vector2d(ahead, y));
+    if (grid_.Contains(c.x(), c.y())) grid_.at(c.x(), c.y()) = 100;
+  }
 }
 
 void ExploreMap::Stamp(const Eigen::Vector2d& p) {

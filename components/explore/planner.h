@@ -107,6 +107,10 @@ class ExploreMap {
   void IntegrateScan(const common::Rigid2d& map_from_base, const Scan& scan);
   // The robot is at this pose: unknown cells within assume_free_radius_m are free.
   void AddTrail(const Eigen::Vector2d& position_m);
+  // An obstacle the sensors do not see (glass, a low step) found by running into it: a segment
+  // across the robot's front, kept as occupied through every later MAP.
+  void AddContact(const common::Rigid2d& map_from_base);
+  int contacts() const { return static_cast<int>(contacts_.size()); }
 
   // Rebuilds the distance transform and traversability (after SetMap / IntegrateScan).
   void UpdateCostMap();
@@ -140,6 +144,8 @@ class ExploreMap {
   Grid grid_;
   std::vector<float> distance_m_;  // to the nearest obstacle
   std::vector<Eigen::Vector2d> trail_;
+  std::vector<common::Rigid2d> contacts_;
+  void StampContact(const common::Rigid2d& map_from_base);
 };
 
 }  // namespace explore
