@@ -7,7 +7,11 @@
 #
 #   launch-scripts/demo.sh [BUILD_DIR]
 #   env: DEMO_WORLD   world file (default config/worlds/lab_dark.yaml)
+#        DEMO_SITE=N  a generated incident site instead (sarmap-site --seed N; default 600 s)
 #        DEMO_SECONDS simulated seconds (default 90)
+#        DEMO_DRIVE   explore (default: the robot searches on its own) or path (the world's
+#                     scripted path)
+#        DEMO_EXPLORE_MODE  sound_guided (default), frontier or reactive
 #        DEMO_KILL=1  kill -9 each process of the stack once, in turn, mid-mission: the launcher
 #                     respawns it and the report must not lose anyone
 #        DEMO_OUT     output folder (default out/demo-DATE)
@@ -18,8 +22,18 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$(cd "${1:-$root/build}" && pwd)"
 bin="$build/bin"
-export DEMO_WORLD="${DEMO_WORLD:-$root/config/worlds/lab_dark.yaml}"
-export DEMO_SECONDS="${DEMO_SECONDS:-90}"
+if [ -n "${DEMO_SITE:-}" ]; then
+  export DEMO_SECONDS="${DEMO_SECONDS:-600}"
+else
+  export DEMO_WORLD="${DEMO_WORLD:-$root/config/worlds/lab_dark.yaml}"
+  export DEMO_SECONDS="${DEMO_SECONDS:-90}"
+fi
+case "${DEMO_DRIVE:-explore}" in
+  explore) export DEMO_SIM_DRIVE=cmd_vel ;;
+  path) export DEMO_SIM_DRIVE=path ;;
+  *) echo "demo: DEMO_DRIVE must be explore or path"; exit 2 ;;
+esac
+export DEMO_EXPLORE_MODE="${DEMO_EXPLORE_MODE:-sound_guided}"
 
 if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   if "$root/tests/harness/sarmap-netns" true 2>/dev/null; then
@@ -40,12 +54,16 @@ fi
 for program in sarmap-sim sarmap-procman sarmap-procman-deputy sarmap-log-record sarmap-log-report; do
   [ -x "$bin/$program" ] || { echo "demo: $bin/$program is not built (run make build)"; exit 1; }
 done
-case "$DEMO_WORLD" in /*) ;; *) DEMO_WORLD="$root/$DEMO_WORLD" ;; esac
-[ -f "$DEMO_WORLD" ] || { echo "demo: no world file $DEMO_WORLD"; exit 1; }
-
 export DEMO_OUT="${DEMO_OUT:-$root/out/demo-$(date +%Y%m%d-%H%M%S)}"
 mkdir -p "$DEMO_OUT"
 out="$DEMO_OUT"
+if [ -n "${DEMO_SITE:-}" ]; then
+  [ -x "$bin/sarmap-site" ] || { echo "demo: $bin/sarmap-site is not built (run make build)"; exit 1; }
+  export DEMO_WORLD="$out/site-$DEMO_SITE.yaml"
+  (cd "$root" && "$bin/sarmap-site" --seed "$DEMO_SITE" -o "$DEMO_WORLD") | sed 's/^/   /'
+fi
+case "$DEMO_WORLD" in /*) ;; *) DEMO_WORLD="$root/$DEMO_WORLD" ;; esac
+[ -f "$DEMO_WORLD" ] || { echo "demo: no world file $DEMO_WORLD"; exit 1; }
 log="$out/demo.lcmlog"
 
 # The launcher obeys only signed orders: a key for this demo only.
@@ -64,7 +82,7 @@ stop_all() {
 }
 trap stop_all EXIT
 
-echo "== sarmap demo: $(basename "$DEMO_WORLD"), ${DEMO_SECONDS} s simulated, $computers computer(s); output in $out"
+echo "== sarmap demo: $(basename "$DEMO_WORLD"), ${DEMO_SECONDS} s simulated, driven by ${DEMO_DRIVE:-explore} ($DEMO_EXPLORE_MODE), $computers computer(s); output in $out"
 pmd="$root/launch-scripts/demo.pmd"
 if [ "$computers" = 1 ]; then
   (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost --set "state_dir=$out") \
@@ -95,7 +113,7 @@ if [ "${DEMO_KILL:-}" = 1 ]; then
   # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission.
   (
     victims=(sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people
-             sarmap-sound-map sarmap-people-map)
+             sarmap-sound-map sarmap-people-map sarmap-explore)
     running() { pgrep -f "(^|/)$1( |\$)" | head -1; }   # (names are longer than pgrep -x sees)
     for _ in $(seq 300); do [ -n "$(running sarmap-sim)" ] && break; sleep 0.2; done
     gap=$(( DEMO_SECONDS / (${#victims[@]} + 2) ))
