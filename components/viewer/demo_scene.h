@@ -35,6 +35,16 @@ inline void FillDemoScene(ViewerState* state) {
   ProcessView slam{"", "sarmap-slam", "running", 1234, 0, 23.5, 80.2};
   ProcessView vision{"", "sarmap-vision-people", "respawning", 0, 2, 0, 0};
   state->SetProcesses("compute", {slam, vision}, common::SteadySeconds());
+  MissionView mission;
+  mission.state = "seeking_sound";
+  mission.driven_by = "planner";
+  mission.goal_kind = "sound";
+  mission.has_goal = true;
+  mission.goal_x_m = 2.9;
+  mission.goal_y_m = 3.6;
+  for (int i = 0; i <= 10; ++i) mission.path.emplace_back(4.5 - 0.16 * i, 2.0 + 0.16 * i);
+  mission.frontiers = 3;
+  state->SetMission(mission);
 }
 
 }  // namespace viewer

@@ -7,6 +7,7 @@
 #include "common/image_codec.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
+#include "sarmap/explore_status_t.hpp"
 #include "common/robot_config.h"
 #include "viewer/viewer_server.h"
 
@@ -52,7 +53,7 @@ int main(int argc, char** argv) {
         "The operator's live web page: map, robot pose and trail, scan, people (seen, heard with\n"
         "their uncertainty, both), sound sources with 3-sigma ellipses, a camera thumbnail and\n"
         "process status from the launcher. Read-only.\n"
-        "In: MAP, POSE, SCAN, PEOPLE_MAP, SOUND_MAP, RGB, PM_INFO, NODE_STATUS.  Out: HTTP.");
+        "In: MAP, POSE, SCAN, PEOPLE_MAP, SOUND_MAP, RGB, EXPLORE_STATUS, PM_INFO, NODE_STATUS.  Out: HTTP.");
     common::NodeArgs args;
     const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/viewer.yaml");
     if (!parsed) return 0;
@@ -166,6 +167,24 @@ int main(int argc, char** argv) {
       v.last_seen_s = common::SteadySeconds();
       state.SetNode(v);
     }, 50);
+
+    node.Subscribe<explore_status_t>("EXPLORE_STATUS", [&](const explore_status_t& m, const common::ReceiveInfo&) {
+      viewer::MissionView v;
+      v.state = m.state;
+      v.driven_by = m.driven_by;
+      v.goal_kind = m.goal_kind;
+      v.has_goal = m.has_goal;
+      v.goal_x_m = m.goal_m[0];
+      v.goal_y_m = m.goal_m[1];
+      for (size_t i = 0; i < m.path_x_m.size() && i < m.path_y_m.size(); ++i) {
+        v.path.emplace_back(m.path_x_m[i], m.path_y_m[i]);
+      }
+      v.frontiers = m.frontiers;
+      v.recoveries = m.recoveries;
+      v.stuck_s = m.stuck_s;
+      v.elapsed_s = m.elapsed_s;
+      state.SetMission(std::move(v));
+    }, 1);
 
     viewer::ViewerServer server(&state, server_options);
     server.Start();

@@ -81,6 +81,12 @@ double Round(double v, double step) { return std::round(v / step) * step; }
 
 }  // namespace
 
+void ViewerState::SetMission(MissionView mission) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  mission_ = std::move(mission);
+  has_mission_ = true;
+}
+
 std::string ViewerState::Json(double now_s) const {
   std::lock_guard<std::mutex> lock(mutex_);
   nlohmann::json j;
@@ -121,6 +127,15 @@ std::string ViewerState::Json(double now_s) const {
                           {"age_s", Round(now_s - n.last_seen_s, 0.1)}});
   }
   j["camera"] = {{"available", !camera_.empty()}, {"version", camera_version_}};
+  if (has_mission_) {
+    nlohmann::json path = nlohmann::json::array();
+    for (const auto& p : mission_.path) path.push_back({Round(p.x(), 0.01), Round(p.y(), 0.01)});
+    j["mission"] = {{"state", mission_.state}, {"driven_by", mission_.driven_by},
+                    {"goal_kind", mission_.goal_kind}, {"has_goal", mission_.has_goal},
+                    {"goal", {Round(mission_.goal_x_m, 0.01), Round(mission_.goal_y_m, 0.01)}},
+                    {"path", path}, {"frontiers", mission_.frontiers}, {"recoveries", mission_.recoveries},
+                    {"stuck_s", Round(mission_.stuck_s, 0.1)}, {"elapsed_s", Round(mission_.elapsed_s, 0.1)}};
+  }
   return j.dump();
 }
 

@@ -58,6 +58,16 @@ struct NodeView {
   double last_seen_s = 0;  // steady clock
 };
 
+// What sarmap-explore is doing (EXPLORE_STATUS).
+struct MissionView {
+  std::string state, driven_by, goal_kind;
+  bool has_goal = false;
+  double goal_x_m = 0, goal_y_m = 0;
+  std::vector<Eigen::Vector2d> path;
+  int frontiers = 0, recoveries = 0;
+  double stuck_s = 0, elapsed_s = 0;
+};
+
 class ViewerState {
  public:
   explicit ViewerState(size_t max_trail = 2000) : max_trail_(max_trail) {}
@@ -70,6 +80,7 @@ class ViewerState {
   void SetProcesses(const std::string& deputy, std::vector<ProcessView> processes, double now_s);
   void SetNode(NodeView node);
   void SetCameraJpeg(std::vector<uint8_t> jpeg);
+  void SetMission(MissionView mission);
 
   // The whole state for the page (without the map and camera bytes, which have their own URLs
   // and a version number so the page fetches them only when they change).
@@ -95,6 +106,8 @@ class ViewerState {
   std::map<std::string, std::pair<double, std::vector<ProcessView>>> processes_;  // deputy -> (seen, list)
   std::map<std::string, NodeView> nodes_;
   std::vector<uint8_t> camera_;
+  bool has_mission_ = false;
+  MissionView mission_;
   int64_t camera_version_ = 0;
 };
 

@@ -37,6 +37,10 @@ TEST(ViewerStateTest, JsonCarriesEverythingThePageDraws) {
   EXPECT_NEAR(j["robot"]["x_m"].get<double>(), 4.5, 1e-9);
   EXPECT_GT(j["trail"].size(), 30u);
   EXPECT_EQ(j["scan"].size(), 40u);
+  EXPECT_EQ(j["mission"]["state"], "seeking_sound");
+  EXPECT_EQ(j["mission"]["goal_kind"], "sound");
+  EXPECT_NEAR(j["mission"]["goal"][0].get<double>(), 2.9, 1e-9);
+  EXPECT_EQ(j["mission"]["path"].size(), 11u);
   // A deputy not heard from for over 3 s is shown as lost.
   const auto later = nlohmann::json::parse(state.Json(common::SteadySeconds() + 10));
   EXPECT_EQ(later["processes"][0]["state"], "deputy lost");
