@@ -27,6 +27,7 @@ class LcmSink : public sarmap::sim::SimSink {
   void Publish(const std::string& ch, const sarmap::image_t& m) override { Send(image_, ch, m); }
   void Publish(const std::string& ch, const sarmap::audio_frame_t& m) override { Send(audio_, ch, m); }
   void Publish(const std::string& ch, const sarmap::sim_truth_t& m) override { Send(truth_, ch, m); }
+  void Publish(const std::string& ch, const sarmap::occupancy_grid_t& m) override { Send(grid_, ch, m); }
 
  private:
   template <class T>
@@ -41,6 +42,7 @@ class LcmSink : public sarmap::sim::SimSink {
   std::map<std::string, Node::Publisher<sarmap::image_t>> image_;
   std::map<std::string, Node::Publisher<sarmap::audio_frame_t>> audio_;
   std::map<std::string, Node::Publisher<sarmap::sim_truth_t>> truth_;
+  std::map<std::string, Node::Publisher<sarmap::occupancy_grid_t>> grid_;
 };
 
 int Run(int argc, char** argv) {
