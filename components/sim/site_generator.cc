@@ -61,7 +61,9 @@ Rgb Colour(double r, double g, double b) {
              static_cast<float>(std::round(b) / 255)};
 }
 Rgb Vary(Random* rng, double r, double g, double b, double spread = 18) {
-  const auto c = [&](double v) { return std::clamp(v + rng->Uniform(-spread, spread), 0.0, 255.0); };
+  const auto c = [&](double v) {
+    return std::clamp(v + rng->Uniform(-spread, spread), 0.0, 255.0);
+  };
   return Colour(c(r), c(g), c(b));
 }
 
@@ -83,7 +85,8 @@ struct Rect {
 
 Rect BoundsOf(const Eigen::Vector2d& centre, const Eigen::Vector2d& size, double yaw) {
   const double c = std::abs(std::cos(yaw)), s = std::abs(std::sin(yaw));
-  const Eigen::Vector2d half(0.5 * (c * size.x() + s * size.y()), 0.5 * (s * size.x() + c * size.y()));
+  const Eigen::Vector2d half(0.5 * (c * size.x() + s * size.y()),
+                             0.5 * (s * size.x() + c * size.y()));
   return {centre - half, centre + half};
 }
 
@@ -111,7 +114,8 @@ class Builder {
 
  private:
   void Layout();
-  void AddWall(const std::string& name, Eigen::Vector2d a, Eigen::Vector2d b, std::vector<std::pair<double, double>> gaps);
+  void AddWall(const std::string& name, Eigen::Vector2d a, Eigen::Vector2d b,
+               std::vector<std::pair<double, double>> gaps);
   double DoorWidth() { return Cm(rng_.Uniform(o_.door_width_min_m, o_.door_width_max_m)); }
   void AddDoorKeepout(const Eigen::Vector2d& centre, bool wall_along_x, double width);
   bool Free(const Rect& r, double margin) const;
@@ -171,7 +175,8 @@ void Builder::AddWall(const std::string& name, Eigen::Vector2d a, Eigen::Vector2
 }
 
 void Builder::AddDoorKeepout(const Eigen::Vector2d& centre, bool wall_along_x, double width) {
-  const Eigen::Vector2d half = wall_along_x ? Eigen::Vector2d(0.5 * width + 0.15, 1.0) : Eigen::Vector2d(1.0, 0.5 * width + 0.15);
+  const Eigen::Vector2d half = wall_along_x ? Eigen::Vector2d(0.5 * width + 0.15, 1.0)
+                                            : Eigen::Vector2d(1.0, 0.5 * width + 0.15);
   doors_.push_back({{centre - half, centre + half}});
   keepouts_.push_back(doors_.back().keepout);
 }
@@ -187,12 +192,15 @@ void Builder::Layout() {
   const double min_room_depth = 2.3, min_room_width = 2.4;
   // A hall across the east end when the building is long enough.
   double hall_w = 0;
-  if (length_ >= 12 && rng_.Chance(0.5)) hall_w = Cm(rng_.Uniform(3.5, std::min(6.0, 0.3 * length_)));
+  if (length_ >= 12 && rng_.Chance(0.5))
+    hall_w = Cm(rng_.Uniform(3.5, std::min(6.0, 0.3 * length_)));
   const double corridor_end = length_ - hall_w;
   // Two rows of rooms when both can be min_room_depth deep, else one row north of the corridor.
   const bool two_rows = depth_ - corridor_w >= 2 * min_room_depth + 0.4;
-  const double y0 = two_rows ? Cm(min_room_depth + (depth_ - corridor_w - 2 * min_room_depth) * rng_.Uniform(0.3, 0.7))
-                             : 0.0;
+  const double y0 =
+      two_rows
+          ? Cm(min_room_depth + (depth_ - corridor_w - 2 * min_room_depth) * rng_.Uniform(0.3, 0.7))
+          : 0.0;
   const double y1 = y0 + corridor_w;
   SiteRoom corridor{"corridor", {0, y0}, {corridor_end, y1}, true};
   rooms_.push_back(corridor);
@@ -201,7 +209,8 @@ void Builder::Layout() {
   const int max_per_row = std::max(1, static_cast<int>(std::floor(corridor_end / min_room_width)));
   std::vector<int> per_row(rows);
   for (int r = 0; r < rows; ++r) {
-    per_row[r] = std::clamp(static_cast<int>(std::ceil(corridor_end / rng_.Uniform(3.5, 5.0))), 1, max_per_row);
+    per_row[r] = std::clamp(static_cast<int>(std::ceil(corridor_end / rng_.Uniform(3.5, 5.0))), 1,
+                            max_per_row);
   }
   const int needed = o_.min_rooms - (hall_w > 0 ? 1 : 0);
   for (int k = 0; std::accumulate(per_row.begin(), per_row.end(), 0) < needed && k < 100; ++k) {
@@ -265,11 +274,13 @@ void Builder::Layout() {
   AddWall("corridor_north", {0, y1}, {corridor_end, y1}, corridor_gaps[1]);
   // The robot starts in the corridor near its west end, facing along it.
   start_ = {Mm(rng_.Uniform(0.8, std::min(2.0, corridor_end - 0.8))), Mm(0.5 * (y0 + y1)), 0.0};
-  keepouts_.push_back({start_.head<2>() - Eigen::Vector2d(0.8, 0.8), start_.head<2>() + Eigen::Vector2d(0.8, 0.8)});
+  keepouts_.push_back(
+      {start_.head<2>() - Eigen::Vector2d(0.8, 0.8), start_.head<2>() + Eigen::Vector2d(0.8, 0.8)});
   // Room centres stay clear, so that the robot can be sent to each.
   for (const SiteRoom& room : rooms_) {
     if (room.corridor) continue;
-    keepouts_.push_back({room.Centre() - Eigen::Vector2d(0.6, 0.6), room.Centre() + Eigen::Vector2d(0.6, 0.6)});
+    keepouts_.push_back(
+        {room.Centre() - Eigen::Vector2d(0.6, 0.6), room.Centre() + Eigen::Vector2d(0.6, 0.6)});
   }
 }
 
@@ -286,7 +297,8 @@ bool Builder::Free(const Rect& r, double margin) const {
 int Builder::PickRoom(bool with_corridor) {
   // Weighted by area (the corridor counts half).
   double total = 0;
-  for (const SiteRoom& r : rooms_) total += (r.corridor ? (with_corridor ? 0.5 : 0.0) : 1.0) * r.Area();
+  for (const SiteRoom& r : rooms_)
+    total += (r.corridor ? (with_corridor ? 0.5 : 0.0) : 1.0) * r.Area();
   double u = rng_.Uniform(0, total);
   for (size_t i = 0; i < rooms_.size(); ++i) {
     const double w = (rooms_[i].corridor ? (with_corridor ? 0.5 : 0.0) : 1.0) * rooms_[i].Area();
@@ -307,7 +319,8 @@ bool Builder::PlaceHidden(int room_index) {
     const int corner = rng_.Int(0, 3);
     const double sx = corner & 1 ? -1 : 1, sy = corner & 2 ? -1 : 1;
     const Eigen::Vector2d k(sx > 0 ? in.lo.x() : in.hi.x(), sy > 0 ? in.lo.y() : in.hi.y());
-    const Rect pocket{k.cwiseMin(k + Eigen::Vector2d(1.45 * sx, 1.45 * sy)), k.cwiseMax(k + Eigen::Vector2d(1.45 * sx, 1.45 * sy))};
+    const Rect pocket{k.cwiseMin(k + Eigen::Vector2d(1.45 * sx, 1.45 * sy)),
+                      k.cwiseMax(k + Eigen::Vector2d(1.45 * sx, 1.45 * sy))};
     if (!Free(pocket, 0.1)) continue;
     const Eigen::Vector2d u = Eigen::Vector2d(sx, sy) / std::sqrt(2.0);
     Item screen;
@@ -343,8 +356,10 @@ bool Builder::PlaceAgainstWall(int room_index, Item item, const Eigen::Vector2d&
     if (room_along < size.x() + 0.1 || room_across < size.y() + 1.2) return false;
     const double t = rng_.Uniform(0.5 * size.x(), room_along - 0.5 * size.x());
     Eigen::Vector2d c;
-    if (along_x) c = {in.lo.x() + t, side == 0 ? in.lo.y() + 0.5 * size.y() : in.hi.y() - 0.5 * size.y()};
-    else c = {side == 2 ? in.lo.x() + 0.5 * size.y() : in.hi.x() - 0.5 * size.y(), in.lo.y() + t};
+    if (along_x)
+      c = {in.lo.x() + t, side == 0 ? in.lo.y() + 0.5 * size.y() : in.hi.y() - 0.5 * size.y()};
+    else
+      c = {side == 2 ? in.lo.x() + 0.5 * size.y() : in.hi.x() - 0.5 * size.y(), in.lo.y() + t};
     c = Mm(c);
     const Eigen::Vector2d extent = along_x ? size : Eigen::Vector2d(size.y(), size.x());
     const Rect r{c - 0.5 * extent, c + 0.5 * extent};
@@ -365,8 +380,9 @@ bool Builder::PlaceTable(int room_index) {
     const bool along_x = rng_.Chance(0.5);
     const Eigen::Vector2d extent = along_x ? size : Eigen::Vector2d(size.y(), size.x());
     if ((in.hi - in.lo - extent).minCoeff() < 0.2) return false;
-    const Eigen::Vector2d c = Mm(Eigen::Vector2d(rng_.Uniform(in.lo.x() + 0.5 * extent.x(), in.hi.x() - 0.5 * extent.x()),
-                                                 rng_.Uniform(in.lo.y() + 0.5 * extent.y(), in.hi.y() - 0.5 * extent.y())));
+    const Eigen::Vector2d c = Mm(
+        Eigen::Vector2d(rng_.Uniform(in.lo.x() + 0.5 * extent.x(), in.hi.x() - 0.5 * extent.x()),
+                        rng_.Uniform(in.lo.y() + 0.5 * extent.y(), in.hi.y() - 0.5 * extent.y())));
     const Rect r{c - 0.5 * extent, c + 0.5 * extent};
     if (!Free(r, 0.3)) continue;
     Item item;
@@ -393,11 +409,13 @@ bool Builder::PlaceDebris() {
   const double kind = rng_.Uniform();
   if (kind < 0.45) {
     item.box.name = "debris";
-    item.box.size_m = {Cm(rng_.Uniform(0.2, 0.5)), Cm(rng_.Uniform(0.2, 0.5)), Cm(rng_.Uniform(0.1, 0.4))};
+    item.box.size_m = {Cm(rng_.Uniform(0.2, 0.5)), Cm(rng_.Uniform(0.2, 0.5)),
+                       Cm(rng_.Uniform(0.1, 0.4))};
     item.box.colour = Vary(&rng_, 120, 110, 100, 30);
   } else if (kind < 0.8) {
     item.box.name = "rubble";
-    item.box.size_m = {Cm(rng_.Uniform(0.6, 1.2)), Cm(rng_.Uniform(0.4, 0.8)), Cm(rng_.Uniform(0.08, 0.2))};
+    item.box.size_m = {Cm(rng_.Uniform(0.6, 1.2)), Cm(rng_.Uniform(0.4, 0.8)),
+                       Cm(rng_.Uniform(0.08, 0.2))};
     item.box.colour = Vary(&rng_, 150, 145, 135, 20);
   } else {
     item.box.name = "fallen_shelf";
@@ -409,8 +427,9 @@ bool Builder::PlaceDebris() {
     const Rect b0 = BoundsOf(Eigen::Vector2d::Zero(), item.box.size_m.head<2>(), yaw);
     const Eigen::Vector2d half = b0.hi;
     if ((in.hi - in.lo - 2 * half).minCoeff() < 0) continue;
-    const Eigen::Vector2d c = Mm(Eigen::Vector2d(rng_.Uniform(in.lo.x() + half.x(), in.hi.x() - half.x()),
-                                                 rng_.Uniform(in.lo.y() + half.y(), in.hi.y() - half.y())));
+    const Eigen::Vector2d c =
+        Mm(Eigen::Vector2d(rng_.Uniform(in.lo.x() + half.x(), in.hi.x() - half.x()),
+                           rng_.Uniform(in.lo.y() + half.y(), in.hi.y() - half.y())));
     const Rect r{c - half, c + half};
     if (!Free(r, 0.05)) continue;
     item.box.centre = c;
@@ -426,8 +445,10 @@ World Builder::CurrentWorld(bool with_people) const {
   World w;
   w.walls = walls_;
   for (const Item& it : items_) {
-    if (it.is_table) w.tables.push_back(it.table);
-    else w.boxes.push_back(it.box);
+    if (it.is_table)
+      w.tables.push_back(it.table);
+    else
+      w.boxes.push_back(it.box);
   }
   if (with_people) w.people = people_;
   w.robot.pose = start_;
@@ -480,11 +501,14 @@ bool Builder::PlacePeople(int visible) {
                                     rng_.Uniform(in.lo.y() + margin, in.hi.y() - margin)));
     if (CellAt(floor, p.position) != 0) continue;
     const Eigen::Vector2d dir(std::cos(p.yaw_rad), std::sin(p.yaw_rad));
-    const Rect around{p.position - Eigen::Vector2d(margin, margin), p.position + Eigen::Vector2d(margin, margin)};
+    const Rect around{p.position - Eigen::Vector2d(margin, margin),
+                      p.position + Eigen::Vector2d(margin, margin)};
     bool ok = true;
     for (const Rect& k : keepouts_) ok = ok && !around.Overlaps(k);
-    for (const Person& q : people_) ok = ok && (q.position - p.position).norm() > 0.8 + (q.posture == Posture::kLying ? 0.9 : 0);
-    for (double s = p.posture == Posture::kLying ? -0.95 : 0.0; ok && s <= (p.posture == Posture::kLying ? 0.86 : 0.0); s += 0.15) {
+    for (const Person& q : people_)
+      ok = ok && (q.position - p.position).norm() > 0.8 + (q.posture == Posture::kLying ? 0.9 : 0);
+    for (double s = p.posture == Posture::kLying ? -0.95 : 0.0;
+         ok && s <= (p.posture == Posture::kLying ? 0.86 : 0.0); s += 0.15) {
       ok = !CircleCollides(p.position + s * dir, 0.3, obstacles);
     }
     if (!ok) continue;
@@ -499,12 +523,15 @@ bool Builder::PlacePeople(int visible) {
 }
 
 void Builder::AddSounds() {
-  const std::vector<std::string> pool = {"espeak:help", "espeak:I am here", "espeak:over here",
+  const std::vector<std::string> pool = {"espeak:help",
+                                         "espeak:I am here",
+                                         "espeak:over here",
                                          "audio/cmu_arctic/cmu_arctic_us_aew_a0001.wav",
                                          "audio/pocketsphinx_test/goforward.raw",
                                          "audio/cmu_arctic/cmu_arctic_us_axb_a0004.wav"};
   for (size_t i = 0; i < people_.size(); ++i) {
-    const bool hidden = std::find(hidden_.begin(), hidden_.end(), static_cast<int>(i)) != hidden_.end();
+    const bool hidden =
+        std::find(hidden_.begin(), hidden_.end(), static_cast<int>(i)) != hidden_.end();
     if (!hidden && !rng_.Chance(o_.voice_probability)) continue;
     SoundSource s;
     s.name = people_[i].name + "_voice";
@@ -515,7 +542,8 @@ void Builder::AddSounds() {
     std::vector<std::string> clips = pool;
     rng_.Shuffle(&clips);
     clips.resize(rng_.Int(2, 3));
-    if (hidden && std::find(clips.begin(), clips.end(), "espeak:help") == clips.end()) clips[0] = "espeak:help";
+    if (hidden && std::find(clips.begin(), clips.end(), "espeak:help") == clips.end())
+      clips[0] = "espeak:help";
     s.clips = clips;
     s.start_s = std::round(rng_.Uniform(0.5, 6.0) * 10) / 10;
     s.every_s = std::round(rng_.Uniform(6.0, 15.0));
@@ -550,7 +578,8 @@ void Builder::Finish(Site* site) {
   AddSounds();
   for (size_t i = 0; i < sources_.size(); ++i) sources_[i].id = static_cast<int>(i) + 1;
   w.sources = sources_;
-  const bool dark = o_.lighting == "dark" || (o_.lighting == "seed" && rng_.Chance(o_.dark_probability));
+  const bool dark =
+      o_.lighting == "dark" || (o_.lighting == "seed" && rng_.Chance(o_.dark_probability));
   w.lights_on = !dark;
   w.ceiling_height_m = height_;
   w.floor_colour = Vary(&rng_, 120, 118, 112, 15);
@@ -602,7 +631,8 @@ bool Builder::Build(Site* site) {
     placed.hums = true;
     placed.noise.name = "machine" + std::to_string(++m);
     placed.noise.kind = SourceKind::kNoise;
-    placed.noise.position = {placed.box.centre.x(), placed.box.centre.y(), Cm(0.8 * placed.box.size_m.z())};
+    placed.noise.position = {placed.box.centre.x(), placed.box.centre.y(),
+                             Cm(0.8 * placed.box.size_m.z())};
     placed.noise.level_db_spl = std::round(rng_.Uniform(50, 58));
     placed.noise.hum_hz = rng_.Chance(0.5) ? 50 : 60;
   }
@@ -621,19 +651,23 @@ bool Builder::Build(Site* site) {
       Eigen::Vector3d size;
       if (u < 0.45) {
         item.box.name = "cabinet";
-        size = {Cm(rng_.Uniform(0.8, 1.2)), Cm(rng_.Uniform(0.45, 0.6)), Cm(rng_.Uniform(1.7, 2.0))};
+        size = {Cm(rng_.Uniform(0.8, 1.2)), Cm(rng_.Uniform(0.45, 0.6)),
+                Cm(rng_.Uniform(1.7, 2.0))};
         item.box.colour = Vary(&rng_, 150, 150, 160);
       } else if (u < 0.65) {
         item.box.name = "shelf";
-        size = {Cm(rng_.Uniform(1.0, 1.6)), Cm(rng_.Uniform(0.35, 0.45)), Cm(rng_.Uniform(1.6, 2.1))};
+        size = {Cm(rng_.Uniform(1.0, 1.6)), Cm(rng_.Uniform(0.35, 0.45)),
+                Cm(rng_.Uniform(1.6, 2.1))};
         item.box.colour = Vary(&rng_, 120, 90, 60);
       } else if (u < 0.75) {
         item.box.name = "bed";
-        size = {Cm(rng_.Uniform(1.9, 2.1)), Cm(rng_.Uniform(0.9, 1.5)), Cm(rng_.Uniform(0.45, 0.6))};
+        size = {Cm(rng_.Uniform(1.9, 2.1)), Cm(rng_.Uniform(0.9, 1.5)),
+                Cm(rng_.Uniform(0.45, 0.6))};
         item.box.colour = Vary(&rng_, 170, 170, 190);
       } else if (u < 0.87) {
         item.box.name = "sofa";
-        size = {Cm(rng_.Uniform(1.6, 2.2)), Cm(rng_.Uniform(0.8, 0.95)), Cm(rng_.Uniform(0.75, 0.9))};
+        size = {Cm(rng_.Uniform(1.6, 2.2)), Cm(rng_.Uniform(0.8, 0.95)),
+                Cm(rng_.Uniform(0.75, 0.9))};
         item.box.colour = Vary(&rng_, 90, 60, 60, 30);
       } else {
         item.box.name = "chair";
@@ -664,7 +698,8 @@ Site GenerateSiteLayout(const SiteOptions& options) {
   common::ValidateOptions(options);
   for (int attempt = 0; attempt < options.max_attempts; ++attempt) {
     Site site;
-    Builder builder(options, Mix(Mix(static_cast<uint64_t>(options.seed)) + static_cast<uint64_t>(attempt)));
+    Builder builder(options,
+                    Mix(Mix(static_cast<uint64_t>(options.seed)) + static_cast<uint64_t>(attempt)));
     if (builder.Build(&site)) {
       site.attempt = attempt;
       return site;
@@ -693,13 +728,14 @@ std::string SiteSummary(const Site& site, double reachable_m2) {
   out.setf(std::ios::fixed);
   out.precision(1);
   out << w.name << ": " << site.size_m.x() << " x " << site.size_m.y() << " m building, "
-      << site.size_m.prod() << " m^2, " << site.rooms_without_corridor() << " rooms and a corridor, "
-      << reachable_m2 << " m^2 reachable; walls " << w.ceiling_height_m << " m; "
-      << (w.lights_on ? "lit" : "dark") << "; " << w.boxes.size() << " boxes, " << w.tables.size()
-      << " tables; " << w.people.size() << " people (";
+      << site.size_m.prod() << " m^2, " << site.rooms_without_corridor()
+      << " rooms and a corridor, " << reachable_m2 << " m^2 reachable; walls " << w.ceiling_height_m
+      << " m; " << (w.lights_on ? "lit" : "dark") << "; " << w.boxes.size() << " boxes, "
+      << w.tables.size() << " tables; " << w.people.size() << " people (";
   for (size_t i = 0; i < w.people.size(); ++i) {
     const Person& p = w.people[i];
-    const bool hidden = std::find(site.hidden_people.begin(), site.hidden_people.end(), p.id) != site.hidden_people.end();
+    const bool hidden = std::find(site.hidden_people.begin(), site.hidden_people.end(), p.id) !=
+                        site.hidden_people.end();
     out << (i ? ", " : "") << p.name << " " << PostureName(p.posture) << (hidden ? " hidden" : "");
   }
   out << "); " << w.sources.size() << " sound sources (";

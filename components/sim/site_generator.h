@@ -26,7 +26,6 @@
 // library; coordinates are rounded to millimetres and angles to whole degrees.
 
 #include <Eigen/Core>
-
 #include <string>
 #include <vector>
 
@@ -58,9 +57,9 @@ struct SiteOptions {
   double alarm_probability = 0.7;
   int machines_min = 1;
   int machines_max = 2;
-  std::string lighting = "seed";   // lit, dark, or seed (dark with dark_probability)
+  std::string lighting = "seed";  // lit, dark, or seed (dark with dark_probability)
   double dark_probability = 0.5;
-  double robot_radius_m = 0.25;    // for the reachability checks
+  double robot_radius_m = 0.25;  // for the reachability checks
   int max_attempts = 20;
   template <class V>
   void Visit(V& v) {
@@ -73,7 +72,8 @@ struct SiteOptions {
     v("door_width_max_m", door_width_max_m, "");
     v("wall_height_min_m", wall_height_min_m, "wall (and ceiling) height range");
     v("wall_height_max_m", wall_height_max_m, "");
-    v("furniture_min_per_room", furniture_min_per_room, "furniture items per room (plus one per 12 m^2)");
+    v("furniture_min_per_room", furniture_min_per_room,
+      "furniture items per room (plus one per 12 m^2)");
     v("furniture_max_per_room", furniture_max_per_room, "");
     v("debris_min", debris_min, "debris items in the building");
     v("debris_max", debris_max, "");
@@ -81,7 +81,8 @@ struct SiteOptions {
     v("people_max", people_max, "");
     v("hidden_min", hidden_min, "people hidden behind a screen in a room corner (only heard)");
     v("hidden_max", hidden_max, "");
-    v("voice_probability", voice_probability, "chance that a person in view calls (hidden people always do)");
+    v("voice_probability", voice_probability,
+      "chance that a person in view calls (hidden people always do)");
     v("alarm_probability", alarm_probability, "chance of an alarm sounding in the corridor");
     v("machines_min", machines_min, "machines humming in rooms");
     v("machines_max", machines_max, "");
@@ -127,7 +128,8 @@ struct SiteOptions {
 
 struct SiteRoom {
   std::string name;
-  Eigen::Vector2d min = Eigen::Vector2d::Zero(), max = Eigen::Vector2d::Zero();  // wall centre lines
+  Eigen::Vector2d min = Eigen::Vector2d::Zero(),
+                  max = Eigen::Vector2d::Zero();  // wall centre lines
   bool corridor = false;
   Eigen::Vector2d Centre() const { return 0.5 * (min + max); }
   double Area() const { return (max - min).prod(); }
@@ -136,10 +138,10 @@ struct SiteRoom {
 // A generated site: the world and what the generator knows about it.
 struct Site {
   World world;
-  std::vector<SiteRoom> rooms;  // the corridor first, then the rooms
+  std::vector<SiteRoom> rooms;                       // the corridor first, then the rooms
   Eigen::Vector2d size_m = Eigen::Vector2d::Zero();  // building L x D (outer walls' centre lines)
-  std::vector<int> hidden_people;  // person ids of the people behind screens
-  int attempt = 0;                 // layouts rejected before this one
+  std::vector<int> hidden_people;                    // person ids of the people behind screens
+  int attempt = 0;                                   // layouts rejected before this one
   int rooms_without_corridor() const;
 };
 

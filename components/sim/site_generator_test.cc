@@ -112,7 +112,8 @@ TEST(SiteGeneratorTest, TwentySeedsGiveBuildingsWhoseRoomsAreAllReachable) {
       bool near = false;
       for (double dx = -1.0; dx <= 1.0 && !near; dx += 0.05) {
         for (double dy = -1.0; dy <= 1.0 && !near; dy += 0.05) {
-          near = std::hypot(dx, dy) <= 1.0 && CellAt(floor, p.position + Eigen::Vector2d(dx, dy)) == 0;
+          near =
+              std::hypot(dx, dy) <= 1.0 && CellAt(floor, p.position + Eigen::Vector2d(dx, dy)) == 0;
         }
       }
       EXPECT_TRUE(near);
@@ -122,7 +123,8 @@ TEST(SiteGeneratorTest, TwentySeedsGiveBuildingsWhoseRoomsAreAllReachable) {
       for (const SoundSource& s : w.sources) calls = calls || s.person_id == id;
       EXPECT_TRUE(calls) << "hidden person " << id << " is silent";
     }
-    EXPECT_FALSE(CircleCollides(w.robot.pose.head<2>(), options.robot_radius_m, CollisionObstacles(w, true)));
+    EXPECT_FALSE(CircleCollides(w.robot.pose.head<2>(), options.robot_radius_m,
+                                CollisionObstacles(w, true)));
     const std::string yaml = WorldToYaml(w);
     const World back = ParseWorld(yaml, "site.yaml");
     ExpectSameWorld(w, back);
@@ -158,7 +160,8 @@ TEST(SiteGeneratorTest, OptionsShapeTheSite) {
 }
 
 TEST(WorldToYamlTest, ShippedWorldsSurviveTheRoundTrip) {
-  for (const char* name : {"lab_lit.yaml", "lab_dark.yaml", "corridor_glass.yaml", "open_area_sound.yaml"}) {
+  for (const char* name :
+       {"lab_lit.yaml", "lab_dark.yaml", "corridor_glass.yaml", "open_area_sound.yaml"}) {
     SCOPED_TRACE(name);
     const World w = LoadWorld(std::string(SARMAP_SOURCE_DIR) + "/config/worlds/" + name);
     const std::string yaml = WorldToYaml(w);

@@ -33,7 +33,8 @@ std::string Vec(std::initializer_list<double> v) {
 std::string Str(const std::string& s) {
   bool plain = !s.empty() && (std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_');
   for (char c : s) {
-    plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' || c == '/');
+    plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ||
+                      c == '.' || c == '/');
   }
   for (const char* word : {"true", "false", "yes", "no", "on", "off", "null", "y", "n"}) {
     std::string lower;
@@ -71,7 +72,8 @@ std::string Yaw(double yaw_rad) {
   char buf[40];
   for (int p = 1; p <= 12; ++p) {
     std::snprintf(buf, sizeof buf, "%.*g", p, yaw_rad * 180.0 / M_PI);
-    if (std::strtod(buf, nullptr) * M_PI / 180.0 == yaw_rad) return std::string(", yaw_deg: ") + buf;
+    if (std::strtod(buf, nullptr) * M_PI / 180.0 == yaw_rad)
+      return std::string(", yaw_deg: ") + buf;
   }
   return ", yaw_rad: " + Num(yaw_rad);
 }
@@ -105,22 +107,23 @@ std::string WorldToYaml(const World& world, const std::string& header) {
   }
   if (!world.boxes.empty()) out << "boxes:\n";
   for (const Box& b : world.boxes) {
-    out << "  - {name: " << Str(b.name) << ", centre: " << Vec({b.centre.x(), b.centre.y()}) << Yaw(b.yaw_rad)
-        << ", size_m: " << Vec({b.size_m.x(), b.size_m.y(), b.size_m.z()});
+    out << "  - {name: " << Str(b.name) << ", centre: " << Vec({b.centre.x(), b.centre.y()})
+        << Yaw(b.yaw_rad) << ", size_m: " << Vec({b.size_m.x(), b.size_m.y(), b.size_m.z()});
     if (b.base_m != 0) out << ", base_m: " << Num(b.base_m);
     out << ", colour: " << Colour(b.colour) << "}\n";
   }
   if (!world.tables.empty()) out << "tables:\n";
   for (const Table& t : world.tables) {
-    out << "  - {name: " << Str(t.name) << ", centre: " << Vec({t.centre.x(), t.centre.y()}) << Yaw(t.yaw_rad)
-        << ", size_m: " << Vec({t.size_m.x(), t.size_m.y()}) << ", height_m: " << Num(t.height_m)
-        << ", top_thickness_m: " << Num(t.top_thickness_m) << ", leg_width_m: " << Num(t.leg_width_m)
-        << ", colour: " << Colour(t.colour) << "}\n";
+    out << "  - {name: " << Str(t.name) << ", centre: " << Vec({t.centre.x(), t.centre.y()})
+        << Yaw(t.yaw_rad) << ", size_m: " << Vec({t.size_m.x(), t.size_m.y()})
+        << ", height_m: " << Num(t.height_m) << ", top_thickness_m: " << Num(t.top_thickness_m)
+        << ", leg_width_m: " << Num(t.leg_width_m) << ", colour: " << Colour(t.colour) << "}\n";
   }
   if (!world.people.empty()) out << "people:\n";
   for (const Person& p : world.people) {
     out << "  - {name: " << Str(p.name) << ", position: " << Vec({p.position.x(), p.position.y()})
-        << Yaw(p.yaw_rad) << ", posture: " << PostureName(p.posture) << ", height_m: " << Num(p.height_m);
+        << Yaw(p.yaw_rad) << ", posture: " << PostureName(p.posture)
+        << ", height_m: " << Num(p.height_m);
     if (p.appearance != -1) out << ", appearance: " << p.appearance;
     out << "}\n";
   }
@@ -168,7 +171,8 @@ std::string WorldToYaml(const World& world, const std::string& header) {
   out << "robot:\n  start: " << Vec({r.pose.x(), r.pose.y(), r.pose.z()}) << "\n";
   if (!r.path.empty()) {
     out << "  path: [";
-    for (size_t i = 0; i < r.path.size(); ++i) out << (i ? ", " : "") << Vec({r.path[i].x(), r.path[i].y()});
+    for (size_t i = 0; i < r.path.size(); ++i)
+      out << (i ? ", " : "") << Vec({r.path[i].x(), r.path[i].y()});
     out << "]\n";
   }
   out << "  path_speed_mps: " << Num(r.path_speed_mps) << "\n"
