@@ -60,6 +60,24 @@ struct MapAgreement {
   Eigen::Vector3d world_from_map{0, 0, 0};  // x, y, yaw used
 };
 
+// The floor the robot's body can cover: the cells the robot's centre reaches from
+// world.robot.pose through free space (a disc of robot_radius_m clear of every obstacle of
+// CollisionObstacles(), the robot's own collision model: walls, glass, boxes, table legs and
+// low table tops; people too when `people_block`), grown by robot_radius_m (the body around
+// each reachable centre) and clipped to floor that no obstacle covers. Centres connect through
+// the 4-neighbourhood of the grid, so a gap is passable when it is at least one cell wider
+// than the robot's diameter plus the obstacles' half-widths. The grid covers the obstacles'
+// bounding box (and the start) with a margin; frame = world frame, yaw 0. Values: 0 reachable
+// floor, 100 obstacle footprint (cells whose centre is within max(half-width,
+// resolution / sqrt(2)) of an obstacle's line), -1 neither (unreachable floor, outside the
+// building). Nothing is reachable when the start pose itself collides.
+GridMap ReachableFloor(const World& world, double robot_radius_m, double resolution_m = 0.05,
+                       bool people_block = false);
+// Area of the cells of value 0, m^2.
+double FloorArea(const GridMap& grid);
+// The value of the cell containing p; -1 outside the grid.
+int CellAt(const GridMap& grid, const Eigen::Vector2d& p);
+
 // Agreement of `map` (in its own frame) with the world's floor plan, the map placed in the
 // world by `world_from_map` (x, y, yaw).
 MapAgreement CompareWithFloorPlan(const GridMap& map, const World& world, const Eigen::Vector3d& world_from_map,

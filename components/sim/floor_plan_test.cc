@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace sarmap {
 namespace sim {
@@ -97,6 +98,79 @@ TEST(FloorPlanTest, AMapOfTheFloorPlanAgreesAndAMisplacedOneDoesNot) {
   const MapAgreement best =
       BestFitAgreement(map, w, world_from_map + Eigen::Vector3d(0.1, -0.05, 0.02), FloorPlanOptions(), 0.15, 2 * M_PI / 180);
   EXPECT_NEAR(best.agreement(), right.agreement(), 0.01);
+}
+
+// Two 3.9 x 2.9 m rooms (inside the walls) side by side, joined by a door of `door_m` in the
+// shared wall; the robot starts in the west room.
+World TwoRooms(double door_m) {
+  World w;
+  const auto wall = [&](Eigen::Vector2d a, Eigen::Vector2d b) {
+    Wall x;
+    x.from = a;
+    x.to = b;
+    w.walls.push_back(x);
+  };
+  wall({0, 0}, {8, 0});
+  wall({8, 0}, {8, 3});
+  wall({8, 3}, {0, 3});
+  wall({0, 3}, {0, 0});
+  wall({4, 0}, {4, 1.0});
+  wall({4, 1.0 + door_m}, {4, 3});
+  w.robot.pose = {2, 1.5, 0};
+  return w;
+}
+
+TEST(ReachableFloorTest, ANarrowDoorKeepsTheRobotInOneRoomAWideOneLetsItThrough) {
+  // The gap between the door's wall ends must exceed the robot's diameter plus the walls'
+  // half-thicknesses: 2 * 0.25 + 2 * 0.05 = 0.6 m.
+  const GridMap narrow = ReachableFloor(TwoRooms(0.5), 0.25, 0.05);
+  EXPECT_EQ(CellAt(narrow, {2, 1.5}), 0);
+  EXPECT_EQ(CellAt(narrow, {6, 1.5}), -1);
+  EXPECT_EQ(CellAt(narrow, {4, 0.5}), 100);   // the wall
+  EXPECT_EQ(CellAt(narrow, {-1, 1.5}), -1);   // outside the grid
+  EXPECT_EQ(CellAt(narrow, {0.17, 0.17}), 0);  // the body reaches into the corners...
+  EXPECT_EQ(CellAt(narrow, {0.08, 0.08}), -1);  // ...but not right into them
+  // One room: 3.9 x 2.9 = 11.31 m^2 less r^2 (1 - pi/4) = 0.013 m^2 per corner, plus the body
+  // reaching into the door.
+  const double one = FloorArea(narrow);
+  std::printf("narrow door: %.3f m^2\n", one);
+  EXPECT_NEAR(one, 11.31, 0.25);
+  const GridMap wide = ReachableFloor(TwoRooms(0.9), 0.25, 0.05);
+  EXPECT_EQ(CellAt(wide, {6, 1.5}), 0);
+  const double two = FloorArea(wide);
+  std::printf("wide door: %.3f m^2\n", two);
+  EXPECT_NEAR(two, 2 * 11.31, 0.4);
+}
+
+TEST(ReachableFloorTest, BoxesAreFootprintTablesOnlyTheirLegs) {
+  World w = TwoRooms(0.9);
+  Box cabinet;
+  cabinet.centre = {6, 1.5};
+  cabinet.size_m = {1.0, 1.0, 1.8};
+  w.boxes.push_back(cabinet);
+  Table table;
+  table.centre = {2, 1.5};
+  table.size_m = {1.6, 1.0};
+  w.tables.push_back(table);
+  w.robot.pose = {1, 1, 0};
+  const GridMap g = ReachableFloor(w, 0.25, 0.05);
+  EXPECT_EQ(CellAt(g, {6, 1.5}), 100);
+  EXPECT_EQ(CellAt(g, {2, 1.5}), 0);  // under the table, between its legs
+  EXPECT_EQ(CellAt(g, {2 + 0.8 - 0.05, 1.5 + 0.5 - 0.05}), 100);  // a leg
+  EXPECT_NEAR(FloorArea(g), 2 * 11.31 - 1.0, 0.45);
+  // A person lying in the door blocks it only when people count as obstacles.
+  Person p;
+  p.position = {4, 1.45};
+  p.posture = Posture::kLying;
+  w.people.push_back(p);
+  EXPECT_EQ(CellAt(ReachableFloor(w, 0.25, 0.05), {6, 0.5}), 0);
+  EXPECT_EQ(CellAt(ReachableFloor(w, 0.25, 0.05, true), {6, 0.5}), -1);
+}
+
+TEST(ReachableFloorTest, NothingIsReachableFromAStartInsideAnObstacle) {
+  World w = TwoRooms(0.9);
+  w.robot.pose = {4, 0.5, 0};
+  EXPECT_EQ(FloorArea(ReachableFloor(w, 0.25, 0.05)), 0.0);
 }
 
 }  // namespace

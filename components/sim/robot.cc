@@ -7,6 +7,21 @@ namespace sarmap {
 namespace sim {
 namespace {
 
+void AddRectangle(std::vector<Obstacle>* out, const Eigen::Vector2d& c, double yaw, double sx, double sy) {
+  const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw)), ay(-ax.y(), ax.x());
+  const Eigen::Vector2d p[4] = {c - ax * sx / 2 - ay * sy / 2, c + ax * sx / 2 - ay * sy / 2,
+                                c + ax * sx / 2 + ay * sy / 2, c - ax * sx / 2 + ay * sy / 2};
+  for (int k = 0; k < 4; ++k) out->push_back({p[k], p[(k + 1) % 4], 0.0});
+  // The inside, too (a centre placed inside collides): the capsule along the long axis whose
+  // radius is half the short side and whose ends touch the short sides lies within the box;
+  // what it leaves out (near the corners) is within the edges' reach.
+  const Eigen::Vector2d along = sx >= sy ? ax : ay;
+  const double half_core = 0.5 * std::abs(sx - sy);
+  out->push_back({c - along * half_core, c + along * half_core, 0.5 * std::min(sx, sy)});
+}
+
+}  // namespace
+
 double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   const Eigen::Vector2d ab = b - a;
   const double len2 = ab.squaredNorm();
@@ -14,28 +29,13 @@ double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const
   return (a + t * ab - p).norm();
 }
 
-void AddRectangle(std::vector<Obstacle>* out, const Eigen::Vector2d& c, double yaw, double sx, double sy) {
-  const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw)), ay(-ax.y(), ax.x());
-  const Eigen::Vector2d p[4] = {c - ax * sx / 2 - ay * sy / 2, c + ax * sx / 2 - ay * sy / 2,
-                                c + ax * sx / 2 + ay * sy / 2, c - ax * sx / 2 + ay * sy / 2};
-  for (int k = 0; k < 4; ++k) out->push_back({p[k], p[(k + 1) % 4], 0.0});
-  out->push_back({c - ax * sx / 2, c + ax * sx / 2, sy / 2});  // the inside, too
-}
-
-}  // namespace
-
-Robot::Robot(const World& world, const SimOptions& options, double max_linear_mps,
-             double max_angular_radps, uint64_t seed)
-    : options_(options), path_(world.robot.path), path_loop_(world.robot.path_loop),
-      path_speed_(world.robot.path_speed_mps), path_turn_(world.robot.path_turn_radps),
-      max_v_(max_linear_mps), max_w_(max_angular_radps),
-      map_from_base_(world.robot.pose.x(), world.robot.pose.y(), world.robot.pose.z()), rng_(seed) {
-  const double robot_height = 0.6;  // parts above this (table tops) do not stop the base
+std::vector<Obstacle> CollisionObstacles(const World& world, bool with_people) {
+  std::vector<Obstacle> obstacles;
   for (const Wall& w : world.walls) {
-    if (w.base_m < robot_height) obstacles_.push_back({w.from, w.to, w.thickness_m / 2});
+    if (w.base_m < kRobotHeightM) obstacles.push_back({w.from, w.to, w.thickness_m / 2});
   }
   for (const Box& b : world.boxes) {
-    if (b.base_m < robot_height) AddRectangle(&obstacles_, b.centre, b.yaw_rad, b.size_m.x(), b.size_m.y());
+    if (b.base_m < kRobotHeightM) AddRectangle(&obstacles, b.centre, b.yaw_rad, b.size_m.x(), b.size_m.y());
   }
   for (const Table& t : world.tables) {
     const Eigen::Vector2d ax(std::cos(t.yaw_rad), std::sin(t.yaw_rad)), ay(-ax.y(), ax.x());
@@ -43,17 +43,36 @@ Robot::Robot(const World& world, const SimOptions& options, double max_linear_mp
       for (double sy : {-1.0, 1.0}) {
         const Eigen::Vector2d c = t.centre + ax * sx * (t.size_m.x() / 2 - t.leg_width_m) +
                                   ay * sy * (t.size_m.y() / 2 - t.leg_width_m);
-        obstacles_.push_back({c, c, t.leg_width_m / 2});
+        obstacles.push_back({c, c, t.leg_width_m / 2});
       }
     }
-    if (t.height_m - t.top_thickness_m < robot_height) {
-      AddRectangle(&obstacles_, t.centre, t.yaw_rad, t.size_m.x(), t.size_m.y());
+    if (t.height_m - t.top_thickness_m < kRobotHeightM) {
+      AddRectangle(&obstacles, t.centre, t.yaw_rad, t.size_m.x(), t.size_m.y());
     }
   }
-  for (const Person& p : world.people) {
-    const double r = p.posture == Posture::kLying ? 0.5 : 0.25;
-    obstacles_.push_back({p.position, p.position, r});
+  if (with_people) {
+    for (const Person& p : world.people) {
+      const double r = p.posture == Posture::kLying ? 0.5 : 0.25;
+      obstacles.push_back({p.position, p.position, r});
+    }
   }
+  return obstacles;
+}
+
+bool CircleCollides(const Eigen::Vector2d& p, double radius_m, const std::vector<Obstacle>& obstacles) {
+  for (const Obstacle& o : obstacles) {
+    if (SegmentDistance(p, o.a, o.b) < radius_m + o.half_width) return true;
+  }
+  return false;
+}
+
+Robot::Robot(const World& world, const SimOptions& options, double max_linear_mps,
+             double max_angular_radps, uint64_t seed)
+    : options_(options), path_(world.robot.path), path_loop_(world.robot.path_loop),
+      path_speed_(world.robot.path_speed_mps), path_turn_(world.robot.path_turn_radps),
+      max_v_(max_linear_mps), max_w_(max_angular_radps),
+      map_from_base_(world.robot.pose.x(), world.robot.pose.y(), world.robot.pose.z()), rng_(seed) {
+  obstacles_ = CollisionObstacles(world, true);
   following_path_ = options.drive != "cmd_vel" && !path_.empty();
 }
 
@@ -65,10 +84,7 @@ void Robot::SetCommand(double linear_mps, double angular_radps, double t_s) {
 }
 
 bool Robot::Collides(const Eigen::Vector2d& p) const {
-  for (const Obstacle& o : obstacles_) {
-    if (SegmentDistance(p, o.a, o.b) < options_.robot_radius_m + o.half_width) return true;
-  }
-  return false;
+  return CircleCollides(p, options_.robot_radius_m, obstacles_);
 }
 
 void Robot::FollowPath(double* v, double* w) {

@@ -24,6 +24,21 @@ struct Obstacle {  // a 2D segment with a half-width (walls, box edges, table le
   double half_width;
 };
 
+// The base is this tall: parts of the world above it (table tops, high window bands) do not
+// stop it.
+constexpr double kRobotHeightM = 0.6;
+
+// What stops the base, as segments with half-widths: walls and glass panels (their centre
+// lines), boxes (four edges plus a capsule inside along the long axis, so that a centre
+// placed inside one collides), table legs (points) and table tops that reach below kRobotHeightM; people as
+// discs (0.25 m, lying 0.5 m) when `with_people`. A circle of radius r at p collides when
+// dist(p, segment) < r + half_width for any of them.
+std::vector<Obstacle> CollisionObstacles(const World& world, bool with_people);
+// Distance from p to the segment [a, b].
+double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+// Whether a circle of `radius_m` at p touches any obstacle (the robot's collision test).
+bool CircleCollides(const Eigen::Vector2d& p, double radius_m, const std::vector<Obstacle>& obstacles);
+
 class Robot {
  public:
   Robot(const World& world, const SimOptions& options, double max_linear_mps,

@@ -21,6 +21,7 @@ struct CountingSink : sarmap::sim::SimSink {
   }
   void Publish(const std::string&, const sarmap::audio_frame_t&) override { ++audio; }
   void Publish(const std::string&, const sarmap::sim_truth_t&) override { ++truth; }
+  void Publish(const std::string&, const sarmap::occupancy_grid_t&) override {}
 };
 double ProcessCpu() {
   timespec ts{};

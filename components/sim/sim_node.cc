@@ -1,5 +1,5 @@
 // sarmap-sim: the embedded default world. Publishes ODOM, DEPTH, RGB, AUDIO (or
-// AUDIO_<DEVICE>) and SIM_TRUTH in simulated time, follows CMD_VEL.
+// AUDIO_<DEVICE>), SIM_TRUTH and SIM_FLOOR in simulated time, follows CMD_VEL.
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -27,6 +27,7 @@ class LcmSink : public sarmap::sim::SimSink {
   void Publish(const std::string& ch, const sarmap::image_t& m) override { Send(image_, ch, m); }
   void Publish(const std::string& ch, const sarmap::audio_frame_t& m) override { Send(audio_, ch, m); }
   void Publish(const std::string& ch, const sarmap::sim_truth_t& m) override { Send(truth_, ch, m); }
+  void Publish(const std::string& ch, const sarmap::occupancy_grid_t& m) override { Send(grid_, ch, m); }
 
  private:
   template <class T>
@@ -41,6 +42,7 @@ class LcmSink : public sarmap::sim::SimSink {
   std::map<std::string, Node::Publisher<sarmap::image_t>> image_;
   std::map<std::string, Node::Publisher<sarmap::audio_frame_t>> audio_;
   std::map<std::string, Node::Publisher<sarmap::sim_truth_t>> truth_;
+  std::map<std::string, Node::Publisher<sarmap::occupancy_grid_t>> grid_;
 };
 
 int Run(int argc, char** argv) {
@@ -60,7 +62,8 @@ int Run(int argc, char** argv) {
   args.AddFlag("--duration", &duration, "stop after this many simulated seconds");
   args.SetEpilog(
       "Channels out: ODOM, DEPTH, RGB, AUDIO (AUDIO_<DEVICE> per microphone for an asynchronous\n"
-      "array), SIM_TRUTH. In: CMD_VEL. Worlds: config/worlds/*.yaml.\n"
+      "array), SIM_TRUTH, SIM_FLOOR. In: CMD_VEL. Worlds: config/worlds/*.yaml, or generated\n"
+      "by sarmap-site.\n"
       "Example: sarmap-sim --world config/worlds/lab_dark.yaml --speed 2 --seed 7\n");
   if (!args.Parse(argc, argv)) return 0;
   common::SetLogLevel(common::ParseLogLevel(node_args.log_level));

@@ -179,6 +179,7 @@ struct ChannelOptions {
   std::string audio = "AUDIO";  // asynchronous arrays: AUDIO_<DEVICE>
   std::string truth = "SIM_TRUTH";
   std::string cmd_vel = "CMD_VEL";
+  std::string floor = "SIM_FLOOR";
   template <class V>
   void Visit(V& v) {
     v("odom", odom, "odometry out");
@@ -187,6 +188,7 @@ struct ChannelOptions {
     v("audio", audio, "audio out (prefix for asynchronous devices)");
     v("truth", truth, "ground truth out");
     v("cmd_vel", cmd_vel, "velocity commands in");
+    v("floor", floor, "reachable floor out (occupancy grid, at start and every 5 simulated s)");
   }
 };
 
@@ -203,6 +205,7 @@ struct SimOptions {
   double physics_rate_hz = 200.0;
   double truth_rate_hz = 10.0;
   double robot_radius_m = 0.25;
+  double floor_period_s = 5.0;          // SIM_FLOOR period (first at start); 0 = never
   CameraOptions camera;
   AudioOptions audio;
   OdometryOptions odometry;
@@ -221,6 +224,7 @@ struct SimOptions {
     v("physics_rate_hz", physics_rate_hz, "robot integration rate");
     v("truth_rate_hz", truth_rate_hz, "SIM_TRUTH rate");
     v("robot_radius_m", robot_radius_m, "robot footprint radius for collisions");
+    v("floor_period_s", floor_period_s, "publish the reachable floor (SIM_FLOOR) this often; 0 = never");
     v("camera", camera, "RGB-D camera");
     v("audio", audio, "microphone array");
     v("odometry", odometry, "odometry noise");
@@ -234,6 +238,7 @@ struct SimOptions {
     check.InRange("physics_rate_hz", physics_rate_hz, 10, 10000);
     check.Positive("truth_rate_hz", truth_rate_hz);
     check.Positive("robot_radius_m", robot_radius_m);
+    check.NonNegative("floor_period_s", floor_period_s);
     check.That(start_utime >= 0, "start_utime", "must be >= 0");
   }
 };

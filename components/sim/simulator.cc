@@ -10,10 +10,12 @@
 #include <filesystem>
 #include <map>
 
+#include "common/compression.h"
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "sim/appearance.h"
 #include "sim/audio_sim.h"
+#include "sim/floor_plan.h"
 #include "sim/renderer.h"
 #include "sim/robot.h"
 #include "sim/sound_sources.h"
@@ -83,8 +85,9 @@ struct Simulator::Impl {
   std::unique_ptr<Robot> robot;
   common::Rigid3d base_from_camera, base_from_array;
   double dt = 0.005;
-  double next_odom = 0, next_cam = 0, next_truth = 0;
-  int64_t seq_odom = 0, seq_depth = 0, seq_rgb = 0, seq_truth = 0;
+  double next_odom = 0, next_cam = 0, next_truth = 0, next_floor = 0;
+  int64_t seq_odom = 0, seq_depth = 0, seq_rgb = 0, seq_truth = 0, seq_floor = 0;
+  sarmap::occupancy_grid_t floor;  // the reachable floor, computed once (the world is static)
   std::map<std::string, int64_t> seq_audio;
   std::vector<int> person_pixels;
   sarmap::camera_intrinsics_t intrinsics;
@@ -154,6 +157,22 @@ Simulator::Simulator(const SimSetup& setup) : impl_(std::make_unique<Impl>()), s
                                               std::move(signals), seed * 3 + 3);
   }
   impl_->person_pixels.assign(setup_.world.people.size(), 0);
+  // The floor the robot can cover (the world is static: computed once, zstd-compressed; a
+  // 180 m^2 site is ~100 k cells, a few kB on the wire).
+  const GridMap floor = ReachableFloor(setup_.world, o.robot_radius_m, 0.05);
+  sarmap::occupancy_grid_t& grid = impl_->floor;
+  grid.header.frame = "map";
+  grid.resolution_m = floor.resolution_m;
+  grid.width = floor.width;
+  grid.height = floor.height;
+  grid.origin_x_m = floor.origin_x_m;
+  grid.origin_y_m = floor.origin_y_m;
+  grid.origin_yaw_rad = 0;
+  const std::vector<uint8_t> packed =
+      common::CompressBytes(reinterpret_cast<const uint8_t*>(floor.cells.data()), floor.cells.size());
+  grid.compression = sarmap::occupancy_grid_t::COMPRESSION_ZSTD;
+  grid.data.assign(packed.begin(), packed.end());
+  grid.size = static_cast<int32_t>(grid.data.size());
 }
 
 Simulator::~Simulator() = default;
@@ -210,6 +229,12 @@ void Simulator::AdvanceTo(double target_s, SimSink* sink) {
     timing_.physics_s += ThreadCpuSeconds() - c;
     sarmap::header_t header;
     header.utime = utime();
+    if (o.floor_period_s > 0 && t_ + 1e-9 >= m.next_floor) {
+      m.next_floor += o.floor_period_s;
+      m.floor.header.utime = header.utime;
+      m.floor.header.seq = m.seq_floor++;
+      sink->Publish(o.channels.floor, m.floor);
+    }
     if (t_ + 1e-9 >= m.next_odom) {
       m.next_odom += 1.0 / o.odometry.rate_hz;
       m.robot->UpdateOdometry();

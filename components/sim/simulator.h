@@ -1,6 +1,6 @@
 #pragma once
 // The simulator core (no LCM): advances simulated time and emits ODOM, DEPTH, RGB, AUDIO
-// (or AUDIO_<DEVICE>) and SIM_TRUTH messages through a SimSink, in time order. The node
+// (or AUDIO_<DEVICE>), SIM_TRUTH and SIM_FLOOR messages through a SimSink, in time order. The node
 // (sim_node.cc) publishes them on LCM; tests and the benchmark collect them in process.
 
 #include <cstdint>
@@ -12,6 +12,7 @@
 #include "common/transform.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/image_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
 #include "sarmap/odometry_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
 #include "sim/sim_options.h"
@@ -27,6 +28,7 @@ class SimSink {
   virtual void Publish(const std::string& channel, const sarmap::image_t& msg) = 0;
   virtual void Publish(const std::string& channel, const sarmap::audio_frame_t& msg) = 0;
   virtual void Publish(const std::string& channel, const sarmap::sim_truth_t& msg) = 0;
+  virtual void Publish(const std::string& channel, const sarmap::occupancy_grid_t& msg) = 0;
 };
 
 // Everything the simulator needs, with paths resolved.

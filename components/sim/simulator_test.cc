@@ -9,6 +9,7 @@
 #include "common/image_messages.h"
 #include "common/message_checks.h"
 #include "sim/audio_sim.h"
+#include "sim/floor_plan.h"
 
 namespace sarmap {
 namespace sim {
@@ -55,7 +56,12 @@ struct CollectingSink : SimSink {
     Record(c, m);
     truths.push_back(m);
   }
+  void Publish(const std::string& c, const sarmap::occupancy_grid_t& m) override {
+    Record(c, m);
+    floors.push_back(m);
+  }
   std::vector<sarmap::sim_truth_t> truths;
+  std::vector<sarmap::occupancy_grid_t> floors;
 };
 
 SimOptions Options(const std::string& world) {
@@ -102,7 +108,7 @@ TEST_P(ScenarioTest, PublishesEveryChannelAtItsRate) {
   ExpectChannel(sink, "RGB", "camera", options.camera.rate_hz, seconds);
   ExpectChannel(sink, "AUDIO", "mic_array", 16000.0 / options.audio.block_samples, seconds);
   ExpectChannel(sink, "SIM_TRUTH", "map", options.truth_rate_hz, seconds);
-  EXPECT_EQ(sink.channels.size(), 5u);
+  EXPECT_EQ(sink.channels.size(), 6u);  // and SIM_FLOOR
   ASSERT_FALSE(sink.truths.empty());
   EXPECT_EQ(sink.truths.back().num_people, static_cast<int>(sim.world().people.size()));
   EXPECT_EQ(sink.truths.back().num_sources, static_cast<int>(sim.world().sources.size()));
@@ -130,6 +136,40 @@ TEST(SimulatorTest, LabTruthShowsTheHiddenPersonCallingAndTheOthersInView) {
   EXPECT_FALSE(people["carol"].visible_to_camera);  // behind the cabinet
   EXPECT_TRUE(carol_called);
   EXPECT_EQ(static_cast<int>(people["carol"].posture), static_cast<int>(sarmap::sim_person_t::POSTURE_SITTING));
+}
+
+// The reachable floor goes out at start and every 5 simulated seconds, compressed, in the
+// world frame, and decodes to ReachableFloor's grid.
+TEST(SimulatorTest, PublishesTheReachableFloorAtStartAndEveryFiveSeconds) {
+  SimOptions o = Options("lab_lit.yaml");
+  o.camera.enabled = false;
+  o.audio.enabled = false;
+  Simulator sim(LoadSetup(o, ""));
+  CollectingSink sink;
+  sim.AdvanceTo(11.0, &sink);
+  ASSERT_EQ(sink.floors.size(), 3u);  // t = 0, 5, 10
+  EXPECT_TRUE(sink.channels["SIM_FLOOR"].problems.empty());
+  EXPECT_EQ(sink.channels["SIM_FLOOR"].type, "occupancy_grid_t");
+  const sarmap::occupancy_grid_t& msg = sink.floors.front();
+  EXPECT_LE(msg.header.utime, 1700000000000000 + 10000);
+  EXPECT_NEAR((sink.floors[1].header.utime - msg.header.utime) * 1e-6, 5.0, 0.01);  // first after one step
+  EXPECT_EQ(msg.header.frame, "map");
+  EXPECT_EQ(msg.origin_yaw_rad, 0.0);
+  EXPECT_EQ(msg.compression, +sarmap::occupancy_grid_t::COMPRESSION_ZSTD);
+  std::vector<int8_t> cells;
+  std::string error;
+  ASSERT_TRUE(common::DecodeOccupancyGrid(msg, &cells, &error)) << error;
+  const GridMap expected = ReachableFloor(sim.world(), o.robot_radius_m, 0.05);
+  EXPECT_EQ(msg.width, expected.width);
+  EXPECT_EQ(msg.origin_x_m, expected.origin_x_m);
+  EXPECT_EQ(cells, expected.cells);
+  // The lab is about 8 x 6 m: most of it is reachable floor.
+  const double area = FloorArea(expected);
+  std::printf("lab_lit reachable floor: %.1f m^2, SIM_FLOOR %d bytes for %d cells\n", area, msg.size,
+              msg.width * msg.height);
+  EXPECT_GT(area, 30.0);
+  EXPECT_LT(area, 48.0);
+  EXPECT_LT(msg.size, 20000);
 }
 
 TEST(SimulatorTest, OtherArraysAndAnAsynchronousArray) {
@@ -224,6 +264,7 @@ TEST(SimulatorTest, OdometryNoiseGrowsAsConfigured) {
         void Publish(const std::string&, const sarmap::image_t&) override {}
         void Publish(const std::string&, const sarmap::audio_frame_t&) override {}
         void Publish(const std::string&, const sarmap::sim_truth_t&) override {}
+        void Publish(const std::string&, const sarmap::occupancy_grid_t&) override {}
       } sink;
       for (int k = 1; k <= 40; ++k) {  // 0.5 m/s for 4 s: 2 m
         sim.SetVelocityCommand(0.5, 0.0);

@@ -18,6 +18,7 @@ struct NullSink : sarmap::sim::SimSink {
   void Publish(const std::string&, const sarmap::image_t&) override {}
   void Publish(const std::string&, const sarmap::audio_frame_t&) override {}
   void Publish(const std::string&, const sarmap::sim_truth_t&) override {}
+  void Publish(const std::string&, const sarmap::occupancy_grid_t&) override {}
 };
 }  // namespace
 

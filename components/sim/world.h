@@ -140,6 +140,12 @@ World LoadWorld(const std::string& path);
 // Same, from text (`name` stands for the file name in errors).
 World ParseWorld(const std::string& yaml_text, const std::string& name);
 
+// The world as a world file that ParseWorld reads back to the same world (numbers in their
+// shortest exact decimal form, angles in whole degrees when that is exact, colours as the
+// 0..255 values they came from); `header` (comment lines) goes first. Glass panels are listed
+// after the walls, as the loader orders them.
+std::string WorldToYaml(const World& world, const std::string& header = "");
+
 const char* PostureName(Posture posture);
 const char* SourceKindName(SourceKind kind);
 

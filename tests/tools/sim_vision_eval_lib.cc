@@ -21,6 +21,7 @@ struct NullSink : sim::SimSink {
   void Publish(const std::string&, const image_t&) override {}
   void Publish(const std::string&, const audio_frame_t&) override {}
   void Publish(const std::string&, const sim_truth_t&) override {}
+  void Publish(const std::string&, const occupancy_grid_t&) override {}
 };
 
 double ThreadCpuSeconds() {
