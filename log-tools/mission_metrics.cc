@@ -122,6 +122,7 @@ void MissionMetrics::OnFloor(int64_t utime, const sarmap::occupancy_grid_t& floo
     }
   }
   floor_resolution_m_ = floor.resolution_m;
+  floor_yaw_rad_ = floor.origin_yaw_rad;
   have_floor_ = true;
 }
 

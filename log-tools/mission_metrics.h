@@ -139,6 +139,8 @@ class MissionMetrics {
   // drawing what was missed; empty without SIM_FLOOR, SIM_TRUTH or MAP.
   std::vector<Eigen::Vector2d> UnmappedFloorInMap() const;
   double floor_resolution_m() const { return floor_resolution_m_; }
+  // The floor grid's axes in the map frame: start yaw^-1 + the floor's origin_yaw.
+  double floor_yaw_in_map_rad() const { return map_from_world_.yaw_rad() + floor_yaw_rad_; }
   const std::optional<sarmap::explore_status_t>& last_explore_status() const { return explore_; }
   const MissionMetricsOptions& options() const { return options_; }
 
@@ -167,7 +169,7 @@ class MissionMetrics {
   std::optional<sarmap::sim_truth_t> truth_;
   common::Rigid2d map_from_world_;
   std::vector<Eigen::Vector2d> floor_world_;  // centres of the reachable cells
-  double floor_resolution_m_ = 0;
+  double floor_resolution_m_ = 0, floor_yaw_rad_ = 0;
   bool have_floor_ = false;
   std::optional<Grid> map_;
   double map_time_s_ = 0;

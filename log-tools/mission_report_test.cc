@@ -27,6 +27,12 @@ void Write(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t 
   log->writeEvent(&e);
 }
 
+void SetStart(sarmap::sim_truth_t* t, double x, double y, double yaw) {
+  t->start_pose[0] = x;
+  t->start_pose[1] = y;
+  t->start_pose[2] = yaw;
+}
+
 sarmap::mapped_person_t Person(int64_t id, double x, double y, int cues, const std::string& keyword = "") {
   sarmap::mapped_person_t p{};
   p.id = id;
@@ -82,7 +88,7 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     sounds.num_sources = 2;
     Write(&log, "SOUND_MAP", sounds, 3'000'000);
     // The simulator's frame is the map frame shifted by (10, -2) and turned by 90 degrees:
-    // truth = R(90) * map + (10, -2). The report must align them by the robot trail.
+    // truth = R(90) * map + (10, -2), i.e. the robot started at (10, -2, 90 deg) in the world.
     const auto to_truth = [](double x, double y) { return std::make_pair(-y + 10.0, x - 2.0); };
     for (int i = 0; i < 20; ++i) {
       sarmap::sim_truth_t t{};
@@ -91,11 +97,13 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
       const auto p = to_truth(1 + 0.2 * i, 3);
       t.robot_position_m[0] = p.first;
       t.robot_position_m[1] = p.second;
+      SetStart(&t, 10, -2, M_PI / 2);
       Write(&log, "SIM_TRUTH", t, t.header.utime);
     }
     sarmap::sim_truth_t truth{};
     truth.header.utime = 3'000'000;
     truth.robot_orientation[0] = 1;
+    SetStart(&truth, 10, -2, M_PI / 2);
     const double positions[3][2] = {{2.1, 1.1}, {6.0, 5.2}, {4.0, 5.5}};  // map frame
     for (int i = 0; i < 3; ++i) {
       sarmap::sim_person_t p{};
@@ -113,9 +121,14 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
   EXPECT_TRUE(data.map);
   EXPECT_GT(data.trail.size(), 10u);
   const MissionSummary s = Summarise(data, 0.5);
+  EXPECT_EQ(s.alignment.method, "start pose");
   EXPECT_EQ(s.alignment.pairs, 20);
   EXPECT_NEAR(s.alignment.rms_m, 0.0, 1e-9);
-  EXPECT_NEAR(std::abs(s.alignment.yaw_rad), M_PI / 2, 1e-9);
+  EXPECT_NEAR(s.alignment.yaw_rad, -M_PI / 2, 1e-9);  // map_from_truth
+  // The trail fit (the consistency check) agrees on this drift-free trail.
+  EXPECT_EQ(s.trail_fit.method, "trail fit");
+  EXPECT_NEAR(s.trail_fit.rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(s.trail_fit.yaw_rad, -M_PI / 2, 1e-9);
   ASSERT_EQ(s.truth.size(), 3u);
   EXPECT_TRUE(s.truth[0].found);
   EXPECT_EQ(s.truth[0].how, "seen");
