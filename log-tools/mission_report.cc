@@ -1,16 +1,13 @@
 #include "log-tools/mission_report.h"
 
-#include "sarmap/explore_status_t.hpp"
-#include "sarmap/pose_t.hpp"
-
-#include <nlohmann/json.hpp>
 #include <sys/stat.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <map>
 #include <cmath>
 #include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -18,6 +15,8 @@
 
 #include "common/image_messages.h"
 #include "log-tools/lcm_log_reader.h"
+#include "sarmap/explore_status_t.hpp"
+#include "sarmap/pose_t.hpp"
 
 namespace sarmap {
 namespace logtools {
@@ -135,7 +134,9 @@ Alignment AlignByStartPose(const MissionData& data) {
   Alignment a;
   if (!data.truth) return a;
   const common::Rigid2d map_from_truth =
-      common::Rigid2d(data.truth->start_pose[0], data.truth->start_pose[1], data.truth->start_pose[2]).inverse();
+      common::Rigid2d(data.truth->start_pose[0], data.truth->start_pose[1],
+                      data.truth->start_pose[2])
+          .inverse();
   a.method = "start pose";
   a.yaw_rad = map_from_truth.yaw_rad();
   a.translation = map_from_truth.translation();
@@ -156,6 +157,16 @@ Alignment AlignTruth(const MissionData& data) {
   }
   mean_est /= pairs.size();
   mean_truth /= pairs.size();
+  // The rotation is undetermined when the robot hardly moved: its error grows as the position
+  // noise over the trail's spread, so below kMinSpreadM the fit is not attempted.
+  constexpr double kMinSpreadM = 0.5;
+  double spread2 = 0;
+  for (const auto& pair : pairs) spread2 += (pair.second - mean_truth).squaredNorm();
+  if (std::sqrt(spread2 / pairs.size()) < kMinSpreadM) {
+    a.method = "none (trail too short)";
+    a.pairs = static_cast<int>(pairs.size());
+    return a;
+  }
   double dot = 0, cross = 0;
   for (const auto& [e, t] : pairs) {
     const Eigen::Vector2d de = e - mean_est, dt = t - mean_truth;
@@ -348,7 +359,8 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
                c.P(explore->path_x_m[i], explore->path_y_m[i]), cyan, 2, cv::LINE_AA);
     }
     if (explore->has_goal) {
-      cv::drawMarker(c.image, c.P(explore->goal_m[0], explore->goal_m[1]), cyan, cv::MARKER_STAR, 18, 2);
+      cv::drawMarker(c.image, c.P(explore->goal_m[0], explore->goal_m[1]), cyan, cv::MARKER_STAR,
+                     18, 2);
     }
   }
   const cv::Scalar blue(219, 152, 52), red(60, 76, 231), green(113, 204, 46), yellow(15, 196, 241);
@@ -378,10 +390,15 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   }
   // Legend (on a dark panel) and scale bar.
   std::vector<std::pair<std::string, cv::Scalar>> legend = {
-      {"seen", green}, {"heard (3-sigma)", red}, {"seen + heard", yellow}, {"sound source (3-sigma)", blue},
-      {"true person (simulator)", cv::Scalar(0, 0, 0)}, {"robot path", cv::Scalar(182, 89, 155)}};
+      {"seen", green},
+      {"heard (3-sigma)", red},
+      {"seen + heard", yellow},
+      {"sound source (3-sigma)", blue},
+      {"true person (simulator)", cv::Scalar(0, 0, 0)},
+      {"robot path", cv::Scalar(182, 89, 155)}};
   if (!unmapped.empty()) legend.emplace_back("reachable, not mapped", orange);
-  if (explore && (explore->num_path > 0 || explore->has_goal)) legend.emplace_back("last explore path, goal", cyan);
+  if (explore && (explore->num_path > 0 || explore->has_goal))
+    legend.emplace_back("last explore path, goal", cyan);
   cv::rectangle(c.image, cv::Point(4, 4), cv::Point(240, 16 + 20 * static_cast<int>(legend.size())),
                 cv::Scalar(45, 45, 45), cv::FILLED);
   int y = 24;
@@ -416,59 +433,60 @@ std::string Html(const std::string& s) {
   return out;
 }
 
-// Explored area against time: mapped reachable floor (m^2) per coverage point, the reachable
-// area as a dashed ceiling. Axes from 0 to the last time and to the reachable area.
-cv::Mat CoveragePlot(const MissionMetricsResult& m) {
-  const int width = 900, height = 360, left = 70, right = 20, top = 20, bottom = 50;
-  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-  double t_max = 1, a_max = m.reachable_m2.value_or(0);
-  for (const auto& p : m.coverage) {
-    t_max = std::max(t_max, p.time_s);
-    a_max = std::max(a_max, p.mapped_m2);
-  }
-  if (a_max <= 0) a_max = 1;
-  a_max *= 1.05;
-  const auto P = [&](double t, double a) {
-    return cv::Point(left + static_cast<int>(std::lround(t / t_max * (width - left - right))),
-                     height - bottom - static_cast<int>(std::lround(a / a_max * (height - top - bottom))));
-  };
-  const cv::Scalar grey(200, 200, 200), black(0, 0, 0), line(182, 89, 155), orange(34, 126, 230);
-  char label[64];
-  for (int k = 0; k <= 5; ++k) {
-    const double t = t_max * k / 5, a = a_max / 1.05 * k / 5;
-    cv::line(image, P(t, 0), P(t, a_max), grey, 1);
-    cv::line(image, P(0, a), P(t_max, a), grey, 1);
-    snprintf(label, sizeof(label), "%.0f", t);
-    cv::putText(image, label, P(t, 0) + cv::Point(-10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
-    snprintf(label, sizeof(label), "%.1f", a);
-    cv::putText(image, label, P(0, a) + cv::Point(-60, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
-  }
-  cv::putText(image, "time since start (s)", cv::Point(width / 2 - 80, height - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              black, 1, cv::LINE_AA);
-  cv::putText(image, "mapped reachable floor (m2)", cv::Point(left + 8, top + 14), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              black, 1, cv::LINE_AA);
-  if (m.reachable_m2) {
-    for (double t = 0; t < t_max; t += t_max / 60) {
-      cv::line(image, P(t, *m.reachable_m2), P(std::min(t_max, t + t_max / 120), *m.reachable_m2), orange, 2);
-    }
-    snprintf(label, sizeof(label), "reachable %.1f m2", *m.reachable_m2);
-    cv::putText(image, label, P(t_max, *m.reachable_m2) + cv::Point(-170, -8), cv::FONT_HERSHEY_SIMPLEX, 0.5, orange, 1,
-                cv::LINE_AA);
-  }
-  std::vector<cv::Point> points;
-  for (const auto& p : m.coverage) points.push_back(P(p.time_s, p.mapped_m2));
-  if (points.size() >= 2) cv::polylines(image, points, false, line, 2, cv::LINE_AA);
-  for (const auto& p : points) cv::circle(image, p, 3, line, cv::FILLED, cv::LINE_AA);
-  cv::rectangle(image, P(0, 0), P(t_max, a_max), black, 1);
-  return image;
+nlohmann::json Json(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
-
-nlohmann::json Json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
 std::string Fixed(double v, int digits) {
   char text[64];
   snprintf(text, sizeof(text), "%.*f", digits, v);
   return text;
+}
+
+// Explored area against time: mapped reachable floor (m^2) per coverage point, the reachable
+// area as a dashed ceiling. Axes from 0 to the last time and to the reachable area.
+cv::Mat CoveragePlot(const MissionMetricsResult& m) {
+  const int width = 900, height = 380, left = 70, right = 20, top = 45, bottom = 50;
+  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  double t_max = std::max(1.0, m.mission_s), a_max = m.reachable_m2.value_or(0);
+  for (const auto& p : m.coverage) {
+    t_max = std::max(t_max, p.time_s);
+    a_max = std::max(a_max, p.mapped_m2);
+  }
+  if (a_max <= 0) a_max = 1;
+  const double a_top = 1.05 * a_max;
+  const auto P = [&](double t, double a) {
+    return cv::Point(
+        left + static_cast<int>(std::lround(t / t_max * (width - left - right))),
+        height - bottom - static_cast<int>(std::lround(a / a_top * (height - top - bottom))));
+  };
+  const cv::Scalar grey(200, 200, 200), black(0, 0, 0), line(182, 89, 155), orange(34, 126, 230);
+  const auto text = [&](const std::string& s, cv::Point at, const cv::Scalar& colour) {
+    cv::putText(image, s, at, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv::LINE_AA);
+  };
+  for (int k = 0; k <= 5; ++k) {
+    const double t = t_max * k / 5, a = a_max * k / 5;
+    cv::line(image, P(t, 0), P(t, a_top), grey, 1);
+    cv::line(image, P(0, a), P(t_max, a), grey, 1);
+    text(Fixed(t, t_max >= 10 ? 0 : 1), P(t, 0) + cv::Point(-10, 20), black);
+    text(Fixed(a, a_max >= 10 ? 0 : 1), P(0, a) + cv::Point(-55, 5), black);
+  }
+  text("time since the first truth (s)", cv::Point(width / 2 - 110, height - 10), black);
+  text("mapped reachable floor (m2)", cv::Point(left, 20), black);
+  if (m.reachable_m2) {  // dashed
+    for (int k = 0; k < 60; ++k) {
+      cv::line(image, P(t_max * k / 60, *m.reachable_m2),
+               P(t_max * (k + 0.5) / 60, *m.reachable_m2), orange, 2);
+    }
+    text("reachable " + Fixed(*m.reachable_m2, 1) + " m2",
+         P(t_max, *m.reachable_m2) + cv::Point(-150, 18), orange);
+  }
+  std::vector<cv::Point> points;
+  for (const auto& p : m.coverage) points.push_back(P(p.time_s, p.mapped_m2));
+  if (points.size() >= 2) cv::polylines(image, points, false, line, 2, cv::LINE_AA);
+  for (const auto& p : points) cv::circle(image, p, 3, line, cv::FILLED, cv::LINE_AA);
+  cv::rectangle(image, P(0, 0), P(t_max, a_top), black, 1);
+  return image;
 }
 
 std::string Seconds(const std::optional<double>& v) { return v ? Fixed(*v, 1) + " s" : "—"; }
@@ -496,37 +514,43 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
              found, summary.truth.size(), summary.match_radius_m, summary.false_positives);
     out << line;
     snprintf(line, sizeof(line),
-             "  (truth aligned to the map by the start pose; robot trail residual %.3f m RMS over %d positions%s)\n",
+             "  (truth aligned to the map by the start pose; robot trail residual %.3f m RMS over "
+             "%d positions%s)\n",
              summary.alignment.rms_m, summary.alignment.pairs,
-             summary.trail_fit.method == "none"
+             summary.trail_fit.method != "trail fit"
                  ? ""
                  : (", " + Fixed(summary.trail_fit.rms_m, 3) + " m with a trail fit").c_str());
     out << line;
     for (const auto& t : summary.truth) {
       if (t.found) {
-        snprintf(line, sizeof(line), "  %-12s FOUND  %-22s error %.2f m%s\n", t.name.c_str(), t.how.c_str(), t.error_m,
+        snprintf(line, sizeof(line), "  %-12s FOUND  %-22s error %.2f m%s\n", t.name.c_str(),
+                 t.how.c_str(), t.error_m,
                  t.found_after_s ? (", after " + Fixed(*t.found_after_s, 1) + " s").c_str() : "");
       } else {
-        snprintf(line, sizeof(line), "  %-12s MISSED at (%.2f, %.2f)%s\n", t.name.c_str(), t.x_m, t.y_m,
-                 t.dropped ? " (found earlier, no longer on the map)" : "");
+        snprintf(line, sizeof(line), "  %-12s MISSED at (%.2f, %.2f)%s\n", t.name.c_str(), t.x_m,
+                 t.y_m, t.dropped ? " (found earlier, no longer on the map)" : "");
       }
       out << line;
     }
   }
   const MissionMetricsResult& m = summary.metrics;
   if (m.have_truth) {
-    snprintf(line, sizeof(line), "mission: %.1f s since the first truth, %.2f m driven, %d collisions\n",
-             m.mission_s, m.distance_m, m.collisions);
+    snprintf(line, sizeof(line),
+             "mission: %.1f s since the first truth, %.2f m driven, %d collisions\n", m.mission_s,
+             m.distance_m, m.collisions);
     out << line;
     if (m.mapped_m2) {
-      snprintf(line, sizeof(line), "  coverage: %.1f of %.1f m2 of reachable floor mapped (%.0f%%)\n", *m.mapped_m2,
+      snprintf(line, sizeof(line),
+               "  coverage: %.1f of %.1f m2 of reachable floor mapped (%.0f%%)\n", *m.mapped_m2,
                *m.reachable_m2, 100.0 * *m.mapped_fraction);
     } else {
-      snprintf(line, sizeof(line), "  coverage: not measured (needs SIM_FLOOR, SIM_TRUTH and MAP)\n");
+      snprintf(line, sizeof(line),
+               "  coverage: not measured (needs SIM_FLOOR, SIM_TRUTH and MAP)\n");
     }
     out << line;
     if (m.stuck_s) {
-      snprintf(line, sizeof(line), "  stuck: %.1f s in total, longest %.1f s\n", *m.stuck_s, *m.longest_stuck_s);
+      snprintf(line, sizeof(line), "  stuck: %.1f s in total, longest %.1f s\n", *m.stuck_s,
+               *m.longest_stuck_s);
     } else {
       snprintf(line, sizeof(line), "  stuck: not judged (no EXPLORE_STATUS)\n");
     }
@@ -535,7 +559,9 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
       snprintf(line, sizeof(line), "  came home after %.1f s\n", *m.home_after_s);
     } else {
       snprintf(line, sizeof(line), "  did not come home%s\n",
-               m.last_explore_state.empty() ? "" : (" (last state: " + m.last_explore_state + ")").c_str());
+               m.last_explore_state.empty()
+                   ? ""
+                   : (" (last state: " + m.last_explore_state + ")").c_str());
     }
     out << line;
   }
@@ -578,26 +604,44 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   if (!summary.truth.empty()) {
     j["truth"] = nlohmann::json::array();
     for (const auto& t : summary.truth) {
-      j["truth"].push_back({{"id", t.truth_id}, {"name", t.name}, {"x_m", t.x_m}, {"y_m", t.y_m}, {"found", t.found},
-                            {"found_after_s", Json(t.found_after_s)}, {"dropped", t.dropped},
-                            {"person_id", t.person_id}, {"how", t.how}, {"error_m", t.error_m}});
+      j["truth"].push_back({{"id", t.truth_id},
+                            {"name", t.name},
+                            {"x_m", t.x_m},
+                            {"y_m", t.y_m},
+                            {"found", t.found},
+                            {"found_after_s", Json(t.found_after_s)},
+                            {"dropped", t.dropped},
+                            {"person_id", t.person_id},
+                            {"how", t.how},
+                            {"error_m", t.error_m}});
     }
     j["false_positives"] = summary.false_positives;
     const Alignment& fit = summary.trail_fit;
-    j["alignment"] = {{"method", summary.alignment.method}, {"yaw_rad", summary.alignment.yaw_rad},
-                      {"x_m", summary.alignment.translation.x()}, {"y_m", summary.alignment.translation.y()},
-                      {"pairs", summary.alignment.pairs}, {"trail_rms_m", summary.alignment.rms_m},
-                      {"trail_fit", {{"method", fit.method}, {"yaw_rad", fit.yaw_rad}, {"x_m", fit.translation.x()},
-                                     {"y_m", fit.translation.y()}, {"rms_m", fit.rms_m}}}};
+    j["alignment"] = {{"method", summary.alignment.method},
+                      {"yaw_rad", summary.alignment.yaw_rad},
+                      {"x_m", summary.alignment.translation.x()},
+                      {"y_m", summary.alignment.translation.y()},
+                      {"pairs", summary.alignment.pairs},
+                      {"trail_rms_m", summary.alignment.rms_m},
+                      {"trail_fit",
+                       {{"method", fit.method},
+                        {"yaw_rad", fit.yaw_rad},
+                        {"x_m", fit.translation.x()},
+                        {"y_m", fit.translation.y()},
+                        {"rms_m", fit.rms_m}}}};
     j["match_radius_m"] = summary.match_radius_m;
   }
   // Mission metrics (mission_metrics.h); null where the log cannot tell.
   const MissionMetricsResult& m = summary.metrics;
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : m.coverage) curve.push_back({p.time_s, p.mapped_m2, p.fraction});
-  j["coverage"] = {{"reachable_m2", Json(m.reachable_m2)}, {"mapped_m2", Json(m.mapped_m2)},
-                   {"mapped_fraction", Json(m.mapped_fraction)}, {"curve", curve}};
-  const auto truth_or_null = [&](const nlohmann::json& v) { return m.have_truth ? v : nlohmann::json(nullptr); };
+  j["coverage"] = {{"reachable_m2", Json(m.reachable_m2)},
+                   {"mapped_m2", Json(m.mapped_m2)},
+                   {"mapped_fraction", Json(m.mapped_fraction)},
+                   {"curve", curve}};
+  const auto truth_or_null = [&](const nlohmann::json& v) {
+    return m.have_truth ? v : nlohmann::json(nullptr);
+  };
   j["mission_s"] = truth_or_null(m.mission_s);
   j["distance_m"] = truth_or_null(m.distance_m);
   j["collisions"] = truth_or_null(m.collisions);
@@ -605,7 +649,8 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   j["longest_stuck_s"] = Json(m.longest_stuck_s);
   j["came_home"] = truth_or_null(m.came_home);
   j["home_after_s"] = Json(m.home_after_s);
-  j["explore_state"] = m.last_explore_state.empty() ? nlohmann::json(nullptr) : nlohmann::json(m.last_explore_state);
+  j["explore_state"] =
+      m.last_explore_state.empty() ? nlohmann::json(nullptr) : nlohmann::json(m.last_explore_state);
   std::ofstream(directory + "/report.json") << j.dump(2) << "\n";
 
   std::ofstream html(directory + "/report.html");
@@ -634,9 +679,11 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   }
   if (m.have_truth) {
     html << "<h2>Mission</h2><table>"
-         << "<tr><th>duration (since the first truth)</th><td>" << Seconds(m.mission_s) << "</td></tr>"
+         << "<tr><th>duration (since the first truth)</th><td>" << Seconds(m.mission_s)
+         << "</td></tr>"
          << "<tr><th>distance driven</th><td>" << Fixed(m.distance_m, 2) << " m</td></tr>"
-         << "<tr><th>collisions</th><td>" << m.collisions << "</td></tr><tr><th>reachable floor mapped</th><td>";
+         << "<tr><th>collisions</th><td>" << m.collisions
+         << "</td></tr><tr><th>reachable floor mapped</th><td>";
     if (m.mapped_m2) {
       html << Fixed(*m.mapped_m2, 1) << " of " << Fixed(*m.reachable_m2, 1) << " m&sup2; ("
            << Fixed(100 * *m.mapped_fraction, 0) << "%)";
@@ -648,21 +695,28 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
                        : std::string("not judged (no EXPLORE_STATUS)"))
          << "</td></tr><tr><th>came home</th><td>"
          << (m.came_home ? "after " + Seconds(m.home_after_s)
-                         : "no" + (m.last_explore_state.empty() ? "" : " (last state: " + Html(m.last_explore_state) + ")"))
+                         : "no" + (m.last_explore_state.empty()
+                                       ? ""
+                                       : " (last state: " + Html(m.last_explore_state) + ")"))
          << "</td></tr>";
     for (const auto& t : summary.truth) {
       html << "<tr><th>" << Html(t.name) << "</th><td>"
-           << (t.found ? "found after " + Seconds(t.found_after_s) : t.dropped ? std::string("found, then lost") : std::string("not found"))
+           << (t.found     ? "found after " + Seconds(t.found_after_s)
+               : t.dropped ? std::string("found, then lost")
+                           : std::string("not found"))
            << "</td></tr>";
     }
     html << "</table>";
     if (wrote_plot) {
-      html << "<h3>Explored area against time</h3><img src=\"coverage.png\" alt=\"mapped reachable floor against time\">";
+      html << "<h3>Explored area against time</h3><img src=\"coverage.png\" alt=\"mapped reachable "
+              "floor against time\">";
     }
   }
   html << "<h2>Map</h2><img src=\"map.png\" alt=\"map with people and sound sources\">"
-       << (m.mapped_m2 ? "<p>Orange: reachable floor SLAM did not map.</p>" : "") << "<h2>People</h2>"
-          "<table><tr><th>#</th><th>position (m)</th><th>how</th><th>confidence</th><th>said</th><th>count</th></tr>";
+       << (m.mapped_m2 ? "<p>Orange: reachable floor SLAM did not map.</p>" : "")
+       << "<h2>People</h2>"
+          "<table><tr><th>#</th><th>position "
+          "(m)</th><th>how</th><th>confidence</th><th>said</th><th>count</th></tr>";
   if (data.people) {
     for (const auto& p : data.people->people) {
       char pos[64];

@@ -52,14 +52,16 @@ struct TruthMatch {
 // trail instead (least squares, Kabsch) and is kept as a consistency check: its residual and
 // its difference from the start pose show SLAM's drift.
 struct Alignment {
-  std::string method = "none";  // "start pose", "trail fit", "none" (identity)
+  // "start pose", "trail fit", "none" or "none (trail too short)" (identity)
+  std::string method = "none";
   double yaw_rad = 0;
   Eigen::Vector2d translation = Eigen::Vector2d::Zero();
   int pairs = 0;     // time-matched (estimated, true) robot positions
   double rms_m = 0;  // residual of the robot trail after alignment
   Eigen::Vector2d Apply(const Eigen::Vector2d& truth) const;
 };
-// The trail fit; identity ("none") when fewer than 3 matched positions.
+// The trail fit; identity ("none") when fewer than 3 matched positions or when the true trail's
+// RMS spread about its mean is under 0.5 m (the rotation is then undetermined).
 Alignment AlignTruth(const MissionData& data);
 // map_from_truth = start_pose^-1, with the trail residual under it.
 Alignment AlignByStartPose(const MissionData& data);
