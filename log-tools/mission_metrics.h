@@ -19,7 +19,8 @@
 // motion POSE is the identity. Hence, with s = start_pose = (x_s, y_s, yaw_s),
 //   world_from_map(p) = R(yaw_s) p + (x_s, y_s),     map_from_world = world_from_map^-1,
 // exact even when the robot never moves (a trail fit is then undetermined). SLAM's drift is
-// not corrected: it shows as position error and as mapped cells off the true floor.
+// not corrected: it shows as position error and as mapped cells off the true floor. (SLAM in
+// localisation-only mode keeps a saved map's frame instead; this alignment then does not hold.)
 //
 // Definitions (t is measured from the first SIM_TRUTH; all areas in m^2):
 //   reachable_m2     (SIM_FLOOR cells == 0) * resolution^2, from the last SIM_FLOOR.
@@ -45,9 +46,10 @@
 //                    and the last EXPLORE_STATUS says exploring, seeking_sound, recovering or
 //                    returning (home, finished, override: the robot is meant to stand).
 //                    stuck_s = sum of t_k - t_{k-1} over consecutive samples both stuck;
-//                    longest_stuck_s the longest such run. A robot that stands still for T >= the
-//                    window therefore counts T - window. Without any EXPLORE_STATUS stuck is not
-//                    judged (std::nullopt).
+//                    longest_stuck_s the longest such run. A stop of T >= window seconds
+//                    counts about T - window (plus the time the robot is within
+//                    stuck_distance_m of the stop while arriving and leaving). Without any
+//                    EXPLORE_STATUS stuck is not judged (std::nullopt).
 //   came_home        an EXPLORE_STATUS said home, and the last truth position is within
 //                    home_radius_m of the start pose; home_after_s = t of the first such status.
 //   mission_s        the last input's time - the first truth's.
