@@ -536,7 +536,7 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
   const MissionMetricsResult& m = summary.metrics;
   if (m.have_truth) {
     snprintf(line, sizeof(line),
-             "mission: %.1f s since the first truth, %.2f m driven, %d collisions\n", m.mission_s,
+             "mission metrics: %.1f s since the first truth, %.2f m driven, %d collisions\n", m.mission_s,
              m.distance_m, m.collisions);
     out << line;
     if (m.mapped_m2) {
