@@ -8,10 +8,13 @@ int main(int argc, char** argv) {
   return sarmap::common::RunMain("sarmap-log report", [&] {
     sarmap::common::ArgParser parser(
         "sarmap-log report",
-        "Writes the mission report of a log: report.html, map.png (map, robot path, people seen and\n"
+        "Writes the mission report of a log: report.html, map.png (map, robot path, people seen "
+        "and\n"
         "heard with their uncertainty, sound sources with 3-sigma ellipses) and report.json. With\n"
-        "SIM_TRUTH in the log it also says who was found against the simulator's truth, how, and\n"
-        "with what position error. Prints a summary.");
+        "SIM_TRUTH in the log it also says who was found against the simulator's truth, how, when\n"
+        "and with what position error, and gives the mission metrics: coverage of the reachable\n"
+        "floor (SIM_FLOOR; coverage.png, unmapped floor shaded on map.png), distance, collisions,\n"
+        "stuck time and coming home (EXPLORE_STATUS). Prints a summary.");
     std::string log, output;
     double match_radius_m = 0.5;
     parser.AddPositional("LOG", &log, "LCM log of the mission");
@@ -20,7 +23,9 @@ int main(int argc, char** argv) {
     if (!parser.Parse(argc, argv)) return 0;
     if (output.empty()) output = log.substr(0, log.rfind('.')) + "-report";
     std::vector<std::string> problems;
-    const auto data = sarmap::logtools::LoadMission(log, &problems);
+    sarmap::logtools::MissionMetricsOptions metrics_options;
+    metrics_options.match_radius_m = match_radius_m;
+    const auto data = sarmap::logtools::LoadMission(log, &problems, metrics_options);
     for (const auto& p : problems) fprintf(stderr, "warning: %s\n", p.c_str());
     const auto summary = sarmap::logtools::Summarise(data, match_radius_m);
     sarmap::logtools::WriteReport(data, summary, output);

@@ -1,15 +1,13 @@
 #include "log-tools/mission_report.h"
 
-#include "sarmap/pose_t.hpp"
-
-#include <nlohmann/json.hpp>
 #include <sys/stat.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <map>
 #include <cmath>
 #include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +15,8 @@
 
 #include "common/image_messages.h"
 #include "log-tools/lcm_log_reader.h"
+#include "sarmap/explore_status_t.hpp"
+#include "sarmap/pose_t.hpp"
 
 namespace sarmap {
 namespace logtools {
@@ -34,8 +34,10 @@ bool Decode(const std::vector<uint8_t>& data, T* out) {
 
 }  // namespace
 
-MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems) {
+MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems,
+                        const MissionMetricsOptions& metrics_options) {
   MissionData data;
+  data.metrics = MissionMetrics(metrics_options);
   data.log_path = log_path;
   LcmLogReader reader(log_path);
   LogEvent event;
@@ -46,9 +48,18 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
     if (first_us < 0) first_us = event.timestamp_us;
     last_us = std::max(last_us, event.timestamp_us);
     const std::string type = SarmapTypeName(event.data);
-    if (type == "occupancy_grid_t") {
+    if (type == "occupancy_grid_t" && event.channel == "SIM_FLOOR") {
       sarmap::occupancy_grid_t m;
-      if (Decode(event.data, &m)) data.map = std::move(m);
+      if (Decode(event.data, &m)) data.metrics.OnFloor(event.timestamp_us, m);
+    } else if (type == "occupancy_grid_t") {
+      sarmap::occupancy_grid_t m;
+      if (Decode(event.data, &m)) {
+        data.metrics.OnMap(event.timestamp_us, m);
+        data.map = std::move(m);
+      }
+    } else if (type == "explore_status_t") {
+      sarmap::explore_status_t m;
+      if (Decode(event.data, &m)) data.metrics.OnExploreStatus(event.timestamp_us, m);
     } else if (type == "pose_t" && event.channel == "POSE") {
       sarmap::pose_t m;
       if (Decode(event.data, &m)) estimated_by_utime[m.header.utime] = Eigen::Vector2d(m.position_m[0], m.position_m[1]);
@@ -59,13 +70,17 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
       }
     } else if (type == "people_map_t") {
       sarmap::people_map_t m;
-      if (Decode(event.data, &m)) data.people = std::move(m);
+      if (Decode(event.data, &m)) {
+        data.metrics.OnPeopleMap(event.timestamp_us, m);
+        data.people = std::move(m);
+      }
     } else if (type == "sound_map_t") {
       sarmap::sound_map_t m;
       if (Decode(event.data, &m)) data.sources = std::move(m);
     } else if (type == "sim_truth_t") {
       sarmap::sim_truth_t m;
       if (Decode(event.data, &m)) {
+        data.metrics.OnTruth(event.timestamp_us, m);
         truth_by_utime[m.header.utime] = Eigen::Vector2d(m.robot_position_m[0], m.robot_position_m[1]);
         if (data.truth_trail.empty() || std::hypot(data.truth_trail.back().first - m.robot_position_m[0],
                                                    data.truth_trail.back().second - m.robot_position_m[1]) > 0.05) {
@@ -102,10 +117,38 @@ Eigen::Vector2d Alignment::Apply(const Eigen::Vector2d& truth) const {
   return Eigen::Rotation2Dd(yaw_rad) * truth + translation;
 }
 
+namespace {
+
+// RMS of |map_from_truth(truth) - estimate| over the time-matched robot positions.
+void TrailResidual(const MissionData& data, Alignment* a) {
+  a->pairs = static_cast<int>(data.matched_positions.size());
+  if (a->pairs == 0) return;
+  double sum = 0;
+  for (const auto& [e, t] : data.matched_positions) sum += (a->Apply(t) - e).squaredNorm();
+  a->rms_m = std::sqrt(sum / a->pairs);
+}
+
+}  // namespace
+
+Alignment AlignByStartPose(const MissionData& data) {
+  Alignment a;
+  if (!data.truth) return a;
+  const common::Rigid2d map_from_truth =
+      common::Rigid2d(data.truth->start_pose[0], data.truth->start_pose[1],
+                      data.truth->start_pose[2])
+          .inverse();
+  a.method = "start pose";
+  a.yaw_rad = map_from_truth.yaw_rad();
+  a.translation = map_from_truth.translation();
+  TrailResidual(data, &a);
+  return a;
+}
+
 Alignment AlignTruth(const MissionData& data) {
   Alignment a;
   const auto& pairs = data.matched_positions;
   if (pairs.size() < 3) return a;
+  a.method = "trail fit";
   // Kabsch in 2D: centre both sets, the rotation is atan2 of the cross/dot sums.
   Eigen::Vector2d mean_est = Eigen::Vector2d::Zero(), mean_truth = Eigen::Vector2d::Zero();
   for (const auto& [e, t] : pairs) {
@@ -114,6 +157,16 @@ Alignment AlignTruth(const MissionData& data) {
   }
   mean_est /= pairs.size();
   mean_truth /= pairs.size();
+  // The rotation is undetermined when the robot hardly moved: its error grows as the position
+  // noise over the trail's spread, so below kMinSpreadM the fit is not attempted.
+  constexpr double kMinSpreadM = 0.5;
+  double spread2 = 0;
+  for (const auto& pair : pairs) spread2 += (pair.second - mean_truth).squaredNorm();
+  if (std::sqrt(spread2 / pairs.size()) < kMinSpreadM) {
+    a.method = "none (trail too short)";
+    a.pairs = static_cast<int>(pairs.size());
+    return a;
+  }
   double dot = 0, cross = 0;
   for (const auto& [e, t] : pairs) {
     const Eigen::Vector2d de = e - mean_est, dt = t - mean_truth;
@@ -122,10 +175,7 @@ Alignment AlignTruth(const MissionData& data) {
   }
   a.yaw_rad = std::atan2(cross, dot);
   a.translation = mean_est - Eigen::Rotation2Dd(a.yaw_rad) * mean_truth;
-  a.pairs = static_cast<int>(pairs.size());
-  double sum = 0;
-  for (const auto& [e, t] : pairs) sum += (a.Apply(t) - e).squaredNorm();
-  a.rms_m = std::sqrt(sum / pairs.size());
+  TrailResidual(data, &a);
   return a;
 }
 
@@ -143,36 +193,20 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
   s.match_radius_m = match_radius_m;
   if (data.people) s.people_found = data.people->num_people;
   if (data.sources) s.sources_mapped = data.sources->num_sources;
+  s.metrics = data.metrics.Result();
   if (!data.truth) return s;
-  s.alignment = AlignTruth(data);
+  s.alignment = AlignByStartPose(data);
+  s.trail_fit = AlignTruth(data);
   const auto& truth = data.truth->people;
   std::vector<Eigen::Vector2d> truth_xy;
   for (const auto& t : truth) truth_xy.push_back(s.alignment.Apply(Eigen::Vector2d(t.position_m[0], t.position_m[1])));
-  std::vector<const sarmap::mapped_person_t*> found;
-  if (data.people) {
-    for (const auto& p : data.people->people) found.push_back(&p);
-  }
-  // All pairs within the radius, closest first; each true and each found person used once.
-  struct Pair {
-    double d;
-    size_t t, f;
-  };
-  std::vector<Pair> pairs;
-  for (size_t t = 0; t < truth.size(); ++t) {
-    for (size_t f = 0; f < found.size(); ++f) {
-      const double d = std::hypot(truth_xy[t].x() - found[f]->position_m[0],
-                                  truth_xy[t].y() - found[f]->position_m[1]);
-      if (d <= match_radius_m) pairs.push_back({d, t, f});
-    }
-  }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
-  std::vector<int> truth_to(truth.size(), -1), found_used(found.size(), 0);
-  std::vector<double> error(truth.size(), 0);
-  for (const auto& p : pairs) {
-    if (truth_to[p.t] >= 0 || found_used[p.f]) continue;
-    truth_to[p.t] = static_cast<int>(p.f);
-    found_used[p.f] = 1;
-    error[p.t] = p.d;
+  std::vector<sarmap::mapped_person_t> no_people;
+  const auto& found = data.people ? data.people->people : no_people;
+  std::vector<double> error;
+  const std::vector<int> truth_to = MatchPeople(truth_xy, found, match_radius_m, &error);
+  std::vector<int> found_used(found.size(), 0);
+  for (int f : truth_to) {
+    if (f >= 0) found_used[f] = 1;
   }
   for (size_t t = 0; t < truth.size(); ++t) {
     TruthMatch m;
@@ -181,11 +215,16 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
     m.x_m = truth_xy[t].x();  // in the estimated map frame
     m.y_m = truth_xy[t].y();
     if (truth_to[t] >= 0) {
-      const auto* p = found[truth_to[t]];
+      const auto& p = found[truth_to[t]];
       m.found = true;
-      m.person_id = p->id;
-      m.how = HowFound(p->cues);
+      m.person_id = p.id;
+      m.how = HowFound(p.cues);
       m.error_m = error[t];
+    }
+    for (const auto& o : s.metrics.people) {
+      if (o.truth_id != m.truth_id) continue;
+      if (m.found) m.found_after_s = o.found_after_s;
+      m.dropped = !m.found && (o.found || o.dropped);
     }
     s.truth.push_back(m);
   }
@@ -240,6 +279,13 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     std::vector<int8_t> decoded;
     if (common::DecodeOccupancyGrid(m, &decoded, &error)) cells.assign(decoded.begin(), decoded.end());
   }
+  const std::vector<Eigen::Vector2d> unmapped = data.metrics.UnmappedFloorInMap();
+  for (const auto& p : unmapped) grow(p.x(), p.y());
+  const auto& explore = data.metrics.last_explore_status();
+  if (explore) {
+    for (int i = 0; i < explore->num_path; ++i) grow(explore->path_x_m[i], explore->path_y_m[i]);
+    if (explore->has_goal) grow(explore->goal_m[0], explore->goal_m[1]);
+  }
   for (const auto& p : data.trail) grow(p.first, p.second);
   if (data.people) for (const auto& p : data.people->people) grow(p.position_m[0], p.position_m[1]);
   for (const auto& t : summary.truth) grow(t.x_m, t.y_m);
@@ -282,6 +328,22 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
       }
     }
   }
+  const cv::Scalar orange(34, 126, 230), cyan(200, 200, 0);
+  if (!unmapped.empty()) {
+    // The reachable floor SLAM never observed, half-transparent over the map: each floor cell
+    // drawn as its square, turned by the floor's yaw in the map frame.
+    cv::Mat overlay = c.image.clone();
+    const double h = 0.5 * data.metrics.floor_resolution_m();
+    const Eigen::Rotation2Dd r(data.metrics.floor_yaw_in_map_rad());
+    const Eigen::Vector2d corners[4] = {r * Eigen::Vector2d(-h, -h), r * Eigen::Vector2d(h, -h),
+                                        r * Eigen::Vector2d(h, h), r * Eigen::Vector2d(-h, h)};
+    for (const auto& p : unmapped) {
+      cv::Point poly[4];
+      for (int k = 0; k < 4; ++k) poly[k] = c.P(p.x() + corners[k].x(), p.y() + corners[k].y());
+      cv::fillConvexPoly(overlay, poly, 4, orange);
+    }
+    cv::addWeighted(overlay, 0.55, c.image, 0.45, 0.0, c.image);
+  }
   for (size_t i = 1; i < data.truth_trail.size(); ++i) {
     const Eigen::Vector2d a = summary.alignment.Apply({data.truth_trail[i - 1].first, data.truth_trail[i - 1].second});
     const Eigen::Vector2d b = summary.alignment.Apply({data.truth_trail[i].first, data.truth_trail[i].second});
@@ -290,6 +352,16 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   for (size_t i = 1; i < data.trail.size(); ++i) {
     cv::line(c.image, c.P(data.trail[i - 1].first, data.trail[i - 1].second),
              c.P(data.trail[i].first, data.trail[i].second), cv::Scalar(182, 89, 155), 2, cv::LINE_AA);
+  }
+  if (explore) {  // the explorer's last plan: path and goal
+    for (int i = 1; i < explore->num_path; ++i) {
+      cv::line(c.image, c.P(explore->path_x_m[i - 1], explore->path_y_m[i - 1]),
+               c.P(explore->path_x_m[i], explore->path_y_m[i]), cyan, 2, cv::LINE_AA);
+    }
+    if (explore->has_goal) {
+      cv::drawMarker(c.image, c.P(explore->goal_m[0], explore->goal_m[1]), cyan, cv::MARKER_STAR,
+                     18, 2);
+    }
   }
   const cv::Scalar blue(219, 152, 52), red(60, 76, 231), green(113, 204, 46), yellow(15, 196, 241);
   if (data.sources) {
@@ -317,11 +389,20 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     }
   }
   // Legend (on a dark panel) and scale bar.
-  cv::rectangle(c.image, cv::Point(4, 4), cv::Point(240, 136), cv::Scalar(45, 45, 45), cv::FILLED);
+  std::vector<std::pair<std::string, cv::Scalar>> legend = {
+      {"seen", green},
+      {"heard (3-sigma)", red},
+      {"seen + heard", yellow},
+      {"sound source (3-sigma)", blue},
+      {"true person (simulator)", cv::Scalar(0, 0, 0)},
+      {"robot path", cv::Scalar(182, 89, 155)}};
+  if (!unmapped.empty()) legend.emplace_back("reachable, not mapped", orange);
+  if (explore && (explore->num_path > 0 || explore->has_goal))
+    legend.emplace_back("last explore path, goal", cyan);
+  cv::rectangle(c.image, cv::Point(4, 4), cv::Point(240, 16 + 20 * static_cast<int>(legend.size())),
+                cv::Scalar(45, 45, 45), cv::FILLED);
   int y = 24;
-  for (const auto& [text, colour] : std::vector<std::pair<std::string, cv::Scalar>>{
-           {"seen", green}, {"heard (3-sigma)", red}, {"seen + heard", yellow}, {"sound source (3-sigma)", blue},
-           {"true person (simulator)", cv::Scalar(0, 0, 0)}, {"robot path", cv::Scalar(182, 89, 155)}}) {
+  for (const auto& [text, colour] : legend) {
     cv::rectangle(c.image, cv::Point(10, y - 12), cv::Point(24, y + 2), colour, cv::FILLED);
     cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
     cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
@@ -352,6 +433,64 @@ std::string Html(const std::string& s) {
   return out;
 }
 
+nlohmann::json Json(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+std::string Fixed(double v, int digits) {
+  char text[64];
+  snprintf(text, sizeof(text), "%.*f", digits, v);
+  return text;
+}
+
+// Explored area against time: mapped reachable floor (m^2) per coverage point, the reachable
+// area as a dashed ceiling. Axes from 0 to the last time and to the reachable area.
+cv::Mat CoveragePlot(const MissionMetricsResult& m) {
+  const int width = 900, height = 380, left = 70, right = 20, top = 45, bottom = 50;
+  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  double t_max = std::max(1.0, m.mission_s), a_max = m.reachable_m2.value_or(0);
+  for (const auto& p : m.coverage) {
+    t_max = std::max(t_max, p.time_s);
+    a_max = std::max(a_max, p.mapped_m2);
+  }
+  if (a_max <= 0) a_max = 1;
+  const double a_top = 1.05 * a_max;
+  const auto P = [&](double t, double a) {
+    return cv::Point(
+        left + static_cast<int>(std::lround(t / t_max * (width - left - right))),
+        height - bottom - static_cast<int>(std::lround(a / a_top * (height - top - bottom))));
+  };
+  const cv::Scalar grey(200, 200, 200), black(0, 0, 0), line(182, 89, 155), orange(34, 126, 230);
+  const auto text = [&](const std::string& s, cv::Point at, const cv::Scalar& colour) {
+    cv::putText(image, s, at, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv::LINE_AA);
+  };
+  for (int k = 0; k <= 5; ++k) {
+    const double t = t_max * k / 5, a = a_max * k / 5;
+    cv::line(image, P(t, 0), P(t, a_top), grey, 1);
+    cv::line(image, P(0, a), P(t_max, a), grey, 1);
+    text(Fixed(t, t_max >= 10 ? 0 : 1), P(t, 0) + cv::Point(-10, 20), black);
+    text(Fixed(a, a_max >= 10 ? 0 : 1), P(0, a) + cv::Point(-55, 5), black);
+  }
+  text("time since the first truth (s)", cv::Point(width / 2 - 110, height - 10), black);
+  text("mapped reachable floor (m2)", cv::Point(left, 20), black);
+  if (m.reachable_m2) {  // dashed
+    for (int k = 0; k < 60; ++k) {
+      cv::line(image, P(t_max * k / 60, *m.reachable_m2),
+               P(t_max * (k + 0.5) / 60, *m.reachable_m2), orange, 2);
+    }
+    text("reachable " + Fixed(*m.reachable_m2, 1) + " m2",
+         P(t_max, *m.reachable_m2) + cv::Point(-150, 18), orange);
+  }
+  std::vector<cv::Point> points;
+  for (const auto& p : m.coverage) points.push_back(P(p.time_s, p.mapped_m2));
+  if (points.size() >= 2) cv::polylines(image, points, false, line, 2, cv::LINE_AA);
+  for (const auto& p : points) cv::circle(image, p, 3, line, cv::FILLED, cv::LINE_AA);
+  cv::rectangle(image, P(0, 0), P(t_max, a_top), black, 1);
+  return image;
+}
+
+std::string Seconds(const std::optional<double>& v) { return v ? Fixed(*v, 1) + " s" : "—"; }
+
 }  // namespace
 
 std::string SummaryText(const MissionData& data, const MissionSummary& summary) {
@@ -374,17 +513,57 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
     snprintf(line, sizeof(line), "against the simulator's truth: %d of %zu people found within %.2f m, %d false\n",
              found, summary.truth.size(), summary.match_radius_m, summary.false_positives);
     out << line;
-    snprintf(line, sizeof(line), "  (truth aligned to the map by the robot trail: %d positions, residual %.3f m RMS)\n",
-             summary.alignment.pairs, summary.alignment.rms_m);
+    snprintf(line, sizeof(line),
+             "  (truth aligned to the map by the start pose; robot trail residual %.3f m RMS over "
+             "%d positions%s)\n",
+             summary.alignment.rms_m, summary.alignment.pairs,
+             summary.trail_fit.method != "trail fit"
+                 ? ""
+                 : (", " + Fixed(summary.trail_fit.rms_m, 3) + " m with a trail fit").c_str());
     out << line;
     for (const auto& t : summary.truth) {
       if (t.found) {
-        snprintf(line, sizeof(line), "  %-12s FOUND  %-22s error %.2f m\n", t.name.c_str(), t.how.c_str(), t.error_m);
+        snprintf(line, sizeof(line), "  %-12s FOUND  %-22s error %.2f m%s\n", t.name.c_str(),
+                 t.how.c_str(), t.error_m,
+                 t.found_after_s ? (", after " + Fixed(*t.found_after_s, 1) + " s").c_str() : "");
       } else {
-        snprintf(line, sizeof(line), "  %-12s MISSED at (%.2f, %.2f)\n", t.name.c_str(), t.x_m, t.y_m);
+        snprintf(line, sizeof(line), "  %-12s MISSED at (%.2f, %.2f)%s\n", t.name.c_str(), t.x_m,
+                 t.y_m, t.dropped ? " (found earlier, no longer on the map)" : "");
       }
       out << line;
     }
+  }
+  const MissionMetricsResult& m = summary.metrics;
+  if (m.have_truth) {
+    snprintf(line, sizeof(line),
+             "mission metrics: %.1f s since the first truth, %.2f m driven, %d collisions\n", m.mission_s,
+             m.distance_m, m.collisions);
+    out << line;
+    if (m.mapped_m2) {
+      snprintf(line, sizeof(line),
+               "  coverage: %.1f of %.1f m2 of reachable floor mapped (%.0f%%)\n", *m.mapped_m2,
+               *m.reachable_m2, 100.0 * *m.mapped_fraction);
+    } else {
+      snprintf(line, sizeof(line),
+               "  coverage: not measured (needs SIM_FLOOR, SIM_TRUTH and MAP)\n");
+    }
+    out << line;
+    if (m.stuck_s) {
+      snprintf(line, sizeof(line), "  stuck: %.1f s in total, longest %.1f s\n", *m.stuck_s,
+               *m.longest_stuck_s);
+    } else {
+      snprintf(line, sizeof(line), "  stuck: not judged (no EXPLORE_STATUS)\n");
+    }
+    out << line;
+    if (m.came_home) {
+      snprintf(line, sizeof(line), "  came home after %.1f s\n", *m.home_after_s);
+    } else {
+      snprintf(line, sizeof(line), "  did not come home%s\n",
+               m.last_explore_state.empty()
+                   ? ""
+                   : (" (last state: " + m.last_explore_state + ")").c_str());
+    }
+    out << line;
   }
   return out.str();
 }
@@ -394,6 +573,10 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   const Canvas canvas = RenderMap(data, summary);
   if (!cv::imwrite(directory + "/map.png", canvas.image)) {
     throw std::runtime_error(directory + "/map.png: cannot write");
+  }
+  const bool wrote_plot = !summary.metrics.coverage.empty();
+  if (wrote_plot && !cv::imwrite(directory + "/coverage.png", CoveragePlot(summary.metrics))) {
+    throw std::runtime_error(directory + "/coverage.png: cannot write");
   }
   nlohmann::json j;
   j["log"] = data.log_path;
@@ -421,15 +604,53 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   if (!summary.truth.empty()) {
     j["truth"] = nlohmann::json::array();
     for (const auto& t : summary.truth) {
-      j["truth"].push_back({{"id", t.truth_id}, {"name", t.name}, {"x_m", t.x_m}, {"y_m", t.y_m}, {"found", t.found},
-                            {"person_id", t.person_id}, {"how", t.how}, {"error_m", t.error_m}});
+      j["truth"].push_back({{"id", t.truth_id},
+                            {"name", t.name},
+                            {"x_m", t.x_m},
+                            {"y_m", t.y_m},
+                            {"found", t.found},
+                            {"found_after_s", Json(t.found_after_s)},
+                            {"dropped", t.dropped},
+                            {"person_id", t.person_id},
+                            {"how", t.how},
+                            {"error_m", t.error_m}});
     }
     j["false_positives"] = summary.false_positives;
-    j["alignment"] = {{"yaw_rad", summary.alignment.yaw_rad}, {"x_m", summary.alignment.translation.x()},
-                      {"y_m", summary.alignment.translation.y()}, {"pairs", summary.alignment.pairs},
-                      {"trail_rms_m", summary.alignment.rms_m}};
+    const Alignment& fit = summary.trail_fit;
+    j["alignment"] = {{"method", summary.alignment.method},
+                      {"yaw_rad", summary.alignment.yaw_rad},
+                      {"x_m", summary.alignment.translation.x()},
+                      {"y_m", summary.alignment.translation.y()},
+                      {"pairs", summary.alignment.pairs},
+                      {"trail_rms_m", summary.alignment.rms_m},
+                      {"trail_fit",
+                       {{"method", fit.method},
+                        {"yaw_rad", fit.yaw_rad},
+                        {"x_m", fit.translation.x()},
+                        {"y_m", fit.translation.y()},
+                        {"rms_m", fit.rms_m}}}};
     j["match_radius_m"] = summary.match_radius_m;
   }
+  // Mission metrics (mission_metrics.h); null where the log cannot tell.
+  const MissionMetricsResult& m = summary.metrics;
+  nlohmann::json curve = nlohmann::json::array();
+  for (const auto& p : m.coverage) curve.push_back({p.time_s, p.mapped_m2, p.fraction});
+  j["coverage"] = {{"reachable_m2", Json(m.reachable_m2)},
+                   {"mapped_m2", Json(m.mapped_m2)},
+                   {"mapped_fraction", Json(m.mapped_fraction)},
+                   {"curve", curve}};
+  const auto truth_or_null = [&](const nlohmann::json& v) {
+    return m.have_truth ? v : nlohmann::json(nullptr);
+  };
+  j["mission_s"] = truth_or_null(m.mission_s);
+  j["distance_m"] = truth_or_null(m.distance_m);
+  j["collisions"] = truth_or_null(m.collisions);
+  j["stuck_s"] = Json(m.stuck_s);
+  j["longest_stuck_s"] = Json(m.longest_stuck_s);
+  j["came_home"] = truth_or_null(m.came_home);
+  j["home_after_s"] = Json(m.home_after_s);
+  j["explore_state"] =
+      m.last_explore_state.empty() ? nlohmann::json(nullptr) : nlohmann::json(m.last_explore_state);
   std::ofstream(directory + "/report.json") << j.dump(2) << "\n";
 
   std::ofstream html(directory + "/report.html");
@@ -456,8 +677,46 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
     }
     html << "</table>";
   }
-  html << "<h2>Map</h2><img src=\"map.png\" alt=\"map with people and sound sources\"><h2>People</h2>"
-          "<table><tr><th>#</th><th>position (m)</th><th>how</th><th>confidence</th><th>said</th><th>count</th></tr>";
+  if (m.have_truth) {
+    html << "<h2>Mission</h2><table>"
+         << "<tr><th>duration (since the first truth)</th><td>" << Seconds(m.mission_s)
+         << "</td></tr>"
+         << "<tr><th>distance driven</th><td>" << Fixed(m.distance_m, 2) << " m</td></tr>"
+         << "<tr><th>collisions</th><td>" << m.collisions
+         << "</td></tr><tr><th>reachable floor mapped</th><td>";
+    if (m.mapped_m2) {
+      html << Fixed(*m.mapped_m2, 1) << " of " << Fixed(*m.reachable_m2, 1) << " m&sup2; ("
+           << Fixed(100 * *m.mapped_fraction, 0) << "%)";
+    } else {
+      html << "not measured (needs SIM_FLOOR, SIM_TRUTH and MAP)";
+    }
+    html << "</td></tr><tr><th>stuck</th><td>"
+         << (m.stuck_s ? Seconds(m.stuck_s) + " in total, longest " + Seconds(m.longest_stuck_s)
+                       : std::string("not judged (no EXPLORE_STATUS)"))
+         << "</td></tr><tr><th>came home</th><td>"
+         << (m.came_home ? "after " + Seconds(m.home_after_s)
+                         : "no" + (m.last_explore_state.empty()
+                                       ? ""
+                                       : " (last state: " + Html(m.last_explore_state) + ")"))
+         << "</td></tr>";
+    for (const auto& t : summary.truth) {
+      html << "<tr><th>" << Html(t.name) << "</th><td>"
+           << (t.found     ? "found after " + Seconds(t.found_after_s)
+               : t.dropped ? std::string("found, then lost")
+                           : std::string("not found"))
+           << "</td></tr>";
+    }
+    html << "</table>";
+    if (wrote_plot) {
+      html << "<h3>Explored area against time</h3><img src=\"coverage.png\" alt=\"mapped reachable "
+              "floor against time\">";
+    }
+  }
+  html << "<h2>Map</h2><img src=\"map.png\" alt=\"map with people and sound sources\">"
+       << (m.mapped_m2 ? "<p>Orange: reachable floor SLAM did not map.</p>" : "")
+       << "<h2>People</h2>"
+          "<table><tr><th>#</th><th>position "
+          "(m)</th><th>how</th><th>confidence</th><th>said</th><th>count</th></tr>";
   if (data.people) {
     for (const auto& p : data.people->people) {
       char pos[64];

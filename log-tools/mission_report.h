@@ -1,13 +1,15 @@
 #pragma once
 // The mission report: what a log says was found, drawn on the map, and — when the log holds
-// SIM_TRUTH — found versus truth with position errors. Built from decoded messages so it can be
-// fed from a log (sarmap-log report) or tested directly.
+// SIM_TRUTH — found versus truth with position errors and the mission metrics (coverage of the
+// reachable floor, when each person was found, stuck time, came home: mission_metrics.h). Built
+// from decoded messages so it can be fed from a log (sarmap-log report) or tested directly.
 
 #include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "log-tools/mission_metrics.h"
 #include "sarmap/occupancy_grid_t.hpp"
 #include "sarmap/people_map_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
@@ -28,6 +30,8 @@ struct MissionData {
   double duration_s = 0;
   int64_t messages = 0;
   std::string log_path;
+  // Fed with SIM_TRUTH, SIM_FLOOR, MAP, PEOPLE_MAP and EXPLORE_STATUS in log order.
+  MissionMetrics metrics;
 };
 
 struct TruthMatch {
@@ -38,22 +42,34 @@ struct TruthMatch {
   int64_t person_id = -1;
   std::string how;   // "seen", "seen (depth)", "heard", "seen + heard"
   double error_m = 0;
+  std::optional<double> found_after_s;  // since the first SIM_TRUTH (MissionMetrics)
+  bool dropped = false;                 // matched in an earlier PEOPLE_MAP, not in the last
 };
 
-// The rigid 2D transform map_from_truth that best maps the simulator's robot positions onto
-// the estimated ones (least squares, Kabsch): SLAM's map frame starts wherever the robot did,
-// the simulator's is the world's. Identity when fewer than 3 matched positions.
+// The rigid 2D transform map_from_truth from the simulator's frame (the world's) to SLAM's map
+// frame. The report uses the robot's start pose (SIM_TRUTH start_pose; SLAM's map frame starts
+// there: mission_metrics.h), exact even when the robot does not move. AlignTruth fits the robot
+// trail instead (least squares, Kabsch) and is kept as a consistency check: its residual and
+// its difference from the start pose show SLAM's drift.
 struct Alignment {
+  // "start pose", "trail fit", "none" or "none (trail too short)" (identity)
+  std::string method = "none";
   double yaw_rad = 0;
   Eigen::Vector2d translation = Eigen::Vector2d::Zero();
-  int pairs = 0;
+  int pairs = 0;     // time-matched (estimated, true) robot positions
   double rms_m = 0;  // residual of the robot trail after alignment
   Eigen::Vector2d Apply(const Eigen::Vector2d& truth) const;
 };
+// The trail fit; identity ("none") when fewer than 3 matched positions or when the true trail's
+// RMS spread about its mean is under 0.5 m (the rotation is then undetermined).
 Alignment AlignTruth(const MissionData& data);
+// map_from_truth = start_pose^-1, with the trail residual under it.
+Alignment AlignByStartPose(const MissionData& data);
 
 struct MissionSummary {
-  Alignment alignment;
+  Alignment alignment;  // the start pose with SIM_TRUTH
+  Alignment trail_fit;  // the consistency check
+  MissionMetricsResult metrics;
   int people_found = 0;
   int sources_mapped = 0;
   std::vector<TruthMatch> truth;        // empty without SIM_TRUTH
@@ -62,14 +78,17 @@ struct MissionSummary {
 };
 
 // Reads everything the report needs from an LCM log (damaged parts are skipped; `problems`
-// gets a line per break).
-MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems = nullptr);
+// gets a line per break). Occupancy grids on SIM_FLOOR are the floor, on any other channel the
+// map.
+MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems = nullptr,
+                        const MissionMetricsOptions& metrics_options = {});
 
 // People matched to true people by ascending distance (each used once) within match_radius_m.
 MissionSummary Summarise(const MissionData& data, double match_radius_m);
 std::string HowFound(int cues);
 
-// Writes report.html, map.png and report.json into `directory` (created if needed).
+// Writes report.html, map.png, report.json and, with a coverage curve, coverage.png into
+// `directory` (created if needed).
 void WriteReport(const MissionData& data, const MissionSummary& summary, const std::string& directory);
 std::string SummaryText(const MissionData& data, const MissionSummary& summary);
 

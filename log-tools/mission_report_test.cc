@@ -1,13 +1,13 @@
 #include "log-tools/mission_report.h"
 
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <sys/stat.h>
 
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
-#include <fstream>
-
+#include "sarmap/explore_status_t.hpp"
 #include "sarmap/pose_t.hpp"
 
 namespace sarmap {
@@ -25,6 +25,12 @@ void Write(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t 
   e.datalen = static_cast<int32_t>(buf.size());
   e.data = buf.data();
   log->writeEvent(&e);
+}
+
+void SetStart(sarmap::sim_truth_t* t, double x, double y, double yaw) {
+  t->start_pose[0] = x;
+  t->start_pose[1] = y;
+  t->start_pose[2] = yaw;
 }
 
 sarmap::mapped_person_t Person(int64_t id, double x, double y, int cues, const std::string& keyword = "") {
@@ -82,7 +88,7 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     sounds.num_sources = 2;
     Write(&log, "SOUND_MAP", sounds, 3'000'000);
     // The simulator's frame is the map frame shifted by (10, -2) and turned by 90 degrees:
-    // truth = R(90) * map + (10, -2). The report must align them by the robot trail.
+    // truth = R(90) * map + (10, -2), i.e. the robot started at (10, -2, 90 deg) in the world.
     const auto to_truth = [](double x, double y) { return std::make_pair(-y + 10.0, x - 2.0); };
     for (int i = 0; i < 20; ++i) {
       sarmap::sim_truth_t t{};
@@ -91,11 +97,13 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
       const auto p = to_truth(1 + 0.2 * i, 3);
       t.robot_position_m[0] = p.first;
       t.robot_position_m[1] = p.second;
+      SetStart(&t, 10, -2, M_PI / 2);
       Write(&log, "SIM_TRUTH", t, t.header.utime);
     }
     sarmap::sim_truth_t truth{};
     truth.header.utime = 3'000'000;
     truth.robot_orientation[0] = 1;
+    SetStart(&truth, 10, -2, M_PI / 2);
     const double positions[3][2] = {{2.1, 1.1}, {6.0, 5.2}, {4.0, 5.5}};  // map frame
     for (int i = 0; i < 3; ++i) {
       sarmap::sim_person_t p{};
@@ -113,9 +121,14 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
   EXPECT_TRUE(data.map);
   EXPECT_GT(data.trail.size(), 10u);
   const MissionSummary s = Summarise(data, 0.5);
+  EXPECT_EQ(s.alignment.method, "start pose");
   EXPECT_EQ(s.alignment.pairs, 20);
   EXPECT_NEAR(s.alignment.rms_m, 0.0, 1e-9);
-  EXPECT_NEAR(std::abs(s.alignment.yaw_rad), M_PI / 2, 1e-9);
+  EXPECT_NEAR(s.alignment.yaw_rad, -M_PI / 2, 1e-9);  // map_from_truth
+  // The trail fit (the consistency check) agrees on this drift-free trail.
+  EXPECT_EQ(s.trail_fit.method, "trail fit");
+  EXPECT_NEAR(s.trail_fit.rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(s.trail_fit.yaw_rad, -M_PI / 2, 1e-9);
   ASSERT_EQ(s.truth.size(), 3u);
   EXPECT_TRUE(s.truth[0].found);
   EXPECT_EQ(s.truth[0].how, "seen");
@@ -152,6 +165,156 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
   std::ifstream html_file(dir + "/report.html");
   const std::string html((std::istreambuf_iterator<char>(html_file)), {});
   EXPECT_NE(html.find("missed"), std::string::npos);
+}
+
+// The robot never moves (a mission stopped at once, or a base that does not start): every POSE
+// is the identity, so a trail fit is undetermined and put the true people elsewhere. The start
+// pose aligns exactly: both people found, no false positive, and every mission figure present.
+TEST(MissionReportTest, ARobotThatDoesNotMove) {
+  const std::string path = ::testing::TempDir() + "/still.lcmlog";
+  const double sx = 3.0, sy = 1.0, syaw = 2.0;  // start pose in the world
+  // map_from_world: R(-yaw) (w - s).
+  const auto to_map = [&](double x, double y) {
+    const double dx = x - sx, dy = y - sy;
+    return std::make_pair(std::cos(syaw) * dx + std::sin(syaw) * dy,
+                          -std::sin(syaw) * dx + std::cos(syaw) * dy);
+  };
+  const double people[2][2] = {{5.0, 2.0}, {1.0, -1.0}};  // world
+  {
+    lcm::LogFile log(path, "w");
+    sarmap::explore_status_t status{};
+    status.state = "exploring";
+    status.has_goal = true;
+    status.goal_kind = "frontier";
+    status.goal_m[0] = 1.5;
+    status.num_path = 2;
+    status.path_x_m = {0.0f, 1.5f};
+    status.path_y_m = {0.0f, 0.0f};
+    Write(&log, "EXPLORE_STATUS", status, 1'000'000);
+    // The reachable floor: 2 x 2 m around the start, at 0.1 m.
+    sarmap::occupancy_grid_t floor{};
+    floor.resolution_m = 0.1;
+    floor.width = floor.height = 20;
+    floor.origin_x_m = sx - 1;
+    floor.origin_y_m = sy - 1;
+    floor.data.assign(400, 0);
+    floor.size = 400;
+    Write(&log, "SIM_FLOOR", floor, 1'000'000);
+    for (int i = 0; i <= 50; ++i) {
+      const int64_t utime = 1'000'000 + i * 100'000;
+      sarmap::pose_t pose{};
+      pose.header.utime = utime;
+      pose.orientation[0] = 1;
+      Write(&log, "POSE", pose, utime);
+      sarmap::sim_truth_t t{};
+      t.header.utime = utime;
+      t.robot_position_m[0] = sx;
+      t.robot_position_m[1] = sy;
+      t.robot_orientation[0] = std::cos(syaw / 2);
+      t.robot_orientation[3] = std::sin(syaw / 2);
+      SetStart(&t, sx, sy, syaw);
+      for (int k = 0; k < 2; ++k) {
+        sarmap::sim_person_t p{};
+        p.id = k;
+        p.name = "person" + std::to_string(k);
+        p.position_m[0] = people[k][0];
+        p.position_m[1] = people[k][1];
+        t.people.push_back(p);
+      }
+      t.num_people = 2;
+      Write(&log, "SIM_TRUTH", t, utime);
+      if (i == 20) {
+        // SLAM's map: 6 x 6 m around its origin, all observed.
+        sarmap::occupancy_grid_t grid{};
+        grid.resolution_m = 0.05;
+        grid.width = grid.height = 120;
+        grid.origin_x_m = grid.origin_y_m = -3;
+        grid.data.assign(120 * 120, 0);
+        grid.size = static_cast<int32_t>(grid.data.size());
+        Write(&log, "MAP", grid, utime);
+      }
+      if (i == 30) {
+        sarmap::people_map_t found{};
+        const auto a = to_map(people[0][0], people[0][1]), b = to_map(people[1][0], people[1][1]);
+        found.people = {
+            Person(1, a.first + 0.1, a.second, sarmap::mapped_person_t::CUE_SEEN_RGBD),
+            Person(2, b.first, b.second - 0.2, sarmap::mapped_person_t::CUE_HEARD, "help")};
+        found.num_people = 2;
+        Write(&log, "PEOPLE_MAP", found, utime);
+      }
+    }
+  }
+  const MissionData data = LoadMission(path);
+  const MissionSummary s = Summarise(data, 0.5);
+  EXPECT_EQ(s.alignment.method, "start pose");
+  EXPECT_NEAR(s.alignment.yaw_rad, -syaw, 1e-12);
+  EXPECT_NEAR(s.alignment.rms_m, 0.0, 1e-12);  // POSE stays at the map origin: the start pose
+  EXPECT_EQ(s.trail_fit.method, "none (trail too short)");
+  ASSERT_EQ(s.truth.size(), 2u);
+  EXPECT_TRUE(s.truth[0].found);
+  EXPECT_NEAR(s.truth[0].error_m, 0.1, 1e-9);
+  EXPECT_TRUE(s.truth[1].found);
+  EXPECT_NEAR(s.truth[1].error_m, 0.2, 1e-9);
+  EXPECT_EQ(s.false_positives, 0);
+  ASSERT_TRUE(s.truth[0].found_after_s);
+  EXPECT_NEAR(*s.truth[0].found_after_s, 3.0, 1e-9);
+  // Judged (EXPLORE_STATUS exploring) but the 5 s mission is shorter than the 10 s window.
+  ASSERT_TRUE(s.metrics.stuck_s);
+  EXPECT_EQ(*s.metrics.stuck_s, 0.0);
+  ASSERT_TRUE(s.metrics.mapped_fraction);
+  EXPECT_DOUBLE_EQ(*s.metrics.mapped_fraction, 1.0);
+  EXPECT_NEAR(*s.metrics.reachable_m2, 4.0, 1e-9);
+
+  const std::string dir = ::testing::TempDir() + "/still-report";
+  WriteReport(data, s, dir);
+  std::ifstream json(dir + "/report.json");
+  const auto j = nlohmann::json::parse(json);
+  EXPECT_EQ(j["false_positives"], 0);
+  EXPECT_EQ(j["alignment"]["method"], "start pose");
+  EXPECT_NEAR(j["coverage"]["reachable_m2"].get<double>(), 4.0, 1e-9);
+  EXPECT_NEAR(j["coverage"]["mapped_m2"].get<double>(), 4.0, 1e-9);
+  EXPECT_DOUBLE_EQ(j["coverage"]["mapped_fraction"].get<double>(), 1.0);
+  ASSERT_EQ(j["coverage"]["curve"].size(), 1u);
+  EXPECT_EQ(j["coverage"]["curve"][0].size(), 3u);
+  EXPECT_NEAR(j["coverage"]["curve"][0][0].get<double>(), 2.0, 1e-9);
+  EXPECT_EQ(j["collisions"], 0);
+  EXPECT_EQ(j["distance_m"], 0.0);
+  EXPECT_EQ(j["stuck_s"], 0.0);
+  EXPECT_EQ(j["longest_stuck_s"], 0.0);
+  EXPECT_EQ(j["came_home"], false);
+  EXPECT_TRUE(j["home_after_s"].is_null());
+  EXPECT_NEAR(j["truth"][1]["found_after_s"].get<double>(), 3.0, 1e-9);
+  struct stat st;
+  EXPECT_EQ(stat((dir + "/coverage.png").c_str(), &st), 0);
+  std::ifstream html_file(dir + "/report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)), {});
+  EXPECT_NE(html.find("<h2>Mission</h2>"), std::string::npos);
+  EXPECT_NE(html.find("coverage.png"), std::string::npos);
+  EXPECT_NE(SummaryText(data, s).find("2 of 2 people found"), std::string::npos);
+  EXPECT_NE(SummaryText(data, s).find("coverage: 4.0 of 4.0 m2"), std::string::npos);
+}
+
+// Without SIM_TRUTH (a real robot) the mission keys are present and null.
+TEST(MissionReportTest, NoTruthMissionKeysAreNull) {
+  const std::string path = ::testing::TempDir() + "/no-truth.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    sarmap::people_map_t people{};
+    Write(&log, "PEOPLE_MAP", people, 1'000'000);
+  }
+  const MissionData data = LoadMission(path);
+  const MissionSummary s = Summarise(data, 0.5);
+  const std::string dir = ::testing::TempDir() + "/no-truth-report";
+  WriteReport(data, s, dir);
+  std::ifstream json(dir + "/report.json");
+  const auto j = nlohmann::json::parse(json);
+  for (const char* key :
+       {"collisions", "distance_m", "stuck_s", "longest_stuck_s", "came_home", "home_after_s"}) {
+    EXPECT_TRUE(j[key].is_null()) << key;
+  }
+  EXPECT_TRUE(j["coverage"]["mapped_fraction"].is_null());
+  EXPECT_TRUE(j["coverage"]["curve"].empty());
+  EXPECT_FALSE(j.contains("truth"));
 }
 
 }  // namespace
