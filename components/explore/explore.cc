@@ -214,6 +214,12 @@ void ExploreController::Replan(double now_s) {
   map_changed_ = false;
   map_.UpdateCostMap();
   const CostField field = map_.Plan(pose_->translation());
+  if (!field.valid) {
+    // No traversable cell near the robot (pressed against an obstacle, or the map shifted
+    // under it): nothing can be concluded; the stuck detector gets it out.
+    path_.clear();
+    return;
+  }
   std::vector<Frontier> frontiers = map_.Frontiers(field);
   frontiers.erase(std::remove_if(frontiers.begin(), frontiers.end(),
                                  [&](const Frontier& f) { return IsBlacklisted(f.goal_m, now_s); }),
@@ -303,6 +309,12 @@ void ExploreController::Replan(double now_s) {
   }
 
   if (!goal_) {
+    // Exploration ends only when several plans in a row find nothing (a new map can hide a
+    // frontier for one plan while SLAM re-renders).
+    if (++empty_plans_ < 3) {
+      path_.clear();
+      return;
+    }
     if (!blacklist_.empty() && !cleared_blacklist_once_) {
       // Nothing else left: the given-up goals get one more chance.
       blacklist_.clear();
@@ -315,6 +327,7 @@ void ExploreController::Replan(double now_s) {
     if (state_ == State::kReturning) Replan(now_s);
     return;
   }
+  empty_plans_ = 0;
   state_ = goal_->kind == "sound" ? State::kSeekingSound : State::kExploring;
   path_ = map_.PathTo(field, goal_->position_m);
   if (path_.empty()) GiveUpGoal(now_s);
@@ -461,7 +474,10 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
     default:
       break;
   }
-  if (now_s - last_plan_s_ >= options_.goals.replan_period_s || !goal_ || path_.empty()) Replan(now_s);
+  const double since_plan_s = now_s - last_plan_s_;
+  if (since_plan_s >= options_.goals.replan_period_s || (goal_ && path_.empty() && since_plan_s >= 0.25)) {
+    Replan(now_s);
+  }
   if (state_ == State::kHome || state_ == State::kFinished) return stop;
   if (!goal_ || path_.empty()) {
     // No path now (e.g. the robot stands in an inflated cell): the stuck detector decides.

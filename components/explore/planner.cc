@@ -211,6 +211,7 @@ CostField ExploreMap::Plan(const Eigen::Vector2d& from, double escape_m) const {
     start_cost = static_cast<float>(best);
   }
   field.start = start;
+  field.valid = true;
   using Item = std::pair<float, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
   const int s = grid_.Index(start.x(), start.y());

@@ -89,6 +89,7 @@ struct Frontier {
 
 // Dijkstra costs from one start over the cost map.
 struct CostField {
+  bool valid = false;  // a start cell was found
   Eigen::Vector2i start{0, 0};
   std::vector<float> cost;  // +inf where unreachable
   std::vector<int> parent;  // -1 at the start and where unreachable
@@ -125,8 +126,8 @@ class ExploreMap {
 
   // Dijkstra from `from`. When `from` is not traversable (the robot brushed a wall, or stands
   // in a cell the map calls occupied), the search starts from the nearest traversable cell
-  // within escape_m, reached in a straight line.
-  CostField Plan(const Eigen::Vector2d& from, double escape_m = 0.6) const;
+  // within escape_m, reached in a straight line; `valid` is false when there is none.
+  CostField Plan(const Eigen::Vector2d& from, double escape_m = 1.0) const;
   // The path to `goal` in the field (start first), or empty when unreachable.
   std::vector<Eigen::Vector2d> PathTo(const CostField& field, const Eigen::Vector2d& goal) const;
   // Reachable frontiers, unsorted, each with its cheapest cell as goal.

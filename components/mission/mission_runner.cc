@@ -137,7 +137,7 @@ class Loop : public sim::SimSink {
     }
   }
 
-  void Publish(const std::string&, const sarmap::occupancy_grid_t& m) {
+  void Publish(const std::string&, const sarmap::occupancy_grid_t& m) override {
     if (observer_) observer_->OnFloor(Seconds(m.header.utime) - start_s_, m);
   }
 
