@@ -261,6 +261,9 @@ void Deputy::PublishOutput() {
   out.deputy_id = id_;
   for (auto& [cmd, text] : chunks) {
     out.command_ids.push_back(cmd);
+    // LCM strings end at their first NUL: a child printing one would make an encoding that
+    // every receiver rejects (and publish uninitialised bytes after it).
+    std::replace(text.begin(), text.end(), '\0', '?');
     out.text.push_back(std::move(text));
   }
   out.num_commands = static_cast<int32_t>(out.command_ids.size());
