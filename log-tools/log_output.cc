@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "log-tools/lcm_log_reader.h"
 #include "sarmap/pm_output_t.hpp"
 
@@ -33,8 +34,7 @@ int main(int argc, char** argv) {
     while (reader.Next(&event)) {
       if (event.channel != channel) continue;
       sarmap::pm_output_t out;
-      if (out.decode(event.data.data(), 0, static_cast<int>(event.data.size())) < 0 ||
-          out.command_ids.size() != out.text.size()) {
+      if (!sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &out)) {
         ++bad;
         continue;
       }

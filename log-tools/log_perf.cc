@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "log-tools/lcm_log_reader.h"
 #include "log-tools/stack_perf.h"
 #include "sarmap/people_detections_t.hpp"
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
       }
       if (event.channel == info_channel) {
         sarmap::pm_info_t info;
-        if (info.decode(event.data.data(), 0, static_cast<int>(event.data.size())) < 0) {
+        if (!sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &info)) {
           ++bad_info;
           continue;
         }
@@ -71,7 +72,7 @@ int main(int argc, char** argv) {
       }
       if (event.channel == map_channel) {
         sarmap::people_map_t map;
-        if (map.decode(event.data.data(), 0, static_cast<int>(event.data.size())) >= 0) {
+        if (sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &map)) {
           std::vector<std::array<double, 2>> xy;
           for (const auto& p : map.people) xy.push_back({p.position_m[0], p.position_m[1]});
           perf.AddPeopleMapSnapshot(map.header.seq, xy);
@@ -82,7 +83,7 @@ int main(int argc, char** argv) {
       if (event.channel == depth_channel) perf.AddDepthFrame(utime, event.timestamp_us);
       if (event.channel == visual_channel) {
         sarmap::people_detections_t seen;
-        const bool ok = seen.decode(event.data.data(), 0, static_cast<int>(event.data.size())) >= 0;
+        const bool ok = sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &seen);
         perf.AddPeopleVisual(utime, event.timestamp_us, ok ? seen.num_detections : 0);
       }
       if (event.channel == map_channel) perf.AddPeopleMap(utime, event.timestamp_us);

@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "common/decode.h"
 #include "common/image_messages.h"
 #include "log-tools/lcm_log_reader.h"
 #include "sarmap/explore_status_t.hpp"
@@ -25,11 +26,7 @@ namespace {
 
 template <class T>
 bool Decode(const std::vector<uint8_t>& data, T* out) {
-  try {
-    return out->decode(data.data(), 0, static_cast<int>(data.size())) == static_cast<int>(data.size());
-  } catch (const std::exception&) {
-    return false;
-  }
+  return common::DecodeMessage(data.data(), data.size(), out);
 }
 
 }  // namespace

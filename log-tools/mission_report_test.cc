@@ -84,6 +84,9 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     far.position_m[0] = 300.0;
     far.position_m[1] = -200.0;
     far.covariance[0] = far.covariance[4] = far.covariance[8] = 1e6;
+    // The report reads what the stack accepts (DecodeMessage): a known state each.
+    near.state = sarmap::sound_source_t::STATE_CONVERGED;
+    far.state = sarmap::sound_source_t::STATE_INITIALISING;
     sounds.sources = {near, far};
     sounds.num_sources = 2;
     Write(&log, "SOUND_MAP", sounds, 3'000'000);
@@ -315,6 +318,45 @@ TEST(MissionReportTest, NoTruthMissionKeysAreNull) {
   EXPECT_TRUE(j["coverage"]["mapped_fraction"].is_null());
   EXPECT_TRUE(j["coverage"]["curve"].empty());
   EXPECT_FALSE(j.contains("truth"));
+}
+
+// A log that recorded hostile datagrams (a header.frame length of INT32_MIN, ten million
+// sound sources in 36 bytes) loads: they are skipped, the valid messages around them are kept.
+TEST(MissionReportTest, HostileMessagesInTheLogAreSkipped) {
+  const std::string path = ::testing::TempDir() + "/hostile.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    sarmap::sound_map_t sounds{};
+    sounds.header.frame = "map";
+    sounds.num_sources = 1;
+    sounds.sources.resize(1);
+    sounds.sources[0].id = 7;
+    sounds.sources[0].state = sarmap::sound_source_t::STATE_CONVERGED;
+    Write(&log, "SOUND_MAP", sounds, 1'000'000);
+    sarmap::sound_map_t empty{};
+    empty.header.frame = "map";
+    std::vector<uint8_t> wire(empty.getEncodedSize());
+    empty.encode(wire.data(), 0, static_cast<int>(wire.size()));
+    ASSERT_EQ(wire.size(), 36u);  // fingerprint, utime, seq, "map", num_sources
+    std::vector<uint8_t> frame_attack = wire, count_attack = wire;
+    const uint8_t int32_min[4] = {0x80, 0, 0, 0}, ten_million[4] = {0x00, 0x98, 0x96, 0x80};
+    std::copy(int32_min, int32_min + 4, frame_attack.begin() + 24);
+    std::copy(ten_million, ten_million + 4, count_attack.begin() + 32);
+    for (std::vector<uint8_t>* attack : {&frame_attack, &count_attack}) {
+      lcm::LogEvent e;
+      e.eventnum = 0;
+      e.timestamp = 2'000'000;
+      e.channel = "SOUND_MAP";
+      e.datalen = static_cast<int32_t>(attack->size());
+      e.data = attack->data();
+      log.writeEvent(&e);
+    }
+  }
+  const MissionData data = LoadMission(path);
+  EXPECT_EQ(data.messages, 3);
+  ASSERT_TRUE(data.sources.has_value());
+  ASSERT_EQ(data.sources->sources.size(), 1u);
+  EXPECT_EQ(data.sources->sources[0].id, 7);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "common/decode.h"
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include <opencv2/imgcodecs.hpp>
@@ -55,7 +56,9 @@ void BM_DepthEncodeCompressDecode(benchmark::State& state) {
     wire.resize(msg.getEncodedSize());
     msg.encode(wire.data(), 0, static_cast<int>(wire.size()));
     sarmap::image_t received;
-    received.decode(wire.data(), 0, static_cast<int>(wire.size()));
+    if (!sarmap::common::DecodeMessage(wire.data(), wire.size(), &received, &error)) {
+      state.SkipWithError(error.c_str());
+    }
     if (!sarmap::common::DecodeDepthImage(received, &back, &error)) state.SkipWithError(error.c_str());
     bytes = wire.size();
   }
@@ -76,7 +79,9 @@ void BM_ColourJpegEncodeDecode(benchmark::State& state) {
     wire.resize(msg.getEncodedSize());
     msg.encode(wire.data(), 0, static_cast<int>(wire.size()));
     sarmap::image_t received;
-    received.decode(wire.data(), 0, static_cast<int>(wire.size()));
+    if (!sarmap::common::DecodeMessage(wire.data(), wire.size(), &received, &error)) {
+      state.SkipWithError(error.c_str());
+    }
     if (!sarmap::common::DecodeColorImage(received, &back, &error)) state.SkipWithError(error.c_str());
     bytes = wire.size();
   }

@@ -10,21 +10,21 @@
 //   pose_pub.Publish(&pose);   // fills header.seq
 //   return node.Run();         // until SIGINT/SIGTERM or Stop()
 //
-// A malformed, truncated or wrong-type message, or one that fails CheckMessage(), is counted
-// and dropped with a (rate-limited) log line; an exception from a callback is counted and
-// logged. Neither stops the node.
-
-#include <lcm/lcm-cpp.hpp>
+// Every message goes through DecodeMessage (common/decode.h): a malformed, truncated or
+// wrong-type message, or one that fails CheckMessage(), is counted and dropped with a
+// (rate-limited) log line; an exception from a callback is counted and logged. Neither stops
+// the node.
 
 #include <cstdint>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "common/decode.h"
 #include "common/logging.h"
-#include "common/message_checks.h"
 #include "common/sequence.h"
 #include "common/time.h"
 
@@ -34,8 +34,7 @@ namespace common {
 // LCM URL used when none is given: $SARMAP_LCM_URL, else $LCM_DEFAULT_URL, else
 // kDefaultLcmUrl (host-local: ttl=0, and a large receive buffer for images).
 std::string DefaultLcmUrl();
-constexpr const char* kDefaultLcmUrl =
-    "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
 
 struct ReceiveInfo {
   std::string channel;
@@ -152,28 +151,9 @@ class Node::TypedSubscription : public Node::SubscriptionBase {
 
   void Handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) override {
     T msg;
-    int decoded = -1;
-    const int size = static_cast<int>(rbuf->data_size);
-    try {
-      decoded = msg.decode(rbuf->data, 0, size);
-    } catch (const std::exception&) {  // absurd array sizes make the decoder throw
-      decoded = -1;
-    }
-    if (decoded < 0) {
-      node_->Dropped(channel, stats_,
-                     size < 8 ? "truncated (" + std::to_string(size) + " bytes)"
-                              : "not a valid " + std::string(T::getTypeName()) +
-                                    " (wrong type, truncated or corrupt; " + std::to_string(size) +
-                                    " bytes)");
-      return;
-    }
-    if (decoded != size) {
-      node_->Dropped(channel, stats_, std::to_string(size - decoded) + " trailing bytes");
-      return;
-    }
-    const std::string problem = CheckMessage(msg);
-    if (!problem.empty()) {
-      node_->Dropped(channel, stats_, problem);
+    std::string why;
+    if (!DecodeMessage(rbuf->data, rbuf->data_size, &msg, &why)) {
+      node_->Dropped(channel, stats_, why);
       return;
     }
     ReceiveInfo info;
@@ -201,9 +181,8 @@ void Node::Subscribe(const std::string& channel, Callback<T> callback, int queue
   stats.type_name = T::getTypeName();
   auto sub = std::make_unique<TypedSubscription<T>>(this, std::move(callback), &stats);
   // LCM treats the channel as a regular expression; anchor it so "AUDIO" is not "AUDIO_X".
-  lcm::Subscription* s =
-      lcm_->subscribe("^" + channel + "$", &SubscriptionBase::Handle,
-                      static_cast<SubscriptionBase*>(sub.get()));
+  lcm::Subscription* s = lcm_->subscribe("^" + channel + "$", &SubscriptionBase::Handle,
+                                         static_cast<SubscriptionBase*>(sub.get()));
   if (s) s->setQueueCapacity(queue_capacity);
   subscriptions_.push_back(std::move(sub));
 }

@@ -7,6 +7,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/decode.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/odometry_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -37,7 +38,7 @@ Recording ReadLcmAudioLog(const std::string& path, const std::string& prefix,
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     if (ev->channel.rfind(prefix, 0) != 0) continue;
     sarmap::audio_frame_t msg;
-    if (msg.decode(ev->data, 0, ev->datalen) < 0) {
+    if (!common::DecodeMessage(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
       ++bad_by_channel[ev->channel];
       continue;
     }
@@ -143,13 +144,14 @@ std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std
     sarmap::pose_t pose;
     sarmap::sim_truth_t truth;
     const double* q = nullptr;
-    if (odom.decode(ev->data, 0, ev->datalen) >= 0) {
+    const size_t size = static_cast<size_t>(ev->datalen);
+    if (common::DecodeMessage(ev->data, size, &odom)) {
       poses.push_back(make(odom.header.utime, odom.position_m, odom.orientation));
       q = odom.orientation;
-    } else if (pose.decode(ev->data, 0, ev->datalen) >= 0) {
+    } else if (common::DecodeMessage(ev->data, size, &pose)) {
       poses.push_back(make(pose.header.utime, pose.position_m, pose.orientation));
       q = pose.orientation;
-    } else if (truth.decode(ev->data, 0, ev->datalen) >= 0) {
+    } else if (common::DecodeMessage(ev->data, size, &truth)) {
       poses.push_back(make(truth.header.utime, truth.robot_position_m, truth.robot_orientation));
       q = truth.robot_orientation;
     } else {

@@ -7,7 +7,7 @@
 #include <cctype>
 #include <cstdlib>
 
-#include "common/message_checks.h"
+#include "common/decode.h"
 #include "common/time.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pm_output_t.hpp"
@@ -86,16 +86,8 @@ Deputy::~Deputy() {
 
 void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   sarmap::pm_orders_t orders;
-  int decoded = -1;
-  try {
-    decoded = orders.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
-  } catch (const std::exception&) {
-    decoded = -1;
-  }
-  const std::string problem = decoded != static_cast<int>(rbuf->data_size)
-                                  ? "not a valid pm_orders_t"
-                                  : common::CheckMessage(orders);
-  if (!problem.empty()) {
+  std::string problem;
+  if (!common::DecodeMessage(rbuf->data, rbuf->data_size, &orders, &problem)) {
     ++malformed_;
     long suppressed = 0;
     if (refuse_log_limit_.try_emplace("malformed", 5.0).first->second.Allow(Now(), &suppressed)) {
@@ -269,6 +261,9 @@ void Deputy::PublishOutput() {
   out.deputy_id = id_;
   for (auto& [cmd, text] : chunks) {
     out.command_ids.push_back(cmd);
+    // LCM strings end at their first NUL: a child printing one would make an encoding that
+    // every receiver rejects (and publish uninitialised bytes after it).
+    std::replace(text.begin(), text.end(), '\0', '?');
     out.text.push_back(std::move(text));
   }
   out.num_commands = static_cast<int32_t>(out.command_ids.size());

@@ -44,6 +44,8 @@ class Deputy : public EventLoop::Participant {
 
   const std::string& id() const { return id_; }
   int refused_orders() const { return refused_; }
+  // Messages on the orders channel that did not decode (common::DecodeMessage).
+  int malformed_orders() const { return malformed_; }
 
  private:
   void OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel);

@@ -62,25 +62,32 @@ Digest HmacSha256(const Key& key, const uint8_t* data, size_t size) {
 
 namespace {
 
-Digest OrdersDigest(const Key& key, const sarmap::pm_orders_t& orders) {
+// False when `orders` has no LCM encoding: LCM's encoder writes a string up to its first NUL
+// while getEncodedSize() counts every byte, so a string holding a NUL (which only a hostile
+// sender puts there) cannot be encoded.
+bool OrdersDigest(const Key& key, const sarmap::pm_orders_t& orders, Digest* digest) {
   sarmap::pm_orders_t copy = orders;
   std::fill(std::begin(copy.hmac_sha256), std::end(copy.hmac_sha256), 0);
   const int size = copy.getEncodedSize();
   std::vector<uint8_t> buffer(static_cast<size_t>(size));
-  if (copy.encode(buffer.data(), 0, size) != size)
-    throw std::runtime_error("cannot encode pm_orders_t");
-  return HmacSha256(key, buffer.data(), buffer.size());
+  if (copy.encode(buffer.data(), 0, size) != size) return false;
+  *digest = HmacSha256(key, buffer.data(), buffer.size());
+  return true;
 }
 
 }  // namespace
 
 void SignOrders(const Key& key, sarmap::pm_orders_t* orders) {
-  const Digest d = OrdersDigest(key, *orders);
+  Digest d;
+  if (!OrdersDigest(key, *orders, &d)) {
+    throw std::runtime_error("cannot encode pm_orders_t (a string holds a NUL byte)");
+  }
   std::copy(d.begin(), d.end(), std::begin(orders->hmac_sha256));
 }
 
 bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders) {
-  const Digest d = OrdersDigest(key, orders);
+  Digest d;
+  if (!OrdersDigest(key, orders, &d)) return false;
   return CRYPTO_memcmp(d.data(), orders.hmac_sha256, d.size()) == 0;
 }
 

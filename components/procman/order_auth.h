@@ -40,9 +40,11 @@ std::string DefaultKeyPath();
 
 Digest HmacSha256(const Key& key, const uint8_t* data, size_t size);
 
-// Fills orders->hmac_sha256.
+// Fills orders->hmac_sha256. Throws std::runtime_error when the orders cannot be encoded (a
+// string holds a NUL byte).
 void SignOrders(const Key& key, sarmap::pm_orders_t* orders);
-// True when hmac_sha256 matches (constant-time comparison).
+// True when hmac_sha256 matches (constant-time comparison); false, never a throw, for orders
+// that cannot be encoded (whatever arrives from the bus comes here).
 bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders);
 
 enum class Verdict { kAccepted, kUnsigned, kForged, kReplayed };

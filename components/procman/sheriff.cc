@@ -6,8 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "common/decode.h"
 #include "common/logging.h"
-#include "common/message_checks.h"
 #include "common/time.h"
 #include "procman/supervisor.h"
 
@@ -49,16 +49,6 @@ bool Active(const pm_command_status_t& s) {
 bool Down(const pm_command_status_t& s) {
   return s.state == pm_command_status_t::STATE_STOPPED ||
          s.state == pm_command_status_t::STATE_FAILED;
-}
-
-template <class T>
-bool Decode(const lcm::ReceiveBuffer* rbuf, T* msg) {
-  try {
-    const int n = msg->decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
-    return n == static_cast<int>(rbuf->data_size) && common::CheckMessage(*msg).empty();
-  } catch (const std::exception&) {
-    return false;
-  }
 }
 
 std::string Mb(int64_t bytes) {
@@ -134,9 +124,22 @@ const Sheriff::CommandView* Sheriff::FindCommand(const std::string& id) const {
   return nullptr;
 }
 
-void Sheriff::OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+template <class T>
+bool Sheriff::Decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel, T* msg) {
+  std::string why;
+  if (common::DecodeMessage(rbuf->data, rbuf->data_size, msg, &why)) return true;
+  ++malformed_;
+  long suppressed = 0;
+  if (drop_log_limit_.try_emplace(channel, 5.0).first->second.Allow(Now(), &suppressed)) {
+    SARMAP_LOG(WARN) << "dropped a message on " << channel << ": " << why << " (so far "
+                     << malformed_ << ")";
+  }
+  return false;
+}
+
+void Sheriff::OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   sarmap::pm_info_t info;
-  if (!Decode(rbuf, &info)) return;
+  if (!Decode(rbuf, channel, &info)) return;
   DeputyView* d = FindDeputy(info.deputy_id);
   if (!d) return;  // a deputy this config does not use
   d->heard = true;
@@ -181,9 +184,9 @@ void Sheriff::Adopt(DeputyView* d) {
   }
 }
 
-void Sheriff::OnOutput(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+void Sheriff::OnOutput(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   sarmap::pm_output_t out;
-  if (!Decode(rbuf, &out)) return;
+  if (!Decode(rbuf, channel, &out)) return;
   for (int i = 0; i < out.num_commands; ++i) {
     CommandView* c = nullptr;
     for (auto& v : commands_) {
@@ -204,9 +207,9 @@ void Sheriff::OnOutput(const lcm::ReceiveBuffer* rbuf, const std::string&) {
   while (tail_.size() > 2000) tail_.pop_front();
 }
 
-void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   sarmap::pm_orders_t orders;
-  if (!Decode(rbuf, &orders) || orders.sheriff_id == sheriff_id_) return;
+  if (!Decode(rbuf, channel, &orders) || orders.sheriff_id == sheriff_id_) return;
   DeputyView* d = FindDeputy(orders.deputy_id);
   if (!d || !SignatureValid(*key_, orders)) return;
   auto it = foreign_counters_.find(orders.sheriff_id);

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/logging.h"
 #include "procman/event_loop.h"
 #include "procman/order_auth.h"
 #include "procman/pmd_config.h"
@@ -53,6 +54,9 @@ class Sheriff : public EventLoop::Participant {
   // When the next deputy that is present now would count as lost (+inf: none).
   double NextLostDeadline(double now_s) const;
   int RefusedOrders(const std::string& deputy_id) const;
+  // Messages on the procman channels that did not decode (common::DecodeMessage); each is
+  // dropped and logged (rate-limited per channel).
+  int malformed_messages() const { return malformed_; }
   // State of a command as last reported (-1: not reported).
   int CommandState(const std::string& command_id) const;
   int CommandPid(const std::string& command_id) const;
@@ -71,6 +75,8 @@ class Sheriff : public EventLoop::Participant {
   void OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void OnOutput(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  template <class T>
+  bool Decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel, T* msg);
   void Adopt(DeputyView* d);
   void ApplyTo(Verb verb, CommandView* c, DeputyView* d);
   bool Acknowledged(const DeputyView& d) const;
@@ -95,6 +101,8 @@ class Sheriff : public EventLoop::Participant {
   double next_probe_s_ = 0;
   int probes_sent_ = 0;
   int64_t orders_seq_ = 0;
+  int malformed_ = 0;
+  std::map<std::string, common::RateLimiter> drop_log_limit_;
 };
 
 // Runs a script (or a single action) against a sheriff, one step per wake-up.

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
 #include "rgbd_odometry/frame_assembler.h"
@@ -26,7 +27,8 @@ using sarmap::rgbd_odometry::RgbdOdometryResult;
 
 template <class T>
 bool Decode(const lcm::LogEvent& e, T* msg) {
-  return msg->decode(e.data, 0, e.datalen) == e.datalen;
+  return e.datalen >= 0 &&
+         sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
 }
 
 double Yaw(const Eigen::Isometry3d& m) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "common/logging.h"
 #include "slam/carmen.h"
 #include "slam/map_io.h"
@@ -86,7 +87,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     if (ev->channel == options.scan_channel) {
       laser_scan_t msg;
-      if (msg.decode(ev->data, 0, ev->datalen) != ev->datalen) {
+      if (!common::DecodeMessage(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
         ++bad;
         continue;
       }
@@ -96,7 +97,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
       inputs.push_back(std::move(in));
     } else if (ev->channel == options.odom_channel) {
       odometry_t msg;
-      if (msg.decode(ev->data, 0, ev->datalen) != ev->datalen) {
+      if (!common::DecodeMessage(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
         ++bad;
         continue;
       }

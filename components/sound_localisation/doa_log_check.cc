@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/decode.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
 
@@ -31,14 +32,14 @@ int main(int argc, char** argv) {
   while (const lcm::LogEvent* e = log.readNextEvent()) {
     if (e->channel.rfind("AUDIO", 0) == 0) {
       sarmap::audio_frame_t a;
-      if (a.decode(e->data, 0, e->datalen) > 0) {
+      if (sarmap::common::DecodeMessage(e->data, static_cast<size_t>(e->datalen), &a)) {
         ++audio_messages;
         last_audio_utime = a.header.utime;
       }
     }
     if (e->channel != doa_channel) continue;
     sarmap::doa_t d;
-    if (d.decode(e->data, 0, e->datalen) < 0) continue;
+    if (!sarmap::common::DecodeMessage(e->data, static_cast<size_t>(e->datalen), &d)) continue;
     ++doa_messages;
     if (d.sources.empty()) continue;
     const auto& s = d.sources.front();

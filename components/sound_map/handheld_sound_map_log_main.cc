@@ -18,6 +18,7 @@
 #include <string>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
 #include "common/transform.h"
@@ -30,7 +31,8 @@ using sarmap::sound_map::LinearArraySoundMap;
 
 template <class T>
 bool Decode(const lcm::LogEvent& e, T* msg) {
-  return msg->decode(e.data, 0, e.datalen) == e.datalen;
+  return e.datalen >= 0 &&
+         sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
 }
 
 Eigen::Isometry3d Iso(const sarmap::common::Rigid3d& r) {

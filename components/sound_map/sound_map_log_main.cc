@@ -25,6 +25,7 @@
 #include <stdexcept>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
 #include "sarmap/audio_frame_t.hpp"
@@ -40,7 +41,8 @@ using sarmap::sound_map::Pose2;
 
 template <class T>
 bool Decode(const lcm::LogEvent& e, T* msg) {
-  return msg->decode(e.data, 0, e.datalen) == e.datalen;
+  return e.datalen >= 0 &&
+         sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
 }
 
 }  // namespace
