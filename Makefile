@@ -24,7 +24,7 @@ export CCACHE_NOHASHDIR := 1
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps configure build test bench demo format clean help
+.PHONY: all deps configure build test bench bench-missions demo format clean help
 
 all: build
 
@@ -32,6 +32,7 @@ help:
 	@echo "make demo    run the stack on the simulated incident site and write a mission report"
 	@echo "make test    build and run every test (unit + multi-process) with CTest"
 	@echo "make bench   build and run every benchmark (prints figures)"
+	@echo "make bench-missions  autonomous missions on generated sites, frontier vs reactive (MISSION_SITES=6)"
 	@echo "make build   just build;  make deps  just install packages;  make clean"
 
 # Installs only what is missing, so a second run installs nothing.
@@ -63,6 +64,14 @@ test: build
 
 bench: build
 	cmake --build $(BUILD_DIR) --target bench
+
+# Autonomous missions in simulated time on generated sites (components/mission/README.md).
+MISSION_SITES ?= 6
+MISSION_MODES ?= frontier,reactive
+MISSION_SECONDS ?= 600
+bench-missions: build
+	$(BUILD_DIR)/bin/sarmap-mission-bench --sites $(MISSION_SITES) --modes $(MISSION_MODES) \
+	  --duration $(MISSION_SECONDS) --out out/mission-bench
 
 demo: build
 	launch-scripts/demo.sh $(BUILD_DIR)

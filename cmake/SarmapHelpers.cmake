@@ -14,7 +14,8 @@ function(sarmap_add_gtest name)
     SARMAP_BIN_DIR="${CMAKE_BINARY_DIR}/bin")
   # A list value must be escaped to survive gtest_discover_tests' own argument parsing.
   string(REPLACE ";" "\\;" labels "unit;${ARG_LABELS}")
-  gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST
+  # Listing a binary that loads PCL and OpenCV can take seconds on a loaded machine.
+  gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
     PROPERTIES LABELS "${labels}" TIMEOUT 300)
 endfunction()
 

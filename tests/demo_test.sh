@@ -20,7 +20,7 @@ grep -q "the mission script failed" "$out/demo.txt" && fail "the launcher's miss
 [ -s "$out/run/report/report.html" ] && [ -s "$out/run/report/map.png" ] && [ -s "$out/run/report/report.json" ] \
   || fail "the report is incomplete"
 for process in sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people \
-               sarmap-sound-map sarmap-people-map; do
+               sarmap-sound-map sarmap-people-map sarmap-explore; do
   line="$(grep "localhost/$process " "$out/run/perf.txt" || true)"
   [ -n "$line" ] || fail "$process never reported by the launcher"
   samples="$(echo "$line" | awk '{print $2}')"

@@ -220,6 +220,19 @@ void ExploreController::Replan(double now_s) {
     path_.clear();
     return;
   }
+  // Reaching only a small part of the free space means the robot is shut in, most likely by a
+  // contact marked in a doorway: forget the contacts (the next MAP redraws the grid without
+  // them) and conclude nothing from this plan.
+  int reached = 0, traversable = 0;
+  for (int i = 0; i < static_cast<int>(field.cost.size()); ++i) {
+    reached += field.Reached(i);
+    traversable += map_.Traversable(i % map_.grid().width, i / map_.grid().width);
+  }
+  if (reached < 0.3 * traversable) {
+    map_.ClearContacts();
+    path_.clear();
+    return;
+  }
   std::vector<Frontier> frontiers = map_.Frontiers(field);
   frontiers.erase(std::remove_if(frontiers.begin(), frontiers.end(),
                                  [&](const Frontier& f) { return IsBlacklisted(f.goal_m, now_s); }),
@@ -517,8 +530,9 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
       }
       visited_sound_.push_back(*goal_->face_m);
     } else {
-      // A frontier still there after looking at it is one the camera cannot resolve.
-      blacklist_.push_back({goal_->position_m, now_s + options_.goals.blacklist_expiry_s});
+      // A frontier still there after looking at it from its edge is one the camera cannot
+      // resolve from anywhere it can reach (under furniture, behind a screen): not again.
+      blacklist_.push_back({goal_->position_m, std::numeric_limits<double>::infinity()});
     }
     goal_.reset();
     path_.clear();

@@ -22,6 +22,7 @@ Eigen::Vector2d Grid::CentreOf(int x, int y) const {
 }
 
 void ExploreMap::SetMap(const Grid& map) {
+  const Grid previous = std::move(grid_);
   const int pad = static_cast<int>(std::ceil(options_.pad_m / map.resolution_m));
   grid_.resolution_m = map.resolution_m;
   grid_.width = map.width + 2 * pad;
@@ -34,6 +35,18 @@ void ExploreMap::SetMap(const Grid& map) {
               map.cells.begin() + static_cast<size_t>(y + 1) * map.width,
               grid_.cells.begin() + static_cast<size_t>(y + pad) * grid_.width + pad);
   }
+  // Obstacles the explorer had (scan returns since the last map) stay unless the new map calls
+  // the cell free: SLAM renders a low object seen from afar in a few scans as uncertain, and the
+  // camera cannot see it again once the robot is close.
+  for (int y = 0; y < previous.height; ++y) {
+    for (int x = 0; x < previous.width; ++x) {
+      if (previous.at(x, y) < options_.occupied_threshold) continue;
+      const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
+      if (!grid_.Contains(c.x(), c.y())) continue;
+      int8_t& v = grid_.at(c.x(), c.y());
+      if (v < 0 || v >= options_.free_threshold) v = 100;
+    }
+  }
   for (const auto& p : trail_) Stamp(p);
   for (const auto& c : contacts_) StampContact(c);
 }
@@ -44,9 +57,10 @@ void ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
 }
 
 void ExploreMap::StampContact(const common::Rigid2d& map_from_base) {
-  // Just beyond the front of the robot, as wide as the robot.
+  // Just beyond the front of the robot, over the middle of its width (what it pushed against).
   const double ahead = options_.robot_radius_m + grid_.resolution_m;
-  for (double y = -options_.robot_radius_m; y <= options_.robot_radius_m + 1e-9; y += 0.5 * grid_.resolution_m) {
+  const double half = 0.6 * options_.robot_radius_m;
+  for (double y = -half; y <= half + 1e-9; y += 0.5 * grid_.resolution_m) {
     const Eigen::Vector2i c = grid_.CellOf(map_from_base * Eigen::Vector2d(ahead, y));
     if (grid_.Contains(c.x(), c.y())) grid_.at(c.x(), c.y()) = 100;
   }

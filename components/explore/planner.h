@@ -112,6 +112,8 @@ class ExploreMap {
   // across the robot's front, kept as occupied through every later MAP.
   void AddContact(const common::Rigid2d& map_from_base);
   int contacts() const { return static_cast<int>(contacts_.size()); }
+  // Forgets the contacts; their cells stay until the next SetMap.
+  void ClearContacts() { contacts_.clear(); }
 
   // Rebuilds the distance transform and traversability (after SetMap / IntegrateScan).
   void UpdateCostMap();

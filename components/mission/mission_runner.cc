@@ -272,7 +272,9 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
 
   sim::Simulator simulator(setup);
   MissionResult result;
-  Loop loop(options, slam_file.slam, explore_file.explore, scan_options, base_from_camera, &simulator, observer,
+  MissionRunOptions loop_options = options;
+  if (loop_options.map_period_s <= 0) loop_options.map_period_s = slam_file.map_period_s;
+  Loop loop(loop_options, slam_file.slam, explore_file.explore, scan_options, base_from_camera, &simulator, observer,
             &result);
   loop.set_start_s(1e-6 * static_cast<double>(simulator.start_utime()));
   const double step_s = 0.05;

@@ -29,7 +29,7 @@ struct MissionRunOptions {
   std::string mode = "";             // overrides explore.mode when not empty
   double duration_s = 600;
   double camera_rate_hz = 15;        // depth frames (and scans) per simulated second
-  double map_period_s = 2.0;         // SLAM renders the map this often for the explorer
+  double map_period_s = 0;           // SLAM renders the map this often; 0: the SLAM file's map_period_s
   int64_t seed = 1;
   std::vector<std::string> sim_overrides;
   std::vector<std::string> explore_overrides;

@@ -1,0 +1,62 @@
+// A whole autonomous mission in simulated time: the simulated lab (Sales 2014's scenario 1)
+// explored by the closed loop of simulator, depth-to-scan, SLAM and explorer, judged by the same
+// metrics as the mission report.
+#include "mission/mission_runner.h"
+
+#include <gtest/gtest.h>
+
+#include "log-tools/mission_metrics.h"
+
+namespace sarmap {
+namespace mission {
+namespace {
+
+class Collect : public MissionObserver {
+ public:
+  void OnTruth(double, const sim_truth_t& m) override { metrics.OnTruth(m.header.utime, m); }
+  void OnFloor(double, const occupancy_grid_t& m) override { metrics.OnFloor(m.header.utime, m); }
+  void OnMap(double, const occupancy_grid_t& m) override { metrics.OnMap(m.header.utime, m); }
+  void OnExploreStatus(double, const explore_status_t& m) override { metrics.OnExploreStatus(m.header.utime, m); }
+  logtools::MissionMetrics metrics;
+};
+
+MissionRunOptions Lab(const std::string& mode) {
+  const std::string root = SARMAP_SOURCE_DIR;
+  MissionRunOptions o;
+  o.world = root + "/config/worlds/lab_lit.yaml";
+  o.sim_config = root + "/config/sim.yaml";
+  o.slam_config = root + "/config/slam_kinect_robot.yaml";
+  o.explore_config = root + "/config/explore.yaml";
+  o.depth_config = root + "/config/depth.yaml";
+  o.mode = mode;
+  o.duration_s = 240;
+  return o;
+}
+
+TEST(MissionRunnerTest, FrontierExplorationMapsTheLabWithoutCollisionAndComesHome) {
+  Collect collect;
+  const MissionResult r = RunMission(Lab("frontier"), &collect);
+  const logtools::MissionMetricsResult m = collect.metrics.Result();
+  ASSERT_TRUE(m.mapped_fraction.has_value());
+  std::printf("lab: %.1f %% of %.1f m^2 mapped, %d collisions, home after %.0f s, %.1f m driven\n",
+              100 * *m.mapped_fraction, m.reachable_m2.value_or(0), r.collisions, r.home_after_s, r.distance_m);
+  EXPECT_GE(*m.mapped_fraction, 0.9);
+  EXPECT_EQ(r.collisions, 0);
+  EXPECT_TRUE(r.came_home);
+  EXPECT_TRUE(m.came_home);
+  EXPECT_LT(r.simulated_s, 240);  // it ended by itself
+}
+
+TEST(MissionRunnerTest, TheSameSeedGivesTheSameMission) {
+  MissionRunOptions o = Lab("frontier");
+  o.duration_s = 30;
+  const MissionResult a = RunMission(o), b = RunMission(o);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  for (size_t i = 0; i < a.samples.size(); ++i) {
+    EXPECT_EQ(a.samples[i].truth_pose, b.samples[i].truth_pose) << "at " << a.samples[i].t_s << " s";
+  }
+}
+
+}  // namespace
+}  // namespace mission
+}  // namespace sarmap
