@@ -169,20 +169,33 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(const 
     if (visited) continue;
     const Eigen::Vector2i c = grid.CellOf(person.position_m);
     const int r = static_cast<int>(std::ceil(o.max_view_m / grid.resolution_m));
-    double best_cost = std::numeric_limits<double>::infinity();
-    Eigen::Vector2d best_cell = Eigen::Vector2d::Zero();
+    // The cheapest cell in view of them (the person's own body, within 0.5 m of their position,
+    // does not block the view); else, for someone behind cover, the cheapest cell in range: the
+    // microphones still gain parallax there.
+    double best_cost = std::numeric_limits<double>::infinity(), cover_cost = best_cost;
+    Eigen::Vector2d best_cell = Eigen::Vector2d::Zero(), cover_cell = best_cell;
     for (int dy = -r; dy <= r; ++dy) {
       for (int dx = -r; dx <= r; ++dx) {
         const int x = c.x() + dx, y = c.y() + dy;
         if (!grid.Contains(x, y)) continue;
         const int i = grid.Index(x, y);
-        if (!field.Reached(i) || field.cost[i] >= best_cost) continue;
+        if (!field.Reached(i) || field.cost[i] >= std::max(best_cost, cover_cost)) continue;
         const Eigen::Vector2d p = grid.CentreOf(x, y);
         const double dist = (p - person.position_m).norm();
-        if (dist < o.min_view_m || dist > o.max_view_m || !map_.LineOfSight(p, person.position_m)) continue;
-        best_cost = field.cost[i];
-        best_cell = p;
+        if (dist < o.min_view_m || dist > o.max_view_m) continue;
+        const Eigen::Vector2d body_edge = person.position_m + (p - person.position_m).normalized() * 0.5;
+        if (field.cost[i] < best_cost && map_.LineOfSight(p, body_edge)) {
+          best_cost = field.cost[i];
+          best_cell = p;
+        } else if (field.cost[i] < cover_cost) {
+          cover_cost = field.cost[i];
+          cover_cell = p;
+        }
       }
+    }
+    if (!std::isfinite(best_cost)) {
+      best_cost = cover_cost;
+      best_cell = cover_cell;
     }
     if (!std::isfinite(best_cost) || best_cost > o.max_detour_m) continue;
     if (!best || best_cost < best->score) {

@@ -240,6 +240,18 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   const double d = (*c.status().goal_m - p.position_m).norm();
   EXPECT_GE(d, o.sound.min_view_m - 0.1);
   EXPECT_LE(d, o.sound.max_view_m + 0.1);
+  // Behind a wall: no cell in view, so the cheapest one in range (parallax for the microphones).
+  Grid walled = g;
+  for (int y = 1; y < walled.height - 1; ++y) walled.cells[y * walled.width + 44] = 100;  // x = 4.4 m
+  ExploreController cover{o};
+  cover.OnMap(walled);
+  cover.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  cover.OnHeardPeople({p});
+  cover.OnScan(0.0, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(cover.status().goal_kind, "sound");
+  ASSERT_TRUE(cover.status().goal_m);
+  EXPECT_LT(cover.status().goal_m->x(), 4.4);
+  EXPECT_LE((*cover.status().goal_m - p.position_m).norm(), o.sound.max_view_m + 0.1);
   // Placed too uncertainly: not a goal (frontier exploration instead).
   ExploreController vague{o};
   vague.OnMap(PartlyKnownRoom());
