@@ -15,7 +15,7 @@ flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --dis
        --disable-component-update --disable-sync --user-data-dir="$work/profile" --virtual-time-budget=4000
        --window-size=1280,800)
 "$chromium" "${flags[@]}" --dump-dom "$url" > "$work/dom.html" 2> "$work/chromium.log"
-for want in 'heard</td>' 'both</td>' 'sarmap-slam' '>help<' 'respawning'; do
+for want in 'heard</td>' 'both</td>' 'sarmap-slam' '>help<' 'respawning' 'seeking sound'; do
   if ! grep -q "$want" "$work/dom.html"; then
     echo "FAIL: rendered page lacks '$want'"; tail -5 "$work/chromium.log"; exit 1
   fi
