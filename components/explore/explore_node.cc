@@ -10,6 +10,7 @@
 #include "common/node.h"
 #include "common/node_main.h"
 #include "explore/explore.h"
+#include "explore/status_message.h"
 #include "sarmap/explore_status_t.hpp"
 
 namespace {
@@ -143,28 +144,9 @@ class ExploreNode {
   }
 
   void PublishStatus(int64_t utime, const explore::ExploreStatus& s) {
-    explore_status_t out;
-    out.header.utime = utime;
-    out.header.frame = "map";
-    out.state = s.state;
-    out.driven_by = s.driven_by;
-    out.has_goal = s.goal_m.has_value();
-    out.goal_kind = s.goal_kind;
-    out.goal_m[0] = s.goal_m ? s.goal_m->x() : 0.0;
-    out.goal_m[1] = s.goal_m ? s.goal_m->y() : 0.0;
     // Every 4th path point (20 cm) is enough to draw it.
-    for (size_t i = 0; i < s.path.size(); i += (i + 4 < s.path.size() ? 4 : 1)) {
-      out.path_x_m.push_back(static_cast<float>(s.path[i].x()));
-      out.path_y_m.push_back(static_cast<float>(s.path[i].y()));
-      if (i + 1 == s.path.size()) break;
-    }
-    out.num_path = static_cast<int32_t>(out.path_x_m.size());
-    out.frontiers = s.frontiers;
-    out.blacklisted = s.blacklisted;
-    out.recoveries = s.recoveries;
-    out.stuck_s = s.stuck_s;
-    out.elapsed_s = s.elapsed_s;
-    status_pub_.Publish(&out);
+    explore_status_t out = explore::ToStatusMessage(s, utime, 4);
+    status_pub_.Publish(&out);  // sets the sequence number
   }
 
   NodeOptions options_;

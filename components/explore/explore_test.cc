@@ -1,4 +1,5 @@
 #include "explore/explore.h"
+#include "explore/status_message.h"
 
 #include <gtest/gtest.h>
 
@@ -281,6 +282,21 @@ TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergency
   const Velocity stop = c.OnScan(9.0, MakeScan(2, 2));  // holds after the timeout too
   EXPECT_EQ(stop.source, "stop");
   EXPECT_EQ(stop.linear_mps, 0);
+}
+
+TEST(StatusMessageTest, EveryNthPathPointAndTheLastOne) {
+  ExploreStatus s;
+  s.state = "exploring";
+  s.goal_m = Eigen::Vector2d(3.0, 1.0);
+  s.goal_kind = "frontier";
+  for (int i = 0; i < 10; ++i) s.path.emplace_back(0.1 * i, 0.0);
+  const sarmap::explore_status_t m = ToStatusMessage(s, 42, 4);
+  ASSERT_EQ(m.num_path, 4);  // points 0, 4, 8 and the last, 9
+  EXPECT_FLOAT_EQ(m.path_x_m[2], 0.8f);
+  EXPECT_FLOAT_EQ(m.path_x_m[3], 0.9f);
+  EXPECT_TRUE(m.has_goal);
+  EXPECT_EQ(m.header.utime, 42);
+  EXPECT_EQ(ToStatusMessage(s, 42).num_path, 10);
 }
 
 }  // namespace

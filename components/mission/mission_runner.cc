@@ -11,6 +11,7 @@
 #include "depth/depth_node_options.h"
 #include "depth/depth_to_scan.h"
 #include "explore/explore.h"
+#include "explore/status_message.h"
 #include "sim/simulator.h"
 #include "slam/slam.h"
 #include "slam/slam_node_options.h"
@@ -179,26 +180,8 @@ class Loop : public sim::SimSink {
     const explore::ExploreStatus& s = explore_.status();
     if (s.state == "home" && result_->home_after_s < 0) result_->home_after_s = t;
     if (!observer_) return;
-    sarmap::explore_status_t out;
-    out.header.utime = utime;
+    sarmap::explore_status_t out = explore::ToStatusMessage(s, utime);
     out.header.seq = status_seq_++;
-    out.header.frame = "map";
-    out.state = s.state;
-    out.driven_by = s.driven_by;
-    out.has_goal = s.goal_m.has_value();
-    out.goal_kind = s.goal_kind;
-    out.goal_m[0] = s.goal_m ? s.goal_m->x() : 0.0;
-    out.goal_m[1] = s.goal_m ? s.goal_m->y() : 0.0;
-    for (const auto& p : s.path) {
-      out.path_x_m.push_back(static_cast<float>(p.x()));
-      out.path_y_m.push_back(static_cast<float>(p.y()));
-    }
-    out.num_path = static_cast<int32_t>(out.path_x_m.size());
-    out.frontiers = s.frontiers;
-    out.blacklisted = s.blacklisted;
-    out.recoveries = s.recoveries;
-    out.stuck_s = s.stuck_s;
-    out.elapsed_s = s.elapsed_s;
     observer_->OnExploreStatus(t, out);
   }
 
