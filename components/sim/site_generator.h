@@ -37,7 +37,7 @@ namespace sim {
 
 struct SiteOptions {
   int64_t seed = 1;
-  double floor_area_m2 = 180.0;  // building footprint (outer walls' centre lines)
+  double floor_area_m2 = 200.0;  // building footprint (outer walls' centre lines)
   int min_rooms = 4;             // rooms besides the corridor
   double corridor_width_min_m = 1.5;
   double corridor_width_max_m = 2.0;

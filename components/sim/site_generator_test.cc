@@ -97,6 +97,7 @@ TEST(SiteGeneratorTest, TwentySeedsGiveBuildingsWhoseRoomsAreAllReachable) {
     const GridMap floor_with_people = ReachableFloor(w, options.robot_radius_m, 0.05, true);
     const double reachable = FloorArea(floor);
     EXPECT_GE(reachable, 0.7 * site.size_m.prod());
+    EXPECT_GE(reachable, 150.0);  // the default 200 m^2 building leaves at least 150 m^2 to cover
     for (const SiteRoom& room : site.rooms) {
       EXPECT_EQ(CellAt(floor, room.Centre()), 0) << room.name;
       EXPECT_EQ(CellAt(floor_with_people, room.Centre()), 0) << room.name << " (people in the way)";
