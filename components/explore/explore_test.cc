@@ -116,7 +116,19 @@ TEST(ExploreMapTest, ScansFillTheGridNoReturnIsFreeToRangeAndTheRobotsOwnPlaceIs
   const double a = wall.angle_min_rad + 30 * wall.angle_increment_rad;
   EXPECT_TRUE(m.Occupied(Eigen::Vector2d(1.0 + 4.0 * std::cos(a), 2.0 + 4.0 * std::sin(a))));
   EXPECT_FALSE(m.Known(Eigen::Vector2d(4.0, 3.0)));  // rays without information are skipped
+  // The return stays an obstacle through a new MAP that has the cell uncertain or unknown (a low
+  // object SLAM saw in few scans), and goes when the MAP calls it free.
+  const Eigen::Vector2d hit(1.0 + 4.0 * std::cos(a), 2.0 + 4.0 * std::sin(a));
+  Grid uncertain = PartlyKnownRoom();
+  m.SetMap(uncertain);
+  EXPECT_TRUE(m.Occupied(hit));
+  Grid free = PartlyKnownRoom();
+  for (auto& c : free.cells) c = 0;
+  m.SetMap(free);
+  EXPECT_FALSE(m.Occupied(hit));
   // The robot's own footprint is free once it has been there.
+  m.SetMap(PartlyKnownRoom());
+  EXPECT_FALSE(m.Known(Eigen::Vector2d(4.2, 3.2)));
   m.AddTrail(Eigen::Vector2d(4.0, 3.0));
   EXPECT_TRUE(m.Known(Eigen::Vector2d(4.2, 3.2)));
 }
