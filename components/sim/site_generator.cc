@@ -456,7 +456,9 @@ World Builder::CurrentWorld(bool with_people) const {
 }
 
 bool Builder::AllRoomsReachable(const World& world, bool people_block) const {
-  const GridMap g = ReachableFloor(world, o_.robot_radius_m, 0.05, people_block);
+  // With a margin: a robot that plans on a measured map (walls a little thicker than they are)
+  // must still find the way.
+  const GridMap g = ReachableFloor(world, o_.robot_radius_m + o_.passage_margin_m, 0.05, people_block);
   for (const SiteRoom& room : rooms_) {
     if (CellAt(g, room.Centre()) != 0) return false;
   }

@@ -60,6 +60,7 @@ struct SiteOptions {
   std::string lighting = "seed";  // lit, dark, or seed (dark with dark_probability)
   double dark_probability = 0.5;
   double robot_radius_m = 0.25;  // for the reachability checks
+  double passage_margin_m = 0.1;  // rooms must be reachable with this much room on each side
   int max_attempts = 20;
   template <class V>
   void Visit(V& v) {
@@ -89,6 +90,8 @@ struct SiteOptions {
     v("lighting", lighting, "lit, dark, or seed (dark with dark_probability)");
     v("dark_probability", dark_probability, "lighting: seed: chance that the lights are off");
     v("robot_radius_m", robot_radius_m, "robot radius for the reachability checks");
+    v("passage_margin_m", passage_margin_m,
+      "every room must be reachable by a robot this much wider on each side (debris never leaves a squeeze)");
     v("max_attempts", max_attempts, "layouts tried before giving up");
   }
   void Validate(common::Validator& check) const {
@@ -122,6 +125,8 @@ struct SiteOptions {
     check.OneOf("lighting", lighting, {"lit", "dark", "seed"});
     check.InRange("dark_probability", dark_probability, 0, 1);
     check.InRange("robot_radius_m", robot_radius_m, 0.1, 0.5);
+    check.That(passage_margin_m >= 0 && 2 * (robot_radius_m + passage_margin_m) < door_width_min_m,
+               "passage_margin_m", "must be >= 0 and leave the narrowest door passable");
     check.That(max_attempts >= 1, "max_attempts", "must be >= 1");
   }
 };
