@@ -73,6 +73,12 @@ class Rigid3d {
     const Eigen::Vector3d x_axis = rotation_ * Eigen::Vector3d::UnitX();
     return Rigid2d(translation_.head<2>(), std::atan2(x_axis.y(), x_axis.x()));
   }
+  Eigen::Isometry3d ToIsometry() const {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = rotation_.toRotationMatrix();
+    t.translation() = translation_;
+    return t;
+  }
 
   const Eigen::Vector3d& translation() const { return translation_; }
   const Eigen::Quaterniond& rotation() const { return rotation_; }

@@ -55,14 +55,7 @@ class Publisher {
   void Publish(const Frame& f) {
     if (!converter_ || converter_->intrinsics().width != f.intrinsics.width ||
         converter_->intrinsics().height != f.intrinsics.height) {
-      depth::DepthToScanOptions so;
-      so.min_height_m = options_.min_height_m;
-      so.max_height_m = options_.max_height_m;
-      so.range_min_m = options_.range_min_m;
-      so.range_max_m = options_.range_max_m;
-      so.num_beams = options_.num_beams;
-      so.row_step = options_.row_step;
-      converter_ = std::make_unique<depth::DepthToScan>(so, f.intrinsics, base_from_camera_);
+      converter_ = std::make_unique<depth::DepthToScan>(options_.ScanOptions(), f.intrinsics, base_from_camera_);
     }
     header_t header;
     header.utime = f.utime;
@@ -296,10 +289,7 @@ int main(int argc, char** argv) {
     if (!parsed) return 0;
     const depth::DepthNodeOptions& options = *parsed;
     const common::RobotOptions robot = common::LoadRobot(options.robot_config);
-    const common::Rigid3d bc = robot.base_from_camera.ToRigid3d();
-    Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();
-    base_from_camera.linear() = bc.rotation().toRotationMatrix();
-    base_from_camera.translation() = bc.translation();
+    const Eigen::Isometry3d base_from_camera = robot.base_from_camera.ToRigid3d().ToIsometry();
     common::Node node("sarmap-depth", node_args.lcm_url);
     Publisher pub(options, &node, base_from_camera);
     if (options.source == "lcm") return RunLcm(options, &node, &pub);

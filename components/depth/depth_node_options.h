@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/options.h"
+#include "depth/depth_to_scan.h"
 
 namespace sarmap {
 namespace depth {
@@ -34,6 +35,17 @@ struct DepthNodeOptions {
   double range_max_m = 4.5;
   int num_beams = 0;
   int row_step = 2;
+  // The scan part, for depth::DepthToScan.
+  DepthToScanOptions ScanOptions() const {
+    DepthToScanOptions o;
+    o.min_height_m = min_height_m;
+    o.max_height_m = max_height_m;
+    o.range_min_m = range_min_m;
+    o.range_max_m = range_max_m;
+    o.num_beams = num_beams;
+    o.row_step = row_step;
+    return o;
+  }
   template <class V> void Visit(V& v) {
     v("source", source, "openni2 (device or .oni), folder (image replay), or lcm (DEPTH from the bus, e.g. the simulator: only SCAN is published)");
     v("device_uri", device_uri, "OpenNI2 device URI or .oni file; empty = first device");

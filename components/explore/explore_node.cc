@@ -10,6 +10,7 @@
 #include "common/node.h"
 #include "common/node_main.h"
 #include "explore/explore.h"
+#include "explore/explore_node_options.h"
 #include "explore/status_message.h"
 #include "sarmap/explore_status_t.hpp"
 
@@ -17,30 +18,7 @@ namespace {
 
 using namespace sarmap;
 
-struct NodeOptions {
-  std::string scan_channel = "SCAN";
-  std::string map_channel = "MAP";
-  std::string pose_channel = "POSE";
-  std::string people_channel = "PEOPLE_MAP";
-  std::string teleop_channel = "TELEOP";
-  std::string command_channel = "CMD_VEL";
-  std::string status_channel = "EXPLORE_STATUS";
-  double status_period_s = 0.5;
-  explore::ExploreOptions explore;
-  template <class V>
-  void Visit(V& v) {
-    v("scan_channel", scan_channel, "laser scan (safety layer, and the explorer's picture between maps)");
-    v("map_channel", map_channel, "occupancy grid from SLAM");
-    v("pose_channel", pose_channel, "robot pose in the map");
-    v("people_channel", people_channel, "people map: people heard but not seen become goals (mode sound_guided)");
-    v("teleop_channel", teleop_channel, "operator override");
-    v("command_channel", command_channel, "velocity commands out");
-    v("status_channel", status_channel, "mission state, goal and path out");
-    v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often");
-    v("explore", explore, "exploration");
-  }
-  void Validate(common::Validator& check) const { check.Positive("status_period_s", status_period_s); }
-};
+using NodeOptions = explore::ExploreNodeOptions;
 
 class ExploreNode {
  public:

@@ -7,10 +7,13 @@
 #include <stdexcept>
 
 #include "common/image_messages.h"
+#include "common/message_conversions.h"
+#include "common/time.h"
 #include "common/robot_config.h"
 #include "depth/depth_node_options.h"
 #include "depth/depth_to_scan.h"
 #include "explore/explore.h"
+#include "explore/explore_node_options.h"
 #include "explore/status_message.h"
 #include "sim/simulator.h"
 #include "slam/slam.h"
@@ -26,26 +29,6 @@ double CpuSeconds(clockid_t clock) {
   clock_gettime(clock, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
-
-// The part of sarmap-explore's options file that is the controller's.
-struct ExploreFile {
-  std::string scan_channel, map_channel, pose_channel, people_channel, teleop_channel, command_channel,
-      status_channel;
-  double status_period_s = 0.5;
-  explore::ExploreOptions explore;
-  template <class V>
-  void Visit(V& v) {
-    v("scan_channel", scan_channel, "");
-    v("map_channel", map_channel, "");
-    v("pose_channel", pose_channel, "");
-    v("people_channel", people_channel, "");
-    v("teleop_channel", teleop_channel, "");
-    v("command_channel", command_channel, "");
-    v("status_channel", status_channel, "");
-    v("status_period_s", status_period_s, "");
-    v("explore", explore, "");
-  }
-};
 
 class Loop : public sim::SimSink {
  public:
@@ -63,9 +46,7 @@ class Loop : public sim::SimSink {
         result_(result) {}
 
   void Publish(const std::string&, const sarmap::odometry_t& m) override {
-    const Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
-    const double yaw = std::atan2(2 * (q.w() * q.z() + q.x() * q.y()), 1 - 2 * (q.y() * q.y() + q.z() * q.z()));
-    slam_.AddOdometry(Seconds(m.header.utime), slam::Rigid2d(m.position_m[0], m.position_m[1], yaw));
+    slam_.AddOdometry(Seconds(m.header.utime), common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
   }
 
   void Publish(const std::string& channel, const sarmap::image_t& m) override {
@@ -93,7 +74,6 @@ class Loop : public sim::SimSink {
     scan.ranges_m = planar.ranges_m;
     const slam::ScanResult r = slam_.AddScan(scan);
     const double t = scan.time_s - start_s_;
-    const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     if (r.accepted) explore_.OnPose(r.map_from_base);
     if (r.accepted && t - last_map_s_ >= options_.map_period_s) {
       last_map_s_ = t;
@@ -108,7 +88,6 @@ class Loop : public sim::SimSink {
     const double explore0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     const explore::Velocity v = explore_.OnScan(t, es);
     result_->explore_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - explore0;
-    (void)cpu0;
     sim_->SetVelocityCommand(v.linear_mps, v.angular_radps);
     if (t - last_status_s_ >= 0.5) {
       last_status_s_ = t;
@@ -128,8 +107,8 @@ class Loop : public sim::SimSink {
       last_sample_s_ = t;
       MissionSample s;
       s.t_s = t;
-      const double yaw = 2 * std::atan2(m.robot_orientation[3], m.robot_orientation[0]);
-      s.truth_pose = Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], yaw);
+      const common::Rigid2d truth = common::ToRigid3d(m.robot_position_m, m.robot_orientation).ToRigid2d();
+      s.truth_pose = Eigen::Vector3d(truth.translation().x(), truth.translation().y(), truth.yaw_rad());
       s.slam_pose = Eigen::Vector3d(slam_pose_.translation().x(), slam_pose_.translation().y(), slam_pose_.yaw_rad());
       s.state = explore_.status().state;
       s.collisions = m.collisions;
@@ -146,7 +125,7 @@ class Loop : public sim::SimSink {
   const explore::ExploreController& explore() const { return explore_; }
 
  private:
-  static double Seconds(int64_t utime) { return 1e-6 * static_cast<double>(utime); }
+  static double Seconds(int64_t utime) { return common::UtimeToSeconds(utime); }
 
   void PublishMap(double t) {
     const slam::OccupancyMap map = slam_.RenderMap();
@@ -239,19 +218,10 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   const auto slam_file = common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, {});
   std::vector<std::string> explore_overrides = options.explore_overrides;
   if (!options.mode.empty()) explore_overrides.push_back("explore.mode=" + options.mode);
-  const auto explore_file = common::LoadOptions<ExploreFile>(options.explore_config, explore_overrides);
+  const auto explore_file = common::LoadOptions<explore::ExploreNodeOptions>(options.explore_config, explore_overrides);
   const auto depth_file = common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, {});
-  depth::DepthToScanOptions scan_options;
-  scan_options.min_height_m = depth_file.min_height_m;
-  scan_options.max_height_m = depth_file.max_height_m;
-  scan_options.range_min_m = depth_file.range_min_m;
-  scan_options.range_max_m = depth_file.range_max_m;
-  scan_options.num_beams = depth_file.num_beams;
-  scan_options.row_step = depth_file.row_step;
-  const common::Rigid3d bc = setup.robot.base_from_camera.ToRigid3d();
-  Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();
-  base_from_camera.linear() = bc.rotation().toRotationMatrix();
-  base_from_camera.translation() = bc.translation();
+  const depth::DepthToScanOptions scan_options = depth_file.ScanOptions();
+  const Eigen::Isometry3d base_from_camera = setup.robot.base_from_camera.ToRigid3d().ToIsometry();
 
   sim::Simulator simulator(setup);
   MissionResult result;
