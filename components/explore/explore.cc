@@ -233,16 +233,13 @@ void ExploreController::Replan(double now_s) {
     path_.clear();
     return;
   }
-  // Reaching only a small part of the free space means the robot is shut in, most likely by a
-  // contact marked in a doorway: forget the contacts (the next MAP redraws the grid without
-  // them) and conclude nothing from this plan.
-  int reached = 0, traversable = 0;
-  for (int i = 0; i < static_cast<int>(field.cost.size()); ++i) {
-    reached += field.Reached(i);
-    traversable += map_.Traversable(i % map_.grid().width, i / map_.grid().width);
-  }
-  if (reached < 0.3 * traversable) {
-    map_.ClearContacts();
+  // Cut off from most of the places the robot has driven through means it is shut in: by a
+  // contact marked in a doorway (it came in that way; forget the contacts around it), or by a doorway
+  // the map draws too narrow for now. Either way nothing is concluded from this plan (it does
+  // not count towards the end of exploration). Space it has never been in (a hall seen
+  // through glass) does not count.
+  if (map_.TrailReachedFraction(field, options_.planner.robot_radius_m + 0.05) < 0.5) {
+    if (map_.ClearContactsBounding(field)) last_plan_s_ = -1e9;
     path_.clear();
     return;
   }
@@ -339,6 +336,14 @@ void ExploreController::Replan(double now_s) {
     // frontier for one plan while SLAM re-renders).
     if (++empty_plans_ < 3) {
       path_.clear();
+      return;
+    }
+    if (!cleared_contacts_once_ && map_.ClearLoneContacts()) {
+      // A bump marked once (not a glass pane) may be what closes the rest off: one more look
+      // without those.
+      cleared_contacts_once_ = true;
+      empty_plans_ = 0;
+      Replan(now_s);
       return;
     }
     if (!blacklist_.empty() && !cleared_blacklist_once_) {
@@ -564,7 +569,7 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
     contact_xy_ = robot;
     commanded_m_ = 0;
     if (contact) {
-      map_.AddContact(*pose_);
+      map_.AddContact(*pose_);  // (no mark where the map already has the obstacle)
       StartRecovery(now_s, scan);
       return Recover(now_s, scan);
     }

@@ -371,6 +371,7 @@ class ExploreController {
   std::optional<double> dwell_until_s_;
   int frontier_count_ = 0;
   bool cleared_blacklist_once_ = false;
+  bool cleared_contacts_once_ = false;
   int empty_plans_ = 0;
   // Progress and recovery.
   Eigen::Vector2d progress_xy_ = Eigen::Vector2d::Zero();

@@ -102,35 +102,111 @@ TEST(ExploreMapTest, FrontierOfTheKnownPartAndAPathThatKeepsItsDistanceFromWalls
 }
 
 TEST(ExploreMapTest, ScansFillTheGridNoReturnIsFreeToRangeAndTheRobotsOwnPlaceIsFree) {
+  const common::Rigid2d pose(1.0, 2.0, 0.0);
+  {
+    ExploreMap m{PlannerOptions()};
+    m.SetMap(PartlyKnownRoom());
+    EXPECT_FALSE(m.Known(Eigen::Vector2d(4.0, 2.0)));
+    m.IntegrateScan(pose, MakeScan(INFINITY, INFINITY));  // no return anywhere: free up to 4.6 m
+    EXPECT_TRUE(m.Known(Eigen::Vector2d(4.0, 2.0)));
+    EXPECT_FALSE(m.Occupied(Eigen::Vector2d(4.0, 2.0)));
+    // What the rays crossed stays free through a MAP that has no verdict there (a room SLAM
+    // saw once through its door)...
+    m.SetMap(PartlyKnownRoom());
+    EXPECT_TRUE(m.Known(Eigen::Vector2d(4.0, 2.0)));
+    EXPECT_FALSE(m.Occupied(Eigen::Vector2d(4.0, 2.0)));
+    // ...and MAP's obstacles win over it.
+    Grid walled = PartlyKnownRoom();
+    walled.at(40, 20) = 100;
+    m.SetMap(walled);
+    EXPECT_TRUE(m.Occupied(Eigen::Vector2d(4.05, 2.05)));
+    // MAP's obstacles are not carried into the next MAP: SLAM moves its walls as it
+    // re-optimises, and the old copies would close doorways.
+    m.SetMap(PartlyKnownRoom());
+    EXPECT_FALSE(m.Occupied(Eigen::Vector2d(4.05, 2.05)));
+  }
   ExploreMap m{PlannerOptions()};
   m.SetMap(PartlyKnownRoom());
-  EXPECT_FALSE(m.Known(Eigen::Vector2d(4.0, 2.0)));
-  Scan s = MakeScan(INFINITY, INFINITY);  // no return anywhere: free up to 4.6 m
-  m.IntegrateScan(common::Rigid2d(1.0, 2.0, 0.0), s);
-  EXPECT_TRUE(m.Known(Eigen::Vector2d(4.0, 2.0)));
-  EXPECT_FALSE(m.Occupied(Eigen::Vector2d(4.0, 2.0)));
   Scan wall = MakeScan(0.0f, 0.0f);  // no information anywhere...
   wall.ranges_m[30] = 4.0f;          // ...but one return straight ahead
-  m.SetMap(PartlyKnownRoom());
-  m.IntegrateScan(common::Rigid2d(1.0, 2.0, 0.0), wall);
+  m.IntegrateScan(pose, wall);
   const double a = wall.angle_min_rad + 30 * wall.angle_increment_rad;
-  EXPECT_TRUE(m.Occupied(Eigen::Vector2d(1.0 + 4.0 * std::cos(a), 2.0 + 4.0 * std::sin(a))));
+  const Eigen::Vector2d hit(1.0 + 4.0 * std::cos(a), 2.0 + 4.0 * std::sin(a));
+  EXPECT_TRUE(m.Occupied(hit));
   EXPECT_FALSE(m.Known(Eigen::Vector2d(4.0, 3.0)));  // rays without information are skipped
   // The return stays an obstacle through a new MAP that has the cell uncertain or unknown (a low
   // object SLAM saw in few scans), and goes when the MAP calls it free.
-  const Eigen::Vector2d hit(1.0 + 4.0 * std::cos(a), 2.0 + 4.0 * std::sin(a));
-  Grid uncertain = PartlyKnownRoom();
-  m.SetMap(uncertain);
+  m.SetMap(PartlyKnownRoom());
   EXPECT_TRUE(m.Occupied(hit));
   Grid free = PartlyKnownRoom();
   for (auto& c : free.cells) c = 0;
   m.SetMap(free);
   EXPECT_FALSE(m.Occupied(hit));
-  // The robot's own footprint is free once it has been there.
+  // A return that a later ray crosses was not there (noise at an edge): gone.
   m.SetMap(PartlyKnownRoom());
+  m.IntegrateScan(pose, wall);
+  EXPECT_TRUE(m.Occupied(hit));
+  Scan through = MakeScan(0.0f, 0.0f);
+  through.ranges_m[30] = INFINITY;
+  m.IntegrateScan(pose, through);
+  EXPECT_FALSE(m.Occupied(hit));
+  m.SetMap(PartlyKnownRoom());
+  EXPECT_FALSE(m.Occupied(hit));
+  // The robot's own footprint is free once it has been there.
   EXPECT_FALSE(m.Known(Eigen::Vector2d(4.2, 3.2)));
   m.AddTrail(Eigen::Vector2d(4.0, 3.0));
   EXPECT_TRUE(m.Known(Eigen::Vector2d(4.2, 3.2)));
+}
+
+// A 6 x 4 m space, all seen free (the camera sees through glass), with a pier at x = 5.0..5.2 m,
+// y = 3.0..3.2 m.
+Grid FreeSpaceWithPier() {
+  Grid g;
+  g.resolution_m = 0.1;
+  g.width = 60;
+  g.height = 40;
+  g.cells.assign(g.width * g.height, 0);
+  for (int y = 30; y <= 31; ++y) {
+    for (int x = 50; x <= 51; ++x) g.cells[y * g.width + x] = 100;
+  }
+  return g;
+}
+
+TEST(ExploreMapTest, ContactsInLineAreOneGlassPaneExtendedToThePierAndKnownObstaclesNeedNoMark) {
+  ExploreMap m{PlannerOptions()};
+  m.SetMap(FreeSpaceWithPier());
+  const double touching = m.options().robot_radius_m;  // base centre to the surface
+  // The mark lies on the line y = 3.0..3.2 (where the front of the base met the surface).
+  const auto marked = [&m](double x) {
+    for (double y = 2.975; y < 3.25; y += 0.05) {
+      if (m.Occupied(Eigen::Vector2d(x, y))) return true;
+    }
+    return false;
+  };
+  // Two bumps heading north into y = 3 m, 1.5 m apart: one invisible surface.
+  EXPECT_TRUE(m.AddContact(common::Rigid2d(2.0, 3.0 - touching, M_PI / 2)));
+  EXPECT_EQ(m.glass_lines(), 0);
+  EXPECT_TRUE(m.AddContact(common::Rigid2d(3.5, 3.0 - touching + 0.05, M_PI / 2 - 0.4)));
+  EXPECT_EQ(m.glass_lines(), 1);
+  EXPECT_TRUE(marked(2.75));  // between the bumps
+  EXPECT_TRUE(marked(4.8));    // extended to the pier...
+  EXPECT_FALSE(marked(5.5));   // ...and not beyond it
+  m.SetMap(FreeSpaceWithPier());                         // kept through every MAP
+  EXPECT_TRUE(marked(2.75));
+  // Touching the pier, which the map has: no mark.
+  EXPECT_FALSE(m.AddContact(common::Rigid2d(5.1, 3.0 - touching, M_PI / 2)));
+  EXPECT_EQ(m.contacts(), 2);
+  // A bump heading along the line (east) is not part of the pane.
+  EXPECT_TRUE(m.AddContact(common::Rigid2d(1.0, 1.0, 0.0)));
+  EXPECT_EQ(m.glass_lines(), 1);
+  const double front = m.options().robot_radius_m + 0.1;  // where a bump is marked
+  EXPECT_TRUE(m.Occupied(Eigen::Vector2d(1.0 + front, 1.0)));
+  // Forgetting the lone bumps keeps the pane.
+  EXPECT_TRUE(m.ClearLoneContacts());
+  EXPECT_EQ(m.contacts(), 2);
+  EXPECT_FALSE(m.Occupied(Eigen::Vector2d(1.0 + front, 1.0)));
+  EXPECT_TRUE(marked(2.75));
+  EXPECT_FALSE(m.ClearLoneContacts());
 }
 
 TEST(SafetyLayerTest, NoReturnIsFreeBlindCorridorIsBlockedAndOnlyForwardSpeedIsLimited) {

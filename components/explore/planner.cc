@@ -22,7 +22,10 @@ Eigen::Vector2d Grid::CentreOf(int x, int y) const {
 }
 
 void ExploreMap::SetMap(const Grid& map) {
+  last_map_ = map;
   const Grid previous = std::move(grid_);
+  const std::vector<uint8_t> previous_crossed = std::move(crossed_);
+  const std::vector<uint8_t> previous_hit = std::move(hit_);
   const int pad = static_cast<int>(std::ceil(options_.pad_m / map.resolution_m));
   grid_.resolution_m = map.resolution_m;
   grid_.width = map.width + 2 * pad;
@@ -35,31 +38,185 @@ void ExploreMap::SetMap(const Grid& map) {
               map.cells.begin() + static_cast<size_t>(y + 1) * map.width,
               grid_.cells.begin() + static_cast<size_t>(y + pad) * grid_.width + pad);
   }
-  // Obstacles the explorer had (scan returns since the last map) stay unless the new map calls
-  // the cell free: SLAM renders a low object seen from afar in a few scans as uncertain, and the
-  // camera cannot see it again once the robot is close.
+  // The explorer's own returns since they were last crossed stay obstacles unless the new map
+  // calls the cell free: SLAM renders a low object seen from afar in a few scans as uncertain,
+  // and the camera cannot see it again once the robot is close. MAP's own obstacles are not
+  // carried over: SLAM moves its walls when it re-optimises, and old copies left in cells it
+  // has no verdict on (a doorway seen edge-on) would close the door.
+  hit_.assign(grid_.cells.size(), 0);
   for (int y = 0; y < previous.height; ++y) {
     for (int x = 0; x < previous.width; ++x) {
-      if (previous.at(x, y) < options_.occupied_threshold) continue;
+      if (!previous_hit[previous.Index(x, y)]) continue;
       const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
       if (!grid_.Contains(c.x(), c.y())) continue;
       int8_t& v = grid_.at(c.x(), c.y());
-      if (v < 0 || v >= options_.free_threshold) v = 100;
+      if ((v >= 0 && v < options_.free_threshold) || v >= options_.occupied_threshold) continue;
+      v = 100;
+      hit_[grid_.Index(c.x(), c.y())] = 1;
+    }
+  }
+  // Cells the explorer's rays crossed stay free where MAP has no verdict; MAP's obstacles win.
+  crossed_.assign(grid_.cells.size(), 0);
+  for (int y = 0; y < previous.height; ++y) {
+    for (int x = 0; x < previous.width; ++x) {
+      if (!previous_crossed[previous.Index(x, y)]) continue;
+      const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
+      if (!grid_.Contains(c.x(), c.y())) continue;
+      int8_t& v = grid_.at(c.x(), c.y());
+      if (v >= options_.occupied_threshold) continue;
+      v = 0;
+      crossed_[grid_.Index(c.x(), c.y())] = 1;
     }
   }
   for (const auto& p : trail_) Stamp(p);
   for (const auto& c : contacts_) StampContact(c);
+  for (auto& line : lines_) StampLine(line);
 }
 
-void ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
+bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
+  // A contact is a surface across the robot's front. Two contacts whose points are between
+  // the robot's width and glass_join_m apart, each made heading into the line through them
+  // (within 60 deg of its normal), with nothing but free cells between them (the camera sees
+  // through), are one invisible surface, a glass pane: the segment between them is an
+  // obstacle too, extended along the line over the seen-through cells until it meets an
+  // obstacle the map has (a pier, a wall) or glass_extend_m.
+  const double ahead = options_.robot_radius_m + grid_.resolution_m;
+  const Eigen::Vector2d point = map_from_base * Eigen::Vector2d(ahead, 0.0);
+  const Eigen::Vector2d heading(std::cos(map_from_base.yaw_rad()), std::sin(map_from_base.yaw_rad()));
+  // Something the map already has at the robot's front (a door jamb brushed in passing) needs
+  // no mark; a mark beside it would narrow the doorway.
+  if (has_map()) {
+    const double reach = options_.robot_radius_m + 0.1;
+    const int r = static_cast<int>(std::ceil(reach / grid_.resolution_m));
+    const Eigen::Vector2i c = grid_.CellOf(map_from_base.translation());
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        if (!grid_.Contains(c.x() + dx, c.y() + dy)) continue;
+        const Eigen::Vector2d local = map_from_base.inverse() * grid_.CentreOf(c.x() + dx, c.y() + dy);
+        if (local.x() <= 0 || local.norm() > reach) continue;
+        const int i = grid_.Index(c.x() + dx, c.y() + dy);
+        if (grid_.cells[i] >= options_.occupied_threshold && !hit_[i]) return false;
+      }
+    }
+  }
+  bool joined = false;
+  for (const common::Rigid2d& c : contacts_) {
+    const Eigen::Vector2d other = c * Eigen::Vector2d(ahead, 0.0);
+    const Eigen::Vector2d other_heading(std::cos(c.yaw_rad()), std::sin(c.yaw_rad()));
+    const double apart = (point - other).norm();
+    if (apart < 2 * options_.robot_radius_m || apart > options_.glass_join_m) continue;
+    const Eigen::Vector2d along = (point - other) / apart;
+    const Eigen::Vector2d normal(-along.y(), along.x());
+    const double into = std::cos(60.0 * M_PI / 180.0);
+    if (std::abs(heading.dot(normal)) < into || std::abs(other_heading.dot(normal)) < into) continue;
+    if (heading.dot(normal) * other_heading.dot(normal) < 0) continue;  // from opposite sides
+    if (has_map() && !NoObstacleBetween(other + along * options_.robot_radius_m, point - along * options_.robot_radius_m)) {
+      continue;
+    }
+    lines_.push_back({other, point});
+    in_line_[&c - contacts_.data()] = true;
+    joined = true;
+    if (has_map()) StampLine(lines_.back());
+  }
   contacts_.push_back(map_from_base);
+  in_line_.push_back(joined);
   if (has_map()) StampContact(map_from_base);
+  return true;
+}
+
+bool ExploreMap::ClearLoneContacts() {
+  std::vector<common::Rigid2d> kept;
+  for (size_t i = 0; i < contacts_.size(); ++i) {
+    if (in_line_[i]) kept.push_back(contacts_[i]);
+  }
+  if (kept.size() == contacts_.size()) return false;
+  contacts_ = kept;
+  in_line_.assign(contacts_.size(), true);
+  const Grid map = last_map_;
+  SetMap(map);
+  return true;
+}
+
+bool ExploreMap::NoObstacleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  // On MAP as received (the contacts' own marks do not count).
+  const double length = (b - a).norm();
+  const int steps = static_cast<int>(length / (0.5 * grid_.resolution_m)) + 1;
+  for (int k = 0; k <= steps; ++k) {
+    const Eigen::Vector2i c = last_map_.CellOf(a + (b - a) * (static_cast<double>(k) / steps));
+    if (last_map_.Contains(c.x(), c.y()) && last_map_.at(c.x(), c.y()) >= options_.occupied_threshold) return false;
+  }
+  return true;
+}
+
+bool ExploreMap::ClearContactsBounding(const CostField& field) {
+  const int r = static_cast<int>(std::ceil((options_.robot_radius_m + 2 * grid_.resolution_m) / grid_.resolution_m));
+  const auto bounds = [&](const Eigen::Vector2d& p) {
+    const Eigen::Vector2i c = grid_.CellOf(p);
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        if (grid_.Contains(c.x() + dx, c.y() + dy) && field.Reached(grid_.Index(c.x() + dx, c.y() + dy))) return true;
+      }
+    }
+    return false;
+  };
+  const size_t before = contacts_.size() + lines_.size();
+  const double ahead = options_.robot_radius_m + grid_.resolution_m;
+  std::vector<common::Rigid2d> kept;
+  std::vector<bool> kept_in_line;
+  for (size_t i = 0; i < contacts_.size(); ++i) {
+    if (bounds(contacts_[i] * Eigen::Vector2d(ahead, 0.0))) continue;
+    kept.push_back(contacts_[i]);
+    kept_in_line.push_back(in_line_[i]);
+  }
+  contacts_ = std::move(kept);
+  in_line_ = std::move(kept_in_line);
+  lines_.erase(std::remove_if(lines_.begin(), lines_.end(),
+                              [&](const GlassLine& line) {
+                                const double length = (line.b_m - line.a_m).norm();
+                                for (double t = 0; t <= length; t += grid_.resolution_m) {
+                                  if (bounds(line.a_m + (line.b_m - line.a_m) * (t / std::max(length, 1e-9)))) return true;
+                                }
+                                return false;
+                              }),
+               lines_.end());
+  if (contacts_.size() + lines_.size() == before) return false;
+  const Grid map = last_map_;
+  SetMap(map);
+  return true;
+}
+
+void ExploreMap::StampLine(GlassLine& line) {
+  const double res = grid_.resolution_m;
+  const Eigen::Vector2d along = (line.b_m - line.a_m).normalized();
+  // Extend once, on the map the line was found on; later maps stamp the same extent.
+  if (!line.extended) {
+    line.extended = true;
+    for (int side = -1; side <= 1; side += 2) {
+      Eigen::Vector2d& end = side < 0 ? line.a_m : line.b_m;
+      const Eigen::Vector2d start = end;
+      // From beyond the contact's own stamp (half the robot's width).
+      for (double t = options_.robot_radius_m + res; t <= options_.glass_extend_m; t += 0.5 * res) {
+        const Eigen::Vector2d p = start + side * along * t;
+        const Eigen::Vector2i c = grid_.CellOf(p);
+        if (!grid_.Contains(c.x(), c.y())) break;
+        const int8_t v = grid_.at(c.x(), c.y());
+        if (v >= options_.occupied_threshold) break;  // met the wall or pier it spans to
+        if (v < 0) break;                             // nothing seen beyond: no evidence
+        end = p;
+      }
+    }
+  }
+  const double length = (line.b_m - line.a_m).norm();
+  for (double t = 0; t <= length + 1e-9; t += 0.5 * res) {
+    const Eigen::Vector2i c = grid_.CellOf(line.a_m + along * t);
+    if (grid_.Contains(c.x(), c.y())) grid_.at(c.x(), c.y()) = 100;
+  }
 }
 
 void ExploreMap::StampContact(const common::Rigid2d& map_from_base) {
-  // Just beyond the front of the robot, over the middle of its width (what it pushed against).
+  // Just beyond the front of the robot, over its width (what it pushed against).
   const double ahead = options_.robot_radius_m + grid_.resolution_m;
-  const double half = 0.6 * options_.robot_radius_m;
+  const double half = options_.robot_radius_m;
   for (double y = -half; y <= half + 1e-9; y += 0.5 * grid_.resolution_m) {
     const Eigen::Vector2i c = grid_.CellOf(map_from_base * Eigen::Vector2d(ahead, y));
     if (grid_.Contains(c.x(), c.y())) grid_.at(c.x(), c.y()) = 100;
@@ -108,14 +265,26 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
     for (int k = 0; k <= steps; ++k) {
       const Eigen::Vector2i c = grid_.CellOf(origin + dir * (0.5 * res * k));
       if (!grid_.Contains(c.x(), c.y())) break;
+      const int index = grid_.Index(c.x(), c.y());
       int8_t& v = grid_.at(c.x(), c.y());
-      if (v < options_.occupied_threshold) v = 0;  // unknown or uncertain: the ray passed
+      // Unknown, uncertain, or one of the explorer's own returns that is no longer there: the
+      // ray passed. MAP's obstacles stay (the next MAP is the judge of those).
+      if (v < options_.occupied_threshold || hit_[index]) {
+        v = 0;
+        crossed_[index] = 1;
+        hit_[index] = 0;
+      }
     }
     if (hit) {
       const Eigen::Vector2i c = grid_.CellOf(origin + dir * length);
       if (grid_.Contains(c.x(), c.y())) {
+        const int index = grid_.Index(c.x(), c.y());
         int8_t& v = grid_.at(c.x(), c.y());
-        if (v < options_.occupied_threshold) v = 100;
+        if (v < options_.occupied_threshold) {
+          v = 100;
+          hit_[index] = 1;
+        }
+        crossed_[index] = 0;
       }
     }
   }
@@ -264,6 +433,27 @@ std::vector<Eigen::Vector2d> ExploreMap::PathTo(const CostField& field, const Ei
   for (int i = gi; i >= 0; i = field.parent[i]) path.push_back(grid_.CentreOf(i % grid_.width, i / grid_.width));
   std::reverse(path.begin(), path.end());
   return path;
+}
+
+double ExploreMap::TrailReachedFraction(const CostField& field, double tolerance_m) const {
+  int samples = 0, reached = 0;
+  const int r = static_cast<int>(std::ceil(tolerance_m / grid_.resolution_m));
+  std::optional<Eigen::Vector2d> last;
+  for (const Eigen::Vector2d& p : trail_) {
+    if (last && (p - *last).norm() < 1.0) continue;
+    last = p;
+    ++samples;
+    const Eigen::Vector2i c = grid_.CellOf(p);
+    bool found = false;
+    for (int dy = -r; dy <= r && !found; ++dy) {
+      for (int dx = -r; dx <= r && !found; ++dx) {
+        if (!grid_.Contains(c.x() + dx, c.y() + dy) || (dx * dx + dy * dy) > r * r) continue;
+        found = field.Reached(grid_.Index(c.x() + dx, c.y() + dy));
+      }
+    }
+    reached += found;
+  }
+  return samples < 3 ? 1.0 : static_cast<double>(reached) / samples;
 }
 
 std::vector<Frontier> ExploreMap::Frontiers(const CostField& field) const {

@@ -55,6 +55,8 @@ struct PlannerOptions {
   int min_frontier_cells = 4;      // smaller frontiers are noise
   double pad_m = 4.0;              // the explorer's grid extends MAP this far on each side
   double assume_free_radius_m = 0.45;  // around every pose the robot has been: its body was there
+  double glass_join_m = 3.0;       // two contacts in line this close are one invisible surface
+  double glass_extend_m = 4.0;     // such a surface is extended along its line up to this far
   template <class V>
   void Visit(V& v) {
     v("robot_radius_m", robot_radius_m, "cells closer than this to an obstacle are not traversable");
@@ -66,6 +68,10 @@ struct PlannerOptions {
     v("pad_m", pad_m, "the explorer's grid extends MAP by this on each side (scans fill it)");
     v("assume_free_radius_m", assume_free_radius_m,
       "unknown cells this close to any pose the robot has had are free (the camera cannot see its own footprint)");
+    v("glass_join_m", glass_join_m,
+      "two contacts in line (similar heading, each on the other's surface) this close are one invisible surface (glass)");
+    v("glass_extend_m", glass_extend_m,
+      "an invisible surface is extended along its line over seen-through cells, until an obstacle or this far");
   }
   void Validate(common::Validator& check) const {
     check.Positive("robot_radius_m", robot_radius_m);
@@ -76,6 +82,8 @@ struct PlannerOptions {
     check.That(min_frontier_cells >= 1, "min_frontier_cells", "must be >= 1");
     check.NonNegative("pad_m", pad_m);
     check.NonNegative("assume_free_radius_m", assume_free_radius_m);
+    check.NonNegative("glass_join_m", glass_join_m);
+    check.NonNegative("glass_extend_m", glass_extend_m);
   }
 };
 
@@ -100,20 +108,31 @@ class ExploreMap {
  public:
   explicit ExploreMap(const PlannerOptions& options) : options_(options) {}
 
-  // A new MAP: the explorer's grid becomes it (padded), then the trail is stamped again.
+  // A new MAP: the explorer's grid becomes it (padded), then what the explorer knows better
+  // is laid over it: its own scan returns where MAP does not call the cell free, the cells its
+  // rays crossed where MAP has no verdict (unknown, or seen too little), the trail, contacts.
   void SetMap(const Grid& map);
-  // Between maps: cells along each ray that are not obstacles become free, a return marks its
-  // cell occupied (something new in the way). +inf rays are free to range_max; rays without
-  // information are skipped.
+  // Between maps: cells along each ray that are not MAP obstacles become free (a return of
+  // an earlier scan that a ray now crosses is gone), a return marks its cell occupied
+  // (something new in the way). +inf rays are free to range_max; rays without information
+  // are skipped.
   void IntegrateScan(const common::Rigid2d& map_from_base, const Scan& scan);
   // The robot is at this pose: unknown cells within assume_free_radius_m are free.
   void AddTrail(const Eigen::Vector2d& position_m);
   // An obstacle the sensors do not see (glass, a low step) found by running into it: a segment
-  // across the robot's front, kept as occupied through every later MAP.
-  void AddContact(const common::Rigid2d& map_from_base);
+  // across the robot's front, kept as occupied through every later MAP. Two contacts in line
+  // make an invisible surface (a glass pane) that spans between them and beyond (GlassLine).
+  // Returns false (no mark) when the map already has an obstacle at the robot's front: what
+  // it touched is known.
+  bool AddContact(const common::Rigid2d& map_from_base);
   int contacts() const { return static_cast<int>(contacts_.size()); }
-  // Forgets the contacts; their cells stay until the next SetMap.
-  void ClearContacts() { contacts_.clear(); }
+  int glass_lines() const { return static_cast<int>(lines_.size()); }
+  // Forgets the contacts and surfaces that bound the region the field reaches (the robot is
+  // shut in by them) and redraws the grid from the last MAP without them; false if none did.
+  bool ClearContactsBounding(const CostField& field);
+  // Forgets the contacts that are not part of an invisible surface (a bump into something
+  // once) and redraws; false if there were none.
+  bool ClearLoneContacts();
 
   // Rebuilds the distance transform and traversability (after SetMap / IntegrateScan).
   void UpdateCostMap();
@@ -132,6 +151,9 @@ class ExploreMap {
   CostField Plan(const Eigen::Vector2d& from, double escape_m = 1.0) const;
   // The path to `goal` in the field (start first), or empty when unreachable.
   std::vector<Eigen::Vector2d> PathTo(const CostField& field, const Eigen::Vector2d& goal) const;
+  // The share of the trail (sampled every metre) with a cell the field reaches within
+  // tolerance_m; 1 when the trail is shorter than three samples.
+  double TrailReachedFraction(const CostField& field, double tolerance_m) const;
   // Reachable frontiers, unsorted, each with its cheapest cell as goal.
   std::vector<Frontier> Frontiers(const CostField& field) const;
 
@@ -145,10 +167,27 @@ class ExploreMap {
 
   PlannerOptions options_;
   Grid grid_;
+  Grid last_map_;  // the last MAP as received
+  // 1 where a ray of the explorer's own scans crossed the cell since its last return there.
+  // SLAM renders a room looked into from its door once or twice as "seen too little"; the
+  // scans that crossed it are what the explorer plans through.
+  std::vector<uint8_t> crossed_;
+  // 1 where one of the explorer's own scan returns marked the cell and no later ray crossed it.
+  std::vector<uint8_t> hit_;
   std::vector<float> distance_m_;  // to the nearest obstacle
   std::vector<Eigen::Vector2d> trail_;
   std::vector<common::Rigid2d> contacts_;
+  std::vector<bool> in_line_;  // per contact: one end of a GlassLine
+  // An invisible surface inferred from contacts in line, from a_m to b_m (map frame).
+  struct GlassLine {
+    Eigen::Vector2d a_m, b_m;
+    bool extended = false;
+  };
+  std::vector<GlassLine> lines_;
   void StampContact(const common::Rigid2d& map_from_base);
+  void StampLine(GlassLine& line);
+  // No MAP obstacle cell on the segment.
+  bool NoObstacleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 };
 
 }  // namespace explore

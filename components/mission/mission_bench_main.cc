@@ -118,6 +118,7 @@ int main(int argc, char** argv) {
         o.world = target.path;
         o.mode = mode;
         o.explorer_map_pgm = out_dir + "/" + target.name + "-" + mode + "-explorer.pgm";
+        o.slam_map_pgm = out_dir + "/" + target.name + "-" + mode + "-slam.pgm";
         Metrics metrics;
         std::fprintf(stderr, "%s %s:", target.name.c_str(), mode.c_str());
         const mission::MissionResult r = mission::RunMission(o, &metrics, [](double t) {

@@ -123,6 +123,7 @@ class Loop : public sim::SimSink {
 
   void set_start_s(double s) { start_s_ = s; }
   const explore::ExploreController& explore() const { return explore_; }
+  const slam::Slam& slam() const { return slam_; }
 
  private:
   static double Seconds(int64_t utime) { return common::UtimeToSeconds(utime); }
@@ -179,8 +180,8 @@ class Loop : public sim::SimSink {
   slam::Rigid2d slam_pose_;
 };
 
-// The explorer's grid as a PGM: unknown grey, free white, occupied black, untraversable free
-// light grey, the last path dark grey.
+// The explorer's grid as a PGM: unknown grey (128), free white, occupied black, free but too
+// near an obstacle light grey (200), seen too little to call (uncertain) 170, the last path 60.
 void WriteExplorerMap(const explore::ExploreController& controller, const std::string& path) {
   const explore::ExploreMap& map = controller.map();
   const explore::Grid& g = map.grid();
@@ -188,7 +189,12 @@ void WriteExplorerMap(const explore::ExploreController& controller, const std::s
   for (int y = 0; y < g.height; ++y) {
     for (int x = 0; x < g.width; ++x) {
       const int8_t v = g.at(x, y);
-      uint8_t c = v < 0 ? 128 : v >= 65 ? 0 : map.Traversable(x, y) ? 255 : 200;
+      const auto& o = map.options();
+      uint8_t c = v < 0                          ? 128
+                  : v >= o.occupied_threshold    ? 0
+                  : v >= o.free_threshold        ? 170
+                  : map.Traversable(x, y)        ? 255
+                                                 : 200;
       image[static_cast<size_t>(g.height - 1 - y) * g.width + x] = c;
     }
   }
@@ -199,6 +205,24 @@ void WriteExplorerMap(const explore::ExploreController& controller, const std::s
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) throw std::runtime_error("cannot write " + path);
   std::fprintf(f, "P5\n%d %d\n255\n", g.width, g.height);
+  std::fwrite(image.data(), 1, image.size(), f);
+  std::fclose(f);
+}
+
+// SLAM's map as a PGM: unknown grey, occupancy 0..100 from white to black.
+void WriteSlamMap(const slam::Slam& slam, const std::string& path) {
+  const slam::OccupancyMap map = slam.RenderMap();
+  std::vector<uint8_t> image(static_cast<size_t>(map.width) * map.height);
+  for (int y = 0; y < map.height; ++y) {
+    for (int x = 0; x < map.width; ++x) {
+      const int8_t v = map.cells[static_cast<size_t>(y) * map.width + x];
+      image[static_cast<size_t>(map.height - 1 - y) * map.width + x] =
+          v < 0 ? 128 : static_cast<uint8_t>(255 - (255 * std::min<int>(v, 100)) / 100);
+    }
+  }
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write " + path);
+  std::fprintf(f, "P5\n%d %d\n255\n", map.width, map.height);
   std::fwrite(image.data(), 1, image.size(), f);
   std::fclose(f);
 }
@@ -247,6 +271,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     result.simulated_s = t;
   }
   if (!options.explorer_map_pgm.empty()) WriteExplorerMap(loop.explore(), options.explorer_map_pgm);
+  if (!options.slam_map_pgm.empty()) WriteSlamMap(loop.slam(), options.slam_map_pgm);
   result.final_state = loop.explore().status().state;
   result.recoveries = loop.explore().status().recoveries;
   result.came_home = result.final_state == "home";

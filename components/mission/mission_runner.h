@@ -34,6 +34,7 @@ struct MissionRunOptions {
   std::vector<std::string> sim_overrides;
   std::vector<std::string> explore_overrides;
   std::string explorer_map_pgm;      // when set: the explorer's final picture is written here
+  std::string slam_map_pgm;          // when set: SLAM's final map is written here
 };
 
 // One sample of the mission, every `sample_period_s` of simulated time.
