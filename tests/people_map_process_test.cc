@@ -317,6 +317,42 @@ TEST_F(PeopleMapProcessTest, OneFarFuturePoseIsDroppedAndDetectionsGoOn) {
   ASSERT_EQ(node->Wait(10), 0) << node->Output();
 }
 
+// A corrupt state file (here: a flipped bit) is refused with one clear line and set aside; the
+// node starts with an empty map and goes on, instead of exiting at every restart.
+TEST_F(PeopleMapProcessTest, CorruptStateFileGivesACleanStart) {
+  const std::string state = dir_ + "/corrupt-state.yaml";
+  {
+    auto node = StartNode(state);
+    Play(0, 3.0);
+    Spin(1.0);
+    node->Signal(SIGINT);
+    ASSERT_EQ(node->Wait(10), 0) << node->Output();
+  }
+  std::string text;
+  ASSERT_EQ(RunCapture({"cat", state}, &text), 0);
+  const size_t digit = text.find_first_of("123456789", text.find("position_m"));
+  ASSERT_NE(digit, std::string::npos) << text;
+  text[digit] = text[digit] == '9' ? '8' : text[digit] + 1;
+  {
+    std::FILE* f = std::fopen(state.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  maps_ = 0;
+  last_ = {};
+  auto node = StartNode(state);
+  Play(3.0, 6.0);
+  Spin(1.0);
+  EXPECT_TRUE(node->Running()) << node->Output();
+  EXPECT_NE(node->Output().find("not resumed"), std::string::npos) << node->Output();
+  EXPECT_GE(last_.num_people, 2) << Describe(last_) << node->Output();
+  std::string ignored;
+  EXPECT_EQ(RunCapture({"test", "-f", state + ".corrupt"}, &ignored), 0);
+  node->Signal(SIGINT);
+  ASSERT_EQ(node->Wait(10), 0) << node->Output();
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace sarmap

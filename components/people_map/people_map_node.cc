@@ -12,6 +12,7 @@
 #include "common/pose_history.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
+#include "common/state_file.h"
 #include "people_map/people_map.h"
 
 namespace {
@@ -110,8 +111,17 @@ int main(int argc, char** argv) {
     const common::Rigid3d base_from_mic = robot.base_from_mic_array.ToRigid3d();
 
     people_map::PeopleMap map(options.map);
-    if (!options.state_file.empty() && map.Load(options.state_file)) {
-      SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from " << options.state_file;
+    if (!options.state_file.empty()) {
+      // A corrupt state file must not make the node crash-loop: one clear line, a clean start.
+      try {
+        if (map.Load(options.state_file)) {
+          SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from " << options.state_file;
+        }
+      } catch (const std::exception& e) {
+        const std::string aside = common::SetAsideStateFile(options.state_file);
+        SARMAP_LOG(ERROR) << "not resumed, starting with an empty people map: " << e.what()
+                          << (aside.empty() ? "" : " (moved to " + aside + ")");
+      }
     }
 
     common::Node node("sarmap-people-map", args.lcm_url);

@@ -14,6 +14,7 @@
 #include "common/message_conversions.h"
 #include "common/node.h"
 #include "common/stamp_gate.h"
+#include "common/state_file.h"
 #include "common/time.h"
 #include "sarmap/laser_scan_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
@@ -76,9 +77,16 @@ class SlamNode {
       SARMAP_LOG(INFO) << "localisation only in " << options_.load_map << " (" << slam_.num_nodes()
                        << " nodes)";
     } else if (options_.resume && !options_.state_file.empty() && FileExists(options_.state_file)) {
-      slam_.Load(options_.state_file);
-      SARMAP_LOG(INFO) << "resumed mapping from " << options_.state_file << " ("
-                       << slam_.num_nodes() << " nodes)";
+      // A corrupt state file must not make the node crash-loop: one clear line, a clean start.
+      try {
+        slam_.Load(options_.state_file);
+        SARMAP_LOG(INFO) << "resumed mapping from " << options_.state_file << " ("
+                         << slam_.num_nodes() << " nodes)";
+      } catch (const std::exception& e) {
+        const std::string aside = common::SetAsideStateFile(options_.state_file);
+        SARMAP_LOG(ERROR) << "not resumed, mapping from scratch: " << e.what()
+                          << (aside.empty() ? "" : " (moved to " + aside + ")");
+      }
     }
     node->Subscribe<laser_scan_t>(
         options_.scan_channel,
