@@ -308,5 +308,32 @@ TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
   EXPECT_GE(after, 60) << node.Output();
 }
 
+// A corrupt state file (a truncated old-format graph) is refused with one clear line and set
+// aside; the node maps from scratch instead of exiting at every restart.
+TEST(SlamNodeTest, ACorruptStateFileGivesACleanStart) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  const std::vector<Event> events = LoadIntelPrefix(60);
+  const std::string state = ::testing::TempDir() + "/slam_node_corrupt.pg";
+  std::remove((state + ".corrupt").c_str());
+  std::ofstream(state, std::ios::binary | std::ios::trunc) << "SARMAPPG\x01\x00\x00\x00garbage";
+  lcm::LCM lcm(common::kDefaultLcmUrl);
+  ASSERT_TRUE(lcm.good());
+  Listener listener(&lcm);
+  std::map<int64_t, double> sent_s;
+  testing::Process node({"sarmap-slam", "--config", "", "--set", "state_file=" + state, "--set", "resume=true"},
+                        ::testing::TempDir() + "/slam_node_corrupt.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  Publish(&lcm, events, 0, events.size(), 40, &sent_s);
+  const double wait_until = common::SteadySeconds() + 1.0;
+  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
+  EXPECT_TRUE(node.Running()) << node.Output();
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+  EXPECT_NE(node.Output().find("not resumed"), std::string::npos) << node.Output();
+  EXPECT_TRUE(std::ifstream(state + ".corrupt").good());
+  std::lock_guard<std::mutex> lock(listener.mu);
+  EXPECT_GE(listener.poses.size(), 40u) << node.Output();
+}
+
 }  // namespace
 }  // namespace sarmap
