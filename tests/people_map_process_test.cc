@@ -1,11 +1,11 @@
 // sarmap-people-map as a real process: replaying the same inputs gives the same people map,
 // and a kill -9 loses nothing already found (the restarted node resumes from its state file).
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
+#include <lcm/lcm-cpp.hpp>
 #include <thread>
 
 #include "common/node.h"

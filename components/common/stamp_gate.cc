@@ -33,8 +33,8 @@ StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
   bool continues = false;
   if (candidate_count_ > 0) {
     const double candidate_elapsed_us = 1e6 * std::max(0.0, receive_s - candidate_receive_s_);
-    const double step_us = static_cast<double>(utime) -
-                           (static_cast<double>(candidate_utime_) + candidate_elapsed_us);
+    const double step_us =
+        static_cast<double>(utime) - (static_cast<double>(candidate_utime_) + candidate_elapsed_us);
     continues = step_us <= static_cast<double>(max_ahead_us) &&
                 step_us >= -static_cast<double>(std::max(max_ahead_us, max_behind_us));
   }

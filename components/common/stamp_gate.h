@@ -26,8 +26,9 @@ namespace common {
 
 struct StampGateOptions {
   double max_ahead_s = 5.0;  // stamps further ahead of the stream's clock are dropped
-  double max_behind_s = 0;   // stamps further behind are dropped (0: never; late inputs are the node's)
-  int reanchor_count = 5;    // consecutive agreeing out-of-bound stamps that re-anchor the stream
+  double max_behind_s =
+      0;  // stamps further behind are dropped (0: never; late inputs are the node's)
+  int reanchor_count = 5;  // consecutive agreeing out-of-bound stamps that re-anchor the stream
   template <class V>
   void Visit(V& v) {
     v("max_ahead_s", max_ahead_s,

@@ -21,7 +21,8 @@ struct Stream {
 TEST(StampGateTest, OneFutureStampIsDroppedCountedAndNotAdopted) {
   StampGate gate;
   Stream s;
-  for (int i = 0; i < 10; ++i, s.Step()) EXPECT_TRUE(StampGate::Accepted(gate.Check(s.utime, s.receive_s)));
+  for (int i = 0; i < 10; ++i, s.Step())
+    EXPECT_TRUE(StampGate::Accepted(gate.Check(s.utime, s.receive_s)));
   EXPECT_EQ(gate.Check(s.utime + kYearUs, s.receive_s), StampGate::Verdict::kAhead);
   EXPECT_EQ(gate.dropped_ahead(), 1);
   EXPECT_LT(gate.newest_utime(), s.utime + kYearUs);
@@ -124,7 +125,8 @@ TEST(StampGateTest, ExtremeStampsDoNotOverflow) {
   Stream s;
   for (int i = 0; i < 5; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
   EXPECT_EQ(gate.Check(INT64_MAX, s.receive_s), StampGate::Verdict::kAhead);
-  EXPECT_EQ(gate.Check(INT64_MIN, s.receive_s), StampGate::Verdict::kAccepted);  // behind, unbounded
+  EXPECT_EQ(gate.Check(INT64_MIN, s.receive_s),
+            StampGate::Verdict::kAccepted);  // behind, unbounded
   s.Step();
   EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
 }

@@ -903,8 +903,8 @@ void AssessSolve(const TdoaData& data, const SolverOptions& o, CalibrationResult
   if (!r->converged) {
     r->warnings.push_back(
         "the solve did not converge: the best start (" + std::to_string(r->best_start + 1) +
-        ") stopped after " + std::to_string(best->iterations) + " iterations (solver.max_iterations " +
-        std::to_string(o.max_iterations) +
+        ") stopped after " + std::to_string(best->iterations) +
+        " iterations (solver.max_iterations " + std::to_string(o.max_iterations) +
         ") without meeting the tolerances; the positions, offsets and drifts and their std are "
         "where it stopped, not a solution, and not to be trusted");
   }

@@ -483,7 +483,8 @@ void PeopleMap::Save(const std::string& path) const {
 bool PeopleMap::Load(const std::string& path) {
   std::string text;
   // Throws StateFileError (another kind or version, truncated, checksum) before any parsing.
-  const common::StateFileRead read = common::ReadSealedState(path, kStateKind, kStateVersion, &text);
+  const common::StateFileRead read =
+      common::ReadSealedState(path, kStateKind, kStateVersion, &text);
   if (read == common::StateFileRead::kMissing) return false;
   YAML::Node root;
   try {

@@ -115,7 +115,8 @@ int main(int argc, char** argv) {
       // A corrupt state file must not make the node crash-loop: one clear line, a clean start.
       try {
         if (map.Load(options.state_file)) {
-          SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from " << options.state_file;
+          SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from "
+                           << options.state_file;
         }
       } catch (const std::exception& e) {
         const std::string aside = common::SetAsideStateFile(options.state_file);
@@ -207,7 +208,7 @@ int main(int argc, char** argv) {
       place_waiting(false);
     };
 
-    node.Subscribe<pose_t>(options.pose_channel, [&](const pose_t& m, const common::ReceiveInfo& info) {
+    node.Subscribe<pose_t>(options.pose_channel, [&](const pose_t& m, const auto& info) {
       if (!stamp_ok(kPoseGate, m.header.utime, info)) return;
       common::StampedPose p;
       p.utime = m.header.utime;
@@ -221,7 +222,7 @@ int main(int argc, char** argv) {
       release();
     });
     node.Subscribe<people_detections_t>(options.visual_channel, [&](const people_detections_t& m,
-                                                                    const common::ReceiveInfo& info) {
+                                                                    const auto& info) {
       const Utime utime = m.header.utime;
       if (!stamp_ok(kSeenGate, utime, info)) return;
       std::vector<people_map::SeenDetection> seen;
@@ -248,7 +249,7 @@ int main(int argc, char** argv) {
       release();
     });
     node.Subscribe<people_detections_t>(options.audio_channel, [&](const people_detections_t& m,
-                                                                   const common::ReceiveInfo& info) {
+                                                                   const auto& info) {
       const Utime utime = m.header.utime;
       if (!stamp_ok(kHeardGate, utime, info)) return;
       std::vector<people_map::HeardDetection> heard;
@@ -274,7 +275,8 @@ int main(int argc, char** argv) {
           kHeardStream);
       release();
     });
-    node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m, const common::ReceiveInfo& info) {
+    node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m,
+                                                               const auto& info) {
       if (!stamp_ok(kSoundMapGate, m.header.utime, info)) return;
       std::vector<people_map::SoundSource> sources;
       for (const auto& s : m.sources) {

@@ -531,12 +531,14 @@ TEST(PeopleMapTest, FlippedNanAndOtherVersionStateFilesAreRefused) {
   const size_t value = with_nan.find("confidence: ") + 12;
   with_nan.replace(value, with_nan.find('\n', value) - value, ".nan");
   common::WriteSealedState(path, PeopleMap::kStateKind, PeopleMap::kStateVersion, with_nan);
-  refused([&] {
-    std::ifstream in(path);
-    std::ostringstream all;
-    all << in.rdbuf();
-    return all.str();
-  }(), "non-finite");
+  refused(
+      [&] {
+        std::ifstream in(path);
+        std::ostringstream all;
+        all << in.rdbuf();
+        return all.str();
+      }(),
+      "non-finite");
   // Another version, or a body that is not the people map.
   common::WriteSealedState(path + ".v9", PeopleMap::kStateKind, 9, body);
   EXPECT_THROW(back.Load(path + ".v9"), common::StateFileError);

@@ -904,7 +904,8 @@ void Slam::Save(const std::string& path) const {
 void Slam::Load(const std::string& path) {
   std::string body;
   // Throws StateFileError (another kind or version, truncated, checksum) before any parsing.
-  if (common::ReadSealedState(path, kStateKind, kStateVersion, &body) == common::StateFileRead::kMissing) {
+  if (common::ReadSealedState(path, kStateKind, kStateVersion, &body) ==
+      common::StateFileRead::kMissing) {
     throw std::runtime_error("cannot open pose-graph file '" + path + "'");
   }
   std::istringstream in(body, std::ios::binary);
@@ -1001,20 +1002,22 @@ void Slam::Load(const std::string& path) {
   }
   // A NaN pose or weight would spread through the next optimisation to the whole graph.
   bool finite = Finite(global_from_local) && Finite(last_scan_local) && Finite(last_scan_odom) &&
-                Finite(last_node_local) && std::isfinite(last_scan_time) && std::isfinite(last_node_time);
+                Finite(last_node_local) && std::isfinite(last_scan_time) &&
+                std::isfinite(last_node_time);
   for (size_t i = 0; finite && i < submaps.size(); ++i) {
     finite = Finite(submaps[i].local_pose) && Finite(submap_global[i]);
   }
   for (size_t i = 0; finite && i < nodes.size(); ++i) {
-    finite = std::isfinite(nodes[i].time_s) && Finite(nodes[i].local_pose) && Finite(node_global[i]) &&
-             Finite(nodes[i].odom_pose);
+    finite = std::isfinite(nodes[i].time_s) && Finite(nodes[i].local_pose) &&
+             Finite(node_global[i]) && Finite(nodes[i].odom_pose);
   }
   for (size_t i = 0; finite && i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
     finite = Finite(c.relative) && std::isfinite(c.translation_weight) &&
              std::isfinite(c.rotation_weight) && std::isfinite(c.score);
   }
-  if (!finite) throw std::runtime_error("pose-graph file '" + path + "' corrupt (non-finite value)");
+  if (!finite)
+    throw std::runtime_error("pose-graph file '" + path + "' corrupt (non-finite value)");
   global_from_local_ = global_from_local;
   have_last_scan_ = have_last_scan;
   last_scan_time_ = last_scan_time;

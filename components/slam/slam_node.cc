@@ -8,11 +8,11 @@
 #include <set>
 #include <variant>
 
-#include "common/node_main.h"
 #include "common/compression.h"
 #include "common/logging.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
+#include "common/node_main.h"
 #include "common/stamp_gate.h"
 #include "common/state_file.h"
 #include "common/time.h"
@@ -36,7 +36,9 @@ namespace {
 class TokenBucket {
  public:
   explicit TokenBucket(double rate_per_min)
-      : rate_per_s_(rate_per_min / 60), capacity_(std::max(1.0, rate_per_min / 6)), tokens_(capacity_) {}
+      : rate_per_s_(rate_per_min / 60),
+        capacity_(std::max(1.0, rate_per_min / 6)),
+        tokens_(capacity_) {}
   bool Take(double now_s) {
     if (last_s_ > -1e299) tokens_ = std::min(capacity_, tokens_ + (now_s - last_s_) * rate_per_s_);
     last_s_ = now_s;
@@ -177,7 +179,9 @@ class SlamNode {
         refuse("already " + std::to_string(anchor_requests_.size()) + " clients");
         return;
       }
-      known = anchor_requests_.emplace(m.client_id, AnchorClient(options_.anchor_replies_per_client_per_min)).first;
+      known = anchor_requests_
+                  .emplace(m.client_id, AnchorClient(options_.anchor_replies_per_client_per_min))
+                  .first;
     }
     AnchorClient& client = known->second;
     client.last_seen_s = now_s;

@@ -77,11 +77,13 @@ struct SlamNodeOptions {
     v("anchor_replies_per_min", anchor_replies_per_min,
       "changed anchor requests answered at once per minute over all clients");
     v("max_anchor_clients", max_anchor_clients,
-      "anchor requests of at most this many clients are kept; requests of further clients are refused");
+      "anchor requests of at most this many clients are kept; requests of further clients are "
+      "refused");
     v("anchor_client_timeout_s", anchor_client_timeout_s,
       "a client that has not repeated its anchor request for this long (wall clock) is forgotten");
     v("max_anchor_ids_per_request", max_anchor_ids_per_request,
-      "anchor requests naming more node ids are refused (each id adds 3 rows to the joint covariance)");
+      "anchor requests naming more node ids are refused (each id adds 3 rows to the joint "
+      "covariance)");
     v("slam", slam, "SLAM core");
   }
   void Validate(common::Validator& c) const {

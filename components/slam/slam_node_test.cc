@@ -4,12 +4,12 @@
 // warnings, answer anchor requests with a joint covariance, and report SCAN -> POSE latency.
 
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -229,7 +229,8 @@ TEST(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
   ASSERT_TRUE(lcm.good());
   Listener listener(&lcm);
   std::map<int64_t, double> sent_s;
-  testing::Process node({"sarmap-slam", "--config", ""}, ::testing::TempDir() + "/slam_node_future.log");
+  testing::Process node({"sarmap-slam", "--config", ""},
+                        ::testing::TempDir() + "/slam_node_future.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const size_t split = NthScan(events, 60);
   Publish(&lcm, events, 0, split, 40, &sent_s);
@@ -247,8 +248,8 @@ TEST(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
 
   std::lock_guard<std::mutex> lock(listener.mu);
   ASSERT_FALSE(listener.poses.empty()) << node.Output();
-  const int64_t last_input_utime = events.back().is_scan ? events.back().scan.header.utime
-                                                         : events.back().odom.header.utime;
+  const int64_t last_input_utime =
+      events.back().is_scan ? events.back().scan.header.utime : events.back().odom.header.utime;
   EXPECT_LE(listener.poses.rbegin()->first, last_input_utime) << "POSE stamped in the future";
   // The 100 scans after the future one are mapped (a few may be skipped by the matcher).
   const auto after = std::distance(listener.poses.lower_bound(split_utime), listener.poses.end());
@@ -275,7 +276,8 @@ TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
   } status{&refused};
   lcm.subscribe("NODE_STATUS", &StatusSink::OnStatus, &status);
   std::map<int64_t, double> sent_s;
-  testing::Process node({"sarmap-slam", "--config", ""}, ::testing::TempDir() + "/slam_node_flood.log");
+  testing::Process node({"sarmap-slam", "--config", ""},
+                        ::testing::TempDir() + "/slam_node_flood.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const size_t split = NthScan(events, 80);
   Publish(&lcm, events, 0, split, 40, &sent_s);
@@ -320,8 +322,9 @@ TEST(SlamNodeTest, ACorruptStateFileGivesACleanStart) {
   ASSERT_TRUE(lcm.good());
   Listener listener(&lcm);
   std::map<int64_t, double> sent_s;
-  testing::Process node({"sarmap-slam", "--config", "", "--set", "state_file=" + state, "--set", "resume=true"},
-                        ::testing::TempDir() + "/slam_node_corrupt.log");
+  testing::Process node(
+      {"sarmap-slam", "--config", "", "--set", "state_file=" + state, "--set", "resume=true"},
+      ::testing::TempDir() + "/slam_node_corrupt.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   Publish(&lcm, events, 0, events.size(), 40, &sent_s);
   const double wait_until = common::SteadySeconds() + 1.0;

@@ -1,6 +1,8 @@
 // SLAM core behaviour: the relations metric, the CARMEN reader, input rejection, save/load
 // resume, and a real-data regression on a short prefix of the Intel log.
 
+#include "slam/slam.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,11 +12,10 @@
 #include <iterator>
 #include <sstream>
 
+#include "common/state_file.h"
 #include "slam/carmen.h"
 #include "slam/map_io.h"
 #include "slam/relations.h"
-#include "slam/slam.h"
-#include "common/state_file.h"
 
 // Measured on this prefix (see the printout), with a margin.
 #define REL_TRANS_BOUND 0.06
@@ -364,7 +365,8 @@ TEST(SlamStateFileTest, FlippedNanAndOtherVersionFilesAreRefusedAndLeaveTheSlamC
   // the end (trailer 8, odom segment 4, beam count 4, last node pose 24).
   std::string with_nan = body;
   const double nan = std::nan("");
-  with_nan.replace(with_nan.size() - 48, sizeof(double), reinterpret_cast<const char*>(&nan), sizeof(double));
+  with_nan.replace(with_nan.size() - 48, sizeof(double), reinterpret_cast<const char*>(&nan),
+                   sizeof(double));
   common::WriteSealedState(path, "slam-pose-graph", 2, with_nan);
   refused("non-finite");
   common::WriteSealedState(path, "slam-pose-graph", 7, body);

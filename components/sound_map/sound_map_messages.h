@@ -2,12 +2,11 @@
 // What sarmap-sound-map and sarmap-log-sound-map share: the node's options and the
 // conversions between LCM messages and the core's OnlineSoundMap (header-only: the core
 // library has no LCM).
+#include <Eigen/Geometry>
 #include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "common/options.h"
 #include "common/robot_config.h"
@@ -41,7 +40,8 @@ struct SoundMapNodeOptions {
   std::string state_file = "";  // "" = no persistence
   double state_save_period_s = 5.0;
   bool resume = false;
-  common::StampGateOptions stamp_gate;  // the node's inputs (the log replay reads a log's own clock)
+  common::StampGateOptions
+      stamp_gate;  // the node's inputs (the log replay reads a log's own clock)
   OnlineSoundMapOptions map;
   template <class V>
   void Visit(V& v) {

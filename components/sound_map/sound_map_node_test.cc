@@ -137,9 +137,11 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
 // Two POSEs stamped a year ahead (a skewed clock, a forged message) are dropped and counted:
 // the inputs after them are still used and SOUND_MAP keeps its stamps.
 TEST(SoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
-  if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
+  if (!getenv("SARMAP_NETNS"))
+    GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
-  const std::string log = ::testing::TempDir() + "/sound-map-future-" + std::to_string(getpid()) + ".log";
+  const std::string log =
+      ::testing::TempDir() + "/sound-map-future-" + std::to_string(getpid()) + ".log";
   sarmap::testing::Process node(
       {"sarmap-sound-map", "--lcm-url", url, "--config",
        std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",

@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
       // In double and clamped: a stamp near the int64 limits must not overflow (the processor
       // drops DOAs far ahead of the audio, and a track far behind times out).
       const double offset_samples = std::clamp(
-          (static_cast<double>(msg.header.utime) - static_cast<double>(anchor_utime)) * 1e-6 * rate, -1e12, 1e12);
+          (static_cast<double>(msg.header.utime) - static_cast<double>(anchor_utime)) * 1e-6 * rate,
+          -1e12, 1e12);
       const int64_t sample = anchor_sample + static_cast<int64_t>(std::llround(offset_samples));
       for (const auto& s : msg.sources) {
         if (s.track_id < 0) continue;
@@ -120,8 +121,8 @@ int main(int argc, char** argv) {
         ++people;
       }
       node.SetStatusMessage("utterances " + std::to_string(processor->utterances()) + ", events " +
-                            std::to_string(events) + ", people " + std::to_string(people) + ", dropped " +
-                            std::to_string(dropped) + ", leaked hits " +
+                            std::to_string(events) + ", people " + std::to_string(people) +
+                            ", dropped " + std::to_string(dropped) + ", leaked hits " +
                             std::to_string(processor->leaked_hits_dropped()) + ", re-attributed " +
                             std::to_string(processor->hits_reattributed()) + ", tracks " +
                             std::to_string(processor->num_tracks()) + " (evicted " +

@@ -50,12 +50,15 @@ struct StatusSink {
 };
 
 TEST(SpeechNode, ADoaFloodOfNewTrackIdsIsBoundedAndSigintStillStopsIt) {
-  if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
+  if (!getenv("SARMAP_NETNS"))
+    GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
-  const std::string log = ::testing::TempDir() + "/speech-flood-" + std::to_string(getpid()) + ".log";
+  const std::string log =
+      ::testing::TempDir() + "/speech-flood-" + std::to_string(getpid()) + ".log";
   sarmap::testing::Process node(
-      {"sarmap-speech", "--lcm-url", url, "--config", std::string(SARMAP_SOURCE_DIR) + "/config/speech.yaml",
-       "--set", "array=" + std::string(SARMAP_SOURCE_DIR) + "/config/arrays/respeaker4.yaml"},
+      {"sarmap-speech", "--lcm-url", url, "--config",
+       std::string(SARMAP_SOURCE_DIR) + "/config/speech.yaml", "--set",
+       "array=" + std::string(SARMAP_SOURCE_DIR) + "/config/arrays/respeaker4.yaml"},
       log);
   lcm::LCM lcm(url);
   ASSERT_TRUE(lcm.good());
@@ -94,7 +97,8 @@ TEST(SpeechNode, ADoaFloodOfNewTrackIdsIsBoundedAndSigintStillStopsIt) {
       const size_t in_call = static_cast<size_t>(sample % 16000);
       const float speech = in_call < call.size() ? 8000.0f * call[in_call] / peak : 0.0f;
       for (int c = 0; c < channels; ++c) {
-        const int noise = static_cast<int>(((seed = seed * 1664525u + 1013904223u) >> 20) % 200) - 100;
+        const int noise =
+            static_cast<int>(((seed = seed * 1664525u + 1013904223u) >> 20) % 200) - 100;
         audio.samples[static_cast<size_t>(i) * channels + c] = static_cast<int16_t>(speech + noise);
       }
     }
@@ -102,9 +106,11 @@ TEST(SpeechNode, ADoaFloodOfNewTrackIdsIsBoundedAndSigintStillStopsIt) {
     audio.header.utime = t0 + audio.first_sample_index * 1'000'000 / 16000;
     lcm.publish("AUDIO", &audio);
     if (b < kFloodBlocks) {
-      // At b = 10 a burst of 5000 of them stamped 11 days ahead (a track that would never time out).
+      // At b = 10 a burst of 5000 of them stamped 11 days ahead (a track that would never time
+      // out).
       const bool burst = b == 10;
-      for (int k = 0; k < (burst ? 5000 : kDoas / kFloodBlocks + 1) && track_id < 100 + kDoas + 5000; ++k) {
+      for (int k = 0;
+           k < (burst ? 5000 : kDoas / kFloodBlocks + 1) && track_id < 100 + kDoas + 5000; ++k) {
         sarmap::doa_t doa{};
         doa.header.utime = audio.header.utime + (burst ? 1'000'000'000'000LL : 0);
         doa.header.frame = "mic_array";
@@ -132,10 +138,11 @@ TEST(SpeechNode, ADoaFloodOfNewTrackIdsIsBoundedAndSigintStillStopsIt) {
   const double cpu_after = cpu_all - cpu_flood, wall_after = wall_all - wall_flood;
   for (int i = 0; i < 60; ++i) lcm.handleTimeout(20);
   std::printf("(audio %s)\n", call.empty() ? "noise only: espeak-ng missing" : "with speech");
-  std::printf("speech under %d DOAs with new track ids: %.0f %% CPU over the %.1f s flood, %.0f %% in "
-              "the %.1f s after it; status: %s\n",
-              kDoas + 5000, 100 * cpu_flood / wall_flood, wall_flood, 100 * cpu_after / wall_after, wall_after,
-              status.message.c_str());
+  std::printf(
+      "speech under %d DOAs with new track ids: %.0f %% CPU over the %.1f s flood, %.0f %% in "
+      "the %.1f s after it; status: %s\n",
+      kDoas + 5000, 100 * cpu_flood / wall_flood, wall_flood, 100 * cpu_after / wall_after,
+      wall_after, status.message.c_str());
   const double sigint_s = Now();
   node.Signal(SIGINT);
   EXPECT_EQ(node.Wait(10), 0) << node.Output();

@@ -65,8 +65,10 @@ double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, 
   return used ? score / used : 0;
 }
 
-bool SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, int64_t sample) {
-  if (sample - samples_seen_ > static_cast<int64_t>(options_.max_doa_ahead_s * geometry_.sample_rate_hz)) {
+bool SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov,
+                                  int64_t sample) {
+  if (sample - samples_seen_ >
+      static_cast<int64_t>(options_.max_doa_ahead_s * geometry_.sample_rate_hz)) {
     ++doas_ahead_dropped_;
     return false;
   }
@@ -74,10 +76,12 @@ bool SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const E
   if (it == tracks_.end()) {
     if (static_cast<int>(tracks_.size()) >= options_.max_tracks) {
       // Least recently updated first; of equals, the one with fewer updates.
-      auto oldest = std::min_element(tracks_.begin(), tracks_.end(), [](const auto& a, const auto& b) {
-        return a.second.last_sample != b.second.last_sample ? a.second.last_sample < b.second.last_sample
-                                                            : a.second.updates < b.second.updates;
-      });
+      auto oldest =
+          std::min_element(tracks_.begin(), tracks_.end(), [](const auto& a, const auto& b) {
+            return a.second.last_sample != b.second.last_sample
+                       ? a.second.last_sample < b.second.last_sample
+                       : a.second.updates < b.second.updates;
+          });
       tracks_.erase(oldest);
       ++tracks_evicted_;
     }

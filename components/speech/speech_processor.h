@@ -55,7 +55,8 @@ struct SpeechOptions {
     v("track_timeout_s", track_timeout_s, "forget a direction not refreshed for this long");
     v("max_tracks", max_tracks,
       "tracks kept at once; a new one beyond this evicts the least recently updated (counted)");
-    v("min_track_updates", min_track_updates, "DOA updates a track needs before it is given a beam");
+    v("min_track_updates", min_track_updates,
+      "DOA updates a track needs before it is given a beam");
     v("max_doa_ahead_s", max_doa_ahead_s,
       "DOAs stamped further ahead of the audio than this are dropped (counted)");
     v("untracked_beam", untracked_beam, "without tracks, listen on one beam (track_id -1, no direction)");
@@ -113,7 +114,8 @@ class SpeechProcessor {
   SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind kind, SpeechOptions options);
   // A DOA update for a track at stream sample `sample`. False (counted) when the sample is more
   // than max_doa_ahead_s ahead of the audio seen.
-  bool UpdateTrack(int64_t id, const sound::Direction& direction, const Eigen::Matrix2d& covariance, int64_t sample);
+  bool UpdateTrack(int64_t id, const sound::Direction& direction, const Eigen::Matrix2d& covariance,
+                   int64_t sample);
   size_t num_tracks() const { return tracks_.size(); }
   bool has_track(int64_t id) const { return tracks_.count(id) > 0; }
   // Tracks evicted by a new one beyond max_tracks.

@@ -145,7 +145,8 @@ TEST(SpeechProcessor, ADoaFloodOfNewTrackIdsIsBounded) {
   const int block = 512, blocks = 63;  // ~2 s at 16 kHz
   std::vector<int16_t> noise(static_cast<size_t>(block) * 4);
   uint32_t seed = 1;
-  for (auto& v : noise) v = static_cast<int16_t>(((seed = seed * 1664525u + 1013904223u) >> 20) % 200) - 100;
+  for (auto& v : noise)
+    v = static_cast<int16_t>(((seed = seed * 1664525u + 1013904223u) >> 20) % 200) - 100;
   std::vector<SpeechResult> results;
   int64_t id = 1000;
   const auto start = std::chrono::steady_clock::now();
@@ -160,10 +161,12 @@ TEST(SpeechProcessor, ADoaFloodOfNewTrackIdsIsBounded) {
     }
     p.Push(noise.data(), block, 4, &results);
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("%lld new track ids over %.1f s of audio: %.2f s of CPU, %zu tracks kept, %lld evicted\n",
-              static_cast<long long>(id - 1000), blocks * block / 16000.0, seconds, p.num_tracks(),
-              static_cast<long long>(p.tracks_evicted()));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "%lld new track ids over %.1f s of audio: %.2f s of CPU, %zu tracks kept, %lld evicted\n",
+      static_cast<long long>(id - 1000), blocks * block / 16000.0, seconds, p.num_tracks(),
+      static_cast<long long>(p.tracks_evicted()));
   EXPECT_TRUE(p.has_track(7));
   EXPECT_EQ(p.tracks_evicted(), id - 1000 + 1 - o.max_tracks);
   EXPECT_FALSE(p.UpdateTrack(8, {0.5, 0.1}, Eigen::Matrix2d::Identity(),
