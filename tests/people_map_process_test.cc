@@ -1,15 +1,16 @@
 // sarmap-people-map as a real process: replaying the same inputs gives the same people map,
 // and a kill -9 loses nothing already found (the restarted node resumes from its state file).
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
+#include <lcm/lcm-cpp.hpp>
 #include <thread>
 
 #include "common/node.h"
 #include "common/robot_config.h"
+#include "sarmap/node_status_t.hpp"
 #include "tests/process.h"
 
 namespace sarmap {
@@ -268,6 +269,86 @@ TEST_F(PeopleMapProcessTest, PoseAloneReleasesADetectionWhenNobodyElseIsSeen) {
   Spin(1.5);  // the node runs on; nothing else arrives
   const std::string described = Describe(last_);
   EXPECT_EQ(last_.num_people, 1) << described << node->Output();
+  node->Signal(SIGINT);
+  ASSERT_EQ(node->Wait(10), 0) << node->Output();
+}
+
+// One POSE stamped a year ahead (a skewed clock, a forged message) is dropped and counted: the
+// detections after it are still placed and PEOPLE_MAP keeps sane stamps.
+TEST_F(PeopleMapProcessTest, OneFarFuturePoseIsDroppedAndDetectionsGoOn) {
+  int64_t pose_dropped = 0;
+  struct StatusSink {
+    int64_t* pose_dropped;
+    void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const sarmap::node_status_t* m) {
+      if (m->node_name != "sarmap-people-map") return;
+      for (const auto& c : m->channels) {
+        if (c.channel == "POSE") *pose_dropped = std::max(*pose_dropped, c.dropped_malformed);
+      }
+    }
+  } status{&pose_dropped};
+  lcm_->subscribe("NODE_STATUS", &StatusSink::OnStatus, &status);
+  auto node = StartNode("");
+  const auto detections = [&] {
+    int n = 0;
+    for (const auto& p : last_.people) n += p.num_detections;
+    return n;
+  };
+  Play(0, 1.0);
+  Spin(0.5);
+  const int before = detections();
+  sarmap::pose_t future{};
+  future.header.utime = 1'000'000'000 + 1'000'000 + 365LL * 24 * 3600 * 1'000'000;
+  future.header.frame = "map";
+  future.child_frame = "base";
+  future.position_m[0] = 0.5;
+  future.orientation[0] = 1;
+  future.covariance[0] = future.covariance[7] = 0.01;
+  future.covariance[35] = 0.001;
+  lcm_->publish("POSE", &future);
+  Play(1.0, 5.0);
+  Spin(1.5);
+  const std::string described = Describe(last_);
+  EXPECT_GE(last_.num_people, 2) << described << node->Output();
+  // 5 Hz detections of two people for 4 s: most of the 40 placed.
+  EXPECT_GT(detections(), before + 20) << described << node->Output();
+  EXPECT_LT(last_.header.utime, 1'000'000'000 + 10'000'000) << described;
+  EXPECT_GE(pose_dropped, 1);
+  node->Signal(SIGINT);
+  ASSERT_EQ(node->Wait(10), 0) << node->Output();
+}
+
+// A corrupt state file (here: a flipped bit) is refused with one clear line and set aside; the
+// node starts with an empty map and goes on, instead of exiting at every restart.
+TEST_F(PeopleMapProcessTest, CorruptStateFileGivesACleanStart) {
+  const std::string state = dir_ + "/corrupt-state.yaml";
+  {
+    auto node = StartNode(state);
+    Play(0, 3.0);
+    Spin(1.0);
+    node->Signal(SIGINT);
+    ASSERT_EQ(node->Wait(10), 0) << node->Output();
+  }
+  std::string text;
+  ASSERT_EQ(RunCapture({"cat", state}, &text), 0);
+  const size_t digit = text.find_first_of("123456789", text.find("position_m"));
+  ASSERT_NE(digit, std::string::npos) << text;
+  text[digit] = text[digit] == '9' ? '8' : text[digit] + 1;
+  {
+    std::FILE* f = std::fopen(state.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  maps_ = 0;
+  last_ = {};
+  auto node = StartNode(state);
+  Play(3.0, 6.0);
+  Spin(1.0);
+  EXPECT_TRUE(node->Running()) << node->Output();
+  EXPECT_NE(node->Output().find("not resumed"), std::string::npos) << node->Output();
+  EXPECT_GE(last_.num_people, 2) << Describe(last_) << node->Output();
+  std::string ignored;
+  EXPECT_EQ(RunCapture({"test", "-f", state + ".corrupt"}, &ignored), 0);
   node->Signal(SIGINT);
   ASSERT_EQ(node->Wait(10), 0) << node->Output();
 }

@@ -110,6 +110,13 @@ class Node {
   void SetStatusChannel(std::string channel) { status_channel_ = std::move(channel); }
   void PublishStatus();
 
+  // A decoded message the node's own checks refused (e.g. a stamp far from its stream's clock,
+  // common/stamp_gate.h): counted with the malformed ones on `channel` in NODE_STATUS and logged
+  // (rate-limited).
+  void Reject(const std::string& channel, const std::string& why) {
+    Dropped(channel, &stats_[channel], why);
+  }
+
   const std::map<std::string, ChannelStats>& stats() const { return stats_; }
   int64_t total_dropped() const;
 

@@ -481,6 +481,8 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     }
   }
   SetResidualStatistics(&result);
+  AssessSolve(data, o, &result);
+  const double f = result.variance_factor;
 
   // --- The bearing of the source in the array frame: does it span enough? ---
   {
@@ -546,6 +548,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
     }
     Eigen::Matrix<double, 2, 2, Eigen::RowMajor> cs;
     cov.GetCovarianceBlock(src, src, cs.data());
+    cs *= f;
     result.source_cov[0].topLeftCorner<2, 2>() = cs;
     std::ostringstream bad;
     if (!(std::sqrt(cs.trace()) <= o.max_position_std_m)) {
@@ -556,7 +559,7 @@ CalibrationResult CalibrateWithArrayPoses(const TdoaData& data,
       Eigen::Matrix<double, 2, 2, Eigen::RowMajor> m;
       cov.GetCovarianceBlock(&clocks[2 * n], &clocks[2 * n], m.data());
       const Eigen::Matrix2d scale = Eigen::Vector2d(1 / kMsPerS, 1 / kPpm).asDiagonal();
-      result.clock_cov[n] = scale * m * scale;
+      result.clock_cov[n] = f * scale * m * scale;
       const double std_tau = std::sqrt(std::max(0.0, result.clock_cov[n](0, 0)));
       if (!(std_tau <= o.max_offset_std_s)) bad << MicName(n) << " start-offset std " << std_tau * 1e3 << " ms; ";
     }

@@ -802,8 +802,11 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     }
   }
   SetResidualStatistics(&result);
+  AssessSolve(data, o, &result);
+  const double f = result.variance_factor;
 
-  // Marginal covariances at the solution (robust loss applied, as in the solve).
+  // Marginal covariances at the solution (robust loss applied, as in the solve), scaled by the
+  // variance factor.
   result.mic_position_cov.assign(N, Eigen::Matrix3d::Zero());
   result.clock_cov.assign(N, Eigen::Matrix2d::Zero());
   result.source_cov.assign(K, Eigen::Matrix3d::Zero());
@@ -840,7 +843,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
         Eigen::Matrix<double, 3, 3, Eigen::RowMajor> c = Eigen::Matrix3d::Zero();
         Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(pd, pd);
         cov.GetCovarianceBlock(&state.mics[3 * n], &state.mics[3 * n], m.data());
-        c.topLeftCorner(pd, pd) = m;
+        c.topLeftCorner(pd, pd) = f * m;
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j) c(i, j) *= sign[i] * sign[j];
         result.mic_position_cov[n] = c;
@@ -853,7 +856,7 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
         Eigen::Matrix<double, 2, 2, Eigen::RowMajor> m;
         cov.GetCovarianceBlock(&state.clocks[2 * n], &state.clocks[2 * n], m.data());
         Eigen::Matrix2d scale = Eigen::Vector2d(1 / kMsPerS, 1 / kPpm).asDiagonal();
-        result.clock_cov[n] = scale * m * scale;
+        result.clock_cov[n] = f * scale * m * scale;
         const double std_tau = std::sqrt(std::max(0.0, result.clock_cov[n](0, 0)));
         if (!(std_tau <= o.max_offset_std_s)) {
           bad << MicName(n) << " start-offset std " << std_tau * 1e3 << " ms; ";
@@ -864,12 +867,12 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
       if (linear) {
         double v;
         cov.GetCovarianceBlock(&state.sources[k], &state.sources[k], &v);
-        result.source_cov[k](0, 0) = v;
+        result.source_cov[k](0, 0) = f * v;
       } else {
         Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(D, D);
         cov.GetCovarianceBlock(&state.sources[3 * k], &state.sources[3 * k], m.data());
         Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
-        c.topLeftCorner(D, D) = m;
+        c.topLeftCorner(D, D) = f * m;
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j) c(i, j) *= sign[i] * sign[j];
         result.source_cov[k] = c;
@@ -888,6 +891,37 @@ CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
     }
   }
   return result;
+}
+
+void AssessSolve(const TdoaData& data, const SolverOptions& o, CalibrationResult* r) {
+  if (r->starts.empty()) return;
+  const StartSummary* best = &r->starts.front();
+  for (const auto& s : r->starts) {
+    if (s.start == r->best_start) best = &s;
+  }
+  r->converged = best->converged;
+  if (!r->converged) {
+    r->warnings.push_back(
+        "the solve did not converge: the best start (" + std::to_string(r->best_start + 1) +
+        ") stopped after " + std::to_string(best->iterations) +
+        " iterations (solver.max_iterations " + std::to_string(o.max_iterations) +
+        ") without meeting the tolerances; the positions, offsets and drifts and their std are "
+        "where it stopped, not a solution, and not to be trusted");
+  }
+  double sum = 0;
+  int m = 0;
+  for (int k = 0; k < r->tdoa_residual_s.rows(); ++k) {
+    const double sigma = data.sigma_s.empty() ? o.tdoa_sigma_s : data.sigma_s[k];
+    for (int n = 0; n < r->tdoa_residual_s.cols(); ++n) {
+      const double e = r->tdoa_residual_s(k, n);
+      if (!std::isfinite(e)) continue;
+      sum += (e / sigma) * (e / sigma);
+      ++m;
+    }
+  }
+  // Degrees of freedom as Ceres counts them (priors, e.g. on free array poses, included).
+  const int dof = std::max(m, best->num_residuals) - best->num_parameters;
+  r->variance_factor = dof > 0 ? std::max(1.0, sum / dof) : 1.0;
 }
 
 namespace internal_testing {

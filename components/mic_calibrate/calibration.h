@@ -184,6 +184,7 @@ struct StartSummary {
   int iterations = 0;
   double normalised_rms = 0;
   bool converged = false;
+  int num_residuals = 0, num_parameters = 0;  // effective (free) parameters
 };
 
 struct CalibrationResult {
@@ -208,6 +209,14 @@ struct CalibrationResult {
   double solve_time_s = 0;    // all starts
   double covariance_time_s = 0;
   std::vector<StartSummary> starts;
+  // The best start met the solver's tolerances. False: it stopped at max_iterations (or failed);
+  // the estimate and its covariance describe where it stopped, not a minimum, and are not to be
+  // trusted (a warning says so, and sarmap-mic-calibrate exits 4).
+  bool converged = true;
+  // A-posteriori variance factor (at least 1): the sum of squared weighted residuals over the
+  // degrees of freedom (residuals - free parameters). The covariances are scaled by it, so
+  // residuals larger than the stated TDOA sigma widen the reported std.
+  double variance_factor = 1;
   std::vector<std::string> warnings;
   int gauge_ref = 1, gauge_x = 0, gauge_plane = 0, gauge_z = 0;  // 1-based
   // Known array poses: span of the static source's bearing in the array frame (degrees;
@@ -235,6 +244,10 @@ struct InitialGuess {
 // gauge signs, computes covariances. Throws std::invalid_argument on malformed input.
 // residual_rms_s, residual_std_s and residual_max_abs_s over the finite tdoa_residual_s.
 void SetResidualStatistics(CalibrationResult* result);
+// After the solve (tdoa_residual_s and starts set): `converged` from the best start, with a
+// warning when it did not converge, and `variance_factor` from the residuals (sigma per emission
+// from data.sigma_s, else options.tdoa_sigma_s).
+void AssessSolve(const TdoaData& data, const SolverOptions& options, CalibrationResult* result);
 
 CalibrationResult Calibrate(const TdoaData& data, const SolverOptions& options,
                             const InitialGuess* guess = nullptr);

@@ -323,6 +323,12 @@ std::string TextReport(const CalibrationResult& r, const TruthComparison& c,
     << r.total_iterations << "), solve " << std::setprecision(3) << r.solve_time_s
     << " s, covariance " << r.covariance_time_s << " s, final cost " << std::setprecision(4)
     << r.final_cost << "\n";
+  if (!r.converged)
+    s << "NOT CONVERGED: the estimate below is where the solver stopped, not a solution\n";
+  if (r.variance_factor > 1) {
+    s << "std scaled by the residuals: variance factor " << std::setprecision(2)
+      << r.variance_factor << " (residuals larger than the stated TDOA sigma)\n";
+  }
   s << "TDOA residuals: rms " << std::setprecision(4) << r.residual_rms_s * 1e3 << " ms, std "
     << r.residual_std_s * 1e3 << " ms, max |r| " << r.residual_max_abs_s * 1e3 << " ms\n";
   s << "mic        x [m]     y [m]     z [m]   std [m]   tau [ms] std [ms]  delta [us/s] std";
@@ -374,6 +380,8 @@ std::string JsonReport(const CalibrationResult& r, const TruthComparison& c,
       << Num(r.source_positions_m.at(0).y()) << ", " << Num(r.source_positions_m.at(0).z())
       << "]},\n";
   }
+  s << "  \"converged\": " << (r.converged ? "true" : "false")
+    << ", \"variance_factor\": " << Num(r.variance_factor) << ",\n";
   s << "  \"num_emissions\": " << r.tdoa_residual_s.rows() << ", \"starts_tried\": "
     << r.starts.size() << ", \"best_start\": " << r.best_start + 1 << ", \"iterations\": "
     << r.iterations << ", \"total_iterations\": " << r.total_iterations

@@ -82,9 +82,11 @@ void WriteOutputs(const CalibrationResult& result, const TruthComparison& cmp, c
   if (!quiet) fprintf(stderr, "%s", text.c_str());
   if (!output.empty()) {
     const common::MicArrayOptions array = ToArrayOptions(result, so, array_name, sample_rate_hz);
-    WriteArrayYaml(output, array,
-                   written_from + "\nTDOA residual std " + std::to_string(result.residual_std_s * 1e3) +
-                       " ms; " + positions_note);
+    WriteArrayYaml(
+        output, array,
+        (result.converged ? "" : "NOT CONVERGED: not to be trusted (see the report's warnings)\n") +
+            written_from + "\nTDOA residual std " + std::to_string(result.residual_std_s * 1e3) +
+            " ms; " + positions_note);
     common::LoadMicArray(output);  // what we wrote must load
     progress("array written to " + output);
   }
@@ -94,6 +96,17 @@ void WriteOutputs(const CalibrationResult& result, const TruthComparison& cmp, c
     WritePlot(report + ".png", result, cmp);
     progress("report written to " + report + ".{txt,json,png}");
   }
+}
+
+// Exit code of a solve that produced outputs: 0, or kNotConverged when the solve did not converge
+// (the outputs are written, marked untrusted).
+constexpr int kNotConverged = 4;
+template <class Progress>
+int ExitCode(const CalibrationResult& result, const Progress& progress) {
+  if (result.converged) return 0;
+  progress("the solve did not converge: outputs written but not to be trusted (exit code " +
+           std::to_string(kNotConverged) + ")");
+  return kNotConverged;
 }
 
 // Known array motion, static source: the pose of every emission from the log, then
@@ -173,7 +186,7 @@ int RunWithArrayPoses(const MicCalibrateOptions& opt, const std::string& input,
                "Written by sarmap-mic-calibrate from " + input + " with the array poses of " +
                    po.channel + " (static source)",
                "microphone positions as given (array frame).", progress);
-  return 0;
+  return ExitCode(result, progress);
 }
 
 int Run(int argc, char** argv) {
@@ -212,9 +225,13 @@ int Run(int argc, char** argv) {
       "mic_calibrate.yaml \\\n"
       "      --mics 1,2,3,4 --nominal ../shared/data/audio/calibration/fig8a_mics.csv \\\n"
       "      --output /tmp/fig8a.yaml --report /tmp/fig8a\n"
-      "  sarmap-mic-calibrate recording.lcmlog --output config/arrays/cards.yaml --report /tmp/cards\n"
+      "  sarmap-mic-calibrate recording.lcmlog --output config/arrays/cards.yaml --report "
+      "/tmp/cards\n"
       "Exit codes: 0 calibrated, 2 bad arguments/options/input, 3 refused (unobservable: the "
-      "message says what the data cannot determine).\n");
+      "message says what the data cannot determine), 4 the solve did not converge (outputs "
+      "written but marked untrusted: \"converged\": false and a warning in the report, a "
+      "NOT CONVERGED line in the array YAML; raise solver.max_iterations or give a better "
+      "start).\n");
   if (!args.Parse(argc, argv)) return 0;
   const MicCalibrateOptions opt = common::LoadOptions<MicCalibrateOptions>(
       config_path.empty() ? config_path : common::ResolveConfigPath(config_path), overrides);
@@ -371,7 +388,7 @@ int Run(int argc, char** argv) {
   WriteOutputs(result, cmp, so, opt.array_name, sample_rate_hz, output, report, quiet,
                "Written by sarmap-mic-calibrate from " + input,
                "positions in the calibration gauge frame (mic 1 at the origin).", progress);
-  return 0;
+  return ExitCode(result, progress);
 }
 
 }  // namespace

@@ -21,6 +21,8 @@ inline StartSummary SummariseStart(int start, const ceres::Solver::Summary& summ
   ss.iterations = static_cast<int>(summary.iterations.size()) - 1;
   ss.converged = summary.termination_type == ceres::CONVERGENCE;
   ss.normalised_rms = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals));
+  ss.num_residuals = summary.num_residuals;
+  ss.num_parameters = summary.num_effective_parameters;
   return ss;
 }
 

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "common/state_file.h"
+
 namespace sarmap {
 namespace people_map {
 namespace {
@@ -429,7 +431,7 @@ std::vector<Person> PeopleMap::Report(Utime utime) const {
 
 void PeopleMap::Save(const std::string& path) const {
   YAML::Node root;
-  root["version"] = 1;
+  root["version"] = kStateVersion;
   root["next_id"] = next_id_;
   for (const auto& [id, p] : people_) {
     YAML::Node n;
@@ -475,25 +477,23 @@ void PeopleMap::Save(const std::string& path) const {
   }
   YAML::Emitter out;
   out << root;
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream file(tmp, std::ios::trunc);
-    if (!file) throw std::runtime_error(tmp + ": cannot write the people-map state");
-    file << out.c_str() << "\n";
-    file.flush();
-    if (!file) throw std::runtime_error(tmp + ": write failed");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    throw std::runtime_error(path + ": cannot replace the people-map state");
-  }
+  common::WriteSealedState(path, kStateKind, kStateVersion, std::string(out.c_str()) + "\n");
 }
 
 bool PeopleMap::Load(const std::string& path) {
-  std::ifstream probe(path);
-  if (!probe) return false;
+  std::string text;
+  // Throws StateFileError (another kind or version, truncated, checksum) before any parsing.
+  const common::StateFileRead read =
+      common::ReadSealedState(path, kStateKind, kStateVersion, &text);
+  if (read == common::StateFileRead::kMissing) return false;
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = YAML::Load(text);
+    // Files written before sealing are version 1 with the same fields.
+    const int version = root["version"] ? root["version"].as<int>() : -1;
+    if (read == common::StateFileRead::kUnsealed ? version != 1 : version != kStateVersion) {
+      throw std::runtime_error("version " + std::to_string(version));
+    }
     std::map<int64_t, Person> people;
     for (const auto& n : root["people"]) {
       Person p;
@@ -514,6 +514,12 @@ bool PeopleMap::Load(const std::string& path) {
       p.has_heard = n["has_heard"].as<bool>();
       p.heard_position_m = ToVec(n["heard_position_m"]);
       p.heard_covariance = ToMat(n["heard_covariance"]);
+      // A NaN or infinite value would spread to every person it is fused with.
+      if (!p.position_m.allFinite() || !p.covariance.allFinite() || !std::isfinite(p.confidence) ||
+          !p.seen_position_m.allFinite() || !p.seen_covariance.allFinite() ||
+          !p.heard_position_m.allFinite() || !p.heard_covariance.allFinite()) {
+        throw std::runtime_error("person " + std::to_string(p.id) + " has a non-finite value");
+      }
       people[p.id] = p;
     }
     std::map<int64_t, Utime> heard;

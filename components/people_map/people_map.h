@@ -158,10 +158,15 @@ class PeopleMap {
   const std::map<int64_t, Person>& people() const { return people_; }
   double DecayedConfidence(const Person& p, common::Utime utime) const;
 
-  // Crash-safe state: written to a temporary file, then renamed over `path`.
+  // Crash-safe state: a sealed YAML file (common/state_file.h: kind "people-map", version and
+  // CRC-32), written to a temporary file, then renamed over `path`.
   void Save(const std::string& path) const;
-  // Returns false (state unchanged) when the file does not exist; throws on a corrupt file.
+  // Returns false (state unchanged) when the file does not exist; throws (state unchanged) on a
+  // file of another kind or version, a checksum mismatch, unparsable YAML or a non-finite value.
+  // An unsealed version-1 file (written before sealing) is read as it is.
   bool Load(const std::string& path);
+  static constexpr const char* kStateKind = "people-map";
+  static constexpr int kStateVersion = 2;
 
  private:
   void AddEvidence(Person* p, common::Utime utime, double detection_confidence) const;

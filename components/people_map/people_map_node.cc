@@ -11,6 +11,8 @@
 #include "common/node_main.h"
 #include "common/pose_history.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
+#include "common/state_file.h"
 #include "people_map/people_map.h"
 
 namespace {
@@ -34,6 +36,7 @@ struct NodeOptions {
   std::string sound_map_channel = "SOUND_MAP";
   std::string pose_channel = "POSE";
   std::string output_channel = "PEOPLE_MAP";
+  sarmap::common::StampGateOptions stamp_gate;
   sarmap::people_map::PeopleMapOptions map;
   template <class V>
   void Visit(V& v) {
@@ -51,6 +54,8 @@ struct NodeOptions {
     v("sound_map_channel", sound_map_channel, "sound-source map");
     v("pose_channel", pose_channel, "robot pose in the map");
     v("output_channel", output_channel, "the people map");
+    v("stamp_gate", stamp_gate,
+      "inputs stamped far from their stream's clock are dropped and counted, never adopted");
     v("map", map, "people map");
   }
   void Validate(sarmap::common::Validator& check) const {
@@ -106,8 +111,18 @@ int main(int argc, char** argv) {
     const common::Rigid3d base_from_mic = robot.base_from_mic_array.ToRigid3d();
 
     people_map::PeopleMap map(options.map);
-    if (!options.state_file.empty() && map.Load(options.state_file)) {
-      SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from " << options.state_file;
+    if (!options.state_file.empty()) {
+      // A corrupt state file must not make the node crash-loop: one clear line, a clean start.
+      try {
+        if (map.Load(options.state_file)) {
+          SARMAP_LOG(INFO) << "resumed " << map.people().size() << " people from "
+                           << options.state_file;
+        }
+      } catch (const std::exception& e) {
+        const std::string aside = common::SetAsideStateFile(options.state_file);
+        SARMAP_LOG(ERROR) << "not resumed, starting with an empty people map: " << e.what()
+                          << (aside.empty() ? "" : " (moved to " + aside + ")");
+      }
     }
 
     common::Node node("sarmap-people-map", args.lcm_url);
@@ -118,6 +133,15 @@ int main(int argc, char** argv) {
     // of the same instant, and must not be dropped as late.
     common::TimeOrderedQueue<std::function<void()>> queue(common::SecondsToUtime(options.reorder_delay_s));
     constexpr int kHeardStream = 1, kSoundMapStream = 2;
+    // One far-future stamp must not move the pose history or the queue's clock: each input
+    // stream is gated on its own clock (common/stamp_gate.h).
+    constexpr int kPoseGate = 0, kSeenGate = 1, kHeardGate = 2, kSoundMapGate = 3;
+    common::StampGates gates(options.stamp_gate);
+    const auto stamp_ok = [&](int gate, Utime utime, const common::ReceiveInfo& info) {
+      if (gates.Accept(gate, utime, info.receive_time_s)) return true;
+      node.Reject(info.channel, "stamp " + std::to_string(utime) + " far from the stream's clock");
+      return false;
+    };
     // After a restart from saved state, the people already found are published at once (at the
     // time of their last detection), not only after the next detection: the operator and the
     // recorder never see the map lose them.
@@ -184,7 +208,8 @@ int main(int argc, char** argv) {
       place_waiting(false);
     };
 
-    node.Subscribe<pose_t>(options.pose_channel, [&](const pose_t& m, const common::ReceiveInfo&) {
+    node.Subscribe<pose_t>(options.pose_channel, [&](const pose_t& m, const auto& info) {
+      if (!stamp_ok(kPoseGate, m.header.utime, info)) return;
       common::StampedPose p;
       p.utime = m.header.utime;
       p.pose = common::ToRigid3d(m.position_m, m.orientation);
@@ -197,8 +222,9 @@ int main(int argc, char** argv) {
       release();
     });
     node.Subscribe<people_detections_t>(options.visual_channel, [&](const people_detections_t& m,
-                                                                    const common::ReceiveInfo&) {
+                                                                    const auto& info) {
       const Utime utime = m.header.utime;
+      if (!stamp_ok(kSeenGate, utime, info)) return;
       std::vector<people_map::SeenDetection> seen;
       for (const auto& d : m.detections) {
         if (!d.has_range || d.cue == person_detection_t::CUE_HEARD) continue;
@@ -223,8 +249,9 @@ int main(int argc, char** argv) {
       release();
     });
     node.Subscribe<people_detections_t>(options.audio_channel, [&](const people_detections_t& m,
-                                                                   const common::ReceiveInfo&) {
+                                                                   const auto& info) {
       const Utime utime = m.header.utime;
+      if (!stamp_ok(kHeardGate, utime, info)) return;
       std::vector<people_map::HeardDetection> heard;
       for (const auto& d : m.detections) {
         people_map::HeardDetection h;
@@ -248,7 +275,9 @@ int main(int argc, char** argv) {
           kHeardStream);
       release();
     });
-    node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m, const common::ReceiveInfo&) {
+    node.Subscribe<sound_map_t>(options.sound_map_channel, [&](const sound_map_t& m,
+                                                               const auto& info) {
+      if (!stamp_ok(kSoundMapGate, m.header.utime, info)) return;
       std::vector<people_map::SoundSource> sources;
       for (const auto& s : m.sources) {
         people_map::SoundSource src;
@@ -268,7 +297,10 @@ int main(int argc, char** argv) {
       release();
       if (latest_utime > 0) publish(latest_utime);
       node.SetStatusMessage(std::to_string(map.people().size()) + " people, " +
-                            std::to_string(without_pose) + " detections without pose");
+                            std::to_string(without_pose) + " detections without pose, " +
+                            std::to_string(queue.dropped_late()) + " late, " +
+                            std::to_string(gates.dropped()) + " off-clock stamps (" +
+                            std::to_string(gates.reanchors()) + " re-anchors)");
     });
     const auto save = [&] {
       if (options.state_file.empty() || !dirty) return;

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 
 #include "common/robot_config.h"
+#include "common/state_file.h"
 
 namespace sarmap {
 namespace people_map {
@@ -491,6 +493,57 @@ TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   std::ofstream(path + ".bad") << "people: [{id: x}]\n";
   EXPECT_THROW(back.Load(path + ".bad"), std::runtime_error);
   EXPECT_EQ(back.people().size(), 3u);  // unchanged by the failed load
+}
+
+TEST(PeopleMapTest, FlippedNanAndOtherVersionStateFilesAreRefused) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d pose(0.5, 0.2, 0.3);
+  map.AddSeen(5'000'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+              pose.translation());
+  const std::string path = ::testing::TempDir() + "/people_state_refused.yaml";
+  map.Save(path);
+  std::string text;
+  {
+    std::ifstream in(path);
+    std::ostringstream all;
+    all << in.rdbuf();
+    text = all.str();
+  }
+  const std::string body = text.substr(text.find('\n') + 1);
+  PeopleMap back{PeopleMapOptions()};
+  const auto refused = [&](const std::string& file_text, const std::string& why) {
+    std::ofstream(path, std::ios::trunc) << file_text;
+    try {
+      back.Load(path);
+      ADD_FAILURE() << "loaded: " << why;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(back.people().empty());
+  };
+  // One digit of a position changed: the checksum no longer matches.
+  std::string flipped = text;
+  const size_t digit = flipped.find_first_of("123456789", flipped.find("position_m"));
+  flipped[digit] = flipped[digit] == '9' ? '8' : flipped[digit] + 1;
+  refused(flipped, "checksum");
+  // A NaN, sealed as the node would have saved it.
+  std::string with_nan = body;
+  const size_t value = with_nan.find("confidence: ") + 12;
+  with_nan.replace(value, with_nan.find('\n', value) - value, ".nan");
+  common::WriteSealedState(path, PeopleMap::kStateKind, PeopleMap::kStateVersion, with_nan);
+  refused(
+      [&] {
+        std::ifstream in(path);
+        std::ostringstream all;
+        all << in.rdbuf();
+        return all.str();
+      }(),
+      "non-finite");
+  // Another version, or a body that is not the people map.
+  common::WriteSealedState(path + ".v9", PeopleMap::kStateKind, 9, body);
+  EXPECT_THROW(back.Load(path + ".v9"), common::StateFileError);
+  refused("# sarmap-state people-map v2 bytes 3 crc32 00000000\n[[[", "checksum");
+  EXPECT_TRUE(back.people().empty());
 }
 
 }  // namespace

@@ -5,9 +5,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "common/binary_io.h"
+#include "common/state_file.h"
 
 namespace sarmap {
 namespace slam {
@@ -786,7 +788,7 @@ namespace {
 
 class Writer : public common::BinaryWriter {
  public:
-  explicit Writer(std::ofstream* out) : BinaryWriter(out), out_(out) {}
+  explicit Writer(std::ostream* out) : BinaryWriter(out), out_(out) {}
   void Pose(const Rigid2d& p) {
     Pod(p.translation().x()), Pod(p.translation().y()), Pod(p.yaw_rad());
   }
@@ -796,12 +798,12 @@ class Writer : public common::BinaryWriter {
   }
 
  private:
-  std::ofstream* out_;
+  std::ostream* out_;
 };
 
 class Reader : public common::BinaryReader {
  public:
-  explicit Reader(std::ifstream* in) : BinaryReader(in, "pose-graph file"), in_(in) {}
+  explicit Reader(std::istream* in) : BinaryReader(in, "pose-graph file"), in_(in) {}
   Rigid2d Pose() {
     const double x = Pod<double>(), y = Pod<double>(), t = Pod<double>();
     return Rigid2d(x, y, t);
@@ -814,19 +816,26 @@ class Reader : public common::BinaryReader {
   }
 
  private:
-  std::ifstream* in_;
+  std::istream* in_;
 };
 
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
-constexpr int32_t kVersion = 1;
+constexpr int32_t kVersion = 1;  // of the body
+// The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
+// an unsealed body (written before sealing).
+constexpr char kStateKind[] = "slam-pose-graph";
+constexpr int kStateVersion = 2;
+
+bool Finite(const Rigid2d& p) {
+  return std::isfinite(p.translation().x()) && std::isfinite(p.translation().y()) &&
+         std::isfinite(p.yaw_rad());
+}
 
 }  // namespace
 
 void Slam::Save(const std::string& path) const {
-  const std::string tmp = path + ".tmp";
   {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
+    std::ostringstream out(std::ios::binary);
     Writer w(&out);
     out.write(kMagic, 8);
     w.Pod(kVersion);
@@ -887,17 +896,19 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int32_t>(expected_num_ranges_);
     w.Pod<int32_t>(odom_segment_);
     out.write(kMagic, 8);  // trailer: a complete file
-    out.flush();
-    if (!out) throw std::runtime_error("write failed: '" + tmp + "'");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "'");
+    if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
+    common::WriteSealedState(path, kStateKind, kStateVersion, out.str());
   }
 }
 
 void Slam::Load(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot open pose-graph file '" + path + "'");
+  std::string body;
+  // Throws StateFileError (another kind or version, truncated, checksum) before any parsing.
+  if (common::ReadSealedState(path, kStateKind, kStateVersion, &body) ==
+      common::StateFileRead::kMissing) {
+    throw std::runtime_error("cannot open pose-graph file '" + path + "'");
+  }
+  std::istringstream in(body, std::ios::binary);
   Reader r(&in);
   char magic[8];
   in.read(magic, 8);
@@ -970,17 +981,18 @@ void Slam::Load(const std::string& path) {
     }
     constraints.push_back(c);
   }
-  global_from_local_ = r.Pose();
-  have_last_scan_ = r.Pod<int32_t>() != 0;
-  last_scan_time_ = r.Pod<double>();
-  last_scan_local_ = r.Pose();
-  last_scan_has_odom_ = r.Pod<int32_t>() != 0;
-  last_scan_odom_ = r.Pose();
-  last_scan_segment_ = r.Pod<int32_t>();
-  last_node_time_ = r.Pod<double>();
-  last_node_local_ = r.Pose();
-  expected_num_ranges_ = r.Pod<int32_t>();
-  odom_segment_ = r.Pod<int32_t>();
+  // Read into locals: a file refused below leaves this Slam as it was (a clean start).
+  const Rigid2d global_from_local = r.Pose();
+  const bool have_last_scan = r.Pod<int32_t>() != 0;
+  const double last_scan_time = r.Pod<double>();
+  const Rigid2d last_scan_local = r.Pose();
+  const bool last_scan_has_odom = r.Pod<int32_t>() != 0;
+  const Rigid2d last_scan_odom = r.Pose();
+  const int32_t last_scan_segment = r.Pod<int32_t>();
+  const double last_node_time = r.Pod<double>();
+  const Rigid2d last_node_local = r.Pose();
+  const int32_t expected_num_ranges = r.Pod<int32_t>();
+  const int32_t odom_segment = r.Pod<int32_t>();
   in.read(magic, 8);
   if (!in || !std::equal(magic, magic + 8, kMagic)) {
     throw std::runtime_error("pose-graph file '" + path + "' is incomplete");
@@ -988,6 +1000,35 @@ void Slam::Load(const std::string& path) {
   for (int a : active) {
     if (a < 0 || a >= num_submaps) throw std::runtime_error("pose-graph file corrupt (active)");
   }
+  // A NaN pose or weight would spread through the next optimisation to the whole graph.
+  bool finite = Finite(global_from_local) && Finite(last_scan_local) && Finite(last_scan_odom) &&
+                Finite(last_node_local) && std::isfinite(last_scan_time) &&
+                std::isfinite(last_node_time);
+  for (size_t i = 0; finite && i < submaps.size(); ++i) {
+    finite = Finite(submaps[i].local_pose) && Finite(submap_global[i]);
+  }
+  for (size_t i = 0; finite && i < nodes.size(); ++i) {
+    finite = std::isfinite(nodes[i].time_s) && Finite(nodes[i].local_pose) &&
+             Finite(node_global[i]) && Finite(nodes[i].odom_pose);
+  }
+  for (size_t i = 0; finite && i < constraints.size(); ++i) {
+    const Constraint& c = constraints[i];
+    finite = Finite(c.relative) && std::isfinite(c.translation_weight) &&
+             std::isfinite(c.rotation_weight) && std::isfinite(c.score);
+  }
+  if (!finite)
+    throw std::runtime_error("pose-graph file '" + path + "' corrupt (non-finite value)");
+  global_from_local_ = global_from_local;
+  have_last_scan_ = have_last_scan;
+  last_scan_time_ = last_scan_time;
+  last_scan_local_ = last_scan_local;
+  last_scan_has_odom_ = last_scan_has_odom;
+  last_scan_odom_ = last_scan_odom;
+  last_scan_segment_ = last_scan_segment;
+  last_node_time_ = last_node_time;
+  last_node_local_ = last_node_local;
+  expected_num_ranges_ = expected_num_ranges;
+  odom_segment_ = odom_segment;
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);
   active_submaps_ = std::move(active);

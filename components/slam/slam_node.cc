@@ -8,11 +8,13 @@
 #include <set>
 #include <variant>
 
-#include "common/node_main.h"
 #include "common/compression.h"
 #include "common/logging.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
+#include "common/node_main.h"
+#include "common/stamp_gate.h"
+#include "common/state_file.h"
 #include "common/time.h"
 #include "sarmap/laser_scan_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
@@ -30,6 +32,26 @@ using common::Utime;
 
 namespace {
 
+// At most rate_per_min events per minute, in bursts of up to a tenth of that (at least one).
+class TokenBucket {
+ public:
+  explicit TokenBucket(double rate_per_min)
+      : rate_per_s_(rate_per_min / 60),
+        capacity_(std::max(1.0, rate_per_min / 6)),
+        tokens_(capacity_) {}
+  bool Take(double now_s) {
+    if (last_s_ > -1e299) tokens_ = std::min(capacity_, tokens_ + (now_s - last_s_) * rate_per_s_);
+    last_s_ = now_s;
+    if (tokens_ < 1) return false;
+    tokens_ -= 1;
+    return true;
+  }
+
+ private:
+  double rate_per_s_, capacity_, tokens_;
+  double last_s_ = -1e300;
+};
+
 bool FileExists(const std::string& path) {
   struct stat st;
   return stat(path.c_str(), &st) == 0;
@@ -44,7 +66,9 @@ class SlamNode {
         queue_(common::SecondsToUtime(options.queue_delay_s)),
         pose_pub_(node->Advertise<pose_t>(options.pose_channel)),
         map_pub_(node->Advertise<occupancy_grid_t>(options.map_channel)),
-        anchors_pub_(node->Advertise<slam_anchors_t>(options.anchors_channel)) {
+        anchors_pub_(node->Advertise<slam_anchors_t>(options.anchors_channel)),
+        gates_(options.stamp_gate),
+        anchor_replies_(options.anchor_replies_per_min) {
     if (!options_.load_map.empty()) {
       slam_.SetLocalisationOnly(true);
       slam_.Load(options_.load_map);
@@ -55,34 +79,36 @@ class SlamNode {
       SARMAP_LOG(INFO) << "localisation only in " << options_.load_map << " (" << slam_.num_nodes()
                        << " nodes)";
     } else if (options_.resume && !options_.state_file.empty() && FileExists(options_.state_file)) {
-      slam_.Load(options_.state_file);
-      SARMAP_LOG(INFO) << "resumed mapping from " << options_.state_file << " ("
-                       << slam_.num_nodes() << " nodes)";
+      // A corrupt state file must not make the node crash-loop: one clear line, a clean start.
+      try {
+        slam_.Load(options_.state_file);
+        SARMAP_LOG(INFO) << "resumed mapping from " << options_.state_file << " ("
+                         << slam_.num_nodes() << " nodes)";
+      } catch (const std::exception& e) {
+        const std::string aside = common::SetAsideStateFile(options_.state_file);
+        SARMAP_LOG(ERROR) << "not resumed, mapping from scratch: " << e.what()
+                          << (aside.empty() ? "" : " (moved to " + aside + ")");
+      }
     }
     node->Subscribe<laser_scan_t>(
         options_.scan_channel,
         [this](const laser_scan_t& m, const common::ReceiveInfo& info) {
+          if (!StampOk(kScanGate, m.header.utime, info)) return;
           Push(m.header.utime, Input{slam::FromScanMessage(m), info.receive_time_s});
         },
         options_.input_queue_capacity);
     node->Subscribe<odometry_t>(
         options_.odom_channel,
-        [this](const odometry_t& m, const common::ReceiveInfo&) {
+        [this](const odometry_t& m, const common::ReceiveInfo& info) {
+          if (!StampOk(kOdomGate, m.header.utime, info)) return;
           OdomInput o{common::UtimeToSeconds(m.header.utime), slam::FromOdometryMessage(m)};
           Push(m.header.utime, Input{o, 0.0});
         },
         options_.input_queue_capacity);
     node->Subscribe<slam_anchor_request_t>(
         options_.anchor_request_channel,
-        [this](const slam_anchor_request_t& m, const common::ReceiveInfo&) {
-          // Clients repeat their request (in case this node restarted); only a changed set is
-          // answered at once (a joint covariance over the whole graph), then after every
-          // optimisation.
-          auto known = anchor_requests_.find(m.client_id);
-          if (known != anchor_requests_.end() && known->second == m.node_ids) return;
-          anchor_requests_[m.client_id] = m.node_ids;
-          SARMAP_LOG(INFO) << "client '" << m.client_id << "' keeps " << m.num_node_ids << " anchors";
-          if (ComputeCovariance()) PublishAnchors(false);
+        [this](const slam_anchor_request_t& m, const common::ReceiveInfo& info) {
+          OnAnchorRequest(m, info);
         });
     node->AddTimer(1.0, [this]() { UpdateStatus(); });
     // When inputs pause (end of a replay, a stalled sensor), release what waits in the queue
@@ -115,6 +141,62 @@ class SlamNode {
     std::variant<slam::LaserScan, OdomInput> data;
     double receive_time_s;
   };
+
+  static constexpr int kScanGate = 0, kOdomGate = 1;
+
+  bool StampOk(int gate, Utime utime, const common::ReceiveInfo& info) {
+    if (gates_.Accept(gate, utime, info.receive_time_s)) return true;
+    node_->Reject(info.channel, "stamp " + std::to_string(utime) + " far from the stream's clock");
+    return false;
+  }
+
+  // Clients repeat their request (in case this node restarted); only a changed set is answered
+  // at once (a joint covariance over the whole graph), then after every optimisation. Replies
+  // are rate-limited per client and overall, and the clients kept are bounded: a flood of
+  // requests from new client ids costs a map lookup each.
+  void OnAnchorRequest(const slam_anchor_request_t& m, const common::ReceiveInfo& info) {
+    const double now_s = common::SteadySeconds();
+    const auto refuse = [&](const std::string& why) {
+      ++anchor_requests_refused_;
+      node_->Reject(info.channel, "anchor request of '" + m.client_id + "' refused: " + why);
+    };
+    if (m.num_node_ids > options_.max_anchor_ids_per_request) {
+      refuse(std::to_string(m.num_node_ids) + " node ids (at most " +
+             std::to_string(options_.max_anchor_ids_per_request) + ")");
+      return;
+    }
+    auto known = anchor_requests_.find(m.client_id);
+    if (known == anchor_requests_.end()) {
+      // Clients that stopped repeating their request free their place.
+      for (auto it = anchor_requests_.begin(); it != anchor_requests_.end();) {
+        if (now_s - it->second.last_seen_s > options_.anchor_client_timeout_s) {
+          it = anchor_requests_.erase(it);
+        } else {
+          ++it;
+        }
+      }
+      if (static_cast<int>(anchor_requests_.size()) >= options_.max_anchor_clients) {
+        refuse("already " + std::to_string(anchor_requests_.size()) + " clients");
+        return;
+      }
+      known = anchor_requests_
+                  .emplace(m.client_id, AnchorClient(options_.anchor_replies_per_client_per_min))
+                  .first;
+    }
+    AnchorClient& client = known->second;
+    client.last_seen_s = now_s;
+    if (client.node_ids == m.node_ids && client.answered) return;
+    client.node_ids = m.node_ids;
+    client.answered = false;
+    // The request is kept either way: it is served after the next optimisation.
+    if (!client.replies.Take(now_s) || !anchor_replies_.Take(now_s)) {
+      refuse("reply rate");
+      return;
+    }
+    client.answered = true;
+    SARMAP_LOG(INFO) << "client '" << m.client_id << "' keeps " << m.num_node_ids << " anchors";
+    if (ComputeCovariance()) PublishAnchors(false);
+  }
 
   void Push(Utime utime, Input in) {
     last_input_s_ = common::SteadySeconds();
@@ -189,8 +271,8 @@ class SlamNode {
   bool ComputeCovariance() {
     if (slam_.num_nodes() == 0) return false;
     std::set<int64_t> wanted;
-    for (const auto& [client, ids] : anchor_requests_) {
-      for (int64_t id : ids) {
+    for (const auto& [name, client] : anchor_requests_) {
+      for (int64_t id : client.node_ids) {
         if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
       }
     }
@@ -289,13 +371,15 @@ class SlamNode {
 
   void UpdateStatus() {
     const auto& s = slam_.stats();
-    char text[256];
+    char text[384];
     std::snprintf(text, sizeof(text),
                   "nodes %lld loops %lld opt %lld rejected scans %lld odom %lld late %lld "
+                  "off-clock stamps %lld (re-anchors %lld) anchor requests refused %lld "
                   "mean latency %.1f ms",
                   (long long)s.nodes, (long long)s.loop_closures, (long long)s.optimisations,
                   (long long)s.rejected_scans, (long long)s.rejected_odometry,
-                  (long long)queue_.dropped_late(),
+                  (long long)queue_.dropped_late(), (long long)gates_.dropped(),
+                  (long long)gates_.reanchors(), (long long)anchor_requests_refused_,
                   latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0);
     node_->SetStatusMessage(text);
   }
@@ -307,7 +391,17 @@ class SlamNode {
   common::Node::Publisher<pose_t> pose_pub_;
   common::Node::Publisher<occupancy_grid_t> map_pub_;
   common::Node::Publisher<slam_anchors_t> anchors_pub_;
-  std::map<std::string, std::vector<int64_t>> anchor_requests_;
+  common::StampGates gates_;
+  struct AnchorClient {
+    explicit AnchorClient(double replies_per_min) : replies(replies_per_min) {}
+    std::vector<int64_t> node_ids;
+    bool answered = false;  // node_ids were answered at once (not refused by the rate limit)
+    double last_seen_s = 0;
+    TokenBucket replies;
+  };
+  std::map<std::string, AnchorClient> anchor_requests_;
+  TokenBucket anchor_replies_;
+  int64_t anchor_requests_refused_ = 0;
   Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
   std::vector<int> covariance_ids_;  // latest node first, then the anchors
   Eigen::MatrixXd joint_covariance_;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/options.h"
+#include "common/stamp_gate.h"
 #include "slam/slam_options.h"
 
 namespace sarmap {
@@ -34,6 +35,17 @@ struct SlamNodeOptions {
   std::vector<double> initial_pose = {};  // localisation only: x y yaw (empty: last saved pose)
   double pose_sigma_xy_m = 0.02;     // local matching uncertainty added to POSE covariance
   double pose_sigma_yaw_deg = 0.5;
+  // SCAN and ODOM stamped far from their stream's clock are dropped and counted.
+  common::StampGateOptions stamp_gate;
+  // Anchor requests answered (each a joint covariance over the graph and a SLAM_ANCHORS of up to
+  // megabytes): at most this many per client and over all clients per minute; more are refused
+  // and counted. Known clients are kept up to max_anchor_clients; a new client beyond that is
+  // refused.
+  double anchor_replies_per_client_per_min = 12.0;
+  double anchor_replies_per_min = 30.0;
+  int max_anchor_clients = 16;
+  double anchor_client_timeout_s = 60.0;  // a client silent this long frees its place
+  int max_anchor_ids_per_request = 256;
   SlamOptions slam;
   template <class V> void Visit(V& v) {
     v("scan_channel", scan_channel, "Input laser scans (laser_scan_t)");
@@ -57,6 +69,21 @@ struct SlamNodeOptions {
     v("initial_pose", initial_pose, "Localisation only: start pose [x, y, yaw] in the map (empty: last saved pose)");
     v("pose_sigma_xy_m", pose_sigma_xy_m, "Local matching standard deviation added to POSE covariance");
     v("pose_sigma_yaw_deg", pose_sigma_yaw_deg, "Local matching yaw standard deviation added to POSE covariance");
+    v("stamp_gate", stamp_gate,
+      "SCAN / ODOM stamped far from their stream's clock are dropped and counted, never adopted");
+    v("anchor_replies_per_client_per_min", anchor_replies_per_client_per_min,
+      "changed anchor requests answered at once per client per minute; more are refused (counted) "
+      "and the client is served after the next optimisation");
+    v("anchor_replies_per_min", anchor_replies_per_min,
+      "changed anchor requests answered at once per minute over all clients");
+    v("max_anchor_clients", max_anchor_clients,
+      "anchor requests of at most this many clients are kept; requests of further clients are "
+      "refused");
+    v("anchor_client_timeout_s", anchor_client_timeout_s,
+      "a client that has not repeated its anchor request for this long (wall clock) is forgotten");
+    v("max_anchor_ids_per_request", max_anchor_ids_per_request,
+      "anchor requests naming more node ids are refused (each id adds 3 rows to the joint "
+      "covariance)");
     v("slam", slam, "SLAM core");
   }
   void Validate(common::Validator& c) const {
@@ -69,6 +96,11 @@ struct SlamNodeOptions {
     c.Positive("state_save_period_s", state_save_period_s);
     c.NonNegative("pose_sigma_xy_m", pose_sigma_xy_m);
     c.NonNegative("pose_sigma_yaw_deg", pose_sigma_yaw_deg);
+    c.Positive("anchor_replies_per_client_per_min", anchor_replies_per_client_per_min);
+    c.Positive("anchor_replies_per_min", anchor_replies_per_min);
+    c.That(max_anchor_clients >= 1, "max_anchor_clients", "must be >= 1");
+    c.Positive("anchor_client_timeout_s", anchor_client_timeout_s);
+    c.That(max_anchor_ids_per_request >= 1, "max_anchor_ids_per_request", "must be >= 1");
   }
 };
 

@@ -4,12 +4,12 @@
 // warnings, answer anchor requests with a joint covariance, and report SCAN -> POSE latency.
 
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -18,6 +18,7 @@
 #include "common/time.h"
 #include "common/transform.h"
 #include "sarmap/laser_scan_t.hpp"
+#include "sarmap/node_status_t.hpp"
 #include "sarmap/odometry_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/slam_anchor_request_t.hpp"
@@ -208,6 +209,133 @@ TEST(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
               "of message time included)\n",
               latency.size(), 1e3 * latency[latency.size() / 2],
               1e3 * latency[std::min(latency.size() - 1, size_t(0.99 * latency.size()))]);
+}
+
+// Index of the n-th scan in `events` (events.size() when there are fewer).
+size_t NthScan(const std::vector<Event>& events, int n) {
+  size_t i = 0;
+  for (int scans = 0; i < events.size(); ++i) {
+    if (events[i].is_scan && scans++ == n) break;
+  }
+  return i;
+}
+
+// One SCAN stamped a year ahead, then a pause long enough for the queue to flush: the scan is
+// dropped and counted, POSE goes on with the scans after it and is never stamped in the future.
+TEST(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  const std::vector<Event> events = LoadIntelPrefix(160);
+  lcm::LCM lcm(common::kDefaultLcmUrl);
+  ASSERT_TRUE(lcm.good());
+  Listener listener(&lcm);
+  std::map<int64_t, double> sent_s;
+  testing::Process node({"sarmap-slam", "--config", ""},
+                        ::testing::TempDir() + "/slam_node_future.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const size_t split = NthScan(events, 60);
+  Publish(&lcm, events, 0, split, 40, &sent_s);
+  laser_scan_t future = events[split].scan;
+  future.header.utime += 365LL * 24 * 3600 * 1000000;
+  lcm.publish("SCAN", &future);
+  const double pause_until = common::SteadySeconds() + 0.5;
+  while (common::SteadySeconds() < pause_until) lcm.handleTimeout(10);
+  const int64_t split_utime = events[split].scan.header.utime;
+  Publish(&lcm, events, split, events.size(), 40, &sent_s);
+  const double wait_until = common::SteadySeconds() + 2.0;
+  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+
+  std::lock_guard<std::mutex> lock(listener.mu);
+  ASSERT_FALSE(listener.poses.empty()) << node.Output();
+  const int64_t last_input_utime =
+      events.back().is_scan ? events.back().scan.header.utime : events.back().odom.header.utime;
+  EXPECT_LE(listener.poses.rbegin()->first, last_input_utime) << "POSE stamped in the future";
+  // The 100 scans after the future one are mapped (a few may be skipped by the matcher).
+  const auto after = std::distance(listener.poses.lower_bound(split_utime), listener.poses.end());
+  EXPECT_GE(after, 80) << node.Output();
+}
+
+// Anchor requests from 300 new client ids, each naming every node: a few are answered, the rest
+// refused and counted, and POSE goes on.
+TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  const std::vector<Event> events = LoadIntelPrefix(160);
+  lcm::LCM lcm(common::kDefaultLcmUrl);
+  ASSERT_TRUE(lcm.good());
+  Listener listener(&lcm);
+  int64_t refused = 0;
+  struct StatusSink {
+    int64_t* refused;
+    void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const node_status_t* m) {
+      if (m->node_name != "sarmap-slam") return;
+      for (const auto& c : m->channels) {
+        if (c.channel == "SLAM_ANCHOR_REQUEST") *refused = std::max(*refused, c.dropped_malformed);
+      }
+    }
+  } status{&refused};
+  lcm.subscribe("NODE_STATUS", &StatusSink::OnStatus, &status);
+  std::map<int64_t, double> sent_s;
+  testing::Process node({"sarmap-slam", "--config", ""},
+                        ::testing::TempDir() + "/slam_node_flood.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const size_t split = NthScan(events, 80);
+  Publish(&lcm, events, 0, split, 40, &sent_s);
+  {
+    std::lock_guard<std::mutex> lock(listener.mu);
+    listener.anchors.clear();
+  }
+  constexpr int kClients = 300;
+  for (int i = 0; i < kClients; ++i) {
+    slam_anchor_request_t request{};
+    request.client_id = "flood-" + std::to_string(i);
+    for (int id = 0; id < 80; ++id) request.node_ids.push_back(id);
+    request.num_node_ids = static_cast<int32_t>(request.node_ids.size());
+    lcm.publish("SLAM_ANCHOR_REQUEST", &request);
+    lcm.handleTimeout(1);
+  }
+  const int64_t split_utime = events[split].scan.header.utime;
+  Publish(&lcm, events, split, events.size(), 40, &sent_s);
+  const double wait_until = common::SteadySeconds() + 2.0;
+  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+
+  std::lock_guard<std::mutex> lock(listener.mu);
+  std::printf("%d anchor requests from new clients: %zu SLAM_ANCHORS, %lld refused\n", kClients,
+              listener.anchors.size(), static_cast<long long>(refused));
+  EXPECT_LE(listener.anchors.size(), 40u) << node.Output();
+  EXPECT_GE(refused, kClients - 40);
+  const auto after = std::distance(listener.poses.lower_bound(split_utime), listener.poses.end());
+  EXPECT_GE(after, 60) << node.Output();
+}
+
+// A corrupt state file (a truncated old-format graph) is refused with one clear line and set
+// aside; the node maps from scratch instead of exiting at every restart.
+TEST(SlamNodeTest, ACorruptStateFileGivesACleanStart) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  const std::vector<Event> events = LoadIntelPrefix(60);
+  const std::string state = ::testing::TempDir() + "/slam_node_corrupt.pg";
+  std::remove((state + ".corrupt").c_str());
+  std::ofstream(state, std::ios::binary | std::ios::trunc) << "SARMAPPG\x01\x00\x00\x00garbage";
+  lcm::LCM lcm(common::kDefaultLcmUrl);
+  ASSERT_TRUE(lcm.good());
+  Listener listener(&lcm);
+  std::map<int64_t, double> sent_s;
+  testing::Process node(
+      {"sarmap-slam", "--config", "", "--set", "state_file=" + state, "--set", "resume=true"},
+      ::testing::TempDir() + "/slam_node_corrupt.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  Publish(&lcm, events, 0, events.size(), 40, &sent_s);
+  const double wait_until = common::SteadySeconds() + 1.0;
+  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
+  EXPECT_TRUE(node.Running()) << node.Output();
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+  EXPECT_NE(node.Output().find("not resumed"), std::string::npos) << node.Output();
+  EXPECT_TRUE(std::ifstream(state + ".corrupt").good());
+  std::lock_guard<std::mutex> lock(listener.mu);
+  EXPECT_GE(listener.poses.size(), 40u) << node.Output();
 }
 
 }  // namespace

@@ -1,18 +1,21 @@
 // SLAM core behaviour: the relations metric, the CARMEN reader, input rejection, save/load
 // resume, and a real-data regression on a short prefix of the Intel log.
 
+#include "slam/slam.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
+#include "common/state_file.h"
 #include "slam/carmen.h"
 #include "slam/map_io.h"
 #include "slam/relations.h"
-#include "slam/slam.h"
 
 // Measured on this prefix (see the printout), with a margin.
 #define REL_TRANS_BOUND 0.06
@@ -321,6 +324,58 @@ TEST(SlamInputTest, AfterARestartScansWaitForTheOdometryThatBridgesTheGap) {
   // The robot has driven 2.0 m since the first scan (the map's origin).
   EXPECT_NEAR(resumed.CurrentPose().translation().x(), 2.0, 0.05);
   EXPECT_NEAR(resumed.CurrentPose().translation().y(), 0.0, 0.05);
+}
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(SlamStateFileTest, FlippedNanAndOtherVersionFilesAreRefusedAndLeaveTheSlamClean) {
+  Slam first{SlamOptions()};
+  for (int k = 0; k <= 10; ++k) {
+    first.AddOdometry(0.1 * k, Rigid2d(0.05 * k, 0, 0));
+    ASSERT_TRUE(first.AddScan(MakeScan(0.1 * k)).accepted);
+  }
+  const std::string path = ::testing::TempDir() + "/slam_state_refused.pg";
+  first.Save(path);
+  const std::string file = ReadBytes(path);
+  ASSERT_EQ(file.rfind("# sarmap-state slam-pose-graph v2 ", 0), 0u) << file.substr(0, 60);
+  const std::string body = file.substr(file.find('\n') + 1);
+  const auto refused = [&](const std::string& why) {
+    Slam slam{SlamOptions()};
+    try {
+      slam.Load(path);
+      ADD_FAILURE() << "loaded: " << why;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    // Nothing of the refused file was taken: a clean start maps from scratch.
+    EXPECT_EQ(slam.num_nodes(), 0);
+    slam.AddOdometry(5.0, Rigid2d(0, 0, 0));
+    EXPECT_TRUE(slam.AddScan(MakeScan(5.0)).accepted);
+    EXPECT_NEAR(slam.CurrentPose().translation().norm(), 0, 1e-9);
+  };
+  // One bit flipped in the middle of the graph.
+  std::string flipped = file;
+  flipped[file.size() / 2] ^= 0x10;
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << flipped;
+  refused("checksum");
+  // A NaN saved by the node itself (sealed, checksum correct): last_node_time, 48 bytes before
+  // the end (trailer 8, odom segment 4, beam count 4, last node pose 24).
+  std::string with_nan = body;
+  const double nan = std::nan("");
+  with_nan.replace(with_nan.size() - 48, sizeof(double), reinterpret_cast<const char*>(&nan),
+                   sizeof(double));
+  common::WriteSealedState(path, "slam-pose-graph", 2, with_nan);
+  refused("non-finite");
+  common::WriteSealedState(path, "slam-pose-graph", 7, body);
+  refused("version 7");
+  // A file written before sealing (the bare body) is still read.
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << body;
+  Slam legacy{SlamOptions()};
+  legacy.Load(path);
+  EXPECT_EQ(legacy.num_nodes(), first.num_nodes());
 }
 
 // Feeds the Intel log in line (recording) order, as sarmap-slam-offline does with CARMEN logs,

@@ -2,15 +2,15 @@
 // What sarmap-sound-map and sarmap-log-sound-map share: the node's options and the
 // conversions between LCM messages and the core's OnlineSoundMap (header-only: the core
 // library has no LCM).
+#include <Eigen/Geometry>
 #include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -40,6 +40,8 @@ struct SoundMapNodeOptions {
   std::string state_file = "";  // "" = no persistence
   double state_save_period_s = 5.0;
   bool resume = false;
+  common::StampGateOptions
+      stamp_gate;  // the node's inputs (the log replay reads a log's own clock)
   OnlineSoundMapOptions map;
   template <class V>
   void Visit(V& v) {
@@ -60,6 +62,8 @@ struct SoundMapNodeOptions {
       "save the state this often when it changed (wall clock)");
     v("resume", resume,
       "start from state_file if it exists (after a crash or kill, the launcher restarts us)");
+    v("stamp_gate", stamp_gate,
+      "inputs stamped far from their stream's clock are dropped and counted, never adopted");
     v("map", map, "sound map estimator");
   }
   void Validate(common::Validator& check) const {

@@ -13,6 +13,7 @@
 #include "common/node.h"
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
 #include "common/time.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
@@ -103,19 +104,30 @@ int main(int argc, char** argv) {
       f(t);
       after_input(t);
     };
+    // One far-future stamp must not become the queue's clock (every later input "late"): each
+    // input stream is gated on its own clock (common/stamp_gate.h).
+    enum Gate { kPoseGate, kAnchorsGate, kDoaGate, kHeardGate };
+    sarmap::common::StampGates gates(options.stamp_gate);
+    const auto stamp_ok = [&](Gate gate, Utime utime, const sarmap::common::ReceiveInfo& info) {
+      if (gates.Accept(gate, utime, info.receive_time_s)) return true;
+      node.Reject(info.channel, "stamp " + std::to_string(utime) + " far from the stream's clock");
+      return false;
+    };
     auto push = [&](Utime utime, std::function<void(Utime)> fn) {
       newest = std::max(newest, utime);
       if (!queue.Push(utime, std::move(fn))) return;
       queue.Release(apply);
     };
 
-    node.Subscribe<sarmap::pose_t>(options.pose_channel, [&](const sarmap::pose_t& msg, const auto&) {
+    node.Subscribe<sarmap::pose_t>(options.pose_channel, [&](const sarmap::pose_t& msg, const auto& info) {
+      if (!stamp_ok(kPoseGate, msg.header.utime, info)) return;
       const Pose2 pose = sarmap::sound_map::PlanarPose(msg);
       const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(msg.covariance);
       const int64_t node_id = msg.node_id;
       push(msg.header.utime, [&map, pose, cov, node_id](Utime t) { map.OnPose(t, pose, cov, node_id); });
     });
-    node.Subscribe<sarmap::slam_anchors_t>(options.anchors_channel, [&](const sarmap::slam_anchors_t& msg, const auto&) {
+    node.Subscribe<sarmap::slam_anchors_t>(options.anchors_channel, [&](const sarmap::slam_anchors_t& msg, const auto& info) {
+      if (!stamp_ok(kAnchorsGate, msg.header.utime, info)) return;
       Pose2 current;
       std::vector<std::pair<int64_t, Pose2>> anchors;
       Eigen::MatrixXd cov;
@@ -137,13 +149,15 @@ int main(int argc, char** argv) {
         }
       });
     });
-    node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const auto&) {
+    node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const auto& info) {
+      if (!stamp_ok(kDoaGate, msg.header.utime, info)) return;
       std::vector<OnlineSoundMap::Doa> doas = sarmap::sound_map::DoasFromMessage(msg);
       const std::string device = msg.device_id;
       push(msg.header.utime, [&map, device, doas](Utime t) { map.OnDoa(t, device, doas); });
     });
     node.Subscribe<sarmap::people_detections_t>(
-        options.people_audio_channel, [&](const sarmap::people_detections_t& msg, const auto&) {
+        options.people_audio_channel, [&](const sarmap::people_detections_t& msg, const auto& info) {
+          if (!stamp_ok(kHeardGate, msg.header.utime, info)) return;
           // By direction: the heard people's track ids are sarmap-speech's (DOA), not the
           // map stream's (DOA_MAP).
           const auto heard = sarmap::sound_map::HeardDirections(msg);
@@ -176,7 +190,9 @@ int main(int argc, char** argv) {
                             std::to_string(c.sources_on_path) +
                             ", back-propagations " + std::to_string(c.back_propagations) + " (anchors skipped " +
                             std::to_string(c.anchors_skipped) + "), late inputs " +
-                            std::to_string(queue.dropped_late()));
+                            std::to_string(queue.dropped_late()) + ", off-clock stamps " +
+                            std::to_string(gates.dropped()) + " (re-anchors " +
+                            std::to_string(gates.reanchors()) + ")");
     });
     const int code = node.Run();
     // What still waits in the queue (the last reorder_delay_s of the mission) is applied, and the

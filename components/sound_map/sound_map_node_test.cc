@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
@@ -23,15 +24,58 @@ struct Sink {
   sarmap::sound_map_t map;
   sarmap::slam_anchor_request_t request;
   int maps = 0, requests = 0;
+  int64_t newest_map_utime = 0;
   void OnMap(const lcm::ReceiveBuffer*, const std::string&, const sarmap::sound_map_t* m) {
     map = *m;
     ++maps;
+    newest_map_utime = std::max(newest_map_utime, m->header.utime);
   }
   void OnRequest(const lcm::ReceiveBuffer*, const std::string&, const sarmap::slam_anchor_request_t* m) {
     request = *m;
     ++requests;
   }
 };
+
+// One step k of a robot driving along +x at 0.5 m/s: POSE, a DOA towards the source at
+// (sx, sy) on DOA_MAP and SLAM_ANCHORS, 0.1 s apart in message time.
+void PublishStep(lcm::LCM& lcm, int k, double sx, double sy) {
+  const int64_t t = 1000000 + k * 100000;
+  sarmap::pose_t pose{};
+  pose.header.utime = t;
+  pose.header.frame = "map";
+  pose.child_frame = "base";
+  pose.position_m[0] = 0.05 * k;
+  pose.orientation[0] = 1;
+  for (int i : {0, 7, 35}) pose.covariance[i] = 1e-4;
+  pose.node_id = k / 10;
+  lcm.publish("POSE", &pose);
+  sarmap::doa_t doa{};
+  doa.header.utime = t + 1;
+  doa.header.frame = "mic_array";
+  doa.device_id = "kinect";
+  sarmap::doa_source_t s{};
+  s.track_id = 5;
+  s.kind = sarmap::doa_source_t::KIND_AZIMUTH;
+  s.method = sarmap::doa_source_t::METHOD_SRP_PHAT;
+  s.confidence = 1;
+  s.azimuth_rad = std::atan2(sy, sx - (0.05 * k + 0.10));
+  s.covariance[0] = std::pow(3 * M_PI / 180, 2);
+  s.covariance[3] = 1;
+  doa.sources.push_back(s);
+  doa.num_sources = 1;
+  lcm.publish("DOA_MAP", &doa);  // config/sound_map.yaml: the localiser's map stream
+  sarmap::slam_anchors_t a{};
+  a.header.utime = t + 2;
+  a.header.frame = "map";
+  a.optimisation_id = k;
+  a.current = {k / 10, t, 0.05 * k, 0, 0};
+  a.num_anchors = 1;
+  a.anchors.push_back({0, 1000000, 0, 0, 0});
+  a.covariance_dim = 6;
+  a.covariance.assign(6, std::vector<double>(6, 0.0));
+  for (int i = 0; i < 6; ++i) a.covariance[i][i] = 1e-4;
+  lcm.publish("SLAM_ANCHORS", &a);
+}
 
 TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
@@ -51,42 +95,7 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   // The array sits 0.10 m ahead of the base (config/robot.yaml); a source at (3, 2).
   const double sx = 3.0, sy = 2.0;
   for (int k = 0; k < 40; ++k) {
-    const int64_t t = 1000000 + k * 100000;
-    sarmap::pose_t pose{};
-    pose.header.utime = t;
-    pose.header.frame = "map";
-    pose.child_frame = "base";
-    pose.position_m[0] = 0.05 * k;
-    pose.orientation[0] = 1;
-    for (int i : {0, 7, 35}) pose.covariance[i] = 1e-4;
-    pose.node_id = k / 10;
-    lcm.publish("POSE", &pose);
-    sarmap::doa_t doa{};
-    doa.header.utime = t + 1;
-    doa.header.frame = "mic_array";
-    doa.device_id = "kinect";
-    sarmap::doa_source_t s{};
-    s.track_id = 5;
-    s.kind = sarmap::doa_source_t::KIND_AZIMUTH;
-    s.method = sarmap::doa_source_t::METHOD_SRP_PHAT;
-    s.confidence = 1;
-    s.azimuth_rad = std::atan2(sy, sx - (0.05 * k + 0.10));
-    s.covariance[0] = std::pow(3 * M_PI / 180, 2);
-    s.covariance[3] = 1;
-    doa.sources.push_back(s);
-    doa.num_sources = 1;
-    lcm.publish("DOA_MAP", &doa);  // config/sound_map.yaml: the localiser's map stream
-    sarmap::slam_anchors_t a{};
-    a.header.utime = t + 2;
-    a.header.frame = "map";
-    a.optimisation_id = k;
-    a.current = {k / 10, t, 0.05 * k, 0, 0};
-    a.num_anchors = 1;
-    a.anchors.push_back({0, 1000000, 0, 0, 0});
-    a.covariance_dim = 6;
-    a.covariance.assign(6, std::vector<double>(6, 0.0));
-    for (int i = 0; i < 6; ++i) a.covariance[i][i] = 1e-4;
-    lcm.publish("SLAM_ANCHORS", &a);
+    PublishStep(lcm, k, sx, sy);
     if (k == 39) {
       // A call heard at message time 3.0 s (k = 20), published 1.9 s later, as sarmap-speech does
       // (decoded when the utterance ends, then held for the other beams' hits).
@@ -123,6 +132,50 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   EXPECT_GE(src.num_observations, 30);
   // The late call still reached the map (with a 0.3 s delay it was dropped as late).
   EXPECT_TRUE(src.is_person) << node.Output();
+}
+
+// Two POSEs stamped a year ahead (a skewed clock, a forged message) are dropped and counted:
+// the inputs after them are still used and SOUND_MAP keeps its stamps.
+TEST(SoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
+  if (!getenv("SARMAP_NETNS"))
+    GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  const std::string log =
+      ::testing::TempDir() + "/sound-map-future-" + std::to_string(getpid()) + ".log";
+  sarmap::testing::Process node(
+      {"sarmap-sound-map", "--lcm-url", url, "--config",
+       std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
+       "robot_config=" + std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml"},
+      log);
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  Sink sink;
+  lcm.subscribe("SOUND_MAP", &Sink::OnMap, &sink);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const double sx = 3.0, sy = 2.0;
+  constexpr int64_t kYearUs = 365LL * 24 * 3600 * 1000000;
+  for (int k = 0; k < 60; ++k) {
+    if (k == 10 || k == 11) {
+      sarmap::pose_t future{};
+      future.header.utime = 1000000 + k * 100000 + kYearUs;
+      future.header.frame = "map";
+      future.child_frame = "base";
+      future.position_m[0] = 0.05 * k;
+      future.orientation[0] = 1;
+      for (int i : {0, 7, 35}) future.covariance[i] = 1e-4;
+      lcm.publish("POSE", &future);
+    }
+    PublishStep(lcm, k, sx, sy);
+    lcm.handleTimeout(10);
+  }
+  for (int i = 0; i < 20; ++i) lcm.handleTimeout(50);
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(5), 0);
+  for (int i = 0; i < 10; ++i) lcm.handleTimeout(50);
+  ASSERT_EQ(sink.map.num_sources, 1) << node.Output();
+  // DOAs after the future poses were used (60 published, the last reorder delay's flushed at exit).
+  EXPECT_GE(sink.map.sources[0].num_observations, 45) << node.Output();
+  EXPECT_LT(sink.newest_map_utime, 1000000 + 60 * 100000) << node.Output();
 }
 
 }  // namespace

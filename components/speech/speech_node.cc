@@ -1,5 +1,6 @@
 // sarmap-speech: AUDIO + DOA -> SPEECH (speech_event_t) and PEOPLE_AUDIO (people_detections_t):
 // per tracked source an MVDR beam with post-filter, voice activity, PocketSphinx keywords.
+#include <algorithm>
 #include <cmath>
 
 #include "common/args.h"
@@ -68,7 +69,12 @@ int main(int argc, char** argv) {
 
     node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const common::ReceiveInfo&) {
       if (anchor_sample < 0 || (!device.empty() && msg.device_id != device)) return;
-      const int64_t sample = anchor_sample + static_cast<int64_t>(std::llround((msg.header.utime - anchor_utime) * 1e-6 * rate));
+      // In double and clamped: a stamp near the int64 limits must not overflow (the processor
+      // drops DOAs far ahead of the audio, and a track far behind times out).
+      const double offset_samples = std::clamp(
+          (static_cast<double>(msg.header.utime) - static_cast<double>(anchor_utime)) * 1e-6 * rate,
+          -1e12, 1e12);
+      const int64_t sample = anchor_sample + static_cast<int64_t>(std::llround(offset_samples));
       for (const auto& s : msg.sources) {
         if (s.track_id < 0) continue;
         if (s.kind != static_cast<int8_t>(kind)) {
@@ -77,7 +83,9 @@ int main(int argc, char** argv) {
         }
         Eigen::Matrix2d cov;
         cov << s.covariance[0], s.covariance[1], s.covariance[2], s.covariance[3];
-        processor->UpdateTrack(s.track_id, {s.azimuth_rad, s.elevation_rad}, cov, sample);
+        if (!processor->UpdateTrack(s.track_id, {s.azimuth_rad, s.elevation_rad}, cov, sample))
+          warn("DOA stamped more than " + std::to_string(options.speech.max_doa_ahead_s) +
+               " s ahead of the audio; dropped");
       }
     });
 
@@ -113,10 +121,12 @@ int main(int argc, char** argv) {
         ++people;
       }
       node.SetStatusMessage("utterances " + std::to_string(processor->utterances()) + ", events " +
-                            std::to_string(events) + ", people " + std::to_string(people) + ", dropped " +
-                            std::to_string(dropped) + ", leaked hits " +
+                            std::to_string(events) + ", people " + std::to_string(people) +
+                            ", dropped " + std::to_string(dropped) + ", leaked hits " +
                             std::to_string(processor->leaked_hits_dropped()) + ", re-attributed " +
-                            std::to_string(processor->hits_reattributed()));
+                            std::to_string(processor->hits_reattributed()) + ", tracks " +
+                            std::to_string(processor->num_tracks()) + " (evicted " +
+                            std::to_string(processor->tracks_evicted()) + ")");
     });
     SARMAP_LOG(INFO) << "listening to array '" << geometry.name << "' on " << options.audio_channel << " + "
                      << options.doa_channel;

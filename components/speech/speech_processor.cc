@@ -65,12 +65,35 @@ double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, 
   return used ? score / used : 0;
 }
 
-void SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, int64_t sample) {
-  TrackedSource& t = tracks_[id];
+bool SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov,
+                                  int64_t sample) {
+  if (sample - samples_seen_ >
+      static_cast<int64_t>(options_.max_doa_ahead_s * geometry_.sample_rate_hz)) {
+    ++doas_ahead_dropped_;
+    return false;
+  }
+  auto it = tracks_.find(id);
+  if (it == tracks_.end()) {
+    if (static_cast<int>(tracks_.size()) >= options_.max_tracks) {
+      // Least recently updated first; of equals, the one with fewer updates.
+      auto oldest =
+          std::min_element(tracks_.begin(), tracks_.end(), [](const auto& a, const auto& b) {
+            return a.second.last_sample != b.second.last_sample
+                       ? a.second.last_sample < b.second.last_sample
+                       : a.second.updates < b.second.updates;
+          });
+      tracks_.erase(oldest);
+      ++tracks_evicted_;
+    }
+    it = tracks_.emplace(id, TrackedSource{}).first;
+  }
+  TrackedSource& t = it->second;
   t.id = id;
   t.direction = d;
   t.covariance = cov;
   t.last_sample = sample;
+  ++t.updates;
+  return true;
 }
 
 void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, std::vector<SpeechResult>* out) {
@@ -93,7 +116,9 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
     it = samples_seen_ - it->second.last_sample > timeout ? tracks_.erase(it) : std::next(it);
   // Most recently updated tracks first.
   std::vector<const TrackedSource*> order;
-  for (const auto& [id, t] : tracks_) order.push_back(&t);
+  for (const auto& [id, t] : tracks_) {
+    if (t.updates >= options_.min_track_updates) order.push_back(&t);
+  }
   std::sort(order.begin(), order.end(), [](auto* a, auto* b) { return a->last_sample > b->last_sample; });
   std::vector<Beam> beams;
   for (size_t i = 0; i < order.size() && static_cast<int>(i) < options_.max_sources; ++i)

@@ -24,6 +24,16 @@ struct SpeechOptions {
   KeywordOptions keywords;
   int max_sources = 3;          // beams at once (strongest/most recent tracks)
   double track_timeout_s = 3.0; // a direction not refreshed for this long is dropped
+  // Tracks kept at once: a new track beyond this evicts the least recently updated one (counted).
+  // A flood of DOAs with new track ids (a broken localiser, a hostile publisher) then costs a
+  // bounded map, not a sort of every id ever heard on each audio block.
+  int max_tracks = 16;
+  // A beam is given only to a track updated at least this many times: a track id heard once (a
+  // flood of new ids) starts no beam, voice-activity detector or MVDR weights.
+  int min_track_updates = 2;
+  // DOAs stamped further ahead of the audio than this are dropped (counted): a far-future stamp
+  // would keep its track "most recent" for ever.
+  double max_doa_ahead_s = 1.0;
   bool untracked_beam = true;   // with no track, spot keywords on an omnidirectional beam (track -1)
   // One talker is heard on every beam: a beam at a steady noise source (whose post-filter
   // removes that noise) passes the talker's speech leaking through its side lobes, and the
@@ -43,6 +53,12 @@ struct SpeechOptions {
     v("keywords", keywords, "PocketSphinx keyword spotting");
     v("max_sources", max_sources, "most sources enhanced at once");
     v("track_timeout_s", track_timeout_s, "forget a direction not refreshed for this long");
+    v("max_tracks", max_tracks,
+      "tracks kept at once; a new one beyond this evicts the least recently updated (counted)");
+    v("min_track_updates", min_track_updates,
+      "DOA updates a track needs before it is given a beam");
+    v("max_doa_ahead_s", max_doa_ahead_s,
+      "DOAs stamped further ahead of the audio than this are dropped (counted)");
     v("untracked_beam", untracked_beam, "without tracks, listen on one beam (track_id -1, no direction)");
     v("beam_arbitration_s", beam_arbitration_s,
       "keyword hits go to the tracked direction their speech came from; of hits of several tracks at once "
@@ -51,6 +67,9 @@ struct SpeechOptions {
   void Validate(common::Validator& check) const {
     check.That(max_sources >= 1, "max_sources", "must be >= 1");
     check.Positive("track_timeout_s", track_timeout_s);
+    check.That(max_tracks >= max_sources, "max_tracks", "must be >= max_sources");
+    check.That(min_track_updates >= 1, "min_track_updates", "must be >= 1");
+    check.Positive("max_doa_ahead_s", max_doa_ahead_s);
     check.InRange("beam_arbitration_s", beam_arbitration_s, 0, 10);
   }
 };
@@ -60,6 +79,7 @@ struct TrackedSource {
   sound::Direction direction;
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
   int64_t last_sample = 0;  // stream sample of the last DOA update
+  int64_t updates = 0;
 };
 
 struct SpeechResult {
@@ -92,8 +112,15 @@ class SpeechProcessor {
  public:
   // kind: how DOA directions are expressed (1-D for linear arrays).
   SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind kind, SpeechOptions options);
-  // A DOA update for a track at stream sample `sample`.
-  void UpdateTrack(int64_t id, const sound::Direction& direction, const Eigen::Matrix2d& covariance, int64_t sample);
+  // A DOA update for a track at stream sample `sample`. False (counted) when the sample is more
+  // than max_doa_ahead_s ahead of the audio seen.
+  bool UpdateTrack(int64_t id, const sound::Direction& direction, const Eigen::Matrix2d& covariance,
+                   int64_t sample);
+  size_t num_tracks() const { return tracks_.size(); }
+  bool has_track(int64_t id) const { return tracks_.count(id) > 0; }
+  // Tracks evicted by a new one beyond max_tracks.
+  int64_t tracks_evicted() const { return tracks_evicted_; }
+  int64_t doas_ahead_dropped() const { return doas_ahead_dropped_; }
   // Feeds audio; appends finished utterances' results (one per keyword hit, or one with text).
   void Push(const int16_t* data, int frames, int block_channels, std::vector<SpeechResult>* results);
   void Flush(std::vector<SpeechResult>* results);
@@ -135,6 +162,7 @@ class SpeechProcessor {
   BeamArbiter arbiter_;
   std::vector<SpeechResult> fresh_;
   int64_t reattributed_ = 0;
+  int64_t tracks_evicted_ = 0, doas_ahead_dropped_ = 0;
   // Speech-band spectra of the raw microphones (no overlap), kept a few seconds for the scores.
   struct BandFrame {
     int64_t end_sample = 0;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdio>
 
 #include "audio_capture/audio_file.h"
@@ -134,6 +135,45 @@ TEST(SpeechProcessor, CallJoinDropsHelpThatStartsALongerStretchOfTalk) {
 
 // The arbiter alone: overlapping hits of two beams keep the louder; hits that do not overlap,
 // hits of one beam and results without a keyword all pass; nothing is decided before the hold.
+// 20 000 DOAs with new track ids over 2 s of audio (a broken localiser, a hostile publisher):
+// the tracks kept stay bounded, the evictions are counted, and a real track updated all along
+// keeps its place. Also a DOA stamped far ahead of the audio is dropped.
+TEST(SpeechProcessor, ADoaFloodOfNewTrackIdsIsBounded) {
+  const auto g = sound::testing_util::LoadArray("respeaker4");
+  SpeechOptions o;
+  SpeechProcessor p(g, sound::DoaKind::kAzimuthElevation, o);
+  const int block = 512, blocks = 63;  // ~2 s at 16 kHz
+  std::vector<int16_t> noise(static_cast<size_t>(block) * 4);
+  uint32_t seed = 1;
+  for (auto& v : noise)
+    v = static_cast<int16_t>(((seed = seed * 1664525u + 1013904223u) >> 20) % 200) - 100;
+  std::vector<SpeechResult> results;
+  int64_t id = 1000;
+  const auto start = std::chrono::steady_clock::now();
+  // The real track, heard for 0.3 s before the flood and all through it.
+  const int pre_blocks = 10;
+  for (int b = 0; b < pre_blocks + blocks; ++b) {
+    const int64_t now = static_cast<int64_t>(b) * block;
+    p.UpdateTrack(7, {0.5, 0.1}, Eigen::Matrix2d::Identity() * 0.003, now);
+    for (int k = 0; k < (b < pre_blocks ? 0 : 20000 / blocks); ++k, ++id) {
+      p.UpdateTrack(id, {0.01 * (id % 600), 0.0}, Eigen::Matrix2d::Identity() * 0.003, now);
+      EXPECT_LE(p.num_tracks(), static_cast<size_t>(o.max_tracks));
+    }
+    p.Push(noise.data(), block, 4, &results);
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "%lld new track ids over %.1f s of audio: %.2f s of CPU, %zu tracks kept, %lld evicted\n",
+      static_cast<long long>(id - 1000), blocks * block / 16000.0, seconds, p.num_tracks(),
+      static_cast<long long>(p.tracks_evicted()));
+  EXPECT_TRUE(p.has_track(7));
+  EXPECT_EQ(p.tracks_evicted(), id - 1000 + 1 - o.max_tracks);
+  EXPECT_FALSE(p.UpdateTrack(8, {0.5, 0.1}, Eigen::Matrix2d::Identity(),
+                             p.samples_seen() + static_cast<int64_t>(3600 * 16000.0)));
+  EXPECT_EQ(p.doas_ahead_dropped(), 1);
+}
+
 TEST(BeamArbiter, KeepsTheLoudestBeamOfOneUtterance) {
   auto hit = [](int64_t track, int64_t start, int64_t end, double level, const char* keyword = "help") {
     SpeechResult r;

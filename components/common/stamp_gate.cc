@@ -1,0 +1,82 @@
+#include "common/stamp_gate.h"
+
+#include <algorithm>
+
+namespace sarmap {
+namespace common {
+
+StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
+  if (!anchored_) {
+    anchored_ = true;
+    newest_utime_ = utime;
+    newest_receive_s_ = receive_s;
+    return Verdict::kAccepted;
+  }
+  const Utime max_ahead_us = SecondsToUtime(options_.max_ahead_s);
+  const Utime max_behind_us = SecondsToUtime(options_.max_behind_s);
+  // Receive time never runs backwards on a steady clock; clamp in case callers mix clocks.
+  const double elapsed_us = 1e6 * std::max(0.0, receive_s - newest_receive_s_);
+  // In double: stamps near the int64 limits must not overflow.
+  const double offset_us =
+      static_cast<double>(utime) - (static_cast<double>(newest_utime_) + elapsed_us);
+  const bool ahead = offset_us > static_cast<double>(max_ahead_us);
+  const bool behind = max_behind_us > 0 && offset_us < -static_cast<double>(max_behind_us);
+  if (!ahead && !behind) {
+    candidate_count_ = 0;
+    if (utime >= newest_utime_) {
+      newest_utime_ = utime;
+      newest_receive_s_ = receive_s;
+    }
+    return Verdict::kAccepted;
+  }
+  // Does this stamp continue the run of out-of-bound stamps?
+  bool continues = false;
+  if (candidate_count_ > 0) {
+    const double candidate_elapsed_us = 1e6 * std::max(0.0, receive_s - candidate_receive_s_);
+    const double step_us =
+        static_cast<double>(utime) - (static_cast<double>(candidate_utime_) + candidate_elapsed_us);
+    continues = step_us <= static_cast<double>(max_ahead_us) &&
+                step_us >= -static_cast<double>(std::max(max_ahead_us, max_behind_us));
+  }
+  candidate_count_ = continues ? candidate_count_ + 1 : 1;
+  candidate_utime_ = utime;
+  candidate_receive_s_ = receive_s;
+  if (candidate_count_ >= options_.reanchor_count) {
+    candidate_count_ = 0;
+    newest_utime_ = utime;
+    newest_receive_s_ = receive_s;
+    ++reanchors_;
+    return Verdict::kReanchored;
+  }
+  if (ahead) {
+    ++dropped_ahead_;
+    return Verdict::kAhead;
+  }
+  ++dropped_behind_;
+  return Verdict::kBehind;
+}
+
+bool StampGates::Accept(int stream, Utime utime, double receive_s) {
+  if (stream < 0) return true;
+  if (static_cast<size_t>(stream) >= gates_.size()) gates_.resize(stream + 1, StampGate(options_));
+  return StampGate::Accepted(gates_[stream].Check(utime, receive_s));
+}
+
+int64_t StampGates::dropped_ahead() const {
+  int64_t n = 0;
+  for (const auto& g : gates_) n += g.dropped_ahead();
+  return n;
+}
+int64_t StampGates::dropped_behind() const {
+  int64_t n = 0;
+  for (const auto& g : gates_) n += g.dropped_behind();
+  return n;
+}
+int64_t StampGates::reanchors() const {
+  int64_t n = 0;
+  for (const auto& g : gates_) n += g.reanchors();
+  return n;
+}
+
+}  // namespace common
+}  // namespace sarmap

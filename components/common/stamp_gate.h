@@ -1,0 +1,98 @@
+#pragma once
+// StampGate: what a single header.utime may do to a node. Each input stream keeps its own
+// clock: the newest stamp it accepted and the receive time (steady clock) of that message.
+// A new stamp is expected near
+//   expected = newest_accepted_utime + (receive_s - newest_accepted_receive_s)
+// and is dropped (and counted) when it is more than max_ahead_s ahead of that, or, when
+// max_behind_s > 0, more than max_behind_s behind it. Dropped stamps are never adopted: one
+// far-future POSE or SCAN cannot move a node's clock. The rule needs no wall clock, so it holds
+// on log replay too (a replay faster than real time only moves stamps by one message's period
+// between two receive times).
+// A genuine clock step of a whole stream is followed: after reanchor_count consecutive dropped
+// stamps that agree with each other (each within max_ahead_s of the previous one plus the
+// receive time between them), the stream's clock is re-anchored on the last of them, which is
+// accepted. Any accepted stamp in between starts the count again, so a stray stamp mixed into a
+// live stream is never followed.
+// The first stamp of a stream sets its clock.
+
+#include <cstdint>
+#include <vector>
+
+#include "common/options.h"
+#include "common/time.h"
+
+namespace sarmap {
+namespace common {
+
+struct StampGateOptions {
+  double max_ahead_s = 5.0;  // stamps further ahead of the stream's clock are dropped
+  double max_behind_s =
+      0;  // stamps further behind are dropped (0: never; late inputs are the node's)
+  int reanchor_count = 5;  // consecutive agreeing out-of-bound stamps that re-anchor the stream
+  template <class V>
+  void Visit(V& v) {
+    v("max_ahead_s", max_ahead_s,
+      "an input stamped further ahead of its stream's clock (newest accepted stamp + receive time "
+      "since) is dropped and counted");
+    v("max_behind_s", max_behind_s,
+      "an input stamped further behind its stream's clock is dropped and counted (0: never)");
+    v("reanchor_count", reanchor_count,
+      "this many consecutive dropped stamps that agree with each other re-anchor the stream (a "
+      "genuine clock step is followed)");
+  }
+  void Validate(Validator& check) const {
+    check.Positive("max_ahead_s", max_ahead_s);
+    check.NonNegative("max_behind_s", max_behind_s);
+    check.That(reanchor_count >= 1, "reanchor_count", "must be at least 1");
+  }
+};
+
+class StampGate {
+ public:
+  enum class Verdict { kAccepted, kReanchored, kAhead, kBehind };
+
+  explicit StampGate(const StampGateOptions& options = {}) : options_(options) {}
+
+  // receive_s: steady-clock time the message was received (ReceiveInfo::receive_time_s).
+  Verdict Check(Utime utime, double receive_s);
+  static bool Accepted(Verdict v) { return v == Verdict::kAccepted || v == Verdict::kReanchored; }
+
+  bool anchored() const { return anchored_; }
+  Utime newest_utime() const { return newest_utime_; }
+  int64_t dropped_ahead() const { return dropped_ahead_; }
+  int64_t dropped_behind() const { return dropped_behind_; }
+  int64_t dropped() const { return dropped_ahead_ + dropped_behind_; }
+  int64_t reanchors() const { return reanchors_; }
+
+ private:
+  StampGateOptions options_;
+  bool anchored_ = false;
+  Utime newest_utime_ = 0;
+  double newest_receive_s_ = 0;
+  // The run of consecutive out-of-bound stamps that may re-anchor the stream.
+  int candidate_count_ = 0;
+  Utime candidate_utime_ = 0;
+  double candidate_receive_s_ = 0;
+  int64_t dropped_ahead_ = 0;
+  int64_t dropped_behind_ = 0;
+  int64_t reanchors_ = 0;
+};
+
+// A gate per input stream of a node, with one set of counters for NODE_STATUS.
+class StampGates {
+ public:
+  explicit StampGates(const StampGateOptions& options) : options_(options) {}
+  // stream: a small index per input (e.g. the channel's position in the node's list).
+  bool Accept(int stream, Utime utime, double receive_s);
+  int64_t dropped_ahead() const;
+  int64_t dropped_behind() const;
+  int64_t dropped() const { return dropped_ahead() + dropped_behind(); }
+  int64_t reanchors() const;
+
+ private:
+  StampGateOptions options_;
+  std::vector<StampGate> gates_;
+};
+
+}  // namespace common
+}  // namespace sarmap

@@ -1,0 +1,148 @@
+#include "common/stamp_gate.h"
+
+#include <gtest/gtest.h>
+
+namespace sarmap {
+namespace common {
+namespace {
+
+constexpr Utime kYearUs = 365LL * 24 * 3600 * 1000000;
+
+// A 10 Hz stream: stamp and receive time advance together.
+struct Stream {
+  Utime utime = 1000000;
+  double receive_s = 50.0;
+  void Step(double dt_s = 0.1) {
+    utime += SecondsToUtime(dt_s);
+    receive_s += dt_s;
+  }
+};
+
+TEST(StampGateTest, OneFutureStampIsDroppedCountedAndNotAdopted) {
+  StampGate gate;
+  Stream s;
+  for (int i = 0; i < 10; ++i, s.Step())
+    EXPECT_TRUE(StampGate::Accepted(gate.Check(s.utime, s.receive_s)));
+  EXPECT_EQ(gate.Check(s.utime + kYearUs, s.receive_s), StampGate::Verdict::kAhead);
+  EXPECT_EQ(gate.dropped_ahead(), 1);
+  EXPECT_LT(gate.newest_utime(), s.utime + kYearUs);
+  // The stream goes on as if nothing happened.
+  for (int i = 0; i < 20; ++i) {
+    s.Step();
+    EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  }
+  EXPECT_EQ(gate.newest_utime(), s.utime);
+  EXPECT_EQ(gate.dropped(), 1);
+  EXPECT_EQ(gate.reanchors(), 0);
+}
+
+TEST(StampGateTest, StrayFutureStampsMixedIntoAStreamNeverReanchor) {
+  StampGateOptions options;
+  options.reanchor_count = 3;
+  StampGate gate(options);
+  Stream s;
+  for (int i = 0; i < 50; ++i, s.Step()) {
+    EXPECT_TRUE(StampGate::Accepted(gate.Check(s.utime, s.receive_s)));
+    // Two agreeing future stamps between every pair of good ones: one short of re-anchoring.
+    gate.Check(s.utime + kYearUs, s.receive_s);
+    gate.Check(s.utime + kYearUs + 1000, s.receive_s);
+  }
+  EXPECT_EQ(gate.dropped_ahead(), 100);
+  EXPECT_EQ(gate.reanchors(), 0);
+  EXPECT_LT(gate.newest_utime(), kYearUs);
+}
+
+TEST(StampGateTest, AWholeStreamThatStepsForwardIsFollowedAfterTheReanchorCount) {
+  StampGateOptions options;
+  options.reanchor_count = 4;
+  StampGate gate(options);
+  Stream s;
+  for (int i = 0; i < 10; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
+  s.utime += SecondsToUtime(3600.0);  // the source's clock is set an hour forward
+  for (int i = 0; i < options.reanchor_count - 1; ++i, s.Step()) {
+    EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAhead);
+  }
+  EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kReanchored);
+  EXPECT_EQ(gate.newest_utime(), s.utime);
+  for (int i = 0; i < 10; ++i) {
+    s.Step();
+    EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  }
+  EXPECT_EQ(gate.dropped_ahead(), options.reanchor_count - 1);
+  EXPECT_EQ(gate.reanchors(), 1);
+}
+
+TEST(StampGateTest, APauseInTheStreamIsCoveredByTheReceiveClock) {
+  StampGate gate;
+  Stream s;
+  for (int i = 0; i < 5; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
+  s.Step(60.0);  // a minute of silence, on both clocks
+  EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  EXPECT_EQ(gate.dropped(), 0);
+}
+
+TEST(StampGateTest, AFastReplayIsAccepted) {
+  StampGate gate;
+  Stream s;
+  // Ten times real time: 0.1 s of stamps per 0.01 s received.
+  for (int i = 0; i < 200; ++i) {
+    s.utime += 100000;
+    s.receive_s += 0.01;
+    EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  }
+}
+
+TEST(StampGateTest, BackwardsStampsPassUnlessBounded) {
+  Stream s;
+  StampGate open;
+  for (int i = 0; i < 5; ++i, s.Step()) open.Check(s.utime, s.receive_s);
+  // Behind: the node's own late-input handling decides; the clock does not move back.
+  const Utime newest = open.newest_utime();
+  EXPECT_EQ(open.Check(s.utime - kYearUs, s.receive_s), StampGate::Verdict::kAccepted);
+  EXPECT_EQ(open.newest_utime(), newest);
+
+  StampGateOptions options;
+  options.max_behind_s = 10.0;
+  options.reanchor_count = 3;
+  StampGate bounded(options);
+  Stream t;
+  for (int i = 0; i < 5; ++i, t.Step()) bounded.Check(t.utime, t.receive_s);
+  EXPECT_EQ(bounded.Check(t.utime - kYearUs, t.receive_s), StampGate::Verdict::kBehind);
+  EXPECT_EQ(bounded.Check(t.utime - 2000000, t.receive_s), StampGate::Verdict::kAccepted);
+  EXPECT_EQ(bounded.dropped_behind(), 1);
+  // A whole stream stepping back an hour is followed too.
+  t.utime -= SecondsToUtime(3600.0);
+  EXPECT_EQ(bounded.Check(t.utime, t.receive_s), StampGate::Verdict::kBehind);
+  t.Step();
+  EXPECT_EQ(bounded.Check(t.utime, t.receive_s), StampGate::Verdict::kBehind);
+  t.Step();
+  EXPECT_EQ(bounded.Check(t.utime, t.receive_s), StampGate::Verdict::kReanchored);
+  EXPECT_EQ(bounded.newest_utime(), t.utime);
+}
+
+TEST(StampGateTest, ExtremeStampsDoNotOverflow) {
+  StampGate gate;
+  Stream s;
+  for (int i = 0; i < 5; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
+  EXPECT_EQ(gate.Check(INT64_MAX, s.receive_s), StampGate::Verdict::kAhead);
+  EXPECT_EQ(gate.Check(INT64_MIN, s.receive_s),
+            StampGate::Verdict::kAccepted);  // behind, unbounded
+  s.Step();
+  EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+}
+
+TEST(StampGatesTest, StreamsKeepTheirOwnClocks) {
+  StampGates gates(StampGateOptions{});
+  // Stream 1 is stamped 3 s behind stream 0 (published late); both are fine.
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_TRUE(gates.Accept(0, 10000000 + i * 100000, 1.0 + 0.1 * i));
+    EXPECT_TRUE(gates.Accept(1, 7000000 + i * 100000, 1.0 + 0.1 * i));
+  }
+  EXPECT_FALSE(gates.Accept(1, 10000000 + kYearUs, 2.0));
+  EXPECT_TRUE(gates.Accept(0, 11000000, 2.0));
+  EXPECT_EQ(gates.dropped_ahead(), 1);
+}
+
+}  // namespace
+}  // namespace common
+}  // namespace sarmap

@@ -1,0 +1,81 @@
+#include "common/state_file.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace sarmap {
+namespace common {
+namespace {
+
+std::string TempPath(const std::string& name) {
+  return ::testing::TempDir() + "/state_file_test_" + std::to_string(getpid()) + "_" + name;
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void WriteAll(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+}
+
+TEST(Crc32Test, MatchesTheStandardCheckValue) {
+  const std::string check = "123456789";
+  EXPECT_EQ(Crc32(check.data(), check.size()), 0xCBF43926u);
+  // Continued over two parts: the same as at once.
+  EXPECT_EQ(Crc32(check.data() + 4, 5, Crc32(check.data(), 4)), 0xCBF43926u);
+}
+
+TEST(StateFileTest, RoundTripsABinaryBody) {
+  const std::string path = TempPath("roundtrip");
+  const std::string body("a\0b\nc\xff", 6);
+  WriteSealedState(path, "test-kind", 3, body);
+  std::string read;
+  EXPECT_EQ(ReadSealedState(path, "test-kind", 3, &read), StateFileRead::kSealed);
+  EXPECT_EQ(read, body);
+  std::remove(path.c_str());
+  EXPECT_EQ(ReadSealedState(path, "test-kind", 3, &read), StateFileRead::kMissing);
+}
+
+TEST(StateFileTest, RefusesFlippedTruncatedForeignAndOtherVersions) {
+  const std::string path = TempPath("refuse");
+  const std::string body = "people:\n  - id: 1\n    confidence: 0.5\n";
+  WriteSealedState(path, "test-kind", 2, body);
+  const std::string good = ReadAll(path);
+  std::string read;
+  const auto refused = [&](const std::string& text, const std::string& kind, int version,
+                           const std::string& why) {
+    WriteAll(path, text);
+    try {
+      ReadSealedState(path, kind, version, &read);
+      ADD_FAILURE() << "accepted: " << why;
+    } catch (const StateFileError& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  std::string flipped = good;
+  flipped[flipped.size() - 5] ^= 0x04;  // one bit of the body
+  refused(flipped, "test-kind", 2, "checksum");
+  refused(good.substr(0, good.size() - 3), "test-kind", 2, "truncated");
+  refused(good + "x", "test-kind", 2, "appended");
+  refused(good, "other-kind", 2, "not other-kind");
+  refused(good, "test-kind", 3, "version 2");
+  refused("# sarmap-state garbage\n", "test-kind", 2, "unreadable");
+  // A file written before sealing: handed back whole, for the caller to decide.
+  WriteAll(path, body);
+  EXPECT_EQ(ReadSealedState(path, "test-kind", 2, &read), StateFileRead::kUnsealed);
+  EXPECT_EQ(read, body);
+  EXPECT_EQ(SetAsideStateFile(path), path + ".corrupt");
+  EXPECT_EQ(ReadSealedState(path, "test-kind", 2, &read), StateFileRead::kMissing);
+  std::remove((path + ".corrupt").c_str());
+}
+
+}  // namespace
+}  // namespace common
+}  // namespace sarmap
