@@ -242,6 +242,7 @@ void Supervisor::Start(Managed* m, double now_s) {
     fail(std::string("pipe: ") + strerror(errno));
     return;
   }
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) {
     for (int fd : {out_pipe[0], out_pipe[1], err_pipe[0], err_pipe[1]}) close(fd);
@@ -251,6 +252,10 @@ void Supervisor::Start(Managed* m, double now_s) {
   if (pid == 0) {
     // Child: only async-signal-safe calls from here to exec.
     setpgid(0, 0);
+    // Dies with its deputy: a deputy that is killed (SIGKILL, OOM) leaves no orphan running
+    // unsupervised, and a restarted deputy never finds a second copy of its commands.
+    prctl(PR_SET_PDEATHSIG, SIGKILL, 0, 0, 0);
+    if (getppid() != parent) _exit(127);  // the deputy died before prctl took effect
     const int devnull = open("/dev/null", O_RDONLY);
     if (devnull >= 0) dup2(devnull, 0);
     dup2(out_pipe[1], 1);
