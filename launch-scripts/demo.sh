@@ -110,27 +110,10 @@ fi
 
 killer_pid=""
 if [ "${DEMO_KILL:-}" = 1 ]; then
-  # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission.
-  # Only this demo's processes: children of its own deputies (commands run without a shell),
-  # never a process of the same name elsewhere on the machine.
-  deputies="$(IFS=,; echo "${pids[*]}")"
-  (
-    victims=(sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people
-             sarmap-sound-map sarmap-people-map sarmap-explore)
-    running() { pgrep -P "$deputies" -f "(^|/)$1( |\$)" | head -1; }   # (names are longer than pgrep -x sees)
-    for _ in $(seq 300); do [ -n "$(running sarmap-sim)" ] && break; sleep 0.2; done
-    gap=$(( DEMO_SECONDS / (${#victims[@]} + 2) ))
-    [ "$gap" -ge 2 ] || gap=2
-    for v in "${victims[@]}"; do
-      sleep "$gap"
-      pid="$(running "$v" || true)"
-      if [ -n "$pid" ]; then
-        kill -KILL "$pid" && echo "$(date +%T) kill -9 $v (pid $pid)"
-      else
-        echo "$(date +%T) $v not running"
-      fi
-    done
-  ) >"$out/kills.txt" 2>&1 &
+  # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission;
+  # only children of this demo's deputies.
+  "$root/launch-scripts/demo-kill.sh" "$(IFS=,; echo "${pids[*]}")" "$DEMO_SECONDS" \
+    >"$out/kills.txt" 2>&1 &
   killer_pid=$!
 fi
 
