@@ -6,14 +6,18 @@ set -uo pipefail
 src="$1"
 work="$(mktemp -d /tmp/sarmap_demo_kill_XXXXXX)"
 pids=()
-cleanup() { for p in "${pids[@]}"; do kill -KILL "$p" 2>/dev/null; done; rm -rf "$work"; }
+cleanup() {
+  for p in "${pids[@]}"; do pkill -KILL -P "$p" 2>/dev/null; kill -KILL "$p" 2>/dev/null; done
+  rm -rf "$work"
+}
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 for name in sarmap-sim sarmap-depth; do ln -s "$(command -v sleep)" "$work/$name"; done
 # A stand-in deputy with the demo's simulator and one victim as its children...
-bash -c "'$work/sarmap-sim' 60 & '$work/sarmap-depth' 60 & wait" & deputy=$!; pids+=("$deputy")
+bash -c "'$work/sarmap-sim' 60 & '$work/sarmap-depth' 60 & wait" >/dev/null 2>&1 & deputy=$!
+pids+=("$deputy")
 # ...and a process of the same name elsewhere on the machine.
-"$work/sarmap-depth" 60 & other=$!; pids+=("$other")
+"$work/sarmap-depth" 60 >/dev/null 2>&1 & other=$!; pids+=("$other")
 for _ in $(seq 50); do [ -n "$(pgrep -P "$deputy" -f sarmap-depth)" ] && break; sleep 0.1; done
 ours="$(pgrep -P "$deputy" -f sarmap-depth)"
 [ -n "$ours" ] || fail "the stand-in deputy's sarmap-depth did not start"
