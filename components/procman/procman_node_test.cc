@@ -225,6 +225,57 @@ TEST(ProcmanNodeTest, ScriptWaitingOnASilentDeputyFails) {
       << rig.runner().error();
 }
 
+// Order counters are on each deputy's own clock: a live sheriff follows another sheriff's
+// orders to every deputy, however far apart the deputies' clocks are.
+TEST(ProcmanNodeTest, LiveSheriffFollowsAnotherSheriffOnDeputiesWithDifferentClocks) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  const ProcmanOptions options;
+  const Config config = ParseConfig(R"(
+cmd "x" { exec = "sleep 600"; deputy = "d1"; }
+cmd "y" { exec = "sleep 600"; deputy = "d2"; }
+)",
+                                    "test.pmd");
+  std::vector<std::unique_ptr<Deputy>> deputies;
+  std::vector<std::unique_ptr<Sheriff>> sheriffs;
+  const auto pump = [&](double seconds, const std::function<bool()>& done) {
+    const double end = Now() + seconds;
+    while (Now() < end) {
+      while (lcm.handleTimeout(1) > 0) {
+      }
+      for (auto& d : deputies) d->OnWake({}, Now());
+      for (auto& s : sheriffs) s->OnWake({}, Now());
+      if (done && done()) return true;
+      usleep(2000);
+    }
+    return false;
+  };
+  deputies.push_back(std::make_unique<Deputy>(&lcm, options, "d1", kKey));
+  pump(2.0, nullptr);  // d1's clock is 2 s ahead of d2's
+  deputies.push_back(std::make_unique<Deputy>(&lcm, options, "d2", kKey));
+  sheriffs.push_back(std::make_unique<Sheriff>(&lcm, options, config, &kKey, "live/1"));
+  sheriffs.push_back(std::make_unique<Sheriff>(&lcm, options, config, &kKey, "one-shot/2"));
+  Sheriff& live = *sheriffs[0];
+  Sheriff& one_shot = *sheriffs[1];
+  ASSERT_TRUE(pump(5, [&] { return live.AllDeputiesHeard() && one_shot.AllDeputiesHeard(); }));
+  one_shot.Apply(Sheriff::Verb::kStart, config.ResolveTarget("x"));
+  one_shot.Apply(Sheriff::Verb::kStart, config.ResolveTarget("y"));
+  ASSERT_TRUE(pump(10, [&] {
+    return live.CommandState("x") == +sarmap::pm_command_status_t::STATE_RUNNING &&
+           live.CommandState("y") == +sarmap::pm_command_status_t::STATE_RUNNING;
+  }));
+  // The live sheriff now wants both running: its table says "run" for each.
+  const std::string table = live.Table(Now());
+  for (const char* id : {"x ", "y "}) {
+    const size_t at = table.find(std::string("\n") + id);
+    ASSERT_NE(at, std::string::npos) << table;
+    const std::string line = table.substr(at + 1, table.find('\n', at + 1) - at - 1);
+    EXPECT_NE(line.find(" run "), std::string::npos) << line;
+  }
+  for (auto& d : deputies) d->Shutdown();
+  pump(10, [&] { return deputies[0]->Finished() && deputies[1]->Finished(); });
+}
+
 }  // namespace
 }  // namespace procman
 }  // namespace sarmap

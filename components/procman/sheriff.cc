@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <limits>
 #include <sstream>
 
@@ -34,6 +35,8 @@ struct Sheriff::DeputyView {
   int64_t session = 0;       // confirmed session (0: none yet)
   int64_t clock_us = 0;      // its session clock in the last verified report
   double clock_heard_s = 0;  // when that report arrived (steady clock)
+  // Other sheriffs' last followed orders to this deputy (their counters are on its clock).
+  std::map<std::string, int64_t> foreign_counters;
   sarmap::pm_info_t info;
   bool initialised = false;    // desired state adopted from its first report
   bool dirty = false;          // desired state changed, not sent yet
@@ -181,6 +184,7 @@ void Sheriff::OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string& channel)
       d->session = info.session;
       d->last_sent_counter = 0;
       d->change_counter = 0;
+      d->foreign_counters.clear();
     }
   } else {
     d->session = info.session;  // an observer shows what it hears; it decides nothing
@@ -264,9 +268,13 @@ void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   if (orders.deputy_session != d->session || orders.counter < clock_us - window_us ||
       orders.counter > clock_us + window_us)
     return;
-  auto it = foreign_counters_.find(orders.sheriff_id);
-  if (it != foreign_counters_.end() && orders.counter <= it->second) return;
-  foreign_counters_[orders.sheriff_id] = orders.counter;
+  auto it = d->foreign_counters.find(orders.sheriff_id);
+  if (it != d->foreign_counters.end() && orders.counter <= it->second) return;
+  d->foreign_counters[orders.sheriff_id] = orders.counter;
+  // Sheriffs silent for longer than the window are forgotten (their orders fail the window).
+  for (auto f = d->foreign_counters.begin(); f != d->foreign_counters.end();) {
+    f = f->second < clock_us - window_us ? d->foreign_counters.erase(f) : std::next(f);
+  }
   // Another sheriff (e.g. a one-shot command) changed the desired state: follow it. Every
   // change bumps the command's run id, so a higher run id is a newer change; a periodic
   // re-send carries the old one and never undoes our change. Two changes made at once from

@@ -107,7 +107,6 @@ class Sheriff : public EventLoop::Participant {
   std::vector<std::unique_ptr<CommandView>> commands_;
   std::vector<std::unique_ptr<DeputyView>> deputies_;
   std::vector<lcm::Subscription*> subscriptions_;
-  std::map<std::string, int64_t> foreign_counters_;       // other sheriffs' last adopted orders
   std::deque<std::pair<std::string, std::string>> tail_;  // (command, line)
   void SendProbe();
   double last_probe_s_ = -1e9;
