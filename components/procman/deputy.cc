@@ -18,6 +18,12 @@ namespace {
 // Probes are answered at most this often (a flood of probes costs at most 20 reports/s).
 constexpr double kProbeReplyPeriodS = 0.05;
 
+int64_t SteadyMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 std::string HostName() {
   char host[256] = {0};
   gethostname(host, sizeof(host) - 1);
@@ -44,16 +50,6 @@ void PutOwnDirectoryOnPath() {
   const char* path = getenv("PATH");
   setenv("PATH", (dir + ":" + (path ? path : "/usr/local/bin:/usr/bin:/bin")).c_str(), 1);
 }
-
-namespace {
-
-int64_t SteadyMicros() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-}  // namespace
 
 Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key)
     : lcm_(lcm),
