@@ -85,7 +85,7 @@ trap stop_all EXIT
 echo "== sarmap demo: $(basename "$DEMO_WORLD"), ${DEMO_SECONDS} s simulated, driven by ${DEMO_DRIVE:-explore} ($DEMO_EXPLORE_MODE), $computers computer(s); output in $out"
 pmd="$root/launch-scripts/demo.pmd"
 if [ "$computers" = 1 ]; then
-  (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost --set "state_dir=$out") \
+  (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost) \
     >"$out/deputy.txt" 2>&1 & pids+=($!)
 else
   pmd="$root/launch-scripts/demo-two-computers.pmd"
@@ -101,7 +101,7 @@ else
   for id in sensors compute; do
     ns="demo-$id"
     netns_add_host "$ns" "$i"; namespaces+=("$ns")
-    (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --set "state_dir=$out") \
+    (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id") \
       >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
     echo "   computer '$id': network namespace $ns, 10.77.0.$i"
     i=$((i + 1))
@@ -110,24 +110,10 @@ fi
 
 killer_pid=""
 if [ "${DEMO_KILL:-}" = 1 ]; then
-  # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission.
-  (
-    victims=(sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people
-             sarmap-sound-map sarmap-people-map sarmap-explore)
-    running() { pgrep -f "(^|/)$1( |\$)" | head -1; }   # (names are longer than pgrep -x sees)
-    for _ in $(seq 300); do [ -n "$(running sarmap-sim)" ] && break; sleep 0.2; done
-    gap=$(( DEMO_SECONDS / (${#victims[@]} + 2) ))
-    [ "$gap" -ge 2 ] || gap=2
-    for v in "${victims[@]}"; do
-      sleep "$gap"
-      pid="$(running "$v" || true)"
-      if [ -n "$pid" ]; then
-        kill -KILL "$pid" && echo "$(date +%T) kill -9 $v (pid $pid)"
-      else
-        echo "$(date +%T) $v not running"
-      fi
-    done
-  ) >"$out/kills.txt" 2>&1 &
+  # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission;
+  # only children of this demo's deputies.
+  "$root/launch-scripts/demo-kill.sh" "$(IFS=,; echo "${pids[*]}")" "$DEMO_SECONDS" \
+    >"$out/kills.txt" 2>&1 &
   killer_pid=$!
 fi
 

@@ -1,10 +1,9 @@
 #include "procman/deputy.h"
 
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
+#include <chrono>
 #include <cstdlib>
 
 #include "common/decode.h"
@@ -15,6 +14,15 @@
 namespace sarmap {
 namespace procman {
 namespace {
+
+// Probes are answered at most this often (a flood of probes costs at most 20 reports/s).
+constexpr double kProbeReplyPeriodS = 0.05;
+
+int64_t SteadyMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
 
 std::string HostName() {
   char host[256] = {0};
@@ -32,26 +40,6 @@ RespawnPolicy PolicyFrom(const ProcmanOptions& o) {
 
 }  // namespace
 
-std::string DeputyStatePath(const std::string& state_dir, const std::string& id) {
-  std::string dir = state_dir;
-  if (dir.empty()) {
-    const char* xdg = getenv("XDG_STATE_HOME");
-    const char* home = getenv("HOME");
-    dir = (xdg && *xdg) ? std::string(xdg) + "/sarmap"
-                        : std::string(home && *home ? home : "/tmp") + "/.local/state/sarmap";
-  }
-  // Create it (and parents) if needed.
-  for (size_t pos = 1; pos != std::string::npos; pos = dir.find('/', pos + 1)) {
-    mkdir(dir.substr(0, pos).c_str(), 0700);
-  }
-  mkdir(dir.c_str(), 0700);
-  std::string safe_id = id;
-  for (auto& c : safe_id) {
-    if (!isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
-  }
-  return dir + "/procman-deputy-" + safe_id + ".counters";
-}
-
 void PutOwnDirectoryOnPath() {
   char self[4096];
   const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
@@ -63,22 +51,24 @@ void PutOwnDirectoryOnPath() {
   setenv("PATH", (dir + ":" + (path ? path : "/usr/local/bin:/usr/bin:/bin")).c_str(), 1);
 }
 
-Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key,
-               const std::string& replay_state_path)
+Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key)
     : lcm_(lcm),
       options_(options),
       id_(std::move(id)),
       host_(HostName()),
       key_(std::move(key)),
-      replay_(replay_state_path),
+      replay_(RandomNonce(), static_cast<int64_t>(options.order_window_s * 1e6)),
       supervisor_(PolicyFrom(options), static_cast<size_t>(options.output_buffer_bytes)) {
   start_s_ = Now();
+  start_us_ = SteadyMicros();
   subscription_ = lcm_->subscribe("^" + options_.orders_channel + "$", &Deputy::OnOrders, this);
   machine_.Update();
   SARMAP_LOG(INFO) << "deputy '" << id_ << "' on " << host_ << " (pid " << getpid()
-                   << "), orders on " << options_.orders_channel << ", replay state "
-                   << (replay_state_path.empty() ? "(memory only)" : replay_state_path);
+                   << "), orders on " << options_.orders_channel << ", session "
+                   << replay_.session();
 }
+
+int64_t Deputy::SessionClockUs() const { return SteadyMicros() - start_us_; }
 
 Deputy::~Deputy() {
   if (subscription_) lcm_->unsubscribe(subscription_);
@@ -97,20 +87,19 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     return;
   }
   if (orders.deputy_id == kProbeDeputyId && orders.num_commands == 0) {
-    // A sheriff starting up asks every deputy to report now rather than within a second.
-    // Orders nothing, so it needs no signature; rate-limited.
-    const double now = Now();
-    if (now - last_probe_reply_s_ >= 0.05) {
-      last_probe_reply_s_ = now;
-      info_dirty_ = true;
+    // A sheriff asks every deputy to report now rather than within a second. A signed probe
+    // carries a nonce to echo: the sheriff's proof that the report is live. Unsigned probes
+    // (observers) get an answer too, without an echo. At most 20 answers a second.
+    if (!IsUnsigned(orders.hmac_sha256) && SignatureValid(key_, orders)) {
+      probe_echo_ = orders.counter;
     }
+    probe_pending_ = true;
     return;
   }
   if (orders.deputy_id != id_) return;  // for another deputy
   ++orders_received_;
   if (shutting_down_) return;
-  bool persisted = true;
-  const Verdict verdict = VerifyOrders(key_, orders, &replay_, &persisted);
+  const Verdict verdict = VerifyOrders(key_, orders, &replay_, SessionClockUs());
   if (verdict != Verdict::kAccepted) {
     ++refused_;
     info_dirty_ = true;
@@ -124,10 +113,6 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
                        << ")";
     }
     return;
-  }
-  if (!persisted && refuse_log_limit_.try_emplace("persist", 30.0).first->second.Allow(Now())) {
-    SARMAP_LOG(ERROR) << "cannot write replay state " << replay_.state_path()
-                      << "; a deputy restart could accept replays of these orders";
   }
   if (orders.counter != last_order_counter_) info_dirty_ = true;
   last_order_counter_ = orders.counter;
@@ -170,6 +155,7 @@ void Deputy::AddFds(std::vector<pollfd>* fds) {
 
 double Deputy::NextWakeup() const {
   double next = std::min(next_info_s_, supervisor_.NextWakeup());
+  if (probe_pending_) next = std::min(next, last_probe_reply_s_ + kProbeReplyPeriodS);
   if (info_dirty_) next = 0;
   return next;
 }
@@ -177,6 +163,11 @@ double Deputy::NextWakeup() const {
 void Deputy::OnWake(const std::vector<pollfd>& /*fds*/, double now_s) {
   // Cheap enough to run on every wake-up: a reap, non-blocking reads and a state check.
   if (supervisor_.Step(now_s)) info_dirty_ = true;
+  if (probe_pending_ && now_s >= last_probe_reply_s_ + kProbeReplyPeriodS) {
+    probe_pending_ = false;
+    last_probe_reply_s_ = now_s;
+    info_dirty_ = true;
+  }
   if (now_s >= next_output_s_) {
     PublishOutput();
     next_output_s_ = now_s + options_.output_period_s;
@@ -218,6 +209,19 @@ void Deputy::PublishInfo(double now_s) {
     info.commands.push_back(c);
   }
   info.num_commands = static_cast<int32_t>(info.commands.size());
+  info.session = replay_.session();
+  // Strictly increasing, so that the sheriff can tell every report from a played-back one.
+  last_info_clock_us_ = std::max(last_info_clock_us_ + 1, SessionClockUs());
+  info.session_clock_us = last_info_clock_us_;
+  info.probe_echo = probe_echo_;
+  std::fill(std::begin(info.hmac_sha256), std::end(info.hmac_sha256), 0);
+  try {
+    SignInfo(key_, &info);
+  } catch (const std::runtime_error& e) {
+    // Cannot happen with decoded orders (no NUL bytes); never publish unsigned state.
+    SARMAP_LOG(ERROR) << e.what();
+    return;
+  }
   lcm_->publish(options_.info_channel, &info);
   info_dirty_ = false;
   next_info_s_ = now_s + options_.info_period_s;

@@ -21,17 +21,15 @@
 namespace sarmap {
 namespace procman {
 
-// Replay state file of deputy `id` in `state_dir` ("" = the default from the options doc).
-std::string DeputyStatePath(const std::string& state_dir, const std::string& id);
-
 // Puts the directory of the running program (build/bin, or the install's bin) first on PATH,
 // so .pmd files can name sarmap programs without paths.
 void PutOwnDirectoryOnPath();
 
 class Deputy : public EventLoop::Participant {
  public:
-  Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key,
-         const std::string& replay_state_path);
+  // Starts a new session (a random number announced in every signed PM_INFO): orders
+  // signed for an earlier run of this deputy are refused.
+  Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key);
   ~Deputy() override;
 
   void AddFds(std::vector<pollfd>* fds) override;
@@ -43,6 +41,10 @@ class Deputy : public EventLoop::Participant {
   bool Finished() const { return shutting_down_ && supervisor_.AllStopped(); }
 
   const std::string& id() const { return id_; }
+  int64_t session() const { return replay_.session(); }
+  // Microseconds since this deputy (its session) started, on the monotonic clock: the clock
+  // that order counters are checked against.
+  int64_t SessionClockUs() const;
   int refused_orders() const { return refused_; }
   // Messages on the orders channel that did not decode (common::DecodeMessage).
   int malformed_orders() const { return malformed_; }
@@ -74,6 +76,10 @@ class Deputy : public EventLoop::Participant {
   int64_t orders_received_ = 0;
   double start_s_ = 0;
   double last_probe_reply_s_ = -1e9;
+  bool probe_pending_ = false;
+  int64_t probe_echo_ = 0;
+  int64_t last_info_clock_us_ = 0;
+  int64_t start_us_ = 0;  // steady clock, microseconds
   std::map<std::string, common::RateLimiter> refuse_log_limit_;
 };
 

@@ -18,16 +18,15 @@ int main(int argc, char** argv) {
         "sarmap-procman-deputy",
         "Runs and watches the commands that a verified sheriff orders for this deputy id.");
     common::NodeArgs node_args;
-    std::string id, key_path = DefaultKeyPath(), state_dir;
+    std::string id, key_path = DefaultKeyPath();
     parser.AddFlag("--id", &id, "deputy name used in the .pmd files (deputy = \"NAME\";)");
     parser.AddFlag("--key", &key_path, "shared HMAC key file (see README: key set-up)");
-    parser.AddFlag("--state-dir", &state_dir,
-                   "where the replay counters are kept (overrides state_dir)");
     parser.AddNodeOptions(&node_args);
     parser.SetEpilog(
         "channels: PM_ORDERS in; PM_INFO (1 Hz and on change), PM_OUTPUT (rate-limited) out.\n"
         "SIGINT/SIGTERM stop every command (signal, then SIGKILL) before the deputy exits;\n"
-        "a second one exits at once, killing what is left.");
+        "a second one exits at once, killing what is left. Commands die with the deputy\n"
+        "(SIGKILL) if it is killed.");
     if (!parser.Parse(argc, argv)) return 0;
     common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
     auto options = common::LoadOptions<ProcmanOptions>(node_args.config_path, node_args.overrides);
@@ -36,7 +35,6 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (id.empty()) throw common::ArgError("--id NAME is required");
-    if (!state_dir.empty()) options.state_dir = state_dir;
     common::SetLogName("sarmap-procman-deputy[" + id + "]");
     Key key;
     try {
@@ -53,7 +51,7 @@ int main(int argc, char** argv) {
     lcm::LCM lcm(url);
     if (!lcm.good()) throw std::runtime_error("cannot initialise LCM on '" + url + "'");
     EventLoop loop(&lcm);
-    Deputy deputy(&lcm, options, id, std::move(key), DeputyStatePath(options.state_dir, id));
+    Deputy deputy(&lcm, options, id, std::move(key));
     loop.Add(&deputy);
     while (true) {
       if (!loop.RunOnce(1.0)) return 1;

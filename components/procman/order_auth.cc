@@ -3,12 +3,12 @@
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
+#include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -62,11 +62,12 @@ Digest HmacSha256(const Key& key, const uint8_t* data, size_t size) {
 
 namespace {
 
-// False when `orders` has no LCM encoding: LCM's encoder writes a string up to its first NUL
+// False when `msg` has no LCM encoding: LCM's encoder writes a string up to its first NUL
 // while getEncodedSize() counts every byte, so a string holding a NUL (which only a hostile
 // sender puts there) cannot be encoded.
-bool OrdersDigest(const Key& key, const sarmap::pm_orders_t& orders, Digest* digest) {
-  sarmap::pm_orders_t copy = orders;
+template <class T>
+bool MessageDigest(const Key& key, const T& msg, Digest* digest) {
+  T copy = msg;
   std::fill(std::begin(copy.hmac_sha256), std::end(copy.hmac_sha256), 0);
   const int size = copy.getEncodedSize();
   std::vector<uint8_t> buffer(static_cast<size_t>(size));
@@ -75,20 +76,46 @@ bool OrdersDigest(const Key& key, const sarmap::pm_orders_t& orders, Digest* dig
   return true;
 }
 
-}  // namespace
-
-void SignOrders(const Key& key, sarmap::pm_orders_t* orders) {
+template <class T>
+void Sign(const Key& key, T* msg, const char* type) {
   Digest d;
-  if (!OrdersDigest(key, *orders, &d)) {
-    throw std::runtime_error("cannot encode pm_orders_t (a string holds a NUL byte)");
+  if (!MessageDigest(key, *msg, &d)) {
+    throw std::runtime_error(std::string("cannot encode ") + type + " (a string holds a NUL byte)");
   }
-  std::copy(d.begin(), d.end(), std::begin(orders->hmac_sha256));
+  std::copy(d.begin(), d.end(), std::begin(msg->hmac_sha256));
 }
 
-bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders) {
+template <class T>
+bool Valid(const Key& key, const T& msg) {
   Digest d;
-  if (!OrdersDigest(key, orders, &d)) return false;
-  return CRYPTO_memcmp(d.data(), orders.hmac_sha256, d.size()) == 0;
+  if (!MessageDigest(key, msg, &d)) return false;
+  return CRYPTO_memcmp(d.data(), msg.hmac_sha256, d.size()) == 0;
+}
+
+}  // namespace
+
+void SignOrders(const Key& key, sarmap::pm_orders_t* orders) { Sign(key, orders, "pm_orders_t"); }
+void SignInfo(const Key& key, sarmap::pm_info_t* info) { Sign(key, info, "pm_info_t"); }
+bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders) {
+  return Valid(key, orders);
+}
+bool SignatureValid(const Key& key, const sarmap::pm_info_t& info) { return Valid(key, info); }
+
+bool IsUnsigned(const uint8_t (&hmac_sha256)[32]) {
+  uint8_t any = 0;
+  for (uint8_t b : hmac_sha256) any |= b;
+  return any == 0;
+}
+
+int64_t RandomNonce() {
+  uint64_t value = 0;
+  while (value == 0) {
+    if (getrandom(&value, sizeof(value), 0) != static_cast<ssize_t>(sizeof(value))) {
+      throw std::runtime_error(std::string("getrandom: ") + strerror(errno));
+    }
+    value &= 0x7fffffffffffffffULL;
+  }
+  return static_cast<int64_t>(value);
 }
 
 const char* ToString(Verdict verdict) {
@@ -101,105 +128,102 @@ const char* ToString(Verdict verdict) {
       return "forged (signature does not match the key)";
     case Verdict::kReplayed:
       return "replayed (counter not above the last accepted)";
+    case Verdict::kOtherSession:
+      return "for another deputy session (sent before this deputy started)";
+    case Verdict::kOutOfWindow:
+      return "counter outside the window around the deputy's clock";
   }
   return "?";
 }
 
-std::string ReplayDomain(const std::string& sheriff_id) {
-  return sheriff_id.substr(0, sheriff_id.find('/'));
-}
-
-ReplayGuard::ReplayGuard(std::string state_path, int64_t window_us)
-    : state_path_(std::move(state_path)), window_us_(window_us) {
-  if (state_path_.empty()) return;
-  std::ifstream in(state_path_);
-  if (!in) {
-    if (errno == ENOENT) return;  // first run
-    throw std::runtime_error("replay state " + state_path_ + ": " + strerror(errno));
-  }
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty()) continue;
-    // "<counter> <sheriff id>": the id may contain spaces, the counter cannot.
-    const size_t space = line.find(' ');
-    char* end = nullptr;
-    const long long counter = strtoll(line.c_str(), &end, 10);
-    if (space == std::string::npos || end != line.c_str() + space || counter < 0) {
-      throw std::runtime_error("replay state " + state_path_ + ":" + std::to_string(line_no) +
-                               ": corrupt line (delete the file only if no replay can matter)");
-    }
-    last_[line.substr(space + 1)] = counter;
-  }
-}
+ReplayGuard::ReplayGuard(int64_t session, int64_t window_us)
+    : session_(session), window_us_(window_us) {}
 
 int64_t ReplayGuard::Last(const std::string& sheriff_id) const {
   auto it = last_.find(sheriff_id);
   return it == last_.end() ? -1 : it->second;
 }
 
-int64_t ReplayGuard::Newest(const std::string& sheriff_id) const {
-  const std::string name = ReplayDomain(sheriff_id);
-  int64_t newest = -1;
-  for (const auto& [id, c] : last_) {
-    if (ReplayDomain(id) == name) newest = std::max(newest, c);
+Verdict ReplayGuard::Check(const std::string& sheriff_id, int64_t deputy_session, int64_t counter,
+                           int64_t now_us) const {
+  if (deputy_session != session_) return Verdict::kOtherSession;
+  // Written so that no subtraction can overflow, whatever the counter.
+  if (counter < now_us - window_us_ || counter > now_us + window_us_) {
+    return Verdict::kOutOfWindow;
   }
-  return newest;
+  if (counter <= Last(sheriff_id)) return Verdict::kReplayed;
+  return Verdict::kAccepted;
 }
 
-bool ReplayGuard::Fresh(const std::string& sheriff_id, int64_t counter) const {
-  const int64_t last = Last(sheriff_id);
-  const int64_t newest = Newest(sheriff_id);
-  if (last >= 0 && counter <= last) return false;
-  return newest < 0 || counter > newest - window_us_;
-}
-
-bool ReplayGuard::Accept(const std::string& sheriff_id, int64_t counter) {
+void ReplayGuard::Accept(const std::string& sheriff_id, int64_t counter, int64_t now_us) {
   last_[sheriff_id] = std::max(counter, Last(sheriff_id));
-  // Forget instances of this name that fell out of the window: the NAME rule refuses them.
-  const std::string name = ReplayDomain(sheriff_id);
-  const int64_t newest = Newest(sheriff_id);
+  // Instances whose last order left the window: any order of theirs fails the window rule.
   for (auto it = last_.begin(); it != last_.end();) {
-    if (ReplayDomain(it->first) == name && it->second < newest - window_us_) {
+    if (it->second < now_us - window_us_) {
       it = last_.erase(it);
     } else {
       ++it;
     }
   }
-  if (state_path_.empty()) return true;
-  // Write a new file and rename it over the old one: a crash never leaves half a file.
-  const std::string tmp = state_path_ + ".tmp";
-  FILE* f = fopen(tmp.c_str(), "w");
-  if (!f) return false;
-  bool ok = true;
-  for (const auto& [id, c] : last_) {
-    ok = ok && fprintf(f, "%lld %s\n", static_cast<long long>(c), id.c_str()) > 0;
-  }
-  ok = fflush(f) == 0 && ok;
-  ok = fsync(fileno(f)) == 0 && ok;
-  ok = fclose(f) == 0 && ok;
-  return ok && rename(tmp.c_str(), state_path_.c_str()) == 0;
 }
 
 Verdict VerifyOrders(const Key& key, const sarmap::pm_orders_t& orders, ReplayGuard* guard,
-                     bool* persisted) {
-  bool all_zero = true;
-  for (uint8_t b : orders.hmac_sha256) all_zero = all_zero && b == 0;
-  if (all_zero) return Verdict::kUnsigned;
+                     int64_t now_us) {
+  if (IsUnsigned(orders.hmac_sha256)) return Verdict::kUnsigned;
   if (!SignatureValid(key, orders)) return Verdict::kForged;
-  if (!guard->Fresh(orders.sheriff_id, orders.counter)) return Verdict::kReplayed;
-  const bool ok = guard->Accept(orders.sheriff_id, orders.counter);
-  if (persisted) *persisted = ok;
-  return Verdict::kAccepted;
+  const Verdict v = guard->Check(orders.sheriff_id, orders.deputy_session, orders.counter, now_us);
+  if (v == Verdict::kAccepted) guard->Accept(orders.sheriff_id, orders.counter, now_us);
+  return v;
 }
 
-int64_t CounterSource::Next() {
-  const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                             std::chrono::system_clock::now().time_since_epoch())
-                             .count();
-  last_ = std::max(last_ + 1, now_us);
-  return last_;
+const char* ToString(InfoVerdict verdict) {
+  switch (verdict) {
+    case InfoVerdict::kAccepted:
+      return "accepted";
+    case InfoVerdict::kNewSession:
+      return "new session";
+    case InfoVerdict::kUnsigned:
+      return "unsigned";
+    case InfoVerdict::kForged:
+      return "forged (signature does not match the key)";
+    case InfoVerdict::kStale:
+      return "stale (not newer than the last report of that session)";
+    case InfoVerdict::kUnconfirmed:
+      return "unconfirmed session (no echo of a probe of ours)";
+  }
+  return "?";
+}
+
+void InfoGuard::AddChallenge(int64_t nonce) {
+  challenges_.emplace_back(next_index_++, nonce);
+  if (challenges_.size() > 8) challenges_.erase(challenges_.begin());
+}
+
+InfoVerdict InfoGuard::Verify(const Key& key, const sarmap::pm_info_t& info) {
+  if (IsUnsigned(info.hmac_sha256)) return InfoVerdict::kUnsigned;
+  if (!SignatureValid(key, info)) return InfoVerdict::kForged;
+  Seen& seen = seen_[info.deputy_id];
+  if (seen.session != 0 && info.session == seen.session) {
+    if (info.session_clock_us <= seen.clock_us) return InfoVerdict::kStale;
+    seen.clock_us = info.session_clock_us;
+    return InfoVerdict::kAccepted;
+  }
+  for (const auto& [index, nonce] : challenges_) {
+    // Only a nonce newer than the one that confirmed the current session: a recording of an
+    // earlier session that echoed an older probe of ours cannot bring that session back.
+    if (nonce == info.probe_echo && index > seen.challenge_index) {
+      seen.session = info.session;
+      seen.clock_us = info.session_clock_us;
+      seen.challenge_index = index;
+      return InfoVerdict::kNewSession;
+    }
+  }
+  return InfoVerdict::kUnconfirmed;
+}
+
+int64_t InfoGuard::Session(const std::string& deputy_id) const {
+  auto it = seen_.find(deputy_id);
+  return it == seen_.end() ? 0 : it->second.session;
 }
 
 }  // namespace procman

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <limits>
 
 namespace sarmap {
 namespace procman {
@@ -24,6 +25,7 @@ sarmap::pm_orders_t SomeOrders(int64_t counter) {
   o.header.frame = "";
   o.sheriff_id = "sheriff@base";
   o.deputy_id = "compute";
+  o.deputy_session = 0;
   o.counter = counter;
   sarmap::pm_command_order_t c;
   c.command_id = "sarmap-slam";
@@ -66,101 +68,168 @@ TEST(OrderAuth, SignedOrdersVerifyAndAnyChangeBreaksThem) {
   changed.deputy_id = "sensors";
   EXPECT_FALSE(SignatureValid(key, changed));
   changed = o;
+  changed.deputy_session = 1;
+  EXPECT_FALSE(SignatureValid(key, changed));
+  changed = o;
   changed.counter = 11;
   EXPECT_FALSE(SignatureValid(key, changed));
 }
 
-TEST(OrderAuth, RefusesUnsignedForgedAndReplayed) {
-  const Key key = TestKey(1);
-  ReplayGuard guard;
-  const int64_t t = 1700000000000000;  // counters are wall-clock microseconds
-  sarmap::pm_orders_t unsigned_orders = SomeOrders(t);
-  EXPECT_EQ(VerifyOrders(key, unsigned_orders, &guard), Verdict::kUnsigned);
+constexpr int64_t kSession = 0x1234567890;
 
-  sarmap::pm_orders_t forged = SomeOrders(t + 1);
-  SignOrders(TestKey(9), &forged);
-  EXPECT_EQ(VerifyOrders(key, forged, &guard), Verdict::kForged);
-
-  sarmap::pm_orders_t first = SomeOrders(t + 2);
-  SignOrders(key, &first);
-  EXPECT_EQ(VerifyOrders(key, first, &guard), Verdict::kAccepted);
-  EXPECT_EQ(guard.Last("sheriff@base"), t + 2);
-  EXPECT_EQ(VerifyOrders(key, first, &guard), Verdict::kReplayed);  // the same again
-  sarmap::pm_orders_t older = SomeOrders(t + 1);
-  SignOrders(key, &older);
-  EXPECT_EQ(VerifyOrders(key, older, &guard), Verdict::kReplayed);
-  sarmap::pm_orders_t next = SomeOrders(t + 1000000);
-  SignOrders(key, &next);
-  EXPECT_EQ(VerifyOrders(key, next, &guard), Verdict::kAccepted);
-  // Another sheriff name has its own counters.
-  sarmap::pm_orders_t other = SomeOrders(5);
-  other.sheriff_id = "sheriff@laptop";
-  SignOrders(key, &other);
-  EXPECT_EQ(VerifyOrders(key, other, &guard), Verdict::kAccepted);
-}
-
-sarmap::pm_orders_t Signed(const Key& key, const std::string& sheriff, int64_t counter) {
+sarmap::pm_orders_t Signed(const Key& key, const std::string& sheriff, int64_t counter,
+                           int64_t session = kSession) {
   sarmap::pm_orders_t o = SomeOrders(counter);
   o.sheriff_id = sheriff;
+  o.deputy_session = session;
   SignOrders(key, &o);
   return o;
 }
 
-TEST(OrderAuth, InstancesOfOneSheriffName) {
+TEST(OrderAuth, RefusesUnsignedForgedAndReplayed) {
   const Key key = TestKey(1);
-  ReplayGuard guard;  // window 2 s
-  const int64_t t = 1700000000000000;
-  // A live sheriff and a one-shot command of the same name send at once: their counters
-  // interleave on the wire; neither is a replay.
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/100", t + 500000), &guard), Verdict::kAccepted);
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/200", t + 400000), &guard), Verdict::kAccepted);
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/100", t + 450000), &guard), Verdict::kReplayed);
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/200", t + 400000), &guard), Verdict::kReplayed);
-  // A restarted sheriff (new instance) continues upward.
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/300", t + 10000000), &guard), Verdict::kAccepted);
-  // Instances left behind by more than the window are held to the name's newest counter,
-  // also with orders of theirs the deputy never saw.
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/100", t + 600000), &guard), Verdict::kReplayed);
-  EXPECT_EQ(VerifyOrders(key, Signed(key, "s@h/400", t + 7000000), &guard), Verdict::kReplayed);
-  EXPECT_EQ(guard.Last("s@h/100"), -1);  // forgotten: the state stays small
-  EXPECT_EQ(guard.Newest("s@h/999"), t + 10000000);
+  ReplayGuard guard(kSession);   // window 5 s
+  const int64_t now = 60000000;  // the deputy's session clock: a minute since it started
+  sarmap::pm_orders_t unsigned_orders = SomeOrders(now);
+  unsigned_orders.deputy_session = kSession;
+  EXPECT_EQ(VerifyOrders(key, unsigned_orders, &guard, now), Verdict::kUnsigned);
+
+  sarmap::pm_orders_t forged = SomeOrders(now + 1);
+  forged.deputy_session = kSession;
+  SignOrders(TestKey(9), &forged);
+  EXPECT_EQ(VerifyOrders(key, forged, &guard, now), Verdict::kForged);
+
+  const sarmap::pm_orders_t first = Signed(key, "sheriff@base/1", now + 2);
+  EXPECT_EQ(VerifyOrders(key, first, &guard, now), Verdict::kAccepted);
+  EXPECT_EQ(guard.Last("sheriff@base/1"), now + 2);
+  EXPECT_EQ(VerifyOrders(key, first, &guard, now + 10), Verdict::kReplayed);  // the same again
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/1", now + 1), &guard, now + 10),
+            Verdict::kReplayed);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/1", now + 1000000), &guard, now + 1000000),
+            Verdict::kAccepted);
+  // Another sheriff instance has its own counters.
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@laptop/7", now - 4000000), &guard, now),
+            Verdict::kAccepted);
 }
 
-TEST(OrderAuth, CountersSurviveADeputyRestart) {
-  char dir_template[] = "/tmp/procman_replay_XXXXXX";
-  ASSERT_NE(mkdtemp(dir_template), nullptr);
-  const std::string path = std::string(dir_template) + "/counters";
+// The deputy's counter state used to live in a file: lose it (or restart the deputy) and a
+// captured order was accepted again. Now a restarted deputy has a new session.
+TEST(OrderAuth, CapturedOrderIsRefusedByARestartedDeputy) {
   const Key key = TestKey(3);
-  sarmap::pm_orders_t o = SomeOrders(1700000000000000);
-  o.sheriff_id = "sheriff with spaces";
-  SignOrders(key, &o);
-  {
-    ReplayGuard guard(path);
-    bool persisted = false;
-    EXPECT_EQ(VerifyOrders(key, o, &guard, &persisted), Verdict::kAccepted);
-    EXPECT_TRUE(persisted);
+  const sarmap::pm_orders_t captured = Signed(key, "sheriff@base/1", 2000000);
+  ReplayGuard first_run(kSession);
+  EXPECT_EQ(VerifyOrders(key, captured, &first_run, 2000000), Verdict::kAccepted);
+  // The deputy restarts: a new session, its clock from zero again, nothing on disk.
+  ReplayGuard second_run(RandomNonce());
+  ASSERT_NE(second_run.session(), kSession);
+  for (const int64_t now : {int64_t{0}, int64_t{1000000}, int64_t{2000000}, int64_t{3000000}}) {
+    EXPECT_EQ(VerifyOrders(key, captured, &second_run, now), Verdict::kOtherSession) << now;
   }
-  ReplayGuard restarted(path);
-  EXPECT_EQ(restarted.Last("sheriff with spaces"), 1700000000000000);
-  EXPECT_EQ(VerifyOrders(key, o, &restarted), Verdict::kReplayed);
-
-  std::ofstream(path) << "garbage\n";
-  EXPECT_THROW(ReplayGuard{path}, std::runtime_error);
-  unlink(path.c_str());
-  rmdir(dir_template);
+  // The same order re-signed for the new session (only a key holder can) is accepted.
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/1", 2000000, second_run.session()),
+                         &second_run, 2000000),
+            Verdict::kAccepted);
 }
 
-TEST(OrderAuth, SheriffCountersOnlyGoUp) {
-  CounterSource a;
-  int64_t prev = 0;
-  for (int i = 0; i < 1000; ++i) {
-    const int64_t c = a.Next();
-    EXPECT_GT(c, prev);
-    prev = c;
+// One order with a near-maximum counter used to lock its sheriff name out for good.
+TEST(OrderAuth, NearMaximumCounterIsRefusedAndLocksNobodyOut) {
+  const Key key = TestKey(1);
+  ReplayGuard guard(kSession);
+  const int64_t now = 10000000;
+  const int64_t max = std::numeric_limits<int64_t>::max();
+  for (const int64_t c : {max, max - 1, now + guard.window_us() + 1, int64_t{0}}) {
+    EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/1", c), &guard, now),
+              Verdict::kOutOfWindow)
+        << c;
   }
-  // A restarted sheriff (new source) continues above: counters come from the wall clock.
-  CounterSource b;
-  EXPECT_GT(b.Next(), prev - 1000000);
+  EXPECT_EQ(guard.Last("sheriff@base/1"), -1);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/1", now), &guard, now), Verdict::kAccepted);
+  // The furthest a counter can get ahead is the window: it holds that instance back for at
+  // most the window, and other instances of the name not at all.
+  const int64_t ahead = now + guard.window_us();
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/2", ahead), &guard, now),
+            Verdict::kAccepted);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/3", now + 1), &guard, now + 1),
+            Verdict::kAccepted);
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "sheriff@base/2", ahead + 1), &guard, ahead + 1),
+            Verdict::kAccepted);
+}
+
+TEST(OrderAuth, InstancesOutsideTheWindowAreForgotten) {
+  const Key key = TestKey(1);
+  ReplayGuard guard(kSession);
+  int64_t now = 1000000;
+  for (int i = 0; i < 50; ++i, now += 1000000) {
+    EXPECT_EQ(VerifyOrders(key, Signed(key, "one-shot/" + std::to_string(i), now), &guard, now),
+              Verdict::kAccepted);
+  }
+  // Only the instances of the last window are remembered...
+  EXPECT_LE(guard.instances(), 6u);
+  // ...and an order of a forgotten one is refused all the same (older than the window).
+  EXPECT_EQ(VerifyOrders(key, Signed(key, "one-shot/3", 4000000 + 1), &guard, now),
+            Verdict::kOutOfWindow);
+}
+
+sarmap::pm_info_t SomeInfo(int64_t session, int64_t clock_us, int64_t echo) {
+  sarmap::pm_info_t info;
+  info.header.utime = 1;
+  info.header.seq = 0;
+  info.deputy_id = "compute";
+  info.host = "robot";
+  info.cpu_load = 0.25;
+  info.phys_mem_total_bytes = 1 << 30;
+  info.phys_mem_free_bytes = 1 << 29;
+  info.refused_orders = 0;
+  info.last_order_counter = -1;
+  info.num_commands = 0;
+  info.session = session;
+  info.session_clock_us = clock_us;
+  info.probe_echo = echo;
+  std::fill(std::begin(info.hmac_sha256), std::end(info.hmac_sha256), 0);
+  return info;
+}
+
+sarmap::pm_info_t SignedInfo(const Key& key, int64_t session, int64_t clock_us, int64_t echo) {
+  sarmap::pm_info_t info = SomeInfo(session, clock_us, echo);
+  SignInfo(key, &info);
+  return info;
+}
+
+TEST(OrderAuth, SheriffAcceptsOnlySignedLiveReports) {
+  const Key key = TestKey(1);
+  InfoGuard guard;
+  // Before any probe of ours, even a genuine report is unconfirmed (it could be a recording).
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession, 100, 0)), InfoVerdict::kUnconfirmed);
+  guard.AddChallenge(777);
+  EXPECT_EQ(guard.Verify(key, SomeInfo(kSession, 200, 777)), InfoVerdict::kUnsigned);
+  sarmap::pm_info_t forged = SomeInfo(kSession, 200, 777);
+  SignInfo(TestKey(9), &forged);
+  EXPECT_EQ(guard.Verify(key, forged), InfoVerdict::kForged);
+  sarmap::pm_info_t tampered = SignedInfo(key, kSession, 200, 777);
+  tampered.cpu_load = 0.5;
+  EXPECT_EQ(guard.Verify(key, tampered), InfoVerdict::kForged);
+  // Signed and echoing our nonce: the session is confirmed.
+  const sarmap::pm_info_t live = SignedInfo(key, kSession, 300, 777);
+  EXPECT_EQ(guard.Verify(key, live), InfoVerdict::kNewSession);
+  EXPECT_EQ(guard.Session("compute"), kSession);
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession, 400, 777)), InfoVerdict::kAccepted);
+  // Played back: not newer than what we have.
+  EXPECT_EQ(guard.Verify(key, live), InfoVerdict::kStale);
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession, 400, 777)), InfoVerdict::kStale);
+  // A recording of another session, even one that echoed our nonce, cannot take over...
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession + 1, 5000, 777)), InfoVerdict::kUnconfirmed);
+  // ...a restarted deputy answering our next probe does.
+  guard.AddChallenge(888);
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession + 2, 50, 888)), InfoVerdict::kNewSession);
+  EXPECT_EQ(guard.Session("compute"), kSession + 2);
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession, 500, 777)), InfoVerdict::kUnconfirmed);
+}
+
+TEST(OrderAuth, RandomNoncesArePositiveAndDiffer) {
+  const int64_t a = RandomNonce(), b = RandomNonce();
+  EXPECT_GT(a, 0);
+  EXPECT_GT(b, 0);
+  EXPECT_NE(a, b);
 }
 
 TEST(OrderAuth, KeyFileChecks) {

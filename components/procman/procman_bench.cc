@@ -62,7 +62,7 @@ int main() {
   const std::string deputy_id = "bench" + std::to_string(getpid());
   const int marker = 600000 + (getpid() % 1000) * 100;
   Child deputy({BinDir() + "/sarmap-procman-deputy", "--id", deputy_id, "--key", scratch.key(),
-                "--state-dir", scratch.state(), "--log-level", "warn"},
+                "--log-level", "warn"},
                scratch.dir() + "/deputy.log");
 
   lcm::LCM lcm(getenv("SARMAP_LCM_URL") ? getenv("SARMAP_LCM_URL") : "");

@@ -1,13 +1,19 @@
 // Deputy and sheriff in-process over memq://: hostile datagrams on their channels are
-// counted and dropped, and both go on.
+// counted and dropped, and both go on; forged reports never drive a script; a script
+// waiting on a deputy that went silent fails.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <vector>
 
 #include "procman/deputy.h"
+#include "procman/event_loop.h"
 #include "procman/pmd_config.h"
 #include "procman/sheriff.h"
 
@@ -57,7 +63,7 @@ TEST(ProcmanNodeTest, DeputyDropsOrdersWithANulByteAndGoesOn) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   ProcmanOptions options;
-  Deputy deputy(&lcm, options, "d1", kKey, "");
+  Deputy deputy(&lcm, options, "d1", kKey);
   Deliver(&lcm, {OrdersWithNul("d1", 0x55), OrdersWithNul("d1", 0)});
   EXPECT_EQ(deputy.malformed_orders(), 2);
   EXPECT_EQ(deputy.refused_orders(), 0);  // never got as far as the signature
@@ -85,10 +91,189 @@ TEST(ProcmanNodeTest, SignatureOfUnencodableOrdersIsInvalidNotAnException) {
   bool valid = true;
   EXPECT_NO_THROW(valid = SignatureValid(kKey, orders));
   EXPECT_FALSE(valid);
-  ReplayGuard guard;
+  ReplayGuard guard(1);
   Verdict verdict = Verdict::kAccepted;
-  EXPECT_NO_THROW(verdict = VerifyOrders(kKey, orders, &guard));
+  EXPECT_NO_THROW(verdict = VerifyOrders(kKey, orders, &guard, 0));
   EXPECT_EQ(verdict, Verdict::kForged);
+}
+
+// A deputy, a sheriff and a script in one process: handles messages and wakes everyone up
+// until `done` or `limit_s`; returns the script's last result.
+class Rig {
+ public:
+  explicit Rig(const std::string& pmd, ProcmanOptions options = ProcmanOptions())
+      : lcm_("memq://"),
+        config_(ParseConfig(pmd, "test.pmd")),
+        deputy_(std::make_unique<Deputy>(&lcm_, options, "d1", kKey)),
+        sheriff_(&lcm_, options, config_, &kKey, "sheriff/1"),
+        runner_(&sheriff_, config_.FindScript("mission")) {
+    lcm_.subscribe("PM_INFO", &Rig::OnInfo, this);
+  }
+  ~Rig() {
+    if (deputy_) {
+      deputy_->Shutdown();
+      Pump([&] { return deputy_->Finished(); }, 10);
+    }
+  }
+  bool Pump(const std::function<bool()>& done, double limit_s) {
+    const double end = Now() + limit_s;
+    while (Now() < end) {
+      while (lcm_.handleTimeout(1) > 0) {
+      }
+      const double now = Now();
+      if (deputy_) deputy_->OnWake({}, now);
+      sheriff_.OnWake({}, now);
+      if (result_ == ScriptRunner::kRunning) result_ = runner_.Step(now);
+      if (done()) return true;
+      usleep(2000);
+    }
+    return false;
+  }
+  lcm::LCM& lcm() { return lcm_; }
+  Sheriff& sheriff() { return sheriff_; }
+  ScriptRunner& runner() { return runner_; }
+  ScriptRunner::Result result() const { return result_; }
+  void KillDeputy() { deputy_.reset(); }  // stops reporting (its commands are killed)
+  const std::vector<sarmap::pm_info_t>& reports() const { return reports_; }
+
+ private:
+  void OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    sarmap::pm_info_t info;
+    if (info.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) reports_.push_back(info);
+  }
+  lcm::LCM lcm_;
+  Config config_;
+  std::unique_ptr<Deputy> deputy_;
+  Sheriff sheriff_;
+  ScriptRunner runner_;
+  ScriptRunner::Result result_ = ScriptRunner::kRunning;
+  std::vector<sarmap::pm_info_t> reports_;
+};
+
+const char* kMissionPmd = R"(
+cmd "sim" { exec = "sleep 600"; deputy = "d1"; }
+script "mission" {
+  start cmd "sim" wait "running" timeout 20;
+  wait cmd "sim" status "stopped" timeout 1800;
+}
+)";
+
+// Five fake "simulator stopped" reports used to end the mission (the script went on to
+// sign real stop orders). Now only signed, live reports count.
+TEST(ProcmanNodeTest, ForgedStoppedReportsDoNotAdvanceTheScript) {
+  Rig rig(kMissionPmd);
+  ASSERT_TRUE(rig.Pump(
+      [&] {
+        return rig.runner().Describe().find("status \"stopped\"") != std::string::npos &&
+               rig.sheriff().CommandState("sim") == sarmap::pm_command_status_t::STATE_RUNNING;
+      },
+      20));
+  const int sim_pid = rig.sheriff().CommandPid("sim");
+  ASSERT_GT(sim_pid, 0);
+  ASSERT_FALSE(rig.reports().empty());
+  // A genuine report from before the start (the deputy ran nothing: "sim" not there)...
+  const sarmap::pm_info_t early = rig.reports().front();
+  // ...and the latest one turned into "sim stopped", with a newer clock.
+  sarmap::pm_info_t stopped = rig.reports().back();
+  for (auto& c : stopped.commands) {
+    c.state = sarmap::pm_command_status_t::STATE_STOPPED;
+    c.pid = 0;
+  }
+  stopped.session_clock_us += 10000000;
+  stopped.last_order_counter += 10000000;
+  const Key wrong_key(32, 0x43);
+  std::vector<sarmap::pm_info_t> forged;
+  for (int i = 0; i < 5; ++i) {
+    sarmap::pm_info_t f = stopped;
+    f.header.seq += i + 1;
+    f.session_clock_us += i;
+    std::fill(std::begin(f.hmac_sha256), std::end(f.hmac_sha256), 0);
+    if (i >= 3) SignInfo(wrong_key, &f);  // two signed with another key
+    forged.push_back(f);
+  }
+  forged.push_back(early);  // a genuine report played back
+  const int ignored_before = rig.sheriff().ignored_info();
+  for (const auto& f : forged) {
+    rig.lcm().publish("PM_INFO", &f);
+    rig.Pump([] { return false; }, 0.05);
+  }
+  rig.Pump([] { return false; }, 0.5);
+  EXPECT_EQ(rig.result(), ScriptRunner::kRunning) << rig.runner().error();
+  EXPECT_EQ(rig.sheriff().CommandState("sim"), +sarmap::pm_command_status_t::STATE_RUNNING);
+  EXPECT_EQ(rig.sheriff().ignored_info() - ignored_before, 6);
+  EXPECT_NE(rig.sheriff().Table(Now()).find("6 unsigned, forged or played-back PM_INFO"),
+            std::string::npos);
+  // The simulator really stopping ends the wait.
+  kill(sim_pid, SIGTERM);
+  EXPECT_TRUE(rig.Pump([&] { return rig.result() != ScriptRunner::kRunning; }, 20));
+  EXPECT_EQ(rig.result(), ScriptRunner::kDone) << rig.runner().error();
+}
+
+// A killed deputy used to leave the script waiting for its whole timeout (30 min in the demo).
+TEST(ProcmanNodeTest, ScriptWaitingOnASilentDeputyFails) {
+  ProcmanOptions options;
+  options.deputy_gone_after_s = 2.0;
+  Rig rig(kMissionPmd, options);
+  ASSERT_TRUE(rig.Pump(
+      [&] { return rig.runner().Describe().find("status \"stopped\"") != std::string::npos; }, 20));
+  rig.KillDeputy();
+  EXPECT_TRUE(rig.Pump([&] { return rig.result() != ScriptRunner::kRunning; }, 30));
+  EXPECT_EQ(rig.result(), ScriptRunner::kFailed);
+  EXPECT_NE(rig.runner().error().find("test.pmd:5:3: wait cmd \"sim\" status \"stopped\": "
+                                      "deputy 'd1' silent for"),
+            std::string::npos)
+      << rig.runner().error();
+}
+
+// Order counters are on each deputy's own clock: a live sheriff follows another sheriff's
+// orders to every deputy, however far apart the deputies' clocks are.
+TEST(ProcmanNodeTest, LiveSheriffFollowsAnotherSheriffOnDeputiesWithDifferentClocks) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  const ProcmanOptions options;
+  const Config config = ParseConfig(R"(
+cmd "x" { exec = "sleep 600"; deputy = "d1"; }
+cmd "y" { exec = "sleep 600"; deputy = "d2"; }
+)",
+                                    "test.pmd");
+  std::vector<std::unique_ptr<Deputy>> deputies;
+  std::vector<std::unique_ptr<Sheriff>> sheriffs;
+  const auto pump = [&](double seconds, const std::function<bool()>& done) {
+    const double end = Now() + seconds;
+    while (Now() < end) {
+      while (lcm.handleTimeout(1) > 0) {
+      }
+      for (auto& d : deputies) d->OnWake({}, Now());
+      for (auto& s : sheriffs) s->OnWake({}, Now());
+      if (done && done()) return true;
+      usleep(2000);
+    }
+    return false;
+  };
+  deputies.push_back(std::make_unique<Deputy>(&lcm, options, "d1", kKey));
+  pump(2.0, nullptr);  // d1's clock is 2 s ahead of d2's
+  deputies.push_back(std::make_unique<Deputy>(&lcm, options, "d2", kKey));
+  sheriffs.push_back(std::make_unique<Sheriff>(&lcm, options, config, &kKey, "live/1"));
+  sheriffs.push_back(std::make_unique<Sheriff>(&lcm, options, config, &kKey, "one-shot/2"));
+  Sheriff& live = *sheriffs[0];
+  Sheriff& one_shot = *sheriffs[1];
+  ASSERT_TRUE(pump(5, [&] { return live.AllDeputiesHeard() && one_shot.AllDeputiesHeard(); }));
+  one_shot.Apply(Sheriff::Verb::kStart, config.ResolveTarget("x"));
+  one_shot.Apply(Sheriff::Verb::kStart, config.ResolveTarget("y"));
+  ASSERT_TRUE(pump(10, [&] {
+    return live.CommandState("x") == +sarmap::pm_command_status_t::STATE_RUNNING &&
+           live.CommandState("y") == +sarmap::pm_command_status_t::STATE_RUNNING;
+  }));
+  // The live sheriff now wants both running: its table says "run" for each.
+  const std::string table = live.Table(Now());
+  for (const char* id : {"x ", "y "}) {
+    const size_t at = table.find(std::string("\n") + id);
+    ASSERT_NE(at, std::string::npos) << table;
+    const std::string line = table.substr(at + 1, table.find('\n', at + 1) - at - 1);
+    EXPECT_NE(line.find(" run "), std::string::npos) << line;
+  }
+  for (auto& d : deputies) d->Shutdown();
+  pump(10, [&] { return deputies[0]->Finished() && deputies[1]->Finished(); });
 }
 
 }  // namespace

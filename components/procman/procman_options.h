@@ -20,10 +20,11 @@ struct ProcmanOptions {
   double respawn_base_s = 0.1;
   double respawn_max_s = 10.0;
   double respawn_stable_run_s = 5.0;
-  std::string state_dir = "";
+  double order_window_s = 5.0;
   // Sheriff.
   double resend_period_s = 1.0;
   double deputy_lost_after_s = 2.0;
+  double deputy_gone_after_s = 10.0;
   double discovery_timeout_s = 3.0;
   double command_timeout_s = 15.0;
   int output_tail_lines = 10;
@@ -42,11 +43,13 @@ struct ProcmanOptions {
     v("respawn_base_s", respawn_base_s, "deputy: first respawn delay after a crash");
     v("respawn_max_s", respawn_max_s, "deputy: longest respawn delay (doubles per quick crash)");
     v("respawn_stable_run_s", respawn_stable_run_s, "deputy: a run this long resets the back-off");
-    v("state_dir", state_dir,
-      "deputy: where the last order counter per sheriff is kept (\"\": $XDG_STATE_HOME/sarmap or "
-      "~/.local/state/sarmap)");
+    v("order_window_s", order_window_s,
+      "deputy: an order's counter must be within this of the deputy's session clock; sheriff: "
+      "the same for other sheriffs' orders it follows");
     v("resend_period_s", resend_period_s, "sheriff: desired state re-sent this often");
     v("deputy_lost_after_s", deputy_lost_after_s, "sheriff: a deputy silent this long is lost");
+    v("deputy_gone_after_s", deputy_gone_after_s,
+      "sheriff: a script waiting on a deputy silent this long fails (killed, crashed, cut off)");
     v("discovery_timeout_s", discovery_timeout_s,
       "sheriff: how long one-shot commands wait to hear the deputies");
     v("command_timeout_s", command_timeout_s,
@@ -65,6 +68,10 @@ struct ProcmanOptions {
     check.Positive("resend_period_s", resend_period_s);
     check.That(deputy_lost_after_s > info_period_s, "deputy_lost_after_s",
                "must be > info_period_s");
+    check.That(deputy_gone_after_s >= deputy_lost_after_s, "deputy_gone_after_s",
+               "must be >= deputy_lost_after_s");
+    check.That(order_window_s >= 1.0, "order_window_s",
+               "must be >= 1 (network delay and the sheriff's estimate of the deputy's clock)");
     check.Positive("discovery_timeout_s", discovery_timeout_s);
     check.Positive("command_timeout_s", command_timeout_s);
     check.That(output_tail_lines >= 0, "output_tail_lines", "must be >= 0");

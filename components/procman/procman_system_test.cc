@@ -34,10 +34,9 @@ class ProcmanSystem : public ::testing::Test {
   std::unique_ptr<Child> StartDeputy(const std::string& id,
                                      const std::string& log_name = "deputy.log") {
     watch_.Forget(id);
-    auto d = std::make_unique<Child>(
-        std::vector<std::string>{BinDir() + "/sarmap-procman-deputy", "--id", id, "--key",
-                                 scratch_.key(), "--state-dir", scratch_.state()},
-        scratch_.dir() + "/" + log_name);
+    auto d = std::make_unique<Child>(std::vector<std::string>{BinDir() + "/sarmap-procman-deputy",
+                                                              "--id", id, "--key", scratch_.key()},
+                                     scratch_.dir() + "/" + log_name);
     EXPECT_TRUE(watch_.WaitFor([&] { return watch_.Heard(id); }))
         << "deputy " << id << " not heard";
     return d;
@@ -68,6 +67,7 @@ sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exe
   o.header.frame = "";
   o.sheriff_id = "mallory";
   o.deputy_id = deputy;
+  o.deputy_session = 0;
   o.counter = counter;
   sarmap::pm_command_order_t c;
   c.command_id = "evil";
@@ -292,7 +292,7 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
       << "state " << (watch_.Command(d, "victim") ? watch_.Command(d, "victim")->state : -1);
   EXPECT_TRUE(ProcessesWithCmdline(SleepCmd(1)).empty());
 
-  // 5. The same replay after a deputy restart: the counter was persisted.
+  // 5. The same replay after a deputy restart (nothing kept on disk): another session.
   deputy->Signal(SIGTERM);
   ASSERT_NE(deputy->Wait(10), -1);
   const std::string log1 = deputy->Log();
@@ -310,7 +310,8 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   EXPECT_NE(log1.find(": unsigned;"), std::string::npos) << log1;
   EXPECT_NE(log1.find(": forged"), std::string::npos) << log1;
   EXPECT_NE(log1.find(": replayed"), std::string::npos) << log1;
-  EXPECT_NE(restarted->Log().find(": replayed"), std::string::npos) << restarted->Log();
+  EXPECT_NE(restarted->Log().find(": for another deputy session"), std::string::npos)
+      << restarted->Log();
 }
 
 TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
@@ -323,10 +324,9 @@ TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
   const int pid = watch_.Pid(d, "x");
   const int32_t runid = watch_.Command(d, "x")->actual_runid;
   // A genuine, newer (by counter) re-send from a sheriff that has not seen the start yet.
-  const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                             std::chrono::system_clock::now().time_since_epoch())
-                             .count();
+  const int64_t now_us = watch_.DeputyClockUs(d);
   sarmap::pm_orders_t stale = EvilOrders(d, SleepCmd(1), now_us);
+  stale.deputy_session = watch_.Info(d).session;
   stale.sheriff_id = "other-sheriff/1";
   stale.commands[0].command_id = "x";
   stale.commands[0].desired_running = false;
@@ -382,7 +382,10 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
   const size_t orders_before = watch_.Orders().size();
   auto sheriff_b = std::make_unique<Child>(live_argv, scratch_.dir() + "/sheriff-b.log");
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.Orders().size() >= orders_before + 3; }));
-  const int64_t counter_b = watch_.Orders().back().counter;
+  int64_t counter_b = -1;  // of the new sheriff's latest orders to d (not a probe)
+  for (const auto& o : watch_.Orders()) {
+    if (o.deputy_id == d) counter_b = o.counter;
+  }
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.Info(d).last_order_counter >= counter_b; }));
   watch_.Spin(1.0);
   for (const char* id : {"a", "b"}) {
@@ -422,9 +425,9 @@ TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
           "\"; stop_time_allowed = 1; }\n"
           "}\n"
           "script \"up\" { start group \"all\" wait \"running\" timeout 10; }\n");
-  Child lone({BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key(), "--lone-ranger", "--set",
-              "state_dir=" + scratch_.state(), "run", "up"},
-             scratch_.dir() + "/lone.log");
+  Child lone(
+      {BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key(), "--lone-ranger", "run", "up"},
+      scratch_.dir() + "/lone.log");
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }))
       << lone.Log();
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(SleepCmd(2)).size() == 2; }, 5));
@@ -434,6 +437,48 @@ TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << lone.Log();
   EXPECT_TRUE(ProcessesWithCmdline(SleepCmd(1)).empty());
   EXPECT_TRUE(ProcessesWithCmdline(SleepCmd(2)).empty());
+}
+
+// A killed deputy used to orphan its commands (they ran on, unsupervised) and leave the
+// sheriff's script waiting for its whole timeout.
+TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
+  const std::string d = deputy_id_;
+  const std::string pmd =
+      Pmd("group \"g\" {\n"
+          "  cmd \"a\" { exec = \"" +
+          SleepCmd(1) + "\"; deputy = \"" + d +
+          "\"; }\n"
+          "  cmd \"b\" { exec = \"" +
+          SleepCmd(2) + "\"; deputy = \"" + d +
+          "\"; auto_respawn = true; }\n"
+          "}\n"
+          "script \"mission\" {\n"
+          "  start group \"g\" wait \"running\" timeout 10;\n"
+          "  wait cmd \"a\" status \"stopped\" timeout 1800;\n"
+          "}\n");
+  auto deputy = StartDeputy(d);
+  Child sheriff({BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key(), "--set",
+                 "deputy_gone_after_s=3", "run", "mission"},
+                scratch_.dir() + "/sheriff-mission.log");
+  ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
+  const std::vector<int> before = {watch_.Pid(d, "a"), watch_.Pid(d, "b")};
+  deputy->Signal(SIGKILL);
+  ASSERT_NE(deputy->Wait(10), -1);
+  // Its commands die with it...
+  EXPECT_TRUE(watch_.WaitFor(
+      [&] {
+        return ProcessesWithCmdline(SleepCmd(1)).empty() &&
+               ProcessesWithCmdline(SleepCmd(2)).empty();
+      },
+      10));
+  for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
+  // ...and the script ends at once with a clear reason, not after 1800 s.
+  const int status = sheriff.Wait(60);
+  ASSERT_NE(status, -1) << sheriff.Log();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << sheriff.Log();
+  EXPECT_NE(sheriff.Log().find("wait cmd \"a\" status \"stopped\": deputy '" + d + "' silent for"),
+            std::string::npos)
+      << sheriff.Log();
 }
 
 TEST_F(ProcmanSystem, ScriptWaitTimesOutWithLocation) {

@@ -69,7 +69,7 @@ export SARMAP_LCM_URL="$URL"
 for id in sensors compute; do
   ns="${TAG}-$id"
   ip netns exec "$ns" env SARMAP_LCM_URL="$URL" "$BIN/sarmap-procman-deputy" --id "$id" \
-    --key "$WORK/procman.key" --state-dir "$WORK/state-$id" > "$WORK/deputy-$id.log" 2>&1 &
+    --key "$WORK/procman.key" > "$WORK/deputy-$id.log" 2>&1 &
   PIDS+=($!)
 done
 # A live sheriff (sends the desired state every second) whose event log we read.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <limits>
 #include <sstream>
 
@@ -31,6 +32,11 @@ struct Sheriff::DeputyView {
   std::string id;
   bool heard = false;
   double last_heard_s = 0;
+  int64_t session = 0;       // confirmed session (0: none yet)
+  int64_t clock_us = 0;      // its session clock in the last verified report
+  double clock_heard_s = 0;  // when that report arrived (steady clock)
+  // Other sheriffs' last followed orders to this deputy (their counters are on its clock).
+  std::map<std::string, int64_t> foreign_counters;
   sarmap::pm_info_t info;
   bool initialised = false;    // desired state adopted from its first report
   bool dirty = false;          // desired state changed, not sent yet
@@ -93,12 +99,20 @@ void Sheriff::SendProbe() {
   probe.header.frame = "";
   probe.sheriff_id = sheriff_id_;
   probe.deputy_id = kProbeDeputyId;
+  probe.deputy_session = 0;
   probe.counter = 0;
   probe.num_commands = 0;
   std::fill(std::begin(probe.hmac_sha256), std::end(probe.hmac_sha256), 0);
+  if (key_) {
+    // A fresh nonce that the deputies echo: a report carrying it is live, not a recording.
+    probe.counter = RandomNonce();
+    info_guard_.AddChallenge(probe.counter);
+    SignOrders(*key_, &probe);
+  }
   lcm_->publish(options_.orders_channel, &probe);
   ++probes_sent_;
-  next_probe_s_ = Now() + 0.25;
+  last_probe_s_ = Now();
+  next_probe_s_ = last_probe_s_ + 0.25;
 }
 
 Sheriff::~Sheriff() {
@@ -142,8 +156,43 @@ void Sheriff::OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string& channel)
   if (!Decode(rbuf, channel, &info)) return;
   DeputyView* d = FindDeputy(info.deputy_id);
   if (!d) return;  // a deputy this config does not use
+  const double now = Now();
+  if (key_) {
+    const InfoVerdict verdict = info_guard_.Verify(*key_, info);
+    if (verdict == InfoVerdict::kUnconfirmed) {
+      // A deputy that restarted, or a recording of an earlier run: a probe tells them apart.
+      if (now - last_probe_s_ >= 0.25) SendProbe();
+      return;
+    }
+    if (verdict != InfoVerdict::kAccepted && verdict != InfoVerdict::kNewSession) {
+      ++ignored_info_;
+      long suppressed = 0;
+      if (drop_log_limit_.try_emplace("info", 60.0).first->second.Allow(now, &suppressed)) {
+        SARMAP_LOG(WARN) << "IGNORED a report on " << channel << " claiming deputy '"
+                         << info.deputy_id << "': " << ToString(verdict)
+                         << "; only signed, live reports count (ignored so far: " << ignored_info_
+                         << ")";
+      }
+      return;
+    }
+    if (verdict == InfoVerdict::kNewSession) {
+      if (d->session != 0) {
+        SARMAP_LOG(WARN) << "deputy '" << d->id << "' restarted (new session): sending it the "
+                         << "desired state again";
+        if (d->initialised) d->dirty = true;
+      }
+      d->session = info.session;
+      d->last_sent_counter = 0;
+      d->change_counter = 0;
+      d->foreign_counters.clear();
+    }
+  } else {
+    d->session = info.session;  // an observer shows what it hears; it decides nothing
+  }
+  d->clock_us = info.session_clock_us;
+  d->clock_heard_s = now;
   d->heard = true;
-  d->last_heard_s = Now();
+  d->last_heard_s = now;
   d->info = info;
   for (auto& c : commands_) {
     if (c->cfg.deputy != d->id) continue;
@@ -211,10 +260,21 @@ void Sheriff::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channe
   sarmap::pm_orders_t orders;
   if (!Decode(rbuf, channel, &orders) || orders.sheriff_id == sheriff_id_) return;
   DeputyView* d = FindDeputy(orders.deputy_id);
-  if (!d || !SignatureValid(*key_, orders)) return;
-  auto it = foreign_counters_.find(orders.sheriff_id);
-  if (it != foreign_counters_.end() && orders.counter <= it->second) return;
-  foreign_counters_[orders.sheriff_id] = orders.counter;
+  if (!d || d->session == 0 || IsUnsigned(orders.hmac_sha256) || !SignatureValid(*key_, orders))
+    return;
+  // The deputy's own rules: its session, within the window of its clock, counters going up.
+  const int64_t clock_us = EstimatedDeputyClockUs(*d, Now());
+  const int64_t window_us = static_cast<int64_t>(options_.order_window_s * 1e6);
+  if (orders.deputy_session != d->session || orders.counter < clock_us - window_us ||
+      orders.counter > clock_us + window_us)
+    return;
+  auto it = d->foreign_counters.find(orders.sheriff_id);
+  if (it != d->foreign_counters.end() && orders.counter <= it->second) return;
+  d->foreign_counters[orders.sheriff_id] = orders.counter;
+  // Sheriffs silent for longer than the window are forgotten (their orders fail the window).
+  for (auto f = d->foreign_counters.begin(); f != d->foreign_counters.end();) {
+    f = f->second < clock_us - window_us ? d->foreign_counters.erase(f) : std::next(f);
+  }
   // Another sheriff (e.g. a one-shot command) changed the desired state: follow it. Every
   // change bumps the command's run id, so a higher run id is a newer change; a periodic
   // re-send carries the old one and never undoes our change. Two changes made at once from
@@ -345,6 +405,25 @@ bool Sheriff::DeputyLost(const std::string& deputy_id, double now_s) const {
   return !d || !d->heard || now_s - d->last_heard_s > options_.deputy_lost_after_s;
 }
 
+bool Sheriff::DeputyGone(const std::string& deputy_id, double now_s) const {
+  const DeputyView* d = FindDeputy(deputy_id);
+  return d && d->heard && now_s - d->last_heard_s > options_.deputy_gone_after_s;
+}
+
+bool Sheriff::TargetDeputyGone(const Target& target, double now_s, std::string* why) const {
+  for (const CommandConfig* cfg : config_.Select(target)) {
+    const DeputyView* d = FindDeputy(cfg->deputy);
+    if (d && DeputyGone(d->id, now_s)) {
+      char buf[160];
+      snprintf(buf, sizeof(buf), "deputy '%s' silent for %.1f s (killed, crashed or cut off)",
+               d->id.c_str(), now_s - d->last_heard_s);
+      if (why) *why = std::string(buf) + "; the state of its commands is unknown";
+      return true;
+    }
+  }
+  return false;
+}
+
 bool Sheriff::DeputyHeard(const std::string& deputy_id) const {
   const DeputyView* d = FindDeputy(deputy_id);
   return d && d->heard;
@@ -374,14 +453,19 @@ int Sheriff::CommandPid(const std::string& command_id) const {
   return c && c->reported ? c->status.pid : 0;
 }
 
-void Sheriff::SendOrders(DeputyView* d, double /*now_s*/) {
+int64_t Sheriff::EstimatedDeputyClockUs(const DeputyView& d, double now_s) const {
+  return d.clock_us + static_cast<int64_t>((now_s - d.clock_heard_s) * 1e6);
+}
+
+void Sheriff::SendOrders(DeputyView* d, double now_s) {
   sarmap::pm_orders_t orders;
   orders.header.utime = common::WallClockUtime();
   orders.header.seq = orders_seq_++;
   orders.header.frame = "";
   orders.sheriff_id = sheriff_id_;
   orders.deputy_id = d->id;
-  orders.counter = counter_.Next();
+  orders.deputy_session = d->session;
+  orders.counter = std::max(d->last_sent_counter + 1, EstimatedDeputyClockUs(*d, now_s));
   for (const auto& c : commands_) {
     if (c->cfg.deputy != d->id) continue;
     sarmap::pm_command_order_t o;
@@ -441,6 +525,9 @@ std::string Sheriff::Table(double now_s) const {
                Mb(d->info.phys_mem_free_bytes).c_str(), d->info.refused_orders);
     }
     out << line;
+  }
+  if (ignored_info_ > 0) {
+    out << ignored_info_ << " unsigned, forged or played-back PM_INFO reports ignored\n";
   }
   out << "\n";
   snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s %7s %5s %5s %6s %8s\n", "COMMAND",
@@ -565,6 +652,12 @@ ScriptRunner::Result ScriptRunner::Step(double now_s) {
     } else if (!a.wait_status.empty()) {
       std::string why;
       done = sheriff_->Reached(a.target, a.wait_status, now_s, &why);
+      std::string gone;
+      if (!done && sheriff_->TargetDeputyGone(a.target, now_s, &gone)) {
+        error_ = (a.where.file.empty() ? "" : a.where.ToString() + ": ") + DescribeAction(a) +
+                 ": " + gone;
+        return kFailed;
+      }
       if (!done && now_s - started_s_ > a.timeout_s) {
         char buf[64];
         snprintf(buf, sizeof(buf), "%g", a.timeout_s);

@@ -7,6 +7,11 @@
 // PM_INFO before it sends that deputy anything, so a restarted sheriff (or a one-shot
 // `sarmap-procman ... status`) changes nothing. It also adopts the desired state from
 // verified orders of other sheriffs (so a one-shot command and a live sheriff agree).
+//
+// With a key, it acts only on signed, live PM_INFO (see order_auth.h): unsigned, forged
+// and played-back reports are ignored and counted, so no one without the key can make a
+// script wait end. A deputy silent for deputy_gone_after_s fails the script step waiting
+// on it.
 
 #include <deque>
 #include <lcm/lcm-cpp.hpp>
@@ -51,12 +56,18 @@ class Sheriff : public EventLoop::Participant {
   bool AllDeputiesHeard() const;
   bool DeputyLost(const std::string& deputy_id, double now_s) const;
   bool DeputyHeard(const std::string& deputy_id) const;
+  // Heard once, then silent for deputy_gone_after_s: killed, crashed or cut off.
+  bool DeputyGone(const std::string& deputy_id, double now_s) const;
+  // True when a deputy of the target's commands is gone; `why` names it.
+  bool TargetDeputyGone(const Target& target, double now_s, std::string* why) const;
   // When the next deputy that is present now would count as lost (+inf: none).
   double NextLostDeadline(double now_s) const;
   int RefusedOrders(const std::string& deputy_id) const;
   // Messages on the procman channels that did not decode (common::DecodeMessage); each is
   // dropped and logged (rate-limited per channel).
   int malformed_messages() const { return malformed_; }
+  // PM_INFO reports ignored: unsigned or forged (with a key), or played back (stale).
+  int ignored_info() const { return ignored_info_; }
   // State of a command as last reported (-1: not reported).
   int CommandState(const std::string& command_id) const;
   int CommandPid(const std::string& command_id) const;
@@ -81,6 +92,8 @@ class Sheriff : public EventLoop::Participant {
   void ApplyTo(Verb verb, CommandView* c, DeputyView* d);
   bool Acknowledged(const DeputyView& d) const;
   void SendOrders(DeputyView* d, double now_s);
+  // The deputy's session clock now, from its last verified report.
+  int64_t EstimatedDeputyClockUs(const DeputyView& d, double now_s) const;
   DeputyView* FindDeputy(const std::string& id);
   const DeputyView* FindDeputy(const std::string& id) const;
   const CommandView* FindCommand(const std::string& id) const;
@@ -90,13 +103,14 @@ class Sheriff : public EventLoop::Participant {
   Config config_;
   const Key* key_;
   std::string sheriff_id_;
-  CounterSource counter_;
+  InfoGuard info_guard_;
   std::vector<std::unique_ptr<CommandView>> commands_;
   std::vector<std::unique_ptr<DeputyView>> deputies_;
   std::vector<lcm::Subscription*> subscriptions_;
-  std::map<std::string, int64_t> foreign_counters_;       // other sheriffs' last adopted orders
   std::deque<std::pair<std::string, std::string>> tail_;  // (command, line)
   void SendProbe();
+  double last_probe_s_ = -1e9;
+  int ignored_info_ = 0;
   double next_resend_s_ = 0;
   double next_probe_s_ = 0;
   int probes_sent_ = 0;

@@ -365,8 +365,7 @@ int main(int argc, char** argv) {
         SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
       }
       for (const auto& id : config.Deputies()) {
-        deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key,
-                                                    DeputyStatePath(options.state_dir, id)));
+        deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key));
         loop.Add(deputies.back().get());
       }
     }

@@ -14,6 +14,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <set>
 #include <tuple>
 
 #include "procman/exec_line.h"
@@ -74,6 +76,22 @@ struct Supervisor::Managed {
   double prev_ticks_s = -1;
 };
 
+namespace {
+
+// Several deputies in one process (--lone-ranger) share waitpid(-1): what one Supervisor
+// reaps for another's command is kept here until its owner claims it. (Single-threaded, like
+// the event loop.)
+struct ReapBoard {
+  std::set<pid_t> commands;       // command pids of every Supervisor of this process
+  std::map<pid_t, int> statuses;  // reaped by another Supervisor, not yet claimed
+};
+ReapBoard& Board() {
+  static ReapBoard board;
+  return board;
+}
+
+}  // namespace
+
 Supervisor::Supervisor(RespawnPolicy respawn, size_t max_buffered_output)
     : respawn_(respawn), max_buffered_output_(max_buffered_output) {}
 
@@ -84,6 +102,8 @@ Supervisor::~Supervisor() {
       int status = 0;
       while (waitpid(m->pid, &status, 0) < 0 && errno == EINTR) {
       }
+      Board().commands.erase(m->pid);
+      Board().statuses.erase(m->pid);
     }
     if (m->out_fd >= 0) close(m->out_fd);
   }
@@ -242,6 +262,7 @@ void Supervisor::Start(Managed* m, double now_s) {
     fail(std::string("pipe: ") + strerror(errno));
     return;
   }
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) {
     for (int fd : {out_pipe[0], out_pipe[1], err_pipe[0], err_pipe[1]}) close(fd);
@@ -251,6 +272,10 @@ void Supervisor::Start(Managed* m, double now_s) {
   if (pid == 0) {
     // Child: only async-signal-safe calls from here to exec.
     setpgid(0, 0);
+    // Dies with its deputy: a deputy that is killed (SIGKILL, OOM) leaves no orphan running
+    // unsupervised, and a restarted deputy never finds a second copy of its commands.
+    prctl(PR_SET_PDEATHSIG, SIGKILL, 0, 0, 0);
+    if (getppid() != parent) _exit(127);  // the deputy died before prctl took effect
     const int devnull = open("/dev/null", O_RDONLY);
     if (devnull >= 0) dup2(devnull, 0);
     dup2(out_pipe[1], 1);
@@ -289,11 +314,13 @@ void Supervisor::Start(Managed* m, double now_s) {
   fcntl(m->out_fd, F_SETFL, fcntl(m->out_fd, F_GETFL) | O_NONBLOCK);
   m->pid = pid;
   m->pgid = pid;
+  Board().commands.insert(pid);
   m->state = CommandState::kRunning;
   if (n == static_cast<ssize_t>(sizeof(exec_errno))) {
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
+    Board().commands.erase(pid);
     m->pid = 0;
     m->pgid = 0;
     AppendOutput(m, "[procman] cannot start: exec " + program + ": " + strerror(exec_errno) + "\n");
@@ -316,6 +343,7 @@ void Supervisor::OnExit(Managed* m, int wait_status, double now_s) {
            : WIFSIGNALED(wait_status) ? 128 + WTERMSIG(wait_status)
                                       : 1;
   }
+  Board().commands.erase(m->pid);
   m->pid = 0;
   m->exit_code = code;
   m->cpu_percent = 0;
@@ -352,13 +380,24 @@ bool Supervisor::ReapAll(double now_s) {
     int status = 0;
     const pid_t pid = waitpid(-1, &status, WNOHANG);
     if (pid <= 0) break;
+    bool mine = false;
     for (auto& m : commands_) {
       if (m->pid == pid) {
         OnExit(m.get(), status, now_s);
-        changed = true;
+        changed = mine = true;
       }
     }
-    // Anything else is an orphaned descendant handed to us as subreaper: just reaped.
+    // Another Supervisor's command: kept for it. Anything else is an orphaned descendant
+    // handed to us as subreaper: just reaped.
+    if (!mine && Board().commands.count(pid)) Board().statuses[pid] = status;
+  }
+  for (auto& m : commands_) {
+    auto it = m->pid > 0 ? Board().statuses.find(m->pid) : Board().statuses.end();
+    if (it == Board().statuses.end()) continue;
+    const int status = it->second;
+    Board().statuses.erase(it);
+    OnExit(m.get(), status, now_s);
+    changed = true;
   }
   return changed;
 }

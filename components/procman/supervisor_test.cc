@@ -86,6 +86,27 @@ TEST(Supervisor, StartsStopsAndCapturesOutput) {
   EXPECT_FALSE(ReadProcInfo(pid, &info) && info.state != 'Z');
 }
 
+// Several deputies in one process (--lone-ranger) each reap with waitpid(-1): an exit reaped
+// by one Supervisor reaches the one that owns the command (it used to be lost: the owner
+// never saw its command exit and a stop never ended).
+TEST(Supervisor, TwoSupervisorsInOneProcessEachSeeTheirCommandsExit) {
+  Supervisor a, b;
+  a.SetDesired({Spec("a", "sh -c 'exit 3'", true)});
+  b.SetDesired({Spec("b", "sleep 100", true)});
+  ASSERT_TRUE(StepUntil(&b, [&] { return StateOf(&b, "b") == CommandState::kRunning; }));
+  usleep(200000);  // "a" exits meanwhile...
+  b.Step(Now());   // ...and b reaps it first
+  ASSERT_TRUE(StepUntil(&a, [&] { return StateOf(&a, "a") == CommandState::kFailed; }));
+  EXPECT_EQ(Find(a.Status(), "a")->exit_code, 3);
+  // And the other way round, on a stop.
+  b.SetDesired({Spec("b", "sleep 100", false)});
+  b.Step(Now());  // sends SIGINT
+  usleep(200000);
+  a.Step(Now());  // a reaps b's command
+  ASSERT_TRUE(StepUntil(&b, [&] { return StateOf(&b, "b") == CommandState::kStopped; }));
+  EXPECT_EQ(Find(b.Status(), "b")->exit_code, 128 + SIGINT);
+}
+
 TEST(Supervisor, RestartOnNewRunId) {
   Supervisor sup;
   sup.SetDesired({Spec("s", "sleep 100", true, 1)});

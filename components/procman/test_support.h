@@ -36,7 +36,7 @@ inline std::string BinDir() {
   return env && *env ? env : SARMAP_BIN_DIR;
 }
 
-// A scratch directory with a key file (0600) and a state directory; removed at the end.
+// A scratch directory with a key file (0600); removed at the end.
 class Scratch {
  public:
   Scratch() {
@@ -45,7 +45,6 @@ class Scratch {
     dir_ = tmpl;
     key_ = dir_ + "/procman.key";
     WriteKey(key_, 1);
-    mkdir((dir_ + "/state").c_str(), 0700);
   }
   ~Scratch() {
     const std::string cmd = "rm -rf '" + dir_ + "'";
@@ -65,7 +64,6 @@ class Scratch {
   }
   const std::string& dir() const { return dir_; }
   const std::string& key() const { return key_; }
-  std::string state() const { return dir_ + "/state"; }
 
  private:
   std::string dir_, key_;
@@ -179,6 +177,12 @@ class Watcher {
     heard_s_.erase(deputy);
   }
   const sarmap::pm_info_t& Info(const std::string& deputy) const { return info_.at(deputy); }
+  // The deputy's session clock now (microseconds), from its last report: what the counter of
+  // an order to it must be close to.
+  int64_t DeputyClockUs(const std::string& deputy) const {
+    return Info(deputy).session_clock_us +
+           static_cast<int64_t>((SteadyNow() - heard_s_.at(deputy)) * 1e6);
+  }
   double LastHeard(const std::string& deputy) const {
     auto it = heard_s_.find(deputy);
     return it == heard_s_.end() ? -1e9 : it->second;

@@ -1,7 +1,9 @@
 #pragma once
 // The HTTP side of the viewer: the page, /api/state (JSON), /api/map.png, /api/camera.jpg.
 // Read-only (GET only), bound to a configured address, with an optional access token
-// (?token=... or "Authorization: Bearer ...").
+// (?token=... or "Authorization: Bearer ..."). Every connection is served for at most
+// connection_limit_s in all (each read or write waits at most io_timeout_s), so slow or idle
+// clients hold a worker thread for a bounded time and cannot lock others out.
 
 #include <memory>
 #include <string>
@@ -16,10 +18,16 @@ class Server;
 namespace sarmap {
 namespace viewer {
 
+class BoundedServer;
+
 struct ServerOptions {
   std::string bind_address = "127.0.0.1";
   int port = 8080;  // 0: any free port
   std::string token;
+  int threads = 16;                   // worker threads (connections served at once)
+  double connection_limit_s = 10.0;   // a connection is closed after this long in all
+  double io_timeout_s = 3.0;          // one read or write waits at most this long
+  int keep_alive_max_requests = 100;  // requests per connection
 };
 
 class ViewerServer {
@@ -35,7 +43,7 @@ class ViewerServer {
   bool Authorised(const std::string& query_token, const std::string& authorization) const;
   const ViewerState* state_;
   ServerOptions options_;
-  std::unique_ptr<httplib::Server> server_;
+  std::unique_ptr<BoundedServer> server_;
   std::thread thread_;
   int port_ = 0;
 };

@@ -68,9 +68,23 @@ struct MissionView {
   double stuck_s = 0, elapsed_s = 0;
 };
 
+// Bounds on what the bus can make the page hold: whatever arrives, /api/state stays small.
+struct ViewerLimits {
+  double forget_after_s = 60.0;  // deputies and nodes not heard from this long are dropped
+  int max_deputies = 16;         // beyond: the least recently heard is dropped
+  int max_commands_per_deputy = 64;
+  int max_nodes = 64;
+  int max_items = 2000;      // people, sound sources, scan points, path points
+  int max_text_bytes = 200;  // any string from the bus (names, keywords, messages)
+  size_t max_trail = 2000;
+};
+
+// `text` cut to at most `max_bytes`, never in the middle of a UTF-8 character.
+std::string ClipText(const std::string& text, size_t max_bytes);
+
 class ViewerState {
  public:
-  explicit ViewerState(size_t max_trail = 2000) : max_trail_(max_trail) {}
+  explicit ViewerState(ViewerLimits limits = ViewerLimits()) : limits_(limits) {}
 
   void SetMap(GridImage grid);
   void SetPose(common::Utime utime, double x_m, double y_m, double yaw_rad);
@@ -83,15 +97,19 @@ class ViewerState {
   void SetMission(MissionView mission);
 
   // The whole state for the page (without the map and camera bytes, which have their own URLs
-  // and a version number so the page fetches them only when they change).
+  // and a version number so the page fetches them only when they change). Deputies and nodes
+  // not heard from for forget_after_s are left out; strings that are not valid UTF-8 are
+  // repaired (U+FFFD), never an exception.
   std::string Json(double now_s) const;
   // The grid as a PNG (unknown grey, free white, occupied black); empty without a map.
   std::vector<uint8_t> MapPng() const;
   std::vector<uint8_t> CameraJpeg() const;
 
  private:
+  // Drops deputies and nodes not heard from for forget_after_s (mutex_ held).
+  void Forget(double now_s);
   mutable std::mutex mutex_;
-  size_t max_trail_;
+  ViewerLimits limits_;
   GridImage grid_;
   int64_t map_version_ = 0;
   mutable std::vector<uint8_t> map_png_;
@@ -103,7 +121,8 @@ class ViewerState {
   std::vector<Eigen::Vector2d> scan_;
   std::vector<PersonView> people_;
   std::vector<SourceView> sources_;
-  std::map<std::string, std::pair<double, std::vector<ProcessView>>> processes_;  // deputy -> (seen, list)
+  std::map<std::string, std::pair<double, std::vector<ProcessView>>>
+      processes_;  // deputy -> (seen, list)
   std::map<std::string, NodeView> nodes_;
   std::vector<uint8_t> camera_;
   bool has_mission_ = false;
