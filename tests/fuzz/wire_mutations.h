@@ -399,6 +399,20 @@ class HostileDatagrams {
       : rng_(seed), now_utime_(now_utime), corpora_(MessageTypeCorpora(random_samples)) {}
 
   bool Knows(const std::string& type_name) const { return corpora_.count(type_name) > 0; }
+
+  // Only these kinds from now on: MutationName()s and "wrong-type". False (and no change)
+  // when none is known.
+  bool SetKinds(const std::function<bool(const std::string&)>& wanted) {
+    std::vector<Mutation> kinds;
+    for (int k = 0; k < static_cast<int>(Mutation::kCount); ++k) {
+      if (wanted(MutationName(static_cast<Mutation>(k)))) kinds.push_back(static_cast<Mutation>(k));
+    }
+    const bool wrong_type = wanted("wrong-type");
+    if (kinds.empty() && !wrong_type) return false;
+    kinds_ = std::move(kinds);
+    wrong_type_ = wrong_type;
+    return true;
+  }
   const std::map<std::string, TypeCorpus>& corpora() const { return corpora_; }
 
   // *kind: the mutation's name ("wrong-type" for another type's message).
@@ -409,7 +423,7 @@ class HostileDatagrams {
       *what = "no bytes";
       return {};
     }
-    if (rng_() % 12 == 0) {
+    if (wrong_type_ && (kinds_.empty() || rng_() % 12 == 0)) {
       auto it = corpora_.begin();
       std::advance(it, static_cast<std::ptrdiff_t>(rng_() % corpora_.size()));
       if (it->first != type_name && !it->second.valid.empty()) {
@@ -419,9 +433,9 @@ class HostileDatagrams {
       }
     }
     Bytes out;
-    for (int attempt = 0; attempt < 32; ++attempt) {
+    for (int attempt = 0; attempt < 32 && !kinds_.empty(); ++attempt) {
       const size_t i = rng_() % c.valid.size();
-      const auto m = static_cast<Mutation>(rng_() % static_cast<uint64_t>(Mutation::kCount));
+      const Mutation m = kinds_[rng_() % kinds_.size()];
       if (Mutate(m, c.valid[i], c.fields[i], now_utime_, rng_, &out, what)) {
         *kind = MutationName(m);
         return out;
@@ -433,8 +447,18 @@ class HostileDatagrams {
   }
 
  private:
+  static std::vector<Mutation> AllKinds() {
+    std::vector<Mutation> out;
+    for (int k = 0; k < static_cast<int>(Mutation::kCount); ++k) {
+      out.push_back(static_cast<Mutation>(k));
+    }
+    return out;
+  }
+
   std::mt19937_64 rng_;
   int64_t now_utime_;
+  std::vector<Mutation> kinds_ = AllKinds();
+  bool wrong_type_ = true;
   std::map<std::string, TypeCorpus> corpora_;
 };
 
