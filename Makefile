@@ -34,7 +34,7 @@ help:
 	@echo "make bench   build and run every benchmark (prints figures)"
 	@echo "make bench-missions  autonomous missions on generated sites, frontier vs reactive (MISSION_SITES=6)"
 	@echo "make fuzz    libFuzzer on the decoding of every message type (FUZZ_SECONDS=300), then the"
-	@echo "             network fuzzer against the running stack (NET_FUZZ_SECONDS=60)"
+	@echo "             network fuzzer against the running stack (NET_FUZZ_SECONDS=60, NET_FUZZ_RATE=2000)"
 	@echo "make build   just build;  make deps  just install packages;  make clean"
 
 # Installs only what is missing, so a second run installs nothing.
@@ -78,13 +78,19 @@ bench-missions: build
 demo: build
 	launch-scripts/demo.sh $(BUILD_DIR)
 
-# Fuzzing (tests/fuzz/README.md): libFuzzer with clang in a separate build directory, then the
+# Fuzzing (components/common/README.md, "Fuzzing"): libFuzzer with clang in a separate build directory, then the
 # network fuzzer's multi-process test with a longer flood.
 FUZZ_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 300
 NET_FUZZ_SECONDS ?= 60
+NET_FUZZ_RATE ?= 2000
 fuzz: configure
 	tests/fuzz/run_libfuzzer.sh $(BUILD_DIR) $(FUZZ_DIR) $(FUZZ_SECONDS)
+	cmake --build $(BUILD_DIR) --target net_fuzz_test
+	@echo "== the network fuzzer against the running stack: $(NET_FUZZ_RATE) datagrams/s for $(NET_FUZZ_SECONDS) s"
+	SARMAP_BIN_DIR=$(abspath $(BUILD_DIR))/bin SARMAP_SOURCE_DIR=$(CURDIR) \
+	  NET_FUZZ_SECONDS=$(NET_FUZZ_SECONDS) NET_FUZZ_RATE=$(NET_FUZZ_RATE) \
+	  tests/harness/sarmap-netns $(BUILD_DIR)/bin/net_fuzz_test
 
 format:
 	find components log-tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
