@@ -5,8 +5,9 @@
 // NODE_STATUS, and must have counted hostile datagrams as dropped (so the flood reached it).
 // Prints each node's RSS and CPU before and during the flood.
 //
-// Run by CTest inside tests/harness/sarmap-netns. NET_FUZZ_SECONDS (default 10) and
-// NET_FUZZ_RATE (datagrams/s, default 2000) set the flood; make fuzz runs it longer.
+// Run by CTest inside tests/harness/sarmap-netns. NET_FUZZ_SECONDS (default 10),
+// NET_FUZZ_RATE (datagrams/s, default 2000) and NET_FUZZ_KINDS (sarmap-net-fuzz --kinds,
+// default all) set the flood; make fuzz runs it longer.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -105,6 +106,14 @@ class NetFuzzTest : public ::testing::Test {
     for (auto& w : nodes_) {
       if (w.process) w.process->Signal(SIGKILL);
     }
+    // Kept after a failure: the nodes' output and every datagram sent (sent.lcmlog).
+    std::string ignored;
+    if (!HasFailure()) {
+      RunCapture({"rm", "-rf", dir_}, &ignored);
+    } else {
+      std::printf("kept %s: each node's output, and every datagram sent in sent.lcmlog\n",
+                  dir_.c_str());
+    }
   }
 
  public:
@@ -159,6 +168,8 @@ TEST_F(NetFuzzTest, EveryNodeSurvivesAHostilePublisherOnEveryChannel) {
   const char* rate_env = getenv("NET_FUZZ_RATE");
   const std::string flood_s = seconds_env && *seconds_env ? seconds_env : "10";
   const std::string rate = rate_env && *rate_env ? rate_env : "2000";
+  const char* kinds_env = getenv("NET_FUZZ_KINDS");
+  const std::string kinds = kinds_env && *kinds_env ? kinds_env : ".*";
 
   const std::string key = dir_ + "/procman.key";
   const auto add = [&](std::string name, std::vector<std::string> args) {
@@ -247,9 +258,9 @@ TEST_F(NetFuzzTest, EveryNodeSurvivesAHostilePublisherOnEveryChannel) {
     w.dropped_before_flood = w.dropped;
   }
   outputs_.clear();
-  Process fuzz(
-      {"sarmap-net-fuzz", "--seconds", flood_s, "--rate", rate, "--record", dir_ + "/sent.lcmlog"},
-      dir_ + "/net-fuzz.txt");
+  Process fuzz({"sarmap-net-fuzz", "--seconds", flood_s, "--rate", rate, "--kinds", kinds,
+                "--record", dir_ + "/sent.lcmlog"},
+               dir_ + "/net-fuzz.txt");
   const double flood_timeout_s = std::stod(flood_s) + 30;
   ASSERT_TRUE(SpinUntil(
       &lcm, [&] { return !fuzz.Running(); }, flood_timeout_s))

@@ -361,6 +361,7 @@ struct TypeCorpus {
   std::string type_name;
   std::vector<Bytes> valid;
   std::vector<WireFields> fields;
+  bool last_is_sane = false;  // valid.back() passes CheckMessage()
 };
 
 // `random` random samples of T and one sane sample (which passes CheckMessage()).
@@ -371,7 +372,8 @@ TypeCorpus MakeTypeCorpus(int random) {
   std::vector<Bytes> encodings = RandomEncodings<T>(random);
   std::mt19937_64 rng(7);
   T sane;
-  if (SaneSample(rng, &sane)) encodings.push_back(Encode(sane));
+  const bool have_sane = SaneSample(rng, &sane);
+  if (have_sane) encodings.push_back(Encode(sane));
   // Only encodings whose fields were found (all of them, unless the layout is broken).
   for (Bytes& wire : encodings) {
     WireFields f;
@@ -379,6 +381,7 @@ TypeCorpus MakeTypeCorpus(int random) {
     c.valid.push_back(std::move(wire));
     c.fields.push_back(std::move(f));
   }
+  c.last_is_sane = have_sane && c.valid.size() == encodings.size();
   return c;
 }
 
@@ -391,8 +394,8 @@ inline std::map<std::string, TypeCorpus> MessageTypeCorpora(int random) {
   return out;
 }
 
-// Draws hostile datagrams for message types by name: a random mutation of a random valid
-// sample, or (1 in 12) a valid sample of another type.
+// Draws hostile datagrams for message types by name: a random mutation of a valid sample
+// (the sane one half of the time), or (1 in 12) a valid sample of another type.
 class HostileDatagrams {
  public:
   HostileDatagrams(uint64_t seed, int64_t now_utime, int random_samples = 4)
@@ -434,7 +437,10 @@ class HostileDatagrams {
     }
     Bytes out;
     for (int attempt = 0; attempt < 32 && !kinds_.empty(); ++attempt) {
-      const size_t i = rng_() % c.valid.size();
+      // Half of them from the sane sample: a hostile value in an otherwise acceptable message
+      // gets past the receiver's checks into its handler.
+      const size_t i =
+          c.last_is_sane && rng_() % 2 == 0 ? c.valid.size() - 1 : rng_() % c.valid.size();
       const Mutation m = kinds_[rng_() % kinds_.size()];
       if (Mutate(m, c.valid[i], c.fields[i], now_utime_, rng_, &out, what)) {
         *kind = MutationName(m);
