@@ -14,7 +14,7 @@ PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
   libopencv-dev libopencv-contrib-dev libpcl-dev libceres-dev libsuitesparse-dev \
   libopenni2-dev libpocketsphinx-dev pocketsphinx-en-us libfftw3-dev libsndfile1-dev \
   libasound2-dev libssl-dev libcpp-httplib-dev nlohmann-json3-dev \
-  iproute2 util-linux espeak-ng flite sox chromium
+  iproute2 util-linux espeak-ng flite sox chromium clang-14 libclang-rt-14-dev
 # Java types for lcm-spy: installed when available, never required.
 OPTIONAL_PACKAGES = liblcm-java default-jdk-headless
 
@@ -24,7 +24,7 @@ export CCACHE_NOHASHDIR := 1
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps configure build test bench bench-missions demo format clean help
+.PHONY: all deps configure build test bench bench-missions demo fuzz format clean help
 
 all: build
 
@@ -33,6 +33,8 @@ help:
 	@echo "make test    build and run every test (unit + multi-process) with CTest"
 	@echo "make bench   build and run every benchmark (prints figures)"
 	@echo "make bench-missions  autonomous missions on generated sites, frontier vs reactive (MISSION_SITES=6)"
+	@echo "make fuzz    libFuzzer on the decoding of every message type (FUZZ_SECONDS=300), then the"
+	@echo "             network fuzzer against the running stack (NET_FUZZ_SECONDS=60, NET_FUZZ_RATE=2000)"
 	@echo "make build   just build;  make deps  just install packages;  make clean"
 
 # Installs only what is missing, so a second run installs nothing.
@@ -76,8 +78,22 @@ bench-missions: build
 demo: build
 	launch-scripts/demo.sh $(BUILD_DIR)
 
+# Fuzzing (components/common/README.md, "Fuzzing"): libFuzzer with clang in a separate build directory, then the
+# network fuzzer's multi-process test with a longer flood.
+FUZZ_DIR ?= build-fuzz
+FUZZ_SECONDS ?= 300
+NET_FUZZ_SECONDS ?= 60
+NET_FUZZ_RATE ?= 2000
+fuzz: configure
+	tests/fuzz/run_libfuzzer.sh $(BUILD_DIR) $(FUZZ_DIR) $(FUZZ_SECONDS)
+	cmake --build $(BUILD_DIR) --target net_fuzz_test
+	@echo "== the network fuzzer against the running stack: $(NET_FUZZ_RATE) datagrams/s for $(NET_FUZZ_SECONDS) s"
+	SARMAP_BIN_DIR=$(abspath $(BUILD_DIR))/bin SARMAP_SOURCE_DIR=$(CURDIR) \
+	  NET_FUZZ_SECONDS=$(NET_FUZZ_SECONDS) NET_FUZZ_RATE=$(NET_FUZZ_RATE) \
+	  tests/harness/sarmap-netns $(BUILD_DIR)/bin/net_fuzz_test
+
 format:
 	find components log-tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
 clean:
-	rm -rf $(BUILD_DIR)
+	rm -rf $(BUILD_DIR) $(FUZZ_DIR)

@@ -15,6 +15,7 @@
 #include "common/channels.h"
 #include "common/node.h"
 #include "sarmap/message_samples.h"
+#include "tests/fuzz/samples.h"
 #include "tests/process.h"
 
 namespace sarmap {
@@ -62,114 +63,6 @@ class RawSink {
  private:
   lcm::LCM* lcm_;
 };
-
-template <class T>
-std::vector<uint8_t> Encode(const T& m) {
-  std::vector<uint8_t> buf(m.getEncodedSize());
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  return buf;
-}
-
-// Makes a random sample pass CheckMessage(): positive header fields, known enums,
-// consistent counts, unit quaternions, probabilities in [0, 1].
-void SaneHeader(sarmap::header_t* h) {
-  h->utime = h->utime < 0 ? -(h->utime + 1) : h->utime;
-  h->seq = h->seq < 0 ? -(h->seq + 1) : h->seq;
-}
-void UnitQuaternion(double (&q)[4]) {
-  q[0] = 1;
-  q[1] = q[2] = q[3] = 0;
-}
-template <class T>
-void SaneUp(T* m) { SaneHeader(&m->header); }
-void SaneUp(sarmap::audio_frame_t* m) {
-  SaneHeader(&m->header);
-  m->num_channels = 2;
-  m->sample_rate_hz = 16000;
-  m->sample_format = sarmap::audio_frame_t::SAMPLE_INT16;
-  m->first_sample_index = 10;
-  m->overrun_samples = 0;
-  m->num_samples = 3;
-  m->num_values = 6;
-  m->samples.assign(6, 7);
-}
-void SaneUp(sarmap::image_t* m) {
-  SaneHeader(&m->header);
-  m->width = 2;
-  m->height = 2;
-  m->pixel_format = sarmap::image_t::PIXEL_DEPTH_U16;
-  m->depth_unit_m = 0.001;
-  m->compression = sarmap::image_t::COMPRESSION_NONE;
-  m->size = 8;
-  m->data.assign(8, 1);
-}
-void SaneUp(sarmap::laser_scan_t* m) {
-  SaneHeader(&m->header);
-  m->angle_increment_rad = 0.01;
-  m->range_min_m = 0.1f;
-  m->range_max_m = 10.f;
-  m->num_intensities = 0;
-  m->intensities.clear();
-}
-void SaneUp(sarmap::pose_t* m) { SaneHeader(&m->header); UnitQuaternion(m->orientation); }
-void SaneUp(sarmap::odometry_t* m) { SaneHeader(&m->header); UnitQuaternion(m->orientation); }
-void SaneUp(sarmap::sim_truth_t* m) { SaneHeader(&m->header); UnitQuaternion(m->robot_orientation); }
-void SaneUp(sarmap::occupancy_grid_t* m) {
-  SaneHeader(&m->header);
-  m->resolution_m = 0.05;
-  m->width = 2;
-  m->height = 3;
-  m->compression = sarmap::occupancy_grid_t::COMPRESSION_NONE;
-  m->size = 6;
-  m->data.assign(6, 0);
-}
-void SaneUp(sarmap::slam_anchors_t* m) {
-  SaneHeader(&m->header);
-  m->covariance_dim = 3 * (1 + m->num_anchors);
-  m->covariance.assign(m->covariance_dim, std::vector<double>(m->covariance_dim, 0.5));
-}
-void SaneUp(sarmap::slam_anchor_request_t* m) { SaneHeader(&m->header); m->client_id = "sound-map"; }
-void SaneUp(sarmap::doa_t* m) {
-  SaneHeader(&m->header);
-  for (auto& s : m->sources) {
-    s.kind = sarmap::doa_source_t::KIND_AZIMUTH;
-    s.method = sarmap::doa_source_t::METHOD_SRP_PHAT;
-    s.confidence = 0.5f;
-  }
-}
-void SaneUp(sarmap::speech_event_t* m) {
-  SaneHeader(&m->header);
-  m->confidence = 0.7f;
-  m->start_utime = 1;
-  m->end_utime = 2;
-}
-void SaneUp(sarmap::people_detections_t* m) {
-  SaneHeader(&m->header);
-  for (auto& d : m->detections) {
-    d.cue = sarmap::person_detection_t::CUE_HEARD;
-    d.confidence = 0.5f;
-  }
-}
-void SaneUp(sarmap::people_map_t* m) {
-  SaneHeader(&m->header);
-  for (auto& p : m->people) {
-    p.confidence = 0.5f;
-    p.num_detections = 1;
-  }
-}
-void SaneUp(sarmap::sound_map_t* m) {
-  SaneHeader(&m->header);
-  for (auto& s : m->sources) s.state = sarmap::sound_source_t::STATE_CONVERGED;
-}
-void SaneUp(sarmap::pm_orders_t* m) {
-  SaneHeader(&m->header);
-  m->counter = 5;
-  for (auto& c : m->commands) {
-    c.command_id = "cmd";
-    c.stop_signal = 2;
-    c.stop_time_allowed_s = 1.0;
-  }
-}
 
 TEST_F(MultiProcessTest, EveryMessageTypeRoundTripsBetweenTwoProcesses) {
   Process echo({"sarmap-test-peer", "echo", "--prefix", "RT_"}, dir_ + "/echo.log");

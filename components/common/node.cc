@@ -9,6 +9,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "common/lcm_guard.h"
+
 namespace sarmap {
 namespace common {
 namespace {
@@ -56,7 +58,8 @@ std::string DefaultLcmUrl() {
 
 Node::Node(const std::string& name, const std::string& lcm_url)
     : name_(name),
-      lcm_(std::make_unique<lcm::LCM>(lcm_url.empty() ? DefaultLcmUrl() : lcm_url)),
+      lcm_url_(lcm_url.empty() ? DefaultLcmUrl() : lcm_url),
+      lcm_(std::make_unique<lcm::LCM>(lcm_url_)),
       start_s_(SteadySeconds()),
       status_pub_(lcm_.get(), "NODE_STATUS") {
   SetLogName(name);
@@ -71,6 +74,15 @@ Node::Node(const std::string& name, const std::string& lcm_url)
 Node::~Node() = default;
 
 bool Node::stopping() const { return stop_ || g_signalled; }
+
+void Node::GuardReceiveSocket() {
+  receive_guarded_ = true;
+  std::string error;
+  const int guarded = GuardLcmReceiveSocket(lcm_.get(), lcm_url_, &error);
+  if (guarded < 0) {
+    SARMAP_LOG(WARN) << "no filter for hostile LCM fragments on the receive socket: " << error;
+  }
+}
 
 void Node::AddTimer(double period_s, std::function<void()> callback) {
   timers_.push_back(Timer{period_s, SteadySeconds() + period_s, std::move(callback)});

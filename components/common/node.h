@@ -129,11 +129,16 @@ class Node {
   template <class T>
   class TypedSubscription;
 
+  // After the first subscription: the kernel filter of common/lcm_guard.h on the socket
+  // liblcm has just opened.
+  void GuardReceiveSocket();
   void Dropped(const std::string& channel, ChannelStats* stats, const std::string& why);
   void HandlerError(const std::string& channel, ChannelStats* stats, const std::string& what);
 
   std::string name_;
+  std::string lcm_url_;
   std::unique_ptr<lcm::LCM> lcm_;
+  bool receive_guarded_ = false;
   std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
   std::map<std::string, ChannelStats> stats_;
   std::map<std::string, RateLimiter> drop_log_limit_;
@@ -192,6 +197,7 @@ void Node::Subscribe(const std::string& channel, Callback<T> callback, int queue
                                          static_cast<SubscriptionBase*>(sub.get()));
   if (s) s->setQueueCapacity(queue_capacity);
   subscriptions_.push_back(std::move(sub));
+  if (!receive_guarded_) GuardReceiveSocket();
 }
 
 }  // namespace common

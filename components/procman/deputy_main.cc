@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "common/args.h"
+#include "common/lcm_guard.h"
 #include "common/logging.h"
 #include "common/node.h"
 #include "procman/deputy.h"
@@ -52,6 +53,10 @@ int main(int argc, char** argv) {
     if (!lcm.good()) throw std::runtime_error("cannot initialise LCM on '" + url + "'");
     EventLoop loop(&lcm);
     Deputy deputy(&lcm, options, id, std::move(key));
+    std::string guard_error;  // hostile LCM fragments (common/lcm_guard.h)
+    if (common::GuardLcmReceiveSocket(&lcm, url, &guard_error) < 0) {
+      SARMAP_LOG(WARN) << "no filter for hostile LCM fragments: " << guard_error;
+    }
     loop.Add(&deputy);
     while (true) {
       if (!loop.RunOnce(1.0)) return 1;

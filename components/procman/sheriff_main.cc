@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "common/args.h"
+#include "common/lcm_guard.h"
 #include "common/logging.h"
 #include "common/node.h"
 #include "common/time.h"
@@ -350,6 +351,10 @@ int main(int argc, char** argv) {
     const bool one_shot = action || script || status_only;
     const bool live_after = lone_ranger || !one_shot;
     Sheriff sheriff(&lcm, options, config, watch_only ? nullptr : &key, sheriff_id);
+    std::string guard_error;  // hostile LCM fragments (common/lcm_guard.h)
+    if (common::GuardLcmReceiveSocket(&lcm, url, &guard_error) < 0) {
+      SARMAP_LOG(WARN) << "no filter for hostile LCM fragments: " << guard_error;
+    }
     Driver driver(&sheriff, options, live_after, isatty(0) != 0);
     if (status_only && !lone_ranger) driver.SetStatusOnly();
     if (action) driver.SetRunner(std::make_unique<ScriptRunner>(&sheriff, *action));

@@ -103,6 +103,8 @@ int Run(int argc, char** argv) {
         }
       }, 5);
   LcmSink sink(&node);
+  // Its own loop, not Node::Run(): NODE_STATUS from the timer that SpinOnce serves.
+  node.AddTimer(1.0, [&node] { node.PublishStatus(); });
   const double step_s = 1.0 / 100;  // advance in 10 ms slices, serving LCM in between
   const auto wall0 = std::chrono::steady_clock::now();
   double last_status = -1;
