@@ -440,8 +440,8 @@ mapped_person_t Person(int64_t id, double x, double y, int8_t cues) {
 
 TEST(RosbagConvertTest, ExportWritesStandardMessagesThatImportBack) {
   const std::string dir = ::testing::TempDir();
-  const std::string log = dir + "/mission.lcmlog", bag = dir + "/mission.bag",
-                    back = dir + "/mission_back.lcmlog";
+  const std::string log = dir + "/rosbag_export.lcmlog", bag = dir + "/rosbag_export.bag",
+                    back = dir + "/rosbag_export_back.lcmlog";
   {
     lcm::LogFile f(log, "w");
     for (int i = 0; i < 3; ++i) {
