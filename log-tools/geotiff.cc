@@ -103,7 +103,7 @@ void WriteGeoTiff(const MissionData& data, const MissionSummary& summary, const 
       } else if (v < 0) {
         colour = ((metre(col) + metre(gy)) % 2 == 0) ? GeoTiffColours::kUnknownA
                                                      : GeoTiffColours::kUnknownB;
-      } else if (v <= 25) {
+      } else if (v < 50) {  // more likely free than occupied
         colour = GeoTiffColours::kFree;
       } else {  // uncertain: between free and occupied
         colour = {160, 170, 195};
@@ -122,13 +122,17 @@ void WriteGeoTiff(const MissionData& data, const MissionSummary& summary, const 
     cv::arrowedLine(image, f.P(x, y), f.P(x + 0.6 * std::cos(yaw), y + 0.6 * std::sin(yaw)),
                     Rgb(GeoTiffColours::kStart), std::max(1, 2 * thickness), cv::LINE_8, 0, 0.35);
   }
+  // Sound sources: a filled square with its 3-sigma ellipse once converged; a hollow square
+  // alone while initialising (its ellipse can span the whole map).
   for (const auto& s : SourcesOnMap(data, summary)) {
-    Ellipse(&image, f, s.position_m[0], s.position_m[1], s.covariance,
-            Rgb(GeoTiffColours::kSoundSource));
+    const bool converged = s.state == sarmap::sound_source_t::STATE_CONVERGED;
+    if (converged)
+      Ellipse(&image, f, s.position_m[0], s.position_m[1], s.covariance,
+              Rgb(GeoTiffColours::kSoundSource));
     const int half = std::max(2, static_cast<int>(0.1 / res));
     const cv::Point p = f.P(s.position_m[0], s.position_m[1]);
     cv::rectangle(image, p - cv::Point(half, half), p + cv::Point(half, half),
-                  Rgb(GeoTiffColours::kSoundSource), cv::FILLED);
+                  Rgb(GeoTiffColours::kSoundSource), converged ? cv::FILLED : 1);
   }
   const int radius = std::max(3, static_cast<int>(std::lround(0.2 / res)));
   for (const auto& p : PeopleOnMap(data, summary)) {

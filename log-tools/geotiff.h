@@ -1,9 +1,10 @@
 #pragma once
 // The mission as a RoboCup-Rescue-style GeoTIFF (as hector_geotiff draws it): the occupancy
-// grid at one pixel per cell (free white, obstacles dark blue, unknown a 1 m checkerboard of two
-// light greys), 1 m grid lines, the robot's path (orange), the start pose (green arrow), the
-// people found (filled discs coloured by how they were found, numbered, with 3-sigma
-// uncertainty ellipses) and the sound sources (blue squares, 3-sigma ellipses). People and
+// grid at one pixel per cell (free (< 50) white, obstacles (>= 65) dark blue, between a grey
+// blue, unknown a 1 m checkerboard of two light greys), 1 m grid lines, the robot's path
+// (orange), the start pose (green arrow), the people found (filled discs coloured by how they
+// were found, numbered, with 3-sigma uncertainty ellipses) and the sound sources (converged:
+// filled blue squares with 3-sigma ellipses; initialising: hollow squares). People and
 // sources the report lists as unconverged or outside the map are not drawn.
 //
 // Georeference: pixel size = the map's resolution; the geotransform maps pixel corners to the
