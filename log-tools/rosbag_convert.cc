@@ -270,10 +270,14 @@ std::string FormatTopics(const std::vector<TopicSummary>& topics) {
   std::ostringstream s;
   for (const auto& t : topics) {
     char line[512];
+    std::string note = t.note;
+    if (t.undecodable > 0) {
+      note += (note.empty() ? "" : ", ") + std::to_string(t.undecodable) + " undecodable, skipped";
+    }
     snprintf(line, sizeof(line), "  %-32s %-36s %8lld  %s%s%s\n", t.topic.c_str(), t.type.c_str(),
              static_cast<long long>(t.messages),
              t.channel.empty() ? "" : ("-> " + t.channel).c_str(),
-             t.channel.empty() || t.note.empty() ? "" : "  ", t.note.c_str());
+             t.channel.empty() || note.empty() ? "" : "  ", note.c_str());
     s << line;
   }
   return s.str();
@@ -379,263 +383,271 @@ RosbagImportResult ImportRosbag(const std::string& bag_path, const std::string& 
     const std::string& type = m.getDataType();
     const int64_t record_utime = ToUtime(m.getTime());
     const int64_t before = out.counts().count(t->channel) ? out.counts().at(t->channel) : 0;
-    if (type == kLaserScan) {
-      auto s = m.instantiate<sensor_msgs::LaserScan>();
-      if (!s) continue;
-      if (first_laser_frame.empty()) first_laser_frame = s->header.frame_id;
-      sarmap::laser_scan_t msg{};
-      msg.header.utime = ToUtime(s->header.stamp);
-      msg.header.frame = frame(s->header.frame_id);
-      msg.angle_min_rad = s->angle_min;
-      msg.angle_increment_rad = s->angle_increment;
-      msg.range_min_m = s->range_min;
-      msg.range_max_m = s->range_max;
-      msg.ranges_m = s->ranges;
-      msg.num_ranges = static_cast<int32_t>(s->ranges.size());
-      if (s->intensities.size() == s->ranges.size()) {
-        msg.intensities = s->intensities;
-        msg.num_intensities = msg.num_ranges;
-      }
-      out.Write(t->channel, record_utime, &msg);
-    } else if (type == kOdometry) {
-      auto o = m.instantiate<nav_msgs::Odometry>();
-      if (!o) continue;
-      sarmap::odometry_t msg{};
-      msg.header.utime = ToUtime(o->header.stamp);
-      msg.header.frame = frame(o->header.frame_id);
-      msg.child_frame = frame(o->child_frame_id);
-      const auto& p = o->pose.pose;
-      msg.position_m[0] = p.position.x;
-      msg.position_m[1] = p.position.y;
-      msg.position_m[2] = p.position.z;
-      msg.orientation[0] = p.orientation.w;
-      msg.orientation[1] = p.orientation.x;
-      msg.orientation[2] = p.orientation.y;
-      msg.orientation[3] = p.orientation.z;
-      std::copy(o->pose.covariance.begin(), o->pose.covariance.end(), msg.pose_covariance);
-      msg.linear_velocity_mps[0] = o->twist.twist.linear.x;
-      msg.linear_velocity_mps[1] = o->twist.twist.linear.y;
-      msg.linear_velocity_mps[2] = o->twist.twist.linear.z;
-      msg.angular_velocity_radps[0] = o->twist.twist.angular.x;
-      msg.angular_velocity_radps[1] = o->twist.twist.angular.y;
-      msg.angular_velocity_radps[2] = o->twist.twist.angular.z;
-      std::copy(o->twist.covariance.begin(), o->twist.covariance.end(), msg.twist_covariance);
-      out.Write(t->channel, record_utime, &msg);
-    } else if (type == kTf) {
-      auto tf = m.instantiate<tf2_msgs::TFMessage>();
-      if (!tf) continue;
-      for (const auto& ts : tf->transforms) {
-        if (ts.header.frame_id != options.odom_frame || ts.child_frame_id != options.base_frame)
-          continue;
-        sarmap::odometry_t msg{};
-        msg.header.utime = ToUtime(ts.header.stamp);
-        msg.header.frame = frame(ts.header.frame_id);
-        msg.child_frame = frame(ts.child_frame_id);
-        msg.position_m[0] = ts.transform.translation.x;
-        msg.position_m[1] = ts.transform.translation.y;
-        msg.position_m[2] = ts.transform.translation.z;
-        msg.orientation[0] = ts.transform.rotation.w;
-        msg.orientation[1] = ts.transform.rotation.x;
-        msg.orientation[2] = ts.transform.rotation.y;
-        msg.orientation[3] = ts.transform.rotation.z;
-        out.Write(t->channel, record_utime, &msg);
-      }
-    } else if (type == kImage) {
-      auto img = m.instantiate<sensor_msgs::Image>();
-      if (!img) continue;
-      sarmap::header_t header{};
-      header.utime = ToUtime(img->header.stamp);
-      header.frame = frame(img->header.frame_id);
-      sarmap::camera_intrinsics_t k{};
-      auto kit = intrinsics.find(Namespace(m.getTopic()));
-      if (kit != intrinsics.end()) {
-        k = kit->second;
-      } else {
-        warn_once(m.getTopic(),
-                  "no CameraInfo in " + Namespace(m.getTopic()) + "/: intrinsics left 0");
-        k.width = static_cast<int32_t>(img->width);
-        k.height = static_cast<int32_t>(img->height);
-      }
-      const int w = static_cast<int>(img->width), h = static_cast<int>(img->height);
-      const std::string& enc = img->encoding;
-      const bool swap = img->is_bigendian != 0;
-      if (enc == "16UC1" || enc == "mono16" || enc == "32FC1") {
-        const size_t bpp = enc == "32FC1" ? 4 : 2;
-        if (img->step < w * bpp || img->data.size() < static_cast<size_t>(img->step) * h) {
-          warn_once(m.getTopic(), "image data shorter than step x height: skipped");
-          continue;
+    // A message that does not deserialise (truncated, or a type of the same name with another
+    // layout) is skipped and counted; the rest of the bag is still converted.
+    try {
+      if (type == kLaserScan) {
+        auto s = m.instantiate<sensor_msgs::LaserScan>();
+        if (!s) continue;
+        if (first_laser_frame.empty()) first_laser_frame = s->header.frame_id;
+        sarmap::laser_scan_t msg{};
+        msg.header.utime = ToUtime(s->header.stamp);
+        msg.header.frame = frame(s->header.frame_id);
+        msg.angle_min_rad = s->angle_min;
+        msg.angle_increment_rad = s->angle_increment;
+        msg.range_min_m = s->range_min;
+        msg.range_max_m = s->range_max;
+        msg.ranges_m = s->ranges;
+        msg.num_ranges = static_cast<int32_t>(s->ranges.size());
+        if (s->intensities.size() == s->ranges.size()) {
+          msg.intensities = s->intensities;
+          msg.num_intensities = msg.num_ranges;
         }
-        std::vector<uint16_t> mm(static_cast<size_t>(w) * h);
-        for (int r = 0; r < h; ++r) {
-          const uint8_t* row = img->data.data() + static_cast<size_t>(r) * img->step;
-          for (int c = 0; c < w; ++c) {
-            uint8_t b[4];
-            std::memcpy(b, row + c * bpp, bpp);
-            if (swap) std::reverse(b, b + bpp);
-            if (bpp == 2) {
-              uint16_t v;
-              std::memcpy(&v, b, 2);
-              mm[static_cast<size_t>(r) * w + c] = v;
-            } else {
-              float v;
-              std::memcpy(&v, b, 4);
-              // Metres to millimetres; no reading (NaN, <= 0) and beyond 65.5 m become 0.
-              mm[static_cast<size_t>(r) * w + c] =
-                  std::isfinite(v) && v > 0 && v < 65.535f
-                      ? static_cast<uint16_t>(std::lround(v * 1000))
-                      : 0;
+        out.Write(t->channel, record_utime, &msg);
+      } else if (type == kOdometry) {
+        auto o = m.instantiate<nav_msgs::Odometry>();
+        if (!o) continue;
+        sarmap::odometry_t msg{};
+        msg.header.utime = ToUtime(o->header.stamp);
+        msg.header.frame = frame(o->header.frame_id);
+        msg.child_frame = frame(o->child_frame_id);
+        const auto& p = o->pose.pose;
+        msg.position_m[0] = p.position.x;
+        msg.position_m[1] = p.position.y;
+        msg.position_m[2] = p.position.z;
+        msg.orientation[0] = p.orientation.w;
+        msg.orientation[1] = p.orientation.x;
+        msg.orientation[2] = p.orientation.y;
+        msg.orientation[3] = p.orientation.z;
+        std::copy(o->pose.covariance.begin(), o->pose.covariance.end(), msg.pose_covariance);
+        msg.linear_velocity_mps[0] = o->twist.twist.linear.x;
+        msg.linear_velocity_mps[1] = o->twist.twist.linear.y;
+        msg.linear_velocity_mps[2] = o->twist.twist.linear.z;
+        msg.angular_velocity_radps[0] = o->twist.twist.angular.x;
+        msg.angular_velocity_radps[1] = o->twist.twist.angular.y;
+        msg.angular_velocity_radps[2] = o->twist.twist.angular.z;
+        std::copy(o->twist.covariance.begin(), o->twist.covariance.end(), msg.twist_covariance);
+        out.Write(t->channel, record_utime, &msg);
+      } else if (type == kTf) {
+        auto tf = m.instantiate<tf2_msgs::TFMessage>();
+        if (!tf) continue;
+        for (const auto& ts : tf->transforms) {
+          if (ts.header.frame_id != options.odom_frame || ts.child_frame_id != options.base_frame)
+            continue;
+          sarmap::odometry_t msg{};
+          msg.header.utime = ToUtime(ts.header.stamp);
+          msg.header.frame = frame(ts.header.frame_id);
+          msg.child_frame = frame(ts.child_frame_id);
+          msg.position_m[0] = ts.transform.translation.x;
+          msg.position_m[1] = ts.transform.translation.y;
+          msg.position_m[2] = ts.transform.translation.z;
+          msg.orientation[0] = ts.transform.rotation.w;
+          msg.orientation[1] = ts.transform.rotation.x;
+          msg.orientation[2] = ts.transform.rotation.y;
+          msg.orientation[3] = ts.transform.rotation.z;
+          out.Write(t->channel, record_utime, &msg);
+        }
+      } else if (type == kImage) {
+        auto img = m.instantiate<sensor_msgs::Image>();
+        if (!img) continue;
+        sarmap::header_t header{};
+        header.utime = ToUtime(img->header.stamp);
+        header.frame = frame(img->header.frame_id);
+        sarmap::camera_intrinsics_t k{};
+        auto kit = intrinsics.find(Namespace(m.getTopic()));
+        if (kit != intrinsics.end()) {
+          k = kit->second;
+        } else {
+          warn_once(m.getTopic(),
+                    "no CameraInfo in " + Namespace(m.getTopic()) + "/: intrinsics left 0");
+          k.width = static_cast<int32_t>(img->width);
+          k.height = static_cast<int32_t>(img->height);
+        }
+        const int w = static_cast<int>(img->width), h = static_cast<int>(img->height);
+        const std::string& enc = img->encoding;
+        const bool swap = img->is_bigendian != 0;
+        if (enc == "16UC1" || enc == "mono16" || enc == "32FC1") {
+          const size_t bpp = enc == "32FC1" ? 4 : 2;
+          if (img->step < w * bpp || img->data.size() < static_cast<size_t>(img->step) * h) {
+            warn_once(m.getTopic(), "image data shorter than step x height: skipped");
+            continue;
+          }
+          std::vector<uint16_t> mm(static_cast<size_t>(w) * h);
+          for (int r = 0; r < h; ++r) {
+            const uint8_t* row = img->data.data() + static_cast<size_t>(r) * img->step;
+            for (int c = 0; c < w; ++c) {
+              uint8_t b[4];
+              std::memcpy(b, row + c * bpp, bpp);
+              if (swap) std::reverse(b, b + bpp);
+              if (bpp == 2) {
+                uint16_t v;
+                std::memcpy(&v, b, 2);
+                mm[static_cast<size_t>(r) * w + c] = v;
+              } else {
+                float v;
+                std::memcpy(&v, b, 4);
+                // Metres to millimetres; no reading (NaN, <= 0) and beyond 65.5 m become 0.
+                mm[static_cast<size_t>(r) * w + c] =
+                    std::isfinite(v) && v > 0 && v < 65.535f
+                        ? static_cast<uint16_t>(std::lround(v * 1000))
+                        : 0;
+              }
             }
           }
+          auto msg = common::MakeDepthImage(header, k, mm.data(), w, h, true);
+          out.Write(t->channel, record_utime, &msg);
+        } else if (enc == "rgb8" || enc == "bgr8" || enc == "mono8") {
+          const int channels = enc == "mono8" ? 1 : 3;
+          if (img->step < static_cast<uint32_t>(w * channels) ||
+              img->data.size() < static_cast<size_t>(img->step) * h) {
+            warn_once(m.getTopic(), "image data shorter than step x height: skipped");
+            continue;
+          }
+          sarmap::image_t msg{};
+          msg.header = header;
+          msg.intrinsics = k;
+          msg.width = w;
+          msg.height = h;
+          msg.pixel_format = enc == "rgb8"   ? sarmap::image_t::PIXEL_RGB8
+                             : enc == "bgr8" ? sarmap::image_t::PIXEL_BGR8
+                                             : sarmap::image_t::PIXEL_GRAY8;
+          msg.compression = sarmap::image_t::COMPRESSION_NONE;
+          msg.data.resize(static_cast<size_t>(w) * h * channels);
+          for (int r = 0; r < h; ++r) {
+            std::memcpy(msg.data.data() + static_cast<size_t>(r) * w * channels,
+                        img->data.data() + static_cast<size_t>(r) * img->step,
+                        static_cast<size_t>(w) * channels);
+          }
+          msg.size = static_cast<int32_t>(msg.data.size());
+          out.Write(t->channel, record_utime, &msg);
+        } else {
+          warn_once(m.getTopic(),
+                    "image encoding '" + enc +
+                        "' not converted (16UC1, mono16, 32FC1, rgb8, bgr8, mono8 are)");
         }
-        auto msg = common::MakeDepthImage(header, k, mm.data(), w, h, true);
+      } else if (type == kAudioData || type == kAudioStamped) {
+        std::vector<uint8_t> bytes;
+        int64_t utime = record_utime;
+        std::string frame_id = "mic_array";
+        if (type == kAudioStamped) {
+          auto a = m.instantiate<audio_common_msgs::AudioDataStamped>();
+          if (!a) continue;
+          bytes = std::move(a->audio.data);
+          utime = ToUtime(a->header.stamp);
+          if (!a->header.frame_id.empty()) frame_id = frame(a->header.frame_id);
+        } else {
+          auto a = m.instantiate<audio_common_msgs::AudioData>();
+          if (!a) continue;
+          bytes = std::move(a->data);
+        }
+        int rate = options.audio_sample_rate_hz, channels = options.audio_channels;
+        auto info = audio_info.find(Namespace(m.getTopic()));
+        if (info != audio_info.end()) {
+          const auto& i = info->second;
+          if (i.coding_format != "wave" && !i.coding_format.empty()) {
+            warn_once(m.getTopic(),
+                      "coding_format '" + i.coding_format + "' not converted (raw wave S16LE is)");
+            continue;
+          }
+          if (!i.sample_format.empty() && i.sample_format != "S16LE") {
+            warn_once(m.getTopic(),
+                      "sample_format '" + i.sample_format + "' not converted (S16LE is)");
+            continue;
+          }
+          rate = static_cast<int>(i.sample_rate);
+          channels = std::max(1, static_cast<int>(i.channels));
+        }
+        const int64_t frames = static_cast<int64_t>(bytes.size()) / (2 * channels);
+        sarmap::audio_frame_t msg{};
+        msg.header.utime = utime;
+        msg.header.frame = frame_id;
+        msg.device_id = options.audio_device;
+        msg.sample_rate_hz = rate;
+        msg.num_channels = static_cast<int16_t>(channels);
+        msg.num_samples = static_cast<int32_t>(frames);
+        msg.first_sample_index = audio_next_sample[m.getTopic()];
+        audio_next_sample[m.getTopic()] += frames;
+        msg.sample_format = sarmap::audio_frame_t::SAMPLE_INT16;
+        msg.num_values = static_cast<int32_t>(frames * channels);
+        msg.samples.resize(msg.num_values);
+        for (int32_t i = 0; i < msg.num_values; ++i) {
+          msg.samples[i] = static_cast<int16_t>(bytes[2 * i] | (bytes[2 * i + 1] << 8));
+        }
         out.Write(t->channel, record_utime, &msg);
-      } else if (enc == "rgb8" || enc == "bgr8" || enc == "mono8") {
-        const int channels = enc == "mono8" ? 1 : 3;
-        if (img->step < static_cast<uint32_t>(w * channels) ||
-            img->data.size() < static_cast<size_t>(img->step) * h) {
-          warn_once(m.getTopic(), "image data shorter than step x height: skipped");
+      } else if (type == kPoseStamped) {
+        auto p = m.instantiate<geometry_msgs::PoseStamped>();
+        if (!p) continue;
+        sarmap::pose_t msg{};
+        msg.header.utime = ToUtime(p->header.stamp);
+        msg.header.frame = frame(p->header.frame_id);
+        msg.child_frame = "base";
+        msg.position_m[0] = p->pose.position.x;
+        msg.position_m[1] = p->pose.position.y;
+        msg.position_m[2] = p->pose.position.z;
+        msg.orientation[0] = p->pose.orientation.w;
+        msg.orientation[1] = p->pose.orientation.x;
+        msg.orientation[2] = p->pose.orientation.y;
+        msg.orientation[3] = p->pose.orientation.z;
+        msg.node_id = -1;
+        out.Write(t->channel, record_utime, &msg);
+      } else if (type == kOccupancyGrid) {
+        auto g = m.instantiate<nav_msgs::OccupancyGrid>();
+        if (!g) continue;
+        sarmap::occupancy_grid_t msg{};
+        msg.header.utime = ToUtime(g->header.stamp);
+        msg.header.frame = frame(g->header.frame_id);
+        msg.resolution_m = g->info.resolution;
+        msg.width = static_cast<int32_t>(g->info.width);
+        msg.height = static_cast<int32_t>(g->info.height);
+        msg.origin_x_m = g->info.origin.position.x;
+        msg.origin_y_m = g->info.origin.position.y;
+        const auto& q = g->info.origin.orientation;
+        msg.origin_yaw_rad =
+            std::atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z));
+        msg.compression = sarmap::occupancy_grid_t::COMPRESSION_NONE;
+        if (g->data.size() != static_cast<size_t>(msg.width) * msg.height) {
+          warn_once(m.getTopic(), "grid data size differs from width x height: skipped");
           continue;
         }
-        sarmap::image_t msg{};
-        msg.header = header;
-        msg.intrinsics = k;
-        msg.width = w;
-        msg.height = h;
-        msg.pixel_format = enc == "rgb8"   ? sarmap::image_t::PIXEL_RGB8
-                           : enc == "bgr8" ? sarmap::image_t::PIXEL_BGR8
-                                           : sarmap::image_t::PIXEL_GRAY8;
-        msg.compression = sarmap::image_t::COMPRESSION_NONE;
-        msg.data.resize(static_cast<size_t>(w) * h * channels);
-        for (int r = 0; r < h; ++r) {
-          std::memcpy(msg.data.data() + static_cast<size_t>(r) * w * channels,
-                      img->data.data() + static_cast<size_t>(r) * img->step,
-                      static_cast<size_t>(w) * channels);
-        }
+        msg.data.assign(g->data.begin(), g->data.end());
         msg.size = static_cast<int32_t>(msg.data.size());
         out.Write(t->channel, record_utime, &msg);
-      } else {
-        warn_once(m.getTopic(),
-                  "image encoding '" + enc +
-                      "' not converted (16UC1, mono16, 32FC1, rgb8, bgr8, mono8 are)");
-      }
-    } else if (type == kAudioData || type == kAudioStamped) {
-      std::vector<uint8_t> bytes;
-      int64_t utime = record_utime;
-      std::string frame_id = "mic_array";
-      if (type == kAudioStamped) {
-        auto a = m.instantiate<audio_common_msgs::AudioDataStamped>();
+      } else if (type == kMarkerArray) {
+        auto a = m.instantiate<visualization_msgs::MarkerArray>();
         if (!a) continue;
-        bytes = std::move(a->audio.data);
-        utime = ToUtime(a->header.stamp);
-        if (!a->header.frame_id.empty()) frame_id = frame(a->header.frame_id);
-      } else {
-        auto a = m.instantiate<audio_common_msgs::AudioData>();
-        if (!a) continue;
-        bytes = std::move(a->data);
-      }
-      int rate = options.audio_sample_rate_hz, channels = options.audio_channels;
-      auto info = audio_info.find(Namespace(m.getTopic()));
-      if (info != audio_info.end()) {
-        const auto& i = info->second;
-        if (i.coding_format != "wave" && !i.coding_format.empty()) {
+        sarmap::people_map_t msg{};
+        msg.header.utime = record_utime;
+        msg.header.frame = "map";
+        for (const auto& mk : a->markers) {
+          if (mk.ns != kPeopleNamespace || mk.action != visualization_msgs::Marker::ADD ||
+              mk.type != visualization_msgs::Marker::SPHERE) {
+            continue;
+          }
+          msg.header.utime = ToUtime(mk.header.stamp);
+          msg.header.frame = frame(mk.header.frame_id);
+          sarmap::mapped_person_t p{};
+          p.id = mk.id;
+          p.position_m[0] = mk.pose.position.x;
+          p.position_m[1] = mk.pose.position.y;
+          p.position_m[2] = mk.pose.position.z;
+          p.covariance[0] = std::pow(0.5 * mk.scale.x, 2);
+          p.covariance[4] = std::pow(0.5 * mk.scale.y, 2);
+          p.covariance[8] = std::pow(0.5 * mk.scale.z, 2);
+          p.people_count = 1;
+          p.sound_source_id = -1;
+          ParsePersonText(mk.text, &p);
+          msg.people.push_back(p);
+        }
+        if (msg.people.empty() && !a->markers.empty()) {
           warn_once(m.getTopic(),
-                    "coding_format '" + i.coding_format + "' not converted (raw wave S16LE is)");
-          continue;
+                    "MarkerArray without SPHERE markers in namespace 'people': empty people maps");
         }
-        if (!i.sample_format.empty() && i.sample_format != "S16LE") {
-          warn_once(m.getTopic(),
-                    "sample_format '" + i.sample_format + "' not converted (S16LE is)");
-          continue;
-        }
-        rate = static_cast<int>(i.sample_rate);
-        channels = std::max(1, static_cast<int>(i.channels));
+        msg.num_people = static_cast<int32_t>(msg.people.size());
+        out.Write(t->channel, record_utime, &msg);
       }
-      const int64_t frames = static_cast<int64_t>(bytes.size()) / (2 * channels);
-      sarmap::audio_frame_t msg{};
-      msg.header.utime = utime;
-      msg.header.frame = frame_id;
-      msg.device_id = options.audio_device;
-      msg.sample_rate_hz = rate;
-      msg.num_channels = static_cast<int16_t>(channels);
-      msg.num_samples = static_cast<int32_t>(frames);
-      msg.first_sample_index = audio_next_sample[m.getTopic()];
-      audio_next_sample[m.getTopic()] += frames;
-      msg.sample_format = sarmap::audio_frame_t::SAMPLE_INT16;
-      msg.num_values = static_cast<int32_t>(frames * channels);
-      msg.samples.resize(msg.num_values);
-      for (int32_t i = 0; i < msg.num_values; ++i) {
-        msg.samples[i] = static_cast<int16_t>(bytes[2 * i] | (bytes[2 * i + 1] << 8));
-      }
-      out.Write(t->channel, record_utime, &msg);
-    } else if (type == kPoseStamped) {
-      auto p = m.instantiate<geometry_msgs::PoseStamped>();
-      if (!p) continue;
-      sarmap::pose_t msg{};
-      msg.header.utime = ToUtime(p->header.stamp);
-      msg.header.frame = frame(p->header.frame_id);
-      msg.child_frame = "base";
-      msg.position_m[0] = p->pose.position.x;
-      msg.position_m[1] = p->pose.position.y;
-      msg.position_m[2] = p->pose.position.z;
-      msg.orientation[0] = p->pose.orientation.w;
-      msg.orientation[1] = p->pose.orientation.x;
-      msg.orientation[2] = p->pose.orientation.y;
-      msg.orientation[3] = p->pose.orientation.z;
-      msg.node_id = -1;
-      out.Write(t->channel, record_utime, &msg);
-    } else if (type == kOccupancyGrid) {
-      auto g = m.instantiate<nav_msgs::OccupancyGrid>();
-      if (!g) continue;
-      sarmap::occupancy_grid_t msg{};
-      msg.header.utime = ToUtime(g->header.stamp);
-      msg.header.frame = frame(g->header.frame_id);
-      msg.resolution_m = g->info.resolution;
-      msg.width = static_cast<int32_t>(g->info.width);
-      msg.height = static_cast<int32_t>(g->info.height);
-      msg.origin_x_m = g->info.origin.position.x;
-      msg.origin_y_m = g->info.origin.position.y;
-      const auto& q = g->info.origin.orientation;
-      msg.origin_yaw_rad = std::atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z));
-      msg.compression = sarmap::occupancy_grid_t::COMPRESSION_NONE;
-      if (g->data.size() != static_cast<size_t>(msg.width) * msg.height) {
-        warn_once(m.getTopic(), "grid data size differs from width x height: skipped");
-        continue;
-      }
-      msg.data.assign(g->data.begin(), g->data.end());
-      msg.size = static_cast<int32_t>(msg.data.size());
-      out.Write(t->channel, record_utime, &msg);
-    } else if (type == kMarkerArray) {
-      auto a = m.instantiate<visualization_msgs::MarkerArray>();
-      if (!a) continue;
-      sarmap::people_map_t msg{};
-      msg.header.utime = record_utime;
-      msg.header.frame = "map";
-      for (const auto& mk : a->markers) {
-        if (mk.ns != kPeopleNamespace || mk.action != visualization_msgs::Marker::ADD ||
-            mk.type != visualization_msgs::Marker::SPHERE) {
-          continue;
-        }
-        msg.header.utime = ToUtime(mk.header.stamp);
-        msg.header.frame = frame(mk.header.frame_id);
-        sarmap::mapped_person_t p{};
-        p.id = mk.id;
-        p.position_m[0] = mk.pose.position.x;
-        p.position_m[1] = mk.pose.position.y;
-        p.position_m[2] = mk.pose.position.z;
-        p.covariance[0] = std::pow(0.5 * mk.scale.x, 2);
-        p.covariance[4] = std::pow(0.5 * mk.scale.y, 2);
-        p.covariance[8] = std::pow(0.5 * mk.scale.z, 2);
-        p.people_count = 1;
-        p.sound_source_id = -1;
-        ParsePersonText(mk.text, &p);
-        msg.people.push_back(p);
-      }
-      if (msg.people.empty() && !a->markers.empty()) {
-        warn_once(m.getTopic(),
-                  "MarkerArray without SPHERE markers in namespace 'people': empty people maps");
-      }
-      msg.num_people = static_cast<int32_t>(msg.people.size());
-      out.Write(t->channel, record_utime, &msg);
+    } catch (const std::exception& e) {
+      ++t->undecodable;
+      warn_once(m.getTopic(), std::string("undecodable messages skipped (") + e.what() + ")");
     }
     const int64_t after = out.counts().count(t->channel) ? out.counts().at(t->channel) : 0;
     t->written += after - before;

@@ -86,6 +86,7 @@ struct TopicSummary {
   std::string topic, type, channel;  // channel "" when not imported
   int64_t messages = 0;              // in the bag
   int64_t written = 0;               // events written
+  int64_t undecodable = 0;           // messages that did not deserialise (skipped)
   std::string note;                  // why not imported, or what was converted
 };
 

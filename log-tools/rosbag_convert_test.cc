@@ -41,6 +41,40 @@
 #include "slam/carmen.h"
 #include "slam/relations.h"
 
+// A LaserScan cut short after its header: what a truncated recording leaves.
+struct TruncatedScan {
+  std_msgs::Header header;
+};
+namespace ros {
+namespace message_traits {
+template <>
+struct MD5Sum<TruncatedScan> {
+  static const char* value() { return MD5Sum<sensor_msgs::LaserScan>::value(); }
+  static const char* value(const TruncatedScan&) { return value(); }
+};
+template <>
+struct DataType<TruncatedScan> {
+  static const char* value() { return DataType<sensor_msgs::LaserScan>::value(); }
+  static const char* value(const TruncatedScan&) { return value(); }
+};
+template <>
+struct Definition<TruncatedScan> {
+  static const char* value() { return Definition<sensor_msgs::LaserScan>::value(); }
+  static const char* value(const TruncatedScan&) { return value(); }
+};
+}  // namespace message_traits
+namespace serialization {
+template <>
+struct Serializer<TruncatedScan> {
+  template <typename Stream, typename T>
+  inline static void allInOne(Stream& stream, T m) {
+    stream.next(m.header);
+  }
+  ROS_DECLARE_ALLINONE_SERIALIZER
+};
+}  // namespace serialization
+}  // namespace ros
+
 namespace sarmap {
 namespace logtools {
 namespace {
@@ -406,6 +440,36 @@ TEST(RosbagConvertTest, UnsupportedTypeNamedInTheConfigIsAnErrorListingTheBag) {
       1)
       << out;
   EXPECT_NE(out.find("cannot read ROS bag"), std::string::npos) << out;
+}
+
+TEST(RosbagConvertTest, UndecodableMessagesAreSkippedAndCounted) {
+  const std::string dir = ::testing::TempDir();
+  const std::string bag_path = dir + "/truncated.bag", log = dir + "/truncated.lcmlog";
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
+    sensor_msgs::LaserScan s;
+    s.header = Header(1, "laser");
+    s.angle_increment = 0.01f;
+    s.range_max = 10;
+    s.ranges.assign(100, 2.0f);
+    bag.write("/scan", T(1), s);
+    TruncatedScan cut;
+    cut.header = Header(1.1, "laser");
+    bag.write("/scan", T(1.1), cut);
+    s.header = Header(1.2, "laser");
+    bag.write("/scan", T(1.2), s);
+  }
+  std::string out;
+  ASSERT_EQ(RunCommand(kBin + "/sarmap-log-import-rosbag " + bag_path + " -o " + log +
+                           " --config " + kConfig,
+                       &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("undecodable messages skipped"), std::string::npos) << out;
+  EXPECT_NE(out.find("-> SCAN  1 undecodable, skipped"), std::string::npos) << out;
+  const auto events = ReadLog(log);
+  ASSERT_EQ(events.at("SCAN").size(), 2u);
+  EXPECT_EQ(Decode<laser_scan_t>(events.at("SCAN")[1]).header.utime, 1'200'000);
 }
 
 template <class Msg>
