@@ -301,7 +301,11 @@ TEST(RosbagConvertTest, EveryTypeImportsWithItsCountAndGeometry) {
   ASSERT_EQ(RunCommand(kBin + "/sarmap-log-info --json " + log + " 2>/dev/null", &out), 0) << out;
   const auto info = nlohmann::json::parse(out);
   std::map<std::string, std::pair<std::string, int64_t>> channels;
-  for (const auto& c : info["channels"]) channels[c["channel"]] = {c["type"], c["count"]};
+  std::map<std::string, std::string> geometry;
+  for (const auto& c : info["channels"]) {
+    channels[c["channel"]] = {c["type"], c["count"]};
+    geometry[c["channel"]] = c["geometry"];
+  }
   const std::map<std::string, std::pair<std::string, int64_t>> expected = {
       {"SCAN", {"laser_scan_t", 5}},
       {"ODOM", {"odometry_t", 14}},
@@ -313,6 +317,12 @@ TEST(RosbagConvertTest, EveryTypeImportsWithItsCountAndGeometry) {
       {"MAP", {"occupancy_grid_t", 1}},
       {"PEOPLE_MAP", {"people_map_t", 1}}};
   EXPECT_EQ(channels, expected) << out;
+  EXPECT_EQ(geometry["SCAN"],
+            "400 beams -114.59..114.59 deg step 0.5744 deg, 0.10-20.00 m, intensities");
+  EXPECT_EQ(geometry["DEPTH"], "4x3 depth u16 zstd, fx 525.0 fy 526.0 cx 319.5 cy 239.5");
+  EXPECT_EQ(geometry["RGB"], "4x3 rgb8, fx 525.0 fy 526.0 cx 319.5 cy 239.5");
+  EXPECT_EQ(geometry["AUDIO"], "2 ch, 48000 Hz, 160 samples");
+  EXPECT_EQ(geometry["MAP"], "3x2 cells of 0.050 m, origin (-1.00, -2.00) m");
 
   const auto events = ReadLog(log);
   // Each scan's own geometry.
