@@ -35,14 +35,18 @@ struct ChannelSummary {
 // The sensor geometry of a message, for the types that have one; "" otherwise.
 std::string Geometry(const std::string& type, const std::vector<uint8_t>& data) {
   char text[200];
-  const auto decode = [&](auto* msg) { return sarmap::common::DecodeMessage(data.data(), data.size(), msg); };
+  const auto decode = [&](auto* msg) {
+    return sarmap::common::DecodeMessage(data.data(), data.size(), msg);
+  };
   if (type == "laser_scan_t") {
     sarmap::laser_scan_t m;
     if (!decode(&m)) return "";
     const double to_deg = 180.0 / M_PI;
-    snprintf(text, sizeof(text), "%d beams %.2f..%.2f deg step %.4f deg, %.2f-%.2f m%s", m.num_ranges,
-             m.angle_min_rad * to_deg, (m.angle_min_rad + (m.num_ranges - 1) * m.angle_increment_rad) * to_deg,
-             m.angle_increment_rad * to_deg, m.range_min_m, m.range_max_m, m.num_intensities ? ", intensities" : "");
+    snprintf(text, sizeof(text), "%d beams %.2f..%.2f deg step %.4f deg, %.2f-%.2f m%s",
+             m.num_ranges, m.angle_min_rad * to_deg,
+             (m.angle_min_rad + (m.num_ranges - 1) * m.angle_increment_rad) * to_deg,
+             m.angle_increment_rad * to_deg, m.range_min_m, m.range_max_m,
+             m.num_intensities ? ", intensities" : "");
   } else if (type == "image_t") {
     sarmap::image_t m;
     if (!decode(&m)) return "";
@@ -50,21 +54,24 @@ std::string Geometry(const std::string& type, const std::vector<uint8_t>& data) 
                          : m.pixel_format == sarmap::image_t::PIXEL_GRAY8   ? "gray8"
                          : m.pixel_format == sarmap::image_t::PIXEL_RGB8    ? "rgb8"
                                                                             : "bgr8";
-    const char* compression = m.compression == sarmap::image_t::COMPRESSION_JPEG               ? " jpeg"
-                              : m.compression == sarmap::image_t::COMPRESSION_PNG              ? " png"
-                              : m.compression == sarmap::image_t::COMPRESSION_DEPTH_DELTA_ZSTD ? " zstd"
-                                                                                              : "";
-    snprintf(text, sizeof(text), "%dx%d %s%s, fx %.1f fy %.1f cx %.1f cy %.1f", m.width, m.height, format,
-             compression, m.intrinsics.fx, m.intrinsics.fy, m.intrinsics.cx, m.intrinsics.cy);
+    const char* compression = m.compression == sarmap::image_t::COMPRESSION_JPEG  ? " jpeg"
+                              : m.compression == sarmap::image_t::COMPRESSION_PNG ? " png"
+                              : m.compression == sarmap::image_t::COMPRESSION_DEPTH_DELTA_ZSTD
+                                  ? " zstd"
+                                  : "";
+    snprintf(text, sizeof(text), "%dx%d %s%s, fx %.1f fy %.1f cx %.1f cy %.1f", m.width, m.height,
+             format, compression, m.intrinsics.fx, m.intrinsics.fy, m.intrinsics.cx,
+             m.intrinsics.cy);
   } else if (type == "occupancy_grid_t") {
     sarmap::occupancy_grid_t m;
     if (!decode(&m)) return "";
-    snprintf(text, sizeof(text), "%dx%d cells of %.3f m, origin (%.2f, %.2f) m", m.width, m.height, m.resolution_m,
-             m.origin_x_m, m.origin_y_m);
+    snprintf(text, sizeof(text), "%dx%d cells of %.3f m, origin (%.2f, %.2f) m", m.width, m.height,
+             m.resolution_m, m.origin_x_m, m.origin_y_m);
   } else if (type == "audio_frame_t") {
     sarmap::audio_frame_t m;
     if (!decode(&m)) return "";
-    snprintf(text, sizeof(text), "%d ch, %d Hz, %d samples", m.num_channels, m.sample_rate_hz, m.num_samples);
+    snprintf(text, sizeof(text), "%d ch, %d Hz, %d samples", m.num_channels, m.sample_rate_hz,
+             m.num_samples);
   } else {
     return "";
   }
@@ -86,10 +93,11 @@ std::string JsonEscape(const std::string& s) {
 int main(int argc, char** argv) {
   return sarmap::common::RunMain("sarmap-log info", [&] {
     sarmap::common::ArgParser parser(
-        "sarmap-log info", "Reports what an LCM log holds: per channel the message type, count, rate,\n"
-                           "size, sequence gaps, time span and sensor geometry (scans, images, grids,\n"
-                           "audio); and where a truncated or corrupt log breaks (the readable part is\n"
-                           "still reported).");
+        "sarmap-log info",
+        "Reports what an LCM log holds: per channel the message type, count, rate,\n"
+        "size, sequence gaps, time span and sensor geometry (scans, images, grids,\n"
+        "audio); and where a truncated or corrupt log breaks (the readable part is\n"
+        "still reported).");
     std::string path;
     bool json = false;
     parser.AddPositional("LOG", &path, "LCM log file (as written by lcm-logger / sarmap-log record)");
@@ -142,9 +150,10 @@ int main(int argc, char** argv) {
         out << (first ? "" : ", ") << "{\"channel\": \"" << JsonEscape(name) << "\", \"type\": \""
             << c.types.rbegin()->first << "\", \"count\": " << c.count << ", \"bytes\": " << c.bytes
             << ", \"rate_hz\": " << (cspan > 0 ? (c.count - 1) / cspan : 0.0)
-            << ", \"seq_gaps\": " << c.sequence.gaps() << ", \"reordered\": " << c.sequence.reordered()
-            << ", \"geometry\": \"" << JsonEscape(c.geometry) << "\", \"geometry_varies\": "
-            << (c.geometry_varies ? "true" : "false") << "}";
+            << ", \"seq_gaps\": " << c.sequence.gaps()
+            << ", \"reordered\": " << c.sequence.reordered() << ", \"geometry\": \""
+            << JsonEscape(c.geometry)
+            << "\", \"geometry_varies\": " << (c.geometry_varies ? "true" : "false") << "}";
         first = false;
       }
       out << "], \"problems\": [";
@@ -177,8 +186,8 @@ int main(int argc, char** argv) {
                  cspan > 0 ? (c.count - 1) / cspan : 0.0, c.bytes / 1e3,
                  static_cast<long long>(c.sequence.gaps()),
                  static_cast<long long>(c.sequence.reordered()),
-                 c.has_header ? (c.last_utime - c.first_utime) * 1e-6 : 0.0, c.geometry.empty() ? "" : "  ",
-                 c.geometry.c_str(),
+                 c.has_header ? (c.last_utime - c.first_utime) * 1e-6 : 0.0,
+                 c.geometry.empty() ? "" : "  ", c.geometry.c_str(),
                  c.geometry_varies ? " (varies)" : "");
         out << line;
       }
