@@ -42,17 +42,15 @@ export DEMO_EXPLORE_MODE="${DEMO_EXPLORE_MODE:-sound_guided}"
 
 if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   if "$root/tests/harness/sarmap-netns" true 2>/dev/null; then
-    if [ "${DEMO_COMPUTERS:-1}" = 1 ]; then
-      # The live page's forwarder on this side; it exits with this process (whose pid the exec
-      # keeps).
-      viewer_dir="$(mktemp -d /tmp/sarmap-demo-viewer.XXXXXX)"
-      python3 "$root/launch-scripts/viewer_forward.py" host --port "${DEMO_VIEWER_PORT:-8080}" \
-        --socket "$viewer_dir/viewer.sock" --port-file "$viewer_dir/port" --parent $$ >/dev/null 2>&1 &
-      for _ in $(seq 50); do [ -s "$viewer_dir/port" ] && break; sleep 0.1; done
-      if [ -s "$viewer_dir/port" ]; then
-        export DEMO_VIEWER_URL="http://127.0.0.1:$(cat "$viewer_dir/port")/"
-        export DEMO_VIEWER_SOCKET="$viewer_dir/viewer.sock"
-      fi
+    # The live page's forwarder on this side; it exits with this process (whose pid the execs
+    # keep).
+    viewer_dir="$(mktemp -d /tmp/sarmap-demo-viewer.XXXXXX)"
+    python3 "$root/launch-scripts/viewer_forward.py" host --port "${DEMO_VIEWER_PORT:-8080}" \
+      --socket "$viewer_dir/viewer.sock" --port-file "$viewer_dir/port" --parent $$ >/dev/null 2>&1 &
+    for _ in $(seq 50); do [ -s "$viewer_dir/port" ] && break; sleep 0.1; done
+    if [ -s "$viewer_dir/port" ]; then
+      export DEMO_VIEWER_URL="http://127.0.0.1:$(cat "$viewer_dir/port")/"
+      export DEMO_VIEWER_SOCKET="$viewer_dir/viewer.sock"
     fi
     exec "$root/tests/harness/sarmap-netns" "$0" "$build"
   fi
@@ -139,11 +137,21 @@ else
   for id in sensors compute; do
     ns="demo-$id"
     netns_add_host "$ns" "$i"; namespaces+=("$ns")
+    [ "$id" != compute ] || export DEMO_VIEWER_BIND_ADDRESS="10.77.0.$i"
     (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --set "state_dir=$out") \
       >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
     echo "   computer '$id': network namespace $ns, 10.77.0.$i"
     i=$((i + 1))
   done
+  # The live page runs on "compute", bound to its address on the robot's network (reachable
+  # from here, where the bridge is); forwarded to this computer's 127.0.0.1.
+  if [ -n "${DEMO_VIEWER_SOCKET:-}" ]; then
+    python3 "$root/launch-scripts/viewer_forward.py" inside --socket "$DEMO_VIEWER_SOCKET" \
+      --to-host "$DEMO_VIEWER_BIND_ADDRESS" --to-port 8080 --parent $$ >"$out/viewer_forward.txt" 2>&1 & pids+=($!)
+    echo "== live page while the mission runs: $DEMO_VIEWER_URL (sarmap-viewer on 'compute', $DEMO_VIEWER_BIND_ADDRESS:8080)"
+  else
+    echo "== live page while the mission runs: http://$DEMO_VIEWER_BIND_ADDRESS:8080/ (inside the network namespace the demo runs in)"
+  fi
 fi
 
 killer_pid=""

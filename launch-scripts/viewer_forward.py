@@ -8,8 +8,9 @@ passes it on to the viewer.
 
   viewer_forward.py host --port 8080 --socket PATH --port-file FILE --parent PID
       listens on 127.0.0.1:8080 (a free port if 8080 is taken), writes the port to FILE
-  viewer_forward.py inside --socket PATH --to-port 8080 --parent PID
-      listens on the socket, connects each client to 127.0.0.1:8080
+  viewer_forward.py inside --socket PATH [--to-host 10.77.0.3] --to-port 8080 --parent PID
+      listens on the socket, connects each client to 127.0.0.1:8080 (or the given address: the
+      two-computer demo's viewer runs on the "compute" computer)
 
 Both exit when the process PID is gone (the demo), so nothing is left behind.
 """
@@ -75,6 +76,7 @@ async def main():
     parser.add_argument("--socket", required=True)
     parser.add_argument("--port", type=int, default=8080)
     parser.add_argument("--port-file")
+    parser.add_argument("--to-host", default="127.0.0.1")
     parser.add_argument("--to-port", type=int, default=8080)
     parser.add_argument("--parent", type=int, required=True)
     args = parser.parse_args()
@@ -90,7 +92,7 @@ async def main():
         if os.path.exists(args.socket):
             os.unlink(args.socket)
         server = await asyncio.start_unix_server(
-            handler(lambda: asyncio.open_connection("127.0.0.1", args.to_port)), path=args.socket)
+            handler(lambda: asyncio.open_connection(args.to_host, args.to_port)), path=args.socket)
     async with server:
         await watch_parent(args.parent)
     if args.side == "inside" and os.path.exists(args.socket):
