@@ -218,6 +218,27 @@ TEST(GeoTiffTest, ReadsBackInGdalWithTheReportsPositions) {
       << info;
 }
 
+TEST(GeoTiffTest, AMapWhoseCellsDoNotDecodeLeavesTheRestOfTheReport) {
+  MissionData data;
+  occupancy_grid_t grid{};
+  grid.resolution_m = 0.05;
+  grid.width = 10;
+  grid.height = 10;
+  grid.data.assign(30, 0);  // not width x height
+  grid.size = 30;
+  data.map = grid;
+  data.trail = {{0.0, 0.0}, {1.0, 0.0}};
+  const MissionSummary s = Summarise(data, 0.5);
+  const std::string dir = ::testing::TempDir() + "/geotiff-bad-map";
+  WriteReport(data, s, dir);
+  EXPECT_FALSE(std::ifstream(dir + "/map.tif").good());
+  EXPECT_TRUE(std::ifstream(dir + "/map.png").good());
+  std::ifstream json_file(dir + "/report.json");
+  const auto j = nlohmann::json::parse(json_file);
+  EXPECT_TRUE(j["files"]["geotiff"].is_null());
+  EXPECT_THROW(WriteGeoTiff(data, s, dir + "/direct.tif"), std::runtime_error);
+}
+
 }  // namespace
 }  // namespace logtools
 }  // namespace sarmap

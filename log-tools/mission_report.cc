@@ -663,7 +663,13 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   if (!cv::imwrite(directory + "/map.png", canvas.image)) {
     throw std::runtime_error(directory + "/map.png: cannot write");
   }
-  if (data.map) WriteGeoTiff(data, summary, directory + "/map.tif");
+  // The GeoTIFF needs a map whose cells decode (a damaged one is still drawn, blank, in the PNG).
+  std::vector<int8_t> map_cells;
+  std::string map_error;
+  const bool geotiff = data.map && data.map->width > 0 && data.map->height > 0 &&
+                       data.map->resolution_m > 0 &&
+                       common::DecodeOccupancyGrid(*data.map, &map_cells, &map_error);
+  if (geotiff) WriteGeoTiff(data, summary, directory + "/map.tif");
   const bool wrote_plot = !summary.metrics.coverage.empty();
   if (wrote_plot && !cv::imwrite(directory + "/coverage.png", CoveragePlot(summary.metrics))) {
     throw std::runtime_error(directory + "/coverage.png: cannot write");
@@ -710,7 +716,7 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
                                 {"why", o.why}});
   }
   j["files"] = {{"map_png", "map.png"},
-                {"geotiff", data.map ? nlohmann::json("map.tif") : nlohmann::json(nullptr)},
+                {"geotiff", geotiff ? nlohmann::json("map.tif") : nlohmann::json(nullptr)},
                 {"json", "report.json"}};
   if (!summary.truth.empty()) {
     j["truth"] = nlohmann::json::array();
@@ -866,7 +872,7 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   }
   html
       << "<h2>Files</h2><p><a href=\"map.png\">map.png</a> (the map drawn above) &middot; "
-      << (data.map
+      << (geotiff
               ? "<a href=\"map.tif\">map.tif</a> (GeoTIFF, RoboCup Rescue style: one pixel per map "
                 "cell, georeferenced in the map frame) &middot; "
               : "")
