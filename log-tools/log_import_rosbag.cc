@@ -12,13 +12,12 @@ int main(int argc, char** argv) {
         "sarmap-log import-rosbag",
         "Converts a ROS 1 bag into an LCM log of sarmap messages: sensor_msgs/LaserScan -> SCAN,\n"
         "nav_msgs/Odometry and /tf odom->base_link -> ODOM, sensor_msgs/Image depth (16UC1 mm,\n"
-        "32FC1 m) -> DEPTH and colour (rgb8, bgr8, mono8) -> RGB with the CameraInfo of the "
-        "image's\n"
-        "namespace, audio_common_msgs/AudioData(Stamped) -> AUDIO, geometry_msgs/PoseStamped ->\n"
-        "POSE, nav_msgs/OccupancyGrid -> MAP, visualization_msgs/MarkerArray (as export-rosbag\n"
-        "writes it) -> PEOPLE_MAP. Topic-to-channel mapping and frame names in "
-        "config/rosbag.yaml.\n"
-        "/tf_static goes to an extrinsics file in config/robot.yaml's form (LOG.robot.yaml).");
+        "32FC1 m) -> DEPTH, colour (rgb8, bgr8, mono8; CompressedImage JPEG, PNG) -> RGB, with\n"
+        "the CameraInfo of the camera's namespace, audio_common_msgs/AudioData(Stamped) ->\n"
+        "AUDIO, geometry_msgs/PoseStamped -> POSE, nav_msgs/OccupancyGrid -> MAP,\n"
+        "visualization_msgs/MarkerArray (as export-rosbag writes it) -> PEOPLE_MAP. Topics and\n"
+        "frame names in config/rosbag.yaml. /tf_static goes to an extrinsics file in\n"
+        "config/robot.yaml's form (LOG.robot.yaml).");
     std::string bag, output, config = "config/rosbag.yaml", extrinsics;
     std::vector<std::string> overrides;
     bool list = false;

@@ -6,6 +6,7 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
@@ -43,6 +44,7 @@ constexpr const char* kLaserScan = "sensor_msgs/LaserScan";
 constexpr const char* kOdometry = "nav_msgs/Odometry";
 constexpr const char* kTf = "tf2_msgs/TFMessage";
 constexpr const char* kImage = "sensor_msgs/Image";
+constexpr const char* kCompressedImage = "sensor_msgs/CompressedImage";
 constexpr const char* kCameraInfo = "sensor_msgs/CameraInfo";
 constexpr const char* kAudioData = "audio_common_msgs/AudioData";
 constexpr const char* kAudioStamped = "audio_common_msgs/AudioDataStamped";
@@ -81,6 +83,7 @@ std::string DefaultChannel(const std::string& type, const std::string& topic,
   if (type == kPoseStamped) return "POSE";
   if (type == kOccupancyGrid) return "MAP";
   if (type == kMarkerArray) return "PEOPLE_MAP";
+  if (type == kCompressedImage) return "RGB";
   if (type == kImage) {
     // Depth topics by name (sensor_msgs/Image says nothing else before the first message).
     const bool depth = topic.find("depth") != std::string::npos || encoding_hint == "depth";
@@ -91,13 +94,45 @@ std::string DefaultChannel(const std::string& type, const std::string& topic,
 
 bool Supported(const std::string& type) {
   return type == kLaserScan || type == kOdometry || type == kTf || type == kImage ||
-         type == kCameraInfo || type == kAudioData || type == kAudioStamped || type == kAudioInfo ||
-         type == kPoseStamped || type == kOccupancyGrid || type == kMarkerArray;
+         type == kCompressedImage || type == kCameraInfo || type == kAudioData ||
+         type == kAudioStamped || type == kAudioInfo || type == kPoseStamped ||
+         type == kOccupancyGrid || type == kMarkerArray;
 }
 
 std::string Namespace(const std::string& topic) {
   const size_t slash = topic.rfind('/');
   return slash == std::string::npos ? "" : topic.substr(0, slash);
+}
+
+// The camera's namespace of an image topic: image_transport puts compressed images one level
+// down (/camera/rgb/image_color/compressed beside /camera/rgb/camera_info).
+std::string CameraNamespace(const std::string& topic, const std::string& type) {
+  return type == kCompressedImage ? Namespace(Namespace(topic)) : Namespace(topic);
+}
+
+// Width and height from a JPEG's start-of-frame or a PNG's IHDR; false when neither.
+bool CompressedSize(const std::vector<uint8_t>& d, int* width, int* height) {
+  if (d.size() >= 24 && d[0] == 0x89 && d[1] == 'P' && d[2] == 'N' && d[3] == 'G') {
+    *width = (d[16] << 24) | (d[17] << 16) | (d[18] << 8) | d[19];
+    *height = (d[20] << 24) | (d[21] << 16) | (d[22] << 8) | d[23];
+    return *width > 0 && *height > 0;
+  }
+  if (d.size() < 4 || d[0] != 0xFF || d[1] != 0xD8) return false;
+  size_t i = 2;
+  while (i + 9 < d.size()) {
+    if (d[i] != 0xFF) return false;
+    const uint8_t marker = d[i + 1];
+    const size_t length = (d[i + 2] << 8) | d[i + 3];
+    const bool sof =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (sof) {
+      *height = (d[i + 5] << 8) | d[i + 6];
+      *width = (d[i + 7] << 8) | d[i + 8];
+      return *width > 0 && *height > 0;
+    }
+    i += 2 + length;
+  }
+  return false;
 }
 
 // Writes sarmap messages to an LCM log, numbering header.seq per channel.
@@ -525,6 +560,42 @@ RosbagImportResult ImportRosbag(const std::string& bag_path, const std::string& 
                     "image encoding '" + enc +
                         "' not converted (16UC1, mono16, 32FC1, rgb8, bgr8, mono8 are)");
         }
+      } else if (type == kCompressedImage) {
+        auto img = m.instantiate<sensor_msgs::CompressedImage>();
+        if (!img) continue;
+        const std::string& format = img->format;
+        const bool png = format.find("png") != std::string::npos;
+        if (format.find("compressedDepth") != std::string::npos ||
+            format.find("16U") != std::string::npos) {
+          warn_once(m.getTopic(), "compressed depth ('" + format +
+                                      "') not converted (raw 16UC1 / 32FC1 depth is)");
+          continue;
+        }
+        int w = 0, h = 0;
+        if (!CompressedSize(img->data, &w, &h)) {
+          warn_once(m.getTopic(), "not a JPEG or PNG image (format '" + format + "'): skipped");
+          continue;
+        }
+        sarmap::image_t msg{};
+        msg.header.utime = ToUtime(img->header.stamp);
+        msg.header.frame = frame(img->header.frame_id);
+        auto kit = intrinsics.find(CameraNamespace(m.getTopic(), type));
+        if (kit != intrinsics.end()) {
+          msg.intrinsics = kit->second;
+        } else {
+          warn_once(m.getTopic(), "no CameraInfo in " + CameraNamespace(m.getTopic(), type) +
+                                      "/: intrinsics left 0");
+          msg.intrinsics.width = w;
+          msg.intrinsics.height = h;
+        }
+        msg.width = w;
+        msg.height = h;
+        msg.pixel_format = sarmap::image_t::PIXEL_RGB8;  // what it decodes to
+        msg.compression =
+            png ? sarmap::image_t::COMPRESSION_PNG : sarmap::image_t::COMPRESSION_JPEG;
+        msg.data = std::move(img->data);
+        msg.size = static_cast<int32_t>(msg.data.size());
+        out.Write(t->channel, record_utime, &msg);
       } else if (type == kAudioData || type == kAudioStamped) {
         std::vector<uint8_t> bytes;
         int64_t utime = record_utime;

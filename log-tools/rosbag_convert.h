@@ -9,7 +9,9 @@
 //   tf2_msgs/TFMessage on /tf_static -> the extrinsics file (config/robot.yaml's form)
 //   sensor_msgs/Image 16UC1 (mm), 32FC1 (m) -> image_t DEPTH (mm, lossless compression)
 //   sensor_msgs/Image rgb8 bgr8 mono8       -> image_t RGB  (raw)
-//     with the intrinsics of the sensor_msgs/CameraInfo in the image topic's namespace
+//   sensor_msgs/CompressedImage JPEG, PNG   -> image_t RGB  (as it came; size from its header)
+//     with the intrinsics of the sensor_msgs/CameraInfo in the camera's namespace (the image
+//     topic's; one level up for image_transport's .../compressed)
 //   audio_common_msgs/AudioData(Stamped)    -> audio_frame_t AUDIO (raw S16LE PCM, format
 //     from audio_common_msgs/AudioInfo or the options)
 //   geometry_msgs/PoseStamped        -> pose_t          POSE

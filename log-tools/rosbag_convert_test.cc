@@ -12,6 +12,7 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_msgs/String.h>
@@ -28,6 +29,7 @@
 #include <sstream>
 
 #include "common/decode.h"
+#include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/robot_config.h"
 #include "log-tools/ros_audio_msgs.h"
@@ -236,6 +238,18 @@ void WriteEveryTypeBag(const std::string& path) {
     c.data.assign(36, static_cast<uint8_t>(10 * i));
     bag.write("/camera/rgb/image_color", T(100.45 + i), c);
   }
+  {
+    // image_transport's JPEG beside the raw colour image: 16 x 8, red above, blue below.
+    std::vector<uint8_t> rgb(16 * 8 * 3, 0);
+    for (int k = 0; k < 16 * 8; ++k) rgb[3 * k + (k < 64 ? 0 : 2)] = 255;
+    const auto jpeg =
+        common::MakeColorImage(header_t{}, camera_intrinsics_t{}, rgb.data(), 16, 8, 90);
+    sensor_msgs::CompressedImage c;
+    c.header = Header(100.48, "camera_rgb_optical_frame");
+    c.format = "rgb8; jpeg compressed bgr8";
+    c.data = jpeg.data;
+    bag.write("/camera/rgb/image_color/compressed", T(100.48), c);
+  }
   for (int i = 0; i < 3; ++i) {
     audio_common_msgs::AudioData a;  // 2 channels, 160 frames
     for (int k = 0; k < 320; ++k) {
@@ -290,10 +304,12 @@ TEST(RosbagConvertTest, EveryTypeImportsWithItsCountAndGeometry) {
   const std::string bag = dir + "/every_type.bag", log = dir + "/every_type.lcmlog";
   WriteEveryTypeBag(bag);
   std::string out;
-  ASSERT_EQ(RunCommand(kBin + "/sarmap-log-import-rosbag " + bag + " -o " + log + " --config " +
-                           kConfig + " --set 'topics=[/mic/audio_stamped=AUDIO_MIC]'",
-                       &out),
-            0)
+  ASSERT_EQ(
+      RunCommand(kBin + "/sarmap-log-import-rosbag " + bag + " -o " + log + " --config " + kConfig +
+                     " --set 'topics=[/mic/audio_stamped=AUDIO_MIC, "
+                     "/camera/rgb/image_color/compressed=RGB_JPEG]'",
+                 &out),
+      0)
       << out;
   EXPECT_NE(out.find("/diagnostics_text"), std::string::npos) << out;
   EXPECT_NE(out.find("unsupported type, skipped"), std::string::npos) << out;
@@ -307,15 +323,11 @@ TEST(RosbagConvertTest, EveryTypeImportsWithItsCountAndGeometry) {
     geometry[c["channel"]] = c["geometry"];
   }
   const std::map<std::string, std::pair<std::string, int64_t>> expected = {
-      {"SCAN", {"laser_scan_t", 5}},
-      {"ODOM", {"odometry_t", 14}},
-      {"DEPTH", {"image_t", 4}},
-      {"RGB", {"image_t", 3}},
-      {"AUDIO", {"audio_frame_t", 3}},
-      {"AUDIO_MIC", {"audio_frame_t", 2}},
-      {"POSE", {"pose_t", 1}},
-      {"MAP", {"occupancy_grid_t", 1}},
-      {"PEOPLE_MAP", {"people_map_t", 1}}};
+      {"SCAN", {"laser_scan_t", 5}},       {"ODOM", {"odometry_t", 14}},
+      {"DEPTH", {"image_t", 4}},           {"RGB", {"image_t", 3}},
+      {"RGB_JPEG", {"image_t", 1}},        {"AUDIO", {"audio_frame_t", 3}},
+      {"AUDIO_MIC", {"audio_frame_t", 2}}, {"POSE", {"pose_t", 1}},
+      {"MAP", {"occupancy_grid_t", 1}},    {"PEOPLE_MAP", {"people_map_t", 1}}};
   EXPECT_EQ(channels, expected) << out;
   EXPECT_EQ(geometry["SCAN"],
             "400 beams -114.59..114.59 deg step 0.5744 deg, 0.10-20.00 m, intensities");
@@ -374,6 +386,16 @@ TEST(RosbagConvertTest, EveryTypeImportsWithItsCountAndGeometry) {
   EXPECT_EQ(rgb.width, 4);
   ASSERT_EQ(rgb.size, 36);
   EXPECT_EQ(rgb.data[35], 10);
+  // The JPEG as it came, its size from its header, the colour camera's intrinsics.
+  const auto jpeg = Decode<image_t>(events.at("RGB_JPEG")[0]);
+  EXPECT_EQ(jpeg.compression, +image_t::COMPRESSION_JPEG);
+  EXPECT_EQ(jpeg.width, 16);
+  EXPECT_EQ(jpeg.height, 8);
+  EXPECT_DOUBLE_EQ(jpeg.intrinsics.fx, 525);
+  std::vector<uint8_t> decoded;
+  ASSERT_TRUE(common::DecodeColorImage(jpeg, &decoded, &error)) << error;
+  EXPECT_GT(decoded[0], 200);                     // red above
+  EXPECT_GT(decoded[3 * (16 * 7 + 8) + 2], 200);  // blue below
   // Audio: format from AudioInfo, contiguous sample indices.
   const auto a = Decode<audio_frame_t>(events.at("AUDIO")[2]);
   EXPECT_EQ(a.sample_rate_hz, 48000);
