@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
@@ -216,6 +217,30 @@ TEST(GeoTiffTest, ReadsBackInGdalWithTheReportsPositions) {
       << info;
   EXPECT_NE(info.find("Origin = (-1.300000000000000,3.300000000000000)"), std::string::npos)
       << info;
+}
+
+TEST(GeoTiffTest, TheToolWritesItAndSaysWhatItLeftOut) {
+  const std::string log = WriteMission("geotiff-tool");
+  const std::string tif = ::testing::TempDir() + "/geotiff-tool.tif";
+  std::remove(tif.c_str());
+  FILE* p = popen(
+      (std::string(SARMAP_BIN_DIR) + "/sarmap-log-geotiff " + log + " -o " + tif + " 2>&1").c_str(),
+      "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[512];
+  while (fgets(buf, sizeof(buf), p)) out += buf;
+  ASSERT_EQ(pclose(p), 0) << out;
+  EXPECT_NE(out.find("120 x 80 pixels of 0.050 m, 3 people, 1 sound sources, 3 left out"),
+            std::string::npos)
+      << out;
+  GDALAllRegister();
+  GDALDatasetH ds = GDALOpen(tif.c_str(), GA_ReadOnly);
+  ASSERT_NE(ds, nullptr);
+  double g[6];
+  ASSERT_EQ(GDALGetGeoTransform(ds, g), CE_None);
+  EXPECT_EQ(PixelAt(ds, g, 1.0, 2.5), GeoTiffColours::kSeen);  // person 1
+  GDALClose(ds);
 }
 
 TEST(GeoTiffTest, AMapWhoseCellsDoNotDecodeLeavesTheRestOfTheReport) {
