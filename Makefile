@@ -14,6 +14,8 @@ PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
   libopencv-dev libopencv-contrib-dev libpcl-dev libceres-dev libsuitesparse-dev \
   libopenni2-dev libpocketsphinx-dev pocketsphinx-en-us libfftw3-dev libsndfile1-dev \
   libasound2-dev libssl-dev libcpp-httplib-dev nlohmann-json3-dev \
+  librosbag-storage-dev libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev \
+  libtf2-msgs-dev libvisualization-msgs-dev libgdal-dev gdal-bin \
   iproute2 util-linux espeak-ng flite sox chromium clang-14 libclang-rt-14-dev
 # Java types for lcm-spy: installed when available, never required.
 OPTIONAL_PACKAGES = liblcm-java default-jdk-headless

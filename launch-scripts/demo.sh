@@ -4,6 +4,9 @@
 # perception, then the simulator; everything stopped when the simulator ends), then writes
 # the mission report and the stack's CPU and latency figures, and prints who was found and how.
 # Runs inside a private network namespace when it can, so the demo's multicast stays here.
+# The operator's live page (sarmap-viewer) runs with the mission; its address is printed at
+# start: the namespace's 127.0.0.1 is not this computer's, so launch-scripts/viewer_forward.py
+# forwards a port of this computer's 127.0.0.1 into it (through a Unix socket, a file both see).
 #
 #   launch-scripts/demo.sh [BUILD_DIR]
 #   env: DEMO_WORLD   world file (default config/worlds/lab_dark.yaml)
@@ -15,6 +18,8 @@
 #        DEMO_KILL=1  kill -9 each process of the stack once, in turn, mid-mission: the launcher
 #                     respawns it and the report must not lose anyone
 #        DEMO_OUT     output folder (default out/demo-DATE)
+#        DEMO_VIEWER_PORT  port of the live page on this computer's 127.0.0.1 (default 8080, a
+#                     free one when taken); its address is printed at start
 #        DEMO_COMPUTERS=2  two computers: deputies "sensors" and "compute" in two network
 #                     namespaces joined by a bridge, LCM at ttl=1 between them, the sheriff in a
 #                     third (launch-scripts/demo-two-computers.pmd); needs root or user namespaces
@@ -37,6 +42,16 @@ export DEMO_EXPLORE_MODE="${DEMO_EXPLORE_MODE:-sound_guided}"
 
 if [ -z "${SARMAP_NETNS:-}" ] && [ -z "${SARMAP_DEMO_NO_NETNS:-}" ]; then
   if "$root/tests/harness/sarmap-netns" true 2>/dev/null; then
+    # The live page's forwarder on this side; it exits with this process (whose pid the execs
+    # keep).
+    viewer_dir="$(mktemp -d /tmp/sarmap-demo-viewer.XXXXXX)"
+    python3 "$root/launch-scripts/viewer_forward.py" host --port "${DEMO_VIEWER_PORT:-8080}" \
+      --socket "$viewer_dir/viewer.sock" --port-file "$viewer_dir/port" --parent $$ >/dev/null 2>&1 &
+    for _ in $(seq 50); do [ -s "$viewer_dir/port" ] && break; sleep 0.1; done
+    if [ -s "$viewer_dir/port" ]; then
+      export DEMO_VIEWER_URL="http://127.0.0.1:$(cat "$viewer_dir/port")/"
+      export DEMO_VIEWER_SOCKET="$viewer_dir/viewer.sock"
+    fi
     exec "$root/tests/harness/sarmap-netns" "$0" "$build"
   fi
   echo "demo: no private network namespace available; using host-local multicast (ttl=0)"
@@ -72,6 +87,7 @@ export SARMAP_PROCMAN_KEY="$out/procman.key"
 
 pids=()
 stop_all() {
+  [ -z "${DEMO_VIEWER_SOCKET:-}" ] || rm -rf "$(dirname "$DEMO_VIEWER_SOCKET")"
   for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   for _ in $(seq 100); do
     alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
@@ -85,6 +101,26 @@ trap stop_all EXIT
 echo "== sarmap demo: $(basename "$DEMO_WORLD"), ${DEMO_SECONDS} s simulated, driven by ${DEMO_DRIVE:-explore} ($DEMO_EXPLORE_MODE), $computers computer(s); output in $out"
 pmd="$root/launch-scripts/demo.pmd"
 if [ "$computers" = 1 ]; then
+  # The live page (sarmap-viewer in demo.pmd, bound to 127.0.0.1).
+  if [ -n "${SARMAP_NETNS:-}" ]; then
+    export DEMO_VIEWER_BIND_PORT=8080  # the namespace's own port space
+    if [ -n "${DEMO_VIEWER_SOCKET:-}" ]; then
+      python3 "$root/launch-scripts/viewer_forward.py" inside --socket "$DEMO_VIEWER_SOCKET" \
+        --to-port "$DEMO_VIEWER_BIND_PORT" --parent $$ >"$out/viewer_forward.txt" 2>&1 & pids+=($!)
+      viewer_url="$DEMO_VIEWER_URL"
+    else
+      viewer_url="http://127.0.0.1:$DEMO_VIEWER_BIND_PORT/ (inside the network namespace the demo runs in)"
+    fi
+  else
+    DEMO_VIEWER_BIND_PORT="$(python3 -c 'import socket,sys
+s = socket.socket()
+try: s.bind(("127.0.0.1", int(sys.argv[1])))
+except OSError: s.bind(("127.0.0.1", 0))
+print(s.getsockname()[1])' "${DEMO_VIEWER_PORT:-8080}")"
+    export DEMO_VIEWER_BIND_PORT
+    viewer_url="http://127.0.0.1:$DEMO_VIEWER_BIND_PORT/"
+  fi
+  echo "== live page while the mission runs: $viewer_url"
   (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost) \
     >"$out/deputy.txt" 2>&1 & pids+=($!)
 else
@@ -101,11 +137,21 @@ else
   for id in sensors compute; do
     ns="demo-$id"
     netns_add_host "$ns" "$i"; namespaces+=("$ns")
+    [ "$id" != compute ] || export DEMO_VIEWER_BIND_ADDRESS="10.77.0.$i"
     (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id") \
       >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
     echo "   computer '$id': network namespace $ns, 10.77.0.$i"
     i=$((i + 1))
   done
+  # The live page runs on "compute", bound to its address on the robot's network (reachable
+  # from here, where the bridge is); forwarded to this computer's 127.0.0.1.
+  if [ -n "${DEMO_VIEWER_SOCKET:-}" ]; then
+    python3 "$root/launch-scripts/viewer_forward.py" inside --socket "$DEMO_VIEWER_SOCKET" \
+      --to-host "$DEMO_VIEWER_BIND_ADDRESS" --to-port 8080 --parent $$ >"$out/viewer_forward.txt" 2>&1 & pids+=($!)
+    echo "== live page while the mission runs: $DEMO_VIEWER_URL (sarmap-viewer on 'compute', $DEMO_VIEWER_BIND_ADDRESS:8080)"
+  else
+    echo "== live page while the mission runs: http://$DEMO_VIEWER_BIND_ADDRESS:8080/ (inside the network namespace the demo runs in)"
+  fi
 fi
 
 killer_pid=""
@@ -143,4 +189,4 @@ echo
 echo "== mission report"
 "$bin/sarmap-log" report "$log" -o "$out/report"
 echo
-echo "demo finished: open $out/report/report.html"
+echo "demo finished: open $out/report/report.html (map.tif: the GeoTIFF; the live page stopped with the mission)"

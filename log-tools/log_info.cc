@@ -1,13 +1,19 @@
 // sarmap-log info LOG: what a log holds, per channel, and where it is damaged.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <sstream>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "common/sequence.h"
 #include "common/time.h"
 #include "log-tools/lcm_log_reader.h"
+#include "sarmap/audio_frame_t.hpp"
+#include "sarmap/image_t.hpp"
+#include "sarmap/laser_scan_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
 
 namespace {
 
@@ -22,7 +28,55 @@ struct ChannelSummary {
   int64_t first_utime = 0, last_utime = 0;
   bool has_header = false;
   sarmap::common::SequenceTracker sequence;
+  std::string geometry;          // of the last message that has one
+  bool geometry_varies = false;  // not the same in every message
 };
+
+// The sensor geometry of a message, for the types that have one; "" otherwise.
+std::string Geometry(const std::string& type, const std::vector<uint8_t>& data) {
+  char text[200];
+  const auto decode = [&](auto* msg) {
+    return sarmap::common::DecodeMessage(data.data(), data.size(), msg);
+  };
+  if (type == "laser_scan_t") {
+    sarmap::laser_scan_t m;
+    if (!decode(&m)) return "";
+    const double to_deg = 180.0 / M_PI;
+    snprintf(text, sizeof(text), "%d beams %.2f..%.2f deg step %.4f deg, %.2f-%.2f m%s",
+             m.num_ranges, m.angle_min_rad * to_deg,
+             (m.angle_min_rad + (m.num_ranges - 1) * m.angle_increment_rad) * to_deg,
+             m.angle_increment_rad * to_deg, m.range_min_m, m.range_max_m,
+             m.num_intensities ? ", intensities" : "");
+  } else if (type == "image_t") {
+    sarmap::image_t m;
+    if (!decode(&m)) return "";
+    const char* format = m.pixel_format == sarmap::image_t::PIXEL_DEPTH_U16 ? "depth u16"
+                         : m.pixel_format == sarmap::image_t::PIXEL_GRAY8   ? "gray8"
+                         : m.pixel_format == sarmap::image_t::PIXEL_RGB8    ? "rgb8"
+                                                                            : "bgr8";
+    const char* compression = m.compression == sarmap::image_t::COMPRESSION_JPEG  ? " jpeg"
+                              : m.compression == sarmap::image_t::COMPRESSION_PNG ? " png"
+                              : m.compression == sarmap::image_t::COMPRESSION_DEPTH_DELTA_ZSTD
+                                  ? " zstd"
+                                  : "";
+    snprintf(text, sizeof(text), "%dx%d %s%s, fx %.1f fy %.1f cx %.1f cy %.1f", m.width, m.height,
+             format, compression, m.intrinsics.fx, m.intrinsics.fy, m.intrinsics.cx,
+             m.intrinsics.cy);
+  } else if (type == "occupancy_grid_t") {
+    sarmap::occupancy_grid_t m;
+    if (!decode(&m)) return "";
+    snprintf(text, sizeof(text), "%dx%d cells of %.3f m, origin (%.2f, %.2f) m", m.width, m.height,
+             m.resolution_m, m.origin_x_m, m.origin_y_m);
+  } else if (type == "audio_frame_t") {
+    sarmap::audio_frame_t m;
+    if (!decode(&m)) return "";
+    snprintf(text, sizeof(text), "%d ch, %d Hz, %d samples", m.num_channels, m.sample_rate_hz,
+             m.num_samples);
+  } else {
+    return "";
+  }
+  return text;
+}
 
 std::string JsonEscape(const std::string& s) {
   std::string out;
@@ -39,9 +93,11 @@ std::string JsonEscape(const std::string& s) {
 int main(int argc, char** argv) {
   return sarmap::common::RunMain("sarmap-log info", [&] {
     sarmap::common::ArgParser parser(
-        "sarmap-log info", "Reports what an LCM log holds: per channel the message type, count, rate,\n"
-                           "size, sequence gaps and time span; and where a truncated or corrupt log\n"
-                           "breaks (the readable part is still reported).");
+        "sarmap-log info",
+        "Reports what an LCM log holds: per channel the message type, count, rate,\n"
+        "size, sequence gaps, time span and sensor geometry (scans, images, grids,\n"
+        "audio); and where a truncated or corrupt log breaks (the readable part is\n"
+        "still reported).");
     std::string path;
     bool json = false;
     parser.AddPositional("LOG", &path, "LCM log file (as written by lcm-logger / sarmap-log record)");
@@ -71,6 +127,11 @@ int main(int argc, char** argv) {
         c.last_utime = utime;
         c.sequence.Observe(seq);
       }
+      const std::string geometry = Geometry(type, event.data);
+      if (!geometry.empty()) {
+        c.geometry_varies = c.geometry_varies || (!c.geometry.empty() && geometry != c.geometry);
+        c.geometry = geometry;
+      }
       if (!json && reader.offset() > next_report) {
         fprintf(stderr, "\r  read %.0f%% ...", 100.0 * reader.offset() / std::max<int64_t>(1, reader.file_size()));
         next_report += 64 << 20;
@@ -89,8 +150,10 @@ int main(int argc, char** argv) {
         out << (first ? "" : ", ") << "{\"channel\": \"" << JsonEscape(name) << "\", \"type\": \""
             << c.types.rbegin()->first << "\", \"count\": " << c.count << ", \"bytes\": " << c.bytes
             << ", \"rate_hz\": " << (cspan > 0 ? (c.count - 1) / cspan : 0.0)
-            << ", \"seq_gaps\": " << c.sequence.gaps() << ", \"reordered\": " << c.sequence.reordered()
-            << "}";
+            << ", \"seq_gaps\": " << c.sequence.gaps()
+            << ", \"reordered\": " << c.sequence.reordered() << ", \"geometry\": \""
+            << JsonEscape(c.geometry)
+            << "\", \"geometry_varies\": " << (c.geometry_varies ? "true" : "false") << "}";
         first = false;
       }
       out << "], \"problems\": [";
@@ -111,19 +174,21 @@ int main(int argc, char** argv) {
              reader.file_size() / 1e6, static_cast<long long>(events), span_s);
     out << line;
     if (events > 0) {
-      snprintf(line, sizeof(line), "%-22s %-22s %8s %9s %10s %7s %7s %10s\n", "channel", "type",
-               "count", "rate_Hz", "kB", "gaps", "reord", "utime_s");
+      snprintf(line, sizeof(line), "%-22s %-22s %8s %9s %10s %7s %7s %10s  %s\n", "channel", "type",
+               "count", "rate_Hz", "kB", "gaps", "reord", "utime_s", "geometry (last message)");
       out << "\n" << line;
       for (const auto& [name, c] : channels) {
         const double cspan = (c.last_us - c.first_us) * 1e-6;
         std::string type;
         for (const auto& [t, n] : c.types) type += (type.empty() ? "" : "+") + t;
-        snprintf(line, sizeof(line), "%-22s %-22s %8lld %9.2f %10.1f %7lld %7lld %10.2f\n",
+        snprintf(line, sizeof(line), "%-22s %-22s %8lld %9.2f %10.1f %7lld %7lld %10.2f%s%s%s\n",
                  name.c_str(), type.c_str(), static_cast<long long>(c.count),
                  cspan > 0 ? (c.count - 1) / cspan : 0.0, c.bytes / 1e3,
                  static_cast<long long>(c.sequence.gaps()),
                  static_cast<long long>(c.sequence.reordered()),
-                 c.has_header ? (c.last_utime - c.first_utime) * 1e-6 : 0.0);
+                 c.has_header ? (c.last_utime - c.first_utime) * 1e-6 : 0.0,
+                 c.geometry.empty() ? "" : "  ", c.geometry.c_str(),
+                 c.geometry_varies ? " (varies)" : "");
         out << line;
       }
     }

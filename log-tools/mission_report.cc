@@ -15,6 +15,7 @@
 
 #include "common/decode.h"
 #include "common/image_messages.h"
+#include "log-tools/geotiff.h"
 #include "log-tools/lcm_log_reader.h"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -23,6 +24,8 @@ namespace sarmap {
 namespace logtools {
 
 namespace {
+
+std::string Fixed(double v, int digits);
 
 template <class T>
 bool Decode(const std::vector<uint8_t>& data, T* out) {
@@ -59,7 +62,15 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
       if (Decode(event.data, &m)) data.metrics.OnExploreStatus(event.timestamp_us, m);
     } else if (type == "pose_t" && event.channel == "POSE") {
       sarmap::pose_t m;
-      if (Decode(event.data, &m)) estimated_by_utime[m.header.utime] = Eigen::Vector2d(m.position_m[0], m.position_m[1]);
+      if (Decode(event.data, &m)) {
+        estimated_by_utime[m.header.utime] = Eigen::Vector2d(m.position_m[0], m.position_m[1]);
+        if (!data.has_start) {
+          data.has_start = true;
+          data.start_x_m = m.position_m[0];
+          data.start_y_m = m.position_m[1];
+          data.start_yaw_rad = 2 * std::atan2(m.orientation[3], m.orientation[0]);
+        }
+      }
       if (Decode(event.data, &m) &&
           (data.trail.empty() || std::hypot(data.trail.back().first - m.position_m[0],
                                             data.trail.back().second - m.position_m[1]) > 0.05)) {
@@ -185,20 +196,109 @@ std::string HowFound(int cues) {
   return heard ? "heard" : seen;
 }
 
+MapExtent ExtentOf(const MissionData& data) {
+  MapExtent e;
+  const auto grow = [&](double x, double y) {
+    if (e.empty) {
+      e = {false, x, y, x, y};
+      return;
+    }
+    e.x0 = std::min(e.x0, x);
+    e.y0 = std::min(e.y0, y);
+    e.x1 = std::max(e.x1, x);
+    e.y1 = std::max(e.y1, y);
+  };
+  if (data.map && data.map->width > 0 && data.map->height > 0) {
+    const auto& m = *data.map;
+    const double c = std::cos(m.origin_yaw_rad), sn = std::sin(m.origin_yaw_rad);
+    for (const double u : {0.0, m.width * m.resolution_m}) {
+      for (const double v : {0.0, m.height * m.resolution_m}) {
+        grow(m.origin_x_m + c * u - sn * v, m.origin_y_m + sn * u + c * v);
+      }
+    }
+  }
+  for (const auto& p : data.trail) grow(p.first, p.second);
+  if (!e.empty) {
+    e.x0 -= kOutsideMapMarginM;
+    e.y0 -= kOutsideMapMarginM;
+    e.x1 += kOutsideMapMarginM;
+    e.y1 += kOutsideMapMarginM;
+  }
+  return e;
+}
+
+std::string OutsideReason(const MapExtent& extent, const double* p, const double* cov,
+                          double* std_m) {
+  Eigen::Matrix2d P;
+  P << cov[0], cov[1], cov[3], cov[4];
+  const double largest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(0.5 * (P + P.transpose())).eigenvalues()(1);
+  *std_m = std::sqrt(std::max(0.0, largest));
+  if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !extent.Contains(p[0], p[1]))
+    return "outside the map";
+  if (!std::isfinite(*std_m) || *std_m > kUnlocalisedStdM)
+    return "unconverged (std " + Fixed(*std_m, 1) + " m)";
+  return "";
+}
+
+std::vector<sarmap::mapped_person_t> PeopleOnMap(const MissionData& data,
+                                                 const MissionSummary& summary) {
+  std::vector<sarmap::mapped_person_t> out;
+  if (!data.people) return out;
+  for (const auto& p : data.people->people) {
+    bool outside = false;
+    for (const auto& o : summary.outside_map)
+      outside = outside || (o.kind == "person" && o.id == p.id);
+    if (!outside) out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<sarmap::sound_source_t> SourcesOnMap(const MissionData& data,
+                                                 const MissionSummary& summary) {
+  std::vector<sarmap::sound_source_t> out;
+  if (!data.sources) return out;
+  for (const auto& src : data.sources->sources) {
+    bool outside = false;
+    for (const auto& o : summary.outside_map)
+      outside = outside || (o.kind == "sound source" && o.id == src.id);
+    if (!outside) out.push_back(src);
+  }
+  return out;
+}
+
 MissionSummary Summarise(const MissionData& data, double match_radius_m) {
   MissionSummary s;
   s.match_radius_m = match_radius_m;
-  if (data.people) s.people_found = data.people->num_people;
-  if (data.sources) s.sources_mapped = data.sources->num_sources;
+  const MapExtent extent = ExtentOf(data);
+  const auto check = [&](const std::string& kind, int64_t id, const double* p, const double* cov) {
+    OutsideMap o;
+    o.why = OutsideReason(extent, p, cov, &o.std_m);
+    if (o.why.empty()) return;
+    o.kind = kind;
+    o.id = id;
+    o.x_m = p[0];
+    o.y_m = p[1];
+    s.outside_map.push_back(o);
+  };
+  if (data.people) {
+    for (const auto& p : data.people->people) check("person", p.id, p.position_m, p.covariance);
+  }
+  if (data.sources) {
+    for (const auto& src : data.sources->sources)
+      check("sound source", src.id, src.position_m, src.covariance);
+  }
+  s.people_found = static_cast<int>(PeopleOnMap(data, s).size());
+  s.sources_mapped = static_cast<int>(SourcesOnMap(data, s).size());
   s.metrics = data.metrics.Result();
   if (!data.truth) return s;
   s.alignment = AlignByStartPose(data);
   s.trail_fit = AlignTruth(data);
   const auto& truth = data.truth->people;
   std::vector<Eigen::Vector2d> truth_xy;
-  for (const auto& t : truth) truth_xy.push_back(s.alignment.Apply(Eigen::Vector2d(t.position_m[0], t.position_m[1])));
-  std::vector<sarmap::mapped_person_t> no_people;
-  const auto& found = data.people ? data.people->people : no_people;
+  for (const auto& t : truth)
+    truth_xy.push_back(s.alignment.Apply(Eigen::Vector2d(t.position_m[0], t.position_m[1])));
+  const std::vector<sarmap::mapped_person_t> found = PeopleOnMap(data, s);
   std::vector<double> error;
   const std::vector<int> truth_to = MatchPeople(truth_xy, found, match_radius_m, &error);
   std::vector<int> found_used(found.size(), 0);
@@ -259,6 +359,10 @@ void DrawEllipse(Canvas* c, double x, double y, const double (&cov)[9], const cv
 
 Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   Canvas c;
+  // Sources and people far outside the map or unconverged (summary.outside_map) are listed
+  // apart and never drawn: an estimate hundreds of metres away would shrink the map to a speck.
+  const std::vector<sarmap::mapped_person_t> people = PeopleOnMap(data, summary);
+  const std::vector<sarmap::sound_source_t> sources = SourcesOnMap(data, summary);
   // Extent: the grid, else everything drawn, with a margin.
   double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
   const auto grow = [&](double x, double y) {
@@ -284,31 +388,13 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     if (explore->has_goal) grow(explore->goal_m[0], explore->goal_m[1]);
   }
   for (const auto& p : data.trail) grow(p.first, p.second);
-  if (data.people) for (const auto& p : data.people->people) grow(p.position_m[0], p.position_m[1]);
+  for (const auto& p : people) grow(p.position_m[0], p.position_m[1]);
   for (const auto& t : summary.truth) grow(t.x_m, t.y_m);
   if (x0 > x1) {
     x0 = y0 = -5;
     x1 = y1 = 5;
   }
-  // Sound sources far outside the mapped area (an estimate that has not converged can sit
-  // tens of metres away) would shrink the map to a speck: they are drawn only near it (they are
-  // all in report.json and the HTML table).
-  constexpr double kSourceMarginM = 5.0;
-  int sources_not_drawn = 0;
-  const double fx0 = x0 - kSourceMarginM, fy0 = y0 - kSourceMarginM, fx1 = x1 + kSourceMarginM,
-               fy1 = y1 + kSourceMarginM;
-  const auto near_map = [&](const double* p) {
-    return p[0] >= fx0 && p[0] <= fx1 && p[1] >= fy0 && p[1] <= fy1;
-  };
-  if (data.sources) {
-    for (const auto& s : data.sources->sources) {
-      if (near_map(s.position_m)) {
-        grow(s.position_m[0], s.position_m[1]);
-      } else {
-        ++sources_not_drawn;
-      }
-    }
-  }
+  for (const auto& s : sources) grow(s.position_m[0], s.position_m[1]);
   c.x0 = x0;
   c.y0 = y0;
   c.pixels_per_m = std::clamp(1400.0 / std::max(x1 - x0, y1 - y0), 5.0, 100.0);
@@ -361,18 +447,15 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     }
   }
   const cv::Scalar blue(219, 152, 52), red(60, 76, 231), green(113, 204, 46), yellow(15, 196, 241);
-  if (data.sources) {
-    for (const auto& s : data.sources->sources) {
-      if (!near_map(s.position_m)) continue;
-      DrawEllipse(&c, s.position_m[0], s.position_m[1], s.covariance, blue);
-      cv::drawMarker(c.image, c.P(s.position_m[0], s.position_m[1]), blue, cv::MARKER_SQUARE, 10, 2);
-    }
+  for (const auto& s : sources) {
+    DrawEllipse(&c, s.position_m[0], s.position_m[1], s.covariance, blue);
+    cv::drawMarker(c.image, c.P(s.position_m[0], s.position_m[1]), blue, cv::MARKER_SQUARE, 10, 2);
   }
   for (const auto& t : summary.truth) {  // true people: hollow diamonds
     cv::drawMarker(c.image, c.P(t.x_m, t.y_m), cv::Scalar(0, 0, 0), cv::MARKER_DIAMOND, 22, 2);
   }
-  if (data.people) {
-    for (const auto& p : data.people->people) {
+  {
+    for (const auto& p : people) {
       const bool heard = p.cues & sarmap::mapped_person_t::CUE_HEARD;
       const bool seen = p.cues & (sarmap::mapped_person_t::CUE_SEEN_RGBD | sarmap::mapped_person_t::CUE_SEEN_DEPTH);
       const cv::Scalar colour = seen && heard ? yellow : heard ? red : green;
@@ -411,10 +494,11 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   cv::line(c.image, cv::Point(10, c.image.rows - 15), cv::Point(10 + bar, c.image.rows - 15), cv::Scalar(255, 255, 255), 3);
   cv::putText(c.image, "1 m", cv::Point(14 + bar, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
               cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-  if (sources_not_drawn > 0) {
-    const std::string note = std::to_string(sources_not_drawn) + " sound source(s) far outside the map not drawn";
-    cv::putText(c.image, note, cv::Point(bar + 70, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  if (!summary.outside_map.empty()) {
+    const std::string note = std::to_string(summary.outside_map.size()) +
+                             " unconverged or far outside the map: listed in the report, not drawn";
+    cv::putText(c.image, note, cv::Point(bar + 70, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX,
+                0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   return c;
 }
@@ -496,11 +580,19 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
   snprintf(line, sizeof(line), "mission: %.1f s, %lld messages; %d people on the map, %d sound sources\n",
            data.duration_s, static_cast<long long>(data.messages), summary.people_found, summary.sources_mapped);
   out << line;
-  if (data.people) {
-    for (const auto& p : data.people->people) {
+  {
+    for (const auto& p : PeopleOnMap(data, summary)) {
       snprintf(line, sizeof(line), "  person #%lld at (%.2f, %.2f) m, %s, confidence %.0f%%%s\n",
                static_cast<long long>(p.id), p.position_m[0], p.position_m[1], HowFound(p.cues).c_str(),
                100.0 * p.confidence, p.keyword.empty() ? "" : (", said \"" + p.keyword + "\"").c_str());
+      out << line;
+    }
+  }
+  if (!summary.outside_map.empty()) {
+    out << "unconverged or far outside the map (not counted as found):\n";
+    for (const auto& o : summary.outside_map) {
+      snprintf(line, sizeof(line), "  %s #%lld at (%.1f, %.1f) m, std %.3g m: %s\n", o.kind.c_str(),
+               static_cast<long long>(o.id), o.x_m, o.y_m, o.std_m, o.why.c_str());
       out << line;
     }
   }
@@ -571,6 +663,13 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   if (!cv::imwrite(directory + "/map.png", canvas.image)) {
     throw std::runtime_error(directory + "/map.png: cannot write");
   }
+  // The GeoTIFF needs a map whose cells decode (a damaged one is still drawn, blank, in the PNG).
+  std::vector<int8_t> map_cells;
+  std::string map_error;
+  const bool geotiff = data.map && data.map->width > 0 && data.map->height > 0 &&
+                       data.map->resolution_m > 0 &&
+                       common::DecodeOccupancyGrid(*data.map, &map_cells, &map_error);
+  if (geotiff) WriteGeoTiff(data, summary, directory + "/map.tif");
   const bool wrote_plot = !summary.metrics.coverage.empty();
   if (wrote_plot && !cv::imwrite(directory + "/coverage.png", CoveragePlot(summary.metrics))) {
     throw std::runtime_error(directory + "/coverage.png: cannot write");
@@ -580,9 +679,12 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   j["duration_s"] = data.duration_s;
   j["messages"] = data.messages;
   j["people"] = nlohmann::json::array();
-  if (data.people) {
-    for (const auto& p : data.people->people) {
-      j["people"].push_back({{"id", p.id}, {"x_m", p.position_m[0]}, {"y_m", p.position_m[1]}, {"z_m", p.position_m[2]},
+  {
+    for (const auto& p : PeopleOnMap(data, summary)) {
+      j["people"].push_back({{"id", p.id},
+                             {"x_m", p.position_m[0]},
+                             {"y_m", p.position_m[1]},
+                             {"z_m", p.position_m[2]},
                              {"covariance", std::vector<double>(p.covariance, p.covariance + 9)},
                              {"confidence", p.confidence}, {"how", HowFound(p.cues)}, {"keyword", p.keyword},
                              {"count", p.people_count}, {"detections", p.num_detections},
@@ -590,14 +692,32 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
     }
   }
   j["sound_sources"] = nlohmann::json::array();
-  if (data.sources) {
-    for (const auto& s : data.sources->sources) {
-      j["sound_sources"].push_back({{"id", s.id}, {"x_m", s.position_m[0]}, {"y_m", s.position_m[1]},
-                                    {"z_m", s.position_m[2]}, {"covariance", std::vector<double>(s.covariance, s.covariance + 9)},
-                                    {"converged", s.state == sarmap::sound_source_t::STATE_CONVERGED},
-                                    {"is_person", s.is_person}});
+  {
+    for (const auto& s : SourcesOnMap(data, summary)) {
+      j["sound_sources"].push_back(
+          {{"id", s.id},
+           {"x_m", s.position_m[0]},
+           {"y_m", s.position_m[1]},
+           {"z_m", s.position_m[2]},
+           {"covariance", std::vector<double>(s.covariance, s.covariance + 9)},
+           {"converged", s.state == sarmap::sound_source_t::STATE_CONVERGED},
+           {"is_person", s.is_person}});
     }
   }
+  j["path_m"] = nlohmann::json::array();  // the robot's path (POSE, points 5 cm apart)
+  for (const auto& p : data.trail) j["path_m"].push_back({p.first, p.second});
+  j["outside_map"] = nlohmann::json::array();
+  for (const auto& o : summary.outside_map) {
+    j["outside_map"].push_back({{"kind", o.kind},
+                                {"id", o.id},
+                                {"x_m", o.x_m},
+                                {"y_m", o.y_m},
+                                {"std_m", o.std_m},
+                                {"why", o.why}});
+  }
+  j["files"] = {{"map_png", "map.png"},
+                {"geotiff", geotiff ? nlohmann::json("map.tif") : nlohmann::json(nullptr)},
+                {"json", "report.json"}};
   if (!summary.truth.empty()) {
     j["truth"] = nlohmann::json::array();
     for (const auto& t : summary.truth) {
@@ -714,8 +834,8 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
        << "<h2>People</h2>"
           "<table><tr><th>#</th><th>position "
           "(m)</th><th>how</th><th>confidence</th><th>said</th><th>count</th></tr>";
-  if (data.people) {
-    for (const auto& p : data.people->people) {
+  {
+    for (const auto& p : PeopleOnMap(data, summary)) {
       char pos[64];
       snprintf(pos, sizeof(pos), "%.2f, %.2f", p.position_m[0], p.position_m[1]);
       html << "<tr><td>" << p.id << "</td><td>" << pos << "</td><td>" << HowFound(p.cues) << "</td><td>"
@@ -723,9 +843,10 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
            << "</td></tr>";
     }
   }
-  html << "</table><h2>Sound sources</h2><table><tr><th>#</th><th>position (m)</th><th>state</th><th>person</th></tr>";
-  if (data.sources) {
-    for (const auto& s : data.sources->sources) {
+  html << "</table><h2>Sound sources</h2><table><tr><th>#</th><th>position "
+          "(m)</th><th>state</th><th>person</th></tr>";
+  {
+    for (const auto& s : SourcesOnMap(data, summary)) {
       char pos[64];
       snprintf(pos, sizeof(pos), "%.2f, %.2f", s.position_m[0], s.position_m[1]);
       html << "<tr><td>" << s.id << "</td><td>" << pos << "</td><td>"
@@ -733,7 +854,29 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
            << (s.is_person ? "yes" : "") << "</td></tr>";
     }
   }
-  html << "</table><p><a href=\"report.json\">report.json</a></p></body></html>\n";
+  html << "</table>";
+  if (!summary.outside_map.empty()) {
+    html << "<h2>Unconverged / outside the map</h2><p>Not counted as found and not drawn: "
+            "estimates far outside the map or with a standard deviation over "
+         << kUnlocalisedStdM
+         << " m.</p><table><tr><th>what</th><th>#</th><th>position (m)</th>"
+            "<th>std (m)</th><th>why</th></tr>";
+    for (const auto& o : summary.outside_map) {
+      char pos[64], sd[32];
+      snprintf(pos, sizeof(pos), "%.1f, %.1f", o.x_m, o.y_m);
+      snprintf(sd, sizeof(sd), "%.3g", o.std_m);
+      html << "<tr><td>" << o.kind << "</td><td>" << o.id << "</td><td>" << pos << "</td><td>" << sd
+           << "</td><td>" << Html(o.why) << "</td></tr>";
+    }
+    html << "</table>";
+  }
+  html
+      << "<h2>Files</h2><p><a href=\"map.png\">map.png</a> (the map drawn above) &middot; "
+      << (geotiff
+              ? "<a href=\"map.tif\">map.tif</a> (GeoTIFF, RoboCup Rescue style: one pixel per map "
+                "cell, georeferenced in the map frame) &middot; "
+              : "")
+      << "<a href=\"report.json\">report.json</a></p></body></html>\n";
 }
 
 }  // namespace logtools

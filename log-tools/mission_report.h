@@ -21,9 +21,11 @@ namespace logtools {
 struct MissionData {
   std::optional<sarmap::occupancy_grid_t> map;   // the last one
   std::vector<std::pair<double, double>> trail;  // robot x, y from POSE
-  std::optional<sarmap::people_map_t> people;    // the last one
-  std::optional<sarmap::sound_map_t> sources;    // the last one
-  std::optional<sarmap::sim_truth_t> truth;      // the last one
+  bool has_start = false;                        // the first POSE: x, y, yaw
+  double start_x_m = 0, start_y_m = 0, start_yaw_rad = 0;
+  std::optional<sarmap::people_map_t> people;  // the last one
+  std::optional<sarmap::sound_map_t> sources;  // the last one
+  std::optional<sarmap::sim_truth_t> truth;    // the last one
   std::vector<std::pair<double, double>> truth_trail;
   // Time-matched robot positions (estimated map frame, simulator frame), for the alignment.
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> matched_positions;
@@ -66,12 +68,40 @@ Alignment AlignTruth(const MissionData& data);
 // map_from_truth = start_pose^-1, with the trail residual under it.
 Alignment AlignByStartPose(const MissionData& data);
 
+// A person or sound source the report does not count as found: far outside the map (beyond
+// kOutsideMapMarginM of the map's extent and the robot's path) or with a position standard
+// deviation over kUnlocalisedStdM (an estimate that has not converged).
+struct OutsideMap {
+  std::string kind;  // "person" or "sound source"
+  int64_t id = -1;
+  double x_m = 0, y_m = 0;
+  double std_m = 0;  // sqrt of the largest eigenvalue of the xy covariance
+  std::string why;   // "outside the map", "unconverged (std N m)"
+};
+constexpr double kOutsideMapMarginM = 5.0;
+constexpr double kUnlocalisedStdM = 10.0;
+
+// The xy extent everything found must lie in: the map's cells and the robot's path, grown by
+// kOutsideMapMarginM. Empty (no map, no path) accepts every position.
+struct MapExtent {
+  bool empty = true;
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool Contains(double x, double y) const {
+    return empty || (x >= x0 && x <= x1 && y >= y0 && y <= y1);
+  }
+};
+MapExtent ExtentOf(const MissionData& data);
+// Why a position with this xy covariance (row-major 3x3) is not counted as found; "" if it is.
+std::string OutsideReason(const MapExtent& extent, const double* position_m,
+                          const double* covariance_3x3, double* std_m);
+
 struct MissionSummary {
   Alignment alignment;  // the start pose with SIM_TRUTH
   Alignment trail_fit;  // the consistency check
   MissionMetricsResult metrics;
-  int people_found = 0;
-  int sources_mapped = 0;
+  int people_found = 0;                 // on the map (not in outside_map)
+  int sources_mapped = 0;               // on the map (not in outside_map)
+  std::vector<OutsideMap> outside_map;  // listed apart, never drawn, never matched to truth
   std::vector<TruthMatch> truth;        // empty without SIM_TRUTH
   int false_positives = 0;              // reported people matching no true person
   double match_radius_m = 0.5;
@@ -87,10 +117,17 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
 MissionSummary Summarise(const MissionData& data, double match_radius_m);
 std::string HowFound(int cues);
 
-// Writes report.html, map.png, report.json and, with a coverage curve, coverage.png into
-// `directory` (created if needed).
-void WriteReport(const MissionData& data, const MissionSummary& summary, const std::string& directory);
+// Writes report.html, map.png, map.tif (RoboCup-Rescue style GeoTIFF, geotiff.h), report.json
+// and, with a coverage curve, coverage.png into `directory` (created if needed).
+void WriteReport(const MissionData& data, const MissionSummary& summary,
+                 const std::string& directory);
 std::string SummaryText(const MissionData& data, const MissionSummary& summary);
+
+// The people and sound sources counted as found (those not in summary.outside_map).
+std::vector<sarmap::mapped_person_t> PeopleOnMap(const MissionData& data,
+                                                 const MissionSummary& summary);
+std::vector<sarmap::sound_source_t> SourcesOnMap(const MissionData& data,
+                                                 const MissionSummary& summary);
 
 }  // namespace logtools
 }  // namespace sarmap

@@ -163,7 +163,11 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
   std::ifstream json(dir + "/report.json");
   const auto j = nlohmann::json::parse(json);
   EXPECT_EQ(j["truth"].size(), 3u);
-  EXPECT_EQ(j["sound_sources"].size(), 2u);  // every source is in the JSON, drawn or not
+  // The source hundreds of metres away is listed apart, not as a mapped source.
+  EXPECT_EQ(j["sound_sources"].size(), 1u);
+  ASSERT_EQ(j["outside_map"].size(), 1u);
+  EXPECT_EQ(j["outside_map"][0]["kind"], "sound source");
+  EXPECT_EQ(j["outside_map"][0]["id"], 2);
   EXPECT_EQ(j["false_positives"], 1);
   std::ifstream html_file(dir + "/report.html");
   const std::string html((std::istreambuf_iterator<char>(html_file)), {});
