@@ -2,7 +2,6 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -16,7 +15,7 @@ namespace vision_people {
 namespace {
 
 constexpr double kBelowFloorM = 0.3;  // voxel grid starts this far below the prior floor
-constexpr int kPad = 2;               // empty cells around the grid: neighbour search needs no bounds checks
+constexpr int kPad = 2;  // empty cells around the grid: neighbour search needs no bounds checks
 
 // Membership rising linearly from 0 at `lo` to 1 at `hi`.
 double Ramp(double x, double lo, double hi) {
@@ -92,11 +91,16 @@ double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
 const char* ColorStateName(ColorState state) {
   switch (state) {
-    case ColorState::kNone: return "none";
-    case ColorState::kUsable: return "usable";
-    case ColorState::kDark: return "dark";
-    case ColorState::kLowContrast: return "low-contrast";
-    case ColorState::kGlare: return "glare";
+    case ColorState::kNone:
+      return "none";
+    case ColorState::kUsable:
+      return "usable";
+    case ColorState::kDark:
+      return "dark";
+    case ColorState::kLowContrast:
+      return "low-contrast";
+    case ColorState::kGlare:
+      return "glare";
   }
   return "?";
 }
@@ -127,28 +131,6 @@ void CloudFromDepth(const uint16_t* depth, int width, int height, double unit_m,
   }
 }
 
-GroundPlane GroundPlane::FromCoefficients(const Eigen::Vector4d& abcd) {
-  GroundPlane g;
-  const double n = abcd.head<3>().norm();
-  g.normal = abcd.head<3>() / n;
-  g.offset = abcd(3) / n;
-  // The camera is above the floor: its height (the offset) must be positive.
-  if (g.offset < 0) {
-    g.normal = -g.normal;
-    g.offset = -g.offset;
-  }
-  return g;
-}
-
-GroundPlane GroundFromMounting(const Eigen::Matrix3d& base_R_camera,
-                               const Eigen::Vector3d& base_t_camera) {
-  // Floor: e_z . (R p + t) = 0  ->  (R^T e_z) . p + t_z = 0.
-  GroundPlane g;
-  g.normal = base_R_camera.transpose() * Eigen::Vector3d::UnitZ();
-  g.offset = base_t_camera.z();
-  return g;
-}
-
 void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double* mean,
                      double* stddev, double* saturated) {
   double s = 0, s2 = 0;
@@ -176,7 +158,8 @@ void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double
 struct PeopleDetector::Workspace {
   // Dense voxel grid over the region of interest, in the prior floor frame.
   int nx = 0, ny = 0, nz = 0;
-  double x0 = 0, y0 = 0, z0 = 0;  // floor-frame coordinates of cell (0,0,0)'s corner (before padding)
+  double x0 = 0, y0 = 0,
+         z0 = 0;  // floor-frame coordinates of cell (0,0,0)'s corner (before padding)
   std::vector<int32_t> cell_voxel;  // -1: empty
   // Voxels of the current frame.
   std::vector<int32_t> voxel_cell;
@@ -197,7 +180,10 @@ struct PeopleDetector::Workspace {
 
 PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane& mounting_ground,
                                std::shared_ptr<const HogClassifier> hog)
-    : options_(options), mounting_(mounting_ground), prior_(mounting_ground), hog_(std::move(hog)),
+    : options_(options),
+      mounting_(mounting_ground),
+      tracker_(options.ground, mounting_ground),
+      hog_(std::move(hog)),
       ws_(std::make_unique<Workspace>()) {
   common::ValidateOptions(options_);
   const double v = options_.voxel_size_m;
@@ -207,8 +193,8 @@ PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane
   ws_->nx = static_cast<int>(std::ceil(2 * options_.max_lateral_m / v));
   ws_->ny = static_cast<int>(std::ceil((options_.max_range_m + 0.5) / v));
   ws_->nz = static_cast<int>(std::ceil((options_.top_cut_m + kBelowFloorM) / v));
-  const size_t cells = static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) *
-                       (ws_->nz + 2 * kPad);
+  const size_t cells =
+      static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) * (ws_->nz + 2 * kPad);
   ws_->cell_voxel.assign(cells, -1);
   // Half of the +-2 neighbourhood (lexicographically positive offsets): each pair once.
   for (int dz = -2; dz <= 2; ++dz) {
@@ -224,11 +210,11 @@ PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane
 
 PeopleDetector::~PeopleDetector() = default;
 
-void PeopleDetector::ResetGround() { prior_ = mounting_; }
+void PeopleDetector::ResetGround() { tracker_.Reset(); }
 
 DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* error) {
   DetectionResult result;
-  result.ground = prior_;
+  result.ground = tracker_.has_track() ? tracker_.tracked() : mounting_;
   std::string local_error;
   std::string& err = error ? *error : local_error;
   err.clear();
@@ -272,8 +258,20 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   const double vs = o.voxel_size_m;
   const float inv_vs = static_cast<float>(1.0 / vs);
 
-  // 1. Voxel grid in the prior floor frame.
-  const FloorFrame prior_frame(prior_);
+  // 1. Floor from the data: RANSAC over a sample of the cloud with the tracked and the
+  // configured floor as extra hypotheses (ground_estimator.h); then the voxel grid in the
+  // frame of that floor.
+  FloorFit fit;
+  if (o.ground.refine) {
+    std::vector<GroundPlane> hypotheses;
+    if (tracker_.has_track()) hypotheses.push_back(tracker_.tracked());
+    hypotheses.push_back(mounting_);
+    fit = FitFloor(frame.xyz.data(), frame.width, frame.height, o.min_range_m, o.max_range_m,
+                   o.ground, hypotheses);
+    result.stats.num_ground_points = fit.inliers;
+  }
+  const GroundPlane grid_plane = fit.found ? fit.plane : result.ground;
+  const FloorFrame prior_frame(grid_plane);
   const Eigen::Matrix3f Rf = prior_frame.R.cast<float>();
   const Eigen::Vector3f tf = prior_frame.t.cast<float>();
   const float x0 = static_cast<float>(ws.x0), y0 = static_cast<float>(ws.y0),
@@ -325,15 +323,15 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     return result;
   }
   ws.centroid.resize(nv);
-  for (int i = 0; i < nv; ++i) ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
+  for (int i = 0; i < nv; ++i)
+    ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
 
-  // 2. Floor: least-squares plane through the voxels near the prior, twice with a shrinking
-  // band; accepted only close to the mounting plane. Floor candidates must have nothing
+  // 2. Floor polish: least-squares plane through the voxels near the RANSAC plane, twice with
+  // a shrinking band, accepted only close to it. Floor candidates must have nothing
   // 0.18-0.30 m above them (cells iz+3, iz+4 of their column): the bottom rows of a wall, a
-  // cabinet or a leg lie in the band too, and facing a wall they outnumber the floor voxels
-  // and tilt the fit a little each frame, which the next frame's prior then carries on.
-  GroundPlane ground = prior_;
-  if (o.ground.refine) {
+  // cabinet or a leg lie in the band too and would tilt the fit.
+  GroundPlane ground = mounting_;
+  if (fit.found) {
     const int64_t layer = static_cast<int64_t>(ws.ny + 2 * kPad) * (ws.nx + 2 * kPad);
     const int64_t layers = ws.nz + 2 * kPad;
     ws.kept.assign(nv, 0);  // here: "open above" (floor candidate) flags
@@ -345,7 +343,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
       ws.kept[i] = open;
     }
-    GroundPlane estimate = prior_;
+    GroundPlane estimate = fit.plane;
     bool ok = true;
     int used = 0;
     for (double band : {o.ground.band_m, 0.5 * o.ground.band_m}) {
@@ -372,28 +370,23 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
         break;
       }
       Eigen::Vector3d n = eig.eigenvectors().col(0);
-      if (n.dot(prior_.normal) < 0) n = -n;
+      if (n.dot(fit.plane.normal) < 0) n = -n;
       estimate.normal = n;
       estimate.offset = -n.dot(mean);
     }
     result.stats.num_ground_voxels = used;
-    if (ok) {
-      const double tilt_deg =
-          std::acos(std::clamp(estimate.normal.dot(mounting_.normal), -1.0, 1.0)) * 180.0 / M_PI;
-      ok = tilt_deg <= o.ground.max_tilt_change_deg &&
-           std::abs(estimate.offset - mounting_.offset) <= o.ground.max_offset_change_m;
-    }
-    if (ok) {
-      ground = estimate;
-      prior_ = estimate;  // Munaro: next frame starts from this one
-      result.stats.ground_refined = true;
-    } else {
-      // Too little floor in view (or an implausible fit): the camera is rigidly mounted, so
-      // the mounting plane is the best guess, and a stale estimate must not stick.
-      ground = mounting_;
-      prior_ = mounting_;
-    }
+    ok = ok && AngleBetweenDeg(estimate, fit.plane) <= o.ground.max_tilt_change_deg &&
+         std::abs(estimate.offset - fit.plane.offset) <= o.ground.max_offset_change_m;
+    const GroundPlane this_frame = ok ? estimate : fit.plane;
+    ground = tracker_.Update(&this_frame, frame.utime);
+    result.stats.ground_refined = true;
+  } else if (o.ground.refine) {
+    // No floor in view (or none plausible): the track, else the mounting file.
+    ground = tracker_.Update(nullptr, frame.utime);
   }
+  result.stats.ground_reset = o.ground.refine && tracker_.last_update_reset();
+  result.stats.mounting_mismatch = tracker_.mismatch();
+  result.camera = MountingFromGround(ground);
   result.ground = ground;
   const FloorFrame floor_frame(ground);
 
@@ -483,7 +476,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     const int nbins = static_cast<int>((smax - smin) / vs) + 1;
     std::vector<int> top(nbins, -1);
     for (int i : cluster) {
-      const int b = std::min(nbins - 1, static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs));
+      const int b =
+          std::min(nbins - 1, static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs));
       if (top[b] < 0 || ws.floor[i].z() > ws.floor[top[b]].z()) top[b] = i;
     }
     auto height = [&](int b) {
@@ -499,9 +493,10 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       if (height(e + 1) < height(b)) maxima.emplace_back(top[(b + e) / 2], (b + e) / 2);
       b = e;
     }
-    std::sort(maxima.begin(), maxima.end(), [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
-      return ws.floor[a.first].z() > ws.floor[b.first].z();
-    });
+    std::sort(maxima.begin(), maxima.end(),
+              [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+                return ws.floor[a.first].z() > ws.floor[b.first].z();
+              });
     // A maximum is a new head when it is at least min_head_distance from every higher head
     // and the height map dips by min_head_dip between them (a neck and shoulders, or a gap);
     // range noise on a flat top (a box, a cupboard) makes maxima without such a dip.
@@ -512,7 +507,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       for (size_t k = 0; k < heads.size() && separate; ++k) {
         separate = (ws.floor[m].head<2>() - ws.floor[heads[k]].head<2>()).squaredNorm() >= head_d2;
         double low = std::numeric_limits<double>::infinity();
-        for (int b = std::min(bm, head_bins[k]) + 1; b < std::max(bm, head_bins[k]); ++b) low = std::min(low, height(b));
+        for (int b = std::min(bm, head_bins[k]) + 1; b < std::max(bm, head_bins[k]); ++b)
+          low = std::min(low, height(b));
         separate = separate && ws.floor[m].z() - low >= o.min_head_dip_m;
       }
       if (separate) {
@@ -561,7 +557,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     c.bottom_m = bottom;
     c.position_camera = floor_frame.ToCamera(centroid_floor);
     const Eigen::Vector2d ground_xy = centroid_floor.head<2>();
-    const Eigen::Vector2d ray = ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
+    const Eigen::Vector2d ray =
+        ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
     const Eigen::Vector2d across(-ray.y(), ray.x());
     const Eigen::Vector3d foot_floor(ground_xy.x(), ground_xy.y(), 0.0);
     const Eigen::Vector3d foot = floor_frame.ToCamera(foot_floor);
@@ -617,7 +614,9 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       const int nbins = static_cast<int>((smax - smin) / vs) + 1;
       std::vector<double> profile(nbins, -1.0);
       for (int i : part) {
-        const int b = std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0, nbins - 1);
+        const int b = std::clamp(
+            static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0,
+            nbins - 1);
         profile[b] = std::max(profile[b], ws.floor[i].z());
       }
       int head_bins = 0, shoulder_bins = 0;
@@ -648,7 +647,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     c.visible_fraction = H > 0 ? std::max(0.0, visible_hi - visible_lo) / H : 0.0;
     // Fill: occupied 6 cm slices between the lowest visible height above the floor removal
     // band and the top.
-    const int s0 = std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
+    const int s0 =
+        std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
     int occupied = 0, slices = 0;
     for (int s = s0; s < nslices; ++s) {
       occupied += slice[s];
@@ -670,8 +670,10 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
                                       so.max_height_m, so.max_height_m + so.height_margin_m);
     const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m,
                                      so.max_width_m, 1.3 * so.max_width_m);
-    const double m_depth = 1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
-    const double area_ratio = shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
+    const double m_depth =
+        1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
+    const double area_ratio =
+        shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
     // Head prominence: how far the top stands above everything at least head_radius away
     // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
     // the top edge of a box, wall or cupboard: ~0).
@@ -709,15 +711,19 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     c.head_prominence_m = around < 0 ? 0.0 : H - around;
     // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
     // surface has the same footprint at every height).
-    const double m_head = Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
-                          (1.0 - Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
-                          (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
-                          (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
+    const double m_head =
+        Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+        (1.0 -
+         Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
+        (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
+        (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
     const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
     const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
     const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
-    const double m_visible = c.truncated_top ? 0.0
-                             : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
+    const double m_visible =
+        c.truncated_top
+            ? 0.0
+            : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
     const double shape = m_width * m_depth * m_head;
     c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
     const double loose_score = m_height * shape;  // with colour: occlusion and truncation allowed
@@ -727,8 +733,10 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
                     std::isfinite(v_foot) && v_foot > v_top;
     if (patch_ok) {
       const double person_px = v_foot - v_top;
-      const int x0p = std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
-      const int x1p = std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
+      const int x0p =
+          std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
+      const int x1p =
+          std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
       const int y0p = std::clamp(static_cast<int>(v_top), 0, frame.height - 1);
       const int y1p = std::clamp(static_cast<int>(v_foot), 0, frame.height - 1);
       if (x1p - x0p < 4 || y1p - y0p < 8) {
@@ -772,14 +780,16 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
         c.accepted = false;
       } else {
         const double hog_needed =
-            p_needed <= 0.0 ? -std::numeric_limits<double>::infinity()
-                            : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
+            p_needed <= 0.0
+                ? -std::numeric_limits<double>::infinity()
+                : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
         c.hog_used = true;
         c.hog_score = hog_->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center,
                                   v_top, v_foot, 0);
         if (c.hog_score < hog_needed && co.search_steps > 0) {
-          c.hog_score = std::max(c.hog_score, hog_->Score(frame.rgb.data(), frame.width, frame.height,
-                                                          c.box_u_center, v_top, v_foot, co.search_steps));
+          c.hog_score =
+              std::max(c.hog_score, hog_->Score(frame.rgb.data(), frame.width, frame.height,
+                                                c.box_u_center, v_top, v_foot, co.search_steps));
         }
         const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
         c.confidence = w * p_hog + (1.0 - w) * loose_score;
@@ -799,7 +809,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     const double st = z * o.noise.pixel_sigma / std::max(1.0, K.fx);
     const double sb2 = o.noise.body_sigma_m * o.noise.body_sigma_m;
     const Eigen::Matrix3d along = u * u.transpose();
-    c.covariance = (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
+    c.covariance =
+        (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
 
     ++result.stats.num_candidates;
     (c.accepted ? result.people : result.rejected).push_back(c);
