@@ -87,6 +87,40 @@ double HeightAtRow(const PinholeIntrinsics& k, const Eigen::Vector3d& foot,
 
 double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
+// Covariance of a cluster centroid: Kinect depth noise along the ray (sigma = c z^2), pixel
+// noise across it, plus the body centre's spread about the visible surface.
+Eigen::Matrix3d CentroidCovariance(const Eigen::Vector3d& p, const NoiseOptions& noise, double fx) {
+  const double z = std::max(0.1, p.z());
+  const Eigen::Vector3d u = p.normalized();
+  const double sr = noise.depth_coeff * z * z;
+  const double st = z * noise.pixel_sigma / std::max(1.0, fx);
+  const double sb2 = noise.body_sigma_m * noise.body_sigma_m;
+  const Eigen::Matrix3d along = u * u.transpose();
+  return (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
+}
+
+// Is the image just below camera-frame point `low` (a cluster's lowest point) filled by
+// something at least 0.3 m nearer? Then the cluster's bottom is hidden (a person behind a
+// desk or a crate), not floating.
+bool HiddenBelow(const RgbdFrame& frame, const Eigen::Vector3d& low) {
+  const PinholeIntrinsics& k = frame.intrinsics;
+  if (low.z() <= 0.1) return false;
+  const int u0 = static_cast<int>(std::lround(k.fx * low.x() / low.z() + k.cx));
+  const int v0 = static_cast<int>(std::lround(k.fy * low.y() / low.z() + k.cy));
+  const float limit = static_cast<float>(low.z() - 0.3);
+  int nearer = 0, seen = 0;
+  for (int v = v0 + 2; v <= v0 + 14; v += 3) {
+    for (int u = u0 - 6; u <= u0 + 6; u += 3) {
+      if (u < 0 || v < 0 || u >= frame.width || v >= frame.height) continue;
+      const float z = frame.xyz[3 * (static_cast<size_t>(v) * frame.width + u) + 2];
+      if (!std::isfinite(z)) continue;
+      ++seen;
+      nearer += z < limit;
+    }
+  }
+  return seen >= 5 && nearer * 2 >= seen;
+}
+
 }  // namespace
 
 const char* ColorStateName(ColorState state) {
@@ -152,6 +186,113 @@ void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double
   *stddev = n ? std::sqrt(std::max(0.0, s2 / n - m * m)) : 0.0;
   *saturated = n ? static_cast<double>(sat) / n : 0.0;
 }
+
+namespace {
+
+// A body lying on the floor, from the floor-frame voxels of one cluster: top height, floor
+// contact, length and width along the principal axes of its footprint, relief (spread of the
+// highest point per 0.1 m along the body, inner 80 %) and fill; the whole body must be inside
+// the image (its length is unknown otherwise).
+PersonCandidate DescribeLying(const std::vector<int>& cluster, const std::vector<Eigen::Vector3d>& floor_points,
+                              const std::vector<Eigen::Vector3d>& camera_points, const FloorFrame& floor_frame,
+                              const RgbdFrame& frame, const DetectorOptions& options) {
+  const LyingOptions& lo = options.lying;
+  const double vs = options.voxel_size_m;
+  PersonCandidate c;
+  c.lying = true;
+  c.depth_only = true;
+  c.num_voxels = static_cast<int>(cluster.size());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double top = -1e9, bottom = 1e9;
+  for (int i : cluster) {
+    centroid += floor_points[i];
+    top = std::max(top, floor_points[i].z());
+    bottom = std::min(bottom, floor_points[i].z());
+  }
+  centroid /= static_cast<double>(cluster.size());
+  c.height_m = top;
+  c.bottom_m = bottom;
+  c.position_camera = floor_frame.ToCamera(centroid);
+  c.head_camera = floor_frame.ToCamera(Eigen::Vector3d(centroid.x(), centroid.y(), top));
+  // Principal axes of the footprint.
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (int i : cluster) {
+    const Eigen::Vector2d d = floor_points[i].head<2>() - centroid.head<2>();
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const Eigen::Vector2d along = eig.eigenvectors().col(1), across = eig.eigenvectors().col(0);
+  double amin = 1e9, amax = -1e9, cmin = 1e9, cmax = -1e9;
+  for (int i : cluster) {
+    const Eigen::Vector2d d = floor_points[i].head<2>() - centroid.head<2>();
+    amin = std::min(amin, along.dot(d));
+    amax = std::max(amax, along.dot(d));
+    cmin = std::min(cmin, across.dot(d));
+    cmax = std::max(cmax, across.dot(d));
+  }
+  c.length_m = amax - amin + vs;
+  c.width_m = cmax - cmin + vs;
+  c.depth_extent_m = c.length_m;
+  // Highest point per 0.1 m along the body.
+  const double bin = 0.1;
+  const int nbins = std::max(1, static_cast<int>((amax - amin) / bin) + 1);
+  std::vector<double> profile(nbins, -1.0);
+  for (int i : cluster) {
+    const int b = std::clamp(static_cast<int>((along.dot(floor_points[i].head<2>() - centroid.head<2>()) - amin) / bin), 0,
+                             nbins - 1);
+    profile[b] = std::max(profile[b], floor_points[i].z());
+  }
+  int filled = 0;
+  for (double h : profile) filled += h >= 0;
+  c.fill = static_cast<double>(filled) / nbins;
+  std::vector<double> inner;
+  for (int b = nbins / 10; b < nbins - nbins / 10; ++b) {
+    if (profile[b] >= 0) inner.push_back(profile[b]);
+  }
+  if (inner.size() >= 3) {
+    std::sort(inner.begin(), inner.end());
+    // 10th to 90th percentile: one noisy bin does not make a box a body.
+    c.relief_m = inner[inner.size() * 9 / 10] - inner[inner.size() / 10];
+  }
+  // Inside the image: no voxel of the cluster projects within 3 px of the image border.
+  bool inside = true;
+  double umin = 1e9, umax = -1e9, vmin = 1e9, vmax = -1e9;
+  for (int i : cluster) {
+    const Eigen::Vector3d& p = camera_points[i];
+    const double u = ProjectU(frame.intrinsics, p), v = ProjectV(frame.intrinsics, p);
+    if (!std::isfinite(u) || !std::isfinite(v)) {
+      inside = false;
+      continue;
+    }
+    umin = std::min(umin, u);
+    umax = std::max(umax, u);
+    vmin = std::min(vmin, v);
+    vmax = std::max(vmax, v);
+  }
+  const double margin =
+      std::max(3, frame.width / 100) + 0.5 * vs * frame.intrinsics.fx / std::max(0.5, c.position_camera.z());
+  inside = inside && umin > margin && vmin > margin && umax < frame.width - 1 - margin &&
+           vmax < frame.height - 1 - margin;
+  c.visible_fraction = inside ? 1.0 : 0.0;
+  c.box_u_center = 0.5 * (umin + umax);
+  c.box_v_top = vmin;
+  c.box_v_bottom = vmax;
+  const double m_top = Trapezoid(top, lo.min_top_m - 0.05, lo.min_top_m, lo.max_top_m, lo.max_top_m + 0.1);
+  const double m_bottom = 1.0 - Ramp(bottom, lo.max_bottom_m, lo.max_bottom_m + 0.1);
+  const double m_length =
+      Trapezoid(c.length_m, lo.min_length_m - 0.2, lo.min_length_m, lo.max_length_m, lo.max_length_m + 0.3);
+  const double m_width = Trapezoid(c.width_m, 0.7 * lo.min_width_m, lo.min_width_m, lo.max_width_m, lo.max_width_m + 0.2);
+  const double m_relief = Ramp(c.relief_m, 0.5 * lo.min_relief_m, lo.min_relief_m);
+  const double m_fill = Ramp(c.fill, lo.min_fill - 0.2, lo.min_fill);
+  c.depth_score = m_top * m_bottom * m_length * m_width * m_relief * m_fill * c.visible_fraction;
+  c.supported = m_bottom >= 0.5;
+  c.confidence = c.depth_score;
+  c.accepted = c.depth_score >= lo.accept;
+  c.covariance = CentroidCovariance(c.position_camera, options.noise, frame.intrinsics.fx);
+  return c;
+}
+
+}  // namespace
 
 // ---------------------------------------------------------------------------------------
 
@@ -462,6 +603,17 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   std::vector<int> heads_in_cluster(clusters.size(), 0);
   const double head_d2 = o.min_head_distance_m * o.min_head_distance_m;
   for (const auto& cluster : clusters) {
+    // Low clusters are no upright person: the lying-body test instead.
+    double cluster_top = -std::numeric_limits<double>::infinity();
+    for (int i : cluster) cluster_top = std::max(cluster_top, ws.floor[i].z());
+    if (cluster_top < o.candidate_min_height_m) {
+      if (o.lying.enabled && cluster_top <= o.lying.max_top_m + 0.1) {
+        PersonCandidate c = DescribeLying(cluster, ws.floor, ws.centroid, floor_frame, frame, o);
+        ++result.stats.num_candidates;
+        (c.accepted ? result.people : result.rejected).push_back(c);
+      }
+      continue;
+    }
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int i : cluster) centre += ws.floor[i].head<2>();
     centre /= static_cast<double>(cluster.size());
@@ -726,7 +878,19 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
             : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
     const double shape = m_width * m_depth * m_head;
     c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
-    const double loose_score = m_height * shape;  // with colour: occlusion and truncation allowed
+    // With colour, occlusion and truncation are allowed, but a person stands on something: the
+    // feet reach the floor, or what is below the cluster is hidden by something nearer (and
+    // then the head and shoulders must be clear: a monitor on a desk has none).
+    double m_support = m_bottom;
+    if (m_support < 1.0) {
+      int low_voxel = part.front();
+      for (int i : part) {
+        if (ws.floor[i].z() < ws.floor[low_voxel].z()) low_voxel = i;
+      }
+      if (HiddenBelow(frame, ws.centroid[low_voxel])) m_support = std::max(m_support, m_head);
+    }
+    c.supported = m_support >= 0.5;
+    const double loose_score = m_height * shape * m_support;
 
     // Colour: HOG on the patch, unless the patch itself is too dark or flat.
     bool patch_ok = color_ok && std::isfinite(c.box_u_center) && std::isfinite(v_top) &&
@@ -801,16 +965,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       c.accepted = c.depth_score >= so.accept;
     }
 
-    // 8. Covariance of the centroid: Kinect depth noise along the ray (sigma = c z^2),
-    // pixel noise across it, plus the body centre's spread about the visible surface.
-    const double z = std::max(0.1, c.position_camera.z());
-    const Eigen::Vector3d u = c.position_camera.normalized();
-    const double sr = o.noise.depth_coeff * z * z;
-    const double st = z * o.noise.pixel_sigma / std::max(1.0, K.fx);
-    const double sb2 = o.noise.body_sigma_m * o.noise.body_sigma_m;
-    const Eigen::Matrix3d along = u * u.transpose();
-    c.covariance =
-        (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
+    // 8. Covariance of the centroid.
+    c.covariance = CentroidCovariance(c.position_camera, o.noise, K.fx);
 
     ++result.stats.num_candidates;
     (c.accepted ? result.people : result.rejected).push_back(c);

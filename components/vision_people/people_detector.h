@@ -114,6 +114,45 @@ struct DepthShapeOptions {
   }
 };
 
+// People lying on the floor (victims): a cluster whose top is low, touching the floor, long
+// and narrow like a body, with a body's relief along its length (head, chest and legs differ
+// in height; a slab, a box or a bag of debris has a flat top). Depth only: HOG's upright
+// window does not fit a lying person.
+struct LyingOptions {
+  bool enabled = true;
+  double min_top_m = 0.15;  // top of the body above the floor
+  double max_top_m = 0.55;
+  double max_bottom_m = 0.15;  // the body lies on the floor
+  double min_length_m = 1.1;   // visible extent along the body (a child, a bent knee)
+  double max_length_m = 2.1;
+  double min_width_m = 0.2;
+  double max_width_m = 0.65;
+  double min_relief_m = 0.06;  // spread of the highest point along the body (inner 80 %)
+  double min_fill = 0.85;      // occupied 0.1 m bins along the body
+  double accept = 0.5;
+  template <class V>
+  void Visit(V& v) {
+    v("enabled", enabled, "look for people lying on the floor");
+    v("min_top_m", min_top_m, "lowest top of a lying body above the floor");
+    v("max_top_m", max_top_m, "highest top of a lying body above the floor");
+    v("max_bottom_m", max_bottom_m, "a lying body's lowest point is at most this above the floor");
+    v("min_length_m", min_length_m, "shortest lying body (visible extent along it)");
+    v("max_length_m", max_length_m, "longest lying body");
+    v("min_width_m", min_width_m, "narrowest lying body (visible extent across it)");
+    v("max_width_m", max_width_m, "widest lying body");
+    v("min_relief_m", min_relief_m, "a body's top varies at least this much along it (a box's does not)");
+    v("min_fill", min_fill, "occupied fraction of the 0.1 m bins along the body");
+    v("accept", accept, "accept when the lying shape score reaches this");
+  }
+  void Validate(common::Validator& check) const {
+    check.That(max_top_m > min_top_m, "max_top_m", "must exceed min_top_m");
+    check.That(max_length_m > min_length_m, "max_length_m", "must exceed min_length_m");
+    check.That(max_width_m > min_width_m, "max_width_m", "must exceed min_width_m");
+    check.InRange("min_fill", min_fill, 0, 1);
+    check.InRange("accept", accept, 0, 1);
+  }
+};
+
 struct ColorOptions {
   std::string hog = "opencv";  // opencv (Dalal-Triggs INRIA SVM) | pcl (PCL's trained SVM) | none
   std::string pcl_svm_file =
@@ -191,6 +230,7 @@ struct DetectorOptions {
   double candidate_max_height_m = 2.3;
   GroundOptions ground;
   DepthShapeOptions shape;
+  LyingOptions lying;
   ColorOptions color;
   NoiseOptions noise;
   template <class V>
@@ -214,6 +254,7 @@ struct DetectorOptions {
     v("candidate_max_height_m", candidate_max_height_m, "highest candidate top above the floor");
     v("ground", ground, "ground plane");
     v("shape", shape, "depth-only shape classifier");
+    v("lying", lying, "people lying on the floor (depth shape)");
     v("color", color, "colour (HOG) classifier and its fusion with depth");
     v("noise", noise, "depth noise model for the position covariance");
   }
@@ -262,6 +303,10 @@ struct PersonCandidate {
   double confidence = 0;  // 0..1
   bool accepted = false;
   bool depth_only = false;  // decided by the depth shape alone
+  bool lying = false;       // a lying body (height_m: its top; length_m: along it)
+  double length_m = 0;
+  double relief_m = 0;          // lying: spread of the top along the body
+  bool supported = true;        // touches the floor, or its bottom is hidden by something nearer
 };
 
 struct DetectionStats {

@@ -15,12 +15,14 @@ namespace vision_people {
 
 // World frame: x forward, y left, z up, floor at z = 0, camera at (0, 0, camera_height_m).
 struct SyntheticPerson {
-  double x_m = 3, y_m = 0;     // feet centre on the floor
-  double height_m = 1.75;
-  double yaw_rad = 0;          // facing direction (0: facing away from the camera, along +x)
+  double x_m = 3, y_m = 0;     // feet centre on the floor (lying: body centre)
+  double height_m = 1.75;      // standing height
+  double yaw_rad = 0;          // facing direction (0: facing away from the camera, along +x);
+                               // lying: the head points along yaw
+  enum Posture { kStanding, kSitting, kLying } posture = kStanding;  // sitting: on a 0.45 m seat
 };
 struct SyntheticObject {
-  enum Kind { kChair, kTable, kCabinet, kPole, kBox } kind = kChair;
+  enum Kind { kChair, kTable, kCabinet, kPole, kBox, kSlab } kind = kChair;  // slab: 1.7 x 0.45 m, 0.25 m high
   double x_m = 2, y_m = 0, yaw_rad = 0;
   double height_m = 0;  // kBox / kCabinet / kPole: overall height (0: default)
 };
