@@ -193,9 +193,11 @@ namespace {
 // contact, length and width along the principal axes of its footprint, relief (spread of the
 // highest point per 0.1 m along the body, inner 80 %) and fill; the whole body must be inside
 // the image (its length is unknown otherwise).
-PersonCandidate DescribeLying(const std::vector<int>& cluster, const std::vector<Eigen::Vector3d>& floor_points,
-                              const std::vector<Eigen::Vector3d>& camera_points, const FloorFrame& floor_frame,
-                              const RgbdFrame& frame, const DetectorOptions& options) {
+PersonCandidate DescribeLying(const std::vector<int>& cluster,
+                              const std::vector<Eigen::Vector3d>& floor_points,
+                              const std::vector<Eigen::Vector3d>& camera_points,
+                              const FloorFrame& floor_frame, const RgbdFrame& frame,
+                              const DetectorOptions& options) {
   const LyingOptions& lo = options.lying;
   const double vs = options.voxel_size_m;
   PersonCandidate c;
@@ -238,8 +240,9 @@ PersonCandidate DescribeLying(const std::vector<int>& cluster, const std::vector
   const int nbins = std::max(1, static_cast<int>((amax - amin) / bin) + 1);
   std::vector<double> profile(nbins, -1.0);
   for (int i : cluster) {
-    const int b = std::clamp(static_cast<int>((along.dot(floor_points[i].head<2>() - centroid.head<2>()) - amin) / bin), 0,
-                             nbins - 1);
+    const int b = std::clamp(
+        static_cast<int>((along.dot(floor_points[i].head<2>() - centroid.head<2>()) - amin) / bin),
+        0, nbins - 1);
     profile[b] = std::max(profile[b], floor_points[i].z());
   }
   int filled = 0;
@@ -269,19 +272,21 @@ PersonCandidate DescribeLying(const std::vector<int>& cluster, const std::vector
     vmin = std::min(vmin, v);
     vmax = std::max(vmax, v);
   }
-  const double margin =
-      std::max(3, frame.width / 100) + 0.5 * vs * frame.intrinsics.fx / std::max(0.5, c.position_camera.z());
+  const double margin = std::max(3, frame.width / 100) +
+                        0.5 * vs * frame.intrinsics.fx / std::max(0.5, c.position_camera.z());
   inside = inside && umin > margin && vmin > margin && umax < frame.width - 1 - margin &&
            vmax < frame.height - 1 - margin;
   c.visible_fraction = inside ? 1.0 : 0.0;
   c.box_u_center = 0.5 * (umin + umax);
   c.box_v_top = vmin;
   c.box_v_bottom = vmax;
-  const double m_top = Trapezoid(top, lo.min_top_m - 0.05, lo.min_top_m, lo.max_top_m, lo.max_top_m + 0.1);
+  const double m_top =
+      Trapezoid(top, lo.min_top_m - 0.05, lo.min_top_m, lo.max_top_m, lo.max_top_m + 0.1);
   const double m_bottom = 1.0 - Ramp(bottom, lo.max_bottom_m, lo.max_bottom_m + 0.1);
-  const double m_length =
-      Trapezoid(c.length_m, lo.min_length_m - 0.2, lo.min_length_m, lo.max_length_m, lo.max_length_m + 0.3);
-  const double m_width = Trapezoid(c.width_m, 0.7 * lo.min_width_m, lo.min_width_m, lo.max_width_m, lo.max_width_m + 0.2);
+  const double m_length = Trapezoid(c.length_m, lo.min_length_m - 0.2, lo.min_length_m,
+                                    lo.max_length_m, lo.max_length_m + 0.3);
+  const double m_width = Trapezoid(c.width_m, 0.7 * lo.min_width_m, lo.min_width_m, lo.max_width_m,
+                                   lo.max_width_m + 0.2);
   const double m_relief = Ramp(c.relief_m, 0.5 * lo.min_relief_m, lo.min_relief_m);
   const double m_fill = Ramp(c.fill, lo.min_fill - 0.2, lo.min_fill);
   c.depth_score = m_top * m_bottom * m_length * m_width * m_relief * m_fill * c.visible_fraction;
@@ -423,6 +428,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   ws.count.clear();
   int num_points = 0;
   const int stride = o.pixel_stride;
+  const float depth_noise = static_cast<float>(o.noise.depth_coeff);
   for (int v = 0; v < frame.height; v += stride) {
     const float* row = &frame.xyz[static_cast<size_t>(v) * frame.width * 3];
     for (int u = 0; u < frame.width; u += stride) {
@@ -430,6 +436,15 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       const float z = p[2];
       if (!(z >= min_z) || !std::isfinite(p[0]) || !std::isfinite(p[1])) continue;  // NaN fails
       ++num_points;
+      // Mixed ("flying") pixels at a depth edge lie between the near and the far surface and
+      // would join a person to the wall behind: a pixel whose left and right neighbours are one
+      // nearer and one farther, both by more than the noise, is dropped. Along columns only:
+      // up and down, the floor and a lying body seen at a grazing angle change depth that fast.
+      if (u >= 1 && u + 1 < frame.width) {
+        const float t = 0.03f + 3.0f * depth_noise * z * z;
+        const float a = p[2 - 3], b = p[2 + 3];
+        if ((a < z - t && b > z + t) || (a > z + t && b < z - t)) continue;  // NaN: false
+      }
       const Eigen::Vector3f pc(p[0], p[1], z);
       const Eigen::Vector3f f = Rf * pc + tf;
       const int ix = static_cast<int>(std::floor((f.x() - x0) * inv_vs));
@@ -706,6 +721,11 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     centroid_floor /= static_cast<double>(part.size());
     c.height_m = ws.floor[top_voxel].z();
     if (c.height_m < o.candidate_min_height_m || c.height_m > o.candidate_max_height_m) continue;
+    // The only head of its cluster: the whole cluster is this person, and its lowest point
+    // is the person's (a sitting person's shins are more than the head radius forward).
+    if (heads_in_cluster[parent_of[sub]] == 1) {
+      for (int i : parent) bottom = std::min(bottom, ws.floor[i].z());
+    }
     c.bottom_m = bottom;
     c.position_camera = floor_frame.ToCamera(centroid_floor);
     const Eigen::Vector2d ground_xy = centroid_floor.head<2>();

@@ -140,7 +140,8 @@ struct LyingOptions {
     v("max_length_m", max_length_m, "longest lying body");
     v("min_width_m", min_width_m, "narrowest lying body (visible extent across it)");
     v("max_width_m", max_width_m, "widest lying body");
-    v("min_relief_m", min_relief_m, "a body's top varies at least this much along it (a box's does not)");
+    v("min_relief_m", min_relief_m,
+      "a body's top varies at least this much along it (a box's does not)");
     v("min_fill", min_fill, "occupied fraction of the 0.1 m bins along the body");
     v("accept", accept, "accept when the lying shape score reaches this");
   }
@@ -305,8 +306,8 @@ struct PersonCandidate {
   bool depth_only = false;  // decided by the depth shape alone
   bool lying = false;       // a lying body (height_m: its top; length_m: along it)
   double length_m = 0;
-  double relief_m = 0;          // lying: spread of the top along the body
-  bool supported = true;        // touches the floor, or its bottom is hidden by something nearer
+  double relief_m = 0;    // lying: spread of the top along the body
+  bool supported = true;  // touches the floor, or its bottom is hidden by something nearer
 };
 
 struct DetectionStats {

@@ -23,18 +23,22 @@ DetectorOptions DepthOnly() {
 void PrintCandidates(const DetectionResult& r) {
   for (const auto* list : {&r.people, &r.rejected}) {
     for (const auto& c : *list) {
-      printf("  %s%s pos (%.2f %.2f %.2f) H %.2f bottom %.2f length %.2f width %.2f depth %.2f relief %.2f "
-             "head %.2f/%.2f prom %.2f areas %.3f/%.3f fill %.2f vis %.2f score %.2f\n",
-             c.accepted ? "PERSON" : "reject", c.lying ? " lying" : "", c.position_camera.x(), c.position_camera.y(),
-             c.position_camera.z(), c.height_m, c.bottom_m, c.length_m, c.width_m, c.depth_extent_m, c.relief_m,
-             c.head_width_m, c.shoulder_width_m, c.head_prominence_m, c.head_area_m2, c.shoulder_area_m2, c.fill,
-             c.visible_fraction, c.depth_score);
+      printf(
+          "  %s%s pos (%.2f %.2f %.2f) H %.2f bottom %.2f length %.2f width %.2f depth %.2f relief "
+          "%.2f "
+          "head %.2f/%.2f prom %.2f areas %.3f/%.3f fill %.2f vis %.2f score %.2f\n",
+          c.accepted ? "PERSON" : "reject", c.lying ? " lying" : "", c.position_camera.x(),
+          c.position_camera.y(), c.position_camera.z(), c.height_m, c.bottom_m, c.length_m,
+          c.width_m, c.depth_extent_m, c.relief_m, c.head_width_m, c.shoulder_width_m,
+          c.head_prominence_m, c.head_area_m2, c.shoulder_area_m2, c.fill, c.visible_fraction,
+          c.depth_score);
     }
   }
 }
 
 // Distance on the floor between a detection and a person (camera x, z).
-double FloorDistance(const SyntheticScene& scene, const SyntheticPerson& p, const PersonCandidate& c) {
+double FloorDistance(const SyntheticScene& scene, const SyntheticPerson& p,
+                     const PersonCandidate& c) {
   const Eigen::Vector3d t = scene.PersonInCamera(p);
   return std::hypot(t.x() - c.position_camera.x(), t.z() - c.position_camera.z());
 }
@@ -65,7 +69,8 @@ TEST(Posture, LyingPeopleFoundFromDepthAlone) {
           extra += r.people.size() > 1 ? static_cast<int>(r.people.size()) - 1 : 0;
           found += hit;
           if (!hit) {
-            printf("missed: camera %.1f m pitch %.0f, yaw %.0f, x %.1f\n", cam_h, pitch_deg, yaw_deg, x);
+            printf("missed: camera %.1f m pitch %.0f, yaw %.0f, x %.1f\n", cam_h, pitch_deg,
+                   yaw_deg, x);
             PrintCandidates(r);
           }
         }
