@@ -10,6 +10,7 @@
 #include "vision_people/pcd_frame.h"
 #include "vision_people/people_detector.h"
 #include "vision_people/synthetic_scene.h"
+#include "vision_people/vision_people_options.h"
 
 namespace sarmap {
 namespace vision_people {
@@ -52,6 +53,26 @@ TEST(GroundEstimator, MountingRoundTrip) {
   SyntheticScene scene;
   scene.camera_pitch_rad = 8 * kDeg;
   EXPECT_NEAR(MountingFromGround(scene.ground()).tilt_down_rad, -8 * kDeg, 1e-12);
+}
+
+// The mounting options as a user gives them, and robot.yaml's convention (roll_rad = -pi/2 -
+// tilt down) as config/robot.yaml documents it.
+TEST(GroundEstimator, MountingOptionsAsAUserGivesThem) {
+  VisionPeopleOptions o;
+  o.camera_height_m = 0.8;
+  o.camera_tilt_down_deg = 10;
+  o.camera_roll_deg = -3;
+  const CameraMounting m = MountingFromGround(InitialGround(o));
+  EXPECT_NEAR(m.height_m, 0.8, 1e-12);
+  EXPECT_NEAR(m.tilt_down_rad, 10 * kDeg, 1e-12);
+  EXPECT_NEAR(m.roll_rad, -3 * kDeg, 1e-12);
+  common::ExtrinsicsOptions base_from_camera{0.1, 0.0, 0.6, -M_PI / 2 - 10 * kDeg, 0.0, -M_PI / 2};
+  const common::Rigid3d t = base_from_camera.ToRigid3d();
+  const CameraMounting r =
+      MountingFromGround(GroundFromMounting(t.rotation().toRotationMatrix(), t.translation()));
+  EXPECT_NEAR(r.height_m, 0.6, 1e-12);
+  EXPECT_NEAR(r.tilt_down_rad, 10 * kDeg, 1e-9);
+  EXPECT_NEAR(r.roll_rad, 0.0, 1e-9);
 }
 
 // The floor is found from any height 0.3-2 m and tilt +-25 deg with the default mounting

@@ -1,6 +1,7 @@
 // sarmap-vision-people: DEPTH + RGB (image_t, paired by utime) in, PEOPLE_VISUAL
 // (people_detections_t, camera frame) out. Ground-based RGB-D people detection with a
 // depth-only fallback in darkness and glare, confirmed over k of n frames.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -149,10 +150,21 @@ int main(int argc, char** argv) {
     };
 
     std::vector<RgbdFrame> ready;
+    // When the bus goes quiet, a depth frame still waiting for its colour is processed
+    // depth-only (the last frame of a depth-only replay would wait for ever).
+    double last_message_s = common::SteadySeconds();
+    const double quiet_s = std::max(0.2, 2 * options.color_wait_s);
+    node.AddTimer(0.1, [&] {
+      if (assembler.has_pending() && common::SteadySeconds() - last_message_s > quiet_s) {
+        assembler.Flush(&ready);
+        process(ready);
+      }
+    });
     node.SetStatusMessage("frames 0 bad 0 people 0 colour none input_warnings 0 floor none");
     node.Subscribe<image_t>(
         options.depth_channel,
         [&](const image_t& m, const common::ReceiveInfo&) {
+          last_message_s = common::SteadySeconds();
           assembler.AddDepth(m, &ready);
           process(ready);
         },
@@ -160,6 +172,7 @@ int main(int argc, char** argv) {
     node.Subscribe<image_t>(
         options.rgb_channel,
         [&](const image_t& m, const common::ReceiveInfo&) {
+          last_message_s = common::SteadySeconds();
           assembler.AddColor(m, &ready);
           process(ready);
         },
