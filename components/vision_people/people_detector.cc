@@ -285,8 +285,16 @@ PersonCandidate DescribeLying(const std::vector<int>& cluster,
   const double m_bottom = 1.0 - Ramp(bottom, lo.max_bottom_m, lo.max_bottom_m + 0.1);
   const double m_length = Trapezoid(c.length_m, lo.min_length_m - 0.2, lo.min_length_m,
                                     lo.max_length_m, lo.max_length_m + 0.3);
-  const double m_width = Trapezoid(c.width_m, 0.7 * lo.min_width_m, lo.min_width_m, lo.max_width_m,
-                                   lo.max_width_m + 0.2);
+  // Only the near side of a body is seen: its width across the viewing ray is measured, its
+  // depth along the ray is not (seen side-on from a low camera, a lying body is a 0.1 m thick
+  // strip). The lower bound applies to the part of the width that lies across the ray.
+  const Eigen::Vector2d ray_xy = centroid.head<2>().norm() > 1e-6
+                                     ? Eigen::Vector2d(centroid.head<2>().normalized())
+                                     : Eigen::Vector2d(0, 1);
+  const double across_ray = std::abs(across.x() * ray_xy.y() - across.y() * ray_xy.x());
+  const double min_width = lo.min_width_m * across_ray;
+  const double m_width =
+      Trapezoid(c.width_m, 0.7 * min_width, min_width, lo.max_width_m, lo.max_width_m + 0.2);
   const double m_relief = Ramp(c.relief_m, 0.5 * lo.min_relief_m, lo.min_relief_m);
   const double m_fill = Ramp(c.fill, lo.min_fill - 0.2, lo.min_fill);
   c.depth_score = m_top * m_bottom * m_length * m_width * m_relief * m_fill * c.visible_fraction;

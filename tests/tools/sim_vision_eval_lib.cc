@@ -97,8 +97,8 @@ Figures Evaluate(const EvalOptions& eval) {
   if (eval.camera_height_m >= 0) {
     options.robot_config = MountedRobotFile(robot_file, eval);
     // The copy lives in /tmp: name the array file beside the original.
-    options.audio.mic_array =
-        std::string(SARMAP_SOURCE_DIR) + "/config/arrays/" + common::LoadRobot(robot_file).mic_array + ".yaml";
+    options.audio.mic_array = std::string(SARMAP_SOURCE_DIR) + "/config/arrays/" +
+                              common::LoadRobot(robot_file).mic_array + ".yaml";
   }
   options.data_dir = SARMAP_DATA_DIR;
   options.audio.enabled = false;
@@ -107,6 +107,8 @@ Figures Evaluate(const EvalOptions& eval) {
   // only be thrown away (and costs most of the run time).
   options.camera.rate_hz = 0.01;
   sim::Simulator simulator(sim::LoadSetup(options, ""));
+  if (options.robot_config != robot_file)
+    std::remove(options.robot_config.c_str());  // read: no longer needed
   auto vision = common::LoadOptions<vision_people::VisionPeopleOptions>(
       std::string(SARMAP_SOURCE_DIR) + "/config/vision_people.yaml", eval.overrides);
   vision.robot_config = robot_file;
