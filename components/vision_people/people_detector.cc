@@ -620,6 +620,76 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   }
   result.stats.num_clusters = static_cast<int>(clusters.size());
 
+  // 5b. An arm held up above the head is no head: on the lateral height profile (highest
+  // point per 6 cm bin across the viewing ray) it is a spike at most two bins wide 0.1 m
+  // below its top, beside a lower, wider maximum (the head) within 0.5 m. The arm's bins
+  // above the head's shoulder level are removed, so the head is the top again and the
+  // other shoulder shows its prominence.
+  for (auto& cluster : clusters) {
+    for (int pass = 0; pass < 2; ++pass) {  // both arms
+      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+      for (int i : cluster) centre += ws.floor[i].head<2>();
+      centre /= static_cast<double>(cluster.size());
+      const Eigen::Vector2d ray =
+          centre.norm() > 1e-6 ? centre.normalized() : Eigen::Vector2d(0, 1);
+      const Eigen::Vector2d across(-ray.y(), ray.x());
+      double smin = std::numeric_limits<double>::infinity(), smax = -smin;
+      for (int i : cluster) {
+        const double s = across.dot(ws.floor[i].head<2>());
+        smin = std::min(smin, s);
+        smax = std::max(smax, s);
+      }
+      const int nbins = static_cast<int>((smax - smin) / vs) + 1;
+      if (nbins < 4) break;
+      std::vector<double> profile(nbins, -1.0);
+      auto bin_of = [&](int i) {
+        return std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs), 0,
+                          nbins - 1);
+      };
+      for (int i : cluster) profile[bin_of(i)] = std::max(profile[bin_of(i)], ws.floor[i].z());
+      const int peak =
+          static_cast<int>(std::max_element(profile.begin(), profile.end()) - profile.begin());
+      const double top = profile[peak];
+      if (top < o.candidate_min_height_m) break;
+      // Width of a maximum at `drop` below its height: contiguous bins at or above that.
+      // (stopping at the bins [skip_lo, skip_hi]).
+      int skip_lo = nbins, skip_hi = -1;
+      auto extent = [&](int b, double level, int* lo, int* hi) {
+        *lo = *hi = b;
+        while (*lo > 0 && profile[*lo - 1] >= level && !(*lo - 1 >= skip_lo && *lo - 1 <= skip_hi))
+          --*lo;
+        while (*hi + 1 < nbins && profile[*hi + 1] >= level &&
+               !(*hi + 1 >= skip_lo && *hi + 1 <= skip_hi))
+          ++*hi;
+      };
+      int lo, hi;
+      extent(peak, top - 0.1, &lo, &hi);
+      skip_lo = lo;
+      skip_hi = hi;
+      if (hi - lo + 1 > 2) break;
+      // The head: the highest bin outside the spike within 0.5 m, lower by 0.1 m or more
+      // and at least three bins wide 0.1 m below its own top.
+      const int reach = static_cast<int>(0.5 / vs);
+      int head = -1;
+      for (int b = std::max(0, lo - reach); b <= std::min(nbins - 1, hi + reach); ++b) {
+        if (b >= lo && b <= hi) continue;
+        if (profile[b] < 0 || profile[b] > top - 0.1) continue;
+        if (head < 0 || profile[b] > profile[head]) head = b;
+      }
+      if (head < 0 || profile[head] < top - 0.7) break;
+      int hlo, hhi;
+      extent(head, profile[head] - 0.1, &hlo, &hhi);
+      if (hhi - hlo + 1 < 3) break;
+      const double cut = profile[head] - o.shape.shoulder_drop_m;
+      cluster.erase(std::remove_if(cluster.begin(), cluster.end(),
+                                   [&](int i) {
+                                     const int b = bin_of(i);
+                                     return b >= lo && b <= hi && ws.floor[i].z() > cut;
+                                   }),
+                    cluster.end());
+    }
+  }
+
   // 6. Head-based sub-clustering on a height map along the axis perpendicular to the ray.
   std::vector<std::vector<int>> subclusters;
   std::vector<size_t> parent_of;  // cluster each sub-cluster came from

@@ -143,6 +143,35 @@ TEST(Posture, SittingPeopleFoundOnce) {
   EXPECT_EQ(extra, 0);
 }
 
+// An arm held up above the head is no head: one person, one detection.
+TEST(Posture, RaisedArmIsOnePerson) {
+  int frames = 0, found = 0, extra = 0;
+  for (double yaw_deg : {180.0, 90.0, 0.0, 135.0}) {
+    for (double raised : {0.1, 0.25}) {
+      SyntheticScene scene;
+      SyntheticPerson p{3.8, 0.2, 1.75, yaw_deg * kDeg};  // the hand in view up to 2.29 m
+      p.arm_raised_m = raised;
+      scene.people.push_back(p);
+      PeopleDetector detector(DepthOnly(), scene.ground(), nullptr);
+      RgbdFrame frame;
+      RenderFrame(scene, 51, false, &frame);
+      const DetectionResult r = detector.Detect(frame);
+      ++frames;
+      bool hit = false;
+      for (const auto& c : r.people) hit = hit || FloorDistance(scene, p, c) < 0.5;
+      found += hit;
+      extra += std::max(0, static_cast<int>(r.people.size()) - 1);
+      if (!hit || r.people.size() != 1) {
+        printf("raised arm %.2f yaw %.0f:\n", raised, yaw_deg);
+        PrintCandidates(r);
+      }
+    }
+  }
+  printf("raised arm: %d/%d found, %d extra detections\n", found, frames, extra);
+  EXPECT_EQ(found, frames);
+  EXPECT_EQ(extra, 0);
+}
+
 }  // namespace
 }  // namespace vision_people
 }  // namespace sarmap

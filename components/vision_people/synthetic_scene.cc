@@ -127,7 +127,11 @@ void AddPerson(const SyntheticPerson& p, World* w) {
     const Eigen::Vector2d leg = at(0, side * 0.09);
     w->cylinders.push_back({leg.x(), leg.y(), 0.065, 0.0, leg_top});
     const Eigen::Vector2d arm = at(0, side * 0.225);
-    w->cylinders.push_back({arm.x(), arm.y(), 0.045, 0.45 * H, torso_top - 0.03});
+    if (side > 0 && p.arm_raised_m > 0) {
+      w->cylinders.push_back({arm.x(), arm.y(), 0.045, torso_top - 0.03, H + p.arm_raised_m});
+    } else {
+      w->cylinders.push_back({arm.x(), arm.y(), 0.045, 0.45 * H, torso_top - 0.03});
+    }
   }
   w->boxes.push_back({Eigen::Vector3d(p.x_m, p.y_m, 0.5 * (leg_top + torso_top)),
                       Eigen::Vector3d(0.11, 0.18, 0.5 * (torso_top - leg_top)), p.yaw_rad});

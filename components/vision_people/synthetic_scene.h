@@ -19,6 +19,7 @@ struct SyntheticPerson {
   double yaw_rad = 0;       // facing direction (0: facing away from the camera, along +x);
                             // lying: the head points along yaw
   enum Posture { kStanding, kSitting, kLying } posture = kStanding;  // sitting: on a 0.45 m seat
+  double arm_raised_m = 0;  // standing: the left arm held up, its hand this far above the head
 };
 struct SyntheticObject {
   enum Kind {
