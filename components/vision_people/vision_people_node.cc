@@ -153,7 +153,8 @@ int main(int argc, char** argv) {
     // When the bus goes quiet, a depth frame still waiting for its colour is processed
     // depth-only (the last frame of a depth-only replay would wait for ever).
     double last_message_s = common::SteadySeconds();
-    const double quiet_s = std::max(0.2, 2 * options.color_wait_s);
+    const double quiet_s =
+        std::max(1.0, 5 * options.color_wait_s);  // a loaded machine may lag 0.2 s
     node.AddTimer(0.1, [&] {
       if (assembler.has_pending() && common::SteadySeconds() - last_message_s > quiet_s) {
         assembler.Flush(&ready);
