@@ -1,22 +1,26 @@
 #pragma once
 // Ground-based RGB-D people detection (Munaro et al. 2012, as used by Sales 2014), plus a
-// depth-only shape classifier for darkness and glare.
+// depth-only shape classifier for darkness and glare and a lying-body test.
 //
 // Pipeline for one frame (an organized cloud in the camera optical frame, optional colour):
-//   1. voxel grid (0.06 m) in a frame aligned with the prior ground plane (seeded from the
-//      camera mounting, then the previous frame's estimate);
-//   2. ground plane refined by least squares on the voxels near the prior plane (gated
-//      against the mounting plane so a wall can never become the floor);
+//   1. the floor found in the data (ground_estimator.h: RANSAC + weighted least squares, the
+//      mounting file and the tracked floor as extra hypotheses);
+//   2. voxel grid (0.06 m) in that floor's frame, without flying pixels; the floor polished on
+//      voxels with free space above them and tracked over frames (a mounting file that
+//      disagrees is reported);
 //   3. voxels within 0.06 m of the ground removed;
 //   4. Euclidean clustering (centroids closer than 2 x voxel are connected);
 //   5. clusters whose ground-plane centroids are closer than 0.4 m merged (vertically aligned
-//      pieces of one occluded person);
+//      pieces of one occluded person); clusters lower than 1 m go to the lying-body test (low,
+//      long, narrow, on the floor, a body's relief along it); arms held up above the head
+//      removed;
 //   6. head-based sub-clustering: a height map along the axis perpendicular to the viewing
 //      ray; its local maxima at least 0.3 m apart are heads, each head takes the points
 //      within 0.3 m of it (ground-plane distance);
 //   7. each sub-cluster is scored by a depth-only shape model (height, head-shoulder profile,
 //      width, vertical fill, feet on the ground) and, when the colour image is usable, by HOG +
-//      linear SVM on the colour patch of its theoretical box (head to ground);
+//      linear SVM on the colour patch of its theoretical box (head to ground), as long as it
+//      stands on something (feet on the floor, or its bottom hidden by something nearer);
 //   8. accepted candidates get a 3D position in the camera frame with a covariance from the
 //      Kinect depth-noise model (sigma_z = c z^2).
 // No OpenCV, PCL or LCM in this header: HOG lives behind HogClassifier (hog_classifier.h).
@@ -344,7 +348,7 @@ class PeopleDetector {
   // empty result and `*error` set; they never throw.
   DetectionResult Detect(const RgbdFrame& frame, std::string* error = nullptr);
 
-  // Forget the tracked floor (unrelated frames follow).
+  // Forget the tracked floor (unrelated frames follow; a jump or a time gap does this too).
   void ResetGround();
   const GroundTracker& ground_tracker() const { return tracker_; }
   const DetectorOptions& options() const { return options_; }
