@@ -2,26 +2,27 @@
 // RGB and a depth-derived SCAN (see depth_to_scan.h).
 
 #include <OpenNI.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
-#include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <dirent.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
 #include <functional>
 #include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
 #include <thread>
 
-#include "common/node_main.h"
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/logging.h"
 #include "common/node.h"
+#include "common/node_main.h"
 #include "common/robot_config.h"
 #include "common/time.h"
 #include "depth/depth_node_options.h"
@@ -45,7 +46,8 @@ struct Frame {
 
 class Publisher {
  public:
-  Publisher(const depth::DepthNodeOptions& o, common::Node* node, const Eigen::Isometry3d& base_from_camera)
+  Publisher(const depth::DepthNodeOptions& o, common::Node* node,
+            const Eigen::Isometry3d& base_from_camera)
       : options_(o),
         base_from_camera_(base_from_camera),
         depth_pub_(node->Advertise<image_t>(o.depth_channel)),
@@ -55,7 +57,8 @@ class Publisher {
   void Publish(const Frame& f) {
     if (!converter_ || converter_->intrinsics().width != f.intrinsics.width ||
         converter_->intrinsics().height != f.intrinsics.height) {
-      converter_ = std::make_unique<depth::DepthToScan>(options_.ScanOptions(), f.intrinsics, base_from_camera_);
+      converter_ = std::make_unique<depth::DepthToScan>(options_.ScanOptions(), f.intrinsics,
+                                                        base_from_camera_);
     }
     header_t header;
     header.utime = f.utime;
@@ -63,10 +66,12 @@ class Publisher {
     camera_intrinsics_t in{};
     in.width = f.intrinsics.width;
     in.height = f.intrinsics.height;
-    in.fx = f.intrinsics.fx, in.fy = f.intrinsics.fy, in.cx = f.intrinsics.cx, in.cy = f.intrinsics.cy;
+    in.fx = f.intrinsics.fx, in.fy = f.intrinsics.fy, in.cx = f.intrinsics.cx,
+    in.cy = f.intrinsics.cy;
     in.distortion_model = camera_intrinsics_t::DISTORTION_NONE;
     if (f.republish_images) {
-      image_t depth_msg = common::MakeDepthImage(header, in, f.depth_mm.data(), in.width, in.height);
+      image_t depth_msg =
+          common::MakeDepthImage(header, in, f.depth_mm.data(), in.width, in.height);
       depth_pub_.Publish(&depth_msg);
     }
     if (f.republish_images && options_.color && !f.rgb.empty()) {
@@ -102,71 +107,145 @@ class Publisher {
   int64_t frames_ = 0;
 };
 
-// Image-folder replay: depth files sorted by name.
-int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
-  // Depth files: regular files whose name contains depth_pattern, in the folder or in a
-  // sub-folder named like it (folder/depth/1.pgm with folder/color/1.png beside).
-  std::vector<std::string> files;
-  std::function<void(const std::string&, bool)> scan_dir = [&](const std::string& path, bool all) {
-    DIR* dir = opendir(path.c_str());
-    if (!dir) return;
-    while (dirent* e = readdir(dir)) {
-      const std::string name = e->d_name;
-      if (name.empty() || name[0] == '.') continue;
-      const std::string full = path + "/" + name;
-      struct stat st;
-      if (stat(full.c_str(), &st) != 0) continue;
-      const bool match = all || name.find(o.depth_pattern) != std::string::npos;
-      if (S_ISDIR(st.st_mode)) {
-        if (match && !all) scan_dir(full, true);
-      } else if (match) {
-        files.push_back(full);
+// One image pair of a folder replay.
+struct FolderImage {
+  std::string depth, color;  // color: "" when none
+};
+
+// TUM RGB-D layout: depth.txt and rgb.txt ("timestamp path" lines, '#' comments) beside
+// depth/ and rgb/; each depth image is paired with the colour image closest in time (within
+// 0.02 s, as TUM's associate.py). Empty when the folder has no such lists.
+std::vector<FolderImage> TumImages(const std::string& folder) {
+  auto read = [&](const std::string& name) {
+    std::vector<std::pair<double, std::string>> entries;
+    std::ifstream in(folder + "/" + name);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream s(line);
+      double t;
+      std::string path;
+      if (s >> t >> path) entries.emplace_back(t, folder + "/" + path);
+    }
+    return entries;
+  };
+  std::vector<FolderImage> images;
+  if (access((folder + "/depth.txt").c_str(), R_OK) != 0) return images;
+  const auto depth = read("depth.txt");
+  const auto rgb = read("rgb.txt");
+  for (const auto& [t, path] : depth) {
+    FolderImage image{path, ""};
+    double best = 0.02;
+    for (const auto& [tc, cpath] : rgb) {
+      if (std::abs(tc - t) <= best) {
+        best = std::abs(tc - t);
+        image.color = cpath;
       }
     }
-    closedir(dir);
-  };
-  scan_dir(o.folder, false);
-  if (files.empty() && access(o.folder.c_str(), R_OK) != 0) {
-    throw std::runtime_error("cannot open folder '" + o.folder + "'");
+    images.push_back(image);
   }
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw std::runtime_error("no depth images matching '" + o.depth_pattern + "' in '" + o.folder + "'");
-  SARMAP_LOG(INFO) << "replaying " << files.size() << " depth images from " << o.folder;
+  return images;
+}
+
+// Image-folder replay: a TUM sequence (depth.txt + rgb.txt), or depth files sorted by name.
+int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
+  std::vector<FolderImage> images = TumImages(o.folder);
+  const bool tum = !images.empty();
+  if (!tum) {
+    // Depth files: regular files whose name contains depth_pattern, in the folder or in a
+    // sub-folder named like it (folder/depth/1.pgm with folder/color/1.png beside).
+    std::vector<std::string> files;
+    std::function<void(const std::string&, bool)> scan_dir = [&](const std::string& path,
+                                                                 bool all) {
+      DIR* dir = opendir(path.c_str());
+      if (!dir) return;
+      while (dirent* e = readdir(dir)) {
+        const std::string name = e->d_name;
+        if (name.empty() || name[0] == '.') continue;
+        const std::string full = path + "/" + name;
+        struct stat st;
+        if (stat(full.c_str(), &st) != 0) continue;
+        const bool match = all || name.find(o.depth_pattern) != std::string::npos;
+        if (S_ISDIR(st.st_mode)) {
+          if (match && !all) scan_dir(full, true);
+        } else if (match) {
+          files.push_back(full);
+        }
+      }
+      closedir(dir);
+    };
+    scan_dir(o.folder, false);
+    if (files.empty() && access(o.folder.c_str(), R_OK) != 0) {
+      throw std::runtime_error("cannot open folder '" + o.folder + "'");
+    }
+    std::sort(files.begin(), files.end());
+    for (const std::string& path : files) {
+      FolderImage image{path, ""};
+      if (o.color) {
+        std::string cpath = path;
+        const size_t at = cpath.rfind(o.depth_pattern);
+        if (at != std::string::npos) cpath.replace(at, o.depth_pattern.size(), o.color_pattern);
+        for (const std::string& p : {cpath, cpath.substr(0, cpath.rfind('.')) + ".png"}) {
+          if (p != path && access(p.c_str(), R_OK) == 0) {
+            image.color = p;
+            break;
+          }
+        }
+      }
+      images.push_back(image);
+    }
+  }
+  if (images.empty()) {
+    throw std::runtime_error("no depth images in '" + o.folder +
+                             "' (neither depth.txt nor files named '*" + o.depth_pattern + "*')");
+  }
+  // Metres per stored unit: depth_scale when given; TUM stores 5000 units per metre.
+  const double unit_m = o.depth_scale > 0 ? 1.0 / o.depth_scale
+                        : tum             ? 1.0 / 5000
+                                          : o.folder_depth_unit_m;
+  SARMAP_LOG(INFO) << "replaying " << images.size() << " depth images from " << o.folder
+                   << (tum ? " (TUM layout)" : "") << ", " << unit_m * 1000 << " mm per unit";
   const double period = 1.0 / o.rate_hz;
   double next = common::SteadySeconds();
   size_t i = 0;
+  int64_t unreadable = 0;
   while (!node->stopping()) {
-    if (i == files.size()) {
-      if (!o.loop) break;
+    if (i == images.size()) {
+      if (!o.loop || pub->frames() == 0) break;
       i = 0;
     }
-    const std::string path = files[i++];
-    cv::Mat d = cv::imread(path, cv::IMREAD_ANYDEPTH);
-    if (d.empty() || d.type() != CV_16UC1) {
-      SARMAP_LOG(WARN) << "skipping '" << path << "': not a 16-bit depth image";
+    const FolderImage& image = images[i++];
+    cv::Mat d = cv::imread(image.depth, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+    if (d.empty()) {
+      ++unreadable;
+      SARMAP_LOG(WARN) << "skipping '" << image.depth << "': not an image";
       continue;
+    }
+    if (d.depth() == CV_8U) {
+      // An 8-bit depth image (a preview, or a 16-bit PNG re-saved by a viewer) has lost the
+      // range: every frame would be wrong, so stop here.
+      throw std::runtime_error(
+          "'" + image.depth +
+          "' is an 8-bit image: depth needs 16-bit values (millimetres, or set depth_scale)");
     }
     Frame f;
     f.utime = common::WallClockUtime();
     f.intrinsics = {d.cols, d.rows, o.folder_fx, o.folder_fy, o.folder_cx, o.folder_cy};
     f.depth_mm.resize(static_cast<size_t>(d.cols) * d.rows);
-    const double to_mm = o.folder_depth_unit_m / 0.001;
+    // 16-bit units, or 32-bit float metres (some TIFF writers).
+    const double to_mm = d.depth() == CV_32F ? 1000.0 : unit_m / 0.001;
+    cv::Mat dd;
+    d.convertTo(dd, CV_64F, to_mm);
     for (int r = 0; r < d.rows; ++r) {
-      for (int c = 0; c < d.cols; ++c) {
-        f.depth_mm[static_cast<size_t>(r) * d.cols + c] =
-            static_cast<uint16_t>(std::min(65535.0, std::round(d.at<uint16_t>(r, c) * to_mm)));
+      for (int col = 0; col < d.cols; ++col) {
+        const double mm = dd.at<double>(r, col);
+        f.depth_mm[static_cast<size_t>(r) * d.cols + col] =
+            std::isfinite(mm) && mm > 0 ? static_cast<uint16_t>(std::min(65535.0, std::round(mm)))
+                                        : 0;
       }
     }
-    if (o.color) {
-      std::string cpath = path;
-      const size_t at = cpath.rfind(o.depth_pattern);
-      if (at != std::string::npos) cpath.replace(at, o.depth_pattern.size(), o.color_pattern);
-      cv::Mat c;
-      for (const std::string& p : {cpath, cpath.substr(0, cpath.rfind('.')) + ".png"}) {
-        if (access(p.c_str(), R_OK) != 0) continue;
-        c = cv::imread(p, cv::IMREAD_COLOR);
-        if (!c.empty()) break;
-      }
+    if (o.color && !image.color.empty()) {
+      cv::Mat c = cv::imread(image.color, cv::IMREAD_COLOR);
       if (!c.empty()) {
         cv::cvtColor(c, c, cv::COLOR_BGR2RGB);
         f.rgb.assign(c.data, c.data + c.total() * 3);
@@ -180,6 +259,11 @@ int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
     const double wait = next - common::SteadySeconds();
     if (wait > 0) node->SpinOnce(wait);
   }
+  if (pub->frames() == 0 && !node->stopping()) {
+    throw std::runtime_error("published no frames from '" + o.folder + "' (" +
+                             std::to_string(unreadable) + " of " + std::to_string(images.size()) +
+                             " images unreadable)");
+  }
   SARMAP_LOG(INFO) << "published " << pub->frames() << " frames";
   return 0;
 }
@@ -187,7 +271,8 @@ int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
 int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
   using namespace openni;
   if (OpenNI::initialize() != STATUS_OK) {
-    throw std::runtime_error(std::string("OpenNI2 initialisation failed: ") + OpenNI::getExtendedError());
+    throw std::runtime_error(std::string("OpenNI2 initialisation failed: ") +
+                             OpenNI::getExtendedError());
   }
   struct Shutdown {
     ~Shutdown() { OpenNI::shutdown(); }
@@ -195,19 +280,22 @@ int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
   Device device;
   const char* uri = o.device_uri.empty() ? ANY_DEVICE : o.device_uri.c_str();
   if (device.open(uri) != STATUS_OK) {
-    throw std::runtime_error("no OpenNI2 device " +
-                             (o.device_uri.empty() ? std::string("connected") : "'" + o.device_uri + "'") +
-                             ": " + OpenNI::getExtendedError());
+    throw std::runtime_error(
+        "no OpenNI2 device " +
+        (o.device_uri.empty() ? std::string("connected") : "'" + o.device_uri + "'") + ": " +
+        OpenNI::getExtendedError());
   }
   VideoStream depth_stream, color_stream;
   if (depth_stream.create(device, SENSOR_DEPTH) != STATUS_OK) {
-    throw std::runtime_error(std::string("cannot open the depth stream: ") + OpenNI::getExtendedError());
+    throw std::runtime_error(std::string("cannot open the depth stream: ") +
+                             OpenNI::getExtendedError());
   }
   VideoMode mode = depth_stream.getVideoMode();
   mode.setPixelFormat(PIXEL_FORMAT_DEPTH_1_MM);
   depth_stream.setVideoMode(mode);  // recordings keep their own format
   const bool color = o.color && color_stream.create(device, SENSOR_COLOR) == STATUS_OK;
-  if (color && o.register_depth && device.isImageRegistrationModeSupported(IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
+  if (color && o.register_depth &&
+      device.isImageRegistrationModeSupported(IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
     device.setImageRegistrationMode(IMAGE_REGISTRATION_DEPTH_TO_COLOR);
   }
   if (depth_stream.start() != STATUS_OK || (color && color_stream.start() != STATUS_OK)) {
@@ -227,8 +315,14 @@ int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
     Frame f;
     f.utime = common::WallClockUtime();
     const int w = depth_frame.getWidth(), h = depth_frame.getHeight();
-    const double hfov = depth_stream.getHorizontalFieldOfView(), vfov = depth_stream.getVerticalFieldOfView();
-    f.intrinsics = {w, h, (w / 2.0) / std::tan(hfov / 2), (h / 2.0) / std::tan(vfov / 2), (w - 1) / 2.0, (h - 1) / 2.0};
+    const double hfov = depth_stream.getHorizontalFieldOfView(),
+                 vfov = depth_stream.getVerticalFieldOfView();
+    f.intrinsics = {w,
+                    h,
+                    (w / 2.0) / std::tan(hfov / 2),
+                    (h / 2.0) / std::tan(vfov / 2),
+                    (w - 1) / 2.0,
+                    (h - 1) / 2.0};
     const auto* px = static_cast<const uint16_t*>(depth_frame.getData());
     const bool is_100um = depth_frame.getVideoMode().getPixelFormat() == PIXEL_FORMAT_DEPTH_100_UM;
     f.depth_mm.resize(static_cast<size_t>(w) * h);
@@ -236,7 +330,8 @@ int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
     if (color && color_stream.readFrame(&color_frame) == STATUS_OK && color_frame.isValid() &&
         color_frame.getVideoMode().getPixelFormat() == PIXEL_FORMAT_RGB888) {
       const auto* c = static_cast<const uint8_t*>(color_frame.getData());
-      f.rgb.assign(c, c + static_cast<size_t>(color_frame.getWidth()) * color_frame.getHeight() * 3);
+      f.rgb.assign(c,
+                   c + static_cast<size_t>(color_frame.getWidth()) * color_frame.getHeight() * 3);
       f.rgb_width = color_frame.getWidth();
       f.rgb_height = color_frame.getHeight();
     }
@@ -250,24 +345,28 @@ int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
 // DEPTH from the bus (the simulator, or a driver on another computer): SCAN only.
 int RunLcm(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub) {
   int64_t bad = 0;
-  node->Subscribe<image_t>(o.depth_channel, [&](const image_t& m, const common::ReceiveInfo&) {
-    Frame f;
-    std::string error;
-    if (!common::DecodeDepthImage(m, &f.depth_mm, &error)) {
-      if (++bad % 100 == 1) SARMAP_LOG(WARN) << "undecodable depth image (" << bad << " so far): " << error;
-      return;
-    }
-    f.utime = m.header.utime;
-    f.intrinsics.width = m.width;
-    f.intrinsics.height = m.height;
-    f.intrinsics.fx = m.intrinsics.fx;
-    f.intrinsics.fy = m.intrinsics.fy;
-    f.intrinsics.cx = m.intrinsics.cx;
-    f.intrinsics.cy = m.intrinsics.cy;
-    f.depth_unit_m = m.depth_unit_m;
-    f.republish_images = false;
-    pub->Publish(f);
-  }, 2);
+  node->Subscribe<image_t>(
+      o.depth_channel,
+      [&](const image_t& m, const common::ReceiveInfo&) {
+        Frame f;
+        std::string error;
+        if (!common::DecodeDepthImage(m, &f.depth_mm, &error)) {
+          if (++bad % 100 == 1)
+            SARMAP_LOG(WARN) << "undecodable depth image (" << bad << " so far): " << error;
+          return;
+        }
+        f.utime = m.header.utime;
+        f.intrinsics.width = m.width;
+        f.intrinsics.height = m.height;
+        f.intrinsics.fx = m.intrinsics.fx;
+        f.intrinsics.fy = m.intrinsics.fy;
+        f.intrinsics.cx = m.intrinsics.cx;
+        f.intrinsics.cy = m.intrinsics.cy;
+        f.depth_unit_m = m.depth_unit_m;
+        f.republish_images = false;
+        pub->Publish(f);
+      },
+      2);
   return node->Run();
 }
 
@@ -284,8 +383,10 @@ int main(int argc, char** argv) {
         "  sarmap-depth                                   # first OpenNI2 device\n"
         "  sarmap-depth --set device_uri=rec.oni          # a recording\n"
         "  sarmap-depth --set source=folder --set folder=DIR --set rate_hz=5\n"
-        "  sarmap-depth --set source=lcm                  # SCAN from DEPTH on the bus (simulator)");
-    const auto parsed = common::ParseNodeOptions<depth::DepthNodeOptions>(&parser, &node_args, argc, argv, "config/depth.yaml");
+        "  sarmap-depth --set source=lcm                  # SCAN from DEPTH on the bus "
+        "(simulator)");
+    const auto parsed = common::ParseNodeOptions<depth::DepthNodeOptions>(
+        &parser, &node_args, argc, argv, "config/depth.yaml");
     if (!parsed) return 0;
     const depth::DepthNodeOptions& options = *parsed;
     const common::RobotOptions robot = common::LoadRobot(options.robot_config);
@@ -293,6 +394,7 @@ int main(int argc, char** argv) {
     common::Node node("sarmap-depth", node_args.lcm_url);
     Publisher pub(options, &node, base_from_camera);
     if (options.source == "lcm") return RunLcm(options, &node, &pub);
-    return options.source == "folder" ? RunFolder(options, &node, &pub) : RunOpenNI(options, &node, &pub);
+    return options.source == "folder" ? RunFolder(options, &node, &pub)
+                                      : RunOpenNI(options, &node, &pub);
   });
 }

@@ -10,19 +10,20 @@ namespace sarmap {
 namespace depth {
 
 struct DepthNodeOptions {
-  std::string source = "openni2";   // openni2 | folder | lcm
-  std::string device_uri = "";      // openni2: "" = first device, or a .oni recording path
-  bool color = true;                // also publish RGB
-  bool register_depth = true;       // openni2: depth registered to colour when supported
+  std::string source = "openni2";  // openni2 | folder | lcm
+  std::string device_uri = "";     // openni2: "" = first device, or a .oni recording path
+  bool color = true;               // also publish RGB
+  bool register_depth = true;      // openni2: depth registered to colour when supported
   // folder replay: depth images (16-bit PNG/PGM/TIFF), sorted by name; colour images matched by
   // replacing depth_pattern with color_pattern in the path.
   std::string folder = "";
   std::string depth_pattern = "depth";
   std::string color_pattern = "color";
   double folder_depth_unit_m = 0.001;  // metres per stored depth unit (TUM: 0.0002)
+  double depth_scale = 0;  // stored units per metre (1000 mm PNG, 5000 TUM); 0: see above
   double folder_fx = 525, folder_fy = 525, folder_cx = 319.5, folder_cy = 239.5;
-  double rate_hz = 10.0;            // folder replay rate
-  bool loop = false;                // folder replay: start again at the end
+  double rate_hz = 10.0;                           // folder replay rate
+  bool loop = false;                               // folder replay: start again at the end
   std::string robot_config = "config/robot.yaml";  // base_from_camera
   std::string depth_channel = "DEPTH";
   std::string rgb_channel = "RGB";
@@ -46,15 +47,24 @@ struct DepthNodeOptions {
     o.row_step = row_step;
     return o;
   }
-  template <class V> void Visit(V& v) {
-    v("source", source, "openni2 (device or .oni), folder (image replay), or lcm (DEPTH from the bus, e.g. the simulator: only SCAN is published)");
+  template <class V>
+  void Visit(V& v) {
+    v("source", source,
+      "openni2 (device or .oni), folder (image replay), or lcm (DEPTH from the bus, e.g. the "
+      "simulator: only SCAN is published)");
     v("device_uri", device_uri, "OpenNI2 device URI or .oni file; empty = first device");
     v("color", color, "publish RGB as well");
     v("register_depth", register_depth, "OpenNI2: register depth to colour when supported");
     v("folder", folder, "folder replay: directory with depth (and colour) images");
     v("depth_pattern", depth_pattern, "folder replay: depth files contain this text");
-    v("color_pattern", color_pattern, "folder replay: colour file = depth path with depth_pattern replaced by this");
-    v("folder_depth_unit_m", folder_depth_unit_m, "folder replay: metres per depth unit");
+    v("color_pattern", color_pattern,
+      "folder replay: colour file = depth path with depth_pattern replaced by this");
+    v("folder_depth_unit_m", folder_depth_unit_m,
+      "folder replay: metres per depth unit (used when depth_scale is 0 and the folder is no TUM "
+      "sequence)");
+    v("depth_scale", depth_scale,
+      "folder replay: stored depth units per metre (1000: millimetres, 5000: TUM); 0: "
+      "folder_depth_unit_m, or 5000 for a TUM folder (depth.txt + rgb.txt)");
     v("folder_fx", folder_fx, "folder replay intrinsics fx");
     v("folder_fy", folder_fy, "folder replay intrinsics fy");
     v("folder_cx", folder_cx, "folder replay intrinsics cx");
@@ -76,6 +86,7 @@ struct DepthNodeOptions {
   void Validate(common::Validator& c) const {
     c.OneOf("source", source, {"openni2", "folder", "lcm"});
     c.Positive("folder_depth_unit_m", folder_depth_unit_m);
+    c.NonNegative("depth_scale", depth_scale);
     c.Positive("rate_hz", rate_hz);
     c.That(max_height_m > min_height_m, "max_height_m", "must be > min_height_m");
     c.Positive("range_min_m", range_min_m);

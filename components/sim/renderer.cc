@@ -223,7 +223,11 @@ void Renderer::SetWorld(const World& world, const std::vector<Appearance>* appea
         AddBox(p.position, p.yaw_rad, {0.20 * s, 0.18 * s, 0.27 * s}, 1.1 * s, skin, kIr, person, true);
         break;
       case Posture::kLying:
-        AddBox(p.position + fwd * 0.02, p.yaw_rad, {1.75 * s, 0.45 * s, 0.25}, 0.0, skin, kIr, person, false);
+        // On the back, head along yaw: legs, chest (the highest part) and head differ in
+        // height as a body's do (the depth image sees a body, not a crate).
+        AddBox(p.position - fwd * 0.42 * s, p.yaw_rad, {0.91 * s, 0.34 * s, 0.15}, 0.0, skin, kIr, person, false);
+        AddBox(p.position + fwd * 0.34 * s, p.yaw_rad, {0.62 * s, 0.44 * s, 0.24}, 0.0, skin, kIr, person, false);
+        AddBox(p.position + fwd * 0.76 * s, p.yaw_rad, {0.22 * s, 0.18 * s, 0.19}, 0.0, skin, kIr, person, false);
         break;
     }
   }

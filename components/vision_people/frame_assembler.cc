@@ -53,18 +53,20 @@ bool FrameAssembler::Build(const sarmap::image_t& depth, const sarmap::image_t* 
   intr.cy = k.cy;
   if (!(std::isfinite(k.fx) && std::isfinite(k.fy) && std::isfinite(k.cx) && std::isfinite(k.cy)) ||
       k.fx <= 0 || k.fy <= 0) {
-    Warn("depth_intrinsics", "depth image without valid intrinsics (fx " + std::to_string(k.fx) + ")");
+    Warn("depth_intrinsics",
+         "depth image without valid intrinsics (fx " + std::to_string(k.fx) + ")");
     return false;
   }
-  const double unit = depth.depth_unit_m > 0 && std::isfinite(depth.depth_unit_m) ? depth.depth_unit_m : 0.001;
+  const double unit =
+      depth.depth_unit_m > 0 && std::isfinite(depth.depth_unit_m) ? depth.depth_unit_m : 0.001;
   frame->utime = depth.header.utime;
   CloudFromDepth(depth_buffer_.data(), depth.width, depth.height, unit, intr, frame);
   frame->rgb.clear();
   if (color) {
     std::vector<uint8_t> rgb;
     if (color->width != depth.width || color->height != depth.height) {
-      Warn("color_size_mismatch", "colour " + Size(*color) + " vs depth " + Size(depth) +
-                                      "; using depth only");
+      Warn("color_size_mismatch",
+           "colour " + Size(*color) + " vs depth " + Size(depth) + "; using depth only");
     } else if (!common::DecodeColorImage(*color, &rgb, &error)) {
       Warn("color_decode", error + "; using depth only");
     } else if (rgb.size() != static_cast<size_t>(depth.width) * depth.height * 3) {
@@ -74,6 +76,11 @@ bool FrameAssembler::Build(const sarmap::image_t& depth, const sarmap::image_t* 
     }
   }
   return true;
+}
+
+void FrameAssembler::Flush(std::vector<RgbdFrame>* ready) {
+  if (pending_depth_.empty()) return;
+  Release(pending_depth_.back().header.utime + color_wait_us_ + 1, ready);
 }
 
 void FrameAssembler::Release(int64_t now_utime, std::vector<RgbdFrame>* ready) {
@@ -89,16 +96,18 @@ void FrameAssembler::Release(int64_t now_utime, std::vector<RgbdFrame>* ready) {
         best = &c;
       }
     }
-    const bool timed_out = now_utime - d.header.utime > color_wait_us_ ||
-                           pending_depth_.size() > kMaxPending;
+    const bool timed_out =
+        now_utime - d.header.utime > color_wait_us_ || pending_depth_.size() > kMaxPending;
     if (!best && !timed_out) break;
     if (!best) {
       if (require_color_) {
-        Warn("no_color", "depth frame at " + std::to_string(d.header.utime) + " has no colour; dropped");
+        Warn("no_color",
+             "depth frame at " + std::to_string(d.header.utime) + " has no colour; dropped");
         pending_depth_.pop_front();
         continue;
       }
-      Warn("no_color", "depth frame at " + std::to_string(d.header.utime) + " has no colour; depth only");
+      Warn("no_color",
+           "depth frame at " + std::to_string(d.header.utime) + " has no colour; depth only");
     }
     RgbdFrame frame;
     if (Build(d, best, &frame)) ready->push_back(std::move(frame));
@@ -119,7 +128,8 @@ void FrameAssembler::AddDepth(const sarmap::image_t& depth, std::vector<RgbdFram
     return;
   }
   if (!pending_depth_.empty() && depth.header.utime <= pending_depth_.back().header.utime) {
-    Warn("depth_out_of_order", "depth frame at " + std::to_string(depth.header.utime) + " is not newer");
+    Warn("depth_out_of_order",
+         "depth frame at " + std::to_string(depth.header.utime) + " is not newer");
     return;
   }
   pending_depth_.push_back(depth);
@@ -131,8 +141,9 @@ void FrameAssembler::AddColor(const sarmap::image_t& color, std::vector<RgbdFram
     Warn("color_format", "RGB message carries a depth image");
     return;
   }
-  auto pos = std::upper_bound(recent_color_.begin(), recent_color_.end(), color.header.utime,
-                              [](int64_t t, const sarmap::image_t& c) { return t < c.header.utime; });
+  auto pos =
+      std::upper_bound(recent_color_.begin(), recent_color_.end(), color.header.utime,
+                       [](int64_t t, const sarmap::image_t& c) { return t < c.header.utime; });
   recent_color_.insert(pos, color);
   Release(color.header.utime, ready);
 }

@@ -27,6 +27,11 @@ class FrameAssembler {
   void AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready);
   void AddColor(const sarmap::image_t& color, std::vector<RgbdFrame>* ready);
 
+  // No more messages are coming for now (the bus went quiet): depth frames still waiting for
+  // their colour go on as if the wait had timed out (the last frame of a depth-only replay).
+  void Flush(std::vector<RgbdFrame>* ready);
+  bool has_pending() const { return !pending_depth_.empty(); }
+
   // Warning name -> count (e.g. "depth_decode", "color_size_mismatch", "no_color").
   const std::map<std::string, int64_t>& warnings() const { return warnings_; }
   int64_t total_warnings() const;

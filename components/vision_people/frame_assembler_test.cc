@@ -71,6 +71,21 @@ TEST(FrameAssembler, MissingColourGoesDepthOnlyWithAWarning) {
   EXPECT_GE(strict.warnings().at("no_color"), 2);
 }
 
+// A depth-only replay: every frame comes out once the bus goes quiet, the last one included.
+TEST(FrameAssembler, FlushReleasesTheLastDepthOnlyFrame) {
+  FrameAssembler a(0.02, 0.1, false);
+  std::vector<RgbdFrame> ready;
+  for (int i = 0; i < 5; ++i) a.AddDepth(Depth(1000000 + i * 150000), &ready);
+  EXPECT_EQ(ready.size(), 4u);  // the last one waits for a colour image
+  EXPECT_TRUE(a.has_pending());
+  a.Flush(&ready);
+  ASSERT_EQ(ready.size(), 5u);
+  EXPECT_EQ(ready.back().utime, 1600000);
+  EXPECT_FALSE(a.has_pending());
+  a.Flush(&ready);  // nothing left: nothing happens
+  EXPECT_EQ(ready.size(), 5u);
+}
+
 TEST(FrameAssembler, MismatchedEmptyAndCorruptFramesAreCountedNotFatal) {
   FrameAssembler a(0.02, 0.1, false);
   std::vector<RgbdFrame> ready;

@@ -2,7 +2,6 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -16,7 +15,7 @@ namespace vision_people {
 namespace {
 
 constexpr double kBelowFloorM = 0.3;  // voxel grid starts this far below the prior floor
-constexpr int kPad = 2;               // empty cells around the grid: neighbour search needs no bounds checks
+constexpr int kPad = 2;  // empty cells around the grid: neighbour search needs no bounds checks
 
 // Membership rising linearly from 0 at `lo` to 1 at `hi`.
 double Ramp(double x, double lo, double hi) {
@@ -88,15 +87,54 @@ double HeightAtRow(const PinholeIntrinsics& k, const Eigen::Vector3d& foot,
 
 double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
+// Covariance of a cluster centroid: Kinect depth noise along the ray (sigma = c z^2), pixel
+// noise across it, plus the body centre's spread about the visible surface.
+Eigen::Matrix3d CentroidCovariance(const Eigen::Vector3d& p, const NoiseOptions& noise, double fx) {
+  const double z = std::max(0.1, p.z());
+  const Eigen::Vector3d u = p.normalized();
+  const double sr = noise.depth_coeff * z * z;
+  const double st = z * noise.pixel_sigma / std::max(1.0, fx);
+  const double sb2 = noise.body_sigma_m * noise.body_sigma_m;
+  const Eigen::Matrix3d along = u * u.transpose();
+  return (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
+}
+
+// Is the image just below camera-frame point `low` (a cluster's lowest point) filled by
+// something at least 0.3 m nearer? Then the cluster's bottom is hidden (a person behind a
+// desk or a crate), not floating.
+bool HiddenBelow(const RgbdFrame& frame, const Eigen::Vector3d& low) {
+  const PinholeIntrinsics& k = frame.intrinsics;
+  if (low.z() <= 0.1) return false;
+  const int u0 = static_cast<int>(std::lround(k.fx * low.x() / low.z() + k.cx));
+  const int v0 = static_cast<int>(std::lround(k.fy * low.y() / low.z() + k.cy));
+  const float limit = static_cast<float>(low.z() - 0.3);
+  int nearer = 0, seen = 0;
+  for (int v = v0 + 2; v <= v0 + 14; v += 3) {
+    for (int u = u0 - 6; u <= u0 + 6; u += 3) {
+      if (u < 0 || v < 0 || u >= frame.width || v >= frame.height) continue;
+      const float z = frame.xyz[3 * (static_cast<size_t>(v) * frame.width + u) + 2];
+      if (!std::isfinite(z)) continue;
+      ++seen;
+      nearer += z < limit;
+    }
+  }
+  return seen >= 5 && nearer * 2 >= seen;
+}
+
 }  // namespace
 
 const char* ColorStateName(ColorState state) {
   switch (state) {
-    case ColorState::kNone: return "none";
-    case ColorState::kUsable: return "usable";
-    case ColorState::kDark: return "dark";
-    case ColorState::kLowContrast: return "low-contrast";
-    case ColorState::kGlare: return "glare";
+    case ColorState::kNone:
+      return "none";
+    case ColorState::kUsable:
+      return "usable";
+    case ColorState::kDark:
+      return "dark";
+    case ColorState::kLowContrast:
+      return "low-contrast";
+    case ColorState::kGlare:
+      return "glare";
   }
   return "?";
 }
@@ -127,28 +165,6 @@ void CloudFromDepth(const uint16_t* depth, int width, int height, double unit_m,
   }
 }
 
-GroundPlane GroundPlane::FromCoefficients(const Eigen::Vector4d& abcd) {
-  GroundPlane g;
-  const double n = abcd.head<3>().norm();
-  g.normal = abcd.head<3>() / n;
-  g.offset = abcd(3) / n;
-  // The camera is above the floor: its height (the offset) must be positive.
-  if (g.offset < 0) {
-    g.normal = -g.normal;
-    g.offset = -g.offset;
-  }
-  return g;
-}
-
-GroundPlane GroundFromMounting(const Eigen::Matrix3d& base_R_camera,
-                               const Eigen::Vector3d& base_t_camera) {
-  // Floor: e_z . (R p + t) = 0  ->  (R^T e_z) . p + t_z = 0.
-  GroundPlane g;
-  g.normal = base_R_camera.transpose() * Eigen::Vector3d::UnitZ();
-  g.offset = base_t_camera.z();
-  return g;
-}
-
 void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double* mean,
                      double* stddev, double* saturated) {
   double s = 0, s2 = 0;
@@ -171,12 +187,133 @@ void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double
   *saturated = n ? static_cast<double>(sat) / n : 0.0;
 }
 
+namespace {
+
+// A body lying on the floor, from the floor-frame voxels of one cluster: top height, floor
+// contact, length and width along the principal axes of its footprint, relief (spread of the
+// highest point per 0.1 m along the body, inner 80 %) and fill; the whole body must be inside
+// the image (its length is unknown otherwise).
+PersonCandidate DescribeLying(const std::vector<int>& cluster,
+                              const std::vector<Eigen::Vector3d>& floor_points,
+                              const std::vector<Eigen::Vector3d>& camera_points,
+                              const FloorFrame& floor_frame, const RgbdFrame& frame,
+                              const DetectorOptions& options) {
+  const LyingOptions& lo = options.lying;
+  const double vs = options.voxel_size_m;
+  PersonCandidate c;
+  c.lying = true;
+  c.depth_only = true;
+  c.num_voxels = static_cast<int>(cluster.size());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double top = -1e9, bottom = 1e9;
+  for (int i : cluster) {
+    centroid += floor_points[i];
+    top = std::max(top, floor_points[i].z());
+    bottom = std::min(bottom, floor_points[i].z());
+  }
+  centroid /= static_cast<double>(cluster.size());
+  c.height_m = top;
+  c.bottom_m = bottom;
+  c.position_camera = floor_frame.ToCamera(centroid);
+  c.head_camera = floor_frame.ToCamera(Eigen::Vector3d(centroid.x(), centroid.y(), top));
+  // Principal axes of the footprint.
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (int i : cluster) {
+    const Eigen::Vector2d d = floor_points[i].head<2>() - centroid.head<2>();
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const Eigen::Vector2d along = eig.eigenvectors().col(1), across = eig.eigenvectors().col(0);
+  double amin = 1e9, amax = -1e9, cmin = 1e9, cmax = -1e9;
+  for (int i : cluster) {
+    const Eigen::Vector2d d = floor_points[i].head<2>() - centroid.head<2>();
+    amin = std::min(amin, along.dot(d));
+    amax = std::max(amax, along.dot(d));
+    cmin = std::min(cmin, across.dot(d));
+    cmax = std::max(cmax, across.dot(d));
+  }
+  c.length_m = amax - amin + vs;
+  c.width_m = cmax - cmin + vs;
+  c.depth_extent_m = c.length_m;
+  // Highest point per 0.1 m along the body.
+  const double bin = 0.1;
+  const int nbins = std::max(1, static_cast<int>((amax - amin) / bin) + 1);
+  std::vector<double> profile(nbins, -1.0);
+  for (int i : cluster) {
+    const int b = std::clamp(
+        static_cast<int>((along.dot(floor_points[i].head<2>() - centroid.head<2>()) - amin) / bin),
+        0, nbins - 1);
+    profile[b] = std::max(profile[b], floor_points[i].z());
+  }
+  int filled = 0;
+  for (double h : profile) filled += h >= 0;
+  c.fill = static_cast<double>(filled) / nbins;
+  std::vector<double> inner;
+  for (int b = nbins / 10; b < nbins - nbins / 10; ++b) {
+    if (profile[b] >= 0) inner.push_back(profile[b]);
+  }
+  if (inner.size() >= 3) {
+    std::sort(inner.begin(), inner.end());
+    // 10th to 90th percentile: one noisy bin does not make a box a body.
+    c.relief_m = inner[inner.size() * 9 / 10] - inner[inner.size() / 10];
+  }
+  // Inside the image: no voxel of the cluster projects within 3 px of the image border.
+  bool inside = true;
+  double umin = 1e9, umax = -1e9, vmin = 1e9, vmax = -1e9;
+  for (int i : cluster) {
+    const Eigen::Vector3d& p = camera_points[i];
+    const double u = ProjectU(frame.intrinsics, p), v = ProjectV(frame.intrinsics, p);
+    if (!std::isfinite(u) || !std::isfinite(v)) {
+      inside = false;
+      continue;
+    }
+    umin = std::min(umin, u);
+    umax = std::max(umax, u);
+    vmin = std::min(vmin, v);
+    vmax = std::max(vmax, v);
+  }
+  const double margin = std::max(3, frame.width / 100) +
+                        0.5 * vs * frame.intrinsics.fx / std::max(0.5, c.position_camera.z());
+  inside = inside && umin > margin && vmin > margin && umax < frame.width - 1 - margin &&
+           vmax < frame.height - 1 - margin;
+  c.visible_fraction = inside ? 1.0 : 0.0;
+  c.box_u_center = 0.5 * (umin + umax);
+  c.box_v_top = vmin;
+  c.box_v_bottom = vmax;
+  const double m_top =
+      Trapezoid(top, lo.min_top_m - 0.05, lo.min_top_m, lo.max_top_m, lo.max_top_m + 0.1);
+  const double m_bottom = 1.0 - Ramp(bottom, lo.max_bottom_m, lo.max_bottom_m + 0.1);
+  const double m_length = Trapezoid(c.length_m, lo.min_length_m - 0.2, lo.min_length_m,
+                                    lo.max_length_m, lo.max_length_m + 0.3);
+  // Only the near side of a body is seen: its width across the viewing ray is measured, its
+  // depth along the ray is not (seen side-on from a low camera, a lying body is a 0.1 m thick
+  // strip). The lower bound applies to the part of the width that lies across the ray.
+  const Eigen::Vector2d ray_xy = centroid.head<2>().norm() > 1e-6
+                                     ? Eigen::Vector2d(centroid.head<2>().normalized())
+                                     : Eigen::Vector2d(0, 1);
+  const double across_ray = std::abs(across.x() * ray_xy.y() - across.y() * ray_xy.x());
+  const double min_width = lo.min_width_m * across_ray;
+  const double m_width =
+      Trapezoid(c.width_m, 0.7 * min_width, min_width, lo.max_width_m, lo.max_width_m + 0.2);
+  const double m_relief = Ramp(c.relief_m, 0.5 * lo.min_relief_m, lo.min_relief_m);
+  const double m_fill = Ramp(c.fill, lo.min_fill - 0.2, lo.min_fill);
+  c.depth_score = m_top * m_bottom * m_length * m_width * m_relief * m_fill * c.visible_fraction;
+  c.supported = m_bottom >= 0.5;
+  c.confidence = c.depth_score;
+  c.accepted = c.depth_score >= lo.accept;
+  c.covariance = CentroidCovariance(c.position_camera, options.noise, frame.intrinsics.fx);
+  return c;
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------------------------------
 
 struct PeopleDetector::Workspace {
   // Dense voxel grid over the region of interest, in the prior floor frame.
   int nx = 0, ny = 0, nz = 0;
-  double x0 = 0, y0 = 0, z0 = 0;  // floor-frame coordinates of cell (0,0,0)'s corner (before padding)
+  double x0 = 0, y0 = 0,
+         z0 = 0;  // floor-frame coordinates of cell (0,0,0)'s corner (before padding)
   std::vector<int32_t> cell_voxel;  // -1: empty
   // Voxels of the current frame.
   std::vector<int32_t> voxel_cell;
@@ -197,7 +334,10 @@ struct PeopleDetector::Workspace {
 
 PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane& mounting_ground,
                                std::shared_ptr<const HogClassifier> hog)
-    : options_(options), mounting_(mounting_ground), prior_(mounting_ground), hog_(std::move(hog)),
+    : options_(options),
+      mounting_(mounting_ground),
+      tracker_(options.ground, mounting_ground),
+      hog_(std::move(hog)),
       ws_(std::make_unique<Workspace>()) {
   common::ValidateOptions(options_);
   const double v = options_.voxel_size_m;
@@ -207,8 +347,8 @@ PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane
   ws_->nx = static_cast<int>(std::ceil(2 * options_.max_lateral_m / v));
   ws_->ny = static_cast<int>(std::ceil((options_.max_range_m + 0.5) / v));
   ws_->nz = static_cast<int>(std::ceil((options_.top_cut_m + kBelowFloorM) / v));
-  const size_t cells = static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) *
-                       (ws_->nz + 2 * kPad);
+  const size_t cells =
+      static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) * (ws_->nz + 2 * kPad);
   ws_->cell_voxel.assign(cells, -1);
   // Half of the +-2 neighbourhood (lexicographically positive offsets): each pair once.
   for (int dz = -2; dz <= 2; ++dz) {
@@ -224,11 +364,11 @@ PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane
 
 PeopleDetector::~PeopleDetector() = default;
 
-void PeopleDetector::ResetGround() { prior_ = mounting_; }
+void PeopleDetector::ResetGround() { tracker_.Reset(); }
 
 DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* error) {
   DetectionResult result;
-  result.ground = prior_;
+  result.ground = tracker_.has_track() ? tracker_.tracked() : mounting_;
   std::string local_error;
   std::string& err = error ? *error : local_error;
   err.clear();
@@ -272,8 +412,20 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   const double vs = o.voxel_size_m;
   const float inv_vs = static_cast<float>(1.0 / vs);
 
-  // 1. Voxel grid in the prior floor frame.
-  const FloorFrame prior_frame(prior_);
+  // 1. Floor from the data: RANSAC over a sample of the cloud with the tracked and the
+  // configured floor as extra hypotheses (ground_estimator.h); then the voxel grid in the
+  // frame of that floor.
+  FloorFit fit;
+  if (o.ground.refine) {
+    std::vector<GroundPlane> hypotheses;
+    if (tracker_.has_track()) hypotheses.push_back(tracker_.tracked());
+    hypotheses.push_back(mounting_);
+    fit = FitFloor(frame.xyz.data(), frame.width, frame.height, o.min_range_m, o.max_range_m,
+                   o.ground, hypotheses);
+    result.stats.num_ground_points = fit.inliers;
+  }
+  const GroundPlane grid_plane = fit.found ? fit.plane : result.ground;
+  const FloorFrame prior_frame(grid_plane);
   const Eigen::Matrix3f Rf = prior_frame.R.cast<float>();
   const Eigen::Vector3f tf = prior_frame.t.cast<float>();
   const float x0 = static_cast<float>(ws.x0), y0 = static_cast<float>(ws.y0),
@@ -284,6 +436,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   ws.count.clear();
   int num_points = 0;
   const int stride = o.pixel_stride;
+  const float depth_noise = static_cast<float>(o.noise.depth_coeff);
   for (int v = 0; v < frame.height; v += stride) {
     const float* row = &frame.xyz[static_cast<size_t>(v) * frame.width * 3];
     for (int u = 0; u < frame.width; u += stride) {
@@ -291,6 +444,15 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       const float z = p[2];
       if (!(z >= min_z) || !std::isfinite(p[0]) || !std::isfinite(p[1])) continue;  // NaN fails
       ++num_points;
+      // Mixed ("flying") pixels at a depth edge lie between the near and the far surface and
+      // would join a person to the wall behind: a pixel whose left and right neighbours are one
+      // nearer and one farther, both by more than the noise, is dropped. Along columns only:
+      // up and down, the floor and a lying body seen at a grazing angle change depth that fast.
+      if (u >= 1 && u + 1 < frame.width) {
+        const float t = 0.03f + 3.0f * depth_noise * z * z;
+        const float a = p[2 - 3], b = p[2 + 3];
+        if ((a < z - t && b > z + t) || (a > z + t && b < z - t)) continue;  // NaN: false
+      }
       const Eigen::Vector3f pc(p[0], p[1], z);
       const Eigen::Vector3f f = Rf * pc + tf;
       const int ix = static_cast<int>(std::floor((f.x() - x0) * inv_vs));
@@ -325,15 +487,15 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     return result;
   }
   ws.centroid.resize(nv);
-  for (int i = 0; i < nv; ++i) ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
+  for (int i = 0; i < nv; ++i)
+    ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
 
-  // 2. Floor: least-squares plane through the voxels near the prior, twice with a shrinking
-  // band; accepted only close to the mounting plane. Floor candidates must have nothing
+  // 2. Floor polish: least-squares plane through the voxels near the RANSAC plane, twice with
+  // a shrinking band, accepted only close to it. Floor candidates must have nothing
   // 0.18-0.30 m above them (cells iz+3, iz+4 of their column): the bottom rows of a wall, a
-  // cabinet or a leg lie in the band too, and facing a wall they outnumber the floor voxels
-  // and tilt the fit a little each frame, which the next frame's prior then carries on.
-  GroundPlane ground = prior_;
-  if (o.ground.refine) {
+  // cabinet or a leg lie in the band too and would tilt the fit.
+  GroundPlane ground = mounting_;
+  if (fit.found) {
     const int64_t layer = static_cast<int64_t>(ws.ny + 2 * kPad) * (ws.nx + 2 * kPad);
     const int64_t layers = ws.nz + 2 * kPad;
     ws.kept.assign(nv, 0);  // here: "open above" (floor candidate) flags
@@ -345,7 +507,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
       ws.kept[i] = open;
     }
-    GroundPlane estimate = prior_;
+    GroundPlane estimate = fit.plane;
     bool ok = true;
     int used = 0;
     for (double band : {o.ground.band_m, 0.5 * o.ground.band_m}) {
@@ -372,28 +534,23 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
         break;
       }
       Eigen::Vector3d n = eig.eigenvectors().col(0);
-      if (n.dot(prior_.normal) < 0) n = -n;
+      if (n.dot(fit.plane.normal) < 0) n = -n;
       estimate.normal = n;
       estimate.offset = -n.dot(mean);
     }
     result.stats.num_ground_voxels = used;
-    if (ok) {
-      const double tilt_deg =
-          std::acos(std::clamp(estimate.normal.dot(mounting_.normal), -1.0, 1.0)) * 180.0 / M_PI;
-      ok = tilt_deg <= o.ground.max_tilt_change_deg &&
-           std::abs(estimate.offset - mounting_.offset) <= o.ground.max_offset_change_m;
-    }
-    if (ok) {
-      ground = estimate;
-      prior_ = estimate;  // Munaro: next frame starts from this one
-      result.stats.ground_refined = true;
-    } else {
-      // Too little floor in view (or an implausible fit): the camera is rigidly mounted, so
-      // the mounting plane is the best guess, and a stale estimate must not stick.
-      ground = mounting_;
-      prior_ = mounting_;
-    }
+    ok = ok && AngleBetweenDeg(estimate, fit.plane) <= o.ground.max_tilt_change_deg &&
+         std::abs(estimate.offset - fit.plane.offset) <= o.ground.max_offset_change_m;
+    const GroundPlane this_frame = ok ? estimate : fit.plane;
+    ground = tracker_.Update(&this_frame, frame.utime);
+    result.stats.ground_refined = true;
+  } else if (o.ground.refine) {
+    // No floor in view (or none plausible): the track, else the mounting file.
+    ground = tracker_.Update(nullptr, frame.utime);
   }
+  result.stats.ground_reset = o.ground.refine && tracker_.last_update_reset();
+  result.stats.mounting_mismatch = tracker_.mismatch();
+  result.camera = MountingFromGround(ground);
   result.ground = ground;
   const FloorFrame floor_frame(ground);
 
@@ -463,12 +620,93 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   }
   result.stats.num_clusters = static_cast<int>(clusters.size());
 
+  // 5b. An arm held up above the head is no head: on the lateral height profile (highest
+  // point per 6 cm bin across the viewing ray) it is a spike at most two bins wide 0.1 m
+  // below its top, beside a lower, wider maximum (the head) within 0.5 m. The arm's bins
+  // above the head's shoulder level are removed, so the head is the top again and the
+  // other shoulder shows its prominence.
+  for (auto& cluster : clusters) {
+    for (int pass = 0; pass < 2; ++pass) {  // both arms
+      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+      for (int i : cluster) centre += ws.floor[i].head<2>();
+      centre /= static_cast<double>(cluster.size());
+      const Eigen::Vector2d ray =
+          centre.norm() > 1e-6 ? centre.normalized() : Eigen::Vector2d(0, 1);
+      const Eigen::Vector2d across(-ray.y(), ray.x());
+      double smin = std::numeric_limits<double>::infinity(), smax = -smin;
+      for (int i : cluster) {
+        const double s = across.dot(ws.floor[i].head<2>());
+        smin = std::min(smin, s);
+        smax = std::max(smax, s);
+      }
+      const int nbins = static_cast<int>((smax - smin) / vs) + 1;
+      if (nbins < 4) break;
+      std::vector<double> profile(nbins, -1.0);
+      auto bin_of = [&](int i) {
+        return std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs), 0,
+                          nbins - 1);
+      };
+      for (int i : cluster) profile[bin_of(i)] = std::max(profile[bin_of(i)], ws.floor[i].z());
+      const int peak =
+          static_cast<int>(std::max_element(profile.begin(), profile.end()) - profile.begin());
+      const double top = profile[peak];
+      if (top < o.candidate_min_height_m) break;
+      // Width of a maximum at `drop` below its height: contiguous bins at or above that.
+      // (stopping at the bins [skip_lo, skip_hi]).
+      int skip_lo = nbins, skip_hi = -1;
+      auto extent = [&](int b, double level, int* lo, int* hi) {
+        *lo = *hi = b;
+        while (*lo > 0 && profile[*lo - 1] >= level && !(*lo - 1 >= skip_lo && *lo - 1 <= skip_hi))
+          --*lo;
+        while (*hi + 1 < nbins && profile[*hi + 1] >= level &&
+               !(*hi + 1 >= skip_lo && *hi + 1 <= skip_hi))
+          ++*hi;
+      };
+      int lo, hi;
+      extent(peak, top - 0.1, &lo, &hi);
+      skip_lo = lo;
+      skip_hi = hi;
+      if (hi - lo + 1 > 2) break;
+      // The head: the highest bin outside the spike within 0.5 m, lower by 0.1 m or more
+      // and at least three bins wide 0.1 m below its own top.
+      const int reach = static_cast<int>(0.5 / vs);
+      int head = -1;
+      for (int b = std::max(0, lo - reach); b <= std::min(nbins - 1, hi + reach); ++b) {
+        if (b >= lo && b <= hi) continue;
+        if (profile[b] < 0 || profile[b] > top - 0.1) continue;
+        if (head < 0 || profile[b] > profile[head]) head = b;
+      }
+      if (head < 0 || profile[head] < top - 0.7) break;
+      int hlo, hhi;
+      extent(head, profile[head] - 0.1, &hlo, &hhi);
+      if (hhi - hlo + 1 < 3) break;
+      const double cut = profile[head] - o.shape.shoulder_drop_m;
+      cluster.erase(std::remove_if(cluster.begin(), cluster.end(),
+                                   [&](int i) {
+                                     const int b = bin_of(i);
+                                     return b >= lo && b <= hi && ws.floor[i].z() > cut;
+                                   }),
+                    cluster.end());
+    }
+  }
+
   // 6. Head-based sub-clustering on a height map along the axis perpendicular to the ray.
   std::vector<std::vector<int>> subclusters;
   std::vector<size_t> parent_of;  // cluster each sub-cluster came from
   std::vector<int> heads_in_cluster(clusters.size(), 0);
   const double head_d2 = o.min_head_distance_m * o.min_head_distance_m;
   for (const auto& cluster : clusters) {
+    // Low clusters are no upright person: the lying-body test instead.
+    double cluster_top = -std::numeric_limits<double>::infinity();
+    for (int i : cluster) cluster_top = std::max(cluster_top, ws.floor[i].z());
+    if (cluster_top < o.candidate_min_height_m) {
+      if (o.lying.enabled && cluster_top <= o.lying.max_top_m + 0.1) {
+        PersonCandidate c = DescribeLying(cluster, ws.floor, ws.centroid, floor_frame, frame, o);
+        ++result.stats.num_candidates;
+        (c.accepted ? result.people : result.rejected).push_back(c);
+      }
+      continue;
+    }
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int i : cluster) centre += ws.floor[i].head<2>();
     centre /= static_cast<double>(cluster.size());
@@ -483,7 +721,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     const int nbins = static_cast<int>((smax - smin) / vs) + 1;
     std::vector<int> top(nbins, -1);
     for (int i : cluster) {
-      const int b = std::min(nbins - 1, static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs));
+      const int b =
+          std::min(nbins - 1, static_cast<int>((across.dot(ws.floor[i].head<2>()) - smin) / vs));
       if (top[b] < 0 || ws.floor[i].z() > ws.floor[top[b]].z()) top[b] = i;
     }
     auto height = [&](int b) {
@@ -499,9 +738,10 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       if (height(e + 1) < height(b)) maxima.emplace_back(top[(b + e) / 2], (b + e) / 2);
       b = e;
     }
-    std::sort(maxima.begin(), maxima.end(), [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
-      return ws.floor[a.first].z() > ws.floor[b.first].z();
-    });
+    std::sort(maxima.begin(), maxima.end(),
+              [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+                return ws.floor[a.first].z() > ws.floor[b.first].z();
+              });
     // A maximum is a new head when it is at least min_head_distance from every higher head
     // and the height map dips by min_head_dip between them (a neck and shoulders, or a gap);
     // range noise on a flat top (a box, a cupboard) makes maxima without such a dip.
@@ -512,7 +752,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       for (size_t k = 0; k < heads.size() && separate; ++k) {
         separate = (ws.floor[m].head<2>() - ws.floor[heads[k]].head<2>()).squaredNorm() >= head_d2;
         double low = std::numeric_limits<double>::infinity();
-        for (int b = std::min(bm, head_bins[k]) + 1; b < std::max(bm, head_bins[k]); ++b) low = std::min(low, height(b));
+        for (int b = std::min(bm, head_bins[k]) + 1; b < std::max(bm, head_bins[k]); ++b)
+          low = std::min(low, height(b));
         separate = separate && ws.floor[m].z() - low >= o.min_head_dip_m;
       }
       if (separate) {
@@ -558,10 +799,16 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     centroid_floor /= static_cast<double>(part.size());
     c.height_m = ws.floor[top_voxel].z();
     if (c.height_m < o.candidate_min_height_m || c.height_m > o.candidate_max_height_m) continue;
+    // The only head of its cluster: the whole cluster is this person, and its lowest point
+    // is the person's (a sitting person's shins are more than the head radius forward).
+    if (heads_in_cluster[parent_of[sub]] == 1) {
+      for (int i : parent) bottom = std::min(bottom, ws.floor[i].z());
+    }
     c.bottom_m = bottom;
     c.position_camera = floor_frame.ToCamera(centroid_floor);
     const Eigen::Vector2d ground_xy = centroid_floor.head<2>();
-    const Eigen::Vector2d ray = ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
+    const Eigen::Vector2d ray =
+        ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
     const Eigen::Vector2d across(-ray.y(), ray.x());
     const Eigen::Vector3d foot_floor(ground_xy.x(), ground_xy.y(), 0.0);
     const Eigen::Vector3d foot = floor_frame.ToCamera(foot_floor);
@@ -617,7 +864,9 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       const int nbins = static_cast<int>((smax - smin) / vs) + 1;
       std::vector<double> profile(nbins, -1.0);
       for (int i : part) {
-        const int b = std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0, nbins - 1);
+        const int b = std::clamp(
+            static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0,
+            nbins - 1);
         profile[b] = std::max(profile[b], ws.floor[i].z());
       }
       int head_bins = 0, shoulder_bins = 0;
@@ -648,7 +897,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     c.visible_fraction = H > 0 ? std::max(0.0, visible_hi - visible_lo) / H : 0.0;
     // Fill: occupied 6 cm slices between the lowest visible height above the floor removal
     // band and the top.
-    const int s0 = std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
+    const int s0 =
+        std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
     int occupied = 0, slices = 0;
     for (int s = s0; s < nslices; ++s) {
       occupied += slice[s];
@@ -670,8 +920,10 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
                                       so.max_height_m, so.max_height_m + so.height_margin_m);
     const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m,
                                      so.max_width_m, 1.3 * so.max_width_m);
-    const double m_depth = 1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
-    const double area_ratio = shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
+    const double m_depth =
+        1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
+    const double area_ratio =
+        shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
     // Head prominence: how far the top stands above everything at least head_radius away
     // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
     // the top edge of a box, wall or cupboard: ~0).
@@ -709,26 +961,44 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     c.head_prominence_m = around < 0 ? 0.0 : H - around;
     // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
     // surface has the same footprint at every height).
-    const double m_head = Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
-                          (1.0 - Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
-                          (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
-                          (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
+    const double m_head =
+        Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+        (1.0 -
+         Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
+        (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
+        (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
     const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
     const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
     const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
-    const double m_visible = c.truncated_top ? 0.0
-                             : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
+    const double m_visible =
+        c.truncated_top
+            ? 0.0
+            : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
     const double shape = m_width * m_depth * m_head;
     c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
-    const double loose_score = m_height * shape;  // with colour: occlusion and truncation allowed
+    // With colour, occlusion and truncation are allowed, but a person stands on something: the
+    // feet reach the floor, or what is below the cluster is hidden by something nearer (and
+    // then the head and shoulders must be clear: a monitor on a desk has none).
+    double m_support = m_bottom;
+    if (m_support < 1.0) {
+      int low_voxel = part.front();
+      for (int i : part) {
+        if (ws.floor[i].z() < ws.floor[low_voxel].z()) low_voxel = i;
+      }
+      if (HiddenBelow(frame, ws.centroid[low_voxel])) m_support = std::max(m_support, m_head);
+    }
+    c.supported = m_support >= 0.5;
+    const double loose_score = m_height * shape * m_support;
 
     // Colour: HOG on the patch, unless the patch itself is too dark or flat.
     bool patch_ok = color_ok && std::isfinite(c.box_u_center) && std::isfinite(v_top) &&
                     std::isfinite(v_foot) && v_foot > v_top;
     if (patch_ok) {
       const double person_px = v_foot - v_top;
-      const int x0p = std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
-      const int x1p = std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
+      const int x0p =
+          std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
+      const int x1p =
+          std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
       const int y0p = std::clamp(static_cast<int>(v_top), 0, frame.height - 1);
       const int y1p = std::clamp(static_cast<int>(v_foot), 0, frame.height - 1);
       if (x1p - x0p < 4 || y1p - y0p < 8) {
@@ -772,14 +1042,16 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
         c.accepted = false;
       } else {
         const double hog_needed =
-            p_needed <= 0.0 ? -std::numeric_limits<double>::infinity()
-                            : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
+            p_needed <= 0.0
+                ? -std::numeric_limits<double>::infinity()
+                : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
         c.hog_used = true;
         c.hog_score = hog_->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center,
                                   v_top, v_foot, 0);
         if (c.hog_score < hog_needed && co.search_steps > 0) {
-          c.hog_score = std::max(c.hog_score, hog_->Score(frame.rgb.data(), frame.width, frame.height,
-                                                          c.box_u_center, v_top, v_foot, co.search_steps));
+          c.hog_score =
+              std::max(c.hog_score, hog_->Score(frame.rgb.data(), frame.width, frame.height,
+                                                c.box_u_center, v_top, v_foot, co.search_steps));
         }
         const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
         c.confidence = w * p_hog + (1.0 - w) * loose_score;
@@ -791,15 +1063,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       c.accepted = c.depth_score >= so.accept;
     }
 
-    // 8. Covariance of the centroid: Kinect depth noise along the ray (sigma = c z^2),
-    // pixel noise across it, plus the body centre's spread about the visible surface.
-    const double z = std::max(0.1, c.position_camera.z());
-    const Eigen::Vector3d u = c.position_camera.normalized();
-    const double sr = o.noise.depth_coeff * z * z;
-    const double st = z * o.noise.pixel_sigma / std::max(1.0, K.fx);
-    const double sb2 = o.noise.body_sigma_m * o.noise.body_sigma_m;
-    const Eigen::Matrix3d along = u * u.transpose();
-    c.covariance = (sr * sr + sb2) * along + (st * st + sb2) * (Eigen::Matrix3d::Identity() - along);
+    // 8. Covariance of the centroid.
+    c.covariance = CentroidCovariance(c.position_camera, o.noise, K.fx);
 
     ++result.stats.num_candidates;
     (c.accepted ? result.people : result.rejected).push_back(c);

@@ -1,34 +1,38 @@
 #pragma once
 // Ground-based RGB-D people detection (Munaro et al. 2012, as used by Sales 2014), plus a
-// depth-only shape classifier for darkness and glare.
+// depth-only shape classifier for darkness and glare and a lying-body test.
 //
 // Pipeline for one frame (an organized cloud in the camera optical frame, optional colour):
-//   1. voxel grid (0.06 m) in a frame aligned with the prior ground plane (seeded from the
-//      camera mounting, then the previous frame's estimate);
-//   2. ground plane refined by least squares on the voxels near the prior plane (gated
-//      against the mounting plane so a wall can never become the floor);
+//   1. the floor found in the data (ground_estimator.h: RANSAC + weighted least squares, the
+//      mounting file and the tracked floor as extra hypotheses);
+//   2. voxel grid (0.06 m) in that floor's frame, without flying pixels; the floor polished on
+//      voxels with free space above them and tracked over frames (a mounting file that
+//      disagrees is reported);
 //   3. voxels within 0.06 m of the ground removed;
 //   4. Euclidean clustering (centroids closer than 2 x voxel are connected);
 //   5. clusters whose ground-plane centroids are closer than 0.4 m merged (vertically aligned
-//      pieces of one occluded person);
+//      pieces of one occluded person); clusters lower than 1 m go to the lying-body test (low,
+//      long, narrow, on the floor, a body's relief along it); arms held up above the head
+//      removed;
 //   6. head-based sub-clustering: a height map along the axis perpendicular to the viewing
 //      ray; its local maxima at least 0.3 m apart are heads, each head takes the points
 //      within 0.3 m of it (ground-plane distance);
 //   7. each sub-cluster is scored by a depth-only shape model (height, head-shoulder profile,
 //      width, vertical fill, feet on the ground) and, when the colour image is usable, by HOG +
-//      linear SVM on the colour patch of its theoretical box (head to ground);
+//      linear SVM on the colour patch of its theoretical box (head to ground), as long as it
+//      stands on something (feet on the floor, or its bottom hidden by something nearer);
 //   8. accepted candidates get a 3D position in the camera frame with a covariance from the
 //      Kinect depth-noise model (sigma_z = c z^2).
 // No OpenCV, PCL or LCM in this header: HOG lives behind HogClassifier (hog_classifier.h).
 
 #include <Eigen/Core>
-
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "common/options.h"
+#include "vision_people/ground_estimator.h"
 
 namespace sarmap {
 namespace vision_people {
@@ -47,7 +51,7 @@ struct RgbdFrame {
   int width = 0;
   int height = 0;
   PinholeIntrinsics intrinsics;
-  std::vector<float> xyz;   // 3 * width * height
+  std::vector<float> xyz;    // 3 * width * height
   std::vector<uint8_t> rgb;  // 3 * width * height, or empty when there is no colour
   bool has_color() const { return !rgb.empty(); }
 };
@@ -56,79 +60,51 @@ struct RgbdFrame {
 void CloudFromDepth(const uint16_t* depth, int width, int height, double unit_m,
                     const PinholeIntrinsics& intrinsics, RgbdFrame* frame);
 
-// A plane n.p + d = 0 in the camera frame with |n| = 1 and n pointing up, so that
-// n.p + d is the height of p above the ground.
-struct GroundPlane {
-  Eigen::Vector3d normal = Eigen::Vector3d(0, -1, 0);
-  double offset = 0.55;
-  double Height(const Eigen::Vector3d& p) const { return normal.dot(p) + offset; }
-  // From PCL's (a, b, c, d) convention (a x + b y + c z + d = 0, either orientation).
-  static GroundPlane FromCoefficients(const Eigen::Vector4d& abcd);
-};
-// The floor (z = 0 of the base frame) seen from a camera mounted at base_from_camera.
-GroundPlane GroundFromMounting(const Eigen::Matrix3d& base_R_camera,
-                               const Eigen::Vector3d& base_t_camera);
-
-struct GroundOptions {
-  bool refine = true;               // least-squares refinement per frame
-  double band_m = 0.15;             // voxels within this of the prior plane are floor candidates
-  int min_voxels = 40;              // fewer floor candidates: keep the prior
-  double max_tilt_change_deg = 10;  // refined vs mounting plane
-  double max_offset_change_m = 0.25;
-  double removal_m = 0.06;          // voxels lower than this above the floor are removed
-  template <class V>
-  void Visit(V& v) {
-    v("refine", refine, "refine the mounting plane per frame by least squares");
-    v("band_m", band_m, "voxels within this distance of the prior plane are floor candidates");
-    v("min_voxels", min_voxels, "minimum floor candidates for a refinement");
-    v("max_tilt_change_deg", max_tilt_change_deg, "largest accepted tilt from the mounting plane");
-    v("max_offset_change_m", max_offset_change_m, "largest accepted height change from the mounting plane");
-    v("removal_m", removal_m, "points closer than this to the floor are removed (Munaro: voxel size)");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("band_m", band_m);
-    check.Positive("removal_m", removal_m);
-    check.Positive("max_tilt_change_deg", max_tilt_change_deg);
-    check.Positive("max_offset_change_m", max_offset_change_m);
-  }
-};
-
 struct DepthShapeOptions {
-  double min_height_m = 1.0;       // standing person: top of the head above the floor
+  double min_height_m = 1.0;  // standing person: top of the head above the floor
   double max_height_m = 2.1;
-  double height_margin_m = 0.15;   // soft edge of the height membership
-  double max_bottom_m = 0.35;      // lowest point above the floor when the feet are in view
+  double height_margin_m = 0.15;      // soft edge of the height membership
+  double max_bottom_m = 0.35;         // lowest point above the floor when the feet are in view
   double min_visible_fraction = 0.8;  // of the head-to-floor span inside the image
-  double min_width_m = 0.25;       // torso width (at 50..80 % of the height)
+  double min_width_m = 0.25;          // torso width (at 50..80 % of the height)
   double max_width_m = 0.9;
   double max_depth_extent_m = 0.8;
-  double head_drop_m = 0.2;        // head = bins within this of the top
-  double shoulder_drop_m = 0.5;    // head + shoulders = bins within this of the top
+  double head_drop_m = 0.2;            // head = bins within this of the top
+  double shoulder_drop_m = 0.5;        // head + shoulders = bins within this of the top
   double max_head_to_shoulder = 0.85;  // head footprint / head-and-shoulders footprint
   double max_head_width_m = 0.35;
-  double head_radius_m = 0.18;        // beyond this from the top point (on the floor) ...
-  double head_depth_m = 0.12;         // (plus this along the viewing ray) ...
+  double head_radius_m = 0.18;          // beyond this from the top point (on the floor) ...
+  double head_depth_m = 0.12;           // (plus this along the viewing ray) ...
   double min_head_prominence_m = 0.15;  // ... everything is at least this much lower
   double max_head_prominence_m = 0.5;   // ... but not this much: shoulders are near
-  double min_fill = 0.6;           // occupied fraction of the height column
-  double accept = 0.5;             // depth-only decision threshold on the shape score
+  double min_fill = 0.6;                // occupied fraction of the height column
+  double accept = 0.5;                  // depth-only decision threshold on the shape score
   template <class V>
   void Visit(V& v) {
     v("min_height_m", min_height_m, "lowest standing person");
     v("max_height_m", max_height_m, "tallest standing person");
     v("height_margin_m", height_margin_m, "soft margin on the height limits");
-    v("max_bottom_m", max_bottom_m, "lowest cluster point above the floor when the feet are in view");
-    v("min_visible_fraction", min_visible_fraction, "depth-only: fraction of the head-to-floor span that must be in the image");
+    v("max_bottom_m", max_bottom_m,
+      "lowest cluster point above the floor when the feet are in view");
+    v("min_visible_fraction", min_visible_fraction,
+      "depth-only: fraction of the head-to-floor span that must be in the image");
     v("min_width_m", min_width_m, "narrowest torso");
     v("max_width_m", max_width_m, "widest torso");
     v("max_depth_extent_m", max_depth_extent_m, "largest extent along the viewing ray");
     v("head_drop_m", head_drop_m, "height map bins within this of the top form the head");
-    v("shoulder_drop_m", shoulder_drop_m, "height map bins within this of the top form head and shoulders");
-    v("max_head_to_shoulder", max_head_to_shoulder, "largest head / head-and-shoulders floor footprint ratio (1.0: zero)");
-    v("head_radius_m", head_radius_m, "points farther than this from the top (on the floor, across the viewing ray) are not head");
-    v("head_depth_m", head_depth_m, "along the viewing ray the head reaches head_radius_m + this (its side, range noise)");
-    v("min_head_prominence_m", min_head_prominence_m, "the top must stand this far above all non-head points (-0.06 m: zero)");
-    v("max_head_prominence_m", max_head_prominence_m, "... and at most this far: a person's shoulders are there (+0.1 m: zero; a pole or a sliver of furniture has none)");
+    v("shoulder_drop_m", shoulder_drop_m,
+      "height map bins within this of the top form head and shoulders");
+    v("max_head_to_shoulder", max_head_to_shoulder,
+      "largest head / head-and-shoulders floor footprint ratio (1.0: zero)");
+    v("head_radius_m", head_radius_m,
+      "points farther than this from the top (on the floor, across the viewing ray) are not head");
+    v("head_depth_m", head_depth_m,
+      "along the viewing ray the head reaches head_radius_m + this (its side, range noise)");
+    v("min_head_prominence_m", min_head_prominence_m,
+      "the top must stand this far above all non-head points (-0.06 m: zero)");
+    v("max_head_prominence_m", max_head_prominence_m,
+      "... and at most this far: a person's shoulders are there (+0.1 m: zero; a pole or a sliver "
+      "of furniture has none)");
     v("max_head_width_m", max_head_width_m, "widest head across the viewing ray (+0.15 m: zero)");
     v("min_fill", min_fill, "smallest occupied fraction of the 6 cm height slices");
     v("accept", accept, "depth-only: accept when the shape score reaches this");
@@ -142,30 +118,74 @@ struct DepthShapeOptions {
   }
 };
 
+// People lying on the floor (victims): a cluster whose top is low, touching the floor, long
+// and narrow like a body, with a body's relief along its length (head, chest and legs differ
+// in height; a slab, a box or a bag of debris has a flat top). Depth only: HOG's upright
+// window does not fit a lying person.
+struct LyingOptions {
+  bool enabled = true;
+  double min_top_m = 0.15;  // top of the body above the floor
+  double max_top_m = 0.55;
+  double max_bottom_m = 0.15;  // the body lies on the floor
+  double min_length_m = 1.1;   // visible extent along the body (a child, a bent knee)
+  double max_length_m = 2.1;
+  double min_width_m = 0.2;
+  double max_width_m = 0.65;
+  double min_relief_m = 0.06;  // spread of the highest point along the body (inner 80 %)
+  double min_fill = 0.85;      // occupied 0.1 m bins along the body
+  double accept = 0.5;
+  template <class V>
+  void Visit(V& v) {
+    v("enabled", enabled, "look for people lying on the floor");
+    v("min_top_m", min_top_m, "lowest top of a lying body above the floor");
+    v("max_top_m", max_top_m, "highest top of a lying body above the floor");
+    v("max_bottom_m", max_bottom_m, "a lying body's lowest point is at most this above the floor");
+    v("min_length_m", min_length_m, "shortest lying body (visible extent along it)");
+    v("max_length_m", max_length_m, "longest lying body");
+    v("min_width_m", min_width_m, "narrowest lying body (visible extent across it)");
+    v("max_width_m", max_width_m, "widest lying body");
+    v("min_relief_m", min_relief_m,
+      "a body's top varies at least this much along it (a box's does not)");
+    v("min_fill", min_fill, "occupied fraction of the 0.1 m bins along the body");
+    v("accept", accept, "accept when the lying shape score reaches this");
+  }
+  void Validate(common::Validator& check) const {
+    check.That(max_top_m > min_top_m, "max_top_m", "must exceed min_top_m");
+    check.That(max_length_m > min_length_m, "max_length_m", "must exceed min_length_m");
+    check.That(max_width_m > min_width_m, "max_width_m", "must exceed min_width_m");
+    check.InRange("min_fill", min_fill, 0, 1);
+    check.InRange("accept", accept, 0, 1);
+  }
+};
+
 struct ColorOptions {
   std::string hog = "opencv";  // opencv (Dalal-Triggs INRIA SVM) | pcl (PCL's trained SVM) | none
   std::string pcl_svm_file =
       "../shared/data/vision/pcl_people/trainedLinearSVMForPeopleDetectionWithHOG.yaml";
-  double hog_threshold = 0.0;   // SVM score at which the colour cue is 50/50
-  double hog_scale = 1.0;       // SVM score units per logistic unit
-  int search_steps = 1;         // +-steps of 1/8 window in x and y and one scale step each way
-  double dark_mean = 25;        // grey mean below this: too dark for colour (0..255)
-  double min_contrast = 10;     // grey standard deviation below this: no contrast
-  double max_saturated = 0.5;   // fraction of pixels >= 250: glare
-  double color_weight = 0.6;    // weight of the HOG probability in the combined confidence
+  double hog_threshold = 0.0;     // SVM score at which the colour cue is 50/50
+  double hog_scale = 1.0;         // SVM score units per logistic unit
+  int search_steps = 1;           // +-steps of 1/8 window in x and y and one scale step each way
+  double dark_mean = 25;          // grey mean below this: too dark for colour (0..255)
+  double min_contrast = 10;       // grey standard deviation below this: no contrast
+  double max_saturated = 0.5;     // fraction of pixels >= 250: glare
+  double color_weight = 0.6;      // weight of the HOG probability in the combined confidence
   double min_depth_score = 0.15;  // with colour, candidates must still look somewhat like a person
-  double accept = 0.5;          // combined confidence to accept
+  double accept = 0.5;            // combined confidence to accept
   template <class V>
   void Visit(V& v) {
     v("hog", hog, "colour classifier: opencv, pcl or none");
-    v("pcl_svm_file", pcl_svm_file, "PCL's trained HOG SVM (for hog: pcl), relative to the working directory");
+    v("pcl_svm_file", pcl_svm_file,
+      "PCL's trained HOG SVM (for hog: pcl), relative to the working directory");
     v("hog_threshold", hog_threshold, "SVM score where the colour cue gives probability 0.5");
     v("hog_scale", hog_scale, "SVM score units per logistic unit");
-    v("search_steps", search_steps, "HOG windows tried around the theoretical box: +-steps of 1/8 window in x, y and scale");
+    v("search_steps", search_steps,
+      "HOG windows tried around the theoretical box: +-steps of 1/8 window in x, y and scale");
     v("dark_mean", dark_mean, "image (or patch) grey mean below which colour is unusable");
     v("min_contrast", min_contrast, "image (or patch) grey std below which colour is unusable");
-    v("max_saturated", max_saturated, "fraction of saturated pixels above which colour is unusable (glare)");
-    v("color_weight", color_weight, "weight of HOG in the combined confidence (depth gets the rest)");
+    v("max_saturated", max_saturated,
+      "fraction of saturated pixels above which colour is unusable (glare)");
+    v("color_weight", color_weight,
+      "weight of HOG in the combined confidence (depth gets the rest)");
     v("min_depth_score", min_depth_score, "with colour: lowest depth shape score still considered");
     v("accept", accept, "with colour: accept when the combined confidence reaches this");
   }
@@ -179,14 +199,16 @@ struct ColorOptions {
 };
 
 struct NoiseOptions {
-  double depth_coeff = 0.0015;  // sigma_z = depth_coeff * z^2 (Kinect v1, Khoshelham & Elberink 2012)
-  double pixel_sigma = 1.0;     // lateral pixel noise
-  double body_sigma_m = 0.08;   // spread of the cluster centroid about the body centre
+  double depth_coeff =
+      0.0015;                // sigma_z = depth_coeff * z^2 (Kinect v1, Khoshelham & Elberink 2012)
+  double pixel_sigma = 1.0;  // lateral pixel noise
+  double body_sigma_m = 0.08;  // spread of the cluster centroid about the body centre
   template <class V>
   void Visit(V& v) {
     v("depth_coeff", depth_coeff, "depth noise: sigma_z = depth_coeff * z^2 (1/m)");
     v("pixel_sigma", pixel_sigma, "lateral noise in pixels");
-    v("body_sigma_m", body_sigma_m, "uncertainty of the body centre about the visible surface centroid");
+    v("body_sigma_m", body_sigma_m,
+      "uncertainty of the body centre about the visible surface centroid");
   }
   void Validate(common::Validator& check) const {
     check.NonNegative("depth_coeff", depth_coeff);
@@ -197,22 +219,23 @@ struct NoiseOptions {
 
 struct DetectorOptions {
   double voxel_size_m = 0.06;
-  int pixel_stride = 1;           // use every n-th pixel in x and y before the voxel grid
+  int pixel_stride = 1;  // use every n-th pixel in x and y before the voxel grid
   double min_range_m = 0.4;
-  double max_range_m = 8.0;       // Kinect depth noise beyond this is > 10 cm
+  double max_range_m = 8.0;  // Kinect depth noise beyond this is > 10 cm
   double max_lateral_m = 6.0;
-  double top_cut_m = 2.6;         // voxels higher than this above the prior floor are ignored
+  double top_cut_m = 2.6;             // voxels higher than this above the prior floor are ignored
   double cluster_tolerance_m = 0.12;  // 2 x voxel
   int min_cluster_voxels = 30;
   int max_cluster_voxels = 5000;
   double merge_distance_m = 0.4;  // ground-plane centroid distance for merging clusters
   double min_head_distance_m = 0.3;
-  double min_head_dip_m = 0.1;    // the height map must dip this much between two heads
+  double min_head_dip_m = 0.1;  // the height map must dip this much between two heads
   int min_subcluster_voxels = 30;
   double candidate_min_height_m = 1.0;  // candidates outside these never reach a classifier
   double candidate_max_height_m = 2.3;
   GroundOptions ground;
   DepthShapeOptions shape;
+  LyingOptions lying;
   ColorOptions color;
   NoiseOptions noise;
   template <class V>
@@ -226,14 +249,17 @@ struct DetectorOptions {
     v("cluster_tolerance_m", cluster_tolerance_m, "Euclidean clustering distance (2 x voxel)");
     v("min_cluster_voxels", min_cluster_voxels, "smallest cluster");
     v("max_cluster_voxels", max_cluster_voxels, "largest cluster");
-    v("merge_distance_m", merge_distance_m, "merge clusters whose ground-plane centroids are closer");
-    v("min_head_distance_m", min_head_distance_m, "height-map maxima closer than this are one head");
+    v("merge_distance_m", merge_distance_m,
+      "merge clusters whose ground-plane centroids are closer");
+    v("min_head_distance_m", min_head_distance_m,
+      "height-map maxima closer than this are one head");
     v("min_head_dip_m", min_head_dip_m, "the height map must dip this much between two heads");
     v("min_subcluster_voxels", min_subcluster_voxels, "smallest sub-cluster");
     v("candidate_min_height_m", candidate_min_height_m, "lowest candidate top above the floor");
     v("candidate_max_height_m", candidate_max_height_m, "highest candidate top above the floor");
     v("ground", ground, "ground plane");
     v("shape", shape, "depth-only shape classifier");
+    v("lying", lying, "people lying on the floor (depth shape)");
     v("color", color, "colour (HOG) classifier and its fusion with depth");
     v("noise", noise, "depth noise model for the position covariance");
   }
@@ -260,35 +286,42 @@ const char* ColorStateName(ColorState state);
 struct PersonCandidate {
   Eigen::Vector3d position_camera = Eigen::Vector3d::Zero();  // centroid of the sub-cluster
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d head_camera = Eigen::Vector3d::Zero();       // top of the head
+  Eigen::Vector3d head_camera = Eigen::Vector3d::Zero();  // top of the head
   double height_m = 0;
   double bottom_m = 0;
   double width_m = 0;
   double depth_extent_m = 0;
-  double head_width_m = 0;      // across the viewing ray
-  double shoulder_width_m = 0;  // head and shoulders, across the viewing ray
-  double head_prominence_m = 0; // top above everything outside the head radius
-  double head_area_m2 = 0;      // floor footprint of the head
-  double shoulder_area_m2 = 0;  // floor footprint of head and shoulders
+  double head_width_m = 0;       // across the viewing ray
+  double shoulder_width_m = 0;   // head and shoulders, across the viewing ray
+  double head_prominence_m = 0;  // top above everything outside the head radius
+  double head_area_m2 = 0;       // floor footprint of the head
+  double shoulder_area_m2 = 0;   // floor footprint of head and shoulders
   double fill = 0;
   double visible_fraction = 0;
   bool truncated_top = false;  // the top may be cut by the field of view
   int num_voxels = 0;
   // Image box of the theoretical person (head to floor), pixels.
   double box_u_center = 0, box_v_top = 0, box_v_bottom = 0;
-  double depth_score = 0;   // 0..1
+  double depth_score = 0;  // 0..1
   bool hog_used = false;
-  double hog_score = 0;     // SVM margin (when hog_used)
-  double confidence = 0;    // 0..1
+  double hog_score = 0;   // SVM margin (when hog_used)
+  double confidence = 0;  // 0..1
   bool accepted = false;
   bool depth_only = false;  // decided by the depth shape alone
+  bool lying = false;       // a lying body (height_m: its top; length_m: along it)
+  double length_m = 0;
+  double relief_m = 0;    // lying: spread of the top along the body
+  bool supported = true;  // touches the floor, or its bottom is hidden by something nearer
 };
 
 struct DetectionStats {
-  int num_points = 0;       // finite points used
+  int num_points = 0;  // finite points used
   int num_voxels = 0;
-  int num_ground_voxels = 0;
-  bool ground_refined = false;
+  int num_ground_voxels = 0;       // voxels of the least-squares polish
+  int num_ground_points = 0;       // RANSAC inliers among the sampled points
+  bool ground_refined = false;     // the floor was found in this frame's data
+  bool ground_reset = false;       // the floor track restarted (a jump or a gap in time)
+  bool mounting_mismatch = false;  // the tracked floor disagrees with the configured mounting
   int num_clusters = 0;
   int num_candidates = 0;
   ColorState color_state = ColorState::kNone;
@@ -296,9 +329,10 @@ struct DetectionStats {
 };
 
 struct DetectionResult {
-  std::vector<PersonCandidate> people;      // accepted
-  std::vector<PersonCandidate> rejected;    // candidates that failed classification
-  GroundPlane ground;                       // used for this frame
+  std::vector<PersonCandidate> people;    // accepted
+  std::vector<PersonCandidate> rejected;  // candidates that failed classification
+  GroundPlane ground;                     // used for this frame
+  CameraMounting camera;                  // the camera over that floor
   DetectionStats stats;
 };
 
@@ -314,15 +348,16 @@ class PeopleDetector {
   // empty result and `*error` set; they never throw.
   DetectionResult Detect(const RgbdFrame& frame, std::string* error = nullptr);
 
-  // Forget the previous frame's ground plane (next frame starts from the mounting).
+  // Forget the tracked floor (unrelated frames follow; a jump or a time gap does this too).
   void ResetGround();
+  const GroundTracker& ground_tracker() const { return tracker_; }
   const DetectorOptions& options() const { return options_; }
 
  private:
   struct Workspace;
   DetectorOptions options_;
   GroundPlane mounting_;
-  GroundPlane prior_;
+  GroundTracker tracker_;
   std::shared_ptr<const HogClassifier> hog_;
   std::unique_ptr<Workspace> ws_;
 };

@@ -1,7 +1,6 @@
 #include "vision_people/synthetic_scene.h"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -28,7 +27,9 @@ struct Sphere {
 
 double Hit(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
   const double c = std::cos(b.yaw), s = std::sin(b.yaw);
-  auto local = [&](const Eigen::Vector3d& v) { return Eigen::Vector3d(c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()); };
+  auto local = [&](const Eigen::Vector3d& v) {
+    return Eigen::Vector3d(c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z());
+  };
   const Eigen::Vector3d lo = local(o - b.centre), ld = local(d);
   double t0 = -kInf, t1 = kInf;
   for (int i = 0; i < 3; ++i) {
@@ -60,7 +61,8 @@ double Hit(const Cylinder& cy, const Eigen::Vector3d& o, const Eigen::Vector3d& 
   if (std::abs(d.z()) > 1e-12) {
     const double tc = (cy.z1 - o.z()) / d.z();
     const Eigen::Vector3d p = o + tc * d;
-    if (tc > 0 && (p.x() - cy.x) * (p.x() - cy.x) + (p.y() - cy.y) * (p.y() - cy.y) <= cy.r * cy.r) return tc;
+    if (tc > 0 && (p.x() - cy.x) * (p.x() - cy.x) + (p.y() - cy.y) * (p.y() - cy.y) <= cy.r * cy.r)
+      return tc;
   }
   return kInf;
 }
@@ -87,12 +89,49 @@ void AddPerson(const SyntheticPerson& p, World* w) {
   auto at = [&](double fwd, double left) {
     return Eigen::Vector2d(p.x_m + c * fwd - s * left, p.y_m + s * fwd + c * left);
   };
+  auto box = [&](double fwd, double left, double z0, double z1, double half_fwd, double half_left) {
+    const Eigen::Vector2d q = at(fwd, left);
+    w->boxes.push_back({Eigen::Vector3d(q.x(), q.y(), 0.5 * (z0 + z1)),
+                        Eigen::Vector3d(half_fwd, half_left, 0.5 * (z1 - z0)), p.yaw_rad});
+  };
+  if (p.posture == SyntheticPerson::kLying) {
+    // On the back, head along +forward: head, chest (the highest part), legs.
+    const double head_c = 0.5 * H - 0.11, torso_len = 0.34 * H,
+                 leg_len = 0.5 * H - 0.22 - torso_len + 0.5 * H;
+    const Eigen::Vector2d head = at(head_c, 0);
+    w->spheres.push_back({Eigen::Vector3d(head.x(), head.y(), 0.1), 0.1});
+    box(0.5 * H - 0.22 - 0.5 * torso_len, 0, 0.0, 0.23, 0.5 * torso_len, 0.18);
+    for (double side : {-1.0, 1.0}) {
+      box(-0.5 * H + 0.5 * leg_len, side * 0.09, 0.0, 0.14, 0.5 * leg_len, 0.065);
+      box(0.5 * H - 0.22 - 0.5 * torso_len, side * 0.22, 0.0, 0.1, 0.4 * torso_len, 0.04);  // arms
+    }
+    return;
+  }
+  if (p.posture == SyntheticPerson::kSitting) {
+    // On a 0.45 m seat (not modelled), facing forward: shins, thighs, torso, head.
+    const double seat = 0.45, torso_top = seat + 0.33 * H;
+    for (double side : {-1.0, 1.0}) {
+      const Eigen::Vector2d shin = at(0.42, side * 0.09);
+      w->cylinders.push_back({shin.x(), shin.y(), 0.06, 0.0, seat});
+      box(0.22, side * 0.09, seat, seat + 0.14, 0.22, 0.07);
+      const Eigen::Vector2d arm = at(0.05, side * 0.225);
+      w->cylinders.push_back({arm.x(), arm.y(), 0.045, seat + 0.05, torso_top - 0.03});
+    }
+    box(0, 0, seat, torso_top, 0.11, 0.18);
+    w->cylinders.push_back({p.x_m, p.y_m, 0.05, torso_top, torso_top + 0.07});
+    w->spheres.push_back({Eigen::Vector3d(p.x_m, p.y_m, torso_top + 0.18), 0.11});
+    return;
+  }
   const double leg_top = 0.47 * H, torso_top = 0.82 * H;
   for (double side : {-1.0, 1.0}) {
     const Eigen::Vector2d leg = at(0, side * 0.09);
     w->cylinders.push_back({leg.x(), leg.y(), 0.065, 0.0, leg_top});
     const Eigen::Vector2d arm = at(0, side * 0.225);
-    w->cylinders.push_back({arm.x(), arm.y(), 0.045, 0.45 * H, torso_top - 0.03});
+    if (side > 0 && p.arm_raised_m > 0) {
+      w->cylinders.push_back({arm.x(), arm.y(), 0.045, torso_top - 0.03, H + p.arm_raised_m});
+    } else {
+      w->cylinders.push_back({arm.x(), arm.y(), 0.045, 0.45 * H, torso_top - 0.03});
+    }
   }
   w->boxes.push_back({Eigen::Vector3d(p.x_m, p.y_m, 0.5 * (leg_top + torso_top)),
                       Eigen::Vector3d(0.11, 0.18, 0.5 * (torso_top - leg_top)), p.yaw_rad});
@@ -107,7 +146,8 @@ void AddObject(const SyntheticObject& ob, World* w) {
   };
   switch (ob.kind) {
     case SyntheticObject::kChair: {
-      w->boxes.push_back({Eigen::Vector3d(ob.x_m, ob.y_m, 0.45), Eigen::Vector3d(0.22, 0.22, 0.025), ob.yaw_rad});
+      w->boxes.push_back(
+          {Eigen::Vector3d(ob.x_m, ob.y_m, 0.45), Eigen::Vector3d(0.22, 0.22, 0.025), ob.yaw_rad});
       for (double f : {-0.19, 0.19}) {
         for (double l : {-0.19, 0.19}) {
           const Eigen::Vector2d leg = at(f, l);
@@ -115,11 +155,13 @@ void AddObject(const SyntheticObject& ob, World* w) {
         }
       }
       const Eigen::Vector2d back = at(0.2, 0);
-      w->boxes.push_back({Eigen::Vector3d(back.x(), back.y(), 0.72), Eigen::Vector3d(0.02, 0.22, 0.22), ob.yaw_rad});
+      w->boxes.push_back({Eigen::Vector3d(back.x(), back.y(), 0.72),
+                          Eigen::Vector3d(0.02, 0.22, 0.22), ob.yaw_rad});
       break;
     }
     case SyntheticObject::kTable: {
-      w->boxes.push_back({Eigen::Vector3d(ob.x_m, ob.y_m, 0.73), Eigen::Vector3d(0.4, 0.6, 0.02), ob.yaw_rad});
+      w->boxes.push_back(
+          {Eigen::Vector3d(ob.x_m, ob.y_m, 0.73), Eigen::Vector3d(0.4, 0.6, 0.02), ob.yaw_rad});
       for (double f : {-0.36, 0.36}) {
         for (double l : {-0.56, 0.56}) {
           const Eigen::Vector2d leg = at(f, l);
@@ -130,7 +172,8 @@ void AddObject(const SyntheticObject& ob, World* w) {
     }
     case SyntheticObject::kCabinet: {
       const double h = ob.height_m > 0 ? ob.height_m : 1.9;
-      w->boxes.push_back({Eigen::Vector3d(ob.x_m, ob.y_m, h / 2), Eigen::Vector3d(0.25, 0.4, h / 2), ob.yaw_rad});
+      w->boxes.push_back(
+          {Eigen::Vector3d(ob.x_m, ob.y_m, h / 2), Eigen::Vector3d(0.25, 0.4, h / 2), ob.yaw_rad});
       break;
     }
     case SyntheticObject::kPole: {  // a coat stand: pole, base and a knob on top
@@ -140,9 +183,16 @@ void AddObject(const SyntheticObject& ob, World* w) {
       w->spheres.push_back({Eigen::Vector3d(ob.x_m, ob.y_m, h - 0.08), 0.08});
       break;
     }
+    case SyntheticObject::kSlab: {  // a lying-body-sized crate or bag of debris
+      const double h = ob.height_m > 0 ? ob.height_m : 0.25;
+      w->boxes.push_back({Eigen::Vector3d(ob.x_m, ob.y_m, h / 2),
+                          Eigen::Vector3d(0.85, 0.225, h / 2), ob.yaw_rad});
+      break;
+    }
     case SyntheticObject::kBox: {
       const double h = ob.height_m > 0 ? ob.height_m : 1.2;
-      w->boxes.push_back({Eigen::Vector3d(ob.x_m, ob.y_m, h / 2), Eigen::Vector3d(0.3, 0.3, h / 2), ob.yaw_rad});
+      w->boxes.push_back(
+          {Eigen::Vector3d(ob.x_m, ob.y_m, h / 2), Eigen::Vector3d(0.3, 0.3, h / 2), ob.yaw_rad});
       break;
     }
   }
@@ -159,10 +209,28 @@ Eigen::Matrix3d SyntheticScene::world_R_camera() const {
   return R;
 }
 
-GroundPlane SyntheticScene::ground() const { return GroundFromMounting(world_R_camera(), world_t_camera()); }
+GroundPlane SyntheticScene::ground() const {
+  return GroundFromMounting(world_R_camera(), world_t_camera());
+}
+
+namespace {
+// Top of a person above the floor in its posture.
+double PersonTop(const SyntheticPerson& p) {
+  switch (p.posture) {
+    case SyntheticPerson::kLying:
+      return 0.23;
+    case SyntheticPerson::kSitting:
+      return 0.45 + 0.33 * p.height_m + 0.29;
+    case SyntheticPerson::kStanding:
+      break;
+  }
+  return p.height_m;
+}
+}  // namespace
 
 Eigen::Vector3d SyntheticScene::PersonInCamera(const SyntheticPerson& p) const {
-  return world_R_camera().transpose() * (Eigen::Vector3d(p.x_m, p.y_m, 0.5 * p.height_m) - world_t_camera());
+  return world_R_camera().transpose() *
+         (Eigen::Vector3d(p.x_m, p.y_m, 0.5 * PersonTop(p)) - world_t_camera());
 }
 
 namespace {
@@ -178,7 +246,8 @@ std::vector<double> Cast(const SyntheticScene& sc, const World& world, bool back
       const Eigen::Vector3d d = R * ray_cam;  // t along d is the camera z
       double t = kInf;
       if (background && d.z() < -1e-9) t = std::min(t, -o.z() / d.z());
-      if (background && sc.back_wall_m > 0 && d.x() > 1e-9) t = std::min(t, (sc.back_wall_m - o.x()) / d.x());
+      if (background && sc.back_wall_m > 0 && d.x() > 1e-9)
+        t = std::min(t, (sc.back_wall_m - o.x()) / d.x());
       for (const auto& b : world.boxes) t = std::min(t, Hit(b, o, d));
       for (const auto& c : world.cylinders) t = std::min(t, Hit(c, o, d));
       for (const auto& s : world.spheres) t = std::min(t, Hit(s, o, d));
@@ -208,10 +277,16 @@ std::vector<uint16_t> SyntheticScene::RenderDepth(uint32_t seed) const {
 
 double SyntheticScene::VisibleFraction(size_t index) const {
   const SyntheticPerson& p = people.at(index);
-  // Head and feet must be in the image (15 px from its edges).
+  // Head and feet must be in the image (15 px from its edges); lying: both ends of the body.
   const Eigen::Matrix3d Rt = world_R_camera().transpose();
-  for (double h : {0.0, p.height_m}) {
-    const Eigen::Vector3d c = Rt * (Eigen::Vector3d(p.x_m, p.y_m, h) - world_t_camera());
+  std::vector<Eigen::Vector3d> ends = {{p.x_m, p.y_m, 0.0}, {p.x_m, p.y_m, PersonTop(p)}};
+  if (p.posture == SyntheticPerson::kLying) {
+    const Eigen::Vector3d half(0.5 * p.height_m * std::cos(p.yaw_rad),
+                               0.5 * p.height_m * std::sin(p.yaw_rad), 0.0);
+    ends = {Eigen::Vector3d(p.x_m, p.y_m, 0.1) + half, Eigen::Vector3d(p.x_m, p.y_m, 0.1) - half};
+  }
+  for (const Eigen::Vector3d& end : ends) {
+    const Eigen::Vector3d c = Rt * (end - world_t_camera());
     if (c.z() < min_range_m || c.z() > max_range_m) return 0.0;
     const double u = intrinsics.fx * c.x() / c.z() + intrinsics.cx;
     const double v = intrinsics.fy * c.y() / c.z() + intrinsics.cy;

@@ -4,7 +4,6 @@
 // depth noise sigma_z = c z^2 and millimetre quantisation. Plain C++/Eigen.
 
 #include <Eigen/Core>
-
 #include <cstdint>
 #include <vector>
 
@@ -15,12 +14,22 @@ namespace vision_people {
 
 // World frame: x forward, y left, z up, floor at z = 0, camera at (0, 0, camera_height_m).
 struct SyntheticPerson {
-  double x_m = 3, y_m = 0;     // feet centre on the floor
-  double height_m = 1.75;
-  double yaw_rad = 0;          // facing direction (0: facing away from the camera, along +x)
+  double x_m = 3, y_m = 0;  // feet centre on the floor (lying: body centre)
+  double height_m = 1.75;   // standing height
+  double yaw_rad = 0;       // facing direction (0: facing away from the camera, along +x);
+                            // lying: the head points along yaw
+  enum Posture { kStanding, kSitting, kLying } posture = kStanding;  // sitting: on a 0.45 m seat
+  double arm_raised_m = 0;  // standing: the left arm held up, its hand this far above the head
 };
 struct SyntheticObject {
-  enum Kind { kChair, kTable, kCabinet, kPole, kBox } kind = kChair;
+  enum Kind {
+    kChair,
+    kTable,
+    kCabinet,
+    kPole,
+    kBox,
+    kSlab
+  } kind = kChair;  // slab: 1.7 x 0.45 m, 0.25 m high
   double x_m = 2, y_m = 0, yaw_rad = 0;
   double height_m = 0;  // kBox / kCabinet / kPole: overall height (0: default)
 };
@@ -29,8 +38,8 @@ struct SyntheticScene {
   int width = 640, height = 480;
   PinholeIntrinsics intrinsics;
   double camera_height_m = 0.55;
-  double camera_pitch_rad = 0.0;   // positive: looking up
-  double back_wall_m = 0;          // > 0: a wall across the view at this forward distance
+  double camera_pitch_rad = 0.0;  // positive: looking up
+  double back_wall_m = 0;         // > 0: a wall across the view at this forward distance
   double depth_noise_coeff = 0.0015;
   double min_range_m = 0.5, max_range_m = 8.0;
   std::vector<SyntheticPerson> people;

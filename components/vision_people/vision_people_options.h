@@ -2,6 +2,7 @@
 // The options of sarmap-vision-people (config/vision_people.yaml): channels, where the camera
 // is mounted, the detector and the multi-frame confirmation.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -21,9 +22,13 @@ struct VisionPeopleOptions {
   std::string robot_config = "config/robot.yaml";  // base_from_camera seeds the floor
   // Floor as a x + b y + c z + d = 0 in the camera frame; empty: from robot_config's mounting.
   std::vector<double> ground_coefficients;
-  double max_pair_dt_s = 0.02;   // depth and colour closer than this in utime form a pair
-  double color_wait_s = 0.1;     // a depth frame waits this long (message time) for its colour
-  bool require_color = false;    // false: depth frames without colour are processed depth-only
+  // The mounting as a user measures it (> 0 height: instead of robot_config's base_from_camera).
+  double camera_height_m = 0;       // optical centre above the floor
+  double camera_tilt_down_deg = 0;  // optical axis below the horizon (negative: looking up)
+  double camera_roll_deg = 0;       // about the optical axis
+  double max_pair_dt_s = 0.02;      // depth and colour closer than this in utime form a pair
+  double color_wait_s = 0.1;        // a depth frame waits this long (message time) for its colour
+  bool require_color = false;       // false: depth frames without colour are processed depth-only
   DetectorOptions detector;
   ConfirmationOptions confirmation;
   template <class V>
@@ -33,27 +38,45 @@ struct VisionPeopleOptions {
     v("output_channel", output_channel, "people_detections_t channel");
     v("sensor_id", sensor_id, "sensor_id written into the detections");
     v("robot_config", robot_config, "robot description whose base_from_camera seeds the floor");
-    v("ground_coefficients", ground_coefficients, "fixed floor a b c d in the camera frame ([] = from robot_config)");
+    v("ground_coefficients", ground_coefficients,
+      "fixed floor a b c d in the camera frame ([] = from robot_config)");
+    v("camera_height_m", camera_height_m,
+      "camera height above the floor (> 0: used instead of robot_config's mounting)");
+    v("camera_tilt_down_deg", camera_tilt_down_deg,
+      "with camera_height_m: optical axis below the horizon, degrees (negative: up)");
+    v("camera_roll_deg", camera_roll_deg,
+      "with camera_height_m: roll about the optical axis, degrees");
     v("max_pair_dt_s", max_pair_dt_s, "depth and colour closer in time than this are a pair");
     v("color_wait_s", color_wait_s, "how long (message time) a depth frame waits for its colour");
-    v("require_color", require_color, "drop depth frames without colour instead of going depth-only");
+    v("require_color", require_color,
+      "drop depth frames without colour instead of going depth-only");
     v("detector", detector, "people detector");
     v("confirmation", confirmation, "k-of-n multi-frame confirmation");
   }
   void Validate(common::Validator& check) const {
-    check.That(ground_coefficients.empty() || ground_coefficients.size() == 4, "ground_coefficients",
-               "must be empty or a b c d");
+    check.That(ground_coefficients.empty() || ground_coefficients.size() == 4,
+               "ground_coefficients", "must be empty or a b c d");
+    check.NonNegative("camera_height_m", camera_height_m);
+    check.InRange("camera_tilt_down_deg", camera_tilt_down_deg, -89, 89);
+    check.InRange("camera_roll_deg", camera_roll_deg, -89, 89);
     check.NonNegative("max_pair_dt_s", max_pair_dt_s);
     check.NonNegative("color_wait_s", color_wait_s);
   }
 };
 
-// The floor the detector starts from: ground_coefficients when given, else the floor seen
-// from robot_config's base_from_camera. Throws common::OptionsError on a bad robot file.
+// The floor the detector starts from (a prior: the floor is found in the data): ground_coefficients
+// when given, else camera_height_m / camera_tilt_down_deg / camera_roll_deg when the height is
+// set, else the floor seen from robot_config's base_from_camera. Throws common::OptionsError
+// on a bad robot file.
 inline GroundPlane InitialGround(const VisionPeopleOptions& options) {
   if (options.ground_coefficients.size() == 4) {
     const auto& g = options.ground_coefficients;
     return GroundPlane::FromCoefficients(Eigen::Vector4d(g[0], g[1], g[2], g[3]));
+  }
+  if (options.camera_height_m > 0) {
+    constexpr double kDeg = M_PI / 180;
+    return GroundFromCameraMounting({options.camera_height_m, options.camera_tilt_down_deg * kDeg,
+                                     options.camera_roll_deg * kDeg});
   }
   const common::RobotOptions robot = common::LoadRobot(options.robot_config);
   const common::Rigid3d base_from_camera = robot.base_from_camera.ToRigid3d();

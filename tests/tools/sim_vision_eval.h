@@ -5,8 +5,8 @@
 // Frames are rendered every step_s along the world's scripted robot path. A person counts as
 // fully visible when at least 1500 of its body pixels are in the depth image, its box does
 // not touch the image border and it stands within the camera's depth range (4.6 m, floor
-// distance from the camera to the person's centre); it is found when a detection lies within 0.5 m of it on the
-// floor (map frame). A detection within 0.5 m of no person is a false positive.
+// distance from the camera to the person's centre); it is found when a detection lies within 0.5 m
+// of it on the floor (map frame). A detection within 0.5 m of no person is a false positive.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -15,12 +15,21 @@ namespace sarmap {
 namespace sim_vision {
 
 struct EvalOptions {
-  std::string world = "lab_lit";     // config/worlds/<world>.yaml
-  double seconds = 40.0;             // simulated time covered
-  double step_s = 0.5;               // between evaluated frames
-  int64_t seed = 1;                  // simulator noise
+  std::string world = "lab_lit";       // config/worlds/<world>.yaml
+  double seconds = 40.0;               // simulated time covered
+  double step_s = 0.5;                 // between evaluated frames
+  int64_t seed = 1;                    // simulator noise
   std::vector<std::string> overrides;  // key=value on config/vision_people.yaml
-  bool verbose = false;              // per person and per non-person candidate lines
+  bool verbose = false;                // per person and per non-person candidate lines
+  // The simulated camera's mounting (config/robot.yaml's otherwise); the detector is still
+  // told config/robot.yaml's (a mounting file that disagrees with the robot).
+  double camera_height_m = -1;      // < 0: robot.yaml's
+  double camera_tilt_down_deg = 0;  // with camera_height_m >= 0: looking down by this
+};
+
+// Per posture (index: sim::Posture - 1: standing, sitting, lying).
+struct PostureFigures {
+  int visible = 0, found = 0;
 };
 
 struct Figures {
@@ -28,6 +37,7 @@ struct Figures {
   int visible = 0;          // fully visible person-frames
   int found = 0;            // ... with a detection in that frame
   int false_positives = 0;  // detections near nobody, over all frames
+  PostureFigures by_posture[3];
   // The same after the node's k-of-n confirmation run on these frames (step_s apart, so a
   // track needs k * step_s of simulated time, not k camera frames).
   int confirm_k = 0, confirm_n = 0;
@@ -35,8 +45,12 @@ struct Figures {
   int confirmed_false_positives = 0;
   double detect_cpu_ms_mean = 0, detect_cpu_ms_max = 0;  // PeopleDetector::Detect, CPU time
   double recall() const { return visible ? static_cast<double>(found) / visible : 0.0; }
-  double fp_per_frame() const { return frames ? static_cast<double>(false_positives) / frames : 0.0; }
-  double confirmed_recall() const { return visible ? static_cast<double>(confirmed_found) / visible : 0.0; }
+  double fp_per_frame() const {
+    return frames ? static_cast<double>(false_positives) / frames : 0.0;
+  }
+  double confirmed_recall() const {
+    return visible ? static_cast<double>(confirmed_found) / visible : 0.0;
+  }
   double confirmed_fp_per_frame() const {
     return frames ? static_cast<double>(confirmed_false_positives) / frames : 0.0;
   }

@@ -1,13 +1,17 @@
-#include "tools/sim_vision_eval.h"
-
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
 
 #include "common/robot_config.h"
 #include "sim/renderer.h"
 #include "sim/simulator.h"
+#include "tools/sim_vision_eval.h"
 #include "vision_people/confirmation_tracker.h"
 #include "vision_people/people_detector.h"
 #include "vision_people/vision_people_options.h"
@@ -33,7 +37,8 @@ double ThreadCpuSeconds() {
 // Counts found people (fully visible ones only) and false positives among `detections`
 // (map-frame floor positions).
 void Score(const std::vector<Eigen::Vector2d>& detections, const std::vector<sim::Person>& people,
-           const std::vector<bool>& whole, int* found, int* false_positives, std::vector<bool>* hit) {
+           const std::vector<bool>& whole, int* found, int* false_positives,
+           std::vector<bool>* hit) {
   std::vector<bool> used(detections.size(), false);
   hit->assign(people.size(), false);
   for (size_t i = 0; i < people.size(); ++i) {
@@ -49,12 +54,37 @@ void Score(const std::vector<Eigen::Vector2d>& detections, const std::vector<sim
 }
 
 void PrintCandidate(const vision_people::PersonCandidate& c) {
-  printf("u %.0f v %.0f..%.0f H %.2f bot %.2f w %.2f dep %.2f headw %.2f prom %.2f ratio %.2f fill %.2f vis %.2f trunc %d "
-         "depth %.2f hog %d %.2f conf %.2f acc %d\n",
-         c.box_u_center, c.box_v_top, c.box_v_bottom, c.height_m, c.bottom_m, c.width_m, c.depth_extent_m,
-         c.head_width_m, c.head_prominence_m,
-         c.shoulder_area_m2 > 0 ? c.head_area_m2 / c.shoulder_area_m2 : 1.0, c.fill, c.visible_fraction,
-         c.truncated_top, c.depth_score, c.hog_used, c.hog_score, c.confidence, c.accepted);
+  printf(
+      "%su %.0f v %.0f..%.0f H %.2f bot %.2f len %.2f relief %.2f w %.2f dep %.2f headw %.2f prom "
+      "%.2f ratio %.2f fill %.2f vis %.2f trunc %d "
+      "depth %.2f hog %d %.2f conf %.2f acc %d\n",
+      c.lying ? "LYING " : "", c.box_u_center, c.box_v_top, c.box_v_bottom, c.height_m, c.bottom_m,
+      c.length_m, c.relief_m, c.width_m, c.depth_extent_m, c.head_width_m, c.head_prominence_m,
+      c.shoulder_area_m2 > 0 ? c.head_area_m2 / c.shoulder_area_m2 : 1.0, c.fill,
+      c.visible_fraction, c.truncated_top, c.depth_score, c.hog_used, c.hog_score, c.confidence,
+      c.accepted);
+}
+
+// A copy of the robot file with the camera at another height and tilt (base_from_camera's
+// z_m and roll_rad = -pi/2 - tilt down), in /tmp.
+std::string MountedRobotFile(const std::string& robot_file, const EvalOptions& eval) {
+  std::ifstream in(robot_file);
+  if (!in) throw std::runtime_error("cannot read " + robot_file);
+  std::ostringstream out;
+  std::string line;
+  bool in_camera = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != ' ') in_camera = line.rfind("base_from_camera:", 0) == 0;
+    if (in_camera && line.find("z_m:") != std::string::npos) {
+      line = "  z_m: " + std::to_string(eval.camera_height_m);
+    } else if (in_camera && line.find("roll_rad:") != std::string::npos) {
+      line = "  roll_rad: " + std::to_string(-M_PI / 2 - eval.camera_tilt_down_deg * M_PI / 180);
+    }
+    out << line << "\n";
+  }
+  const std::string path = "/tmp/sarmap_sim_vision_robot_" + std::to_string(getpid()) + ".yaml";
+  std::ofstream(path) << out.str();
+  return path;
 }
 
 }  // namespace
@@ -62,7 +92,14 @@ void PrintCandidate(const vision_people::PersonCandidate& c) {
 Figures Evaluate(const EvalOptions& eval) {
   sim::SimOptions options;
   options.world = std::string(SARMAP_SOURCE_DIR) + "/config/worlds/" + eval.world + ".yaml";
-  options.robot_config = std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml";
+  const std::string robot_file = std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml";
+  options.robot_config = robot_file;
+  if (eval.camera_height_m >= 0) {
+    options.robot_config = MountedRobotFile(robot_file, eval);
+    // The copy lives in /tmp: name the array file beside the original.
+    options.audio.mic_array = std::string(SARMAP_SOURCE_DIR) + "/config/arrays/" +
+                              common::LoadRobot(robot_file).mic_array + ".yaml";
+  }
   options.data_dir = SARMAP_DATA_DIR;
   options.audio.enabled = false;
   options.seed = eval.seed;
@@ -70,9 +107,11 @@ Figures Evaluate(const EvalOptions& eval) {
   // only be thrown away (and costs most of the run time).
   options.camera.rate_hz = 0.01;
   sim::Simulator simulator(sim::LoadSetup(options, ""));
+  if (options.robot_config != robot_file)
+    std::remove(options.robot_config.c_str());  // read: no longer needed
   auto vision = common::LoadOptions<vision_people::VisionPeopleOptions>(
       std::string(SARMAP_SOURCE_DIR) + "/config/vision_people.yaml", eval.overrides);
-  vision.robot_config = options.robot_config;
+  vision.robot_config = robot_file;
   vision_people::PeopleDetector detector(vision.detector, vision_people::InitialGround(vision),
                                          vision_people::MakeHogClassifier(vision.detector.color));
   vision_people::ConfirmationTracker confirmation(vision.confirmation);
@@ -95,7 +134,8 @@ Figures Evaluate(const EvalOptions& eval) {
     const sim::Simulator::View view = simulator.RenderView();
     vision_people::RgbdFrame frame;
     frame.utime = simulator.utime();
-    vision_people::CloudFromDepth(view.depth_mm.data(), view.width, view.height, 0.001, intrinsics, &frame);
+    vision_people::CloudFromDepth(view.depth_mm.data(), view.width, view.height, 0.001, intrinsics,
+                                  &frame);
     frame.rgb = view.rgb;
     const double c0 = ThreadCpuSeconds();
     const vision_people::DetectionResult result = detector.Detect(frame);
@@ -105,30 +145,42 @@ Figures Evaluate(const EvalOptions& eval) {
     ++fig.frames;
 
     const common::Rigid3d map_from_camera = simulator.map_from_camera();
-    auto on_floor = [&](const Eigen::Vector3d& p) { return (map_from_camera * p).head<2>().eval(); };
+    auto on_floor = [&](const Eigen::Vector3d& p) {
+      return (map_from_camera * p).head<2>().eval();
+    };
     std::vector<bool> whole(people.size(), false);
     for (size_t i = 0; i < people.size() && i < view.person_box.size(); ++i) {
       const auto& box = view.person_box[i];  // x0 y0 x1 y1
       // The simulator counts body pixels before its depth range cut: a person beyond the
       // Kinect's range (corridor_glass) is in view but has no depth at all.
       const double range = (people[i].position - map_from_camera.translation().head<2>()).norm();
-      whole[i] = view.person_pixels[i] >= 1500 && box[0] > 2 && box[1] > 2 && box[2] < view.width - 3 &&
-                 box[3] < view.height - 3 && range <= options.camera.max_range_m;
+      whole[i] = view.person_pixels[i] >= 1500 && box[0] > 2 && box[1] > 2 &&
+                 box[2] < view.width - 3 && box[3] < view.height - 3 &&
+                 range <= options.camera.max_range_m;
       fig.visible += whole[i];
+      fig.by_posture[static_cast<int>(people[i].posture) - 1].visible += whole[i];
     }
     std::vector<Eigen::Vector2d> detections, confirmed;
     for (const auto& p : result.people) detections.push_back(on_floor(p.position_camera));
-    for (const auto& p : confirmation.Update(result.people)) confirmed.push_back(on_floor(p.person.position_camera));
+    for (const auto& p : confirmation.Update(result.people))
+      confirmed.push_back(on_floor(p.person.position_camera));
     std::vector<bool> hit, confirmed_hit;
     Score(detections, people, whole, &fig.found, &fig.false_positives, &hit);
-    Score(confirmed, people, whole, &fig.confirmed_found, &fig.confirmed_false_positives, &confirmed_hit);
+    for (size_t i = 0; i < people.size(); ++i) {
+      fig.by_posture[static_cast<int>(people[i].posture) - 1].found += whole[i] && hit[i];
+    }
+    Score(confirmed, people, whole, &fig.confirmed_found, &fig.confirmed_false_positives,
+          &confirmed_hit);
 
     if (!eval.verbose) continue;
-    printf("t %5.1f ground n %.3f %.3f %.3f d %.3f refined %d floor voxels %d candidates %d accepted %d "
-           "confirmed %zu cpu %.1f ms\n",
-           t, result.ground.normal.x(), result.ground.normal.y(), result.ground.normal.z(), result.ground.offset,
-           result.stats.ground_refined, result.stats.num_ground_voxels, result.stats.num_candidates,
-           static_cast<int>(result.people.size()), confirmed.size(), cpu_ms);
+    printf(
+        "t %5.1f ground n %.3f %.3f %.3f d %.3f refined %d floor voxels %d candidates %d accepted "
+        "%d "
+        "confirmed %zu cpu %.1f ms\n",
+        t, result.ground.normal.x(), result.ground.normal.y(), result.ground.normal.z(),
+        result.ground.offset, result.stats.ground_refined, result.stats.num_ground_voxels,
+        result.stats.num_candidates, static_cast<int>(result.people.size()), confirmed.size(),
+        cpu_ms);
     for (size_t i = 0; i < people.size(); ++i) {
       if (!whole[i]) continue;
       // The nearest candidate, accepted or not: where was this person lost?
@@ -145,8 +197,9 @@ Figures Evaluate(const EvalOptions& eval) {
       }
       const auto& box = view.person_box[i];
       printf("  person %zu range %.2f px %5d box %3d %3d %3d %3d %s%s", i,
-             (people[i].position - map_from_camera.translation().head<2>()).norm(), view.person_pixels[i],
-             box[0], box[1], box[2], box[3], hit[i] ? "FOUND" : "lost ", confirmed_hit[i] ? "+conf " : "      ");
+             (people[i].position - map_from_camera.translation().head<2>()).norm(),
+             view.person_pixels[i], box[0], box[1], box[2], box[3], hit[i] ? "FOUND" : "lost ",
+             confirmed_hit[i] ? "+conf " : "      ");
       if (best) {
         printf("cand d %.2f ", best_d);
         PrintCandidate(*best);
@@ -161,7 +214,8 @@ Figures Evaluate(const EvalOptions& eval) {
         bool near_person = false;
         for (const auto& p : people) near_person = near_person || (xy - p.position).norm() <= 0.5;
         if (near_person) continue;
-        printf("  other at %.2f %.2f %s ", xy.x(), xy.y(), c.accepted ? "FALSE-POSITIVE" : "rejected");
+        printf("  other at %.2f %.2f %s ", xy.x(), xy.y(),
+               c.accepted ? "FALSE-POSITIVE" : "rejected");
         PrintCandidate(c);
       }
     }
