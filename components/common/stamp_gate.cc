@@ -1,6 +1,7 @@
 #include "common/stamp_gate.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace sarmap {
 namespace common {
@@ -59,7 +60,19 @@ StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
 bool StampGates::Accept(int stream, Utime utime, double receive_s) {
   if (stream < 0) return true;
   if (static_cast<size_t>(stream) >= gates_.size()) gates_.resize(stream + 1, StampGate(options_));
-  return StampGate::Accepted(gates_[stream].Check(utime, receive_s));
+  StampGate& gate = gates_[stream];
+  if (!gate.anchored()) {
+    bool any = false;
+    double clock_utime = 0;
+    for (const StampGate& other : gates_) {
+      if (&other == &gate || !other.anchored()) continue;
+      clock_utime = any ? std::max(clock_utime, other.ExpectedUtime(receive_s)) : other.ExpectedUtime(receive_s);
+      any = true;
+    }
+    // In double: the other clocks may sit near the int64 limits.
+    if (any && std::abs(clock_utime) < 9e18) gate.Anchor(static_cast<Utime>(clock_utime), receive_s);
+  }
+  return StampGate::Accepted(gate.Check(utime, receive_s));
 }
 
 int64_t StampGates::dropped_ahead() const {

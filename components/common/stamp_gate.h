@@ -13,7 +13,9 @@
 // receive time between them), the stream's clock is re-anchored on the last of them, which is
 // accepted. Any accepted stamp in between starts the count again, so a stray stamp mixed into a
 // live stream is never followed.
-// The first stamp of a stream sets its clock.
+// The first stamp of a stream sets its clock, unless the node already has a clock from another
+// stream (StampGates): then the new stream starts on that clock, so a far-future first message
+// on a stream nobody has published on yet (a forged one) is dropped like any other.
 
 #include <cstdint>
 #include <vector>
@@ -58,6 +60,16 @@ class StampGate {
   static bool Accepted(Verdict v) { return v == Verdict::kAccepted || v == Verdict::kReanchored; }
 
   bool anchored() const { return anchored_; }
+  // Sets the stream's clock (for a stream that has no stamp of its own yet).
+  void Anchor(Utime utime, double receive_s) {
+    anchored_ = true;
+    newest_utime_ = utime;
+    newest_receive_s_ = receive_s;
+  }
+  // Where the stream's clock stands at receive_s (anchored streams only).
+  double ExpectedUtime(double receive_s) const {
+    return static_cast<double>(newest_utime_) + 1e6 * (receive_s - newest_receive_s_);
+  }
   Utime newest_utime() const { return newest_utime_; }
   int64_t dropped_ahead() const { return dropped_ahead_; }
   int64_t dropped_behind() const { return dropped_behind_; }
@@ -78,7 +90,8 @@ class StampGate {
   int64_t reanchors_ = 0;
 };
 
-// A gate per input stream of a node, with one set of counters for NODE_STATUS.
+// A gate per input stream of a node, with one set of counters for NODE_STATUS. A stream's
+// first message is checked against the most advanced clock of the node's other streams.
 class StampGates {
  public:
   explicit StampGates(const StampGateOptions& options) : options_(options) {}

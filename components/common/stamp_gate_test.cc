@@ -143,6 +143,23 @@ TEST(StampGatesTest, StreamsKeepTheirOwnClocks) {
   EXPECT_EQ(gates.dropped_ahead(), 1);
 }
 
+TEST(StampGatesTest, AStreamsFirstStampIsCheckedAgainstTheNodesClock) {
+  StampGates gates(StampGateOptions{});
+  for (int i = 0; i < 10; ++i) EXPECT_TRUE(gates.Accept(0, 10000000 + i * 100000, 1.0 + 0.1 * i));
+  // The first message ever on stream 1 is stamped a year ahead (forged): dropped, not its clock.
+  EXPECT_FALSE(gates.Accept(1, 11000000 + kYearUs, 2.0));
+  EXPECT_TRUE(gates.Accept(1, 11000000, 2.0));
+  // A stream that is genuinely on another clock (an hour ahead) is followed after the
+  // re-anchor count.
+  StampGates other(StampGateOptions{});
+  EXPECT_TRUE(other.Accept(0, 10000000, 1.0));
+  const Utime hour_us = 3600LL * 1000000;
+  int accepted = 0;
+  for (int i = 0; i < 10; ++i) accepted += other.Accept(1, 10000000 + hour_us + i * 100000, 1.0 + 0.1 * i);
+  EXPECT_EQ(accepted, 10 - (StampGateOptions{}.reanchor_count - 1));
+  EXPECT_EQ(other.reanchors(), 1);
+}
+
 }  // namespace
 }  // namespace common
 }  // namespace sarmap

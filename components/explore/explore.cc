@@ -414,6 +414,27 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
       break;
     }
   }
+  // The corridor ahead does not see a corner beside the robot that a turning arc cuts: follow
+  // the commanded arc for sweep_horizon_s; if it brings the base nearer than footprint_radius_m
+  // to an obstacle of the map (and nearer than it is now), no forward motion: the robot turns
+  // on the spot first.
+  if (map_.has_map() && o.sweep_horizon_s > 0) {
+    const Eigen::Vector2i now_cell = map_.grid().CellOf(pose_->translation());
+    const double clearance_now = map_.Clearance(now_cell.x(), now_cell.y());
+    for (int k = 1; k <= 6; ++k) {
+      const double t = o.sweep_horizon_s * k / 6;
+      const double mean_yaw = pose_->yaw_rad() + 0.5 * desired.angular_radps * t;
+      const Eigen::Vector2d p =
+          pose_->translation() + desired.linear_mps * t * Eigen::Vector2d(std::cos(mean_yaw), std::sin(mean_yaw));
+      const Eigen::Vector2i c = map_.grid().CellOf(p);
+      const double clearance_then = map_.Clearance(c.x(), c.y());
+      if (clearance_then < o.footprint_radius_m && clearance_then < clearance_now - 1e-3) {
+        desired.linear_mps = 0;
+        desired.source = "safety";
+        return desired;
+      }
+    }
+  }
   const double scale = std::clamp((clearance - o.stop_distance_m) / (o.slow_distance_m - o.stop_distance_m), 0.0, 1.0);
   if (scale < 1.0) {
     const double limited = desired.linear_mps * scale;

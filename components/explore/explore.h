@@ -96,9 +96,14 @@ struct SafetyOptions {
   double slow_distance_m = 1.2;
   double corridor_half_width_m = 0.3;
   double blind_fraction = 0.5;     // of the corridor's beams without information: blocked
+  double footprint_radius_m = 0.28;  // the base's radius and a margin, for the swept check
+  double sweep_horizon_s = 0.6;      // how far ahead the commanded arc is checked
   template <class V>
   void Visit(V& v) {
     v("stop_distance_m", stop_distance_m, "no forward motion when an obstacle ahead is nearer (from the base centre)");
+    v("footprint_radius_m", footprint_radius_m,
+      "no forward motion when the commanded arc brings the base this close to a map obstacle (a corner cut while turning)");
+    v("sweep_horizon_s", sweep_horizon_s, "the commanded arc is checked this far ahead in time");
     v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
     v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
     v("blind_fraction", blind_fraction,
@@ -109,6 +114,8 @@ struct SafetyOptions {
     check.That(slow_distance_m > stop_distance_m, "slow_distance_m", "must exceed stop_distance_m");
     check.Positive("corridor_half_width_m", corridor_half_width_m);
     check.InRange("blind_fraction", blind_fraction, 0.0, 1.0);
+    check.Positive("footprint_radius_m", footprint_radius_m);
+    check.NonNegative("sweep_horizon_s", sweep_horizon_s);
   }
 };
 

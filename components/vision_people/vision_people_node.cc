@@ -162,9 +162,19 @@ int main(int argc, char** argv) {
       }
     });
     node.SetStatusMessage("frames 0 bad 0 people 0 colour none input_warnings 0 floor none");
+    // One frame stamped far ahead would become the assembler's "newest" and every real frame
+    // after it "not newer": each stream is gated on its own clock (common/stamp_gate.h).
+    constexpr int kDepthGate = 0, kColorGate = 1;
+    common::StampGates gates(options.stamp_gate);
+    const auto stamp_ok = [&](int gate, const image_t& m, const common::ReceiveInfo& info) {
+      if (gates.Accept(gate, m.header.utime, info.receive_time_s)) return true;
+      node.Reject(info.channel, "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
+      return false;
+    };
     node.Subscribe<image_t>(
         options.depth_channel,
-        [&](const image_t& m, const common::ReceiveInfo&) {
+        [&](const image_t& m, const common::ReceiveInfo& info) {
+          if (!stamp_ok(kDepthGate, m, info)) return;
           last_message_s = common::SteadySeconds();
           assembler.AddDepth(m, &ready);
           process(ready);
@@ -172,7 +182,8 @@ int main(int argc, char** argv) {
         4);
     node.Subscribe<image_t>(
         options.rgb_channel,
-        [&](const image_t& m, const common::ReceiveInfo&) {
+        [&](const image_t& m, const common::ReceiveInfo& info) {
+          if (!stamp_ok(kColorGate, m, info)) return;
           last_message_s = common::SteadySeconds();
           assembler.AddColor(m, &ready);
           process(ready);

@@ -8,6 +8,7 @@
 
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
 #include "vision_people/confirmation_tracker.h"
 #include "vision_people/people_detector.h"
 
@@ -31,6 +32,7 @@ struct VisionPeopleOptions {
   bool require_color = false;       // false: depth frames without colour are processed depth-only
   DetectorOptions detector;
   ConfirmationOptions confirmation;
+  common::StampGateOptions stamp_gate;  // DEPTH and RGB, each on its own clock
   template <class V>
   void Visit(V& v) {
     v("depth_channel", depth_channel, "depth image_t channel");
@@ -52,6 +54,8 @@ struct VisionPeopleOptions {
       "drop depth frames without colour instead of going depth-only");
     v("detector", detector, "people detector");
     v("confirmation", confirmation, "k-of-n multi-frame confirmation");
+    v("stamp_gate", stamp_gate,
+      "depth and colour frames stamped far from their stream's clock are dropped (common/stamp_gate.h)");
   }
   void Validate(common::Validator& check) const {
     check.That(ground_coefficients.empty() || ground_coefficients.size() == 4,
