@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <set>
@@ -129,6 +130,43 @@ TEST_F(RecordTest, RefusesToOverwriteAndNumbersFilesWithIncrement) {
     numbered.Signal(SIGINT);
     EXPECT_EQ(numbered.Wait(10), 0) << numbered.Output();
   }
+}
+
+TEST_F(RecordTest, SplitMbStartsTheNextNumberedFileAndLosesNothing) {
+  const std::string base = dir_ + "/split.lcmlog";
+  Process recorder({"sarmap-log-record", "-o", base, "--split-mb", "0.002"}, dir_ + "/split.txt");
+  ASSERT_TRUE(WaitFor([&] { return recorder.Output().find("writing") != std::string::npos; }, 10))
+      << recorder.Output();
+  lcm::LCM lcm(sarmap::common::DefaultLcmUrl());
+  ASSERT_TRUE(lcm.good());
+  constexpr int kPoses = 20;  // about 400 bytes each: 2 kB files hold 5
+  PublishPoses(&lcm, 0, kPoses);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  recorder.Signal(SIGINT);
+  ASSERT_EQ(recorder.Wait(10), 0) << recorder.Output();
+  int files = 0;
+  std::set<int64_t> seqs;
+  for (;; ++files) {
+    char suffix[16];
+    std::snprintf(suffix, sizeof(suffix), ".%02d", files);
+    if (access((base + suffix).c_str(), F_OK) != 0) break;
+    sarmap::logtools::LcmLogReader reader(base + suffix);
+    sarmap::logtools::LogEvent event;
+    int64_t bytes = 0;
+    while (reader.Next(&event)) {
+      bytes += 28 + event.channel.size() + event.data.size();
+      sarmap::pose_t pose;
+      if (event.channel == "POSE" &&
+          sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &pose)) {
+        EXPECT_EQ(seqs.count(pose.header.seq), 0u) << "pose " << pose.header.seq << " twice";
+        seqs.insert(pose.header.seq);
+      }
+    }
+    EXPECT_TRUE(reader.problems().empty()) << suffix;
+    EXPECT_LE(bytes, static_cast<int64_t>(0.002 * 1024 * 1024)) << suffix << " past --split-mb";
+  }
+  EXPECT_GE(files, 3) << recorder.Output();
+  EXPECT_GE(static_cast<int>(seqs.size()), kPoses * 3 / 4);
 }
 
 }  // namespace
