@@ -66,9 +66,16 @@ class Recorder {
       ++skipped_;
       return;
     }
-    if (split_bytes_ > 0 && file_bytes_ > 0 && file_bytes_ + rbuf->data_size > split_bytes_) {
+    // Event header: sync word, event number, timestamp, channel length, data length.
+    const int64_t bytes = 28 + static_cast<int64_t>(channel.size()) + rbuf->data_size;
+    if (split_bytes_ > 0 && file_bytes_ > 0 && file_bytes_ + bytes > split_bytes_) {
       Close();
-      Open();
+      try {  // not through liblcm's C dispatch: the main loop reports it
+        Open();
+      } catch (const std::exception& e) {
+        error_ = e.what();
+        return;
+      }
     }
     lcm::LogEvent event;
     event.eventnum = events_;
@@ -84,8 +91,6 @@ class Recorder {
       return;
     }
     ++events_;
-    // Event header: sync word, event number, timestamp, channel length, data length.
-    const int64_t bytes = 28 + static_cast<int64_t>(channel.size()) + rbuf->data_size;
     file_bytes_ += bytes;
     total_bytes_ += bytes;
   }
