@@ -198,7 +198,9 @@ int main(int argc, char** argv) {
       if (msg.sample_format != sarmap::audio_frame_t::SAMPLE_INT16 ||
           msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
         return warn("malformed audio block (format or size); dropped");
-      if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d]) {
+      // Rate-limited: at datagram loss every lost block is a gap (the aligner counts them all).
+      if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d] &&
+          warn_limit.Allow(common::SteadySeconds())) {
         SARMAP_LOG(WARN) << "device '" << msg.device_id << "': gap, expected sample " << device_expected[d]
                          << ", got " << msg.first_sample_index << " (filled with zeros)";
       }
