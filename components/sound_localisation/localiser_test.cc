@@ -129,7 +129,8 @@ TEST(LocaliserSynthetic, BandPeaksFindANarrowbandSourceBesideABroadbandOne) {
   for (int m = 0; m < g.num_mics(); ++m) {
     // Both start after 0.5 s of sensor noise (the activity detector learns the floor).
     testing_util::AddDelayed(noise, 0.5 * fs + d_noise[m] * fs, 1.0, &mics[m]);
-    testing_util::AddDelayed(tone, 0.5 * fs + d_tone[m] * fs, 1.0 / std::sqrt(0.5 + 0.125), &mics[m]);
+    testing_util::AddDelayed(tone, 0.5 * fs + d_tone[m] * fs, 1.0 / std::sqrt(0.5 + 0.125),
+                             &mics[m]);
     for (size_t i = 0; i < n; ++i) mics[m][i] += 0.01f * sensor[m * n + i];
   }
   struct Found {

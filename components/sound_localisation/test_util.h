@@ -36,7 +36,8 @@ inline std::vector<float> Speech(int index) {
 }
 
 // Adds gain * x delayed by delay_samples (windowed sinc) to y.
-inline void AddDelayed(const std::vector<float>& x, double delay_samples, double gain, std::vector<float>* y) {
+inline void AddDelayed(const std::vector<float>& x, double delay_samples, double gain,
+                       std::vector<float>* y) {
   const int half = 16;
   for (int k = -half; k <= half; ++k) {
     const int n = static_cast<int>(std::floor(delay_samples)) + k;

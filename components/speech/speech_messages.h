@@ -30,7 +30,8 @@ struct SpeechNodeOptions {
     v("speech_channel", speech_channel, "output speech_event_t");
     v("people_channel", people_channel, "output people_detections_t (CUE_HEARD)");
     v("array", array, "array description (config/arrays/<name>.yaml)");
-    v("device_id", device_id, "only this device ('' = the first heard); others are dropped and reported");
+    v("device_id", device_id,
+      "only this device ('' = the first heard); others are dropped and reported");
     v("max_bridged_gap_s", max_bridged_gap_s,
       "an audio gap up to this long is counted as bridged, a longer one as a restart");
     v("search", search, "direction kind of the DOA input: auto, 1d, azimuth, azimuth_elevation");

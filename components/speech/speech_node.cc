@@ -53,7 +53,8 @@ int main(int argc, char** argv) {
     common::Node node("sarmap-speech", args.lcm_url);
     auto speech_pub = node.Advertise<sarmap::speech_event_t>(options.speech_channel);
     auto people_pub = node.Advertise<sarmap::people_detections_t>(options.people_channel);
-    sound::AudioIntake intake(options.device_id, geometry.sample_rate_hz, options.max_bridged_gap_s);
+    sound::AudioIntake intake(options.device_id, geometry.sample_rate_hz,
+                              options.max_bridged_gap_s);
     std::string device = options.device_id;
     // Anchor between stream samples and utime (from the latest audio block).
     int64_t anchor_sample = -1, anchor_utime = 0, dropped = 0, events = 0, people = 0;
@@ -91,8 +92,9 @@ int main(int argc, char** argv) {
       }
     });
 
-    node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t& msg,
-                                                                      const common::ReceiveInfo&) {
+    node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t&
+                                                                         msg,
+                                                                     const common::ReceiveInfo&) {
       std::string report;
       const bool ours = intake.FromDevice(msg.device_id, &report);
       if (!report.empty()) {
@@ -116,11 +118,13 @@ int main(int argc, char** argv) {
         return warn("malformed audio block; dropped");
       // The beams and keyword spotting go on across gaps (each block's stamp anchors its
       // samples); a repeated or late block is dropped.
-      const sound::AudioIntake::Decision decision = intake.Sequence(msg.first_sample_index, msg.num_samples);
+      const sound::AudioIntake::Decision decision =
+          intake.Sequence(msg.first_sample_index, msg.num_samples);
       if (decision.verdict == sound::AudioIntake::Verdict::kStale)
         return warn("audio block at sample " + std::to_string(msg.first_sample_index) +
                     " repeats or precedes what was processed; dropped");
-      if (decision.verdict == sound::AudioIntake::Verdict::kRestart && warn_limit.Allow(common::SteadySeconds()))
+      if (decision.verdict == sound::AudioIntake::Verdict::kRestart &&
+          warn_limit.Allow(common::SteadySeconds()))
         SARMAP_LOG(WARN) << "audio discontinuity of " << decision.gap_samples << " samples";
       anchor_sample = processor->samples_seen();
       anchor_utime = msg.header.utime;
@@ -144,7 +148,8 @@ int main(int argc, char** argv) {
                             std::to_string(processor->leaked_hits_dropped()) + ", re-attributed " +
                             std::to_string(processor->hits_reattributed()) + ", tracks " +
                             std::to_string(processor->num_tracks()) + " (evicted " +
-                            std::to_string(processor->tracks_evicted()) + "); audio " + intake.Summary());
+                            std::to_string(processor->tracks_evicted()) + "); audio " +
+                            intake.Summary());
     });
     SARMAP_LOG(INFO) << "listening to array '" << geometry.name << "' on " << options.audio_channel << " + "
                      << options.doa_channel;
