@@ -4,7 +4,7 @@
 # drifts (+80 / -120 ppm); three sarmap-audio-capture processes, one per card, publish them on
 # AUDIO_CARD0..2 with their own sample counters; sarmap-sound-localisation (devices / mic_devices)
 # aligns the streams with the array's calibrated offsets and drifts and publishes DOA over real
-# LCM; lcm-logger records; the median direction must be within 2 deg of the truth.
+# LCM; sarmap-log record records; the median direction must be within 2 deg of the truth.
 # A second localiser on the same streams with the offsets and drifts zeroed shows that they
 # matter (reported, not asserted: an unaligned array may still point somewhere).
 set -euo pipefail
@@ -14,7 +14,7 @@ cd "$src"
 "$bin/async_array_wavgen" "$tmp" 6
 sed -e 's/^start_offsets_s:.*/start_offsets_s: [0.0, 0.0, 0.0, 0.0]/' -e 's/^clock_drift:.*/clock_drift: [0.0, 0.0, 0.0, 0.0]/' \
   "$tmp/array.yaml" > "$tmp/array_unaligned.yaml"
-lcm-logger -q "$tmp/log.lcm" & logger=$!
+"$bin/sarmap-log-record" -q -o "$tmp/log.lcm" & logger=$!
 async=(--set devices=[card0,card1,card2] --set mic_devices=[0,0,1,2]
        --set audio_channels=[AUDIO_CARD0,AUDIO_CARD1,AUDIO_CARD2])
 "$bin/sarmap-sound-localisation" --config config/sound_localisation.yaml --set array="$tmp/array.yaml" "${async[@]}" \

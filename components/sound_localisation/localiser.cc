@@ -117,6 +117,12 @@ void Localiser::ResetStream() {
   stream_offset_ = samples_seen_;
 }
 
+void Localiser::SkipSamples(int64_t samples) {
+  if (samples <= 0) return;
+  stream_offset_ += samples;
+  samples_seen_ += samples;
+}
+
 void Localiser::Push(const int16_t* data, int frames, int block_channels, std::vector<LocaliserOutput>* out) {
   for (int c : geometry_.channel_map)
     if (c >= block_channels)

@@ -169,8 +169,13 @@ class Localiser {
   void Push(const int16_t* data, int frames, int block_channels, std::vector<LocaliserOutput>* out);
   void PushFloat(const std::vector<std::vector<float>>& mic_channels, size_t begin, size_t count,
                  std::vector<LocaliserOutput>* out);
-  // Forget the signal (after a gap); the noise model and tracks stay.
+  // Forget the signal (after a discontinuity); the noise model and tracks stay.
   void ResetStream();
+  // A short gap of `samples` lost samples: the next samples are analysed as if they followed
+  // on, the stream's sample count (and so every later output's position) advanced by the gap.
+  // On one clock all channels jump together, so the frames across the join keep the right
+  // inter-channel delays.
+  void SkipSamples(int64_t samples);
 
   // One estimate from given statistics (offline use, tests).
   std::vector<DoaEstimate> Estimate(const BlockStatistics& stats) const;

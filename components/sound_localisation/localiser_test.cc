@@ -58,22 +58,6 @@ TEST(LocaliserRealData, RespeakerSingleTalkerAllMethods) {
   }
 }
 
-// Adds gain * x delayed by delay_samples (windowed sinc) to y.
-void AddDelayed(const std::vector<float>& x, double delay_samples, double gain, std::vector<float>* y) {
-  const int half = 16;
-  for (int k = -half; k <= half; ++k) {
-    const int n = static_cast<int>(std::floor(delay_samples)) + k;
-    const double t = n - delay_samples;
-    const double sinc = std::abs(t) < 1e-9 ? 1.0 : std::sin(M_PI * t) / (M_PI * t);
-    const double w = 0.5 * (1 + std::cos(M_PI * t / (half + 1)));
-    const float h = static_cast<float>(gain * sinc * w);
-    for (size_t i = 0; i < x.size(); ++i) {
-      const long j = static_cast<long>(i) + n;
-      if (j >= 0 && j < static_cast<long>(y->size())) (*y)[j] += h * x[i];
-    }
-  }
-}
-
 // Precedence effect: a source near a wall, its mirror image 25 deg away arriving 2.5 ms later
 // at 0.85 of its amplitude (the hidden caller of the simulated lab). Sound events start
 // sharply and decay. Without onset weighting the strongest direction is pulled towards the
@@ -93,8 +77,8 @@ TEST(LocaliserSynthetic, OnsetWeightingRejectsAnEarlyReflection) {
   std::vector<std::vector<float>> mics(g.num_mics(), std::vector<float>(n, 0.0f));
   const auto noise = testing_util::WhiteNoise(n * g.num_mics(), 11);
   for (int m = 0; m < g.num_mics(); ++m) {
-    AddDelayed(s, 40 + d_direct[m] * fs, 1.0, &mics[m]);
-    AddDelayed(s, 40 + 0.0025 * fs + d_image[m] * fs, 0.85, &mics[m]);
+    testing_util::AddDelayed(s, 40 + d_direct[m] * fs, 1.0, &mics[m]);
+    testing_util::AddDelayed(s, 40 + 0.0025 * fs + d_image[m] * fs, 0.85, &mics[m]);
     for (size_t i = 0; i < n; ++i) mics[m][i] += 0.01f * noise[m * n + i];
   }
   auto median_error_deg = [&](LocaliserOptions o) {
@@ -144,8 +128,9 @@ TEST(LocaliserSynthetic, BandPeaksFindANarrowbandSourceBesideABroadbandOne) {
   const auto sensor = testing_util::WhiteNoise(n * g.num_mics(), 13);
   for (int m = 0; m < g.num_mics(); ++m) {
     // Both start after 0.5 s of sensor noise (the activity detector learns the floor).
-    AddDelayed(noise, 0.5 * fs + d_noise[m] * fs, 1.0, &mics[m]);
-    AddDelayed(tone, 0.5 * fs + d_tone[m] * fs, 1.0 / std::sqrt(0.5 + 0.125), &mics[m]);
+    testing_util::AddDelayed(noise, 0.5 * fs + d_noise[m] * fs, 1.0, &mics[m]);
+    testing_util::AddDelayed(tone, 0.5 * fs + d_tone[m] * fs, 1.0 / std::sqrt(0.5 + 0.125),
+                             &mics[m]);
     for (size_t i = 0; i < n; ++i) mics[m][i] += 0.01f * sensor[m * n + i];
   }
   struct Found {
@@ -212,8 +197,8 @@ TEST(LocaliserSynthetic, TonalityGateKeepsBandPeaksForTones) {
   std::vector<std::vector<float>> mics(g.num_mics(), std::vector<float>(n, 0.0f));
   const auto sensor = testing_util::WhiteNoise(n * g.num_mics(), 23);
   for (int m = 0; m < g.num_mics(); ++m) {
-    AddDelayed(a, 0.5 * fs + da[m] * fs, 1.0, &mics[m]);
-    AddDelayed(b, 0.5 * fs + db[m] * fs, 1.0, &mics[m]);
+    testing_util::AddDelayed(a, 0.5 * fs + da[m] * fs, 1.0, &mics[m]);
+    testing_util::AddDelayed(b, 0.5 * fs + db[m] * fs, 1.0, &mics[m]);
     for (size_t i = 0; i < n; ++i) mics[m][i] += 0.01f * sensor[m * n + i];
   }
   auto band_peaks = [&](double min_tonality) {
@@ -253,8 +238,8 @@ TEST(LocaliserSynthetic, NoiseSubtractionRemovesASteadyInterferersPull) {
   const Eigen::VectorXd d_noise = g.Delays(unit(noise_az)), d_voice = g.Delays(unit(voice_az));
   std::vector<std::vector<float>> mics(g.num_mics(), std::vector<float>(n, 0.0f));
   for (int m = 0; m < g.num_mics(); ++m) {
-    AddDelayed(noise, 20 + d_noise[m] * fs, noise_gain, &mics[m]);
-    AddDelayed(voice, start + d_voice[m] * fs, 1.0, &mics[m]);
+    testing_util::AddDelayed(noise, 20 + d_noise[m] * fs, noise_gain, &mics[m]);
+    testing_util::AddDelayed(voice, start + d_voice[m] * fs, 1.0, &mics[m]);
   }
   auto voice_errors = [&](double subtraction, int* blocks_with_voice) {
     LocaliserOptions o;

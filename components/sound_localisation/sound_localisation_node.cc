@@ -10,6 +10,7 @@
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
 #include "sound_localisation/async_alignment.h"
+#include "sound_localisation/audio_intake.h"
 #include "sound_localisation/localiser.h"
 
 using namespace sarmap;
@@ -19,6 +20,8 @@ struct SoundLocalisationOptions {
   std::string doa_channel = "DOA";
   std::string array = "config/arrays/respeaker4.yaml";
   std::string device_id = "";      // accept only this device ("" = the first one heard)
+  // Longest run of lost samples (dropped datagrams) bridged without restarting the analysis.
+  double max_bridged_gap_s = 0.25;
   bool publish_untracked = true;   // also publish directions not (yet) in a confirmed track
   // Asynchronous array (several cards, each its own process on AUDIO_<DEVICE>): the device of
   // each microphone; channel_map then gives the channel within that device. The streams are
@@ -37,7 +40,10 @@ struct SoundLocalisationOptions {
     v("audio_channel", audio_channel, "input audio_frame_t channel");
     v("doa_channel", doa_channel, "output doa_t channel");
     v("array", array, "array description (config/arrays/<name>.yaml)");
-    v("device_id", device_id, "only use this device ('' = the first one heard)");
+    v("device_id", device_id,
+      "only use this device ('' = the first one heard); others are dropped and reported");
+    v("max_bridged_gap_s", max_bridged_gap_s,
+      "a gap in the audio up to this long is bridged (analysis goes on); longer ones restart it");
     v("publish_untracked", publish_untracked, "publish directions outside confirmed tracks with track_id -1");
     v("devices", devices, "asynchronous array: device ids of its cards ([] = one device)");
     v("mic_devices", mic_devices, "asynchronous array: index into devices of each microphone");
@@ -47,6 +53,7 @@ struct SoundLocalisationOptions {
     v("map_localiser", map_localiser, "DOA estimation and tracking of the map_doa_channel stream");
   }
   void Validate(common::Validator& check) const {
+    check.NonNegative("max_bridged_gap_s", max_bridged_gap_s);
     for (int d : mic_devices)
       check.That(d >= 0 && d < static_cast<int>(devices.size()), "mic_devices", "indices must point into devices");
     check.That(devices.empty() || !mic_devices.empty(), "mic_devices", "needed with devices");
@@ -114,8 +121,10 @@ int main(int argc, char** argv) {
     auto pub = node.Advertise<sarmap::doa_t>(options.doa_channel);
     std::vector<common::Node::Publisher<sarmap::doa_t>> map_pub;
     if (map_localiser) map_pub.push_back(node.Advertise<sarmap::doa_t>(options.map_doa_channel));
+    sound::AudioIntake intake(options.device_id, geometry.sample_rate_hz,
+                              options.max_bridged_gap_s);
     std::string device = options.device_id;
-    int64_t expected_index = -1, last_overrun = 0, dropped = 0, published = 0;
+    int64_t last_overrun = 0, dropped = 0, published = 0;
     common::RateLimiter warn_limit(5.0);
     const int8_t kind = static_cast<int8_t>(localiser->kind());
     std::vector<sound::LocaliserOutput> outs, map_outs;
@@ -191,7 +200,9 @@ int main(int argc, char** argv) {
       if (msg.sample_format != sarmap::audio_frame_t::SAMPLE_INT16 ||
           msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
         return warn("malformed audio block (format or size); dropped");
-      if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d]) {
+      // Rate-limited: at datagram loss every lost block is a gap (the aligner counts them all).
+      if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d] &&
+          warn_limit.Allow(common::SteadySeconds())) {
         SARMAP_LOG(WARN) << "device '" << msg.device_id << "': gap, expected sample " << device_expected[d]
                          << ", got " << msg.first_sample_index << " (filled with zeros)";
       }
@@ -233,43 +244,73 @@ int main(int argc, char** argv) {
           on_async(msg);
         });
     } else
-    node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t& msg,
-                                                                      const common::ReceiveInfo&) {
-      if (device.empty()) device = msg.device_id;
-      if (msg.device_id != device)
-        return warn("audio from device '" + msg.device_id + "' ignored: this node localises '" + device +
-                    "' (run one node per array, or set device_id)");
-      if (msg.sample_rate_hz != geometry.sample_rate_hz)
-        return warn("sample-rate mismatch: audio is " + std::to_string(msg.sample_rate_hz) + " Hz, array '" +
-                    geometry.name + "' expects " + std::to_string(geometry.sample_rate_hz) + " Hz; block dropped");
-      if (msg.num_channels < needed_channels)
-        return warn("audio has " + std::to_string(msg.num_channels) + " channels, array '" + geometry.name +
-                    "' needs " + std::to_string(needed_channels) + " (channel_map); block dropped");
-      if (msg.sample_format != sarmap::audio_frame_t::SAMPLE_INT16 ||
-          msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
-        return warn("malformed audio block (format or size); dropped");
-      if (msg.overrun_samples != last_overrun) {
-        SARMAP_LOG(WARN) << "device '" << device << "' lost " << (msg.overrun_samples - last_overrun)
-                         << " samples (overrun); restarting the analysis";
-        last_overrun = msg.overrun_samples;
-      }
-      if (expected_index >= 0 && msg.first_sample_index != expected_index) {
-        SARMAP_LOG(WARN) << "audio gap: expected sample " << expected_index << ", got " << msg.first_sample_index
-                         << "; restarting the analysis";
-        localiser->ResetStream();
-        if (map_localiser) map_localiser->ResetStream();
-      }
-      expected_index = msg.first_sample_index + msg.num_samples;
-      const int64_t before = localiser->samples_seen();
-      outs.clear();
-      localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &outs);
-      if (map_localiser) {
-        map_outs.clear();
-        map_localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &map_outs);
-      }
-      publish(msg.header.utime, before);
-      node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped));
-    });
+      node.Subscribe<sarmap::audio_frame_t>(
+          options.audio_channel, [&](const sarmap::audio_frame_t& msg, const common::ReceiveInfo&) {
+            std::string report;
+            const bool ours = intake.FromDevice(msg.device_id, &report);
+            if (!report.empty()) {
+              if (ours)
+                SARMAP_LOG(INFO) << report;
+              else
+                SARMAP_LOG(ERROR) << report;
+            }
+            if (!ours) {
+              ++dropped;
+              node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " +
+                                    std::to_string(dropped) + "; audio " + intake.Summary());
+              return;
+            }
+            device = intake.device();
+            if (msg.sample_rate_hz != geometry.sample_rate_hz)
+              return warn("sample-rate mismatch: audio is " + std::to_string(msg.sample_rate_hz) +
+                          " Hz, array '" + geometry.name + "' expects " +
+                          std::to_string(geometry.sample_rate_hz) + " Hz; block dropped");
+            if (msg.num_channels < needed_channels)
+              return warn("audio has " + std::to_string(msg.num_channels) + " channels, array '" +
+                          geometry.name + "' needs " + std::to_string(needed_channels) +
+                          " (channel_map); block dropped");
+            if (msg.sample_format != sarmap::audio_frame_t::SAMPLE_INT16 ||
+                msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
+              return warn("malformed audio block (format or size); dropped");
+            if (msg.overrun_samples != last_overrun) {
+              if (warn_limit.Allow(common::SteadySeconds()))
+                SARMAP_LOG(WARN) << "device '" << device << "' lost "
+                                 << (msg.overrun_samples - last_overrun) << " samples (overrun)";
+              last_overrun = msg.overrun_samples;
+            }
+            const sound::AudioIntake::Decision decision =
+                intake.Sequence(msg.first_sample_index, msg.num_samples);
+            switch (decision.verdict) {
+              case sound::AudioIntake::Verdict::kStale:
+                return warn("audio block at sample " + std::to_string(msg.first_sample_index) +
+                            " repeats or precedes what was analysed; dropped");
+              case sound::AudioIntake::Verdict::kBridge:
+                // A lost datagram or a few: go on, the time line advanced by the gap.
+                localiser->SkipSamples(decision.gap_samples);
+                if (map_localiser) map_localiser->SkipSamples(decision.gap_samples);
+                break;
+              case sound::AudioIntake::Verdict::kRestart:
+                if (warn_limit.Allow(common::SteadySeconds()))
+                  SARMAP_LOG(WARN)
+                      << "audio discontinuity of " << decision.gap_samples << " samples at sample "
+                      << msg.first_sample_index << "; restarting the analysis";
+                localiser->ResetStream();
+                if (map_localiser) map_localiser->ResetStream();
+                break;
+              default:
+                break;
+            }
+            const int64_t before = localiser->samples_seen();
+            outs.clear();
+            localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &outs);
+            if (map_localiser) {
+              map_outs.clear();
+              map_localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &map_outs);
+            }
+            publish(msg.header.utime, before);
+            node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " +
+                                  std::to_string(dropped) + "; audio " + intake.Summary());
+          });
     SARMAP_LOG(INFO) << "localising array '" << geometry.name << "' (" << geometry.num_mics() << " mics, "
                      << options.localiser.method << ") from " << options.audio_channel << " -> " << options.doa_channel
                      << (map_localiser ? " and " + options.map_doa_channel + " (map_localiser)" : "");

@@ -1,5 +1,6 @@
 #pragma once
 // Helpers for the synthetic tests (not part of the library).
+#include <cmath>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -32,6 +33,23 @@ inline std::vector<float> Speech(int index) {
   const float g = static_cast<float>(1.0 / std::sqrt(e / std::max<size_t>(1, x.size()) + 1e-12));
   for (float& v : x) v *= g;
   return x;
+}
+
+// Adds gain * x delayed by delay_samples (windowed sinc) to y.
+inline void AddDelayed(const std::vector<float>& x, double delay_samples, double gain,
+                       std::vector<float>* y) {
+  const int half = 16;
+  for (int k = -half; k <= half; ++k) {
+    const int n = static_cast<int>(std::floor(delay_samples)) + k;
+    const double t = n - delay_samples;
+    const double sinc = std::abs(t) < 1e-9 ? 1.0 : std::sin(M_PI * t) / (M_PI * t);
+    const double w = 0.5 * (1 + std::cos(M_PI * t / (half + 1)));
+    const float h = static_cast<float>(gain * sinc * w);
+    for (size_t i = 0; i < x.size(); ++i) {
+      const long j = static_cast<long>(i) + n;
+      if (j >= 0 && j < static_cast<long>(y->size())) (*y)[j] += h * x[i];
+    }
+  }
 }
 
 inline std::vector<float> WhiteNoise(size_t n, uint32_t seed) {

@@ -20,6 +20,7 @@ struct SpeechNodeOptions {
   std::string people_channel = "PEOPLE_AUDIO";
   std::string array = "config/arrays/respeaker4.yaml";
   std::string device_id = "";
+  double max_bridged_gap_s = 0.25;  // longest audio gap counted as bridged, not a restart
   std::string search = "auto";  // must match the localiser's (1d for linear arrays)
   SpeechOptions speech;
   template <class V>
@@ -29,11 +30,16 @@ struct SpeechNodeOptions {
     v("speech_channel", speech_channel, "output speech_event_t");
     v("people_channel", people_channel, "output people_detections_t (CUE_HEARD)");
     v("array", array, "array description (config/arrays/<name>.yaml)");
-    v("device_id", device_id, "only this device ('' = the first heard)");
+    v("device_id", device_id,
+      "only this device ('' = the first heard); others are dropped and reported");
+    v("max_bridged_gap_s", max_bridged_gap_s,
+      "an audio gap up to this long is counted as bridged, a longer one as a restart");
     v("search", search, "direction kind of the DOA input: auto, 1d, azimuth, azimuth_elevation");
     v("speech", speech, "enhancement, VAD and keyword spotting");
   }
-  void Validate(common::Validator&) const {}
+  void Validate(common::Validator& check) const {
+    check.NonNegative("max_bridged_gap_s", max_bridged_gap_s);
+  }
 };
 
 inline speech_event_t ToSpeechEvent(const SpeechResult& r, int64_t start_utime, int64_t end_utime) {

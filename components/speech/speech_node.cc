@@ -12,6 +12,7 @@
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/speech_event_t.hpp"
+#include "sound_localisation/audio_intake.h"
 #include "sound_localisation/localiser.h"
 #include "speech/speech_messages.h"
 
@@ -52,9 +53,11 @@ int main(int argc, char** argv) {
     common::Node node("sarmap-speech", args.lcm_url);
     auto speech_pub = node.Advertise<sarmap::speech_event_t>(options.speech_channel);
     auto people_pub = node.Advertise<sarmap::people_detections_t>(options.people_channel);
+    sound::AudioIntake intake(options.device_id, geometry.sample_rate_hz,
+                              options.max_bridged_gap_s);
     std::string device = options.device_id;
     // Anchor between stream samples and utime (from the latest audio block).
-    int64_t anchor_sample = -1, anchor_utime = 0, expected_index = -1, dropped = 0, events = 0, people = 0;
+    int64_t anchor_sample = -1, anchor_utime = 0, dropped = 0, events = 0, people = 0;
     common::RateLimiter warn_limit(5.0);
     auto warn = [&](const std::string& what) {
       ++dropped;
@@ -89,10 +92,23 @@ int main(int argc, char** argv) {
       }
     });
 
-    node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t& msg,
-                                                                      const common::ReceiveInfo&) {
-      if (device.empty()) device = msg.device_id;
-      if (msg.device_id != device) return warn("audio from '" + msg.device_id + "' ignored (this node: '" + device + "')");
+    node.Subscribe<sarmap::audio_frame_t>(options.audio_channel, [&](const sarmap::audio_frame_t&
+                                                                         msg,
+                                                                     const common::ReceiveInfo&) {
+      std::string report;
+      const bool ours = intake.FromDevice(msg.device_id, &report);
+      if (!report.empty()) {
+        if (ours)
+          SARMAP_LOG(INFO) << report;
+        else
+          SARMAP_LOG(ERROR) << report;
+      }
+      if (!ours) {
+        ++dropped;
+        node.SetStatusMessage("dropped " + std::to_string(dropped) + "; audio " + intake.Summary());
+        return;
+      }
+      device = intake.device();
       if (msg.sample_rate_hz != geometry.sample_rate_hz)
         return warn("sample-rate mismatch: audio " + std::to_string(msg.sample_rate_hz) + " Hz, array " +
                     std::to_string(geometry.sample_rate_hz) + " Hz; dropped");
@@ -100,10 +116,16 @@ int main(int argc, char** argv) {
         return warn("audio has " + std::to_string(msg.num_channels) + " channels, array needs " + std::to_string(needed));
       if (msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
         return warn("malformed audio block; dropped");
-      if (expected_index >= 0 && msg.first_sample_index != expected_index) {
-        SARMAP_LOG(WARN) << "audio gap of " << (msg.first_sample_index - expected_index) << " samples";
-      }
-      expected_index = msg.first_sample_index + msg.num_samples;
+      // The beams and keyword spotting go on across gaps (each block's stamp anchors its
+      // samples); a repeated or late block is dropped.
+      const sound::AudioIntake::Decision decision =
+          intake.Sequence(msg.first_sample_index, msg.num_samples);
+      if (decision.verdict == sound::AudioIntake::Verdict::kStale)
+        return warn("audio block at sample " + std::to_string(msg.first_sample_index) +
+                    " repeats or precedes what was processed; dropped");
+      if (decision.verdict == sound::AudioIntake::Verdict::kRestart &&
+          warn_limit.Allow(common::SteadySeconds()))
+        SARMAP_LOG(WARN) << "audio discontinuity of " << decision.gap_samples << " samples";
       anchor_sample = processor->samples_seen();
       anchor_utime = msg.header.utime;
       results.clear();
@@ -126,7 +148,8 @@ int main(int argc, char** argv) {
                             std::to_string(processor->leaked_hits_dropped()) + ", re-attributed " +
                             std::to_string(processor->hits_reattributed()) + ", tracks " +
                             std::to_string(processor->num_tracks()) + " (evicted " +
-                            std::to_string(processor->tracks_evicted()) + ")");
+                            std::to_string(processor->tracks_evicted()) + "); audio " +
+                            intake.Summary());
     });
     SARMAP_LOG(INFO) << "listening to array '" << geometry.name << "' on " << options.audio_channel << " + "
                      << options.doa_channel;
