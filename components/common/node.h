@@ -162,6 +162,12 @@ class Node::TypedSubscription : public Node::SubscriptionBase {
       : node_(node), callback_(std::move(callback)), stats_(stats) {}
 
   void Handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) override {
+    // liblcm 1.3.1 hands on a 4-8 byte "LC02" datagram as a message of 2^32 - 5 bytes made of
+    // whatever its buffer held: no real message is larger than LCM's own maximum (256 MB).
+    if (rbuf->data_size > (1u << 28)) {
+      node_->Dropped(channel, stats_, "impossible size " + std::to_string(rbuf->data_size) + " (a short LC02 datagram)");
+      return;
+    }
     T msg;
     std::string why;
     if (!DecodeMessage(rbuf->data, rbuf->data_size, &msg, &why)) {
