@@ -76,9 +76,9 @@ void ExploreMap::SetMap(const Grid& map) {
 bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
   // A contact is a surface across the robot's front. Two contacts whose points are between
   // the robot's width and glass_join_m apart, each made heading into the line through them
-  // (within 60 deg of its normal), with nothing but free cells between them (the camera sees
-  // through), are one invisible surface, a glass pane: the segment between them is an
-  // obstacle too, extended along the line over the seen-through cells until it meets an
+  // (within 60 deg of its normal) from the same side, with no MAP obstacle between them (the
+  // camera sees through), are one invisible surface, a glass pane: the segment between them is
+  // an obstacle too, extended along the line over the seen-through cells until it meets an
   // obstacle the map has (a pier, a wall) or glass_extend_m.
   const double ahead = options_.robot_radius_m + grid_.resolution_m;
   const Eigen::Vector2d point = map_from_base * Eigen::Vector2d(ahead, 0.0);
