@@ -91,8 +91,9 @@ fuzz: configure
 	cmake --build $(BUILD_DIR) --target net_fuzz_test
 	@echo "== the network fuzzer against the running stack: $(NET_FUZZ_RATE) datagrams/s for $(NET_FUZZ_SECONDS) s"
 	SARMAP_BIN_DIR=$(abspath $(BUILD_DIR))/bin SARMAP_SOURCE_DIR=$(CURDIR) \
-	  NET_FUZZ_SECONDS=$(NET_FUZZ_SECONDS) NET_FUZZ_RATE=$(NET_FUZZ_RATE) \
-	  tests/harness/sarmap-netns $(BUILD_DIR)/bin/net_fuzz_test
+	  tests/harness/sarmap-netns $(BUILD_DIR)/bin/net_fuzz_test \
+	  --gtest_filter=NetFuzzTest.EveryNodeSurvivesAHostilePublisherOnEveryChannel \
+	  --flood-seconds $(NET_FUZZ_SECONDS) --flood-rate $(NET_FUZZ_RATE)
 
 format:
 	find components log-tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i

@@ -5,9 +5,9 @@
 // NODE_STATUS, and must have counted hostile datagrams as dropped (so the flood reached it).
 // Prints each node's RSS and CPU before and during the flood.
 //
-// Run by CTest inside tests/harness/sarmap-netns. NET_FUZZ_SECONDS (default 10),
-// NET_FUZZ_RATE (datagrams/s, default 2000) and NET_FUZZ_KINDS (sarmap-net-fuzz --kinds,
-// default all) set the flood; make fuzz runs it longer.
+// Run by CTest inside tests/harness/sarmap-netns. After the gtest flags, --flood-seconds S
+// (default 10), --flood-rate N (datagrams/s, default 2000) and --flood-kinds RE
+// (sarmap-net-fuzz --kinds, default all) set the flood; make fuzz runs it longer.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -84,6 +84,14 @@ struct Watched {
   ProcSample before_flood, flood_start, flood_end;
   int64_t dropped_before_flood = 0;
 };
+
+// The flood, from the command line (main below).
+struct Flood {
+  std::string seconds = "10";
+  std::string rate = "2000";
+  std::string kinds = ".*";
+};
+Flood g_flood;
 
 class NetFuzzTest : public ::testing::Test {
  protected:
@@ -164,12 +172,9 @@ std::string Tail(const std::string& text, size_t lines) {
 }
 
 TEST_F(NetFuzzTest, EveryNodeSurvivesAHostilePublisherOnEveryChannel) {
-  const char* seconds_env = getenv("NET_FUZZ_SECONDS");
-  const char* rate_env = getenv("NET_FUZZ_RATE");
-  const std::string flood_s = seconds_env && *seconds_env ? seconds_env : "10";
-  const std::string rate = rate_env && *rate_env ? rate_env : "2000";
-  const char* kinds_env = getenv("NET_FUZZ_KINDS");
-  const std::string kinds = kinds_env && *kinds_env ? kinds_env : ".*";
+  const std::string flood_s = g_flood.seconds;
+  const std::string rate = g_flood.rate;
+  const std::string kinds = g_flood.kinds;
 
   const std::string key = dir_ + "/procman.key";
   const auto add = [&](std::string name, std::vector<std::string> args) {
@@ -387,3 +392,21 @@ TEST_F(NetFuzzTest, NodesSurviveHostileLcmFragmentHeaders) {
 }  // namespace
 }  // namespace testing
 }  // namespace sarmap
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);  // removes the gtest flags
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (i + 1 < argc && flag == "--flood-seconds") {
+      sarmap::testing::g_flood.seconds = argv[++i];
+    } else if (i + 1 < argc && flag == "--flood-rate") {
+      sarmap::testing::g_flood.rate = argv[++i];
+    } else if (i + 1 < argc && flag == "--flood-kinds") {
+      sarmap::testing::g_flood.kinds = argv[++i];
+    } else {
+      std::fprintf(stderr, "usage: net_fuzz_test [gtest flags] [--flood-seconds S] [--flood-rate N] [--flood-kinds RE]\n");
+      return 2;
+    }
+  }
+  return RUN_ALL_TESTS();
+}
