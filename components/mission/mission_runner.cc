@@ -180,6 +180,15 @@ class Loop : public sim::SimSink {
   slam::Rigid2d slam_pose_;
 };
 
+// An 8-bit greyscale image as a binary PGM, rows top first.
+void WritePgm(const std::string& path, int width, int height, const std::vector<uint8_t>& image) {
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write " + path);
+  std::fprintf(f, "P5\n%d %d\n255\n", width, height);
+  std::fwrite(image.data(), 1, image.size(), f);
+  std::fclose(f);
+}
+
 // The explorer's grid as a PGM: unknown grey (128), free white, occupied black, free but too
 // near an obstacle light grey (200), seen too little to call (uncertain) 170, the last path 60.
 void WriteExplorerMap(const explore::ExploreController& controller, const std::string& path) {
@@ -202,11 +211,7 @@ void WriteExplorerMap(const explore::ExploreController& controller, const std::s
     const Eigen::Vector2i c = g.CellOf(p);
     if (g.Contains(c.x(), c.y())) image[static_cast<size_t>(g.height - 1 - c.y()) * g.width + c.x()] = 60;
   }
-  FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write " + path);
-  std::fprintf(f, "P5\n%d %d\n255\n", g.width, g.height);
-  std::fwrite(image.data(), 1, image.size(), f);
-  std::fclose(f);
+  WritePgm(path, g.width, g.height, image);
 }
 
 // SLAM's map as a PGM: unknown grey, occupancy 0..100 from white to black.
@@ -220,11 +225,7 @@ void WriteSlamMap(const slam::Slam& slam, const std::string& path) {
           v < 0 ? 128 : static_cast<uint8_t>(255 - (255 * std::min<int>(v, 100)) / 100);
     }
   }
-  FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write " + path);
-  std::fprintf(f, "P5\n%d %d\n255\n", map.width, map.height);
-  std::fwrite(image.data(), 1, image.size(), f);
-  std::fclose(f);
+  WritePgm(path, map.width, map.height, image);
 }
 
 }  // namespace
