@@ -364,7 +364,8 @@ LcmJsonResult DecodeLcmToJson(const LcmTypeSet& types, const uint8_t* data, size
 }
 
 std::string EchoLine(int64_t recv_utime, int64_t first_utime, const std::string& channel,
-                     const LcmJsonResult& result, size_t size, int indent) {
+                     const LcmJsonResult& result, size_t size, int indent,
+                     const std::string& refused) {
   Json line = Json::object();
   line["recv_utime"] = recv_utime;
   line["t_s"] = static_cast<double>(recv_utime - first_utime) / 1e6;
@@ -375,6 +376,7 @@ std::string EchoLine(int64_t recv_utime, int64_t first_utime, const std::string&
     if (result.trailing_bytes > 0) {
       line["warning"] = std::to_string(result.trailing_bytes) + " bytes after the message";
     }
+    if (!refused.empty()) line["refused"] = refused;
   } else {
     line["size"] = size;
     line["error"] = result.error;

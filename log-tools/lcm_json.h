@@ -44,11 +44,13 @@ LcmJsonResult DecodeLcmToJson(const LcmTypeSet& types, const uint8_t* data, size
 
 // One output line of `sarmap-log echo` (no newline): {"recv_utime", "t_s", "channel", "type",
 // "msg"} for a decoded message, {"recv_utime", "t_s", "channel", ["type",] "size", "error"}
-// for one that is not; "warning" when bytes follow the message. recv_utime is the logger's
+// for one that is not; "warning" when bytes follow the message; "refused" with `refused` when
+// it is not empty (why a sarmap node would drop the message). recv_utime is the logger's
 // (or this process's) receive time in us, t_s the seconds since `first_utime`. Strings that
 // are not UTF-8 are printed with U+FFFD for the bad bytes. indent >= 0 pretty-prints.
 std::string EchoLine(int64_t recv_utime, int64_t first_utime, const std::string& channel,
-                     const LcmJsonResult& result, size_t size, int indent = -1);
+                     const LcmJsonResult& result, size_t size, int indent = -1,
+                     const std::string& refused = "");
 
 // A number for JSON: floats printed with the fewest digits that give the float back (0.1f
 // prints 0.1); NaN and infinities, which JSON lacks, as the strings "nan", "inf", "-inf".

@@ -15,16 +15,36 @@
 #include <vector>
 
 #include "common/args.h"
+#include "common/decode.h"
 #include "common/lcm_guard.h"
 #include "common/node.h"
 #include "log-tools/lcm_json.h"
 #include "log-tools/lcm_log_reader.h"
+#include "sarmap/message_registry.h"
 
 namespace {
 
 using sarmap::common::ArgError;
 using sarmap::logtools::LcmJsonOptions;
 using sarmap::logtools::LcmTypeSet;
+
+// Why a sarmap node would drop this message (common::DecodeMessage: wire, decoder and value
+// checks), "" when it would take it or the type is not one this build knows.
+std::string NodeVerdict(const uint8_t* data, size_t size) {
+  if (size < 8) return "";
+  int64_t hash = 0;
+  for (int i = 0; i < 8; ++i)
+    hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | data[i]);
+  std::string why;
+#define SARMAP_VERDICT(T)                                                    \
+  if (hash == sarmap::T::getHash()) {                                        \
+    sarmap::T msg;                                                           \
+    return sarmap::common::DecodeMessage(data, size, &msg, &why) ? "" : why; \
+  }
+  SARMAP_FOR_EACH_MESSAGE_TYPE(SARMAP_VERDICT)
+#undef SARMAP_VERDICT
+  return "";
+}
 
 volatile sig_atomic_t g_stop = 0;
 void OnStop(int) { g_stop = 1; }
@@ -40,6 +60,7 @@ struct EchoOptions {
   bool full = false;
   bool pretty = false;
   bool no_constant_names = false;
+  bool no_check = false;
   std::vector<std::string> type_dirs;
   LcmJsonOptions json;
 
@@ -70,8 +91,10 @@ class Echo {
     if (!std::regex_match(channel, channels_)) return true;
     const auto result = sarmap::logtools::DecodeLcmToJson(types_, data, size, options_.json);
     if (!result.ok) ++errors_;
+    const std::string refused = result.ok && !options_.no_check ? NodeVerdict(data, size) : "";
+    if (!refused.empty()) ++refused_;
     const std::string line = sarmap::logtools::EchoLine(recv_utime, first_utime_, channel, result,
-                                                        size, options_.pretty ? 2 : -1);
+                                                        size, options_.pretty ? 2 : -1, refused);
     fputs(line.c_str(), stdout);
     fputc('\n', stdout);
     if (options_.live) fflush(stdout);
@@ -81,13 +104,14 @@ class Echo {
   int64_t first_utime() const { return first_utime_; }
   void set_first_utime(int64_t utime) { first_utime_ = utime; }
   int64_t errors() const { return errors_; }
+  int64_t refused() const { return refused_; }
 
  private:
   const LcmTypeSet& types_;
   const EchoOptions& options_;
   std::regex channels_;
   int64_t first_utime_ = -1;
-  int64_t printed_ = 0, errors_ = 0;
+  int64_t printed_ = 0, errors_ = 0, refused_ = 0;
 };
 
 int EchoLog(Echo* echo, const EchoOptions& options) {
@@ -178,12 +202,15 @@ int Main(int argc, char** argv) {
   parser.AddSwitch("--pretty", &options.pretty, "indented JSON, one object over several lines");
   parser.AddSwitch("--no-constant-names", &options.no_constant_names,
                    "no \"<member>_name\" beside members that hold one of their type's constants");
+  parser.AddSwitch("--no-check", &options.no_check,
+                   "do not say which messages a sarmap node would refuse (\"refused\")");
   parser.AddRepeated("--types", &options.type_dirs,
                      "directory of .lcm files (repeatable; default: " SARMAP_LCMTYPES_DIR ")");
   parser.SetEpilog(
       "Each line: {\"recv_utime\": logger receive time (us), \"t_s\": seconds since the first\n"
       "event, \"channel\", \"type\", \"msg\": {fields}}; a message that cannot be decoded gives\n"
-      "{..., \"size\", \"error\"} and the next one is read.\n\n"
+      "{..., \"size\", \"error\"} and the next one is read. A message a sarmap node would drop\n"
+      "(its checks of values and sizes) carries \"refused\": why.\n\n"
       "Examples:\n"
       "  sarmap-log echo mission.lcmlog --channel PEOPLE_VISUAL\n"
       "  sarmap-log echo mission.lcmlog --channel 'PEOPLE_.*' --from 10 --to 20 --pretty\n"
@@ -216,6 +243,10 @@ int Main(int argc, char** argv) {
   if (echo.errors() > 0) {
     fprintf(stderr, "sarmap-log echo: %lld messages could not be decoded (\"error\" lines)\n",
             static_cast<long long>(echo.errors()));
+  }
+  if (echo.refused() > 0) {
+    fprintf(stderr, "sarmap-log echo: %lld messages a sarmap node would refuse (\"refused\")\n",
+            static_cast<long long>(echo.refused()));
   }
   return code;
 }

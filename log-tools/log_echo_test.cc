@@ -126,6 +126,7 @@ TEST(LogEchoTest, PrintsEveryMessageAsOneJsonLineAndGoesOnAfterBadOnes) {
   EXPECT_EQ(lines[2]["size"], 9);
   EXPECT_EQ(lines[2]["error"].get<std::string>().find("unknown type (fingerprint"), 0u);
   EXPECT_FALSE(lines[2].contains("msg"));
+  EXPECT_FALSE(lines[0].contains("refused"));
 
   EXPECT_EQ(lines[3]["type"], "sarmap.pose_t");
   EXPECT_NE(lines[3]["error"].get<std::string>().find("left"), std::string::npos) << lines[3];
@@ -151,6 +152,31 @@ TEST(LogEchoTest, SelectsChannelsTimesAndCount) {
   run = RunTool("echo " + log + " --channel PEOPLE_VISUAL --limit 1 --pretty");
   EXPECT_GT(run.lines.size(), 20u);  // one object over many lines
   EXPECT_EQ(run.lines.front(), "{");
+}
+
+TEST(LogEchoTest, SaysWhyANodeWouldRefuseAMessage) {
+  const std::string path =
+      ::testing::TempDir() + "/echo_refused_" + std::to_string(getpid()) + ".lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    sarmap::people_detections_t people{};
+    people.header.frame = "camera";
+    people.num_detections = 1;
+    people.detections.resize(1);
+    people.detections[0].cue = sarmap::person_detection_t::CUE_SEEN_RGBD;
+    people.detections[0].confidence = 1.5f;  // not a probability
+    Write(&log, "PEOPLE_VISUAL", people, 1000);
+    people.detections[0].confidence = 0.5f;
+    Write(&log, "PEOPLE_VISUAL", people, 2000);
+  }
+  ToolRun run = RunTool("echo " + path);
+  ASSERT_EQ(run.lines.size(), 2u);
+  const Json refused = Json::parse(run.lines[0]);
+  EXPECT_EQ(refused["msg"]["detections"][0]["confidence"], 1.5);
+  EXPECT_NE(refused["refused"].get<std::string>().find("confidence"), std::string::npos) << refused;
+  EXPECT_FALSE(Json::parse(run.lines[1]).contains("refused"));
+  run = RunTool("echo " + path + " --no-check");
+  EXPECT_FALSE(Json::parse(run.lines[0]).contains("refused"));
 }
 
 TEST(LogEchoTest, ReadsTheLiveBusThroughLcm) {
