@@ -187,6 +187,10 @@ TEST(LogEchoTest, ReadsTheLiveBusThroughLcm) {
   EXPECT_EQ(run.exit_code, 0);
   ASSERT_EQ(run.lines.size(), 2u);
   EXPECT_EQ(Json::parse(run.lines[0])["msg"]["detections"][0]["track_id"], 3);
+  // Without --limit the played log's end ends the tool.
+  const ToolRun all = RunTool("echo --live --lcm-url 'file://" + log + "?speed=0'");
+  EXPECT_EQ(all.exit_code, 0);
+  EXPECT_EQ(all.lines.size(), 5u);
 }
 
 TEST(LogEchoTest, BadArgumentsAndTypesAreClearErrors) {
