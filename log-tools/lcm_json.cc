@@ -97,27 +97,24 @@ class Decoder {
     for (const auto& m : s.members) {
       const std::string member_path = path.empty() ? m.name : path + "." + m.name;
       Json value;
+      std::optional<std::string> constant;
       if (m.dims.empty()) {
         int64_t integer = 0;
         if (!Scalar(m.type, &value, member_path, depth, &integer)) return false;
         if (IsInteger(m.type)) {
           counts[m.name] = integer;
-          if (options_.constant_names) NameConstant(s, m, integer);
+          if (options_.constant_names) constant = NameConstant(s, m, integer);
         }
       } else if (!Array(m, 0, counts, &value, member_path, depth)) {
         return false;
       }
       (*out)[m.name] = std::move(value);
-      if (pending_name_) {
-        (*out)[m.name + "_name"] = *pending_name_;
-        pending_name_.reset();
-      }
+      if (constant) (*out)[m.name + "_name"] = *constant;
     }
     return true;
   }
 
   size_t left() const { return size_ - pos_; }
-  size_t pos() const { return pos_; }
   const std::string& error() const { return error_; }
 
  private:
@@ -127,14 +124,16 @@ class Decoder {
     return false;
   }
 
-  void NameConstant(const LcmStruct& s, const LcmMember& m, int64_t value) {
-    if (m.comment.empty()) return;
+  // The constant that `value` of member `m` is, when the member's comment names constants.
+  static std::optional<std::string> NameConstant(const LcmStruct& s, const LcmMember& m,
+                                                 int64_t value) {
+    if (m.comment.empty()) return std::nullopt;
     const auto ref = ConstantsNamedIn(m.comment);
-    if (!ref) return;
+    if (!ref) return std::nullopt;
     for (const auto& other : s.members) {
-      if (other.name == m.name + "_name") return;  // the key is taken by a real member
+      if (other.name == m.name + "_name") return std::nullopt;  // a real member has the key
     }
-    pending_name_ = ConstantName(s, *ref, value);
+    return ConstantName(s, *ref, value);
   }
 
   // A fixed-size primitive at the cursor (the caller checked the bytes are there).
@@ -314,7 +313,6 @@ class Decoder {
   size_t size_;
   size_t pos_ = 0;
   std::string error_;
-  std::optional<std::string> pending_name_;
 };
 
 }  // namespace

@@ -380,15 +380,15 @@ bool LcmTypeSet::Resolve(std::vector<std::string>* errors) {
   if (!ok) return false;
   by_fingerprint_.clear();
   min_wire_size_.clear();
+  ambiguities_.clear();
   for (auto& [name, s] : structs_) {
     std::vector<std::string> stack;
     s.fingerprint = Fingerprint(name, &stack);
     auto [it, inserted] = by_fingerprint_.emplace(s.fingerprint, name);
     if (!inserted) {
-      // LCM cannot tell such types apart on the wire either.
-      errors->push_back(s.file + ":" + std::to_string(s.line) + ": " + name +
-                        " has the same fingerprint as " + it->second);
-      ok = false;
+      // LCM cannot tell such types apart on the wire either: the first (by name) decodes.
+      ambiguities_.push_back(s.file + ":" + std::to_string(s.line) + ": " + name +
+                             " has the same fingerprint as " + it->second + ", which is used");
     }
   }
   for (const auto& entry : structs_) {

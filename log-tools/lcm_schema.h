@@ -79,6 +79,9 @@ class LcmTypeSet {
   const LcmStruct* Find(const std::string& full_name) const;
   const LcmStruct* FindByFingerprint(uint64_t fingerprint) const;
   const std::map<std::string, LcmStruct>& structs() const { return structs_; }
+  // Types that share a fingerprint with another (the one that sorts first by name decodes),
+  // found by Resolve.
+  const std::vector<std::string>& ambiguities() const { return ambiguities_; }
   // Fewest bytes one encoded struct takes (no fingerprint): variable arrays empty, strings
   // empty. Valid after Resolve.
   uint64_t MinWireSize(const std::string& full_name) const;
@@ -90,6 +93,7 @@ class LcmTypeSet {
   std::map<std::string, LcmStruct> structs_;  // by full name
   std::map<uint64_t, std::string> by_fingerprint_;
   std::map<std::string, uint64_t> min_wire_size_;
+  std::vector<std::string> ambiguities_;
 };
 
 }  // namespace logtools

@@ -41,6 +41,7 @@ TEST(LcmSchemaTest, EveryProjectTypeHasTheFingerprintOfItsGeneratedClass) {
   for (const auto& [name, s] : types.structs()) parsed.insert(name);
   EXPECT_EQ(parsed, checked);
   EXPECT_GE(checked.size(), 30u);
+  EXPECT_TRUE(types.ambiguities().empty());
 }
 
 TEST(LcmSchemaTest, MinWireSizeCountsFixedPartsOnly) {
@@ -140,6 +141,20 @@ TEST(LcmSchemaTest, FingerprintOfNestedTypesAddsEachMemberAndRotates) {
   // Two members of type inner_t: its fingerprint counts twice.
   EXPECT_EQ(weird->fingerprint,
             rotl(static_cast<uint64_t>(weird->base_hash) + 2 * inner->fingerprint));
+}
+
+TEST(LcmSchemaTest, TypesWithOneFingerprintAreReportedAndTheFirstIsUsed) {
+  LcmTypeSet types;
+  std::vector<std::string> errors;
+  // The name of a type is not part of its fingerprint.
+  ASSERT_TRUE(types.AddText("package p; struct b_t { int8_t x; } struct a_t { int8_t x; }",
+                            "same.lcm", &errors));
+  ASSERT_TRUE(types.Resolve(&errors));
+  EXPECT_EQ(types.Find("p.a_t")->fingerprint, types.Find("p.b_t")->fingerprint);
+  EXPECT_EQ(types.FindByFingerprint(types.Find("p.b_t")->fingerprint)->name, "a_t");
+  ASSERT_EQ(types.ambiguities().size(), 1u);
+  EXPECT_NE(types.ambiguities()[0].find("p.b_t has the same fingerprint as p.a_t"),
+            std::string::npos);
 }
 
 TEST(LcmSchemaTest, TypeContainingItselfContributesZeroInsideItself) {

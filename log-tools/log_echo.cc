@@ -234,6 +234,8 @@ int Main(int argc, char** argv) {
     for (const auto& e : errors) fprintf(stderr, "sarmap-log echo: %s\n", e.c_str());
     throw ArgError("cannot read the LCM types (give the lcmtypes directory with --types DIR)");
   }
+  for (const auto& a : types.ambiguities())
+    fprintf(stderr, "sarmap-log echo: warning: %s\n", a.c_str());
   try {
     std::regex check(options.channels);
   } catch (const std::regex_error& e) {

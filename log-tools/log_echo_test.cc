@@ -5,11 +5,14 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "log-tools/lcm_schema.h"
 #include "sarmap/image_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -191,6 +194,42 @@ TEST(LogEchoTest, ReadsTheLiveBusThroughLcm) {
   const ToolRun all = RunTool("echo --live --lcm-url 'file://" + log + "?speed=0'");
   EXPECT_EQ(all.exit_code, 0);
   EXPECT_EQ(all.lines.size(), 5u);
+}
+
+TEST(LogEchoTest, ReadsTypesOfAnotherPackageFromTypesDir) {
+  const std::string dir = ::testing::TempDir() + "/echo_types_" + std::to_string(getpid());
+  std::filesystem::create_directories(dir);
+  const char kPing[] = "package demo;\nstruct ping_t {\n  int32_t n;\n  string s;\n}\n";
+  std::ofstream(dir + "/ping_t.lcm") << kPing;
+  sarmap::logtools::LcmTypeSet types;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(types.AddText(kPing, "ping_t.lcm", &errors));
+  ASSERT_TRUE(types.Resolve(&errors));
+  // fingerprint, n = 5, s = "hi" (length with the NUL), big-endian.
+  std::vector<uint8_t> bytes;
+  const uint64_t fingerprint = types.Find("demo.ping_t")->fingerprint;
+  for (int i = 7; i >= 0; --i) bytes.push_back(static_cast<uint8_t>(fingerprint >> (8 * i)));
+  for (int b : {0, 0, 0, 5, 0, 0, 0, 3, int{'h'}, int{'i'}, 0})
+    bytes.push_back(static_cast<uint8_t>(b));
+  const std::string log = dir + "/ping.lcmlog";
+  {
+    lcm::LogFile file(log, "w");
+    lcm::LogEvent e;
+    e.eventnum = 0;
+    e.timestamp = 1;
+    e.channel = "PING";
+    e.datalen = static_cast<int32_t>(bytes.size());
+    e.data = bytes.data();
+    file.writeEvent(&e);
+  }
+  ToolRun run = RunTool("echo " + log + " --types " + dir);
+  ASSERT_EQ(run.lines.size(), 1u);
+  EXPECT_EQ(Json::parse(run.lines[0])["type"], "demo.ping_t");
+  EXPECT_EQ(Json::parse(run.lines[0])["msg"], Json::parse(R"({"n": 5, "s": "hi"})"));
+  // Not among sarmap's types.
+  run = RunTool("echo " + log);
+  ASSERT_EQ(run.lines.size(), 1u);
+  EXPECT_TRUE(Json::parse(run.lines[0]).contains("error"));
 }
 
 TEST(LogEchoTest, BadArgumentsAndTypesAreClearErrors) {
