@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 
+#include "common/wire_check.h"
 #include "sarmap/message_registry.h"
 #include "sarmap/message_samples.h"
 
@@ -317,6 +318,71 @@ TEST(LcmJsonTest, RandomDamageNeverCrashes) {
     }
   }
   EXPECT_GT(decoded, 0);  // flips in numbers decode, flips in lengths do not
+}
+
+// One random change of the kinds that break decoders: flipped bytes, a length or count field
+// overwritten with an extreme value, a cut, bytes appended.
+void Mutate(std::vector<uint8_t>* bytes, std::mt19937_64& rng) {
+  const size_t body = bytes->size() - 8;
+  switch (rng() % 4) {
+    case 0:
+      for (int f = 1 + static_cast<int>(rng() % 3); f > 0; --f) {
+        (*bytes)[8 + rng() % body] = static_cast<uint8_t>(rng());
+      }
+      break;
+    case 1: {
+      if (body < 4) break;
+      const int32_t extremes[] = {-1, 0, 1, 3, 1000, 65536, INT32_MAX, INT32_MIN};
+      const uint32_t v = static_cast<uint32_t>(extremes[rng() % 8]);
+      const size_t at = 8 + rng() % (body - 3);
+      for (int i = 0; i < 4; ++i) (*bytes)[at + i] = static_cast<uint8_t>(v >> (24 - 8 * i));
+      break;
+    }
+    case 2:
+      bytes->resize(8 + rng() % body);
+      break;
+    default:
+      bytes->push_back(static_cast<uint8_t>(rng()));
+  }
+}
+
+TEST(LcmJsonTest, AgreesWithTheNodesWireCheckOnDamagedMessagesOfEveryType) {
+  // What a node's wire check accepts decodes here to the last byte; what fails here, the wire
+  // check refuses. The wire check refuses more: strings not ending with their one NUL (they
+  // print here as they are, and echo's "refused" says so).
+  std::mt19937_64 rng(11);
+  int accepted = 0, refused_here = 0, nul_only = 0;
+#define SARMAP_AGREE(T)                                                                          \
+  for (int trial = 0; trial < 400; ++trial) {                                                    \
+    sarmap::T msg;                                                                               \
+    sarmap::samples::Fill(msg, rng);                                                             \
+    std::vector<uint8_t> bytes = Encode(msg);                                                    \
+    Mutate(&bytes, rng);                                                                         \
+    std::string why;                                                                             \
+    const bool wire_ok = sarmap::common::CheckWire<sarmap::T>(bytes.data(), bytes.size(), &why); \
+    const LcmJsonResult r = Decode(bytes, 16);                                                   \
+    const bool here_ok = r.ok && r.trailing_bytes == 0;                                          \
+    if (wire_ok) {                                                                               \
+      ++accepted;                                                                                \
+      EXPECT_TRUE(here_ok) << #T << ": " << r.error;                                             \
+    } else if (here_ok) {                                                                        \
+      ++nul_only;                                                                                \
+      EXPECT_NE(why.find("NUL"), std::string::npos) << #T << ": " << why;                        \
+    }                                                                                            \
+    if (!r.ok) {                                                                                 \
+      ++refused_here;                                                                            \
+      EXPECT_FALSE(wire_ok) << #T;                                                               \
+      EXPECT_FALSE(r.error.empty());                                                             \
+    }                                                                                            \
+  }
+  SARMAP_FOR_EACH_LCM_TYPE(SARMAP_AGREE)
+#undef SARMAP_AGREE
+  // Both outcomes occur often enough for the agreement to mean something.
+  EXPECT_GT(accepted, 1000);
+  EXPECT_GT(refused_here, 1000);
+  RecordProperty("accepted", accepted);
+  RecordProperty("refused", refused_here);
+  RecordProperty("nul_only", nul_only);
 }
 
 TEST(LcmJsonTest, StringsThatAreNotUtf8StillPrint) {
