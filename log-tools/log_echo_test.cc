@@ -138,6 +138,15 @@ TEST(LogEchoTest, PrintsEveryMessageAsOneJsonLineAndGoesOnAfterBadOnes) {
   EXPECT_EQ(lines[4]["msg"]["detections"], Json::array());
 }
 
+TEST(LogEchoTest, ADamagedLogIsReadPastTheDamageAndExitsThree) {
+  const std::string log = WriteLog();
+  std::filesystem::resize_file(log, std::filesystem::file_size(log) - 10);  // cut the last event
+  const ToolRun run = RunTool("echo " + log);
+  EXPECT_EQ(run.exit_code, 3);
+  ASSERT_EQ(run.lines.size(), 4u);
+  EXPECT_EQ(Json::parse(run.lines[3])["channel"], "POSE");
+}
+
 TEST(LogEchoTest, SelectsChannelsTimesAndCount) {
   const std::string log = WriteLog();
   ToolRun run = RunTool("echo " + log + " --channel PEOPLE_VISUAL");
