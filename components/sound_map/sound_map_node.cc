@@ -2,18 +2,18 @@
 //   in:  DOA_MAP (doa_t, doa_channel), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
 //   out: SLAM_ANCHOR_REQUEST (slam_anchor_request_t), SOUND_MAP (sound_map_t)
 // Inputs go through a time-ordered queue; results depend on message time only.
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <functional>
 #include <set>
 
-#include <Eigen/Geometry>
-
-#include "common/node_main.h"
 #include "common/logging.h"
 #include "common/node.h"
+#include "common/node_main.h"
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
+#include "common/state_file.h"
 #include "common/time.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
@@ -57,8 +57,10 @@ int main(int argc, char** argv) {
           SARMAP_LOG(INFO) << "resumed " << map.ekf().source_ids().size() << " sources from "
                            << options.state_file;
         }
-      } catch (const std::exception& e) {
-        SARMAP_LOG(WARN) << "not resumed, starting empty: " << e.what();
+      } catch (const std::exception& e) {  // one clear line and a clean start, no crash loop
+        const std::string aside = sarmap::common::SetAsideStateFile(options.state_file);
+        SARMAP_LOG(ERROR) << "not resumed, starting empty: " << e.what()
+                          << (aside.empty() ? "" : " (moved to " + aside + ")");
       }
     }
     sarmap::common::Node node("sarmap-sound-map", node_args.lcm_url);
