@@ -60,6 +60,15 @@ StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
   return Verdict::kBehind;
 }
 
+bool EncodedHeaderUtime(const void* data, int64_t size, Utime* utime) {
+  if (data == nullptr || size < 16) return false;
+  const auto* b = static_cast<const uint8_t*>(data) + 8;
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];
+  *utime = static_cast<Utime>(v);
+  return true;
+}
+
 bool StampGates::Accept(int stream, Utime utime, double receive_s) {
   if (stream < 0) return true;
   if (static_cast<size_t>(stream) >= gates_.size()) gates_.resize(stream + 1, StampGate(options_));

@@ -100,6 +100,10 @@ class StampGate {
   int64_t reanchors_ = 0;
 };
 
+// header.utime of an encoded sarmap message (every type starts with header_t, right after the
+// 8-byte fingerprint), for gating a log's events before decoding them; false when too short.
+bool EncodedHeaderUtime(const void* data, int64_t size, Utime* utime);
+
 // A gate per input stream of a node, with one set of counters for NODE_STATUS. A stream's
 // first message is checked against the most advanced clock of the node's other streams.
 class StampGates {

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
+#include "sarmap/pose_t.hpp"
+
 namespace sarmap {
 namespace common {
 namespace {
@@ -216,6 +220,19 @@ TEST(StampGatesTest, AStreamsFirstStampIsCheckedAgainstTheNodesClock) {
   for (int i = 0; i < 10; ++i) accepted += other.Accept(1, 10000000 + hour_us + i * 100000, 1.0 + 0.1 * i);
   EXPECT_EQ(accepted, 10 - (options.reanchor_count - 1));
   EXPECT_EQ(other.reanchors(), 1);
+}
+
+TEST(StampGateTest, TheHeaderStampIsReadFromTheEncodedMessage) {
+  sarmap::pose_t pose{};
+  pose.header.utime = 1234567890123;
+  pose.header.frame = "map";
+  std::vector<uint8_t> wire(static_cast<size_t>(pose.getEncodedSize()));
+  pose.encode(wire.data(), 0, static_cast<int>(wire.size()));
+  Utime utime = 0;
+  ASSERT_TRUE(EncodedHeaderUtime(wire.data(), static_cast<int64_t>(wire.size()), &utime));
+  EXPECT_EQ(utime, pose.header.utime);
+  EXPECT_FALSE(EncodedHeaderUtime(wire.data(), 15, &utime));
+  EXPECT_FALSE(EncodedHeaderUtime(nullptr, 100, &utime));
 }
 
 }  // namespace
