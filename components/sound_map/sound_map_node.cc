@@ -2,14 +2,15 @@
 //   in:  DOA_MAP (doa_t, doa_channel), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
 //   out: SLAM_ANCHOR_REQUEST (slam_anchor_request_t), SOUND_MAP (sound_map_t)
 // Inputs go through a time-ordered queue; results depend on message time only.
-#include <Eigen/Geometry>
 #include <cstdio>
 #include <functional>
 #include <set>
 
+#include <Eigen/Geometry>
+
+#include "common/node_main.h"
 #include "common/logging.h"
 #include "common/node.h"
-#include "common/node_main.h"
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
