@@ -248,7 +248,7 @@ fi
 stop_all
 # What each process printed (recorded from the launcher's PM_OUTPUT) into $out/output/.
 mkdir -p "$out/output"
-"$bin/sarmap-log" output "$log" -o "$out/output" 2>/dev/null || true
+"$bin/sarmap-log" output "$log" -o "$out/output" --key "$SARMAP_PROCMAN_KEY" 2>/dev/null || true
 for f in "$out"/output/*.txt; do
   [ -f "$f" ] || continue
   if grep -qE "^E |terminate called|Segmentation|Aborted|exited with code [1-9]" "$f"; then
