@@ -325,16 +325,14 @@ struct PeopleDetector::Workspace {
   std::vector<uint8_t> kept;
   std::vector<int32_t> neighbour_offsets;
   UnionFind uf;
-  // The depth's field of view in the image, as the union of the pixels that held depth over
-  // the frames seen so far: a registered depth image leaves bands without depth at its borders
-  // (the depth camera's field is narrower than the colour camera's). The floor fills every
-  // column the depth sees, so one frame gives the sides; the top rows often hold no depth
-  // because the room is beyond range there, so the top band is trusted only after
-  // kFovFrames frames (before that the image's top edge is the border). Reset when the image
-  // size changes.
-  static constexpr int kFovFrames = 30;
-  int fov_width = 0, fov_height = 0, fov_frames = 0;
-  int fov_umin = 0, fov_umax = -1, fov_vmin = 0;
+  // The columns of the depth's field of view, as the union of the columns that held depth over
+  // the frames seen so far: a registered depth image leaves bands without depth at its sides
+  // (the depth camera's field is narrower than the colour camera's), and the floor fills
+  // every column the depth sees. Reset when the image size changes. (The top band is not
+  // learned: a head within it is usually a person close by, and what is cut there has a flat
+  // top.)
+  int fov_width = 0, fov_height = 0;
+  int fov_umin = 0, fov_umax = -1;
 
   int64_t Cell(int ix, int iy, int iz) const {
     return (static_cast<int64_t>(iz + kPad) * (ny + 2 * kPad) + (iy + kPad)) * (nx + 2 * kPad) +
@@ -448,10 +446,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   if (ws.fov_width != frame.width || ws.fov_height != frame.height) {
     ws.fov_width = frame.width;
     ws.fov_height = frame.height;
-    ws.fov_frames = 0;
     ws.fov_umin = frame.width;
     ws.fov_umax = -1;
-    ws.fov_vmin = frame.height;
   }
   const int stride = o.pixel_stride;
   const float depth_noise = static_cast<float>(o.noise.depth_coeff);
@@ -464,7 +460,6 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       ++num_points;
       ws.fov_umin = std::min(ws.fov_umin, u);
       ws.fov_umax = std::max(ws.fov_umax, u);
-      ws.fov_vmin = std::min(ws.fov_vmin, v);
       // Mixed ("flying") pixels at a depth edge lie between the near and the far surface and
       // would join a person to the wall behind: a pixel whose left and right neighbours are one
       // nearer and one farther, both by more than the noise, is dropped. Along columns only:
@@ -494,7 +489,6 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     }
   }
   result.stats.num_points = num_points;
-  if (num_points > 0) ++ws.fov_frames;
   const int nv = static_cast<int>(ws.voxel_cell.size());
   result.stats.num_voxels = nv;
   // The grid is cleared at the end of this function through this guard, whatever happens.
@@ -932,8 +926,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     // object's: the top may go on above the field of view, and a wall or cupboard whose top is
     // cut by a side border looks like a narrow upright body with a step at its top. Only the
     // head (points within head_drop of the top) counts at the sides: a person whose arm or
-    // shoulder leaves the image is still judged by the head. The borders are those of the
-    // depth's field of view (fov_*); the margin adds half a voxel's image size (voxel
+    // shoulder leaves the image is still judged by the head. The side borders are those of the
+    // depth's field of view (fov_umin/umax); the margin adds half a voxel's image size (voxel
     // centroids lie inside the object's outline).
     {
       double umin = 1e9, umax = -1e9, vmin = 1e9;
@@ -951,8 +945,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
       const double margin =
           std::max(2, frame.height / 48) + 0.5 * vs * K.fx / std::max(0.5, c.position_camera.z());
-      c.truncated_top =
-          !finite || vmin < (ws.fov_frames >= Workspace::kFovFrames ? ws.fov_vmin : 0) + margin;
+      c.truncated_top = !finite || vmin < margin;
       c.truncated_side = !finite || umin < ws.fov_umin + margin || umax > ws.fov_umax - margin;
     }
 
