@@ -22,8 +22,9 @@ namespace {
 double Percent(int a, int b) { return b > 0 ? 100.0 * a / b : NAN; }
 
 int RunScore(const sound::ArrayGeometry& geometry, const sound::LocaliserOptions& options,
-             const std::vector<std::string>& files, const sound::Direction& truth,
-             const std::string& simulate, const std::string& speech_dir) {
+             const sound::ScoreOptions& score_options, const std::vector<std::string>& files,
+             const sound::Direction& truth, const std::string& simulate,
+             const std::string& speech_dir) {
   std::vector<std::pair<std::string, std::vector<sound::Scene>>> groups;
   if (!files.empty()) {
     std::vector<sound::Scene> recorded;
@@ -48,7 +49,7 @@ int RunScore(const sound::ArrayGeometry& geometry, const sound::LocaliserOptions
     double cpu = 0, audio = 0;
     std::vector<double> onsets, el_errors;
     for (const auto& scene : scenes) {
-      const auto r = sound::ScoreScene(scene, geometry, options);
+      const auto r = sound::ScoreScene(scene, geometry, options, score_options);
       std::string onset;
       for (double l : r.onset_latency_s) {
         char b[32];
@@ -105,10 +106,13 @@ int main(int argc, char** argv) {
     p.AddFlag("--azimuth-deg", &az, "true azimuth (linear arrays: angle to the axis)");
     p.AddFlag("--elevation-deg", &el, "true elevation");
     bool score = false;
+    sound::ScoreOptions score_options;
     std::string simulate, speech_dir;
     p.AddSwitch("--score", &score, "multi-talker scorer instead of the per-method accuracy table");
     p.AddFlag("--simulate", &simulate,
               "with --score: also simulated scenes of these talker counts (e.g. 2,3)");
+    p.AddFlag("--found-deg", &score_options.found_deg,
+              "with --score: a talker is found / covered within this azimuth error");
     p.AddFlag("--speech-dir", &speech_dir, "CMU ARCTIC speech for the simulated scenes");
     p.AddRest("FILE", &files, "multichannel WAV files");
     if (!p.Parse(argc, argv)) return 0;
@@ -120,8 +124,8 @@ int main(int argc, char** argv) {
             ? common::LoadOptions<sound::LocaliserOptions>("", overrides)
             : common::LoadOptions<sound::LocaliserOptions>(config_path, overrides, "localiser");
     if (score)
-      return RunScore(geometry, base, files, {sound::DegToRad(az), sound::DegToRad(el)}, simulate,
-                      speech_dir);
+      return RunScore(geometry, base, score_options, files,
+                      {sound::DegToRad(az), sound::DegToRad(el)}, simulate, speech_dir);
     std::vector<double> all_az, all_el;
     std::printf(
         "| file | method | blocks | median az err (deg) | median el err (deg) | whole-file az/el "
