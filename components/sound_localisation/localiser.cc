@@ -7,15 +7,6 @@
 namespace sarmap {
 namespace sound {
 
-namespace {
-double MedianOf(std::vector<double>* v) {
-  if (v->empty()) return 0;
-  auto mid = v->begin() + v->size() / 2;
-  std::nth_element(v->begin(), mid, v->end());
-  return *mid;
-}
-}  // namespace
-
 double InverseNormalTail(double p) {
   // Q(t) = erfc(t / sqrt 2) / 2 is decreasing: bisection.
   double lo = -10, hi = 40;
@@ -274,7 +265,7 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
   std::vector<DoaEstimate> estimates;
   if (cfar) {
     if (noise_frames_ > 10) stats.noise = noise_;
-    estimates = Detect(stats, !loud);
+    estimates = Detect(stats);
     o.active = !estimates.empty();
   } else {
     o.active = loud;
@@ -300,6 +291,7 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
       tm.covariance = d.covariance;
       tm.power = d.power;
       tm.confidence = d.confidence;
+      tm.primary = measurements.empty();
       measurements.push_back(tm);
     }
   }
@@ -357,7 +349,7 @@ bool Localiser::IsGridLocalMax(const std::vector<double>& values, size_t index) 
   return true;
 }
 
-std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block, bool quiet) {
+std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block) {
   if (block.num_frames == 0) return {};
   BlockStatistics subtracted;
   const bool subtract = options_.noise_subtraction > 0 && !block.noise.empty();
@@ -377,6 +369,10 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block, bool qu
     noise_map_blocks_ = 0;
   }
   const std::vector<double> unsuppressed = values;
+  // A further source is a peak of its own in the block's map, not a shoulder of one found.
+  std::vector<char> local_max(g, 1);
+  if (options_.secondary_local_max && options_.max_sources > 1)
+    for (size_t i = 0; i < g; ++i) local_max[i] = IsGridLocalMax(unsuppressed, i);
   std::vector<DoaEstimate> found;
   std::vector<char> excluded(g, 0);
   const double half_width = options_.suppression_samples > 0
@@ -390,7 +386,8 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block, bool qu
     size_t best = g;
     double best_z = -INFINITY, best_value = -INFINITY;
     for (size_t i = 0; i < g; ++i) {
-      if (excluded[i]) continue;
+      if (excluded[i] || (!found.empty() && options_.secondary_local_max && !local_max[i]))
+        continue;
       const double z = (values[i] - noise_mean_[i]) / std::sqrt(noise_var_[i]);
       const bool passes = z >= detection_threshold_;
       if (passes ? (values[i] > best_value || best_z < detection_threshold_)
@@ -400,30 +397,7 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block, bool qu
         if (passes) best_value = values[i];
       }
     }
-    if (getenv("DBG"))
-      fprintf(stderr, "blk %lld quiet=%d n=%d z=%.2f P=%.4f mu=%.4f sd=%.4f grid=%.0f/%.0f\n",
-              (long long)samples_seen_, quiet, (int)noise_map_blocks_, best_z, values[best],
-              noise_mean_[best], std::sqrt(noise_var_[best]),
-              RadToDeg(geometry_.FromUnit(kind_, grid_units_[best]).azimuth_rad),
-              RadToDeg(geometry_.FromUnit(kind_, grid_units_[best]).elevation_rad));
     if (best == g || best_z < detection_threshold_) break;
-    // A further source is a peak of its own in the block's map, not a shoulder of one found.
-    if (options_.secondary_local_max && !found.empty() && !IsGridLocalMax(unsuppressed, best)) {
-      excluded[best] = 1;
-      continue;
-    }
-    if (options_.spatial_test) {
-      // Against this block's own map (the other directions: reverberation, the found sources'
-      // remaining lobes): median and MAD-based spread of the cells not yet excluded.
-      std::vector<double> rest;
-      rest.reserve(g);
-      for (size_t i = 0; i < g; ++i)
-        if (!excluded[i]) rest.push_back(values[i]);
-      const double med = MedianOf(&rest);
-      for (double& r : rest) r = std::abs(r - med);
-      const double spread = 1.4826 * MedianOf(&rest);
-      if (spread <= 0 || (values[best] - med) / spread < detection_threshold_) break;
-    }
     // Refine on the (suppressed) spectrum by hill-climbing with halving steps.
     Direction d = geometry_.FromUnit(kind_, grid_units_[best]);
     double v = (*correlation_)(grid_units_[best]);
@@ -471,9 +445,9 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block, bool qu
           min_sep)
         excluded[i] = 1;
   }
-  // Noise statistics from blocks without a detection (and quiet ones): exponential averages,
+  // Noise statistics from blocks without a detection: exponential averages,
   // the prior counting as one block for the variance.
-  if (found.empty() || (quiet && options_.learn_quiet_blocks)) {
+  if (found.empty()) {
     const double block = options_.block_s;
     const double a_mean = std::max(block / options_.noise_map_s, 1.0 / (noise_map_blocks_ + 1));
     const double a_var = std::max(block / options_.noise_map_s, 1.0 / (noise_map_blocks_ + 2));

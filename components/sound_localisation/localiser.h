@@ -62,23 +62,17 @@ struct LocaliserOptions {
   // (SubtractNoiseCrossSpectra); 0 off.
   double noise_subtraction = 0.0;
   // Detection (srp_phat): "activity" estimates in blocks with enough loud frames (energy gate);
-  // "cfar" tests every block: SRP-PHAT through the pairs' correlations (CorrelationSrp) over
-  // every frame, each grid direction's value standardised by its own noise statistics (mean and
-  // variance over blocks without a detection and quiet blocks, time constant noise_map_s), a
-  // source declared where the standardised value exceeds the threshold that gives
-  // false_alarm_probability per block (Bonferroni over the grid, Gaussian values); then the
-  // found direction's lag neighbourhood is removed from every pair's correlation and the next
-  // is searched, up to max_sources.
+  // "cfar" tests every block. SRP-PHAT through the pairs' correlations (CorrelationSrp), every
+  // frame's bins weighted by their power above the noise; each grid direction's value is
+  // standardised by its own noise mean and variance (over blocks without a detection, time
+  // constant noise_map_s) and a source declared where it exceeds the threshold that gives
+  // false_alarm_probability per block (Bonferroni over the grid, Gaussian values). Among the
+  // directions that pass, the strongest is taken, refined, removed from every pair's
+  // correlation (suppression), and the next searched, up to max_sources; a further source must
+  // be a local maximum of the block's map (secondary_local_max).
   std::string detection = "activity";
   double false_alarm_probability = 0.01;
   double noise_map_s = 10.0;
-  // Learn the noise statistics also from quiet blocks (energy gate), where the array's own
-  // steady noise (a fixed coherent direction) is the only thing heard.
-  bool learn_quiet_blocks = false;
-  // A source must also stand out from the rest of its own block's map by the same threshold
-  // (median and MAD of the directions not yet taken): reverberation and the found sources'
-  // lobes raise whole regions, another talker a peak.
-  bool spatial_test = false;
   // Half-width of the lag neighbourhood removed around a found source (samples); 0: the main
   // lobe of the band's PHAT correlation, fs / (2 (min_frequency + max_frequency)).
   double suppression_samples = 0.0;
@@ -146,15 +140,10 @@ struct LocaliserOptions {
     v("false_alarm_probability", false_alarm_probability,
       "cfar: chance per block that noise alone gives a detection");
     v("noise_map_s", noise_map_s, "cfar: time constant of the per-direction noise statistics");
-    v("learn_quiet_blocks", learn_quiet_blocks,
-      "cfar: quiet blocks (energy gate) also teach the noise statistics (the array's own steady "
-      "noise)");
     v("suppression", suppression,
       "cfar: clean (subtract a found source's whole correlation) or zero (its lag neighbourhood)");
     v("secondary_local_max", secondary_local_max,
       "cfar: a further source must be a local maximum of the block's map");
-    v("spatial_test", spatial_test,
-      "cfar: a source must also stand out from the rest of its block's map");
     v("suppression_samples", suppression_samples,
       "cfar: half-width of the lag neighbourhood removed around a found source (0: band's main "
       "lobe)");
@@ -269,8 +258,8 @@ class Localiser {
  private:
   void OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
                std::vector<LocaliserOutput>* out);
-  // cfar detection on one window's statistics; `quiet`: the energy gate heard nothing.
-  std::vector<DoaEstimate> Detect(const BlockStatistics& stats, bool quiet);
+  // cfar detection on one window's statistics.
+  std::vector<DoaEstimate> Detect(const BlockStatistics& stats);
   bool IsGridLocalMax(const std::vector<double>& values, size_t index) const;
   void AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
                           const std::vector<char>* mask) const;
