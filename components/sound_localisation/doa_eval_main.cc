@@ -101,6 +101,8 @@ int main(int argc, char** argv) {
     p.AddFlag("--array", &array_path, "array description (config/arrays/<name>.yaml)");
     p.AddFlag("--config", &config_path,
               "sound_localisation.yaml (its 'localiser' section); defaults if empty");
+    std::string section = "localiser";
+    p.AddFlag("--section", &section, "the config's section to use (localiser or map_localiser)");
     p.AddRepeated("--set", &overrides, "override a localiser option key=value");
     p.AddFlag("--methods", &methods, "comma-separated methods");
     p.AddFlag("--azimuth-deg", &az, "true azimuth (linear arrays: angle to the axis)");
@@ -122,7 +124,7 @@ int main(int argc, char** argv) {
     sound::LocaliserOptions base =
         config_path.empty()
             ? common::LoadOptions<sound::LocaliserOptions>("", overrides)
-            : common::LoadOptions<sound::LocaliserOptions>(config_path, overrides, "localiser");
+            : common::LoadOptions<sound::LocaliserOptions>(config_path, overrides, section);
     if (score)
       return RunScore(geometry, base, score_options, files,
                       {sound::DegToRad(az), sound::DegToRad(el)}, simulate, speech_dir);
