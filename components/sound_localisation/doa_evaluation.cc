@@ -161,13 +161,18 @@ SceneScore ScoreScene(const Scene& scene, const ArrayGeometry& geometry,
     return std::abs(RadToDeg(WrapAngle(a.azimuth_rad - b.azimuth_rad)));
   };
   std::vector<double> elevation_errors;
+  // Talker directions as the localiser reports them (linear arrays: the angle to the axis).
+  std::vector<Direction> truths;
+  for (const auto& t : scene.talkers)
+    truths.push_back(
+        geometry.FromUnit(kind, geometry.Unit(DoaKind::kAzimuthElevation, t.direction)));
   r.onset_latency_s.assign(scene.talkers.size(), NAN);
   std::map<int64_t, std::vector<double>> track_distances;  // id -> distance to the nearest talker
   std::map<int64_t, std::vector<Direction>> track_directions;
   for (const auto& o : outs) {
     const int64_t start = std::max<int64_t>(0, 2 * o.centre_sample - o.end_sample);
     for (size_t t = 0; t < scene.talkers.size(); ++t) {
-      const Direction& truth = scene.talkers[t].direction;
+      const Direction& truth = truths[t];
       int frames = 0, on = 0;
       for (int64_t f = start / hop;
            f * hop < o.end_sample && f < static_cast<int64_t>(speech[t].size()); ++f) {
@@ -205,8 +210,7 @@ SceneScore ScoreScene(const Scene& scene, const ArrayGeometry& geometry,
     for (const Track& tr : o.tracks) {
       if (!tr.updated) continue;
       double nearest = 1e9;
-      for (const auto& t : scene.talkers)
-        nearest = std::min(nearest, dist_deg(tr.direction, t.direction));
+      for (const Direction& t : truths) nearest = std::min(nearest, dist_deg(tr.direction, t));
       track_distances[tr.id].push_back(nearest);
       track_directions[tr.id].push_back(tr.direction);
     }
