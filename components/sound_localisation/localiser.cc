@@ -445,19 +445,26 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block) {
           min_sep)
         excluded[i] = 1;
   }
-  // Noise statistics from blocks without a detection: exponential averages,
-  // the prior counting as one block for the variance.
+  // Noise statistics from blocks without a detection: exponential averages, the prior counting
+  // as one block for the variance. With steady_s, blocks with a detection teach them too, at
+  // that slower rate: what is heard without pause for much longer than anyone talks (a fan, the
+  // robot's own motors) becomes background.
+  const double block_s = options_.block_s;
+  double a_mean = 0, a_var = 0;
   if (found.empty()) {
-    const double block = options_.block_s;
-    const double a_mean = std::max(block / options_.noise_map_s, 1.0 / (noise_map_blocks_ + 1));
-    const double a_var = std::max(block / options_.noise_map_s, 1.0 / (noise_map_blocks_ + 2));
+    a_mean = std::max(block_s / options_.noise_map_s, 1.0 / (noise_map_blocks_ + 1));
+    a_var = std::max(block_s / options_.noise_map_s, 1.0 / (noise_map_blocks_ + 2));
+    ++noise_map_blocks_;
+  } else if (options_.steady_s > 0) {
+    // The mean only: the spread of what stands out is not the noise's.
+    a_mean = block_s / options_.steady_s;
+  }
+  if (a_mean > 0)
     for (size_t i = 0; i < g; ++i) {
       const double dev = unsuppressed[i] - noise_mean_[i];
       noise_var_[i] = (1 - a_var) * noise_var_[i] + a_var * dev * dev;
       noise_mean_[i] += a_mean * dev;
     }
-    ++noise_map_blocks_;
-  }
   return found;
 }
 

@@ -73,6 +73,9 @@ struct LocaliserOptions {
   std::string detection = "activity";
   double false_alarm_probability = 0.01;
   double noise_map_s = 10.0;
+  // Blocks with a detection also teach the noise statistics, with this (slower) time constant:
+  // a sound heard without pause for much longer than anyone talks becomes background. 0: never.
+  double steady_s = 0.0;
   // Half-width of the lag neighbourhood removed around a found source (samples); 0: the main
   // lobe of the band's PHAT correlation, fs / (2 (min_frequency + max_frequency)).
   double suppression_samples = 0.0;
@@ -140,6 +143,10 @@ struct LocaliserOptions {
     v("false_alarm_probability", false_alarm_probability,
       "cfar: chance per block that noise alone gives a detection");
     v("noise_map_s", noise_map_s, "cfar: time constant of the per-direction noise statistics");
+    v("steady_s", steady_s,
+      "cfar: blocks with a detection also teach the noise statistics with this time constant, so "
+      "an "
+      "unceasing sound becomes background (0: never)");
     v("suppression", suppression,
       "cfar: clean (subtract a found source's whole correlation) or zero (its lag neighbourhood)");
     v("secondary_local_max", secondary_local_max,
@@ -186,6 +193,7 @@ struct LocaliserOptions {
     check.That(false_alarm_probability > 0 && false_alarm_probability < 1,
                "false_alarm_probability", "must be in (0, 1)");
     check.Positive("noise_map_s", noise_map_s);
+    check.NonNegative("steady_s", steady_s);
     check.NonNegative("suppression_samples", suppression_samples);
     check.OneOf("suppression", suppression, {"clean", "zero"});
   }
@@ -200,9 +208,9 @@ struct LocalisedDirection {
 };
 
 struct LocaliserOutput {
-  int64_t end_sample = 0;                      // stream sample one past the window
-  int64_t centre_sample = 0;                   // centre of the analysed window
-  bool active = false;                         // enough sound to estimate
+  int64_t end_sample = 0;     // stream sample one past the window
+  int64_t centre_sample = 0;  // centre of the analysed window
+  bool active = false;        // activity: enough sound to estimate; cfar: a source detected
   std::vector<LocalisedDirection> directions;  // this block, best first
   std::vector<Track> tracks;                   // confirmed tracks after this block
 };

@@ -397,6 +397,67 @@ TEST(LocaliserSynthetic, CfarTracksTwoSimultaneousTalkersInARoom) {
   for (double onset : r.onset_latency_s) EXPECT_LE(onset, 0.6);
 }
 
+// The robot's own steady noise: a fan at az 0 / el 60 (white noise, 0.03 of the voice's RMS at
+// the array) from the start, a talker at az 180 / el 20 after 2.5 steady_s (anechoic). With
+// steady_s (the shipped value) the fan becomes background; the talker is still found.
+TEST(LocaliserSynthetic, CfarLearnsASteadyNoiseDirection) {
+  const std::vector<float> voice = testing_util::Speech(0);
+  if (voice.empty()) GTEST_SKIP() << "shared data missing: audio/cmu_arctic";
+  const ArrayGeometry g = LoadArray("respeaker4");
+  const double fs = g.sample_rate_hz;
+  const double steady_s = ShippedOptions().steady_s;
+  ASSERT_GT(steady_s, 0);
+  const double talk_s = 2.5 * steady_s;
+  const size_t start = static_cast<size_t>(talk_s * fs), n = start + voice.size();
+  const Direction fan_dir{0.0, DegToRad(60)}, talker_dir{M_PI, DegToRad(20)};
+  std::vector<std::vector<float>> mics(g.num_mics(), std::vector<float>(n, 0.0f));
+  const std::vector<float> fan = testing_util::WhiteNoise(n, 41);
+  const Eigen::VectorXd d_fan = g.Delays(g.Unit(DoaKind::kAzimuthElevation, fan_dir));
+  const Eigen::VectorXd d_talker = g.Delays(g.Unit(DoaKind::kAzimuthElevation, talker_dir));
+  const std::vector<float> sensor = testing_util::WhiteNoise(n * g.num_mics(), 42);
+  for (int m = 0; m < g.num_mics(); ++m) {
+    testing_util::AddDelayed(fan, 20 + d_fan[m] * fs, 0.03, &mics[m]);
+    testing_util::AddDelayed(voice, start + d_talker[m] * fs, 1.0, &mics[m]);
+    for (size_t i = 0; i < n; ++i) mics[m][i] += 0.003f * sensor[m * n + i];
+  }
+  auto near = [&](const LocaliserOutput& o, const Direction& d) {
+    for (const auto& x : o.directions)
+      if (AngularDistanceRad(g, DoaKind::kAzimuthElevation, x.direction, d) < DegToRad(10))
+        return true;
+    return false;
+  };
+  for (const double steady : {0.0, steady_s}) {
+    LocaliserOptions o = ShippedOptions();
+    o.steady_s = steady;
+    Localiser localiser(g, o, nullptr);
+    std::vector<LocaliserOutput> outs;
+    for (size_t b = 0; b < n; b += 512)
+      localiser.PushFloat(mics, b, std::min<size_t>(512, n - b), &outs);
+    int late = 0, fan_late = 0, talking = 0, talker_found = 0;
+    for (const auto& out : outs) {
+      const double t = static_cast<double>(out.end_sample) / fs;
+      if (t > talk_s - 10 && t < talk_s) {
+        ++late;
+        fan_late += near(out, fan_dir);
+      }
+      if (t > talk_s + 0.5 && t < talk_s + voice.size() / fs) {
+        ++talking;
+        talker_found += near(out, talker_dir);
+      }
+    }
+    std::printf(
+        "steady_s %.0f: fan heard in %d of %d blocks in the 10 s before the talker; talker found "
+        "in %d of %d blocks\n",
+        steady, fan_late, late, talker_found, talking);
+    if (steady > 0) {
+      EXPECT_LE(fan_late, 0.1 * late);
+      EXPECT_GE(talker_found, 0.6 * talking);
+    } else {
+      EXPECT_GE(fan_late, 0.9 * late);  // without it the fan is a source for ever
+    }
+  }
+}
+
 }  // namespace
 }  // namespace sound
 }  // namespace sarmap

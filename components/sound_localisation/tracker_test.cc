@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <random>
 
+#include "common/options.h"
+#include "sound_localisation/localiser.h"
 #include "sound_localisation/test_util.h"
 
 namespace sarmap {
@@ -113,9 +115,12 @@ CrossingResult RunCrossing(const TrackerOptions& o) {
 
 TEST(DoaTracker, KeepsTwoCrossingTalkersApart) {
   TrackerOptions random_walk;
-  TrackerOptions constant_velocity;
-  constant_velocity.velocity_noise_deg_per_s_sqrt_s = 20;
-  constant_velocity.gate_probability = 0.99;
+  // The shipped tracker (bearing rates).
+  const TrackerOptions constant_velocity =
+      common::LoadOptions<LocaliserOptions>(
+          std::string(SARMAP_SOURCE_DIR) + "/config/sound_localisation.yaml", {}, "localiser")
+          .tracker;
+  ASSERT_GT(constant_velocity.velocity_noise_deg_per_s_sqrt_s, 0);
   const CrossingResult rw = RunCrossing(random_walk), cv = RunCrossing(constant_velocity);
   std::printf(
       "crossing talkers, ids swapped or lost: random walk %d / %d, constant velocity %d / %d\n",
