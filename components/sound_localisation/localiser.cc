@@ -388,7 +388,9 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block) {
     for (size_t i = 0; i < g; ++i) {
       if (excluded[i] || (!found.empty() && options_.secondary_local_max && !local_max[i]))
         continue;
-      const double z = (values[i] - noise_mean_[i]) / std::sqrt(noise_var_[i]);
+      // Floor: after digital silence the learnt spread is ~0 and any dither would stand out.
+      const double z =
+          (values[i] - noise_mean_[i]) / std::sqrt(std::max(noise_var_[i], 1e-4 * prior_var));
       const bool passes = z >= detection_threshold_;
       if (passes ? (values[i] > best_value || best_z < detection_threshold_)
                  : (best_z < detection_threshold_ && z > best_z)) {
