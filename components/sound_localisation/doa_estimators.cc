@@ -82,7 +82,8 @@ Grid MakeGrid(const SearchOptions& o) {
 
 }  // namespace
 
-std::vector<Eigen::Vector3d> SearchGridUnits(const ArrayGeometry& geometry, const SearchOptions& o) {
+std::vector<Eigen::Vector3d> SearchGridUnits(const ArrayGeometry& geometry,
+                                             const SearchOptions& o) {
   const Grid grid = MakeGrid(o);
   std::vector<Eigen::Vector3d> units;
   units.reserve(grid.az.size() * grid.el.size());
@@ -100,11 +101,12 @@ std::vector<DoaEstimate> FindPeaks(const ArrayGeometry& geometry, const SearchOp
 }
 
 std::vector<DoaEstimate> FindPeaksOnGrid(const ArrayGeometry& geometry, const SearchOptions& o,
-                                         const std::vector<double>& values, const SpatialSpectrum& spectrum,
-                                         double* grid_mean) {
+                                         const std::vector<double>& values,
+                                         const SpatialSpectrum& spectrum, double* grid_mean) {
   const Grid grid = MakeGrid(o);
   const int na = static_cast<int>(grid.az.size()), ne = static_cast<int>(grid.el.size());
-  if (values.size() != static_cast<size_t>(na) * ne) throw std::invalid_argument("grid values do not fit the search grid");
+  if (values.size() != static_cast<size_t>(na) * ne)
+    throw std::invalid_argument("grid values do not fit the search grid");
   double vmin = INFINITY, vmax = -INFINITY, sum = 0;
   for (double v : values) {
     vmin = std::min(vmin, v);
@@ -128,8 +130,10 @@ std::vector<DoaEstimate> FindPeaksOnGrid(const ArrayGeometry& geometry, const Se
           const int ee = e + de;
           int aa = a + da;
           if (ee < 0 || ee >= ne) continue;
-          if (grid.wrap_az) aa = (aa + na) % na;
-          else if (aa < 0 || aa >= na) continue;
+          if (grid.wrap_az)
+            aa = (aa + na) % na;
+          else if (aa < 0 || aa >= na)
+            continue;
           if (values[ee * na + aa] > v) is_max = false;
         }
       if (is_max) candidates.push_back({v, {grid.az[a], grid.el[e]}});
@@ -150,9 +154,12 @@ std::vector<DoaEstimate> FindPeaksOnGrid(const ArrayGeometry& geometry, const Se
             if (!de && !da) continue;
             if (o.kind != DoaKind::kAzimuthElevation && de) continue;
             Direction t{d.azimuth_rad + da * step, d.elevation_rad + de * step};
-            if (o.kind == DoaKind::kAngle1d) t.azimuth_rad = std::clamp(t.azimuth_rad, 0.0, M_PI);
-            else t.azimuth_rad = WrapAngle(t.azimuth_rad);
-            if (o.kind == DoaKind::kAzimuthElevation) t.elevation_rad = std::clamp(t.elevation_rad, lo_el, hi_el);
+            if (o.kind == DoaKind::kAngle1d)
+              t.azimuth_rad = std::clamp(t.azimuth_rad, 0.0, M_PI);
+            else
+              t.azimuth_rad = WrapAngle(t.azimuth_rad);
+            if (o.kind == DoaKind::kAzimuthElevation)
+              t.elevation_rad = std::clamp(t.elevation_rad, lo_el, hi_el);
             const double tv = spectrum(geometry.Unit(o.kind, t));
             if (tv > best_v) {
               best_v = tv;
@@ -192,11 +199,13 @@ std::vector<DoaEstimate> FindPeaksOnGrid(const ArrayGeometry& geometry, const Se
 
 // ---------------------------------------------------------------- steering
 
-SteeredQuadraticForm::SteeredQuadraticForm(const ArrayGeometry& geometry, const BlockStatistics& stats)
+SteeredQuadraticForm::SteeredQuadraticForm(const ArrayGeometry& geometry,
+                                           const BlockStatistics& stats)
     : geometry_(geometry), stats_(stats) {}
 
-void SteeredQuadraticForm::Evaluate(const Eigen::Vector3d& u, const std::vector<Eigen::MatrixXcd>& q,
-                                    bool off_diagonal_only, std::vector<double>* out) const {
+void SteeredQuadraticForm::Evaluate(const Eigen::Vector3d& u,
+                                    const std::vector<Eigen::MatrixXcd>& q, bool off_diagonal_only,
+                                    std::vector<double>* out) const {
   const int m = geometry_.num_mics();
   const Eigen::VectorXd tau = geometry_.Delays(u);
   const double dw = 2 * M_PI * stats_.sample_rate_hz / stats_.fft_size;
@@ -235,7 +244,125 @@ double SrpPhat::operator()(const Eigen::Vector3d& u) const {
   return std::accumulate(per_bin_.begin(), per_bin_.end(), 0.0) * scale_;
 }
 
-BandSrpPhat::BandSrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats, double band_hz)
+CorrelationSrp::CorrelationSrp(const ArrayGeometry& geometry, int fft_size, int bin_lo, int bin_hi,
+                               double lag_step_samples)
+    : geometry_(geometry), bin_lo_(bin_lo), bin_hi_(bin_hi), lag_step_(lag_step_samples) {
+  const int m = geometry.num_mics();
+  for (int i = 0; i < m; ++i)
+    for (int j = i + 1; j < m; ++j) pairs_.emplace_back(i, j);
+  // Largest |tau_i - tau_j| in samples, plus a margin for interpolation.
+  max_lag_ =
+      geometry.aperture_m() / geometry.speed_of_sound_mps * geometry.sample_rate_hz + 2 * lag_step_;
+  num_lags_ = 2 * static_cast<int>(std::ceil(max_lag_ / lag_step_)) + 1;
+  const int nb = bin_hi - bin_lo + 1;
+  cos_.resize(num_lags_, nb);
+  sin_.resize(num_lags_, nb);
+  const int half = num_lags_ / 2;
+  for (int l = 0; l < num_lags_; ++l)
+    for (int k = 0; k < nb; ++k) {
+      const double phase = 2 * M_PI * (bin_lo + k) / fft_size * (l - half) * lag_step_;
+      cos_(l, k) = std::cos(phase);
+      sin_(l, k) = std::sin(phase);
+    }
+  corr_.assign(pairs_.size(), Eigen::VectorXd::Zero(num_lags_));
+  magnitude_.assign(pairs_.size(), Eigen::VectorXd::Zero(nb));
+  for (int k = 0; k < nb; ++k) bin_omega_.push_back(2 * M_PI * (bin_lo + k) / fft_size);
+}
+
+void CorrelationSrp::SetBlock(const BlockStatistics& stats) {
+  if (stats.bin_lo != bin_lo_ || stats.bin_hi != bin_hi_)
+    throw std::invalid_argument("CorrelationSrp: band differs");
+  const int nb = num_bins();
+  const double scale = 1.0 / (std::max(1, stats.num_frames) * std::max(1, nb));
+  Eigen::VectorXd re(nb), im(nb);
+  for (size_t p = 0; p < pairs_.size(); ++p) {
+    const auto [i, j] = pairs_[p];
+    for (int k = 0; k < nb; ++k) {
+      re(k) = stats.phat[k](i, j).real();
+      im(k) = stats.phat[k](i, j).imag();
+    }
+    // Re(Q e^{j w d}) = Re Q cos(w d) - Im Q sin(w d)
+    corr_[p].noalias() = (cos_ * re - sin_ * im) * scale;
+    magnitude_[p] = (re.array().square() + im.array().square()).sqrt() * scale;
+  }
+}
+
+double CorrelationSrp::PairValue(int p, double lag_samples) const {
+  const double x = lag_samples / lag_step_ + num_lags_ / 2;
+  const int i = std::clamp(static_cast<int>(std::floor(x)), 0, num_lags_ - 2);
+  const double f = std::clamp(x - i, 0.0, 1.0);
+  return (1 - f) * corr_[p](i) + f * corr_[p](i + 1);
+}
+
+double CorrelationSrp::operator()(const Eigen::Vector3d& u) const {
+  const Eigen::VectorXd tau = geometry_.Delays(u) * geometry_.sample_rate_hz;
+  double sum = 0;
+  for (size_t p = 0; p < pairs_.size(); ++p)
+    sum += PairValue(p, tau(pairs_[p].first) - tau(pairs_[p].second));
+  return sum / pairs_.size();
+}
+
+void CorrelationSrp::Subtract(const Eigen::Vector3d& u) {
+  const Eigen::VectorXd tau = geometry_.Delays(u) * geometry_.sample_rate_hz;
+  const int nb = num_bins();
+  Eigen::VectorXd c(nb), s(nb);
+  for (size_t p = 0; p < pairs_.size(); ++p) {
+    const double d0 = tau(pairs_[p].first) - tau(pairs_[p].second);
+    const double total = magnitude_[p].sum();  // h(0)
+    if (total <= 0) continue;
+    const double gain = std::clamp(PairValue(p, d0) / total, 0.0, 1.0);
+    if (gain <= 0) continue;
+    for (int k = 0; k < nb; ++k) {
+      c(k) = magnitude_[p](k) * std::cos(bin_omega_[k] * d0);
+      s(k) = magnitude_[p](k) * std::sin(bin_omega_[k] * d0);
+    }
+    // h(d - d0) = sum_k A_k (cos w d cos w d0 + sin w d sin w d0)
+    // Only the kernel's positive lobes: subtracting its negative ones would raise false peaks
+    // wherever the block's correlation is not exactly one plane wave's.
+    corr_[p].noalias() -= gain * (cos_ * c + sin_ * s).cwiseMax(0.0);
+    magnitude_[p] *= 1 - gain;
+  }
+}
+
+void CorrelationSrp::PrepareGrid(const std::vector<Eigen::Vector3d>& units) {
+  grid_pos_.assign(units.size(), std::vector<float>(pairs_.size()));
+  for (size_t g = 0; g < units.size(); ++g) {
+    const Eigen::VectorXd tau = geometry_.Delays(units[g]) * geometry_.sample_rate_hz;
+    for (size_t p = 0; p < pairs_.size(); ++p)
+      grid_pos_[g][p] = static_cast<float>(
+          (tau(pairs_[p].first) - tau(pairs_[p].second)) / lag_step_ + num_lags_ / 2);
+  }
+}
+
+void CorrelationSrp::EvaluateGrid(std::vector<double>* values) const {
+  values->resize(grid_pos_.size());
+  const double inv = 1.0 / pairs_.size();
+  for (size_t g = 0; g < grid_pos_.size(); ++g) {
+    double sum = 0;
+    for (size_t p = 0; p < pairs_.size(); ++p) {
+      const float x = grid_pos_[g][p];
+      const int i = std::clamp(static_cast<int>(x), 0, num_lags_ - 2);
+      const double f = x - i;
+      sum += (1 - f) * corr_[p](i) + f * corr_[p](i + 1);
+    }
+    (*values)[g] = sum * inv;
+  }
+}
+
+void CorrelationSrp::Suppress(const Eigen::Vector3d& u, double half_width_samples) {
+  const Eigen::VectorXd tau = geometry_.Delays(u) * geometry_.sample_rate_hz;
+  for (size_t p = 0; p < pairs_.size(); ++p) {
+    const double centre =
+        (tau(pairs_[p].first) - tau(pairs_[p].second)) / lag_step_ + num_lags_ / 2;
+    const double w = half_width_samples / lag_step_;
+    const int lo = std::max(0, static_cast<int>(std::floor(centre - w)));
+    const int hi = std::min(num_lags_ - 1, static_cast<int>(std::ceil(centre + w)));
+    for (int l = lo; l <= hi; ++l) corr_[p](l) = 0;
+  }
+}
+
+BandSrpPhat::BandSrpPhat(const ArrayGeometry& geometry, const BlockStatistics& stats,
+                         double band_hz)
     : form_(geometry, stats), stats_(stats) {
   const int m = geometry.num_mics();
   const int nb = stats.num_bins();
@@ -260,9 +387,11 @@ BandSrpPhat::BandSrpPhat(const ArrayGeometry& geometry, const BlockStatistics& s
     std::partial_sort(powers.begin(), powers.begin() + top, powers.end(), std::greater<>());
     tonality_[b] = std::accumulate(powers.begin(), powers.begin() + top, 0.0) / total_power;
     for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) {
-      const double frames = stats.phat[k].trace().real() / m;  // n_k: each frame adds |y_i|^2 = 1 per mic
+      const double frames =
+          stats.phat[k].trace().real() / m;  // n_k: each frame adds |y_i|^2 = 1 per mic
       if (frames <= 0) continue;
-      bin_weight_[k] = std::max(0.0, stats.raw[k].trace().real()) / total_power / (frames * m * (m - 1));
+      bin_weight_[k] =
+          std::max(0.0, stats.raw[k].trace().real()) / total_power / (frames * m * (m - 1));
     }
   }
 }
@@ -279,7 +408,8 @@ double BandSrpPhat::Evaluate(const Eigen::Vector3d& u, std::vector<double>* band
   if (bands) {
     bands->assign(num_bands(), 0.0);
     for (int b = 0; b < num_bands(); ++b)
-      for (int k = band_first_[b]; k < band_first_[b + 1]; ++k) (*bands)[b] += bin_weight_[k] * per_bin_[k];
+      for (int k = band_first_[b]; k < band_first_[b + 1]; ++k)
+        (*bands)[b] += bin_weight_[k] * per_bin_[k];
   }
   return total * broadband_scale_;
 }
@@ -291,7 +421,8 @@ double BandSrpPhat::Band(const Eigen::Vector3d& u, int b) const {
   return value;
 }
 
-Music::Music(const ArrayGeometry& geometry, const BlockStatistics& stats, int num_sources, bool generalized)
+Music::Music(const ArrayGeometry& geometry, const BlockStatistics& stats, int num_sources,
+             bool generalized)
     : form_(geometry, stats), num_mics_(geometry.num_mics()) {
   const int m = num_mics_;
   const int d = std::clamp(num_sources, 1, m - 1);
@@ -330,13 +461,15 @@ Music::Music(const ArrayGeometry& geometry, const BlockStatistics& stats, int nu
 double Music::operator()(const Eigen::Vector3d& u) const {
   form_.Evaluate(u, noise_projectors_, false, &per_bin_);
   double p = 0;
-  for (size_t k = 0; k < per_bin_.size(); ++k) p += weights_[k] / std::max(per_bin_[k] / num_mics_, 1e-4);
+  for (size_t k = 0; k < per_bin_.size(); ++k)
+    p += weights_[k] / std::max(per_bin_[k] / num_mics_, 1e-4);
   return p;
 }
 
 // ---------------------------------------------------------------- GCC-PHAT
 
-double GccPhatTdoa(const BlockStatistics& stats, int i, int j, double max_tau_s, int upsample, double* peak) {
+double GccPhatTdoa(const BlockStatistics& stats, int i, int j, double max_tau_s, int upsample,
+                   double* peak) {
   const double fs = stats.sample_rate_hz;
   const int max_lag = static_cast<int>(std::ceil(max_tau_s * fs * upsample)) + 1;
   const double dw = 2 * M_PI * fs / stats.fft_size;
@@ -362,7 +495,8 @@ double GccPhatTdoa(const BlockStatistics& stats, int i, int j, double max_tau_s,
   return (best - max_lag + offset) / (fs * upsample);
 }
 
-std::vector<DoaEstimate> GccPhatDirection(const ArrayGeometry& g, const BlockStatistics& stats, DoaKind kind) {
+std::vector<DoaEstimate> GccPhatDirection(const ArrayGeometry& g, const BlockStatistics& stats,
+                                          DoaKind kind) {
   const int m = g.num_mics();
   const int pairs = m * (m - 1) / 2;
   Eigen::MatrixXd D(pairs, 3);
@@ -408,12 +542,12 @@ std::vector<DoaEstimate> GccPhatDirection(const ArrayGeometry& g, const BlockSta
 
 // ---------------------------------------------------------------- ESPRIT
 
-std::vector<DoaEstimate> Esprit(const ArrayGeometry& g, const BlockStatistics& stats, int num_sources,
-                                double min_separation_deg) {
+std::vector<DoaEstimate> Esprit(const ArrayGeometry& g, const BlockStatistics& stats,
+                                int num_sources, double min_separation_deg) {
   const double d = g.UniformSpacing();
   if (!g.is_linear() || d <= 0 || g.num_mics() < 3)
-    throw std::invalid_argument("ESPRIT needs a uniform linear array of >= 3 microphones; '" + g.name +
-                                "' is not one");
+    throw std::invalid_argument("ESPRIT needs a uniform linear array of >= 3 microphones; '" +
+                                g.name + "' is not one");
   const int m = g.num_mics();
   const int ns = std::clamp(num_sources, 1, m - 2);
   const double f_max = g.speed_of_sound_mps / (2 * d);
@@ -424,7 +558,8 @@ std::vector<DoaEstimate> Esprit(const ArrayGeometry& g, const BlockStatistics& s
   for (int k = 0; k < stats.num_bins(); ++k) {
     const double f = stats.BinHz(stats.bin_lo + k);
     if (f > f_max || f < 200) continue;
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> eig(0.5 * (stats.raw[k] + stats.raw[k].adjoint()));
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> eig(0.5 *
+                                                        (stats.raw[k] + stats.raw[k].adjoint()));
     const Eigen::MatrixXcd Es = eig.eigenvectors().rightCols(ns);
     const Eigen::MatrixXcd E1 = Es.topRows(m - 1), E2 = Es.bottomRows(m - 1);
     const Eigen::MatrixXcd Phi = E1.colPivHouseholderQr().solve(E2);

@@ -61,12 +61,36 @@ struct LocaliserOptions {
   // srp_phat: remove this share (0..1) of the noise covariance's cross-spectra before steering
   // (SubtractNoiseCrossSpectra); 0 off.
   double noise_subtraction = 0.0;
+  // Detection (srp_phat): "activity" estimates in blocks with enough loud frames (energy gate);
+  // "cfar" tests every block. SRP-PHAT through the pairs' correlations (CorrelationSrp), every
+  // frame's bins weighted by their power above the noise; each grid direction's value is
+  // standardised by its own noise mean and variance (over blocks without a detection, time
+  // constant noise_map_s) and a source declared where it exceeds the threshold that gives
+  // false_alarm_probability per block (Bonferroni over the grid, Gaussian values). Among the
+  // directions that pass, the strongest is taken, refined, removed from every pair's
+  // correlation (suppression), and the next searched, up to max_sources; a further source must
+  // be a local maximum of the block's map (secondary_local_max).
+  std::string detection = "activity";
+  double false_alarm_probability = 0.01;
+  double noise_map_s = 10.0;
+  // Blocks with a detection also teach the noise statistics, with this (slower) time constant:
+  // a sound heard without pause for much longer than anyone talks becomes background. 0: never.
+  double steady_s = 0.0;
+  // Half-width of the lag neighbourhood removed around a found source (samples); 0: the main
+  // lobe of the band's PHAT correlation, fs / (2 (min_frequency + max_frequency)).
+  double suppression_samples = 0.0;
+  // "clean": subtract the found source's whole correlation (CorrelationSrp::Subtract), side and
+  // grating lobes included; "zero": zero its lag neighbourhood (suppression_samples).
+  std::string suppression = "clean";
+  // A further source must be a local maximum of the block's map before suppression.
+  bool secondary_local_max = true;
   TrackerOptions tracker;
 
   template <class V>
   void Visit(V& v) {
     v("method", method, "gcc_phat, srp_phat, music, gevd_music or esprit (uniform linear arrays)");
-    v("search", search, "auto (1d for linear arrays, else azimuth_elevation), 1d, azimuth, azimuth_elevation");
+    v("search", search,
+      "auto (1d for linear arrays, else azimuth_elevation), 1d, azimuth, azimuth_elevation");
     v("fft_size", fft_size, "STFT frame length (samples)");
     v("hop_size", hop_size, "STFT hop (samples)");
     v("min_frequency_hz", min_frequency_hz, "lowest analysed frequency");
@@ -79,9 +103,11 @@ struct LocaliserOptions {
     v("max_elevation_deg", max_elevation_deg, "elevation search range (azimuth_elevation)");
     v("max_sources", max_sources, "most simultaneous sources reported per block");
     v("min_separation_deg", min_separation_deg, "closer peaks are suppressed");
-    v("min_peak_ratio", min_peak_ratio, "secondary peaks must reach this fraction of the best (0..1)");
+    v("min_peak_ratio", min_peak_ratio,
+      "secondary peaks must reach this fraction of the best (0..1)");
     v("music_num_sources", music_num_sources, "MUSIC/ESPRIT signal-subspace dimension");
-    v("activity_snr_db", activity_snr_db, "frames this far above the noise floor are active (sound)");
+    v("activity_snr_db", activity_snr_db,
+      "frames this far above the noise floor are active (sound)");
     v("min_active_fraction", min_active_fraction, "a block needs this fraction of active frames");
     v("noise_rise_db_per_s", noise_rise_db_per_s, "noise-floor tracker rise rate");
     v("noise_average_s", noise_average_s, "time constant of the noise covariance (GEVD)");
@@ -89,30 +115,56 @@ struct LocaliserOptions {
     v("direct_path_threshold", direct_path_threshold,
       "use a time-frequency bin only when its short-time covariance is this close to rank 1 "
       "(|R|_F^2 / tr(R)^2, 1/M diffuse .. 1 one plane wave); 0 uses every bin");
-    v("direct_path_smoothing", direct_path_smoothing, "weight of the past in that short-time covariance (0..1)");
+    v("direct_path_smoothing", direct_path_smoothing,
+      "weight of the past in that short-time covariance (0..1)");
     v("onset_rise_db", onset_rise_db,
-      "precedence effect: use a bin only when its power rose this many dB above its recent level (0: all)");
+      "precedence effect: use a bin only when its power rose this many dB above its recent level "
+      "(0: all)");
     v("onset_memory_s", onset_memory_s, "time constant of that recent level");
     v("band_hz", band_hz,
-      "srp_phat: also report each band's (this wide) power-weighted peak, so a narrowband source that "
+      "srp_phat: also report each band's (this wide) power-weighted peak, so a narrowband source "
+      "that "
       "dominates its own band is heard beside broadband ones (0: broadband only)");
-    v("band_min_coherence", band_min_coherence, "a band's peak needs this weighted PHAT coherence (0..1)");
+    v("band_min_coherence", band_min_coherence,
+      "a band's peak needs this weighted PHAT coherence (0..1)");
     v("band_max_sources", band_max_sources, "most band peaks added per block");
     v("band_min_tonality", band_min_tonality,
-      "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise and "
+      "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise "
+      "and "
       "voiced speech lower); 0: any band");
     v("noise_subtraction", noise_subtraction,
-      "srp_phat: remove this share (0..1) of the steady noise's cross-spectra (learnt between sounds) "
+      "srp_phat: remove this share (0..1) of the steady noise's cross-spectra (learnt between "
+      "sounds) "
       "before steering, so a steady interferer does not bend a voice's bearing; 0: off");
+    v("detection", detection,
+      "activity (energy gate) or cfar (srp_phat: every block, standardised against learnt noise "
+      "statistics per "
+      "direction, calibrated false-alarm rate, several sources by suppression)");
+    v("false_alarm_probability", false_alarm_probability,
+      "cfar: chance per block that noise alone gives a detection");
+    v("noise_map_s", noise_map_s, "cfar: time constant of the per-direction noise statistics");
+    v("steady_s", steady_s,
+      "cfar: blocks with a detection also teach the noise statistics with this time constant, so "
+      "an "
+      "unceasing sound becomes background (0: never)");
+    v("suppression", suppression,
+      "cfar: clean (subtract a found source's whole correlation) or zero (its lag neighbourhood)");
+    v("secondary_local_max", secondary_local_max,
+      "cfar: a further source must be a local maximum of the block's map");
+    v("suppression_samples", suppression_samples,
+      "cfar: half-width of the lag neighbourhood removed around a found source (0: band's main "
+      "lobe)");
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {
     check.OneOf("method", method, {"gcc_phat", "srp_phat", "music", "gevd_music", "esprit"});
     check.OneOf("search", search, {"auto", "1d", "azimuth", "azimuth_elevation"});
-    check.That(fft_size >= 64 && (fft_size & (fft_size - 1)) == 0, "fft_size", "must be a power of two >= 64");
+    check.That(fft_size >= 64 && (fft_size & (fft_size - 1)) == 0, "fft_size",
+               "must be a power of two >= 64");
     check.That(hop_size >= 1 && hop_size <= fft_size, "hop_size", "must be in [1, fft_size]");
     check.Positive("min_frequency_hz", min_frequency_hz);
-    check.That(max_frequency_hz > min_frequency_hz, "max_frequency_hz", "must exceed min_frequency_hz");
+    check.That(max_frequency_hz > min_frequency_hz, "max_frequency_hz",
+               "must exceed min_frequency_hz");
     check.Positive("block_s", block_s);
     check.That(window_blocks >= 1, "window_blocks", "must be >= 1");
     check.Positive("coarse_step_deg", coarse_step_deg);
@@ -135,31 +187,43 @@ struct LocaliserOptions {
     check.That(band_max_sources >= 0, "band_max_sources", "must be >= 0");
     check.InRange("band_min_tonality", band_min_tonality, 0, 1);
     check.InRange("noise_subtraction", noise_subtraction, 0, 1);
+    check.OneOf("detection", detection, {"activity", "cfar"});
+    check.That(detection != "cfar" || (method == "srp_phat" && band_hz == 0), "detection",
+               "cfar needs method srp_phat without band peaks (band_hz 0)");
+    check.That(false_alarm_probability > 0 && false_alarm_probability < 1,
+               "false_alarm_probability", "must be in (0, 1)");
+    check.Positive("noise_map_s", noise_map_s);
+    check.NonNegative("steady_s", steady_s);
+    check.NonNegative("suppression_samples", suppression_samples);
+    check.OneOf("suppression", suppression, {"clean", "zero"});
   }
 };
 
 struct LocalisedDirection {
-  Direction direction;           // after the sensor model
-  Eigen::Matrix2d covariance;    // rad^2
+  Direction direction;         // after the sensor model
+  Eigen::Matrix2d covariance;  // rad^2
   double power = 0, confidence = 0;
-  int band = -1;                 // band peak (BandSrpPhat band index); -1 broadband
-  double band_hz = 0;            // that band's centre
+  int band = -1;       // band peak (BandSrpPhat band index); -1 broadband
+  double band_hz = 0;  // that band's centre
 };
 
 struct LocaliserOutput {
-  int64_t end_sample = 0;        // stream sample one past the window
-  int64_t centre_sample = 0;     // centre of the analysed window
-  bool active = false;           // enough sound to estimate
+  int64_t end_sample = 0;     // stream sample one past the window
+  int64_t centre_sample = 0;  // centre of the analysed window
+  bool active = false;        // activity: enough sound to estimate; cfar: a source detected
   std::vector<LocalisedDirection> directions;  // this block, best first
-  std::vector<Track> tracks;     // confirmed tracks after this block
+  std::vector<Track> tracks;                   // confirmed tracks after this block
 };
 
 DoaKind ResolveKind(const ArrayGeometry& geometry, const std::string& search);
+// t with Q(t) = p for a standard normal variable (upper tail).
+double InverseNormalTail(double p);
 
 class Localiser {
  public:
   // Throws std::invalid_argument for a method the array cannot use (ESPRIT on a non-ULA).
-  Localiser(ArrayGeometry geometry, LocaliserOptions options, std::unique_ptr<SensorModel> sensor_model);
+  Localiser(ArrayGeometry geometry, LocaliserOptions options,
+            std::unique_ptr<SensorModel> sensor_model);
   const ArrayGeometry& geometry() const { return geometry_; }
   const LocaliserOptions& options() const { return options_; }
   DoaKind kind() const { return kind_; }
@@ -185,17 +249,28 @@ class Localiser {
   BlockStatistics MakeStatistics() const;
   // Adds one frame of spectra (num_bins x mics) to `stats` (as active).
   // `mask` (optional, one per band bin) selects the bins to add.
-  void Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* stats, const std::vector<char>* mask = nullptr) const;
+  void Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
+                  const std::vector<char>* mask = nullptr) const;
   // Marks the bins of this frame dominated by one plane wave (direct-path dominance test on
   // the smoothed covariance `state`, updated in place).
-  void DirectPathMask(const Eigen::MatrixXcf& spectra, std::vector<Eigen::MatrixXcd>* state, std::vector<char>* mask) const;
+  void DirectPathMask(const Eigen::MatrixXcf& spectra, std::vector<Eigen::MatrixXcd>* state,
+                      std::vector<char>* mask) const;
   // Precedence effect: clears the mask of the bins whose power did not rise onset_rise_db
   // above their recent level `level` (updated in place).
-  void OnsetMask(const Eigen::MatrixXcf& spectra, std::vector<double>* level, std::vector<char>* mask) const;
+  void OnsetMask(const Eigen::MatrixXcf& spectra, std::vector<double>* level,
+                 std::vector<char>* mask) const;
   int64_t samples_seen() const { return samples_seen_; }
+  // cfar: the standardised threshold (from false_alarm_probability and the grid size).
+  double detection_threshold() const { return detection_threshold_; }
 
  private:
-  void OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, std::vector<LocaliserOutput>* out);
+  void OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
+               std::vector<LocaliserOutput>* out);
+  // cfar detection on one window's statistics.
+  std::vector<DoaEstimate> Detect(const BlockStatistics& stats);
+  bool IsGridLocalMax(const std::vector<double>& values, size_t index) const;
+  void AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
+                          const std::vector<char>* mask) const;
 
   ArrayGeometry geometry_;
   LocaliserOptions options_;
@@ -209,6 +284,8 @@ class Localiser {
   int current_frames_ = 0;
   std::deque<BlockStatistics> window_;
   std::deque<int> window_total_frames_;
+  int current_active_ = 0;  // frames the energy gate calls active (cfar accumulates all)
+  std::deque<int> window_active_;
   std::vector<Eigen::MatrixXcd> noise_;
   std::vector<Eigen::MatrixXcd> smoothed_;
   std::vector<char> mask_;
@@ -216,7 +293,13 @@ class Localiser {
   int64_t noise_frames_ = 0;
   double noise_floor_ = -1;
   int64_t samples_seen_ = 0;
-  int64_t stream_offset_ = 0;  // samples before the last ResetStream
+  // cfar
+  std::unique_ptr<CorrelationSrp> correlation_;
+  std::vector<Eigen::Vector3d> grid_units_;
+  std::vector<double> noise_mean_, noise_var_;
+  int64_t noise_map_blocks_ = 0;
+  double detection_threshold_ = 0;  // standardised value
+  int64_t stream_offset_ = 0;       // samples before the last ResetStream
 };
 
 }  // namespace sound

@@ -1,12 +1,17 @@
 #pragma once
 // Multi-source DOA tracker: births, deaths, persistence through short silences, stable ids.
 //
-// Each track is a random-walk Kalman filter on (azimuth, elevation) (1-D: angle to the
-// axis): prediction adds q^2 dt to the variances; a measurement z with covariance R updates
-// x += K (z - x), K = P (P + R)^-1 (angle differences wrapped). Association is greedy
-// nearest-first within a gate (angular distance). An unassociated measurement starts a
-// tentative track; it is confirmed (and gets the next id) after `birth_hits` hits within
-// `birth_window_s`; a track not updated for `max_silence_s` dies.
+// Each track is a Kalman filter on (azimuth, elevation) (1-D: angle to the axis) and, with
+// velocity_noise_deg_per_s_sqrt_s > 0, their rates: a constant-velocity model whose rate decays
+// towards 0 with velocity_time_constant_s (a talker who stops talking is not carried away).
+// Prediction adds the position random walk q^2 dt and the rate's noise; a measurement z with
+// covariance R updates x += K (z - Hx), K = P H^T S^-1, S = H P H^T + R (angle differences
+// wrapped). Association is greedy, smallest Mahalanobis distance first, within the gate
+// d^2 = v^T S^-1 v < chi2_2(gate_probability) and gate_deg. With the rates, two talkers whose
+// bearings cross keep their tracks: each track's prediction goes on past the other's.
+// An unassociated measurement starts a tentative track; it is confirmed (and gets the next id)
+// after `birth_hits` hits within `birth_window_s`; a track not updated for `max_silence_s`
+// dies.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -24,6 +29,12 @@ struct TrackerOptions {
   double birth_window_s = 1.0;
   double max_silence_s = 2.0;
   double process_noise_deg_per_sqrt_s = 10.0;
+  double velocity_noise_deg_per_s_sqrt_s = 0.0;  // 0: random walk only
+  double velocity_time_constant_s = 1.0;
+  double gate_probability = 0.0;  // 0: angular gate only
+  // A reflection is always weaker than its direct sound, so it is never its block's strongest
+  // direction: a track is confirmed only after this many hits as the strongest (0: any hits).
+  int primary_hits = 0;
   template <class V>
   void Visit(V& v) {
     v("gate_deg", gate_deg, "a measurement further than this from a track starts a new one");
@@ -31,6 +42,15 @@ struct TrackerOptions {
     v("birth_window_s", birth_window_s, "tentative tracks not confirmed within this die");
     v("max_silence_s", max_silence_s, "a track survives silences up to this long");
     v("process_noise_deg_per_sqrt_s", process_noise_deg_per_sqrt_s, "random-walk process noise");
+    v("velocity_noise_deg_per_s_sqrt_s", velocity_noise_deg_per_s_sqrt_s,
+      "constant-velocity model: noise of the bearing rate (0: random walk only)");
+    v("velocity_time_constant_s", velocity_time_constant_s,
+      "the bearing rate decays to 0 with this time constant");
+    v("primary_hits", primary_hits,
+      "hits as its block's strongest direction needed to confirm a track");
+    v("gate_probability", gate_probability,
+      "also gate by Mahalanobis distance: a track's own measurement falls inside with this "
+      "probability (0: off)");
   }
   void Validate(common::Validator& check) const {
     check.Positive("gate_deg", gate_deg);
@@ -38,6 +58,11 @@ struct TrackerOptions {
     check.Positive("birth_window_s", birth_window_s);
     check.Positive("max_silence_s", max_silence_s);
     check.NonNegative("process_noise_deg_per_sqrt_s", process_noise_deg_per_sqrt_s);
+    check.NonNegative("velocity_noise_deg_per_s_sqrt_s", velocity_noise_deg_per_s_sqrt_s);
+    check.That(primary_hits >= 0, "primary_hits", "must be >= 0");
+    check.Positive("velocity_time_constant_s", velocity_time_constant_s);
+    check.That(gate_probability >= 0 && gate_probability < 1, "gate_probability",
+               "must be in [0, 1)");
   }
 };
 
@@ -45,14 +70,18 @@ struct TrackMeasurement {
   Direction direction;
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity() * 0.003;
   double power = 0, confidence = 0;
+  bool primary = true;  // the strongest direction of its block
 };
 
 struct Track {
   int64_t id = -1;  // -1 while tentative
   Direction direction;
-  Eigen::Matrix2d covariance;
+  Eigen::Matrix2d covariance;                                  // of direction (rad^2)
+  Eigen::Vector2d rate = Eigen::Vector2d::Zero();              // rad/s (constant-velocity model)
+  Eigen::Matrix4d state_covariance = Eigen::Matrix4d::Zero();  // (az, el, az rate, el rate)
   double birth_s = 0, last_update_s = 0;
   int hits = 0;
+  int primary_hits = 0;  // hits as its block's strongest direction
   bool updated = false;  // in the latest Update()
   double power = 0, confidence = 0;
   bool confirmed() const { return id >= 0; }
