@@ -143,14 +143,16 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
     *why = "scan has " + std::to_string(n) + " ranges";
     return false;
   }
-  if (expected_num_ranges_ >= 0 && n != expected_num_ranges_) {
-    *why = "scan has " + std::to_string(n) + " ranges, the sensor gives " +
-           std::to_string(expected_num_ranges_);
-    return false;
-  }
   if (!std::isfinite(scan.angle_min_rad) || !std::isfinite(scan.angle_increment_rad) ||
       scan.angle_increment_rad == 0 || std::abs(scan.angle_increment_rad * n) > 2 * M_PI + 0.1) {
     *why = "scan angles are invalid";
+    return false;
+  }
+  if (scan.has_base_from_laser &&
+      !(std::isfinite(scan.base_from_laser.translation().x()) &&
+        std::isfinite(scan.base_from_laser.translation().y()) &&
+        std::isfinite(scan.base_from_laser.yaw_rad()))) {
+    *why = "scan laser pose not finite";
     return false;
   }
   if (!std::isfinite(scan.time_s)) {
@@ -176,13 +178,15 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
 
 void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
   const auto& o = options_.scan;
-  const Rigid2d base_from_laser(o.laser_x_m, o.laser_y_m, o.laser_yaw_rad);
+  const Rigid2d base_from_laser = scan.has_base_from_laser
+                                      ? scan.base_from_laser
+                                      : Rigid2d(o.laser_x_m, o.laser_y_m, o.laser_yaw_rad);
   data->origin = base_from_laser.translation().cast<float>();
   data->hits.clear();
   data->misses.clear();
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const float r = scan.ranges_m[i];
-    const double a = scan.angle_min_rad + i * scan.angle_increment_rad + o.laser_yaw_rad;
+    const double a = scan.angle_min_rad + i * scan.angle_increment_rad + base_from_laser.yaw_rad();
     const Eigen::Vector2d dir(std::cos(a), std::sin(a));
     const bool is_return = std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m &&
                            r >= o.min_range_m;
@@ -331,7 +335,6 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
     ++stats_.rejected_scans;
     return result;
   }
-  expected_num_ranges_ = static_cast<int>(scan.ranges_m.size());
   // A scan stamped slightly earlier than the previous one (the Intel log does this 631 times,
   // by up to 0.9 s, in bursts whose line order is the recording order: its relations confirm
   // it) is taken in arrival order, as odometry is: it is processed at the newest input time,
@@ -893,7 +896,7 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int32_t>(last_scan_segment_);
     w.Pod(last_node_time_);
     w.Pose(last_node_local_);
-    w.Pod<int32_t>(expected_num_ranges_);
+    w.Pod<int32_t>(-1);  // unused (scans carry their own geometry); kept for the file layout
     w.Pod<int32_t>(odom_segment_);
     out.write(kMagic, 8);  // trailer: a complete file
     if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
@@ -991,7 +994,7 @@ void Slam::Load(const std::string& path) {
   const int32_t last_scan_segment = r.Pod<int32_t>();
   const double last_node_time = r.Pod<double>();
   const Rigid2d last_node_local = r.Pose();
-  const int32_t expected_num_ranges = r.Pod<int32_t>();
+  r.Pod<int32_t>();  // unused (a fixed beam count of version 2 files)
   const int32_t odom_segment = r.Pod<int32_t>();
   in.read(magic, 8);
   if (!in || !std::equal(magic, magic + 8, kMagic)) {
@@ -1027,7 +1030,6 @@ void Slam::Load(const std::string& path) {
   last_scan_segment_ = last_scan_segment;
   last_node_time_ = last_node_time;
   last_node_local_ = last_node_local;
-  expected_num_ranges_ = expected_num_ranges;
   odom_segment_ = odom_segment;
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);

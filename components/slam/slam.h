@@ -31,6 +31,9 @@
 namespace sarmap {
 namespace slam {
 
+// One scan with its own geometry: beam i points at angle_min_rad + i * angle_increment_rad in
+// the laser frame. Consecutive scans may differ in start angle, increment and beam count
+// (interlacing scanners, drivers that drop end beams).
 struct LaserScan {
   double time_s = 0;
   double angle_min_rad = 0;
@@ -38,6 +41,9 @@ struct LaserScan {
   float range_min_m = 0;
   float range_max_m = 0;  // a reading outside [min, max] or not finite is "no return"
   std::vector<float> ranges_m;
+  // base_from_laser of this scan (CARMEN ROBOTLASER1 lines carry it); unset: slam.scan.laser_*.
+  bool has_base_from_laser = false;
+  Rigid2d base_from_laser;
 };
 
 struct ScanResult {
@@ -78,8 +84,8 @@ class Slam {
   // Odometry odom_from_base at `time_s`, in time order. Returns false (and counts) when it is
   // rejected as a jump or not finite; `why` says why.
   bool AddOdometry(double time_s, const Rigid2d& odom_from_base, std::string* why = nullptr);
-  // Scans in time order. Garbage (negative/NaN ranges, wrong beam count, bad angles) is
-  // rejected and counted.
+  // Scans in time order, each with its own geometry. Garbage (negative/NaN ranges, fewer than 2
+  // or more than 100000 beams, bad angles) is rejected and counted.
   ScanResult AddScan(const LaserScan& scan);
   // Runs the global optimisation now (e.g. at the end of a log).
   void Optimise();
@@ -177,7 +183,6 @@ class Slam {
   int odom_segment_ = 0;
   bool have_pending_jump_ = false;
   OdomSample pending_jump_;
-  int expected_num_ranges_ = -1;
 
   // Local SLAM.
   std::vector<Submap> submaps_;

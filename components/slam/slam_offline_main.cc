@@ -74,6 +74,11 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
         in.scan.range_min_m = 0;
         in.scan.range_max_m = std::nextafter(static_cast<float>(l.range_max_m), 0.f);
         in.scan.ranges_m = l.ranges_m;
+        if (l.source == "ROBOTLASER1") {  // the line carries the laser's pose on the robot
+          in.scan.has_base_from_laser = true;
+          in.scan.base_from_laser =
+              slam::Rigid2d(l.base_from_laser_x_m, l.base_from_laser_y_m, l.base_from_laser_yaw_rad);
+        }
         inputs.push_back(std::move(in));
       };
       slam::ReadCarmenFile(path, &reader);
