@@ -123,6 +123,58 @@ TEST(LogToolsTest, InterlaceCarmenWritesScansWithTheirOwnGeometry) {
   EXPECT_EQ(fields(scans[4])[8], "3");  // the FLASER (phase 4 % 4 = 0): all its readings
 }
 
+TEST(LogToolsTest, InterlaceCarmenDrivesLapsWithContinuousTimeAndOdometry) {
+  const std::string dir = ::testing::TempDir();
+  {
+    // The robot drives 1 m along x, turning by 0.5 rad; the stamps run back once (0.3 -> 0.25).
+    std::ofstream f(dir + "/lap.log");
+    f << "ODOM 0 0 0 0 0 0 10.0 host 10.0\n"
+         "RAWLASER1 0 -1.570796 3.141593 0.785398 80.00 0.01 0 5 1 2 3 4 5 0 10.3 host 0\n"
+         "RAWLASER1 0 -1.570796 3.141593 0.785398 80.00 0.01 0 5 1 2 3 4 5 0 10.25 host 0\n"
+         "ODOM 1 0 0.5 0 0 0 11.0 host 11.0\n";
+    std::ofstream r(dir + "/lap.relations");
+    r << "10.0 11.0 1 0 0 0 0 0.5\n";
+  }
+  const std::string bin = SARMAP_BIN_DIR;
+  const std::string out =
+      RunCommand(bin + "/sarmap-log-interlace-carmen " + dir + "/lap.log " + dir +
+                 "/laps.log --laps 3 --relations " + dir + "/lap.relations --relations-output " +
+                 dir + "/laps.relations 2>&1");
+  EXPECT_NE(out.find("6 scans interlaced, 6 odometry lines"), std::string::npos) << out;
+  EXPECT_NE(out.find("3 laps of 2.0 s"), std::string::npos) << out;  // 10.0 .. 11.0, + 1 s
+  std::ifstream in(dir + "/laps.log");
+  std::vector<std::vector<double>> odometry;  // x y theta t
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string type;
+    s >> type;
+    if (type != "ODOM") continue;
+    double x, y, theta, tv, rv, accel, t;
+    s >> x >> y >> theta >> tv >> rv >> accel >> t;
+    odometry.push_back({x, y, theta, t});
+  }
+  ASSERT_EQ(odometry.size(), 6u);
+  // Lap k starts where lap k - 1 ended, 1 s after its latest stamp.
+  for (int lap = 1; lap < 3; ++lap) {
+    const auto& end = odometry[2 * lap - 1];
+    const auto& start = odometry[2 * lap];
+    EXPECT_NEAR(start[0], end[0], 1e-6);
+    EXPECT_NEAR(start[1], end[1], 1e-6);
+    EXPECT_NEAR(start[2], end[2], 1e-6);
+    EXPECT_NEAR(start[3], 10.0 + 2.0 * lap, 1e-6);
+  }
+  // Lap 1 drives its 1 m along its own heading (0.5 rad at its start).
+  EXPECT_NEAR(odometry[3][0], 1 + std::cos(0.5), 1e-6);
+  EXPECT_NEAR(odometry[3][1], std::sin(0.5), 1e-6);
+  EXPECT_NEAR(odometry[3][2], 1.0, 1e-6);
+  std::ifstream rel(dir + "/laps.relations");
+  std::vector<std::string> relations;
+  while (std::getline(rel, line)) relations.push_back(line);
+  ASSERT_EQ(relations.size(), 3u);
+  EXPECT_EQ(relations[2], "14.000000 15.000000 1 0 0 0 0 0.5");
+}
+
 TEST(LogToolsTest, EvalRelationsPrintsTheFourMetricsAndAPlot) {
   const std::string dir = ::testing::TempDir();
   {

@@ -586,6 +586,10 @@ bool Slam::SampleSubmap(Submap* s) {
 void Slam::FinishSubmap(int submap_id) {
   Submap& s = submaps_[submap_id];
   s.finished = true;
+  s.grid->Finish();
+  // A stack cached while the submap was active (the search after a restart) holds neither
+  // the later insertions nor the cropped layout.
+  precomputations_.remove_if([submap_id](const auto& p) { return p.first == submap_id; });
   // Older nodes (not in this submap) against the newly finished submap.
   const auto t0 = std::chrono::steady_clock::now();
   // Nodes of this submap and of the few before it are its local chain, not loops.
@@ -943,6 +947,7 @@ void Slam::Load(const std::string& path) {
     if (!in) throw std::runtime_error("pose-graph file truncated");
     s.grid = std::make_unique<ProbabilityGrid>(resolution, Eigen::Vector2d(cx, cy), 1);
     s.grid->SetRaw(w, h, Eigen::Vector2d(cx, cy), std::move(cells));
+    if (s.finished) s.grid->Finish();
     submaps.push_back(std::move(s));
   }
   std::vector<int> active;
