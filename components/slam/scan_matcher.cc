@@ -294,21 +294,28 @@ PrecomputationStack::PrecomputationStack(const ProbabilityGrid& grid, int depth)
           static_cast<uint8_t>(std::lround(std::min(255.f, std::max(0.f, v))));
     }
   }
-  // Level h from level h-1: max of the four half-windows starting at (x, y), (x+s, y), ...
+  // Level h from level h-1: max of the four half-windows starting at (x, y), (x+s, y), ...,
+  // as a max along rows (x, x+s) and then along columns (y, y+s).
+  std::vector<uint8_t> row_max(static_cast<size_t>(width_) * height_);
   for (int h = 1; h < depth; ++h) {
     const int s = 1 << (h - 1);
     const auto& prev = levels_[h - 1];
     auto& cur = levels_[h];
-    cur.assign(prev.size(), 0);
     for (int y = 0; y < height_; ++y) {
-      for (int x = 0; x < width_; ++x) {
-        uint8_t m = prev[static_cast<size_t>(y) * width_ + x];
-        if (x + s < width_) m = std::max(m, prev[static_cast<size_t>(y) * width_ + x + s]);
-        if (y + s < height_) {
-          m = std::max(m, prev[static_cast<size_t>(y + s) * width_ + x]);
-          if (x + s < width_) m = std::max(m, prev[static_cast<size_t>(y + s) * width_ + x + s]);
-        }
-        cur[static_cast<size_t>(y) * width_ + x] = m;
+      const uint8_t* in = &prev[static_cast<size_t>(y) * width_];
+      uint8_t* out = &row_max[static_cast<size_t>(y) * width_];
+      for (int x = 0; x + s < width_; ++x) out[x] = std::max(in[x], in[x + s]);
+      for (int x = std::max(0, width_ - s); x < width_; ++x) out[x] = in[x];
+    }
+    cur.resize(prev.size());
+    for (int y = 0; y < height_; ++y) {
+      const uint8_t* a = &row_max[static_cast<size_t>(y) * width_];
+      uint8_t* out = &cur[static_cast<size_t>(y) * width_];
+      if (y + s < height_) {
+        const uint8_t* b = &row_max[static_cast<size_t>(y + s) * width_];
+        for (int x = 0; x < width_; ++x) out[x] = std::max(a[x], b[x]);
+      } else {
+        std::copy(a, a + width_, out);
       }
     }
   }
