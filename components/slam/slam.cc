@@ -148,10 +148,9 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
     *why = "scan angles are invalid";
     return false;
   }
-  if (scan.has_base_from_laser &&
-      !(std::isfinite(scan.base_from_laser.translation().x()) &&
-        std::isfinite(scan.base_from_laser.translation().y()) &&
-        std::isfinite(scan.base_from_laser.yaw_rad()))) {
+  if (scan.has_base_from_laser && !(std::isfinite(scan.base_from_laser.translation().x()) &&
+                                    std::isfinite(scan.base_from_laser.translation().y()) &&
+                                    std::isfinite(scan.base_from_laser.yaw_rad()))) {
     *why = "scan laser pose not finite";
     return false;
   }
@@ -188,8 +187,8 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
     const float r = scan.ranges_m[i];
     const double a = scan.angle_min_rad + i * scan.angle_increment_rad + base_from_laser.yaw_rad();
     const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-    const bool is_return = std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m &&
-                           r >= o.min_range_m;
+    const bool is_return =
+        std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m && r >= o.min_range_m;
     if (is_return && r <= o.max_range_m) {
       data->hits.push_back((base_from_laser.translation() + r * dir).cast<float>());
     } else if ((!is_return && !(r < o.min_range_m) && r > scan.range_min_m) ||
@@ -250,7 +249,8 @@ Rigid2d Slam::PredictLocal(double time_s) {
     return last_scan_local_;
   }
   const Rigid2d odom_delta = reference_odom_.inverse() * odom;
-  const bool frozen = odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
+  const bool frozen =
+      odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
   // Odometry readings on both sides of the scan (not only the last one, held) that did not change
   // show a robot standing still; the held last reading alone shows nothing yet.
   // Once standing, a scan ahead of the newest reading is still standing.
@@ -287,9 +287,8 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
     // The prediction can be far off (wheel slip, fast turns): when the best candidate lies at
     // the edge of the window or matches poorly, search again in a wide window.
     const Rigid2d delta = predicted.inverse() * initial;
-    const bool at_edge =
-        std::abs(delta.yaw_rad()) > 0.8 * c.angular_window_rad ||
-        delta.translation().cwiseAbs().maxCoeff() > 0.8 * c.linear_window_m;
+    const bool at_edge = std::abs(delta.yaw_rad()) > 0.8 * c.angular_window_rad ||
+                         delta.translation().cwiseAbs().maxCoeff() > 0.8 * c.linear_window_m;
     if (at_edge || csm_score < l.wide_search_below_score) {
       c.linear_window_m = l.wide_linear_window_m;
       c.angular_window_rad = l.wide_angular_window_deg * kDegToRad;
@@ -308,13 +307,12 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
     // view), keep it where the scan cannot tell turning from sliding (a corridor).
     // The matcher's cost is a mean over the points; counted per point (x N), a scan of 20
     // points through glass tells less than one of 200 that sees the same walls.
-    const double info = points.size() * RotationInformation(grid, points, initial,
-                                                            l.ceres_occupied_weight,
-                                                            l.ceres_translation_weight);
-    m.rotation_weight = AdaptiveRotationWeight(info, l.ceres_rotation_weight,
-                                               l.ceres_rotation_weight_informative,
-                                               l.rotation_information_low,
-                                               l.rotation_information_high);
+    const double info =
+        points.size() * RotationInformation(grid, points, initial, l.ceres_occupied_weight,
+                                            l.ceres_translation_weight);
+    m.rotation_weight =
+        AdaptiveRotationWeight(info, l.ceres_rotation_weight, l.ceres_rotation_weight_informative,
+                               l.rotation_information_low, l.rotation_information_high);
   }
   // The translation prior is the prediction (as in Cartographer): where the scan cannot tell
   // (a corridor), the prediction wins; the rotation prior is the correlative result (or the
@@ -322,8 +320,9 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
   // In localisation only the map is fixed and complete: follow the correlative result, so an
   // offset of the start pose is corrected instead of held.
   const Rigid2d prior(localisation_only_ ? initial.translation() : predicted.translation(),
-                      l.ceres_rotation_prior_from_prediction && !localisation_only_ ? predicted.yaw_rad()
-                                                                                     : initial.yaw_rad());
+                      l.ceres_rotation_prior_from_prediction && !localisation_only_
+                          ? predicted.yaw_rad()
+                          : initial.yaw_rad());
   const Rigid2d result = CeresMatch(grid, points, prior, initial, m);
   if (score) *score = ScoreAt(grid, points, result);
   return result;
@@ -475,9 +474,9 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
                                 static_cast<float>(l.miss_probability));
       ++submaps_[id].num_inserted;
     }
-    const PointCloud loop_points = AdaptiveVoxelFilter(
-        voxel_hits, static_cast<float>(so.loop_adaptive_max_length_m), so.loop_adaptive_min_points,
-        static_cast<float>(so.max_range_m));
+    const PointCloud loop_points =
+        AdaptiveVoxelFilter(voxel_hits, static_cast<float>(so.loop_adaptive_max_length_m),
+                            so.loop_adaptive_min_points, static_cast<float>(so.max_range_m));
     const int node_id = AddNode(scan.time_s, local, local_data, loop_points, inserted);
     result.is_node = true;
     if (submaps_[active_submaps_.back()].num_inserted == l.scans_per_submap) {
@@ -605,21 +604,24 @@ void Slam::FinishSubmap(int submap_id) {
   }
   // At most max_old_nodes_per_submap of them, spread evenly over time.
   const int limit = options_.loop.max_old_nodes_per_submap;
-  const double stride = near.size() > static_cast<size_t>(limit) ? double(near.size()) / limit : 1.0;
-  for (double k = 0; k < near.size(); k += stride) TryLoopClosure(near[static_cast<size_t>(k)], submap_id);
+  const double stride =
+      near.size() > static_cast<size_t>(limit) ? double(near.size()) / limit : 1.0;
+  for (double k = 0; k < near.size(); k += stride)
+    TryLoopClosure(near[static_cast<size_t>(k)], submap_id);
   stats_.loop_seconds += Seconds(t0);
 }
 
-const PrecomputationStack& Slam::Precomputation(int submap_id) const {
+const PrecomputationStack& Slam::Precomputation(int submap_id) {
   for (auto it = precomputations_.begin(); it != precomputations_.end(); ++it) {
     if (it->first == submap_id) {
       precomputations_.splice(precomputations_.begin(), precomputations_, it);
       return *precomputations_.front().second;
     }
   }
-  precomputations_.emplace_front(submap_id, std::make_unique<PrecomputationStack>(
-                                                *submaps_[submap_id].grid,
-                                                options_.loop.branch_and_bound_depth));
+  ++stats_.precomputations_built;
+  precomputations_.emplace_front(
+      submap_id, std::make_unique<PrecomputationStack>(*submaps_[submap_id].grid,
+                                                       options_.loop.branch_and_bound_depth));
   while (static_cast<int>(precomputations_.size()) > options_.loop.max_cached_precomputations) {
     precomputations_.pop_back();
   }
@@ -651,8 +653,9 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   m.rotation_weight = lo.ceres_rotation_weight;
   m.max_iterations = 10;
   const Rigid2d refined = CeresMatch(*s.grid, n.loop_points, found, found, m);
-  Constraint c{Constraint::LOOP_CLOSURE, submap_id, node_id, s.local_pose.inverse() * refined,
-               lo.translation_weight, lo.rotation_weight};
+  Constraint c{
+      Constraint::LOOP_CLOSURE, submap_id,         node_id, s.local_pose.inverse() * refined,
+      lo.translation_weight,    lo.rotation_weight};
   c.score = score;
   constraints_.push_back(c);
   ++stats_.loop_closures;
@@ -690,8 +693,9 @@ std::vector<StampedPose2> Slam::Trajectory() const {
     }
     out.push_back({s.time_s, g.translation().x(), g.translation().y(), g.yaw_rad()});
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const StampedPose2& a, const StampedPose2& b) { return a.time_s < b.time_s; });
+  std::stable_sort(out.begin(), out.end(), [](const StampedPose2& a, const StampedPose2& b) {
+    return a.time_s < b.time_s;
+  });
   return out;
 }
 
@@ -982,7 +986,8 @@ void Slam::Load(const std::string& path) {
     c.translation_weight = r.Pod<double>();
     c.rotation_weight = r.Pod<double>();
     c.score = r.Pod<double>();
-    const bool submap_kind = c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
+    const bool submap_kind =
+        c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
     if (c.kind < 0 || c.kind > 3 || c.from < 0 || c.to < 0 || c.to >= num_nodes ||
         c.from >= (submap_kind ? num_submaps : num_nodes)) {
       throw std::runtime_error("pose-graph file corrupt (constraint)");
@@ -1059,7 +1064,8 @@ void Slam::Load(const std::string& path) {
   have_reference_ = false;
   have_prev_scan_ = false;
   ++odom_segment_;
-  if (localisation_only_ && !nodes_.empty()) last_scan_local_ = global_from_local_ * last_scan_local_;
+  if (localisation_only_ && !nodes_.empty())
+    last_scan_local_ = global_from_local_ * last_scan_local_;
   stats_ = SlamStats();
   stats_.nodes = nodes_.size();
   stats_.submaps = submaps_.size();

@@ -12,6 +12,7 @@
 //    Huber loss on loop closures).
 // No LCM here: the node and the offline runner feed it.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <deque>
 #include <list>
@@ -19,8 +20,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "slam/grid.h"
 #include "slam/pose_graph.h"
@@ -48,9 +47,9 @@ struct LaserScan {
 
 struct ScanResult {
   bool accepted = false;
-  std::string reason;        // why rejected
-  Rigid2d map_from_base;     // global pose of the scan
-  int node_id = -1;          // the node of this scan, else the latest node
+  std::string reason;     // why rejected
+  Rigid2d map_from_base;  // global pose of the scan
+  int node_id = -1;       // the node of this scan, else the latest node
   bool is_node = false;
   bool optimised = false;    // a global optimisation ran after this scan
   bool loop_closed = false;  // ... and it included new loop closures
@@ -64,6 +63,7 @@ struct SlamStats {
   int64_t stopped_scans = 0;  // matched at the stop pose (unchanged_odometry_means_stopped)
   int64_t scans_waiting_for_odometry = 0;  // after a restart, before the first odometry
   int64_t loop_searches = 0, loop_closures = 0;
+  int64_t precomputations_built = 0;  // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
@@ -161,8 +161,8 @@ class Slam {
   ScanResult AddScanInOrder(const LaserScan& scan, double stamp_s);
   bool OdometryAt(double time_s, Rigid2d* pose, int* segment) const;
   Rigid2d PredictLocal(double time_s);
-  Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& predicted,
-                     double* score) const;
+  Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
+                     const Rigid2d& predicted, double* score) const;
   ScanResult AddScanLocalisation(const LaserScan& scan, const RangeData& data,
                                  const PointCloud& points);
   int AddNode(double time_s, const Rigid2d& local_pose, const RangeData& base_data,
@@ -170,7 +170,7 @@ class Slam {
   void FinishSubmap(int submap_id);
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
-  const PrecomputationStack& Precomputation(int submap_id) const;
+  const PrecomputationStack& Precomputation(int submap_id);
   void RunOptimisation(int max_iterations = 0);  // 0: graph.max_iterations
 
   SlamOptions options_;
@@ -195,7 +195,7 @@ class Slam {
   // Odometry of the last scan before a restart from saved state (Load), to bridge the gap.
   bool resume_odom_valid_ = false;
   double resume_wait_start_s_ = -1;  // first scan that waited for odometry after a restart
-  bool resume_bridged_ = false;  // the first scan after Load was predicted across the gap
+  bool resume_bridged_ = false;      // the first scan after Load was predicted across the gap
   Rigid2d resume_odom_;
   int last_scan_segment_ = -1;
   bool this_scan_has_fresh_odom_ = false;
@@ -218,7 +218,7 @@ class Slam {
   int nodes_since_optimisation_ = 0;
   int64_t loop_closures_at_last_optimisation_ = 0;
   std::vector<ScanRecord> scans_;
-  mutable std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
+  std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
 };
 
 }  // namespace slam

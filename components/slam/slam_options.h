@@ -151,7 +151,7 @@ struct LoopClosureOptions {
   double ceres_rotation_weight = 1.0;
   double translation_weight = 1.1e4;
   double rotation_weight = 1e5;
-  int max_cached_precomputations = 16;
+  int max_cached_precomputations = 8;
   int max_submaps_per_node = 8;       // nearest finished submaps searched for a new node
   int max_old_nodes_per_submap = 60;  // older nodes searched against a newly finished submap
   template <class V> void Visit(V& v) {
