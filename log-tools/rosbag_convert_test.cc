@@ -26,7 +26,9 @@
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
+#include <string>
 
 #include "common/decode.h"
 #include "common/image_codec.h"
@@ -681,15 +683,16 @@ slam::RelationErrors PrefixErrors(const std::string& trajectory_path,
   return slam::EvaluateRelations(traj, rel);
 }
 
-TEST(RosbagConvertTest, IntelAsABagGivesTheSameRelationsErrorAsTheCarmenLog) {
+// The prefix as a CARMEN log (interlaced by sarmap-log-interlace-carmen: scans of four
+// geometries) and as a bag made from it, both through sarmap-slam-offline.
+void CompareBagWithCarmen(bool interlace) {
   const std::string data = std::string(SARMAP_DATA_DIR) + "/slam/intel";
-  if (!std::ifstream(data + "/intel.log"))
-    GTEST_SKIP() << "shared data missing: " << data << "/intel.log";
   const std::string dir = ::testing::TempDir();
-  const std::string carmen = dir + "/intel_prefix.log", bag_path = dir + "/intel_prefix.bag";
+  const std::string name = interlace ? "intel_interlaced" : "intel_prefix";
+  const std::string carmen = dir + "/" + name + ".log", bag_path = dir + "/" + name + ".bag";
   {
     std::ifstream in(data + "/intel.log");
-    std::ofstream out(carmen);
+    std::ofstream out(interlace ? dir + "/intel_plain_prefix.log" : carmen);
     std::string line;
     int scans = 0;
     while (std::getline(in, line) && scans < kScans) {
@@ -697,6 +700,15 @@ TEST(RosbagConvertTest, IntelAsABagGivesTheSameRelationsErrorAsTheCarmenLog) {
       scans += line.rfind("RAWLASER1", 0) == 0 || line.rfind("FLASER", 0) == 0;
     }
   }
+  std::string out;
+  if (interlace) {
+    ASSERT_EQ(RunCommand(kBin + "/sarmap-log-interlace-carmen " + dir + "/intel_plain_prefix.log " +
+                             carmen,
+                         &out),
+              0)
+        << out;
+  }
+  std::set<std::pair<size_t, float>> geometries;  // (beam count, start angle) in the bag
   {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
     int64_t record_ns = 0;
@@ -734,40 +746,61 @@ TEST(RosbagConvertTest, IntelAsABagGivesTheSameRelationsErrorAsTheCarmenLog) {
       // CARMEN's max reading means no return; ROS drops ranges above range_max.
       s.range_max = std::nextafter(static_cast<float>(l.range_max_m), 0.f);
       s.ranges = l.ranges_m;
+      geometries.insert({s.ranges.size(), s.angle_min});
       bag.write("/scan", record_time(l.time_s), s);
     };
     slam::ReadCarmenFile(carmen, &reader);
   }
-  std::string out;
-  ASSERT_EQ(RunCommand(kBin + "/sarmap-log-import-rosbag " + bag_path + " -o " + dir +
-                           "/intel_prefix_bag.lcmlog --config " + kConfig,
+  EXPECT_EQ(geometries.size(), interlace ? 4u : 1u);
+  ASSERT_EQ(RunCommand(kBin + "/sarmap-log-import-rosbag " + bag_path + " -o " + dir + "/" + name +
+                           "_bag.lcmlog --config " + kConfig,
                        &out),
             0)
       << out;
-  ASSERT_EQ(RunCommand(kBin + "/sarmap-slam-offline " + carmen + " --quiet --output " + dir +
-                           "/traj_carmen.txt",
+  ASSERT_EQ(RunCommand(kBin + "/sarmap-slam-offline " + carmen + " --quiet --output " + dir + "/" +
+                           name + "_carmen.txt",
                        &out),
             0)
+      << out;
+  EXPECT_NE(out.find("scans " + std::to_string(kScans) + " (rejected 0,"), std::string::npos)
       << out;
   // The bag's record order is the CARMEN line order (its stamps go back at times), so the LCM
   // log is run in log order as the CARMEN log is.
-  ASSERT_EQ(RunCommand(kBin + "/sarmap-slam-offline " + dir +
-                           "/intel_prefix_bag.lcmlog --log-order --quiet --output " + dir +
-                           "/traj_bag.txt",
-                       &out),
-            0)
+  ASSERT_EQ(
+      RunCommand(kBin + "/sarmap-slam-offline " + dir + "/" + name +
+                     "_bag.lcmlog --log-order --quiet --output " + dir + "/" + name + "_bag.txt",
+                 &out),
+      0)
       << out;
-  const auto carmen_errors = PrefixErrors(dir + "/traj_carmen.txt", data + "/intel.relations");
-  const auto bag_errors = PrefixErrors(dir + "/traj_bag.txt", data + "/intel.relations");
+  EXPECT_NE(out.find("scans " + std::to_string(kScans) + " (rejected 0,"), std::string::npos)
+      << out;
+  const auto carmen_errors =
+      PrefixErrors(dir + "/" + name + "_carmen.txt", data + "/intel.relations");
+  const auto bag_errors = PrefixErrors(dir + "/" + name + "_bag.txt", data + "/intel.relations");
   std::printf(
-      "Intel first %d scans: CARMEN %d relations, %.6f m, %.4f deg; bag %d relations, %.6f m, %.4f "
-      "deg\n",
-      kScans, carmen_errors.used, carmen_errors.abs_trans_m.mean, carmen_errors.abs_rot_deg.mean,
-      bag_errors.used, bag_errors.abs_trans_m.mean, bag_errors.abs_rot_deg.mean);
+      "Intel first %d scans%s: CARMEN %d relations, %.6f m, %.4f deg; bag %d relations, %.6f m, "
+      "%.4f deg\n",
+      kScans, interlace ? " interlaced" : "", carmen_errors.used, carmen_errors.abs_trans_m.mean,
+      carmen_errors.abs_rot_deg.mean, bag_errors.used, bag_errors.abs_trans_m.mean,
+      bag_errors.abs_rot_deg.mean);
   EXPECT_GT(carmen_errors.used, 50);
   EXPECT_EQ(bag_errors.used, carmen_errors.used);
   EXPECT_NEAR(bag_errors.abs_trans_m.mean, carmen_errors.abs_trans_m.mean, 1e-4);
   EXPECT_NEAR(bag_errors.abs_rot_deg.mean, carmen_errors.abs_rot_deg.mean, 0.01);
+}
+
+TEST(RosbagConvertTest, IntelAsABagGivesTheSameRelationsErrorAsTheCarmenLog) {
+  const std::string log = std::string(SARMAP_DATA_DIR) + "/slam/intel/intel.log";
+  if (!std::ifstream(log)) GTEST_SKIP() << "shared data missing: " << log;
+  CompareBagWithCarmen(false);
+}
+
+TEST(RosbagConvertTest, AnInterlacedScannerAsABagKeepsEveryScansGeometry) {
+  // LaserScans whose start angle, increment and beam count change from scan to scan: every
+  // one is imported with its own geometry and used by SLAM, as in the CARMEN log.
+  const std::string log = std::string(SARMAP_DATA_DIR) + "/slam/intel/intel.log";
+  if (!std::ifstream(log)) GTEST_SKIP() << "shared data missing: " << log;
+  CompareBagWithCarmen(true);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 #include "slam/carmen.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -161,6 +163,73 @@ CarmenStats ReadCarmenFile(const std::string& path, CarmenReader* reader) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open CARMEN log '" + path + "'");
   return reader->Read(in);
+}
+
+CarmenLaser InterlacedLaser(const CarmenLaser& laser, int phase) {
+  phase = ((phase % kInterlacePhases) + kInterlacePhases) % kInterlacePhases;
+  const int first = phase == 0 || phase == 2 ? 0 : 1;
+  const int step = phase < 2 ? 1 : 2;
+  CarmenLaser out = laser;
+  out.ranges_m.clear();
+  out.remissions.clear();
+  const int n = static_cast<int>(laser.ranges_m.size());
+  const bool with_remissions = laser.remissions.size() == laser.ranges_m.size();
+  for (int i = first; i < n; i += step) {
+    out.ranges_m.push_back(laser.ranges_m[i]);
+    if (with_remissions) out.remissions.push_back(laser.remissions[i]);
+  }
+  out.angle_min_rad = laser.angle_min_rad + first * laser.angle_increment_rad;
+  out.angle_increment_rad = step * laser.angle_increment_rad;
+  return out;
+}
+
+namespace {
+
+void Append(std::string* line, const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), format, v);
+  *line += buf;
+}
+
+}  // namespace
+
+std::string FormatCarmenOdometry(const CarmenOdometry& o) {
+  std::string line = "ODOM";
+  for (double v : {o.x_m, o.y_m, o.theta_rad, o.tv_mps, o.rv_radps}) Append(&line, " %.6f", v);
+  Append(&line, " %g", 0.0);  // acceleration
+  Append(&line, " %.6f", o.time_s);
+  line += " sarmap";
+  Append(&line, " %.6f", o.time_s);
+  return line;
+}
+
+std::string FormatCarmenLaser(const CarmenLaser& l) {
+  const bool robot = l.source == "ROBOTLASER1";
+  std::string line = robot ? "ROBOTLASER1 0" : "RAWLASER1 0";
+  const int n = static_cast<int>(l.ranges_m.size());
+  Append(&line, " %.9f", l.angle_min_rad);
+  Append(&line, " %.9f", l.angle_increment_rad * std::max(0, n - 1));  // fov
+  Append(&line, " %.9f", l.angle_increment_rad);
+  Append(&line, " %g", l.range_max_m);
+  line += " 0.01 0";  // accuracy, remission mode
+  line += " " + std::to_string(n);
+  for (float r : l.ranges_m) Append(&line, " %.9g", r);
+  line += " " + std::to_string(l.remissions.size());
+  for (float r : l.remissions) Append(&line, " %.9g", r);
+  if (robot) {
+    // odom_from_laser = odom_from_base * base_from_laser
+    const CarmenOdometry& o = l.odometry;
+    const double c = std::cos(o.theta_rad), s = std::sin(o.theta_rad);
+    Append(&line, " %.6f", o.x_m + c * l.base_from_laser_x_m - s * l.base_from_laser_y_m);
+    Append(&line, " %.6f", o.y_m + s * l.base_from_laser_x_m + c * l.base_from_laser_y_m);
+    Append(&line, " %.6f", std::remainder(o.theta_rad + l.base_from_laser_yaw_rad, 2 * M_PI));
+    for (double v : {o.x_m, o.y_m, o.theta_rad, o.tv_mps, o.rv_radps}) Append(&line, " %.6f", v);
+    line += " 0 0 0";  // forward safety, side safety, turn axis
+  }
+  Append(&line, " %.6f", l.time_s);
+  line += " sarmap";
+  Append(&line, " %.6f", l.time_s);
+  return line;
 }
 
 }  // namespace slam

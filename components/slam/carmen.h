@@ -11,6 +11,9 @@
 //       n r_1..r_n n_rem rem.. laser_x laser_y laser_theta robot_x robot_y robot_theta
 //       tv rv forward_safety side_safety turn_axis ipc_timestamp hostname logger_timestamp
 // Timestamps are the ipc_timestamp (seconds), as the .relations files use them.
+// Geometry: RAWLASER1 / ROBOTLASER1 lines carry their own start angle and resolution (beam i at
+// start_angle + i * angular_res), so consecutive lines may differ (interlacing scanners); the
+// fov field is not used. FLASER lines carry none: 180 deg from -90 deg, beams at both ends.
 
 #include <cstdint>
 #include <functional>
@@ -68,6 +71,22 @@ class CarmenReader {
 
 // Reads a whole file; throws std::runtime_error if it cannot be opened.
 CarmenStats ReadCarmenFile(const std::string& path, CarmenReader* reader);
+
+// Interlacing, to test scanners whose geometry changes from scan to scan (a SICK LMS interlaces:
+// 181 beams from -90 deg, then 180 beams from -89.75, -89.5, -89.25 deg). Scan k of a log is cut
+// to phase k % kInterlacePhases of its own sweep of n beams (start a, increment d):
+//   0: all n beams from a;                  1: beams 1..n-1, n-1 beams from a + d;
+//   2: even beams, ceil(n/2) from a, 2 d;   3: odd beams, floor(n/2) from a + d, 2 d.
+// Every kept reading stays at its exact angle, so the cut log keeps the original's accuracy
+// up to the information dropped.
+constexpr int kInterlacePhases = 4;
+CarmenLaser InterlacedLaser(const CarmenLaser& laser, int phase);
+
+// CARMEN lines (no trailing newline): ODOM, and a laser as RAWLASER1 (ROBOTLASER1 when it was
+// one, with its odometry and laser pose), with its own start angle, fov and resolution. A
+// FLASER's odometry is not in a RAWLASER1 line: write it as an ODOM line before it.
+std::string FormatCarmenOdometry(const CarmenOdometry& odometry);
+std::string FormatCarmenLaser(const CarmenLaser& laser);
 
 }  // namespace slam
 }  // namespace sarmap

@@ -60,8 +60,11 @@ void ProbabilityGrid::ApplyOdds(int index, float odds_factor) {
   cells_[index] = std::min(kMaxProbability, std::max(kMinProbability, p));
 }
 
-void ProbabilityGrid::Insert(const RangeData& data, float hit_probability,
-                             float miss_probability) {
+void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float miss_probability) {
+  if (update_mark_.size() != cells_.size()) {  // released by Finish()
+    update_mark_.assign(cells_.size(), 0);
+    current_mark_ = 1;
+  }
   GrowToInclude(data.origin);
   for (const auto& p : data.hits) GrowToInclude(p);
   for (const auto& p : data.misses) GrowToInclude(p);
@@ -93,8 +96,10 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability,
     const int step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;
     const double t_dx = dx != 0 ? std::abs(1.0 / dx) : 1e300;
     const double t_dy = dy != 0 ? std::abs(1.0 / dy) : 1e300;
-    double t_max_x = dx != 0 ? (dx > 0 ? (std::floor(ox) + 1 - ox) : (ox - std::floor(ox))) * t_dx : 1e300;
-    double t_max_y = dy != 0 ? (dy > 0 ? (std::floor(oy) + 1 - oy) : (oy - std::floor(oy))) * t_dy : 1e300;
+    double t_max_x =
+        dx != 0 ? (dx > 0 ? (std::floor(ox) + 1 - ox) : (ox - std::floor(ox))) * t_dx : 1e300;
+    double t_max_y =
+        dy != 0 ? (dy > 0 ? (std::floor(oy) + 1 - oy) : (oy - std::floor(oy))) * t_dy : 1e300;
     const int max_steps = std::abs(end_x - x) + std::abs(end_y - y) + 2;
     for (int s = 0; s < max_steps; ++s) {
       const bool at_end = x == end_x && y == end_y;
@@ -129,6 +134,23 @@ bool ProbabilityGrid::KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) cons
     }
   }
   return max->x() >= 0;
+}
+
+void ProbabilityGrid::Finish() {
+  std::vector<uint32_t>().swap(update_mark_);
+  Eigen::Array2i min, max;
+  if (!KnownBounds(&min, &max)) return;
+  const int new_w = max.x() - min.x() + 1, new_h = max.y() - min.y() + 1;
+  if (new_w == width_ && new_h == height_) return;
+  std::vector<float> cells(static_cast<size_t>(new_w) * new_h);
+  for (int y = 0; y < new_h; ++y) {
+    const auto row = cells_.begin() + static_cast<size_t>(y + min.y()) * width_ + min.x();
+    std::copy(row, row + new_w, cells.begin() + static_cast<size_t>(y) * new_w);
+  }
+  cells_.swap(cells);
+  width_ = new_w;
+  height_ = new_h;
+  corner_ += Eigen::Vector2d(min.x() * resolution_, min.y() * resolution_);
 }
 
 void ProbabilityGrid::SetRaw(int width, int height, const Eigen::Vector2d& corner,

@@ -8,10 +8,9 @@
 // starting from p = 0.5 for a new cell, clamped to [p_min, p_max]. Within one scan a cell is
 // updated at most once, a hit winning over a miss (so dense rays do not over-count).
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/transform.h"
 
@@ -26,7 +25,7 @@ constexpr float kMaxProbability = 0.9f;
 
 struct RangeData {
   Eigen::Vector2f origin = Eigen::Vector2f::Zero();  // sensor position
-  PointCloud hits;    // returns
+  PointCloud hits;                                   // returns
   PointCloud misses;  // end points of no-return rays (free space only)
 };
 
@@ -45,8 +44,9 @@ class ProbabilityGrid {
 
   // Cell index of a map point (may be out of bounds).
   Eigen::Array2i CellIndex(const Eigen::Vector2f& point) const {
-    return Eigen::Array2i(static_cast<int>(std::floor((point.x() - corner_.x()) * inv_resolution_)),
-                          static_cast<int>(std::floor((point.y() - corner_.y()) * inv_resolution_)));
+    return Eigen::Array2i(
+        static_cast<int>(std::floor((point.x() - corner_.x()) * inv_resolution_)),
+        static_cast<int>(std::floor((point.y() - corner_.y()) * inv_resolution_)));
   }
   bool Contains(const Eigen::Array2i& cell) const {
     return cell.x() >= 0 && cell.y() >= 0 && cell.x() < width_ && cell.y() < height_;
@@ -71,6 +71,11 @@ class ProbabilityGrid {
 
   // Bounding box of known cells [min, max] (inclusive); false if none.
   bool KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) const;
+
+  // For a grid that is only read from now on: crops it to its known cells (growth leaves up to
+  // half the grid unknown) and frees the per-scan update marks; reads are unchanged (outside
+  // and unknown read alike). Inserting again works, at the cost of re-allocating the marks.
+  void Finish();
 
   // Raw access for loading.
   void SetRaw(int width, int height, const Eigen::Vector2d& corner, std::vector<float> cells);

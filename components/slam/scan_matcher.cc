@@ -4,6 +4,8 @@
 #include <ceres/cubic_interpolation.h>
 
 #include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
 #include <unordered_set>
 
@@ -19,7 +21,8 @@ PointCloud VoxelFilter(const PointCloud& points, float size_m) {
   for (const auto& p : points) {
     const int64_t x = static_cast<int64_t>(std::floor(p.x() * inv));
     const int64_t y = static_cast<int64_t>(std::floor(p.y() * inv));
-    const uint64_t key = (static_cast<uint64_t>(x) << 32) ^ (static_cast<uint64_t>(y) & 0xffffffffu);
+    const uint64_t key =
+        (static_cast<uint64_t>(x) << 32) ^ (static_cast<uint64_t>(y) & 0xffffffffu);
     if (seen.insert(key).second) out.push_back(p);
   }
   return out;
@@ -88,8 +91,7 @@ void DiscretizeScan(const ProbabilityGrid& grid, const PointCloud& points, doubl
 }  // namespace
 
 Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
-                         const Rigid2d& initial, const CorrelativeOptions& options,
-                         double* score) {
+                         const Rigid2d& initial, const CorrelativeOptions& options, double* score) {
   if (points.empty()) {
     if (score) *score = 0;
     return initial;
@@ -104,15 +106,24 @@ Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
   double best = -1, best_raw = 0;
   Rigid2d best_pose = initial;
   const float inv_n = 1.f / points.size();
+  const float* grid_cells = grid.cells().data();
+  const int grid_w = grid.width(), grid_h = grid.height();
   for (int k = -num_angles; k <= num_angles; ++k) {
     const double dtheta = k * angle_step;
     DiscretizeScan(grid, points, initial.yaw_rad() + dtheta, initial.translation(), &cells);
     std::fill(sums.begin(), sums.end(), 0.f);
     for (const auto& c : cells) {
+      const bool columns_inside = c.x() - w >= 0 && c.x() + w < grid_w;
       for (int dy = -w; dy <= w; ++dy) {
         float* row = &sums[static_cast<size_t>(dy + w) * side];
         const int y = c.y() + dy;
-        for (int dx = -w; dx <= w; ++dx) row[dx + w] += grid.Probability(c.x() + dx, y);
+        if (columns_inside && y >= 0 && y < grid_h) {
+          // The window row lies inside the grid: read it directly (as Probability() does).
+          const float* in = &grid_cells[static_cast<size_t>(y) * grid_w + c.x() - w];
+          for (int i = 0; i < side; ++i) row[i] += in[i] == 0.f ? kMinProbability : in[i];
+        } else {
+          for (int dx = -w; dx <= w; ++dx) row[dx + w] += grid.Probability(c.x() + dx, y);
+        }
       }
     }
     const double rot_cost = options.rotation_delta_cost_weight * dtheta * dtheta;
@@ -142,9 +153,7 @@ class GridAdapter {
  public:
   enum { DATA_DIMENSION = 1 };
   explicit GridAdapter(const ProbabilityGrid& grid) : grid_(grid) {}
-  void GetValue(int row, int col, double* f) const {
-    *f = 1.0 - grid_.Probability(col, row);
-  }
+  void GetValue(int row, int col, double* f) const { *f = 1.0 - grid_.Probability(col, row); }
 
  private:
   const ProbabilityGrid& grid_;
@@ -205,8 +214,9 @@ Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const 
                    const Rigid2d& initial, const CeresMatcherOptions& options) {
   if (points.empty()) return initial;
   // Unwrap the initial yaw next to the prior's so the rotation residual is small.
-  double pose[3] = {initial.translation().x(), initial.translation().y(),
-                    prior.yaw_rad() + std::remainder(initial.yaw_rad() - prior.yaw_rad(), 2 * M_PI)};
+  double pose[3] = {
+      initial.translation().x(), initial.translation().y(),
+      prior.yaw_rad() + std::remainder(initial.yaw_rad() - prior.yaw_rad(), 2 * M_PI)};
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -216,11 +226,10 @@ Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const 
                                 points, grid),
           static_cast<int>(points.size())),
       nullptr, pose);
-  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TranslationDeltaCost, 2, 3>(
-                               new TranslationDeltaCost{options.translation_weight,
-                                                        prior.translation().x(),
-                                                        prior.translation().y()}),
-                           nullptr, pose);
+  problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<TranslationDeltaCost, 2, 3>(new TranslationDeltaCost{
+          options.translation_weight, prior.translation().x(), prior.translation().y()}),
+      nullptr, pose);
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotationDeltaCost, 1, 3>(
                                new RotationDeltaCost{options.rotation_weight, prior.yaw_rad()}),
                            nullptr, pose);
@@ -285,21 +294,28 @@ PrecomputationStack::PrecomputationStack(const ProbabilityGrid& grid, int depth)
           static_cast<uint8_t>(std::lround(std::min(255.f, std::max(0.f, v))));
     }
   }
-  // Level h from level h-1: max of the four half-windows starting at (x, y), (x+s, y), ...
+  // Level h from level h-1: max of the four half-windows starting at (x, y), (x+s, y), ...,
+  // as a max along rows (x, x+s) and then along columns (y, y+s).
+  std::vector<uint8_t> row_max(static_cast<size_t>(width_) * height_);
   for (int h = 1; h < depth; ++h) {
     const int s = 1 << (h - 1);
     const auto& prev = levels_[h - 1];
     auto& cur = levels_[h];
-    cur.assign(prev.size(), 0);
     for (int y = 0; y < height_; ++y) {
-      for (int x = 0; x < width_; ++x) {
-        uint8_t m = prev[static_cast<size_t>(y) * width_ + x];
-        if (x + s < width_) m = std::max(m, prev[static_cast<size_t>(y) * width_ + x + s]);
-        if (y + s < height_) {
-          m = std::max(m, prev[static_cast<size_t>(y + s) * width_ + x]);
-          if (x + s < width_) m = std::max(m, prev[static_cast<size_t>(y + s) * width_ + x + s]);
-        }
-        cur[static_cast<size_t>(y) * width_ + x] = m;
+      const uint8_t* in = &prev[static_cast<size_t>(y) * width_];
+      uint8_t* out = &row_max[static_cast<size_t>(y) * width_];
+      for (int x = 0; x + s < width_; ++x) out[x] = std::max(in[x], in[x + s]);
+      for (int x = std::max(0, width_ - s); x < width_; ++x) out[x] = in[x];
+    }
+    cur.resize(prev.size());
+    for (int y = 0; y < height_; ++y) {
+      const uint8_t* a = &row_max[static_cast<size_t>(y) * width_];
+      uint8_t* out = &cur[static_cast<size_t>(y) * width_];
+      if (y + s < height_) {
+        const uint8_t* b = &row_max[static_cast<size_t>(y + s) * width_];
+        for (int x = 0; x < width_; ++x) out[x] = std::max(a[x], b[x]);
+      } else {
+        std::copy(a, a + width_, out);
       }
     }
   }
@@ -336,9 +352,27 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
   auto to_probability = [&](double sum) {
     return kMinProbability + (kMaxProbability - kMinProbability) * sum / (255.0 * n);
   };
+  // Bounding box of each rotated scan's cells: a candidate whose shifted box lies inside the
+  // stack is scored without per-point bounds checks.
+  std::vector<Eigen::Array4i> boxes(scans.size());  // min x, min y, max x, max y
+  for (size_t a = 0; a < scans.size(); ++a) {
+    Eigen::Array4i b(INT_MAX, INT_MAX, INT_MIN, INT_MIN);
+    for (const auto& cell : scans[a]) {
+      b = Eigen::Array4i(std::min(b[0], cell.x()), std::min(b[1], cell.y()),
+                         std::max(b[2], cell.x()), std::max(b[3], cell.y()));
+    }
+    boxes[a] = b;
+  }
   auto score_of = [&](int level, const Candidate& c) {
     int64_t sum = 0;
-    for (const auto& cell : scans[c.angle_index]) sum += stack.Value(level, cell.x() + c.x, cell.y() + c.y);
+    const auto& cells = scans[c.angle_index];
+    const Eigen::Array4i& b = boxes[c.angle_index];
+    if (stack.Contains(b[0] + c.x, b[1] + c.y) && stack.Contains(b[2] + c.x, b[3] + c.y)) {
+      for (const auto& cell : cells)
+        sum += stack.ValueInside(level, cell.x() + c.x, cell.y() + c.y);
+    } else {
+      for (const auto& cell : cells) sum += stack.Value(level, cell.x() + c.x, cell.y() + c.y);
+    }
     return to_probability(static_cast<double>(sum));
   };
   const int top = stack.depth() - 1;
@@ -355,32 +389,32 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
   }
   Candidate best{-1, 0, 0, min_score};
   // Depth-first branch and bound, best-first at each level.
-  std::function<void(std::vector<Candidate>&, int)> search = [&](std::vector<Candidate>& cs,
-                                                                 int level) {
-    std::sort(cs.begin(), cs.end(),
+  std::function<void(Candidate*, Candidate*, int)> search = [&](Candidate* first, Candidate* last,
+                                                                int level) {
+    std::sort(first, last,
               [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-    for (const Candidate& c : cs) {
-      if (c.score <= best.score) break;
+    for (const Candidate* c = first; c != last; ++c) {
+      if (c->score <= best.score) break;
       if (level == 0) {
-        best = c;
+        best = *c;
         break;  // sorted: the first leaf above the bound is the best of this set
       }
       const int half = 1 << (level - 1);
-      std::vector<Candidate> children;
-      children.reserve(4);
+      std::array<Candidate, 4> children;
+      int num_children = 0;
       for (int dy : {0, half}) {
-        if (c.y + dy > w) continue;
+        if (c->y + dy > w) continue;
         for (int dx : {0, half}) {
-          if (c.x + dx > w) continue;
-          Candidate child{c.angle_index, c.x + dx, c.y + dy, 0};
+          if (c->x + dx > w) continue;
+          Candidate child{c->angle_index, c->x + dx, c->y + dy, 0};
           child.score = score_of(level - 1, child);
-          children.push_back(child);
+          children[num_children++] = child;
         }
       }
-      search(children, level - 1);
+      search(children.data(), children.data() + num_children, level - 1);
     }
   };
-  search(candidates, top);
+  search(candidates.data(), candidates.data() + candidates.size(), top);
   if (best.angle_index < 0) return false;
   *pose = Rigid2d(initial.translation() + Eigen::Vector2d(best.x * res, best.y * res),
                   initial.yaw_rad() + (best.angle_index - num_angles) * angle_step);

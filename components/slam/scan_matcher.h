@@ -41,8 +41,7 @@ struct CorrelativeOptions {
 
 // Exhaustive search around `initial`; returns the best pose and its (unweighted) score.
 Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
-                         const Rigid2d& initial, const CorrelativeOptions& options,
-                         double* score);
+                         const Rigid2d& initial, const CorrelativeOptions& options, double* score);
 
 struct CeresMatcherOptions {
   double occupied_space_weight = 1.0;
@@ -52,7 +51,8 @@ struct CeresMatcherOptions {
 };
 
 // Minimises, over the pose T = (x, y, theta),
-//   sum_i (w_o / sqrt(N) * (1 - P(T p_i)))^2 + (w_t |t - t_prior|)^2 + (w_r (theta - theta_prior))^2
+//   sum_i (w_o / sqrt(N) * (1 - P(T p_i)))^2 + (w_t |t - t_prior|)^2 + (w_r (theta -
+//   theta_prior))^2
 // with P bicubically interpolated between cell centres (unknown cells = kMinProbability).
 Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& prior,
                    const Rigid2d& initial, const CeresMatcherOptions& options);
@@ -87,6 +87,16 @@ class PrecomputationStack {
     y += offset_;
     if (x < 0 || y < 0 || x >= width_ || y >= height_) return 0;
     return levels_[level][static_cast<size_t>(y) * width_ + x];
+  }
+  // Whether (x, y) lies inside the stored levels (Value() is 0 outside).
+  bool Contains(int x, int y) const {
+    x += offset_;
+    y += offset_;
+    return x >= 0 && y >= 0 && x < width_ && y < height_;
+  }
+  // Value() of a cell for which Contains() holds.
+  int ValueInside(int level, int x, int y) const {
+    return levels_[level][static_cast<size_t>(y + offset_) * width_ + x + offset_];
   }
   size_t MemoryBytes() const { return levels_.size() * static_cast<size_t>(width_) * height_; }
 

@@ -2,12 +2,13 @@
 // into a grid, must be found again from perturbed starting poses by the correlative search,
 // the Ceres refinement and the branch-and-bound search.
 
+#include "slam/scan_matcher.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "slam/grid.h"
-#include "slam/scan_matcher.h"
 
 namespace sarmap {
 namespace slam {
@@ -50,7 +51,8 @@ class ScanMatcherTest : public ::testing::Test {
     grid_ = std::make_unique<ProbabilityGrid>(0.05, Eigen::Vector2d(5.013, 3.011));
     // Map built from a few poses, as local SLAM would.
     for (const Rigid2d& p : {Rigid2d(3, 2, 0.1), Rigid2d(5, 3, -0.4), Rigid2d(7.5, 4.5, 1.0)}) {
-      for (int k = 0; k < 30; ++k) grid_->Insert(TransformRangeData(SimulateScan(p), p), 0.55f, 0.49f);
+      for (int k = 0; k < 30; ++k)
+        grid_->Insert(TransformRangeData(SimulateScan(p), p), 0.55f, 0.49f);
     }
     truth_ = Rigid2d(4.2, 2.7, 0.3);
     points_ = VoxelFilter(SimulateScan(truth_).hits, 0.025f);
@@ -129,6 +131,46 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
   EXPECT_NEAR(ScoreAt(*grid_, points_, found), score, 0.02);
   // Nothing reaches an impossible score.
   EXPECT_FALSE(BranchAndBoundMatch(*grid_, stack, points_, start, b, 0.95, &found, &score));
+}
+
+TEST_F(ScanMatcherTest, AFinishedGridIsCroppedAndMatchesExactlyAsBefore) {
+  ProbabilityGrid finished = *grid_;
+  finished.Finish();
+  // Growth leaves unknown margins: the finished grid holds only the known cells.
+  EXPECT_LT(static_cast<int64_t>(finished.width()) * finished.height(),
+            static_cast<int64_t>(grid_->width()) * grid_->height());
+  for (float y = -2.f; y < 9.f; y += 0.07f) {
+    for (float x = -2.f; x < 13.f; x += 0.07f) {
+      const Eigen::Vector2f p(x, y);
+      ASSERT_EQ(finished.Raw(finished.CellIndex(p)), grid_->Raw(grid_->CellIndex(p)))
+          << x << " " << y;
+    }
+  }
+  // The matchers give the same poses and scores on both.
+  const Rigid2d start(truth_.translation() + Eigen::Vector2d(0.07, -0.06), truth_.yaw_rad() + 0.12);
+  CorrelativeOptions c;
+  c.linear_window_m = 0.15;
+  c.angular_window_rad = 0.25;
+  double score_before = 0, score_after = 0;
+  const Rigid2d before = CorrelativeMatch(*grid_, points_, start, c, &score_before);
+  const Rigid2d after = CorrelativeMatch(finished, points_, start, c, &score_after);
+  EXPECT_NEAR((before.translation() - after.translation()).norm(), 0, 1e-9);
+  EXPECT_NEAR(before.yaw_rad(), after.yaw_rad(), 1e-12);
+  EXPECT_NEAR(score_before, score_after, 1e-6);
+  BranchAndBoundOptions b;
+  b.linear_window_m = 2.0;
+  b.angular_window_rad = 0.5;
+  b.depth = 6;
+  Rigid2d found_before, found_after;
+  ASSERT_TRUE(BranchAndBoundMatch(*grid_, PrecomputationStack(*grid_, 6), points_, start, b, 0.5,
+                                  &found_before, &score_before));
+  ASSERT_TRUE(BranchAndBoundMatch(finished, PrecomputationStack(finished, 6), points_, start, b,
+                                  0.5, &found_after, &score_after));
+  EXPECT_NEAR((found_before.translation() - found_after.translation()).norm(), 0, 1e-9);
+  EXPECT_EQ(score_before, score_after);
+  // A finished grid can still take a scan.
+  finished.Insert(TransformRangeData(SimulateScan(truth_), truth_), 0.55f, 0.49f);
+  EXPECT_GT(finished.Raw(finished.CellIndex(Eigen::Vector2f(10.01f, 3.0f))), 0.5f);
 }
 
 TEST_F(ScanMatcherTest, RotationInformationIsWhatTurningTellsBeyondSliding) {

@@ -143,14 +143,15 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
     *why = "scan has " + std::to_string(n) + " ranges";
     return false;
   }
-  if (expected_num_ranges_ >= 0 && n != expected_num_ranges_) {
-    *why = "scan has " + std::to_string(n) + " ranges, the sensor gives " +
-           std::to_string(expected_num_ranges_);
-    return false;
-  }
   if (!std::isfinite(scan.angle_min_rad) || !std::isfinite(scan.angle_increment_rad) ||
       scan.angle_increment_rad == 0 || std::abs(scan.angle_increment_rad * n) > 2 * M_PI + 0.1) {
     *why = "scan angles are invalid";
+    return false;
+  }
+  if (scan.has_base_from_laser && !(std::isfinite(scan.base_from_laser.translation().x()) &&
+                                    std::isfinite(scan.base_from_laser.translation().y()) &&
+                                    std::isfinite(scan.base_from_laser.yaw_rad()))) {
+    *why = "scan laser pose not finite";
     return false;
   }
   if (!std::isfinite(scan.time_s)) {
@@ -176,16 +177,18 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
 
 void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
   const auto& o = options_.scan;
-  const Rigid2d base_from_laser(o.laser_x_m, o.laser_y_m, o.laser_yaw_rad);
+  const Rigid2d base_from_laser = scan.has_base_from_laser
+                                      ? scan.base_from_laser
+                                      : Rigid2d(o.laser_x_m, o.laser_y_m, o.laser_yaw_rad);
   data->origin = base_from_laser.translation().cast<float>();
   data->hits.clear();
   data->misses.clear();
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const float r = scan.ranges_m[i];
-    const double a = scan.angle_min_rad + i * scan.angle_increment_rad + o.laser_yaw_rad;
+    const double a = scan.angle_min_rad + i * scan.angle_increment_rad + base_from_laser.yaw_rad();
     const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-    const bool is_return = std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m &&
-                           r >= o.min_range_m;
+    const bool is_return =
+        std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m && r >= o.min_range_m;
     if (is_return && r <= o.max_range_m) {
       data->hits.push_back((base_from_laser.translation() + r * dir).cast<float>());
     } else if ((!is_return && !(r < o.min_range_m) && r > scan.range_min_m) ||
@@ -246,7 +249,8 @@ Rigid2d Slam::PredictLocal(double time_s) {
     return last_scan_local_;
   }
   const Rigid2d odom_delta = reference_odom_.inverse() * odom;
-  const bool frozen = odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
+  const bool frozen =
+      odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
   // Odometry readings on both sides of the scan (not only the last one, held) that did not change
   // show a robot standing still; the held last reading alone shows nothing yet.
   // Once standing, a scan ahead of the newest reading is still standing.
@@ -283,9 +287,8 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
     // The prediction can be far off (wheel slip, fast turns): when the best candidate lies at
     // the edge of the window or matches poorly, search again in a wide window.
     const Rigid2d delta = predicted.inverse() * initial;
-    const bool at_edge =
-        std::abs(delta.yaw_rad()) > 0.8 * c.angular_window_rad ||
-        delta.translation().cwiseAbs().maxCoeff() > 0.8 * c.linear_window_m;
+    const bool at_edge = std::abs(delta.yaw_rad()) > 0.8 * c.angular_window_rad ||
+                         delta.translation().cwiseAbs().maxCoeff() > 0.8 * c.linear_window_m;
     if (at_edge || csm_score < l.wide_search_below_score) {
       c.linear_window_m = l.wide_linear_window_m;
       c.angular_window_rad = l.wide_angular_window_deg * kDegToRad;
@@ -304,13 +307,12 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
     // view), keep it where the scan cannot tell turning from sliding (a corridor).
     // The matcher's cost is a mean over the points; counted per point (x N), a scan of 20
     // points through glass tells less than one of 200 that sees the same walls.
-    const double info = points.size() * RotationInformation(grid, points, initial,
-                                                            l.ceres_occupied_weight,
-                                                            l.ceres_translation_weight);
-    m.rotation_weight = AdaptiveRotationWeight(info, l.ceres_rotation_weight,
-                                               l.ceres_rotation_weight_informative,
-                                               l.rotation_information_low,
-                                               l.rotation_information_high);
+    const double info =
+        points.size() * RotationInformation(grid, points, initial, l.ceres_occupied_weight,
+                                            l.ceres_translation_weight);
+    m.rotation_weight =
+        AdaptiveRotationWeight(info, l.ceres_rotation_weight, l.ceres_rotation_weight_informative,
+                               l.rotation_information_low, l.rotation_information_high);
   }
   // The translation prior is the prediction (as in Cartographer): where the scan cannot tell
   // (a corridor), the prediction wins; the rotation prior is the correlative result (or the
@@ -318,8 +320,9 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
   // In localisation only the map is fixed and complete: follow the correlative result, so an
   // offset of the start pose is corrected instead of held.
   const Rigid2d prior(localisation_only_ ? initial.translation() : predicted.translation(),
-                      l.ceres_rotation_prior_from_prediction && !localisation_only_ ? predicted.yaw_rad()
-                                                                                     : initial.yaw_rad());
+                      l.ceres_rotation_prior_from_prediction && !localisation_only_
+                          ? predicted.yaw_rad()
+                          : initial.yaw_rad());
   const Rigid2d result = CeresMatch(grid, points, prior, initial, m);
   if (score) *score = ScoreAt(grid, points, result);
   return result;
@@ -331,7 +334,6 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
     ++stats_.rejected_scans;
     return result;
   }
-  expected_num_ranges_ = static_cast<int>(scan.ranges_m.size());
   // A scan stamped slightly earlier than the previous one (the Intel log does this 631 times,
   // by up to 0.9 s, in bursts whose line order is the recording order: its relations confirm
   // it) is taken in arrival order, as odometry is: it is processed at the newest input time,
@@ -472,9 +474,9 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
                                 static_cast<float>(l.miss_probability));
       ++submaps_[id].num_inserted;
     }
-    const PointCloud loop_points = AdaptiveVoxelFilter(
-        voxel_hits, static_cast<float>(so.loop_adaptive_max_length_m), so.loop_adaptive_min_points,
-        static_cast<float>(so.max_range_m));
+    const PointCloud loop_points =
+        AdaptiveVoxelFilter(voxel_hits, static_cast<float>(so.loop_adaptive_max_length_m),
+                            so.loop_adaptive_min_points, static_cast<float>(so.max_range_m));
     const int node_id = AddNode(scan.time_s, local, local_data, loop_points, inserted);
     result.is_node = true;
     if (submaps_[active_submaps_.back()].num_inserted == l.scans_per_submap) {
@@ -583,6 +585,10 @@ bool Slam::SampleSubmap(Submap* s) {
 void Slam::FinishSubmap(int submap_id) {
   Submap& s = submaps_[submap_id];
   s.finished = true;
+  s.grid->Finish();
+  // A stack cached while the submap was active (the search after a restart) holds neither
+  // the later insertions nor the cropped layout.
+  precomputations_.remove_if([submap_id](const auto& p) { return p.first == submap_id; });
   // Older nodes (not in this submap) against the newly finished submap.
   const auto t0 = std::chrono::steady_clock::now();
   // Nodes of this submap and of the few before it are its local chain, not loops.
@@ -598,21 +604,24 @@ void Slam::FinishSubmap(int submap_id) {
   }
   // At most max_old_nodes_per_submap of them, spread evenly over time.
   const int limit = options_.loop.max_old_nodes_per_submap;
-  const double stride = near.size() > static_cast<size_t>(limit) ? double(near.size()) / limit : 1.0;
-  for (double k = 0; k < near.size(); k += stride) TryLoopClosure(near[static_cast<size_t>(k)], submap_id);
+  const double stride =
+      near.size() > static_cast<size_t>(limit) ? double(near.size()) / limit : 1.0;
+  for (double k = 0; k < near.size(); k += stride)
+    TryLoopClosure(near[static_cast<size_t>(k)], submap_id);
   stats_.loop_seconds += Seconds(t0);
 }
 
-const PrecomputationStack& Slam::Precomputation(int submap_id) const {
+const PrecomputationStack& Slam::Precomputation(int submap_id) {
   for (auto it = precomputations_.begin(); it != precomputations_.end(); ++it) {
     if (it->first == submap_id) {
       precomputations_.splice(precomputations_.begin(), precomputations_, it);
       return *precomputations_.front().second;
     }
   }
-  precomputations_.emplace_front(submap_id, std::make_unique<PrecomputationStack>(
-                                                *submaps_[submap_id].grid,
-                                                options_.loop.branch_and_bound_depth));
+  ++stats_.precomputations_built;
+  precomputations_.emplace_front(
+      submap_id, std::make_unique<PrecomputationStack>(*submaps_[submap_id].grid,
+                                                       options_.loop.branch_and_bound_depth));
   while (static_cast<int>(precomputations_.size()) > options_.loop.max_cached_precomputations) {
     precomputations_.pop_back();
   }
@@ -644,8 +653,9 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   m.rotation_weight = lo.ceres_rotation_weight;
   m.max_iterations = 10;
   const Rigid2d refined = CeresMatch(*s.grid, n.loop_points, found, found, m);
-  Constraint c{Constraint::LOOP_CLOSURE, submap_id, node_id, s.local_pose.inverse() * refined,
-               lo.translation_weight, lo.rotation_weight};
+  Constraint c{
+      Constraint::LOOP_CLOSURE, submap_id,         node_id, s.local_pose.inverse() * refined,
+      lo.translation_weight,    lo.rotation_weight};
   c.score = score;
   constraints_.push_back(c);
   ++stats_.loop_closures;
@@ -683,8 +693,9 @@ std::vector<StampedPose2> Slam::Trajectory() const {
     }
     out.push_back({s.time_s, g.translation().x(), g.translation().y(), g.yaw_rad()});
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const StampedPose2& a, const StampedPose2& b) { return a.time_s < b.time_s; });
+  std::stable_sort(out.begin(), out.end(), [](const StampedPose2& a, const StampedPose2& b) {
+    return a.time_s < b.time_s;
+  });
   return out;
 }
 
@@ -893,7 +904,7 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int32_t>(last_scan_segment_);
     w.Pod(last_node_time_);
     w.Pose(last_node_local_);
-    w.Pod<int32_t>(expected_num_ranges_);
+    w.Pod<int32_t>(-1);  // unused (scans carry their own geometry); kept for the file layout
     w.Pod<int32_t>(odom_segment_);
     out.write(kMagic, 8);  // trailer: a complete file
     if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
@@ -940,6 +951,7 @@ void Slam::Load(const std::string& path) {
     if (!in) throw std::runtime_error("pose-graph file truncated");
     s.grid = std::make_unique<ProbabilityGrid>(resolution, Eigen::Vector2d(cx, cy), 1);
     s.grid->SetRaw(w, h, Eigen::Vector2d(cx, cy), std::move(cells));
+    if (s.finished) s.grid->Finish();
     submaps.push_back(std::move(s));
   }
   std::vector<int> active;
@@ -974,7 +986,8 @@ void Slam::Load(const std::string& path) {
     c.translation_weight = r.Pod<double>();
     c.rotation_weight = r.Pod<double>();
     c.score = r.Pod<double>();
-    const bool submap_kind = c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
+    const bool submap_kind =
+        c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
     if (c.kind < 0 || c.kind > 3 || c.from < 0 || c.to < 0 || c.to >= num_nodes ||
         c.from >= (submap_kind ? num_submaps : num_nodes)) {
       throw std::runtime_error("pose-graph file corrupt (constraint)");
@@ -991,7 +1004,7 @@ void Slam::Load(const std::string& path) {
   const int32_t last_scan_segment = r.Pod<int32_t>();
   const double last_node_time = r.Pod<double>();
   const Rigid2d last_node_local = r.Pose();
-  const int32_t expected_num_ranges = r.Pod<int32_t>();
+  r.Pod<int32_t>();  // unused (a fixed beam count of version 2 files)
   const int32_t odom_segment = r.Pod<int32_t>();
   in.read(magic, 8);
   if (!in || !std::equal(magic, magic + 8, kMagic)) {
@@ -1027,7 +1040,6 @@ void Slam::Load(const std::string& path) {
   last_scan_segment_ = last_scan_segment;
   last_node_time_ = last_node_time;
   last_node_local_ = last_node_local;
-  expected_num_ranges_ = expected_num_ranges;
   odom_segment_ = odom_segment;
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);
@@ -1052,7 +1064,8 @@ void Slam::Load(const std::string& path) {
   have_reference_ = false;
   have_prev_scan_ = false;
   ++odom_segment_;
-  if (localisation_only_ && !nodes_.empty()) last_scan_local_ = global_from_local_ * last_scan_local_;
+  if (localisation_only_ && !nodes_.empty())
+    last_scan_local_ = global_from_local_ * last_scan_local_;
   stats_ = SlamStats();
   stats_.nodes = nodes_.size();
   stats_.submaps = submaps_.size();

@@ -12,6 +12,7 @@
 //    Huber loss on loop closures).
 // No LCM here: the node and the offline runner feed it.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <deque>
 #include <list>
@@ -19,8 +20,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "slam/grid.h"
 #include "slam/pose_graph.h"
@@ -31,6 +30,9 @@
 namespace sarmap {
 namespace slam {
 
+// One scan with its own geometry: beam i points at angle_min_rad + i * angle_increment_rad in
+// the laser frame. Consecutive scans may differ in start angle, increment and beam count
+// (interlacing scanners, drivers that drop end beams).
 struct LaserScan {
   double time_s = 0;
   double angle_min_rad = 0;
@@ -38,13 +40,16 @@ struct LaserScan {
   float range_min_m = 0;
   float range_max_m = 0;  // a reading outside [min, max] or not finite is "no return"
   std::vector<float> ranges_m;
+  // base_from_laser of this scan (CARMEN ROBOTLASER1 lines carry it); unset: slam.scan.laser_*.
+  bool has_base_from_laser = false;
+  Rigid2d base_from_laser;
 };
 
 struct ScanResult {
   bool accepted = false;
-  std::string reason;        // why rejected
-  Rigid2d map_from_base;     // global pose of the scan
-  int node_id = -1;          // the node of this scan, else the latest node
+  std::string reason;     // why rejected
+  Rigid2d map_from_base;  // global pose of the scan
+  int node_id = -1;       // the node of this scan, else the latest node
   bool is_node = false;
   bool optimised = false;    // a global optimisation ran after this scan
   bool loop_closed = false;  // ... and it included new loop closures
@@ -58,6 +63,7 @@ struct SlamStats {
   int64_t stopped_scans = 0;  // matched at the stop pose (unchanged_odometry_means_stopped)
   int64_t scans_waiting_for_odometry = 0;  // after a restart, before the first odometry
   int64_t loop_searches = 0, loop_closures = 0;
+  int64_t precomputations_built = 0;  // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
@@ -78,8 +84,8 @@ class Slam {
   // Odometry odom_from_base at `time_s`, in time order. Returns false (and counts) when it is
   // rejected as a jump or not finite; `why` says why.
   bool AddOdometry(double time_s, const Rigid2d& odom_from_base, std::string* why = nullptr);
-  // Scans in time order. Garbage (negative/NaN ranges, wrong beam count, bad angles) is
-  // rejected and counted.
+  // Scans in time order, each with its own geometry. Garbage (negative/NaN ranges, fewer than 2
+  // or more than 100000 beams, bad angles) is rejected and counted.
   ScanResult AddScan(const LaserScan& scan);
   // Runs the global optimisation now (e.g. at the end of a log).
   void Optimise();
@@ -155,8 +161,8 @@ class Slam {
   ScanResult AddScanInOrder(const LaserScan& scan, double stamp_s);
   bool OdometryAt(double time_s, Rigid2d* pose, int* segment) const;
   Rigid2d PredictLocal(double time_s);
-  Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& predicted,
-                     double* score) const;
+  Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
+                     const Rigid2d& predicted, double* score) const;
   ScanResult AddScanLocalisation(const LaserScan& scan, const RangeData& data,
                                  const PointCloud& points);
   int AddNode(double time_s, const Rigid2d& local_pose, const RangeData& base_data,
@@ -164,7 +170,7 @@ class Slam {
   void FinishSubmap(int submap_id);
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
-  const PrecomputationStack& Precomputation(int submap_id) const;
+  const PrecomputationStack& Precomputation(int submap_id);
   void RunOptimisation(int max_iterations = 0);  // 0: graph.max_iterations
 
   SlamOptions options_;
@@ -177,7 +183,6 @@ class Slam {
   int odom_segment_ = 0;
   bool have_pending_jump_ = false;
   OdomSample pending_jump_;
-  int expected_num_ranges_ = -1;
 
   // Local SLAM.
   std::vector<Submap> submaps_;
@@ -190,7 +195,7 @@ class Slam {
   // Odometry of the last scan before a restart from saved state (Load), to bridge the gap.
   bool resume_odom_valid_ = false;
   double resume_wait_start_s_ = -1;  // first scan that waited for odometry after a restart
-  bool resume_bridged_ = false;  // the first scan after Load was predicted across the gap
+  bool resume_bridged_ = false;      // the first scan after Load was predicted across the gap
   Rigid2d resume_odom_;
   int last_scan_segment_ = -1;
   bool this_scan_has_fresh_odom_ = false;
@@ -213,7 +218,7 @@ class Slam {
   int nodes_since_optimisation_ = 0;
   int64_t loop_closures_at_last_optimisation_ = 0;
   std::vector<ScanRecord> scans_;
-  mutable std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
+  std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
 };
 
 }  // namespace slam

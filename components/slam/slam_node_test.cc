@@ -119,7 +119,8 @@ TEST(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
 
   auto node = std::make_unique<testing::Process>(args, ::testing::TempDir() + "/slam_node_1.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  // Garbage: a scan with NaN ranges and one with the wrong beam count, and an odometry jump.
+  // Garbage: two scans with NaN ranges (the second with 90 beams: a beam count of its own is
+  // not garbage, the NaN is).
   Publish(&lcm, events, 0, 40, 40, &sent_s);
   // (Stamped just before the next scan to come, so the time-ordered queue takes them.)
   laser_scan_t bad = events[0].scan;

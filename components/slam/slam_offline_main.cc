@@ -1,14 +1,14 @@
 // sarmap-slam-offline: runs the SLAM core over a whole dataset as fast as possible (one core)
 // and writes the trajectory of every scan; reads CARMEN logs directly or LCM logs (ODOM, SCAN).
 
-#include <lcm/lcm-cpp.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
@@ -54,7 +54,8 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
     unsigned char magic[4] = {0, 0, 0, 0};
     const size_t got = std::fread(magic, 1, 4, f);
     std::fclose(f);
-    const bool lcm_magic = got == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
+    const bool lcm_magic =
+        got == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
     if (!lcm_magic) {
       slam::CarmenReader reader;
       reader.warn = [](const std::string& w) { SARMAP_LOG(WARN) << "CARMEN: " << w; };
@@ -63,8 +64,8 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
       };
       reader.on_laser = [&](const slam::CarmenLaser& l) {
         if (l.has_odometry) {
-          inputs.push_back(
-              OdometryInput(l.time_s, slam::Rigid2d(l.odometry.x_m, l.odometry.y_m, l.odometry.theta_rad)));
+          inputs.push_back(OdometryInput(
+              l.time_s, slam::Rigid2d(l.odometry.x_m, l.odometry.y_m, l.odometry.theta_rad)));
         }
         Input in;
         in.is_scan = true;
@@ -74,6 +75,11 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
         in.scan.range_min_m = 0;
         in.scan.range_max_m = std::nextafter(static_cast<float>(l.range_max_m), 0.f);
         in.scan.ranges_m = l.ranges_m;
+        if (l.source == "ROBOTLASER1") {  // the line carries the laser's pose on the robot
+          in.scan.has_base_from_laser = true;
+          in.scan.base_from_laser = slam::Rigid2d(l.base_from_laser_x_m, l.base_from_laser_y_m,
+                                                  l.base_from_laser_yaw_rad);
+        }
         inputs.push_back(std::move(in));
       };
       slam::ReadCarmenFile(path, &reader);
@@ -101,7 +107,8 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
         ++bad;
         continue;
       }
-      inputs.push_back(OdometryInput(common::UtimeToSeconds(msg.header.utime), slam::FromOdometryMessage(msg)));
+      inputs.push_back(
+          OdometryInput(common::UtimeToSeconds(msg.header.utime), slam::FromOdometryMessage(msg)));
     }
   }
   if (bad) {
@@ -116,16 +123,19 @@ int main(int argc, char** argv) {
   return common::RunMain("sarmap-slam-offline", [&]() -> int {
     std::string input, output, map_prefix, save_path, config, live_output;
     std::vector<std::string> overrides;
-    bool print_config = false, quiet = false, no_final = false, log_order = false, time_order = false;
+    bool print_config = false, quiet = false, no_final = false, log_order = false,
+         time_order = false;
     common::ArgParser args("sarmap-slam-offline",
                            "Runs SLAM over a CARMEN or LCM log as fast as possible and writes "
                            "the trajectory (t x y yaw per scan).");
     args.AddPositional("LOG", &input, "CARMEN log (.log/.clf) or LCM log (ODOM + SCAN)");
     args.AddFlag("--output", &output, "trajectory file to write (t x y yaw)");
-    args.AddFlag("--live-output", &live_output,
-                 "also write each scan's pose as the node publishes it on POSE, at that time (t x y yaw)");
+    args.AddFlag(
+        "--live-output", &live_output,
+        "also write each scan's pose as the node publishes it on POSE, at that time (t x y yaw)");
     args.AddFlag("--config", &config, "options YAML (config/slam.yaml)");
-    args.AddRepeated("--set", &overrides, "override an option, e.g. --set slam.local.resolution_m=0.05");
+    args.AddRepeated("--set", &overrides,
+                     "override an option, e.g. --set slam.local.resolution_m=0.05");
     args.AddFlag("--map", &map_prefix, "write the map as PREFIX.pgm + PREFIX.yaml");
     args.AddFlag("--save", &save_path, "write the pose-graph file here");
     args.AddSwitch("--print-config", &print_config, "print the effective options and exit");
@@ -136,7 +146,8 @@ int main(int argc, char** argv) {
     args.AddSwitch("--time-order", &time_order,
                    "process inputs in time order (the default for LCM logs, as the node's "
                    "time-ordered queue does)");
-    args.AddSwitch("--no-final-optimisation", &no_final, "skip the optimisation at the end (to see local SLAM alone)");
+    args.AddSwitch("--no-final-optimisation", &no_final,
+                   "skip the optimisation at the end (to see local SLAM alone)");
     if (!args.Parse(argc, argv)) return 0;
     const auto options = common::LoadOptions<slam::SlamNodeOptions>(config, overrides);
     if (print_config) {
@@ -146,7 +157,8 @@ int main(int argc, char** argv) {
     if (output.empty()) throw common::ArgError("--output is required");
 
     auto start = std::chrono::steady_clock::now();
-    if (log_order && time_order) throw common::ArgError("--log-order and --time-order exclude each other");
+    if (log_order && time_order)
+      throw common::ArgError("--log-order and --time-order exclude each other");
     bool is_carmen = false;
     std::vector<Input> inputs = ReadInput(input, options, &is_carmen);
     // A CARMEN log's lines are in recording order; its stamps are not always (Intel has 631
@@ -155,7 +167,8 @@ int main(int argc, char** argv) {
     // time, as the node's time-ordered queue does.
     if (time_order || (!log_order && !is_carmen)) {
       std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
-        return (a.is_scan ? a.scan.time_s : a.odom_time_s) < (b.is_scan ? b.scan.time_s : b.odom_time_s);
+        return (a.is_scan ? a.scan.time_s : a.odom_time_s) <
+               (b.is_scan ? b.scan.time_s : b.odom_time_s);
       });
     }
     const double read_s =
@@ -167,8 +180,8 @@ int main(int argc, char** argv) {
       if (num_scans++ == 0) first_t = in.scan.time_s;
       last_t = in.scan.time_s;
     }
-    std::fprintf(stderr, "read %zu inputs (%lld scans, %.1f s of data) in %.2f s\n",
-                 inputs.size(), (long long)num_scans, last_t - first_t, read_s);
+    std::fprintf(stderr, "read %zu inputs (%lld scans, %.1f s of data) in %.2f s\n", inputs.size(),
+                 (long long)num_scans, last_t - first_t, read_s);
 
     slam::Slam slam(options.slam);
     std::vector<double> latencies;
@@ -189,7 +202,8 @@ int main(int argc, char** argv) {
       }
       const auto t0 = std::chrono::steady_clock::now();
       const slam::ScanResult r = slam.AddScan(in.scan);
-      latencies.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      latencies.push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       if (r.accepted) live_poses.emplace_back(in.scan.time_s, r.map_from_base);
       if (!r.accepted && ++rejected_scans <= 5) {
         SARMAP_LOG(WARN) << "scan rejected: " << r.reason;
@@ -199,19 +213,23 @@ int main(int argc, char** argv) {
       if (!quiet && percent != last_percent) {
         last_percent = percent;
         const auto& s = slam.stats();
-        const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double el =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::fprintf(stderr,
                      "\r%3d %%  scans %lld  nodes %lld  submaps %lld  loops %lld/%lld  "
                      "optimisations %lld  %.1f s (%.1fx real time)   ",
                      percent, (long long)s.scans, (long long)s.nodes, (long long)s.submaps,
                      (long long)s.loop_closures, (long long)s.loop_searches,
-                     (long long)s.optimisations, el, el > 0 ? (in.scan.time_s - first_t) / el : 0.0);
+                     (long long)s.optimisations, el,
+                     el > 0 ? (in.scan.time_s - first_t) / el : 0.0);
       }
     }
     const auto t_final = std::chrono::steady_clock::now();
     if (!no_final) slam.Optimise();
-    const double final_opt_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_final).count();
-    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double final_opt_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_final).count();
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!quiet) std::fprintf(stderr, "\n");
     slam::SaveTrajectory(output, slam.Trajectory());
     if (!live_output.empty()) {
@@ -219,14 +237,17 @@ int main(int argc, char** argv) {
       if (!f) throw std::runtime_error("cannot write " + live_output);
       std::fprintf(f, "# t_s x_m y_m yaw_rad (map_from_base as published live)\n");
       for (const auto& [t, p] : live_poses) {
-        std::fprintf(f, "%.6f %.6f %.6f %.6f\n", t, p.translation().x(), p.translation().y(), p.yaw_rad());
+        std::fprintf(f, "%.6f %.6f %.6f %.6f\n", t, p.translation().x(), p.translation().y(),
+                     p.yaw_rad());
       }
       std::fclose(f);
     }
 
     std::sort(latencies.begin(), latencies.end());
     auto pct = [&](double p) {
-      return latencies.empty() ? 0.0 : latencies[std::min(latencies.size() - 1, size_t(p * latencies.size()))];
+      return latencies.empty()
+                 ? 0.0
+                 : latencies[std::min(latencies.size() - 1, size_t(p * latencies.size()))];
     };
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
@@ -238,16 +259,22 @@ int main(int argc, char** argv) {
         (long long)s.scans, (long long)s.rejected_scans, (long long)s.reordered_scans,
         (long long)s.stopped_scans, (long long)s.rejected_odometry, (long long)s.nodes,
         (long long)s.submaps);
-    std::printf("loop closures %lld of %lld searches, optimisations %lld\n",
-                (long long)s.loop_closures, (long long)s.loop_searches, (long long)s.optimisations);
-    std::printf("data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final %.2f) "
-                "= %.1fx real time\n",
-                last_t - first_t, wall_s, s.local_seconds, s.loop_seconds, s.optimise_seconds,
-                final_opt_s, wall_s > 0 ? (last_t - first_t) / wall_s : 0.0);
+    std::printf(
+        "loop closures %lld of %lld searches (%lld precomputation stacks built), optimisations "
+        "%lld\n",
+        (long long)s.loop_closures, (long long)s.loop_searches, (long long)s.precomputations_built,
+        (long long)s.optimisations);
+    std::printf(
+        "data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final "
+        "%.2f) "
+        "= %.1fx real time\n",
+        last_t - first_t, wall_s, s.local_seconds, s.loop_seconds, s.optimise_seconds, final_opt_s,
+        wall_s > 0 ? (last_t - first_t) / wall_s : 0.0);
     std::printf("per-scan latency: median %.2f ms, p99 %.2f ms, max %.2f ms\n", 1e3 * pct(0.5),
                 1e3 * pct(0.99), 1e3 * latencies.back());
     std::printf("peak memory (max RSS) %.1f MB\n", ru.ru_maxrss / 1024.0);
-    const double cpu_s = ru.ru_utime.tv_sec + 1e-6 * ru.ru_utime.tv_usec + ru.ru_stime.tv_sec + 1e-6 * ru.ru_stime.tv_usec;
+    const double cpu_s = ru.ru_utime.tv_sec + 1e-6 * ru.ru_utime.tv_usec + ru.ru_stime.tv_sec +
+                         1e-6 * ru.ru_stime.tv_usec;
     std::printf("CPU time (one thread, incl. reading) %.2f s = %.1fx real time\n", cpu_s,
                 cpu_s > 0 ? (last_t - first_t) / cpu_s : 0.0);
     std::printf("trajectory: %s\n", output.c_str());
@@ -259,11 +286,13 @@ int main(int argc, char** argv) {
       for (int y = 0; y < map.height; ++y) {
         for (int x = 0; x < map.width; ++x) {
           const int v = map.cells[static_cast<size_t>(y) * map.width + x];
-          img.at<uint8_t>(map.height - 1 - y, x) = v < 0 ? 205 : static_cast<uint8_t>(255 - v * 255 / 100);
+          img.at<uint8_t>(map.height - 1 - y, x) =
+              v < 0 ? 205 : static_cast<uint8_t>(255 - v * 255 / 100);
         }
       }
       cv::imwrite(map_prefix + ".png", img);
-      std::printf("map: %s.pgm %s.yaml %s.png\n", map_prefix.c_str(), map_prefix.c_str(), map_prefix.c_str());
+      std::printf("map: %s.pgm %s.yaml %s.png\n", map_prefix.c_str(), map_prefix.c_str(),
+                  map_prefix.c_str());
     }
     if (!save_path.empty()) {
       slam.Save(save_path);

@@ -151,7 +151,7 @@ struct LoopClosureOptions {
   double ceres_rotation_weight = 1.0;
   double translation_weight = 1.1e4;
   double rotation_weight = 1e5;
-  int max_cached_precomputations = 64;
+  int max_cached_precomputations = 8;
   int max_submaps_per_node = 8;       // nearest finished submaps searched for a new node
   int max_old_nodes_per_submap = 60;  // older nodes searched against a newly finished submap
   template <class V> void Visit(V& v) {
@@ -166,7 +166,7 @@ struct LoopClosureOptions {
     v("ceres_rotation_weight", ceres_rotation_weight, "Refinement: rotation prior weight");
     v("translation_weight", translation_weight, "Pose graph weight of loop closures (translation)");
     v("rotation_weight", rotation_weight, "Pose graph weight of loop closures (rotation)");
-    v("max_cached_precomputations", max_cached_precomputations, "Submap precomputation stacks kept in memory");
+    v("max_cached_precomputations", max_cached_precomputations, "Submap precomputation stacks kept in memory (least recently used; a stack is rebuilt in milliseconds)");
     v("max_submaps_per_node", max_submaps_per_node, "A new node is searched against at most this many nearest finished submaps");
     v("max_old_nodes_per_submap", max_old_nodes_per_submap, "A newly finished submap is searched for at most this many older nodes");
   }

@@ -62,7 +62,8 @@ TEST(CarmenTest, ParsesTheLineTypesAndCountsMalformedLines) {
       "ODOM 1.0 2.0 0.5 0.1 0.2 0 100.5 host 100.5\n"
       "FLASER 3 1.0 2.0 3.0 9 9 9 1.5 2.5 0.25 100.6 host 0.1\n"
       "RAWLASER1 0 -1.5 3.0 0.01 80 0.01 0 2 4.0 5.0 0 100.7 host 100.7\n"
-      "ROBOTLASER1 0 -1.5 3.0 0.01 80 0.01 0 1 7.0 0 1.1 0.0 0.0 1.0 0.0 0.0 0 0 0 0 0 100.8 host 1\n"
+      "ROBOTLASER1 0 -1.5 3.0 0.01 80 0.01 0 1 7.0 0 1.1 0.0 0.0 1.0 0.0 0.0 0 0 0 0 0 100.8 host "
+      "1\n"
       "ODOM 1.0 oops\n");
   CarmenReader reader;
   std::vector<CarmenOdometry> odom;
@@ -88,6 +89,70 @@ TEST(CarmenTest, ParsesTheLineTypesAndCountsMalformedLines) {
   EXPECT_DOUBLE_EQ(lasers[2].time_s, 100.8);
 }
 
+TEST(CarmenTest, LinesWithTheirOwnGeometryReadAsWritten) {
+  // Interlaced SICK lines: each RAWLASER1 line has its own start angle and beam count.
+  std::istringstream in(
+      "RAWLASER1 0 -1.5707963 3.1415927 0.0174533 81.9 0.01 0 3 1.0 2.0 3.0 0 10.0 host 10.0\n"
+      "RAWLASER1 0 -1.5664330 3.1241393 0.0174533 81.9 0.01 0 2 4.0 5.0 0 10.1 host 10.1\n");
+  CarmenReader reader;
+  std::vector<CarmenLaser> lasers;
+  reader.on_laser = [&](const CarmenLaser& l) { lasers.push_back(l); };
+  reader.Read(in);
+  ASSERT_EQ(lasers.size(), 2u);
+  EXPECT_NEAR(lasers[0].angle_min_rad, -M_PI / 2, 1e-7);
+  EXPECT_NEAR(lasers[1].angle_min_rad, -89.75 * M_PI / 180, 1e-7);
+  EXPECT_EQ(lasers[0].ranges_m.size(), 3u);
+  EXPECT_EQ(lasers[1].ranges_m.size(), 2u);
+
+  // Each written line reads back to the same geometry, readings, odometry and laser pose.
+  CarmenLaser robot = lasers[0];
+  robot.source = "ROBOTLASER1";
+  robot.has_odometry = true;
+  robot.odometry = {10.0, 1.0, 2.0, 0.5, 0.0, 0.0};
+  robot.base_from_laser_x_m = 0.2;
+  robot.base_from_laser_yaw_rad = 0.1;
+  CarmenOdometry odom{10.0, 1.0, 2.0, 0.5, 0.3, 0.1};
+  std::istringstream back(FormatCarmenOdometry(odom) + "\n" + FormatCarmenLaser(lasers[1]) + "\n" +
+                          FormatCarmenLaser(robot) + "\n");
+  std::vector<CarmenOdometry> odom_back;
+  std::vector<CarmenLaser> back_lasers;
+  reader.on_odometry = [&](const CarmenOdometry& o) { odom_back.push_back(o); };
+  reader.on_laser = [&](const CarmenLaser& l) { back_lasers.push_back(l); };
+  const CarmenStats s = reader.Read(back);
+  EXPECT_EQ(s.malformed, 0);
+  ASSERT_EQ(odom_back.size(), 1u);
+  EXPECT_NEAR(odom_back[0].theta_rad, 0.5, 1e-6);
+  EXPECT_NEAR(odom_back[0].rv_radps, 0.1, 1e-6);
+  EXPECT_DOUBLE_EQ(odom_back[0].time_s, 10.0);
+  ASSERT_EQ(back_lasers.size(), 2u);
+  EXPECT_EQ(back_lasers[0].source, "RAWLASER1");
+  EXPECT_NEAR(back_lasers[0].angle_min_rad, lasers[1].angle_min_rad, 1e-9);
+  EXPECT_NEAR(back_lasers[0].angle_increment_rad, lasers[1].angle_increment_rad, 1e-9);
+  EXPECT_EQ(back_lasers[0].ranges_m, lasers[1].ranges_m);
+  EXPECT_DOUBLE_EQ(back_lasers[0].time_s, 10.1);
+  EXPECT_EQ(back_lasers[1].source, "ROBOTLASER1");
+  EXPECT_NEAR(back_lasers[1].odometry.theta_rad, 0.5, 1e-6);
+  EXPECT_NEAR(back_lasers[1].base_from_laser_x_m, 0.2, 1e-5);
+  EXPECT_NEAR(back_lasers[1].base_from_laser_yaw_rad, 0.1, 1e-5);
+}
+
+TEST(CarmenTest, InterlacingKeepsEachReadingAtItsAngle) {
+  CarmenLaser l;
+  l.angle_min_rad = -1.0;
+  l.angle_increment_rad = 0.1;
+  l.ranges_m = {0, 1, 2, 3, 4, 5, 6};  // reading i = i: its angle is -1 + 0.1 i
+  const size_t expected_counts[kInterlacePhases] = {7, 6, 4, 3};
+  for (int phase = 0; phase < kInterlacePhases; ++phase) {
+    const CarmenLaser c = InterlacedLaser(l, phase);
+    ASSERT_EQ(c.ranges_m.size(), expected_counts[phase]) << phase;
+    for (size_t j = 0; j < c.ranges_m.size(); ++j) {
+      const double angle = c.angle_min_rad + j * c.angle_increment_rad;
+      EXPECT_NEAR(angle, -1.0 + 0.1 * c.ranges_m[j], 1e-12) << "phase " << phase << " beam " << j;
+    }
+  }
+  EXPECT_EQ(InterlacedLaser(l, 5).ranges_m.size(), 6u);  // phase 5 % 4 = 1
+}
+
 LaserScan MakeScan(double t, int n = 180) {
   LaserScan s;
   s.time_s = t;
@@ -109,7 +174,9 @@ TEST(SlamInputTest, GarbageScansAndOdometryJumpsAreRejectedAndCounted) {
   LaserScan negative = MakeScan(0.2);
   negative.ranges_m[3] = -1.0f;
   EXPECT_FALSE(slam.AddScan(negative).accepted);
-  EXPECT_FALSE(slam.AddScan(MakeScan(0.3, 90)).accepted);  // wrong beam count
+  LaserScan one_beam = MakeScan(0.3);
+  one_beam.ranges_m.resize(1);
+  EXPECT_FALSE(slam.AddScan(one_beam).accepted);
   LaserScan bad_angles = MakeScan(0.4);
   bad_angles.angle_increment_rad = std::nan("");
   EXPECT_FALSE(slam.AddScan(bad_angles).accepted);
@@ -142,6 +209,118 @@ float RoomRange(double x, double y, double angle) {
   return static_cast<float>(r);
 }
 
+// A SICK-like scanner driven through the room on an S-shaped path (x from -3 to 3 m, y and
+// heading swinging); odometry overestimates distance by 5 % and heading by 2 %.
+struct ScannerRun {
+  bool interlace = false;          // scan k: phase k % 4 (below); else always phase 0
+  bool fixed_start_angle = false;  // give every scan phase 0's start angle (a fixed table)
+  Rigid2d base_from_laser;         // where the laser really is
+  bool scans_carry_laser_pose = false;
+  bool options_carry_laser_pose = false;
+};
+// Interlaced phases: 181 beams from -90 deg, then 180 beams from -89.75, -89.5, -89.25 deg, all
+// 1 deg apart. Returns the largest position error (m) against the truth, and the trajectory and
+// the largest heading error (deg).
+double ScannerError(const ScannerRun& run, std::vector<StampedPose2>* trajectory = nullptr,
+                    double* heading_error_deg = nullptr) {
+  SlamOptions options;
+  if (run.options_carry_laser_pose) {
+    options.scan.laser_x_m = run.base_from_laser.translation().x();
+    options.scan.laser_y_m = run.base_from_laser.translation().y();
+    options.scan.laser_yaw_rad = run.base_from_laser.yaw_rad();
+  }
+  Slam slam{options};
+  const int kScans = 200;
+  std::vector<Rigid2d> truth;
+  for (int k = 0; k < kScans; ++k) {
+    const double t = 0.1 * k;
+    const double x = -3.0 + 0.03 * k, y = std::sin(0.03 * k);
+    const double yaw = std::atan2(0.03 * std::cos(0.03 * k), 0.03);
+    truth.emplace_back(x, y, yaw);
+    slam.AddOdometry(t, Rigid2d(-3.0 + 1.05 * (x + 3.0), 1.05 * y, 1.02 * yaw));
+    const int phase = run.interlace ? k % 4 : 0;
+    LaserScan scan;
+    scan.time_s = t;
+    scan.angle_min_rad = (-90.0 + 0.25 * phase) * M_PI / 180;
+    scan.angle_increment_rad = M_PI / 180;
+    scan.range_min_m = 0;
+    scan.range_max_m = 30;
+    scan.ranges_m.resize(phase == 0 ? 181 : 180);
+    const Rigid2d map_from_laser = truth.back() * run.base_from_laser;
+    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      scan.ranges_m[i] =
+          RoomRange(map_from_laser.translation().x(), map_from_laser.translation().y(),
+                    map_from_laser.yaw_rad() + scan.angle_min_rad + i * scan.angle_increment_rad);
+    }
+    if (run.fixed_start_angle) scan.angle_min_rad = -M_PI / 2;
+    scan.has_base_from_laser = run.scans_carry_laser_pose;
+    scan.base_from_laser = run.base_from_laser;
+    const ScanResult r = slam.AddScan(scan);
+    EXPECT_TRUE(r.accepted) << "scan " << k << ": " << r.reason;
+  }
+  slam.Optimise();
+  EXPECT_EQ(slam.stats().rejected_scans, 0);
+  const auto traj = slam.Trajectory();
+  EXPECT_EQ(static_cast<int>(traj.size()), kScans);
+  if (trajectory) *trajectory = traj;
+  const Rigid2d map_from_world = truth.front().inverse();  // the map frame: the first scan
+  double worst = 0, worst_deg = 0;
+  for (size_t k = 0; k < traj.size() && k < truth.size(); ++k) {
+    const Rigid2d expected = map_from_world * truth[k];
+    worst = std::max(worst, std::hypot(traj[k].x_m - expected.translation().x(),
+                                       traj[k].y_m - expected.translation().y()));
+    worst_deg = std::max(
+        worst_deg,
+        std::abs(std::remainder(traj[k].yaw_rad - expected.yaw_rad(), 2 * M_PI)) * 180 / M_PI);
+  }
+  if (heading_error_deg) *heading_error_deg = worst_deg;
+  return worst;
+}
+
+TEST(SlamInputTest, AnInterlacingScannerIsTrackedWithEveryScansOwnGeometry) {
+  // Every scan is used (a fixed beam count rejected three of four: "scan has 180 ranges, the
+  // sensor gives 181"), and each scan's beams lie at its own angles: with the first scan's
+  // start angle for all (a precomputed beam table), three of four scans turn by 0.25-0.75 deg.
+  ScannerRun run;
+  run.interlace = true;
+  double own_deg = 0, fixed_deg = 0;
+  const double own_m = ScannerError(run, nullptr, &own_deg);
+  run.fixed_start_angle = true;
+  const double fixed_m = ScannerError(run, nullptr, &fixed_deg);
+  std::printf(
+      "interlaced scanner: largest error %.4f m, %.3f deg with each scan's geometry; "
+      "%.4f m, %.3f deg with one start angle for all\n",
+      own_m, own_deg, fixed_m, fixed_deg);
+  EXPECT_LT(own_m, 0.05);
+  EXPECT_LT(own_deg, 1.0);
+  EXPECT_GT(fixed_deg, 2 * own_deg);
+}
+
+TEST(SlamInputTest, AScanCarryingItsLaserPoseIsPlacedWithIt) {
+  // The laser 0.3 m ahead of the base, turned by 0.2 rad. A scan that carries this pose (CARMEN
+  // ROBOTLASER1 lines do) is placed exactly as with the pose in the options.
+  ScannerRun run;
+  run.base_from_laser = Rigid2d(0.3, 0, 0.2);
+  run.scans_carry_laser_pose = true;
+  std::vector<StampedPose2> carried, configured;
+  const double carried_m = ScannerError(run, &carried);
+  run.scans_carry_laser_pose = false;
+  run.options_carry_laser_pose = true;
+  const double configured_m = ScannerError(run, &configured);
+  run.options_carry_laser_pose = false;
+  const double ignored_m = ScannerError(run);
+  std::printf(
+      "laser 0.3 m ahead, 0.2 rad: largest position error %.4f m carried by the scans, "
+      "%.4f m in the options, %.4f m ignored\n",
+      carried_m, configured_m, ignored_m);
+  ASSERT_EQ(carried.size(), configured.size());
+  for (size_t k = 0; k < carried.size(); ++k) {
+    EXPECT_NEAR(carried[k].x_m, configured[k].x_m, 1e-9) << k;
+    EXPECT_NEAR(carried[k].yaw_rad, configured[k].yaw_rad, 1e-9) << k;
+  }
+  EXPECT_GT(ignored_m, 2 * carried_m);
+}
+
 TEST(SlamInputTest, ScansStampedEarlierThanThePreviousOneAreTakenInArrivalOrder) {
   // A robot drives along x at 0.05 m per scan (0.1 s). Scans 20-24 and their odometry are
   // stamped 0.75 s too early, as in the Intel log's bursts, but arrive in recording order.
@@ -164,8 +343,9 @@ TEST(SlamInputTest, ScansStampedEarlierThanThePreviousOneAreTakenInArrivalOrder)
   const auto traj = slam.Trajectory();
   ASSERT_EQ(traj.size(), 40u);
   for (const auto& [stamp, x] : stamp_and_true_x) {
-    const auto it = std::find_if(traj.begin(), traj.end(),
-                                 [&](const StampedPose2& p) { return std::abs(p.time_s - stamp) < 1e-9; });
+    const auto it = std::find_if(traj.begin(), traj.end(), [&](const StampedPose2& p) {
+      return std::abs(p.time_s - stamp) < 1e-9;
+    });
     ASSERT_NE(it, traj.end()) << stamp;
     // The map frame starts at the first scan (x = -2).
     EXPECT_NEAR(it->x_m, x + 2.0, 0.05) << "scan stamped " << stamp;
@@ -362,7 +542,7 @@ TEST(SlamStateFileTest, FlippedNanAndOtherVersionFilesAreRefusedAndLeaveTheSlamC
   std::ofstream(path, std::ios::binary | std::ios::trunc) << flipped;
   refused("checksum");
   // A NaN saved by the node itself (sealed, checksum correct): last_node_time, 48 bytes before
-  // the end (trailer 8, odom segment 4, beam count 4, last node pose 24).
+  // the end (trailer 8, odom segment 4, unused beam count 4, last node pose 24).
   std::string with_nan = body;
   const double nan = std::nan("");
   with_nan.replace(with_nan.size() - 48, sizeof(double), reinterpret_cast<const char*>(&nan),
@@ -378,30 +558,37 @@ TEST(SlamStateFileTest, FlippedNanAndOtherVersionFilesAreRefusedAndLeaveTheSlamC
   EXPECT_EQ(legacy.num_nodes(), first.num_nodes());
 }
 
+LaserScan ToLaserScan(const CarmenLaser& l) {
+  LaserScan s;
+  s.time_s = l.time_s;
+  s.angle_min_rad = l.angle_min_rad;
+  s.angle_increment_rad = l.angle_increment_rad;
+  s.range_min_m = 0;
+  s.range_max_m = std::nextafter(static_cast<float>(l.range_max_m), 0.f);
+  s.ranges_m = l.ranges_m;
+  return s;
+}
+
 // Feeds the Intel log in line (recording) order, as sarmap-slam-offline does with CARMEN logs,
-// scans [first_scan, max_scans) and the odometry between them.
-int FeedIntel(Slam* slam, int first_scan, int max_scans) {
+// scans [first_scan, max_scans) and the odometry between them; with `interlace`, scan k cut to
+// interlacing phase k % 4 (InterlacedLaser).
+int FeedIntel(Slam* slam, int first_scan, int max_scans, bool interlace = false) {
   struct Item {
     double t;
     bool is_scan;
     CarmenOdometry odom;
-    LaserScan scan;
+    CarmenLaser laser;
   };
   static std::vector<Item> items;  // parsed once per test binary
   if (items.empty()) {
     CarmenReader reader;
     int scans = 0;
-    reader.on_odometry = [&](const CarmenOdometry& o) { items.push_back({o.time_s, false, o, {}}); };
+    reader.on_odometry = [&](const CarmenOdometry& o) {
+      items.push_back({o.time_s, false, o, {}});
+    };
     reader.on_laser = [&](const CarmenLaser& l) {
       if (scans++ > 2000) return;
-      LaserScan s;
-      s.time_s = l.time_s;
-      s.angle_min_rad = l.angle_min_rad;
-      s.angle_increment_rad = l.angle_increment_rad;
-      s.range_min_m = 0;
-      s.range_max_m = std::nextafter(static_cast<float>(l.range_max_m), 0.f);
-      s.ranges_m = l.ranges_m;
-      items.push_back({l.time_s, true, {}, s});
+      items.push_back({l.time_s, true, {}, l});
     };
     ReadCarmenFile(kIntel, &reader);
   }
@@ -410,7 +597,7 @@ int FeedIntel(Slam* slam, int first_scan, int max_scans) {
     if (scans >= max_scans) break;
     if (scans >= first_scan) {
       if (it.is_scan) {
-        slam->AddScan(it.scan);
+        slam->AddScan(ToLaserScan(interlace ? InterlacedLaser(it.laser, scans) : it.laser));
         ++fed;
       } else {
         slam->AddOdometry(it.t, Rigid2d(it.odom.x_m, it.odom.y_m, it.odom.theta_rad));
@@ -433,21 +620,64 @@ TEST(SlamRealDataTest, IntelPrefixMatchesTheRelations) {
   // Relations within the prefix.
   std::vector<Relation> rel;
   for (const Relation& r : LoadRelations(kIntelRelations)) {
-    if (r.t1_s >= traj.front().time_s && r.t2_s <= traj.back().time_s && r.t1_s <= traj.back().time_s &&
-        r.t2_s >= traj.front().time_s) {
+    if (r.t1_s >= traj.front().time_s && r.t2_s <= traj.back().time_s &&
+        r.t1_s <= traj.back().time_s && r.t2_s >= traj.front().time_s) {
       rel.push_back(r);
     }
   }
   const RelationErrors e = EvaluateRelations(traj, rel);
-  std::printf("Intel prefix: %d relations, abs trans %.4f +- %.4f m, abs rot %.3f +- %.3f deg, "
-              "%lld loop closures\n",
-              e.used, e.abs_trans_m.mean, e.abs_trans_m.std, e.abs_rot_deg.mean, e.abs_rot_deg.std,
-              (long long)slam.stats().loop_closures);
+  std::printf(
+      "Intel prefix: %d relations, abs trans %.4f +- %.4f m, abs rot %.3f +- %.3f deg, "
+      "%lld loop closures\n",
+      e.used, e.abs_trans_m.mean, e.abs_trans_m.std, e.abs_rot_deg.mean, e.abs_rot_deg.std,
+      (long long)slam.stats().loop_closures);
   EXPECT_GT(e.used, 30);
   EXPECT_EQ(e.missing, 0);
   // Regression bounds (measured values are printed above and in the README).
   EXPECT_LT(e.abs_trans_m.mean, REL_TRANS_BOUND);
   EXPECT_LT(e.abs_rot_deg.mean, REL_ROT_BOUND);
+}
+
+// Relations error of a trajectory over the relations that lie within it.
+RelationErrors PrefixRelationErrors(const std::vector<StampedPose2>& traj) {
+  std::vector<Relation> rel;
+  for (const Relation& r : LoadRelations(kIntelRelations)) {
+    if (r.t1_s >= traj.front().time_s && r.t2_s <= traj.back().time_s &&
+        r.t1_s <= traj.back().time_s && r.t2_s >= traj.front().time_s) {
+      rel.push_back(r);
+    }
+  }
+  return EvaluateRelations(traj, rel);
+}
+
+constexpr int kInterlacedScans = 1000;  // ~200 s of the Intel log, with loops
+
+TEST(SlamRealDataTest, IntelInterlacedUsesEveryScanClosesLoopsAndMatchesThePlainLog) {
+  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+  // The Intel scans re-cut into four interlaced sweeps (180 beams from -90 deg, 179 from -89,
+  // 90 from -90 every 2 deg, 90 from -89 every 2 deg), the way sarmap-log-interlace-carmen
+  // writes a log: every scan is used, loops are closed, the error stays near the plain log's.
+  Slam plain{SlamOptions()}, interlaced{SlamOptions()};
+  ASSERT_EQ(FeedIntel(&plain, 0, kInterlacedScans), kInterlacedScans);
+  ASSERT_EQ(FeedIntel(&interlaced, 0, kInterlacedScans, true), kInterlacedScans);
+  plain.Optimise();
+  interlaced.Optimise();
+  const RelationErrors p = PrefixRelationErrors(plain.Trajectory());
+  const RelationErrors i = PrefixRelationErrors(interlaced.Trajectory());
+  std::printf(
+      "Intel first %d scans: plain %.4f m, %.3f deg, %lld loop closures; interlaced %.4f m, "
+      "%.3f deg, %lld loop closures, %lld of %d scans used\n",
+      kInterlacedScans, p.abs_trans_m.mean, p.abs_rot_deg.mean,
+      (long long)plain.stats().loop_closures, i.abs_trans_m.mean, i.abs_rot_deg.mean,
+      (long long)interlaced.stats().loop_closures,
+      (long long)(interlaced.stats().scans - interlaced.stats().rejected_scans), kInterlacedScans);
+  EXPECT_EQ(interlaced.stats().rejected_scans, 0);
+  EXPECT_EQ(static_cast<int>(interlaced.Trajectory().size()), kInterlacedScans);
+  EXPECT_GT(interlaced.stats().loop_closures, plain.stats().loop_closures / 2);
+  EXPECT_EQ(i.used, p.used);
+  EXPECT_GT(i.used, 50);
+  EXPECT_LT(i.abs_trans_m.mean, 1.3 * p.abs_trans_m.mean + 0.005);
+  EXPECT_LT(i.abs_rot_deg.mean, 1.3 * p.abs_rot_deg.mean + 0.05);
 }
 
 TEST(SlamRealDataTest, SaveLoadResumesMapping) {
@@ -469,8 +699,9 @@ TEST(SlamRealDataTest, SaveLoadResumesMapping) {
   FeedIntel(&full, 0, kPrefixScans);
   full.Optimise();
   const Rigid2d a = resumed.CurrentPose(), b = full.CurrentPose();
-  std::printf("resumed end pose %.3f %.3f %.3f, uninterrupted %.3f %.3f %.3f\n", a.translation().x(),
-              a.translation().y(), a.yaw_rad(), b.translation().x(), b.translation().y(), b.yaw_rad());
+  std::printf("resumed end pose %.3f %.3f %.3f, uninterrupted %.3f %.3f %.3f\n",
+              a.translation().x(), a.translation().y(), a.yaw_rad(), b.translation().x(),
+              b.translation().y(), b.yaw_rad());
   EXPECT_LT((a.translation() - b.translation()).norm(), 0.3);
   EXPECT_LT(std::abs(std::remainder(a.yaw_rad() - b.yaw_rad(), 2 * M_PI)), 0.05);
   // A truncated file is refused with a clear error.
@@ -535,8 +766,8 @@ TEST(SlamRealDataTest, SaveLoadResumesMapping) {
 
 TEST(SlamRealDataTest, ResumeBridgesTheMotionMadeWhileDownWithOdometry) {
   if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
-  // The process dies and comes back 25 scans (~5 s, a state-save period, about a metre of driving) later: the scans
-  // in between are lost, the odometry frame is the same.
+  // The process dies and comes back 25 scans (~5 s, a state-save period, about a metre of driving)
+  // later: the scans in between are lost, the odometry frame is the same.
   const int half = kPrefixScans / 2, gap = 25;
   Slam first{SlamOptions()};
   FeedIntel(&first, 0, half);
