@@ -202,9 +202,16 @@ std::string CheckMessage(const sarmap::sound_map_t& m) {
   Check c;
   c.Header(m.header).Count(m.num_sources, m.sources.size(), "num_sources");
   for (const auto& s : m.sources) {
-    c.Finite(s.position_m, "position_m").Finite(s.covariance, "covariance")
+    c.Finite(s.position_m, "position_m")
+        .Finite(s.covariance, "covariance")
         .That(s.state >= sarmap::sound_source_t::STATE_INITIALISING &&
-                  s.state <= sarmap::sound_source_t::STATE_SILENT, "unknown state");
+                  s.state <= sarmap::sound_source_t::STATE_SILENT,
+              "unknown state")
+        .Finite(s.bearing_origin_m, "bearing_origin_m")
+        .That(std::isfinite(s.bearing_rad) && std::isfinite(s.bearing_variance),
+              "non-finite bearing")
+        .That(s.sound_class >= 0 && s.sound_class <= 4, "unknown sound_class")
+        .Probability(s.class_confidence, "class_confidence");
   }
   return c.error();
 }

@@ -298,23 +298,20 @@ void DirectionalClassifier::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end
   const size_t n = tracks_.size();
   // Each bin goes to the track whose plane wave explains it best, when it does so clearly.
   std::vector<std::vector<float>> powers(n, std::vector<float>(power_.size(), -1.0f));
-  std::vector<Eigen::VectorXd> delays(n);
-  for (size_t t = 0; t < n; ++t) delays[t] = geometry_.Delays(tracks_[t].unit);
   coherence_.resize(n);
   std::vector<double> owned_energy(n, 0.0);
+  Eigen::VectorXcd x(m);
   for (int k = bin_lo_; k <= bin_hi_; ++k) {
-    const double w = 2 * M_PI * k * geometry_.sample_rate_hz / options_.fft_size;
     double norm = 0;
-    for (int i = 0; i < m; ++i) norm += std::norm(spectra(k, i));
-    if (norm <= 1e-30) continue;
-    for (size_t t = 0; t < n; ++t) {
-      // a_m = exp(-j w tau_m); a^H x = sum exp(+j w tau_m) x_m.
-      std::complex<double> acc = 0;
-      for (int i = 0; i < m; ++i)
-        acc += std::polar(1.0, w * delays[t](i)) *
-               std::complex<double>(spectra(k, i).real(), spectra(k, i).imag());
-      coherence_[t] = std::norm(acc) / (m * norm);
+    for (int i = 0; i < m; ++i) {
+      x(i) = std::complex<double>(spectra(k, i).real(), spectra(k, i).imag());
+      norm += std::norm(x(i));
     }
+    if (norm <= 1e-30) continue;
+    // a^H x with a_m = exp(-j w tau_m).
+    for (size_t t = 0; t < n; ++t)
+      coherence_[t] =
+          std::norm((tracks_[t].conj_steering.row(k - bin_lo_) * x).value()) / (m * norm);
     size_t best = 0;
     for (size_t t = 1; t < n; ++t)
       if (coherence_[t] > coherence_[best]) best = t;
@@ -378,6 +375,13 @@ std::vector<SoundClassEstimate> DirectionalClassifier::Observe(
     used[best] = 1;
     t.direction = d;
     t.unit = geometry_.Unit(kind_, d);
+    const Eigen::VectorXd delays = geometry_.Delays(t.unit);
+    t.conj_steering.resize(bin_hi_ - bin_lo_ + 1, geometry_.num_mics());
+    for (int k = bin_lo_; k <= bin_hi_; ++k) {
+      const double w = 2 * M_PI * k * geometry_.sample_rate_hz / options_.fft_size;
+      for (int i = 0; i < geometry_.num_mics(); ++i)
+        t.conj_steering(k - bin_lo_, i) = std::polar(1.0, w * delays(i));
+    }
     t.last_sample = end_sample;
     t.classifier->MarkPresent(begin_sample, end_sample);
     out.push_back(t.classifier->Classify());

@@ -200,6 +200,7 @@ class DirectionalClassifier {
   struct ClassTrack {
     Direction direction;
     Eigen::Vector3d unit = Eigen::Vector3d::UnitX();
+    Eigen::MatrixXcd conj_steering;  // (bins of the band) x mics: exp(+j w tau_m)
     int64_t last_sample = 0;
     std::unique_ptr<SoundClassifier> classifier;
   };

@@ -9,16 +9,15 @@
 //   sarmap-log sound-map demo.lcmlog --truth-poses --doa-check --doa-trace carol_voice
 //   # re-run the localiser over the log's AUDIO (e.g. to try localiser options offline):
 //   sarmap-log sound-map demo.lcmlog --relocalise config/sound_localisation.yaml --loc-set onset_rise_db=0
-#include <lcm/lcm-cpp.hpp>
-
-#include <algorithm>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <ctime>
 #include <fstream>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <map>
 #include <memory>
@@ -31,6 +30,7 @@
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_localisation/localiser.h"
+#include "sound_localisation/source_class.h"
 #include "sound_map/joint_optimizer.h"
 #include "sound_map/sound_map_messages.h"
 
@@ -45,6 +45,12 @@ bool Decode(const lcm::LogEvent& e, T* msg) {
          sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
 }
 
+}  // namespace
+
+namespace {
+const char* ClassName(int c) {
+  return sarmap::sound::SoundClassName(static_cast<sarmap::sound::SoundClass>(c));
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -119,6 +125,7 @@ int main(int argc, char** argv) {
     std::map<int, int64_t> kinds;
     // --relocalise: the localiser over the logged AUDIO, as the node runs it.
     std::unique_ptr<sarmap::sound::Localiser> localiser;
+    std::unique_ptr<sarmap::sound::DirectionalClassifier> classifier;  // the file's `classes`
     sarmap::sound::ArrayGeometry geometry;
     sarmap::sound::LocaliserOptions loc_options;
     if (!relocalise_config.empty()) {
@@ -132,11 +139,20 @@ int main(int argc, char** argv) {
       localiser = std::make_unique<sarmap::sound::Localiser>(
           geometry, loc_options,
           sarmap::sound::SensorModel::FromArray(array, array_path.substr(0, array_path.find_last_of('/') + 1)));
+      // The file's `classes` section, as the node classifies each direction (none: unclassified).
+      try {
+        classifier = std::make_unique<sarmap::sound::DirectionalClassifier>(
+            geometry, localiser->kind(),
+            sarmap::common::LoadOptions<sarmap::sound::SourceClassOptions>(path, {}, "classes"));
+      } catch (const sarmap::common::OptionsError& e) {
+        printf("no source classes: %s\n", e.what());
+      }
     }
     int64_t expected_index = -1;
     // --heard-check: each heard keyword direction against the truth, and the source it marks.
     std::function<void(int64_t, const OnlineSoundMap::Doa&, const std::string&, int64_t)> on_heard_check;
     double localiser_cpu_s = 0;  // --relocalise: the localiser's own CPU time
+    double classifier_cpu_s = 0;  // --relocalise: the source classifier's
     std::vector<sarmap::sound::LocaliserOutput> outs;
     const int64_t doa_shift_us = static_cast<int64_t>(std::llround(doa_shift_s * 1e6));
     auto on_doa = [&](const sarmap::doa_t& m) {
@@ -195,13 +211,21 @@ int main(int argc, char** argv) {
       } else if (e->channel == "AUDIO" && localiser) {
         sarmap::audio_frame_t a;
         if (!Decode(*e, &a) || a.sample_format != sarmap::audio_frame_t::SAMPLE_INT16) continue;
-        if (expected_index >= 0 && a.first_sample_index != expected_index) localiser->ResetStream();
+        if (expected_index >= 0 && a.first_sample_index != expected_index) {
+          localiser->ResetStream();
+          if (classifier) classifier->ResetStream();
+        }
         expected_index = a.first_sample_index + a.num_samples;
         const int64_t before = localiser->samples_seen();
         outs.clear();
         const std::clock_t cpu0 = std::clock();
         localiser->Push(a.samples.data(), a.num_samples, a.num_channels, &outs);
         localiser_cpu_s += static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
+        if (classifier) {
+          const std::clock_t c0 = std::clock();
+          classifier->Push(a.samples.data(), a.num_samples, a.num_channels);
+          classifier_cpu_s += static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        }
         for (const auto& o : outs) {  // as sarmap-sound-localisation publishes them
           sarmap::doa_t d;
           d.header.utime = a.header.utime + static_cast<int64_t>(std::llround(
@@ -227,6 +251,19 @@ int main(int argc, char** argv) {
             if (!in_track) add(-1, dir.direction, dir.covariance);
           }
           d.num_sources = static_cast<int32_t>(d.sources.size());
+          if (classifier && !d.sources.empty()) {
+            std::vector<sarmap::sound::Direction> dirs;
+            for (const auto& s : d.sources) dirs.push_back({s.azimuth_rad, s.elevation_rad});
+            const int64_t block =
+                static_cast<int64_t>(std::llround(loc_options.block_s * geometry.sample_rate_hz));
+            const std::clock_t c0 = std::clock();
+            const auto classes = classifier->Observe(o.end_sample - block, o.end_sample, dirs);
+            classifier_cpu_s += static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+            for (size_t i = 0; i < classes.size(); ++i) {
+              d.sources[i].sound_class = static_cast<int8_t>(classes[i].sound_class);
+              d.sources[i].class_confidence = static_cast<float>(classes[i].confidence);
+            }
+          }
           on_doa(d);
         }
       } else if (e->channel == options.anchors_channel && !no_anchors && !truth_poses_in) {
@@ -458,26 +495,42 @@ int main(int argc, char** argv) {
         for (const auto& s : sources) {
           const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.covariance.topLeftCorner<2, 2>());
           const Eigen::Vector2d w = to_world(s.position_m);
-          printf("  source %3ld at (%6.2f, %6.2f, %5.2f) m (world %6.2f, %6.2f), std %.2f m, %s, %d DOAs%s\n",
-                 static_cast<long>(s.id), s.position_m.x(), s.position_m.y(), s.position_m.z(), w.x(), w.y(),
-                 std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())),
-                 s.state == OnlineSoundMap::Source::kConverged ? "converged"
-                 : s.state == OnlineSoundMap::Source::kSilent  ? "silent"
-                                                               : "initialising",
-                 s.num_observations, s.is_person ? ", person" : "");
+          printf(
+              "  source %3ld at (%6.2f, %6.2f, %5.2f) m (world %6.2f, %6.2f), std %.2f m, %s, %d "
+              "DOAs, %s %.0f%%%s%s\n",
+              static_cast<long>(s.id), s.position_m.x(), s.position_m.y(), s.position_m.z(), w.x(),
+              w.y(), std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())),
+              s.state == OnlineSoundMap::Source::kConverged ? "converged"
+              : s.state == OnlineSoundMap::Source::kSilent  ? "silent"
+                                                            : "initialising",
+              s.num_observations, ClassName(s.sound_class), 100 * s.class_confidence,
+              s.has_position ? "" : ", bearing only (position = where heard from)",
+              s.is_person ? ", person" : "");
         }
       }
       if (!have_truth) return;
       for (const auto& ts : truth.sources) {
         const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
-        double best = std::numeric_limits<double>::infinity(), best_conv = best;
+        double best = std::numeric_limits<double>::infinity(), best_conv = best, best_placed = best;
+        const OnlineSoundMap::Source* placed = nullptr;
         for (const auto& s : sources) {
           const double d = (to_world(s.position_m) - p).norm();
           best = std::min(best, d);
           if (s.state != OnlineSoundMap::Source::kInitialising) best_conv = std::min(best_conv, d);
+          if (s.has_position && d < best_placed) {
+            best_placed = d;
+            placed = &s;
+          }
         }
-        printf("  truth %-18s (%5.2f, %5.2f): nearest source %.3f m, nearest converged %.3f m\n", ts.name.c_str(),
-               p.x(), p.y(), best, best_conv);
+        static const char* kKinds[] = {"?", "voice", "music", "alarm", "noise"};
+        printf(
+            "  truth %-18s %-5s (%5.2f, %5.2f): nearest source %.3f m, nearest converged %.3f m, "
+            "nearest placed %.3f m",
+            ts.name.c_str(), ts.kind >= 1 && ts.kind <= 4 ? kKinds[ts.kind] : "?", p.x(), p.y(),
+            best, best_conv, best_placed);
+        if (placed)
+          printf(" (%s%s)", ClassName(placed->sound_class), placed->is_person ? ", person" : "");
+        printf("\n");
       }
     };
 
@@ -496,6 +549,8 @@ int main(int argc, char** argv) {
            static_cast<long>(doa_sources));
     for (const auto& k : kinds) printf(" kind %d: %ld", k.first, static_cast<long>(k.second));
     printf(" ), largest DOA track id %ld%s\n", static_cast<long>(max_track), no_anchors ? ", SLAM_ANCHORS ignored" : "");
+    if (classifier)
+      printf("relocalised: the source classifier took %.2f s of CPU\n", classifier_cpu_s);
     if (localiser && localiser->samples_seen() > 0)
       printf("relocalised: the localiser took %.2f s of CPU for %.1f s of audio = %.2f%% of a core\n", localiser_cpu_s,
              static_cast<double>(localiser->samples_seen()) / geometry.sample_rate_hz,
