@@ -569,8 +569,9 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
       votes += m.class_votes[k];
       if (m.class_votes[k] > (best_class ? m.class_votes[best_class] : 0.0)) best_class = k;
     }
+    if (votes < options_.min_class_votes) best_class = kClassUnknown;
     s.sound_class = best_class;
-    s.class_confidence = votes > 0 ? m.class_votes[best_class] / votes : 0.0;
+    s.class_confidence = best_class != kClassUnknown ? m.class_votes[best_class] / votes : 0.0;
     s.priority =
         best_class == kClassVoice ? (m.called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
     const Eigen::Array2d xy = s.position_m.head<2>().array();

@@ -15,7 +15,7 @@
 //   * PEOPLE_AUDIO: a heard person's DOA track marks its source as heard (calling, when a
 //     keyword came with it).
 //   * Classes: each DOA's sound class (voice, alarm, machinery, music) is a vote for its
-//     source; the source's class is the class with most votes.
+//     source; the source's class is the class with most votes once it has min_class_votes.
 //   * Published (Sources): a source's range is observable when its inverse depth rho exceeds
 //     observable_sigmas times its standard deviation (the 3-sigma range interval is bounded)
 //     and its largest planar position std is below max_position_sigma_m. Until then it is a
@@ -58,6 +58,7 @@ struct OnlineSoundMapOptions {
   double observable_sigmas = 3.0;
   double max_position_sigma_m = 2.0;
   double site_margin_m = 1.0;       // a person must lie this close to the mapped site
+  int min_class_votes = 3;          // DOAs with a class needed before a source has one
   double silent_after_s = 30.0;     // not heard for this long: STATE_SILENT
   // Births: a DOA that fits no source starts a tentative track in the map frame; it becomes a
   // source after birth_min_observations DOAs whose map-frame bearings agree (chi-square
@@ -139,6 +140,7 @@ struct OnlineSoundMapOptions {
       "... and its largest planar position std is below this");
     v("site_margin_m", site_margin_m,
       "a person must lie within this distance of the mapped site's known cells' box");
+    v("min_class_votes", min_class_votes, "classified DOAs a source needs before it has a class (unknown until then)");
     v("birth_min_observations", birth_min_observations, "consistent DOAs needed before a new source is born");
     v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time");
     v("birth_gate_chi2", birth_gate_chi2, "chi-square gate between map-frame bearings of a tentative source");
@@ -185,6 +187,7 @@ struct OnlineSoundMapOptions {
     check.Positive("observable_sigmas", observable_sigmas);
     check.Positive("max_position_sigma_m", max_position_sigma_m);
     check.NonNegative("site_margin_m", site_margin_m);
+    check.That(min_class_votes >= 1, "min_class_votes", "must be at least 1");
     check.That(birth_min_observations >= 1, "birth_min_observations", "must be at least 1");
     check.Positive("birth_window_s", birth_window_s);
     check.Positive("birth_gate_chi2", birth_gate_chi2);

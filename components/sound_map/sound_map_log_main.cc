@@ -123,6 +123,7 @@ int main(int argc, char** argv) {
     int64_t live_msgs = 0;
     int64_t doa_msgs = 0, doa_sources = 0, max_track = -1, first_utime = -1;
     std::map<int, int64_t> kinds;
+    std::map<int64_t, std::vector<char>> truth_active;  // SIM_TRUTH time -> each source sounding
     // --relocalise: the localiser over the logged AUDIO, as the node runs it.
     std::unique_ptr<sarmap::sound::Localiser> localiser;
     std::unique_ptr<sarmap::sound::DirectionalClassifier> classifier;  // the file's `classes`
@@ -295,6 +296,12 @@ int main(int argc, char** argv) {
           if (debug)
             for (const auto& s : map.Sources(t)) printf("  after: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
         });
+      } else if (!options.site_map_channel.empty() && e->channel == options.site_map_channel) {
+        sarmap::occupancy_grid_t m;
+        Eigen::Vector2d lo, hi;
+        if (!Decode(*e, &m) || !sarmap::sound_map::SiteBox(m, &lo, &hi)) continue;
+        const int64_t t = m.header.utime;
+        inputs.emplace(t, [&map, lo, hi] { map.SetSite(lo, hi); });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t m;
         if (!Decode(*e, &m)) continue;
@@ -321,6 +328,8 @@ int main(int argc, char** argv) {
         if (!Decode(*e, &m)) continue;
         truth = m;
         have_truth = true;
+        std::vector<char>& active = truth_active[m.header.utime];
+        for (const auto& ts : m.sources) active.push_back(ts.active);
         const Eigen::Quaterniond q(m.robot_orientation[0], m.robot_orientation[1], m.robot_orientation[2],
                                    m.robot_orientation[3]);
         const Eigen::Vector3d x = q.normalized() * Eigen::Vector3d::UnitX();
@@ -335,6 +344,12 @@ int main(int argc, char** argv) {
     }
     if (inputs.empty()) throw std::runtime_error("no sound map input in " + log_path);
     first_utime = inputs.begin()->first;
+    // Which true sources sounded at time t (the SIM_TRUTH before it); empty: unknown.
+    auto active_at = [&](int64_t t) -> std::vector<char> {
+      auto it = truth_active.upper_bound(t);
+      if (it == truth_active.begin()) return {};
+      return std::prev(it)->second;
+    };
     auto truth_at = [&](int64_t t) {
       auto it = truth_poses.lower_bound(t);
       if (it == truth_poses.end()) --it;
@@ -436,25 +451,33 @@ int main(int argc, char** argv) {
       // nearest true source: how good are the localiser's bearings?
       const auto mount = sarmap::sound_map::MountFromRobot(robot);
       std::map<std::string, std::vector<double>> errors, signed_errors;
+      std::map<std::string, std::map<int, int>> classes;  // DOAs within 10 deg of a sounding source
       std::vector<double> all;
       for (const auto& [t, m] : doa_log) {
         const Pose2 base = truth_at(t + doa_shift_us);
         const Pose2 arr = sarmap::sound_map::Compose(base, Pose2(mount.x_m, mount.y_m, mount.yaw_rad));
+        const std::vector<char> active = active_at(t + doa_shift_us);
         for (const auto& s : m.sources) {
           double best = 1e9, signed_best = 0;
           std::string name;
-          for (const auto& ts : truth.sources) {
+          bool best_active = false;
+          for (size_t j = 0; j < truth.sources.size(); ++j) {
+            const auto& ts = truth.sources[j];
             double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
             // Linear arrays: the angle to the array's x axis (0..pi), in the plane |bearing|.
             if (s.kind == sarmap::doa_source_t::KIND_ANGLE_1D) b = std::abs(sarmap::sound_map::WrapAngleD(b));
             const double se = sarmap::sound_map::WrapAngleD(s.azimuth_rad - b) * 180 / M_PI;
-            if (std::abs(se) < best) {
+            const bool sounding = j < active.size() && active[j];
+            // A sounding source takes precedence over a silent one a little nearer.
+            if ((sounding && !best_active && std::abs(se) < 10) || ((sounding || !best_active) && std::abs(se) < best)) {
               best = std::abs(se);
               signed_best = se;
               name = ts.name;
+              best_active = sounding;
             }
           }
           errors[name].push_back(best);
+          if (best < 10 && best_active) ++classes[name][s.sound_class];
           if (name == doa_trace)
             printf("  trace t=%6.2f robot (%5.2f, %5.2f, %6.1f deg) track %3ld doa %7.1f true %7.1f err %6.1f sigma %.1f\n",
                    (t - doa_log.front().first) * 1e-6, base.x, base.y, base.yaw * 180 / M_PI,
@@ -473,9 +496,13 @@ int main(int argc, char** argv) {
       for (double e : all) within10 += e < 10;
       printf("DOA check: %zu DOAs, %d within 10 deg of a true source, median error %.1f deg\n", all.size(), within10,
              median(all));
-      for (const auto& [name, v] : errors)
-        printf("  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg\n", name.c_str(),
-               v.size(), median(v), median(signed_errors[name]));
+      for (const auto& [name, v] : errors) {
+        printf("  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg; classes within 10 deg "
+               "while it sounded:",
+               name.c_str(), v.size(), median(v), median(signed_errors[name]));
+        for (const auto& [c, n] : classes[name]) printf(" %s %d", ClassName(c), n);
+        printf("\n");
+      }
     }
 
     auto report = [&](int64_t now, bool final_report) {
