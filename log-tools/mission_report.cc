@@ -837,6 +837,19 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
                             {"error_m", t.error_m}});
     }
     j["false_positives"] = summary.false_positives;
+    j["sound_source_truth"] = nlohmann::json::array();
+    for (const auto& m : summary.source_truth)
+      j["sound_source_truth"].push_back({{"name", m.name},
+                                         {"kind", m.kind},
+                                         {"x_m", m.x_m},
+                                         {"y_m", m.y_m},
+                                         {"found", m.found},
+                                         {"source_id", m.source_id},
+                                         {"error_m", m.error_m},
+                                         {"mapped_class", m.mapped_class},
+                                         {"class_right", m.class_right},
+                                         {"is_person", m.is_person}});
+    j["non_voice_people"] = summary.non_voice_people;
     const Alignment& fit = summary.trail_fit;
     j["alignment"] = {{"method", summary.alignment.method},
                       {"yaw_rad", summary.alignment.yaw_rad},
