@@ -300,6 +300,7 @@ void DirectionalClassifier::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end
   std::vector<std::vector<float>> powers(n, std::vector<float>(power_.size(), -1.0f));
   coherence_.resize(n);
   std::vector<double> owned_energy(n, 0.0);
+  double band_energy = 0;
   Eigen::VectorXcd x(m);
   for (int k = bin_lo_; k <= bin_hi_; ++k) {
     double norm = 0;
@@ -323,6 +324,7 @@ void DirectionalClassifier::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end
     // as the background each source is heard against; a coherent bin that two directions
     // explain alike (close directions, low frequencies) is nobody's.
     const float p = static_cast<float>(norm / m);
+    band_energy += p;
     const bool coherent = coherence_[best] >= options_.min_bin_coherence;
     const bool owned = coherent && coherence_[best] - second >= options_.bin_margin;
     for (size_t t = 0; t < n; ++t)
@@ -330,8 +332,13 @@ void DirectionalClassifier::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end
     if (owned) owned_energy[best] += p;
   }
   // Bins of other sources stay masked out (-1), not zero: the spectral shape is this track's.
+  // A direction that holds most of the frame's energy sounds in it, reported or not.
   for (size_t t = 0; t < n; ++t)
-    tracks_[t].classifier->AddFrame(powers[t], end_sample, 0, owned_energy[t]);
+    tracks_[t].classifier->AddFrame(
+        powers[t], end_sample,
+        options_.dominant_share > 0 && owned_energy[t] >= options_.dominant_share * band_energy ? 1
+                                                                                                : 0,
+        owned_energy[t]);
 }
 
 std::vector<SoundClassEstimate> DirectionalClassifier::Observe(

@@ -73,6 +73,9 @@ struct SourceClassOptions {
   // DirectionalClassifier
   double min_bin_coherence = 0.6;
   double bin_margin = 0.05;
+  // A frame also sounds for a direction that owns this share of its band energy, reported or
+  // not (0: only reported blocks sound).
+  double dominant_share = 0.0;
   double gate_deg = 20.0;  // a reported direction continues the nearest class track within this
   double forget_s = 20.0;  // a class track not reported for this long is dropped
   int max_tracks = 8;
@@ -98,6 +101,9 @@ struct SourceClassOptions {
     v("min_bin_coherence", min_bin_coherence,
       "a bin belongs to a direction this coherent with it (0..1)");
     v("bin_margin", bin_margin, "... by this margin over the next direction");
+    v("dominant_share", dominant_share,
+      "a frame also sounds for a direction owning this share of its band energy, reported or not "
+      "(0: off)");
     v("gate_deg", gate_deg, "a reported direction continues the nearest class track within this");
     v("forget_s", forget_s, "a class track not reported for this long is dropped");
     v("max_tracks", max_tracks, "most class tracks kept");
@@ -119,6 +125,7 @@ struct SourceClassOptions {
     check.NonNegative("voice_syllabic_min", voice_syllabic_min);
     check.InRange("min_bin_coherence", min_bin_coherence, 0, 1);
     check.InRange("bin_margin", bin_margin, 0, 1);
+    check.InRange("dominant_share", dominant_share, 0, 1);
     check.Positive("gate_deg", gate_deg);
     check.Positive("forget_s", forget_s);
     check.That(max_tracks >= 1, "max_tracks", "must be >= 1");
