@@ -16,7 +16,7 @@ PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
   libasound2-dev libssl-dev libcpp-httplib-dev nlohmann-json3-dev \
   librosbag-storage-dev libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev \
   libtf2-msgs-dev libvisualization-msgs-dev libgdal-dev gdal-bin \
-  iproute2 util-linux espeak-ng flite sox chromium clang-14 libclang-rt-14-dev
+  iproute2 iptables util-linux espeak-ng flite sox chromium clang-14 libclang-rt-14-dev
 # Java types for lcm-spy: installed when available, never required.
 OPTIONAL_PACKAGES = liblcm-java default-jdk-headless
 
@@ -26,12 +26,14 @@ export CCACHE_NOHASHDIR := 1
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps configure build test bench bench-missions demo fuzz format clean help
+.PHONY: all deps configure build test bench bench-missions demo demo-hostile fuzz format clean help
 
 all: build
 
 help:
 	@echo "make demo    run the stack on the simulated incident site and write a mission report"
+	@echo "make demo-hostile  the same mission under attack: a hostile publisher on every channel"
+	@echo "             (sarmap-net-fuzz) and 10 % datagram loss, in the demo's network namespace"
 	@echo "make test    build and run every test (unit + multi-process) with CTest"
 	@echo "make bench   build and run every benchmark (prints figures)"
 	@echo "make bench-missions  autonomous missions on generated sites, frontier vs reactive (MISSION_SITES=6)"
@@ -79,6 +81,11 @@ bench-missions: build
 
 demo: build
 	launch-scripts/demo.sh $(BUILD_DIR)
+
+# The demo attacked (launch-scripts/demo.sh, DEMO_HOSTILE): the report must still find the
+# people, and no process may crash.
+demo-hostile: build
+	DEMO_HOSTILE=1 launch-scripts/demo.sh $(BUILD_DIR)
 
 # Fuzzing (components/common/README.md, "Fuzzing"): libFuzzer with clang in a separate build directory, then the
 # network fuzzer's multi-process test with a longer flood.

@@ -23,6 +23,17 @@
 #        DEMO_COMPUTERS=2  two computers: deputies "sensors" and "compute" in two network
 #                     namespaces joined by a bridge, LCM at ttl=1 between them, the sheriff in a
 #                     third (launch-scripts/demo-two-computers.pmd); needs root or user namespaces
+#        DEMO_HOSTILE=1  an attacked mission (make demo-hostile): once the simulator has run for
+#                     DEMO_HOSTILE_DELAY s (default 5), sarmap-net-fuzz sends crafted datagrams to
+#                     every channel of the demo's bus (DEMO_HOSTILE_RATE per second, default
+#                     500, DEMO_HOSTILE_SEED its random choices, default 1) until 5 s before
+#                     the simulator stops, and DEMO_LOSS_PERCENT
+#                     (default 10) of the datagrams are lost; only inside the demo's private
+#                     network namespace
+#        DEMO_LOSS_PERCENT=N  datagram loss on the demo's bus, N % (iptables' statistic match on
+#                     every multicast datagram received in the demo's namespace: every receiver
+#                     loses the same ones; with two computers each loses its own); needs the
+#                     private network namespace and iptables
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$(cd "${1:-$root/build}" && pwd)"
@@ -59,6 +70,17 @@ fi
 
 computers="${DEMO_COMPUTERS:-1}"
 case "$computers" in 1|2) ;; *) echo "demo: DEMO_COMPUTERS must be 1 or 2"; exit 2 ;; esac
+hostile="${DEMO_HOSTILE:-}"
+case "$hostile" in ""|0|1) ;; *) echo "demo: DEMO_HOSTILE must be 1 (or empty)"; exit 2 ;; esac
+[ "$hostile" = 1 ] || hostile=""
+loss_percent="${DEMO_LOSS_PERCENT:-${hostile:+10}}"
+loss_percent="${loss_percent:-0}"
+[[ "$loss_percent" =~ ^[0-9]+([.][0-9]+)?$ ]] && awk -v p="$loss_percent" 'BEGIN { exit !(p < 100) }' \
+  || { echo "demo: DEMO_LOSS_PERCENT must be a number from 0 to below 100"; exit 2; }
+if [ -n "$hostile" ] || [ "$loss_percent" != 0 ]; then
+  # An attack on the bus and lost datagrams stay inside the demo's own network namespace.
+  [ -n "${SARMAP_NETNS:-}" ] || { echo "demo: DEMO_HOSTILE and DEMO_LOSS_PERCENT need a private network namespace (root or user namespaces)"; exit 1; }
+fi
 if [ "$computers" = 2 ] && [ -z "${DEMO_MOUNT_NS:-}" ]; then
   [ -n "${SARMAP_NETNS:-}" ] || { echo "demo: two computers need a private network namespace (root or user namespaces)"; exit 1; }
   # A private mount namespace for /run/netns, so the demo's namespaces never meet anyone else's.
@@ -66,7 +88,9 @@ if [ "$computers" = 2 ] && [ -z "${DEMO_MOUNT_NS:-}" ]; then
   exec unshare --mount --propagation private -- "$0" "$build"
 fi
 
-for program in sarmap-sim sarmap-procman sarmap-procman-deputy sarmap-log-record sarmap-log-report; do
+programs="sarmap-sim sarmap-procman sarmap-procman-deputy sarmap-log-record sarmap-log-report"
+[ -z "$hostile" ] || programs="$programs sarmap-net-fuzz"
+for program in $programs; do
   [ -x "$bin/$program" ] || { echo "demo: $bin/$program is not built (run make build)"; exit 1; }
 done
 export DEMO_OUT="${DEMO_OUT:-$root/out/demo-$(date +%Y%m%d-%H%M%S)}"
@@ -154,6 +178,51 @@ else
   fi
 fi
 
+# Datagram loss: a statistic match drops that share of the multicast datagrams each namespace
+# receives (in the demo's namespace, or each computer's); counted by a rule before it.
+loss_namespaces=()
+loss_rule() {  # NAMESPACE (empty: this one) ARGS...
+  local ns="$1"; shift
+  if [ -n "$ns" ]; then ip netns exec "$ns" iptables "$@"; else iptables "$@"; fi
+}
+if [ "$loss_percent" != 0 ]; then
+  command -v iptables >/dev/null || { echo "demo: DEMO_LOSS_PERCENT needs iptables (apt-get install iptables)"; exit 1; }
+  if [ "$computers" = 1 ]; then loss_namespaces=(""); else loss_namespaces=("${namespaces[@]}"); fi
+  probability="$(awk -v p="$loss_percent" 'BEGIN { printf "%.4f", p / 100 }')"
+  for ns in "${loss_namespaces[@]}"; do
+    loss_rule "$ns" -A INPUT -p udp -d 224.0.0.0/4 -m comment --comment sarmap-demo-received \
+      || { echo "demo: cannot set the loss rule with iptables"; exit 1; }
+    loss_rule "$ns" -A INPUT -p udp -d 224.0.0.0/4 -m statistic --mode random --probability "$probability" \
+      -m comment --comment sarmap-demo-loss -j DROP || { echo "demo: cannot set the loss rule with iptables"; exit 1; }
+  done
+  echo "== $loss_percent % of the bus's datagrams are lost (iptables statistic match, each computer its own)"
+fi
+loss_report() {
+  local ns received dropped
+  for ns in "${loss_namespaces[@]}"; do
+    received="$(loss_rule "$ns" -L INPUT -v -n -x | awk '/sarmap-demo-received/ { print $1 }')"
+    dropped="$(loss_rule "$ns" -L INPUT -v -n -x | awk '/sarmap-demo-loss/ { print $1 }')"
+    echo "   datagrams lost${ns:+ on $ns}: $dropped of $received received ($(awk -v d="$dropped" -v r="$received" 'BEGIN { printf "%.1f", (r > 0) ? 100 * d / r : 0 }') %)"
+  done
+}
+
+# The attacker: once the simulator runs (and every node has its own clocks), a hostile publisher
+# on every channel until shortly before the simulator stops, so the final maps are the nodes'.
+attacker_pid=""
+if [ -n "$hostile" ]; then
+  delay_s="${DEMO_HOSTILE_DELAY:-5}"
+  rate="${DEMO_HOSTILE_RATE:-500}"
+  fuzz_s="$(awk -v t="$DEMO_SECONDS" -v d="$delay_s" 'BEGIN { s = t - d - 5; printf "%.0f", s < 5 ? 5 : s }')"
+  echo "== hostile publisher: sarmap-net-fuzz, $rate datagrams/s to every channel for $fuzz_s s, from $delay_s s after the simulator starts"
+  (
+    deputies="$(IFS=,; echo "${pids[*]}")"
+    for _ in $(seq 600); do pgrep -P "$deputies" -f "(^|/)sarmap-sim( |\$)" >/dev/null && break; sleep 0.2; done
+    sleep "$delay_s"
+    exec "$bin/sarmap-net-fuzz" --seconds "$fuzz_s" --rate "$rate" --seed "${DEMO_HOSTILE_SEED:-1}"
+  ) >"$out/net-fuzz.txt" 2>&1 &
+  attacker_pid=$!
+fi
+
 killer_pid=""
 if [ "${DEMO_KILL:-}" = 1 ]; then
   # Once the simulator runs, kill -9 each process of the stack in turn, evenly over the mission;
@@ -169,10 +238,17 @@ if ! (cd "$root" && "$bin/sarmap-procman" "$pmd" run mission) >"$out/sheriff.txt
   tail -5 "$out/sheriff.txt" | sed 's/^/   /'
 fi
 [ -z "$killer_pid" ] || { wait "$killer_pid" 2>/dev/null || true; sed 's/^/   /' "$out/kills.txt"; }
+if [ -n "$attacker_pid" ]; then
+  kill -TERM "$attacker_pid" 2>/dev/null || true  # (a background job ignores SIGINT)
+  wait "$attacker_pid" 2>/dev/null || true
+  echo "== the attack"
+  sed 's/^/   /' "$out/net-fuzz.txt"
+fi
+[ "$loss_percent" = 0 ] || loss_report
 stop_all
 # What each process printed (recorded from the launcher's PM_OUTPUT) into $out/output/.
 mkdir -p "$out/output"
-"$bin/sarmap-log" output "$log" -o "$out/output" 2>/dev/null || true
+"$bin/sarmap-log" output "$log" -o "$out/output" --key "$SARMAP_PROCMAN_KEY" 2>/dev/null || true
 for f in "$out"/output/*.txt; do
   [ -f "$f" ] || continue
   if grep -qE "^E |terminate called|Segmentation|Aborted|exited with code [1-9]" "$f"; then
@@ -184,7 +260,7 @@ echo "== the log (sarmap-log info)"
 "$bin/sarmap-log" info "$log" || true
 echo
 echo "== what the stack cost (sarmap-log perf)"
-"$bin/sarmap-log" perf "$log" | tee "$out/perf.txt" || true
+"$bin/sarmap-log" perf "$log" --key "$SARMAP_PROCMAN_KEY" | tee "$out/perf.txt" || true
 echo
 echo "== mission report"
 "$bin/sarmap-log" report "$log" -o "$out/report"

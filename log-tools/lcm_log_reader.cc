@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "common/channels.h"
 #include "sarmap/message_registry.h"
 
 namespace sarmap {
@@ -118,6 +119,30 @@ bool ReadSarmapHeader(const std::vector<uint8_t>& data, int64_t* utime, int64_t*
   *utime = static_cast<int64_t>(BigEndian(data.data() + 8, 8));
   *seq = static_cast<int64_t>(BigEndian(data.data() + 16, 8));
   return true;
+}
+
+LogMessageFilter::LogMessageFilter(const common::StampGateOptions& options) : gates_(options) {}
+
+bool LogMessageFilter::Accept(const LogEvent& event) {
+  const std::string type = SarmapTypeName(event.data);
+  for (const auto& spec : common::DefaultChannels()) {
+    if (event.channel == spec.channel && type != spec.type) {
+      ++wrong_type_;
+      return false;
+    }
+  }
+  int64_t utime, seq;
+  if (!ReadSarmapHeader(event.data, &utime, &seq)) return true;
+  const int stream =
+      stream_of_channel_.emplace(event.channel, static_cast<int>(stream_of_channel_.size()))
+          .first->second;
+  return gates_.Accept(stream, utime, 1e-6 * static_cast<double>(event.timestamp_us));
+}
+
+std::string LogMessageFilter::Summary() const {
+  if (wrong_type_ == 0 && off_clock() == 0) return "";
+  return std::to_string(wrong_type_) + " messages of another type than their channel's and " +
+         std::to_string(off_clock()) + " stamped far ahead of their channel's clock skipped";
 }
 
 }  // namespace logtools

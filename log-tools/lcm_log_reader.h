@@ -8,8 +8,11 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <vector>
+
+#include "common/stamp_gate.h"
 
 namespace sarmap {
 namespace logtools {
@@ -61,6 +64,30 @@ std::string SarmapTypeName(const std::vector<uint8_t>& data);
 // header.utime and header.seq of a sarmap message (they follow the fingerprint in every
 // sarmap message type); false when the data is too short or the type unknown.
 bool ReadSarmapHeader(const std::vector<uint8_t>& data, int64_t* utime, int64_t* seq);
+
+// What of a recorded bus is read back as the stack's own: the log holds every datagram the
+// recorder heard, a hostile publisher's too. A message is skipped (and counted) when its type
+// (by fingerprint) is not its channel's (common/channels.h; channels not listed there take any
+// type), or when its header stamp is far ahead of its channel's clock: common::StampGates, a
+// stream per channel, on the log's receive times, as the nodes gate their inputs live (default
+// options: more than 5 s ahead; behind passes; a channel's first stamp is checked against the
+// clocks of the channels before it). Another type's message on a channel and stamps far ahead
+// then never become a report's map, people or trail.
+class LogMessageFilter {
+ public:
+  explicit LogMessageFilter(const common::StampGateOptions& options = {});
+  bool Accept(const LogEvent& event);
+  int64_t wrong_type() const { return wrong_type_; }
+  int64_t off_clock() const { return gates_.dropped(); }
+  // "N messages of another type than their channel's and M stamped far ahead of their
+  // channel's clock skipped", or "" when none was.
+  std::string Summary() const;
+
+ private:
+  common::StampGates gates_;
+  std::map<std::string, int> stream_of_channel_;
+  int64_t wrong_type_ = 0;
+};
 
 }  // namespace logtools
 }  // namespace sarmap

@@ -1,13 +1,16 @@
 // sarmap-log perf LOG: CPU and memory of every process of the stack (from the launcher's
 // PM_INFO reports in the log) and the latency from a DEPTH frame to the PEOPLE_VISUAL and
-// PEOPLE_MAP updates it causes.
+// PEOPLE_MAP updates it causes. With --key, only the PM_INFO reports signed with the
+// launcher's key count (a forged report in the log is skipped).
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 #include "common/args.h"
 #include "common/decode.h"
 #include "log-tools/lcm_log_reader.h"
 #include "log-tools/stack_perf.h"
+#include "procman/order_auth.h"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/people_map_t.hpp"
 #include "sarmap/pm_info_t.hpp"
@@ -43,12 +46,20 @@ int main(int argc, char** argv) {
     parser.AddFlag("--visual-channel", &visual_channel, "channel of the visual detections");
     parser.AddFlag("--map-channel", &map_channel, "channel of the people map");
     parser.AddFlag("--info-channel", &info_channel, "channel of the launcher's deputy reports");
+    std::string key_path;
+    parser.AddFlag("--key", &key_path,
+                   "the launcher's key file: only deputy reports signed with it are counted "
+                   "(without: every report, unverified)");
     if (!parser.Parse(argc, argv)) return 0;
+    std::optional<sarmap::procman::Key> key;
+    if (!key_path.empty()) key = sarmap::procman::LoadKeyFile(key_path);
 
     sarmap::logtools::LcmLogReader reader(log);
     sarmap::logtools::StackPerf perf(SplitComma(exclude));
     sarmap::logtools::LogEvent event;
-    int64_t bad_info = 0, events = 0;
+    // A hostile publisher's datagrams are in the log too (lcm_log_reader.h).
+    sarmap::logtools::LogMessageFilter filter;
+    int64_t bad_info = 0, unsigned_info = 0, events = 0;
     int64_t next_report = 64 << 20;
     while (reader.Next(&event)) {
       ++events;
@@ -56,10 +67,15 @@ int main(int argc, char** argv) {
         fprintf(stderr, "\r  read %.0f%% ...", 100.0 * reader.offset() / std::max<int64_t>(1, reader.file_size()));
         next_report += 64 << 20;
       }
+      if (!filter.Accept(event)) continue;
       if (event.channel == info_channel) {
         sarmap::pm_info_t info;
         if (!sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &info)) {
           ++bad_info;
+          continue;
+        }
+        if (key && !sarmap::procman::SignatureValid(*key, info)) {
+          ++unsigned_info;
           continue;
         }
         perf.AddMachineLoad(info.cpu_load);
@@ -95,6 +111,14 @@ int main(int argc, char** argv) {
     }
     if (bad_info > 0) fprintf(stderr, "warning: %lld undecodable %s messages skipped\n",
                               static_cast<long long>(bad_info), info_channel.c_str());
+    if (key) {
+      fprintf(stderr, "%lld %s reports not signed with the key skipped\n",
+              static_cast<long long>(unsigned_info), info_channel.c_str());
+    } else {
+      fprintf(stderr, "%s reports taken unverified (--key checks their signatures)\n",
+              info_channel.c_str());
+    }
+    if (!filter.Summary().empty()) fprintf(stderr, "%s\n", filter.Summary().c_str());
     printf("log %s: %lld events\n", log.c_str(), static_cast<long long>(events));
     fputs(sarmap::logtools::StackPerfText(perf.Summarise()).c_str(), stdout);
     return 0;

@@ -43,10 +43,14 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
   LogEvent event;
   int64_t first_us = -1, last_us = 0;
   std::map<int64_t, Eigen::Vector2d> estimated_by_utime, truth_by_utime;
+  // A hostile publisher's datagrams are in the log too: another type's message on a channel
+  // and far-off stamps are skipped, as the nodes skip them live.
+  LogMessageFilter filter;
   while (reader.Next(&event)) {
     ++data.messages;
     if (first_us < 0) first_us = event.timestamp_us;
     last_us = std::max(last_us, event.timestamp_us);
+    if (!filter.Accept(event)) continue;
     const std::string type = SarmapTypeName(event.data);
     if (type == "occupancy_grid_t" && event.channel == "SIM_FLOOR") {
       sarmap::occupancy_grid_t m;
@@ -117,6 +121,7 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
     for (const auto& p : reader.problems()) {
       problems->push_back("log damaged at byte " + std::to_string(p.file_offset) + ": " + p.what);
     }
+    if (!filter.Summary().empty()) problems->push_back(filter.Summary());
   }
   return data;
 }
@@ -407,8 +412,12 @@ struct Canvas {
   cv::Mat image;
   double x0 = 0, y0 = 0, pixels_per_m = 40;
   cv::Point P(double x, double y) const {
-    return cv::Point(static_cast<int>(std::lround((x - x0) * pixels_per_m)),
-                     static_cast<int>(std::lround(image.rows - 1 - (y - y0) * pixels_per_m)));
+    // Clamped far outside the image (drawing clips there) before the conversion to int.
+    const auto pixel = [](double v) {
+      return static_cast<int>(std::lround(std::isfinite(v) ? std::clamp(v, -1e6, 1e6) : -1e6));
+    };
+    return cv::Point(pixel((x - x0) * pixels_per_m),
+                     pixel(image.rows - 1 - (y - y0) * pixels_per_m));
   }
 };
 
@@ -437,6 +446,7 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   // Extent: the grid, else everything drawn, with a margin.
   double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
   const auto grow = [&](double x, double y) {
+    if (!std::isfinite(x) || !std::isfinite(y)) return;
     x0 = std::min(x0, x - 1);
     y0 = std::min(y0, y - 1);
     x1 = std::max(x1, x + 1);
@@ -468,9 +478,17 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   for (const auto& s : sources) grow(s.position_m[0], s.position_m[1]);
   c.x0 = x0;
   c.y0 = y0;
-  c.pixels_per_m = std::clamp(1400.0 / std::max(x1 - x0, y1 - y0), 5.0, 100.0);
-  c.image = cv::Mat(static_cast<int>((y1 - y0) * c.pixels_per_m) + 1,
-                    static_cast<int>((x1 - x0) * c.pixels_per_m) + 1, CV_8UC3, cv::Scalar(60, 60, 60));
+  // At most kMaxPixels a side, whatever the extent (a damaged message's coordinates may be
+  // anywhere a double reaches).
+  constexpr double kMaxPixels = 4000;
+  const double extent_m = std::max(x1 - x0, y1 - y0);
+  c.pixels_per_m = std::clamp(1400.0 / extent_m, 5.0, 100.0);
+  if (extent_m * c.pixels_per_m > kMaxPixels) c.pixels_per_m = kMaxPixels / extent_m;
+  const auto side = [&](double metres) {
+    const double pixels = metres * c.pixels_per_m;
+    return std::isfinite(pixels) ? static_cast<int>(std::clamp(pixels, 0.0, kMaxPixels)) + 1 : 1;
+  };
+  c.image = cv::Mat(side(y1 - y0), side(x1 - x0), CV_8UC3, cv::Scalar(60, 60, 60));
   if (data.map && !cells.empty()) {
     const auto& m = *data.map;
     for (int gy = 0; gy < m.height; ++gy) {

@@ -9,6 +9,8 @@
 
 #include "sarmap/doa_source_t.hpp"
 #include "sarmap/explore_status_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
+#include "sarmap/people_map_t.hpp"
 #include "sarmap/pose_t.hpp"
 
 namespace sarmap {
@@ -447,6 +449,60 @@ TEST(MissionReportTest, SoundSourcesAreScoredAgainstTheEmitters) {
   for (const auto& o : s.outside_map)
     bearing_listed |= o.id == 3 && o.why.find("bearing") != std::string::npos;
   EXPECT_TRUE(bearing_listed);
+}
+
+// A log of an attacked bus (make demo-hostile): a valid map sent on another type's channel and
+// messages stamped a year ahead of their channel's clock are skipped, so the report's map and
+// people are the stack's own; a map that passes (stamped behind) with an extent a double barely
+// holds still gives a report, not an OpenCV assertion.
+TEST(MissionReportTest, AnAttackedBusStillGivesTheStacksReport) {
+  const std::string path = ::testing::TempDir() + "/attacked.lcmlog";
+  constexpr int64_t kYearUs = 365LL * 24 * 3600 * 1000000;
+  sarmap::occupancy_grid_t map{};
+  map.resolution_m = 0.1;
+  map.width = map.height = 10;
+  map.data.assign(100, 0);
+  map.size = 100;
+  sarmap::occupancy_grid_t huge = map;
+  huge.origin_x_m = -1e300;
+  huge.origin_y_m = 1e300;
+  huge.resolution_m = 1e300;
+  sarmap::people_map_t people{};
+  people.num_people = 1;
+  people.people = {Person(1, 0.5, 0.5, 1)};
+  sarmap::people_map_t far_people = people;
+  far_people.people[0].position_m[0] = 50;
+  {
+    lcm::LogFile log(path, "w");
+    for (int i = 0; i < 10; ++i) {
+      const int64_t utime = 1'000'000 + i * 100'000;
+      map.header.utime = people.header.utime = utime;
+      Write(&log, "MAP", map, utime);
+      Write(&log, "PEOPLE_MAP", people, utime);
+      huge.header.utime = far_people.header.utime = utime + kYearUs;
+      Write(&log, "MAP", huge, utime);               // a year ahead
+      Write(&log, "PEOPLE_MAP", far_people, utime);  // a year ahead
+      huge.header.utime = utime;
+      Write(&log, "CMD_VEL", huge, utime);  // a map where velocity commands go
+    }
+  }
+  std::vector<std::string> problems;
+  MissionData data = LoadMission(path, &problems);
+  ASSERT_TRUE(data.map.has_value());
+  EXPECT_EQ(data.map->resolution_m, 0.1);
+  ASSERT_TRUE(data.people.has_value());
+  ASSERT_EQ(data.people->people.size(), 1u);
+  EXPECT_EQ(data.people->people[0].position_m[0], 0.5);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("10 messages of another type"), std::string::npos) << problems[0];
+  EXPECT_NE(problems[0].find("20 stamped far ahead"), std::string::npos) << problems[0];
+
+  huge.header.utime = 0;  // behind: passes, as it would in a node
+  data.map = huge;
+  const std::string dir = ::testing::TempDir() + "/attacked_report";
+  EXPECT_NO_THROW(WriteReport(data, Summarise(data, 0.5), dir));
+  struct stat st;
+  EXPECT_EQ(stat((dir + "/map.png").c_str(), &st), 0);
 }
 
 }  // namespace

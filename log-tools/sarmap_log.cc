@@ -37,7 +37,8 @@ void Usage(const std::string& dir) {
          "found here (each has --help):\n");
   for (const auto& s : SubCommands(dir)) printf("  %s\n", s.c_str());
   printf("\nExamples:\n  sarmap-log record -o mission.lcmlog\n  sarmap-log info mission.lcmlog\n"
-         "  sarmap-log replay mission.lcmlog --speed 2\n");
+         "  sarmap-log replay mission.lcmlog --speed 2\n"
+         "  sarmap-log echo mission.lcmlog --channel PEOPLE_VISUAL\n");
 }
 
 }  // namespace

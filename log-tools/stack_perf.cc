@@ -65,6 +65,11 @@ void StackPerf::AddPeopleMap(int64_t capture_utime, int64_t receive_us) {
 }
 
 void StackPerf::AddPeopleMapSnapshot(int64_t seq, const std::vector<std::array<double, 2>>& people_xy_m) {
+  if (last_map_seq_ >= 0) {
+    const bool continues = seq > last_map_seq_ && seq - last_map_seq_ <= kMaxSeqStep;
+    const bool starts_again = seq < last_map_seq_ && seq >= 0 && seq < kMaxSeqStep;
+    if (!continues && !starts_again) return;
+  }
   if (last_map_seq_ >= 0 && seq < last_map_seq_) {
     // A new process: compare with what the previous one reported last.
     ++map_restarts_;

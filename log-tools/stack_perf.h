@@ -66,7 +66,11 @@ class StackPerf {
   void AddPeopleMap(int64_t capture_utime, int64_t receive_us);
   // A whole PEOPLE_MAP message: its header.seq and the people's map positions (x, y in m).
   // A person counts as kept across a restart when the first map after it has someone within
-  // keep_radius_m of where they were.
+  // keep_radius_m of where they were. The people map numbers its messages 0, 1, 2, ... from its
+  // start: a message that neither continues that count (at most kMaxSeqStep on: lost messages)
+  // nor starts it again (seq below kMaxSeqStep) is not its own (forged or damaged, in a log of
+  // an attacked bus) and is skipped.
+  static constexpr int64_t kMaxSeqStep = 1000;
   void AddPeopleMapSnapshot(int64_t seq, const std::vector<std::array<double, 2>>& people_xy_m);
 
   StackPerfSummary Summarise() const;

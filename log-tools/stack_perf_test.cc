@@ -75,6 +75,19 @@ TEST(StackPerfTest, PeopleKeptAcrossAPeopleMapRestart) {
   EXPECT_NE(StackPerfText(s).find("3 of the 4 people"), std::string::npos);
 }
 
+// A log of an attacked bus: forged PEOPLE_MAP messages (random sequence numbers) between the
+// node's own are not taken for restarts.
+TEST(StackPerfTest, ForgedPeopleMapsAreNotRestarts) {
+  StackPerf perf;
+  for (int64_t seq = 0; seq < 20; ++seq) {
+    perf.AddPeopleMapSnapshot(seq, {{1.0, 2.0}});
+    perf.AddPeopleMapSnapshot(seq % 2 ? 8377426615063428000 : 4611686018427387904, {});
+  }
+  perf.AddPeopleMapSnapshot(23, {{1.0, 2.0}});  // three lost
+  const StackPerfSummary s = perf.Summarise();
+  EXPECT_EQ(s.people_map_restarts, 0);
+}
+
 TEST(StackPerfTest, SaysSoWhenTheLogHasNoLauncherReports) {
   StackPerf perf;
   const std::string text = StackPerfText(perf.Summarise());

@@ -35,7 +35,7 @@ Figures RunWorld(const std::string& world) {
 TEST(SimVisionTest, LitLabEveryVisiblePersonFound) {
   if (!PhotosPresent()) GTEST_SKIP() << "shared data missing: " << SARMAP_DATA_DIR << "/vision/rgb";
   const Figures f = RunWorld("lab_lit");
-  ASSERT_GE(f.visible, 40);  // both standing people are in full view for ~20 s of the path
+  ASSERT_GE(f.visible, 35);  // both standing people are in full view for ~18 s of the path
   EXPECT_GE(f.recall(), 0.95);
   EXPECT_LE(f.fp_per_frame(), 0.05);
 }
@@ -43,7 +43,7 @@ TEST(SimVisionTest, LitLabEveryVisiblePersonFound) {
 TEST(SimVisionTest, DarkLabVisiblePeopleFoundFromDepthAlone) {
   if (!PhotosPresent()) GTEST_SKIP() << "shared data missing: " << SARMAP_DATA_DIR << "/vision/rgb";
   const Figures f = RunWorld("lab_dark");
-  ASSERT_GE(f.visible, 40);
+  ASSERT_GE(f.visible, 35);
   EXPECT_GE(f.recall(), 0.80);
   EXPECT_LE(f.fp_per_frame(), 0.05);
 }
@@ -86,6 +86,28 @@ TEST(SimVisionTest, WrongMountingFileStillFindsPeople) {
   EXPECT_GE(f.recall(), 0.9);
   EXPECT_GE(f.by_posture[2].found, 20);
   EXPECT_LE(f.fp_per_frame(), 0.05);
+}
+
+// An exploring robot first turns on the spot: the room's corners, a wall receding out of the
+// depth's field of view and furniture cut by the image's side pass through every part of the
+// image. None of them is a person (lab_dark: depth alone, where the shape decides).
+TEST(SimVisionTest, TurningOnTheSpotFindsNobodyWhoIsNotThere) {
+  if (!PhotosPresent()) GTEST_SKIP() << "shared data missing: " << SARMAP_DATA_DIR << "/vision/rgb";
+  for (const char* world : {"lab_dark"}) {
+    EvalOptions eval;
+    eval.world = world;
+    eval.seconds = 30.0;
+    eval.step_s = 0.2;
+    eval.spin_deg_per_step = 3.0;  // 450 degrees
+    const Figures f = Evaluate(eval);
+    printf(
+        "%s turning at the start: %d frames, recall %.3f (%d/%d), %d false (%.3f/frame), %d "
+        "confirmed false\n",
+        world, f.frames, f.recall(), f.found, f.visible, f.false_positives, f.fp_per_frame(),
+        f.confirmed_false_positives);
+    EXPECT_EQ(f.confirmed_false_positives, 0) << world;
+    EXPECT_LE(f.fp_per_frame(), 0.01) << world;
+  }
 }
 
 }  // namespace

@@ -36,13 +36,16 @@ StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
     const double candidate_elapsed_us = 1e6 * std::max(0.0, receive_s - candidate_receive_s_);
     const double step_us =
         static_cast<double>(utime) - (static_cast<double>(candidate_utime_) + candidate_elapsed_us);
-    continues = step_us <= static_cast<double>(max_ahead_us) &&
+    // A clock advances: the same stamp sent again and again continues no run.
+    continues = utime > candidate_utime_ && step_us <= static_cast<double>(max_ahead_us) &&
                 step_us >= -static_cast<double>(std::max(max_ahead_us, max_behind_us));
   }
   candidate_count_ = continues ? candidate_count_ + 1 : 1;
+  if (candidate_count_ == 1) candidate_first_receive_s_ = receive_s;
   candidate_utime_ = utime;
   candidate_receive_s_ = receive_s;
-  if (candidate_count_ >= options_.reanchor_count) {
+  if (candidate_count_ >= options_.reanchor_count &&
+      receive_s - candidate_first_receive_s_ >= options_.reanchor_min_s) {
     candidate_count_ = 0;
     newest_utime_ = utime;
     newest_receive_s_ = receive_s;
@@ -55,6 +58,15 @@ StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
   }
   ++dropped_behind_;
   return Verdict::kBehind;
+}
+
+bool EncodedHeaderUtime(const void* data, int64_t size, Utime* utime) {
+  if (data == nullptr || size < 16) return false;
+  const auto* b = static_cast<const uint8_t*>(data) + 8;
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];
+  *utime = static_cast<Utime>(v);
+  return true;
 }
 
 bool StampGates::Accept(int stream, Utime utime, double receive_s) {

@@ -9,10 +9,14 @@
 // on log replay too (a replay faster than real time only moves stamps by one message's period
 // between two receive times).
 // A genuine clock step of a whole stream is followed: after reanchor_count consecutive dropped
-// stamps that agree with each other (each within max_ahead_s of the previous one plus the
-// receive time between them), the stream's clock is re-anchored on the last of them, which is
-// accepted. Any accepted stamp in between starts the count again, so a stray stamp mixed into a
-// live stream is never followed.
+// stamps that agree with each other (each later than the previous one, and within max_ahead_s
+// of it plus the receive time between them) and span at least reanchor_min_s of receive time,
+// the stream's clock is re-anchored on the last of them, which is accepted. Any accepted stamp
+// in between starts the count again, so a stray stamp mixed into a live stream is never
+// followed, and neither is a second publisher interleaved with it (the live stream's own
+// messages break every run shorter than reanchor_min_s). A stamp repeated (a replayed or forged
+// message sent again and again) is a clock that stands still, not a stream: it never
+// re-anchors.
 // The first stamp of a stream sets its clock, unless the node already has a clock from another
 // stream (StampGates): then the new stream starts on that clock, so a far-future first message
 // on a stream nobody has published on yet (a forged one) is dropped like any other.
@@ -31,6 +35,7 @@ struct StampGateOptions {
   double max_behind_s =
       0;  // stamps further behind are dropped (0: never; late inputs are the node's)
   int reanchor_count = 5;  // consecutive agreeing out-of-bound stamps that re-anchor the stream
+  double reanchor_min_s = 1.0;  // ... received over at least this long, nothing accepted between
   template <class V>
   void Visit(V& v) {
     v("max_ahead_s", max_ahead_s,
@@ -41,11 +46,15 @@ struct StampGateOptions {
     v("reanchor_count", reanchor_count,
       "this many consecutive dropped stamps that agree with each other re-anchor the stream (a "
       "genuine clock step is followed)");
+    v("reanchor_min_s", reanchor_min_s,
+      "a re-anchoring run of stamps must span at least this much receive time with no accepted "
+      "stamp in it (a live stream is never re-anchored by a second publisher)");
   }
   void Validate(Validator& check) const {
     check.Positive("max_ahead_s", max_ahead_s);
     check.NonNegative("max_behind_s", max_behind_s);
     check.That(reanchor_count >= 1, "reanchor_count", "must be at least 1");
+    check.NonNegative("reanchor_min_s", reanchor_min_s);
   }
 };
 
@@ -85,10 +94,15 @@ class StampGate {
   int candidate_count_ = 0;
   Utime candidate_utime_ = 0;
   double candidate_receive_s_ = 0;
+  double candidate_first_receive_s_ = 0;
   int64_t dropped_ahead_ = 0;
   int64_t dropped_behind_ = 0;
   int64_t reanchors_ = 0;
 };
+
+// header.utime of an encoded sarmap message (every type starts with header_t, right after the
+// 8-byte fingerprint), for gating a log's events before decoding them; false when too short.
+bool EncodedHeaderUtime(const void* data, int64_t size, Utime* utime);
 
 // A gate per input stream of a node, with one set of counters for NODE_STATUS. A stream's
 // first message is checked against the most advanced clock of the node's other streams.

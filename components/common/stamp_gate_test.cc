@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
+#include "sarmap/pose_t.hpp"
+
 namespace sarmap {
 namespace common {
 namespace {
@@ -55,6 +59,7 @@ TEST(StampGateTest, StrayFutureStampsMixedIntoAStreamNeverReanchor) {
 TEST(StampGateTest, AWholeStreamThatStepsForwardIsFollowedAfterTheReanchorCount) {
   StampGateOptions options;
   options.reanchor_count = 4;
+  options.reanchor_min_s = 0;  // the count alone
   StampGate gate(options);
   Stream s;
   for (int i = 0; i < 10; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
@@ -70,6 +75,60 @@ TEST(StampGateTest, AWholeStreamThatStepsForwardIsFollowedAfterTheReanchorCount)
   }
   EXPECT_EQ(gate.dropped_ahead(), options.reanchor_count - 1);
   EXPECT_EQ(gate.reanchors(), 1);
+}
+
+TEST(StampGateTest, AWholeStreamThatStepsIsFollowedOnlyAfterTheReanchorTime) {
+  StampGateOptions options;
+  options.reanchor_count = 2;
+  options.reanchor_min_s = 1.0;
+  StampGate gate(options);
+  Stream s;
+  for (int i = 0; i < 10; ++i) s.Step(0.25), gate.Check(s.utime, s.receive_s);
+  s.utime += SecondsToUtime(3600.0);
+  const double first_s = s.receive_s;
+  // Every stamp of the stepped stream agrees with the previous one; the count is reached on the
+  // second, the time only after a second of them.
+  while (s.receive_s - first_s < options.reanchor_min_s) {
+    EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAhead);
+    s.Step(0.25);
+  }
+  EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kReanchored);
+  EXPECT_EQ(gate.reanchors(), 1);
+}
+
+TEST(StampGateTest, AStampSentAgainAndAgainNeverReanchors) {
+  StampGate gate;
+  Stream s;
+  for (int i = 0; i < 10; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
+  // The stream stops; one forged message a year ahead is sent 200 times over 20 s.
+  const Utime forged = s.utime + kYearUs;
+  for (int i = 0; i < 200; ++i) {
+    s.receive_s += 0.1;
+    EXPECT_EQ(gate.Check(forged, s.receive_s), StampGate::Verdict::kAhead);
+  }
+  EXPECT_EQ(gate.reanchors(), 0);
+  EXPECT_LT(gate.newest_utime(), forged);
+}
+
+TEST(StampGateTest, ASecondPublisherInterleavedWithALiveStreamNeverReanchors) {
+  StampGate gate;
+  Stream s;
+  for (int i = 0; i < 10; ++i, s.Step()) gate.Check(s.utime, s.receive_s);
+  // A forger runs a clock of its own an hour ahead at 100 Hz, its stamps advancing with the
+  // receive time: runs of 9 agreeing stamps (past reanchor_count) between two of the live
+  // stream's, for 30 s.
+  Utime forged = s.utime + SecondsToUtime(3600.0);
+  for (int i = 0; i < 300; ++i) {
+    for (int k = 1; k < 10; ++k) {
+      forged += 10000;
+      EXPECT_EQ(gate.Check(forged, s.receive_s + 0.01 * k), StampGate::Verdict::kAhead);
+    }
+    forged += 10000;
+    s.Step();
+    EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  }
+  EXPECT_EQ(gate.reanchors(), 0);
+  EXPECT_EQ(gate.newest_utime(), s.utime);
 }
 
 TEST(StampGateTest, APauseInTheStreamIsCoveredByTheReceiveClock) {
@@ -104,6 +163,7 @@ TEST(StampGateTest, BackwardsStampsPassUnlessBounded) {
   StampGateOptions options;
   options.max_behind_s = 10.0;
   options.reanchor_count = 3;
+  options.reanchor_min_s = 0;
   StampGate bounded(options);
   Stream t;
   for (int i = 0; i < 5; ++i, t.Step()) bounded.Check(t.utime, t.receive_s);
@@ -151,13 +211,28 @@ TEST(StampGatesTest, AStreamsFirstStampIsCheckedAgainstTheNodesClock) {
   EXPECT_TRUE(gates.Accept(1, 11000000, 2.0));
   // A stream that is genuinely on another clock (an hour ahead) is followed after the
   // re-anchor count.
-  StampGates other(StampGateOptions{});
+  StampGateOptions options;
+  options.reanchor_min_s = 0;
+  StampGates other(options);
   EXPECT_TRUE(other.Accept(0, 10000000, 1.0));
   const Utime hour_us = 3600LL * 1000000;
   int accepted = 0;
   for (int i = 0; i < 10; ++i) accepted += other.Accept(1, 10000000 + hour_us + i * 100000, 1.0 + 0.1 * i);
-  EXPECT_EQ(accepted, 10 - (StampGateOptions{}.reanchor_count - 1));
+  EXPECT_EQ(accepted, 10 - (options.reanchor_count - 1));
   EXPECT_EQ(other.reanchors(), 1);
+}
+
+TEST(StampGateTest, TheHeaderStampIsReadFromTheEncodedMessage) {
+  sarmap::pose_t pose{};
+  pose.header.utime = 1234567890123;
+  pose.header.frame = "map";
+  std::vector<uint8_t> wire(static_cast<size_t>(pose.getEncodedSize()));
+  pose.encode(wire.data(), 0, static_cast<int>(wire.size()));
+  Utime utime = 0;
+  ASSERT_TRUE(EncodedHeaderUtime(wire.data(), static_cast<int64_t>(wire.size()), &utime));
+  EXPECT_EQ(utime, pose.header.utime);
+  EXPECT_FALSE(EncodedHeaderUtime(wire.data(), 15, &utime));
+  EXPECT_FALSE(EncodedHeaderUtime(nullptr, 100, &utime));
 }
 
 }  // namespace

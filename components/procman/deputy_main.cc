@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 
 #include "common/args.h"
@@ -46,6 +47,10 @@ int main(int argc, char** argv) {
     PutOwnDirectoryOnPath();
     if (!BecomeSubreaper()) {
       SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
+    }
+    if (!StartGroupGuardian()) {
+      SARMAP_LOG(WARN) << "no group guardian (" << strerror(errno)
+                       << "): if this deputy is killed, what its commands forked runs on";
     }
 
     const std::string url = node_args.lcm_url.empty() ? common::DefaultLcmUrl() : node_args.lcm_url;

@@ -481,6 +481,25 @@ TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
       << sheriff.Log();
 }
 
+// What a command forked (a shell's jobs, in the command's process group) dies with a killed
+// deputy too: its group guardian kills the group. Before, only the command itself died
+// (PR_SET_PDEATHSIG) and the three sleeps below ran on.
+TEST_F(ProcmanSystem, KilledDeputyTakesWhatItsCommandsForkedAlong) {
+  const std::string d = deputy_id_;
+  const std::string s = SleepCmd(3);
+  const std::string pmd = Pmd("cmd \"family\" { exec = \"sh -c '" + s + " & " + s + " & " + s +
+                              "'\"; deputy = \"" + d + "\"; }\n");
+  auto deputy = StartDeputy(d);
+  ASSERT_EQ(Sheriff(pmd, {"start", "family"}).exit_code, 0);
+  ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).size() == 3; }, 5));
+  const std::vector<int> before = ProcessesWithCmdline(s);
+  deputy->Signal(SIGKILL);
+  ASSERT_NE(deputy->Wait(10), -1);
+  EXPECT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).empty(); }, 10))
+      << ProcessesWithCmdline(s).size() << " still running";
+  for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
+}
+
 TEST_F(ProcmanSystem, ScriptWaitTimesOutWithLocation) {
   const std::string d = deputy_id_;
   const std::string pmd =

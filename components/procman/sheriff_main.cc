@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -368,6 +369,10 @@ int main(int argc, char** argv) {
       PutOwnDirectoryOnPath();
       if (!BecomeSubreaper()) {
         SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
+      }
+      if (!StartGroupGuardian()) {
+        SARMAP_LOG(WARN) << "no group guardian (" << strerror(errno)
+                         << "): if this process is killed, what its commands forked runs on";
       }
       for (const auto& id : config.Deputies()) {
         deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key));

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/prctl.h>
+#include <sys/socket.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -51,6 +52,84 @@ double RespawnPolicy::Delay(int quick_crashes) const {
 
 bool BecomeSubreaper() { return prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0; }
 
+namespace {
+
+// This process's end of the socket to its group guardian (-1: none). Records of 5 bytes: '+' or
+// '-', then the process group id (native int32).
+int g_guardian_fd = -1;
+
+[[noreturn]] void RunGroupGuardian(int fd) {
+  // Only async-signal-safe calls: the parent may have had threads when it forked.
+  for (int s : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) signal(s, SIG_IGN);
+  setpgid(0, 0);  // signals to the deputy's group do not reach it
+  prctl(PR_SET_NAME, "procman-guard", 0, 0, 0);
+  constexpr int kMaxGroups = 4096;
+  static int groups[kMaxGroups];
+  int num_groups = 0;
+  unsigned char record[5];
+  size_t have = 0;
+  while (true) {
+    const ssize_t n = read(fd, record + have, sizeof(record) - have);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;  // the deputy is gone (or closed its end)
+    have += static_cast<size_t>(n);
+    if (have < sizeof(record)) continue;
+    have = 0;
+    int pgid;
+    memcpy(&pgid, record + 1, sizeof(pgid));
+    if (pgid <= 0) continue;
+    if (record[0] == '+' && num_groups < kMaxGroups) {
+      groups[num_groups++] = pgid;
+    } else if (record[0] == '-') {
+      for (int i = 0; i < num_groups; ++i) {
+        if (groups[i] == pgid) {
+          groups[i] = groups[--num_groups];
+          break;
+        }
+      }
+    }
+  }
+  for (int i = 0; i < num_groups; ++i) kill(-groups[i], SIGKILL);
+  _exit(0);
+}
+
+void TellGuardian(char op, int pgid) {
+  if (g_guardian_fd < 0 || pgid <= 0) return;
+  unsigned char record[5];
+  record[0] = static_cast<unsigned char>(op);
+  memcpy(record + 1, &pgid, sizeof(pgid));
+  // One record is far below a socket buffer: written whole or not at all (a guardian that died).
+  if (send(g_guardian_fd, record, sizeof(record), MSG_NOSIGNAL | MSG_DONTWAIT) != sizeof(record)) {
+    close(g_guardian_fd);
+    g_guardian_fd = -1;
+  }
+}
+
+}  // namespace
+
+bool StartGroupGuardian() {
+  if (g_guardian_fd >= 0) return true;
+  int sv[2];
+  if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) return false;
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(sv[0]);
+    close(sv[1]);
+    return false;
+  }
+  if (pid == 0) {
+    // Keep nothing of the deputy's but the socket (no pipe or LCM socket held open).
+    const long max_fd = std::min(sysconf(_SC_OPEN_MAX), 65536L);
+    for (int fd = 0; fd < max_fd; ++fd) {
+      if (fd != sv[1]) close(fd);
+    }
+    RunGroupGuardian(sv[1]);
+  }
+  close(sv[1]);
+  g_guardian_fd = sv[0];
+  return true;
+}
+
 struct Supervisor::Managed {
   CommandSpec spec;
   bool removed = false;
@@ -75,6 +154,13 @@ struct Supervisor::Managed {
   uint64_t prev_ticks = 0;
   double prev_ticks_s = -1;
 };
+
+void Supervisor::SetGroup(Managed* m, int pgid) {
+  if (m->pgid == pgid) return;
+  TellGuardian('-', m->pgid);
+  m->pgid = pgid;
+  TellGuardian('+', pgid);
+}
 
 namespace {
 
@@ -210,7 +296,7 @@ void Supervisor::Start(Managed* m, double now_s) {
   auto fail = [&](const std::string& why) {
     AppendOutput(m, "[procman] cannot start: " + why + "\n");
     m->pid = 0;
-    m->pgid = 0;
+    SetGroup(m, 0);
     m->state = CommandState::kRunning;  // so that OnExit treats it as a crash
     OnExit(m, -1, now_s);
   };
@@ -313,7 +399,7 @@ void Supervisor::Start(Managed* m, double now_s) {
   m->out_fd = out_pipe[0];
   fcntl(m->out_fd, F_SETFL, fcntl(m->out_fd, F_GETFL) | O_NONBLOCK);
   m->pid = pid;
-  m->pgid = pid;
+  SetGroup(m, pid);
   Board().commands.insert(pid);
   m->state = CommandState::kRunning;
   if (n == static_cast<ssize_t>(sizeof(exec_errno))) {
@@ -322,7 +408,7 @@ void Supervisor::Start(Managed* m, double now_s) {
     }
     Board().commands.erase(pid);
     m->pid = 0;
-    m->pgid = 0;
+    SetGroup(m, 0);
     AppendOutput(m, "[procman] cannot start: exec " + program + ": " + strerror(exec_errno) + "\n");
     OnExit(m, -1, now_s);
   }
@@ -353,7 +439,7 @@ void Supervisor::OnExit(Managed* m, int wait_status, double now_s) {
   // Exited on its own: nothing of it may stay behind.
   if (m->pgid > 0) {
     SignalTree(m, SIGKILL);
-    m->pgid = 0;
+    SetGroup(m, 0);
   }
   const bool want = !shutting_down_ && !m->removed && m->spec.desired_running;
   if (want && m->spec.auto_respawn && m->spec.desired_runid == m->actual_runid) {
@@ -421,7 +507,7 @@ bool Supervisor::Step(double now_s) {
         case CommandState::kStopping:
           if (m->pid == 0 && !TreeAlive(m)) {
             m->state = CommandState::kStopped;
-            m->pgid = 0;
+            SetGroup(m, 0);
             m->tree.clear();
             ReadOutput(m);
           } else if (now_s >= m->stop_deadline_s && !m->killed) {

@@ -74,6 +74,14 @@ struct RespawnPolicy {
 // Makes this process the reaper of its orphaned descendants (Linux PR_SET_CHILD_SUBREAPER).
 bool BecomeSubreaper();
 
+// Starts this process's group guardian: a small child process, in a process group of its own,
+// that every Supervisor here tells which command process groups are alive. When this process
+// ends in any way (SIGKILL, OOM, a crash), the guardian kills those groups with SIGKILL: the
+// commands die with their deputy (PR_SET_PDEATHSIG) and so do the processes they forked
+// (a shell's background jobs), which stay in the command's group. False (errno set) when it
+// cannot be started; the commands themselves still die with the deputy.
+bool StartGroupGuardian();
+
 class Supervisor {
  public:
   explicit Supervisor(RespawnPolicy respawn = RespawnPolicy(), size_t max_buffered_output = 65536);
@@ -117,6 +125,8 @@ class Supervisor {
   bool ReapAll(double now_s);
   void ReadOutput(Managed* m);
   void AppendOutput(Managed* m, const std::string& text);
+  // Sets m->pgid (0: none), telling the group guardian.
+  static void SetGroup(Managed* m, int pgid);
 
   RespawnPolicy respawn_;
   size_t max_buffered_output_;

@@ -16,16 +16,22 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/args.h"
 #include "common/decode.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
 #include "common/transform.h"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_map/handheld_sound_map_messages.h"
 
 namespace {
+
+// Inputs stamped further behind their stream's clock are dropped by the replay (a keyword is
+// published a few seconds after it was heard; nothing of the stack comes later).
+constexpr double kReplayMaxBehindS = 10.0;
 
 using sarmap::sound_map::LinearArraySoundMap;
 
@@ -102,7 +108,23 @@ int main(int argc, char** argv) {
     bool have_truth = false;
     sarmap::sound_map_t live;
     int64_t live_msgs = 0, other_kinds = 0, bad = 0, doa_msgs = 0;
+    // Each input stream gated on its own clock, on the log's receive times, as the node gates
+    // it live: a far-future stamp (a skewed or forged message the recorder heard) is dropped.
+    // The replay orders the whole log by stamp, so a stamp far behind would be applied first
+    // (the node's queue drops it as late): those are dropped too.
+    sarmap::common::StampGateOptions gate_options = options.stamp_gate;
+    if (gate_options.max_behind_s <= 0) gate_options.max_behind_s = kReplayMaxBehindS;
+    sarmap::common::StampGates gates(gate_options);
+    const std::vector<std::string> gated = {options.pose_channel, options.doa_channel,
+                                            options.people_audio_channel};
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+      const int stream =
+          static_cast<int>(std::find(gated.begin(), gated.end(), e->channel) - gated.begin());
+      sarmap::common::Utime stamp;
+      if (stream < static_cast<int>(gated.size()) &&
+          sarmap::common::EncodedHeaderUtime(e->data, e->datalen, &stamp) &&
+          !gates.Accept(stream, stamp, 1e-6 * static_cast<double>(e->timestamp)))
+        continue;
       if (e->channel == options.pose_channel && trajectory.empty()) {
         sarmap::pose_t msg;
         Eigen::Isometry3d pose;
@@ -171,10 +193,11 @@ int main(int argc, char** argv) {
       });
     }
     printf(
-        "log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld undecodable%s\n",
+        "log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld undecodable, "
+        "%ld stamped far from their stream's clock%s\n",
         odom_rig.size(), options.pose_channel.c_str(), static_cast<long>(doa_msgs),
         options.doa_channel.c_str(), static_cast<long>(other_kinds), static_cast<long>(bad),
-        truth_poses ? "; map from the TRUE rig poses" : "");
+        static_cast<long>(gates.dropped()), truth_poses ? "; map from the TRUE rig poses" : "");
     if (poses.empty())
       throw std::runtime_error("no poses on " + options.pose_channel +
                                " (run sarmap-rgbd-odometry)");

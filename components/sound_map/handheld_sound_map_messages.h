@@ -9,6 +9,7 @@
 
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -28,6 +29,7 @@ struct HandheldSoundMapOptions {
   common::ExtrinsicsOptions rig_from_mic_array{0.0, 0.0, -0.03, 0.0, 0.0, M_PI / 2};
   double reorder_delay_s = 0.5;   // inputs wait this long for older ones
   double publish_period_s = 1.0;  // SOUND_MAP period, message time
+  common::StampGateOptions stamp_gate;  // each input stream on its own clock
   LinearArrayMapOptions map;
   template <class V>
   void Visit(V& v) {
@@ -40,11 +42,14 @@ struct HandheldSoundMapOptions {
     v("reorder_delay_s", reorder_delay_s,
       "inputs are processed in time order once this much newer data arrived");
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
+    v("stamp_gate", stamp_gate,
+      "inputs stamped far from their stream's clock are dropped and counted, never adopted");
     v("map", map, "linear-array sound map (Su 2017 ch. 5)");
   }
   void Validate(common::Validator& check) const {
     check.NonNegative("reorder_delay_s", reorder_delay_s);
     check.Positive("publish_period_s", publish_period_s);
+    stamp_gate.Validate(check);
     map.Validate(check);
   }
 };

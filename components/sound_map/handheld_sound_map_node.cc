@@ -11,6 +11,7 @@
 #include "common/node.h"
 #include "common/node_main.h"
 #include "common/options.h"
+#include "common/stamp_gate.h"
 #include "common/time.h"
 #include "sound_map/handheld_sound_map_messages.h"
 #include "sound_map/linear_array_map.h"
@@ -60,6 +61,15 @@ int main(int argc, char** argv) {
       if (t - last_publish >= sarmap::common::SecondsToUtime(options.publish_period_s))
         publish_map(t);
     };
+    // One far-future stamp must not become the queue's clock (every later input "late"): each
+    // input stream is gated on its own clock (common/stamp_gate.h).
+    enum Gate { kPoseGate, kDoaGate, kHeardGate };
+    sarmap::common::StampGates gates(options.stamp_gate);
+    const auto stamp_ok = [&](Gate gate, Utime utime, const sarmap::common::ReceiveInfo& info) {
+      if (gates.Accept(gate, utime, info.receive_time_s)) return true;
+      node.Reject(info.channel, "stamp " + std::to_string(utime) + " far from the stream's clock");
+      return false;
+    };
     auto push = [&](Utime utime, std::function<void(Utime)> fn) {
       newest = std::max(newest, utime);
       if (!queue.Push(utime, std::move(fn))) return;
@@ -67,7 +77,8 @@ int main(int argc, char** argv) {
     };
 
     node.Subscribe<sarmap::pose_t>(
-        options.pose_channel, [&](const sarmap::pose_t& msg, const auto&) {
+        options.pose_channel, [&](const sarmap::pose_t& msg, const auto& info) {
+          if (!stamp_ok(kPoseGate, msg.header.utime, info)) return;
           Eigen::Isometry3d odom_from_rig;
           if (!sarmap::sound_map::IsometryFromPose(msg, &odom_from_rig)) {
             ++bad_poses;
@@ -82,7 +93,9 @@ int main(int argc, char** argv) {
           push(msg.header.utime,
                [&map, odom_from_sensor](Utime t) { map.OnPose(t, odom_from_sensor); });
         });
-    node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const auto&) {
+    node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg,
+                                                           const auto& info) {
+      if (!stamp_ok(kDoaGate, msg.header.utime, info)) return;
       auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &other_kinds);
       if (other_kinds > warned_kinds) {
         warned_kinds = other_kinds;
@@ -95,7 +108,9 @@ int main(int argc, char** argv) {
       push(msg.header.utime, [&map, doas](Utime t) { map.OnDoa(t, doas); });
     });
     node.Subscribe<sarmap::people_detections_t>(
-        options.people_audio_channel, [&](const sarmap::people_detections_t& msg, const auto&) {
+        options.people_audio_channel,
+        [&](const sarmap::people_detections_t& msg, const auto& info) {
+          if (!stamp_ok(kHeardGate, msg.header.utime, info)) return;
           const auto heard = sarmap::sound_map::HeardLinearDirections(msg);
           push(msg.header.utime, [&map, heard](Utime t) {
             for (const auto& d : heard) map.OnHeardDirection(t, d);
@@ -114,7 +129,9 @@ int main(int argc, char** argv) {
           std::to_string(c.doas_used) + " of " + std::to_string(c.doas) + " (no pose " +
           std::to_string(c.doas_without_pose) + ", gated out " + std::to_string(c.doas_gated_out) +
           "), bad poses " + std::to_string(bad_poses) + ", late inputs " +
-          std::to_string(queue.dropped_late()));
+          std::to_string(queue.dropped_late()) + ", off-clock stamps " +
+          std::to_string(gates.dropped()) + " (re-anchors " + std::to_string(gates.reanchors()) +
+          ")");
     });
     const int code = node.Run();
     // The last reorder_delay_s of inputs, then one optimisation over everything, and the final map.

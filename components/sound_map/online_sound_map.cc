@@ -6,6 +6,9 @@
 #include <fstream>
 #include <limits>
 #include <set>
+#include <sstream>
+
+#include "common/state_file.h"
 
 namespace sarmap {
 namespace sound_map {
@@ -596,6 +599,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
 namespace {
 constexpr char kStateMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'S', 'M'};
 constexpr int32_t kStateVersion = 2;  // 2: class votes and calls per source
+constexpr char kStateKind[] = "sound-map";  // the seal's kind (common/state_file.h)
 
 void WritePose(common::BinaryWriter* w, const Pose2& p) { w->Pod(p.x), w->Pod(p.y), w->Pod(p.yaw); }
 Pose2 ReadPose(common::BinaryReader* r) {
@@ -605,7 +609,9 @@ Pose2 ReadPose(common::BinaryReader* r) {
 }  // namespace
 
 void OnlineSoundMap::Save(const std::string& path) const {
-  common::WriteAtomically(path, [this](common::BinaryWriter* w) {
+  std::ostringstream body(std::ios::binary);
+  common::BinaryWriter writer(&body);
+  const auto write = [this](common::BinaryWriter* w) {
     for (char c : kStateMagic) w->Pod(c);
     w->Pod(kStateVersion);
     w->Pod<int8_t>(options_.three_d);
@@ -642,12 +648,18 @@ void OnlineSoundMap::Save(const std::string& path) const {
     }
     w->Pod(last_trail_point_.x()), w->Pod(last_trail_point_.y());
     for (char c : kStateMagic) w->Pod(c);  // trailer: a complete file
-  });
+  };
+  write(&writer);
+  common::WriteSealedState(path, kStateKind, kStateVersion, body.str());
 }
 
 bool OnlineSoundMap::Load(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
+  std::string body;
+  // Throws StateFileError (another kind or version, truncated, bit flips) before any parsing.
+  if (common::ReadSealedState(path, kStateKind, kStateVersion, &body) ==
+      common::StateFileRead::kMissing)
+    return false;
+  std::istringstream in(body, std::ios::binary);
   common::BinaryReader r(&in, "sound-map state '" + path + "'");
   auto magic = [&r] {
     for (char c : kStateMagic)

@@ -288,9 +288,10 @@ class OnlineSoundMap {
   const Counters& counters() const { return counters_; }
   const IdpEkf& ekf() const { return ekf_; }
 
-  // The whole state (not the options), crash-safe (written beside and renamed over path), so a
-  // restarted node continues where it was. Load returns false when there is no file and throws
-  // for one that is truncated, corrupt or from a map of the other dimension (three_d).
+  // The whole state (not the options), crash-safe (written beside and renamed over path) and
+  // sealed with a checksum (common/state_file.h), so a restarted node continues where it was.
+  // Load returns false when there is no file and throws for one that is truncated, bit-flipped,
+  // corrupt or from a map of the other dimension (three_d), leaving the map as it was.
   void Save(const std::string& path) const;
   bool Load(const std::string& path);
 

@@ -8,6 +8,7 @@
 #include <map>
 #include <random>
 
+#include "common/state_file.h"
 #include "sound_map/experiments.h"
 #include "sound_map/simulation.h"
 
@@ -138,6 +139,35 @@ TEST(OnlineSoundMap, ARestartFromTheStateFileContinuesExactly) {
   three_d.three_d = true;
   OnlineSoundMap(three_d, ArrayMount{}).Save(path);
   EXPECT_THROW(resumed.Load(path), std::runtime_error);
+}
+
+// The state file is sealed: one flipped bit in a value (the current pose's x, which would parse
+// and resume as a slightly different map) is refused by the checksum, and the map is unchanged.
+TEST(OnlineSoundMap, ABitFlipInTheStateFileIsRefused) {
+  Harness h(LandmarkScene());
+  for (size_t k = 0; k < h.d.truth.size() / 2; ++k) h.Step(k);
+  const std::string path = ::testing::TempDir() + "/sound_map_bit_flip.state";
+  h.map.Save(path);
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_EQ(bytes.rfind("# sarmap-state sound-map v", 0), 0u) << "no seal";
+  // After the header line: magic (8), version (4), three_d (1), the EKF state's rows and
+  // columns (8 + 8), then its first value, whose lowest byte is flipped.
+  const size_t value = bytes.find('\n') + 1 + 8 + 4 + 1 + 8 + 8;
+  ASSERT_LT(value, bytes.size());
+  bytes[value] = static_cast<char>(bytes[value] ^ 0x01);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+  OnlineSoundMap resumed(OnlineSoundMapOptions{}, ArrayMount{});
+  try {
+    resumed.Load(path);
+    ADD_FAILURE() << "a bit-flipped state file was resumed";
+  } catch (const common::StateFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(resumed.Sources(0).empty());
 }
 
 // After a loop closure SLAM corrects the trajectory; the sound map moves with it.

@@ -8,7 +8,8 @@
 //   sarmap-log sound-map demo.lcmlog --set map.birth_min_observations=5
 //   sarmap-log sound-map demo.lcmlog --truth-poses --doa-check --doa-trace carol_voice
 //   # re-run the localiser over the log's AUDIO (e.g. to try localiser options offline):
-//   sarmap-log sound-map demo.lcmlog --relocalise config/sound_localisation.yaml --loc-set onset_rise_db=0
+//   sarmap-log sound-map demo.lcmlog --relocalise config/sound_localisation.yaml --loc-set
+//   onset_rise_db=0
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -22,11 +23,13 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 #include "common/args.h"
 #include "common/decode.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
+#include "common/stamp_gate.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_localisation/localiser.h"
@@ -35,6 +38,10 @@
 #include "sound_map/sound_map_messages.h"
 
 namespace {
+
+// Inputs stamped further behind their stream's clock are dropped by the replay (a keyword is
+// published a few seconds after it was heard; nothing of the stack comes later).
+constexpr double kReplayMaxBehindS = 10.0;
 
 using sarmap::sound_map::OnlineSoundMap;
 using sarmap::sound_map::Pose2;
@@ -195,7 +202,23 @@ int main(int argc, char** argv) {
       }
       if (slam_poses.empty()) throw std::runtime_error("no poses in " + trajectory_path);
     }
+    // Each input stream gated on its own clock, on the log's receive times, as the node gates
+    // it live: a far-future stamp (a skewed or forged message the recorder heard) is dropped.
+    // The replay orders the whole log by stamp, so a stamp far behind would be applied first
+    // (the node's queue drops it as late): those are dropped too.
+    sarmap::common::StampGateOptions gate_options = options.stamp_gate;
+    if (gate_options.max_behind_s <= 0) gate_options.max_behind_s = kReplayMaxBehindS;
+    sarmap::common::StampGates gates(gate_options);
+    const std::vector<std::string> gated = {options.pose_channel, options.doa_channel, "AUDIO",
+                                            options.anchors_channel, options.people_audio_channel};
     for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+      const int stream =
+          static_cast<int>(std::find(gated.begin(), gated.end(), e->channel) - gated.begin());
+      sarmap::common::Utime stamp;
+      if (stream < static_cast<int>(gated.size()) &&
+          sarmap::common::EncodedHeaderUtime(e->data, e->datalen, &stamp) &&
+          !gates.Accept(stream, stamp, 1e-6 * static_cast<double>(e->timestamp)))
+        continue;
       if (e->channel == options.pose_channel && !truth_poses_in && !poses_from_file) {
         sarmap::pose_t m;
         if (!Decode(*e, &m)) continue;
@@ -342,6 +365,9 @@ int main(int argc, char** argv) {
         }
       }
     }
+    if (gates.dropped() > 0)
+      printf("%lld inputs stamped far from their stream's clock dropped\n",
+             static_cast<long long>(gates.dropped()));
     if (inputs.empty()) throw std::runtime_error("no sound map input in " + log_path);
     first_utime = inputs.begin()->first;
     // Which true sources sounded at time t (the SIM_TRUTH before it); empty: unknown.

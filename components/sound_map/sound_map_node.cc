@@ -15,6 +15,7 @@
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
+#include "common/state_file.h"
 #include "common/time.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
@@ -60,8 +61,10 @@ int main(int argc, char** argv) {
           SARMAP_LOG(INFO) << "resumed " << map.ekf().source_ids().size() << " sources from "
                            << options.state_file;
         }
-      } catch (const std::exception& e) {
-        SARMAP_LOG(WARN) << "not resumed, starting empty: " << e.what();
+      } catch (const std::exception& e) {  // one clear line and a clean start, no crash loop
+        const std::string aside = sarmap::common::SetAsideStateFile(options.state_file);
+        SARMAP_LOG(ERROR) << "not resumed, starting empty: " << e.what()
+                          << (aside.empty() ? "" : " (moved to " + aside + ")");
       }
     }
     sarmap::common::Node node("sarmap-sound-map", node_args.lcm_url);

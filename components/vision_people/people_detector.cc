@@ -325,6 +325,16 @@ struct PeopleDetector::Workspace {
   std::vector<uint8_t> kept;
   std::vector<int32_t> neighbour_offsets;
   UnionFind uf;
+  // The depth's field of view in the image, as the union of the pixels that held depth over
+  // the frames seen so far: a registered depth image leaves bands without depth at its borders
+  // (the depth camera's field is narrower than the colour camera's). The floor fills every
+  // column the depth sees, so one frame gives the sides; the top rows often hold no depth
+  // because the room is beyond range there, so the top band is trusted only after
+  // kFovFrames frames (before that the image's top edge is the border). Reset when the image
+  // size changes.
+  static constexpr int kFovFrames = 30;
+  int fov_width = 0, fov_height = 0, fov_frames = 0;
+  int fov_umin = 0, fov_umax = -1, fov_vmin = 0;
 
   int64_t Cell(int ix, int iy, int iz) const {
     return (static_cast<int64_t>(iz + kPad) * (ny + 2 * kPad) + (iy + kPad)) * (nx + 2 * kPad) +
@@ -435,6 +445,14 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   ws.sum.clear();
   ws.count.clear();
   int num_points = 0;
+  if (ws.fov_width != frame.width || ws.fov_height != frame.height) {
+    ws.fov_width = frame.width;
+    ws.fov_height = frame.height;
+    ws.fov_frames = 0;
+    ws.fov_umin = frame.width;
+    ws.fov_umax = -1;
+    ws.fov_vmin = frame.height;
+  }
   const int stride = o.pixel_stride;
   const float depth_noise = static_cast<float>(o.noise.depth_coeff);
   for (int v = 0; v < frame.height; v += stride) {
@@ -444,6 +462,9 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       const float z = p[2];
       if (!(z >= min_z) || !std::isfinite(p[0]) || !std::isfinite(p[1])) continue;  // NaN fails
       ++num_points;
+      ws.fov_umin = std::min(ws.fov_umin, u);
+      ws.fov_umax = std::max(ws.fov_umax, u);
+      ws.fov_vmin = std::min(ws.fov_vmin, v);
       // Mixed ("flying") pixels at a depth edge lie between the near and the far surface and
       // would join a person to the wall behind: a pixel whose left and right neighbours are one
       // nearer and one farther, both by more than the noise, is dropped. Along columns only:
@@ -473,6 +494,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     }
   }
   result.stats.num_points = num_points;
+  if (num_points > 0) ++ws.fov_frames;
   const int nv = static_cast<int>(ws.voxel_cell.size());
   result.stats.num_voxels = nv;
   // The grid is cleared at the end of this function through this guard, whatever happens.
@@ -906,13 +928,32 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     }
     c.fill = slices > 0 ? static_cast<double>(occupied) / slices : 0.0;
 
-    // Is the top of the cluster the top of the object? Not when it touches the image's top
-    // edge (the object may go on above the field of view).
+    // Where the sub-cluster meets the image border its outline is the image's, not the
+    // object's: the top may go on above the field of view, and a wall or cupboard whose top is
+    // cut by a side border looks like a narrow upright body with a step at its top. Only the
+    // head (points within head_drop of the top) counts at the sides: a person whose arm or
+    // shoulder leaves the image is still judged by the head. The borders are those of the
+    // depth's field of view (fov_*); the margin adds half a voxel's image size (voxel
+    // centroids lie inside the object's outline).
     {
-      const Eigen::Vector3d top_point = ws.centroid[top_voxel];
-      const double vt = ProjectV(K, top_point), ut = ProjectU(K, top_point);
-      const int margin = std::max(2, frame.height / 48);
-      c.truncated_top = !(std::isfinite(vt) && std::isfinite(ut)) || vt < margin;
+      double umin = 1e9, umax = -1e9, vmin = 1e9;
+      bool finite = true;
+      for (int i : part) {
+        const double u = ProjectU(K, ws.centroid[i]), v = ProjectV(K, ws.centroid[i]);
+        if (!std::isfinite(u) || !std::isfinite(v)) {
+          finite = false;
+          continue;
+        }
+        vmin = std::min(vmin, v);
+        if (ws.floor[i].z() < H - so.head_drop_m) continue;
+        umin = std::min(umin, u);
+        umax = std::max(umax, u);
+      }
+      const double margin =
+          std::max(2, frame.height / 48) + 0.5 * vs * K.fx / std::max(0.5, c.position_camera.z());
+      c.truncated_top =
+          !finite || vmin < (ws.fov_frames >= Workspace::kFovFrames ? ws.fov_vmin : 0) + margin;
+      c.truncated_side = !finite || umin < ws.fov_umin + margin || umax > ws.fov_umax - margin;
     }
 
     // Depth shape score: a fuzzy AND (product) of memberships.
@@ -971,7 +1012,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
     const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
     const double m_visible =
-        c.truncated_top
+        c.truncated_top || c.truncated_side
             ? 0.0
             : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
     const double shape = m_width * m_depth * m_head;

@@ -298,7 +298,8 @@ struct PersonCandidate {
   double shoulder_area_m2 = 0;   // floor footprint of head and shoulders
   double fill = 0;
   double visible_fraction = 0;
-  bool truncated_top = false;  // the top may be cut by the field of view
+  bool truncated_top = false;   // the top may be cut by the field of view
+  bool truncated_side = false;  // the left or right image border cuts it
   int num_voxels = 0;
   // Image box of the theoretical person (head to floor), pixels.
   double box_u_center = 0, box_v_top = 0, box_v_bottom = 0;

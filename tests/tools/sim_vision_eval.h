@@ -3,9 +3,10 @@
 // acceptance), shared by bench_sim_vision (prints) and sim_vision_test (asserts).
 //
 // Frames are rendered every step_s along the world's scripted robot path. A person counts as
-// fully visible when at least 1500 of its body pixels are in the depth image, its box does
-// not touch the image border and it stands within the camera's depth range (4.6 m, floor
-// distance from the camera to the person's centre); it is found when a detection lies within 0.5 m
+// fully visible when at least 1500 of its body pixels are in the depth image, its box lies
+// inside the depth's field of view (narrower than the colour image's; 2 px in from its
+// border) and it stands within the camera's depth range (4.6 m, floor distance from the
+// camera to the person's centre); it is found when a detection lies within 0.5 m
 // of it on the floor (map frame). A detection within 0.5 m of no person is a false positive.
 #include <cstdint>
 #include <string>
@@ -25,6 +26,9 @@ struct EvalOptions {
   // told config/robot.yaml's (a mounting file that disagrees with the robot).
   double camera_height_m = -1;      // < 0: robot.yaml's
   double camera_tilt_down_deg = 0;  // with camera_height_m >= 0: looking down by this
+  // > 0: instead of following the scripted path, the robot stays at its start pose and turns
+  // by this much between evaluated frames (as an exploring robot does when it starts).
+  double spin_deg_per_step = 0;
 };
 
 // Per posture (index: sim::Posture - 1: standing, sitting, lying).

@@ -127,10 +127,25 @@ Figures Evaluate(const EvalOptions& eval) {
   fig.confirm_n = vision.confirmation.n;
   double cpu_sum = 0;
   const auto& people = simulator.world().people;
+  // The depth's field of view is narrower than the colour image (registered depth): a person
+  // counts as whole when its box lies inside the depth's field, 2 px in from its border.
+  const int depth_u0 =
+      2 + static_cast<int>(options.camera.width / 2.0 *
+                           (1.0 - std::tan(options.camera.depth_hfov_deg * M_PI / 360) /
+                                      std::tan(options.camera.color_hfov_deg * M_PI / 360)));
+  const int depth_v0 =
+      2 + static_cast<int>(options.camera.height / 2.0 *
+                           (1.0 - std::tan(options.camera.depth_vfov_deg * M_PI / 360) /
+                                      std::tan(options.camera.color_vfov_deg * M_PI / 360)));
   const int steps = static_cast<int>(eval.seconds / eval.step_s + 1e-9);
   for (int step = 0; step <= steps; ++step) {
     const double t = step * eval.step_s;
     simulator.AdvanceTo(t, &sink);
+    if (eval.spin_deg_per_step > 0) {
+      const Eigen::Vector3d& start = simulator.world().robot.pose;
+      simulator.SetRobotPose(common::Rigid2d(
+          start.x(), start.y(), start.z() + step * eval.spin_deg_per_step * M_PI / 180));
+    }
     const sim::Simulator::View view = simulator.RenderView();
     vision_people::RgbdFrame frame;
     frame.utime = simulator.utime();
@@ -154,8 +169,8 @@ Figures Evaluate(const EvalOptions& eval) {
       // The simulator counts body pixels before its depth range cut: a person beyond the
       // Kinect's range (corridor_glass) is in view but has no depth at all.
       const double range = (people[i].position - map_from_camera.translation().head<2>()).norm();
-      whole[i] = view.person_pixels[i] >= 1500 && box[0] > 2 && box[1] > 2 &&
-                 box[2] < view.width - 3 && box[3] < view.height - 3 &&
+      whole[i] = view.person_pixels[i] >= 1500 && box[0] > depth_u0 && box[1] > depth_v0 &&
+                 box[2] < view.width - 1 - depth_u0 && box[3] < view.height - 1 - depth_v0 &&
                  range <= options.camera.max_range_m;
       fig.visible += whole[i];
       fig.by_posture[static_cast<int>(people[i].posture) - 1].visible += whole[i];
