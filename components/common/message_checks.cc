@@ -157,11 +157,19 @@ std::string CheckMessage(const sarmap::doa_t& m) {
   c.Header(m.header).Count(m.num_sources, m.sources.size(), "num_sources");
   for (const auto& s : m.sources) {
     c.That(s.kind >= sarmap::doa_source_t::KIND_ANGLE_1D &&
-               s.kind <= sarmap::doa_source_t::KIND_AZIMUTH_ELEVATION, "unknown DOA kind")
+               s.kind <= sarmap::doa_source_t::KIND_AZIMUTH_ELEVATION,
+           "unknown DOA kind")
         .That(s.method >= sarmap::doa_source_t::METHOD_GCC_PHAT &&
-                  s.method <= sarmap::doa_source_t::METHOD_ESPRIT, "unknown DOA method")
-        .Finite(s.azimuth_rad, "azimuth_rad").Finite(s.elevation_rad, "elevation_rad")
-        .Finite(s.covariance, "covariance").Probability(s.confidence, "confidence");
+                  s.method <= sarmap::doa_source_t::METHOD_ESPRIT,
+              "unknown DOA method")
+        .Finite(s.azimuth_rad, "azimuth_rad")
+        .Finite(s.elevation_rad, "elevation_rad")
+        .Finite(s.covariance, "covariance")
+        .Probability(s.confidence, "confidence")
+        .That(s.sound_class >= sarmap::doa_source_t::SOUND_CLASS_UNKNOWN &&
+                  s.sound_class <= sarmap::doa_source_t::SOUND_CLASS_MUSIC,
+              "unknown sound_class")
+        .Probability(s.class_confidence, "class_confidence");
   }
   return c.error();
 }

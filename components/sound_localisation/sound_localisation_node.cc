@@ -186,7 +186,7 @@ int main(int argc, char** argv) {
         }
         for (size_t i = 0; i < entries.size(); ++i) {
           const Entry& e = entries[i];
-          sarmap::doa_source_t s;
+          sarmap::doa_source_t s{};
           s.track_id = e.id;
           s.kind = kind;
           s.azimuth_rad = e.direction->azimuth_rad;

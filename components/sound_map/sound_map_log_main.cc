@@ -255,8 +255,9 @@ int main(int argc, char** argv) {
           d.header.utime = a.header.utime + static_cast<int64_t>(std::llround(
                                                 static_cast<double>(o.centre_sample - before) / geometry.sample_rate_hz * 1e6));
           d.device_id = a.device_id;
-          auto add = [&](int64_t id, const sarmap::sound::Direction& dir, const Eigen::Matrix2d& cov) {
-            sarmap::doa_source_t s;
+          auto add = [&](int64_t id, const sarmap::sound::Direction& dir,
+                         const Eigen::Matrix2d& cov) {
+            sarmap::doa_source_t s{};
             s.track_id = id;
             s.kind = static_cast<int8_t>(localiser->kind());
             s.azimuth_rad = dir.azimuth_rad;
