@@ -182,7 +182,12 @@ int main(int argc, char** argv) {
           for (const auto& e : entries) directions.push_back(*e.direction);
           const int64_t block =
               static_cast<int64_t>(std::llround(lo.block_s * geometry.sample_rate_hz));
-          classes = classifier->Observe(o.end_sample - block, o.end_sample, directions);
+          // The stream the sound map reads marks the class tracks; the other one (the speech
+          // beams' DOA) only reads them: its reports of one source near another's direction
+          // marked the other's frames as sounding (lab tour: the smoke alarm mapped as a voice).
+          const bool marks = map_localiser ? &lo == &options.map_localiser : true;
+          classes = marks ? classifier->Observe(o.end_sample - block, o.end_sample, directions)
+                          : classifier->Lookup(directions);
         }
         for (size_t i = 0; i < entries.size(); ++i) {
           const Entry& e = entries[i];

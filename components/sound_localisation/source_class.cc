@@ -396,5 +396,23 @@ std::vector<SoundClassEstimate> DirectionalClassifier::Observe(
   return out;
 }
 
+std::vector<SoundClassEstimate> DirectionalClassifier::Lookup(
+    const std::vector<Direction>& directions) const {
+  std::vector<SoundClassEstimate> out;
+  for (const Direction& d : directions) {
+    const ClassTrack* best = nullptr;
+    double best_rad = DegToRad(options_.gate_deg);
+    for (const ClassTrack& t : tracks_) {
+      const double a = AngularDistanceRad(geometry_, kind_, t.direction, d);
+      if (a < best_rad) {
+        best_rad = a;
+        best = &t;
+      }
+    }
+    out.push_back(best ? best->classifier->Classify() : SoundClassEstimate());
+  }
+  return out;
+}
+
 }  // namespace sound
 }  // namespace sarmap

@@ -201,6 +201,10 @@ class DirectionalClassifier {
   // frames of the block are marked as sounding; returns the class of each, in order.
   std::vector<SoundClassEstimate> Observe(int64_t begin_sample, int64_t end_sample,
                                           const std::vector<Direction>& directions);
+  // The class of the class track nearest each direction (within gate_deg; kUnknown if none),
+  // without marking or starting tracks: for a second stream of the same audio, whose reports
+  // would mark other sources' frames as sounding.
+  std::vector<SoundClassEstimate> Lookup(const std::vector<Direction>& directions) const;
   size_t num_tracks() const { return tracks_.size(); }
 
  private:

@@ -223,6 +223,15 @@ TEST(SourceClassTest, DirectionalClassifierSeparatesThreeSources) {
     std::printf("source %zu: %s\n", i, Describe(last[i]).c_str());
     EXPECT_EQ(last[i].sound_class, truth[i]) << "source " << i << ": " << Describe(last[i]);
   }
+  // A second stream reads the tracks without touching them; a direction far from all is unknown.
+  std::vector<Direction> other = directions;
+  other.push_back(
+      geometry.FromUnit(DoaKind::kAzimuthElevation, Eigen::Vector3d(0, -1, 0.2).normalized()));
+  const auto looked_up = classifier.Lookup(other);
+  ASSERT_EQ(looked_up.size(), 4u);
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(looked_up[i].sound_class, truth[i]);
+  EXPECT_EQ(looked_up[3].sound_class, SoundClass::kUnknown);
+  EXPECT_EQ(classifier.num_tracks(), 3u);
 }
 
 }  // namespace
