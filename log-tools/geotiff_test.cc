@@ -52,6 +52,7 @@ sound_source_t MakeSource(int64_t id, double x, double y, double variance, int8_
   s.position_m[1] = y;
   s.covariance[0] = s.covariance[4] = s.covariance[8] = variance;
   s.state = state;
+  s.has_position = true;
   return s;
 }
 

@@ -246,6 +246,11 @@ std::string OutsideReason(const MapExtent& extent, const double* p, const double
   return "";
 }
 
+std::string SoundClassName(int sound_class) {
+  static const char* kNames[] = {"unknown", "voice", "alarm", "machinery", "music"};
+  return sound_class >= 0 && sound_class <= 4 ? kNames[sound_class] : "unknown";
+}
+
 std::vector<sarmap::mapped_person_t> PeopleOnMap(const MissionData& data,
                                                  const MissionSummary& summary) {
   std::vector<sarmap::mapped_person_t> out;
@@ -290,8 +295,25 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
     for (const auto& p : data.people->people) check("person", p.id, p.position_m, p.covariance);
   }
   if (data.sources) {
-    for (const auto& src : data.sources->sources)
+    for (const auto& src : data.sources->sources) {
+      if (!src.has_position) {
+        // A bearing: position_m is where it was heard from, not the source.
+        OutsideMap o;
+        o.kind = "sound source";
+        o.id = src.id;
+        o.x_m = src.position_m[0];
+        o.y_m = src.position_m[1];
+        o.std_m = INFINITY;
+        char why[160];
+        snprintf(why, sizeof(why),
+                 "%s heard at bearing %.0f deg from here, range not yet observable",
+                 SoundClassName(src.sound_class).c_str(), src.bearing_rad * 180 / M_PI);
+        o.why = why;
+        s.outside_map.push_back(o);
+        continue;
+      }
       check("sound source", src.id, src.position_m, src.covariance);
+    }
   }
   s.people_found = static_cast<int>(PeopleOnMap(data, s).size());
   s.sources_mapped = static_cast<int>(SourcesOnMap(data, s).size());
@@ -331,6 +353,55 @@ MissionSummary Summarise(const MissionData& data, double match_radius_m) {
     s.truth.push_back(m);
   }
   for (size_t f = 0; f < found.size(); ++f) s.false_positives += found_used[f] ? 0 : 1;
+  // Sound sources: every simulated emitter against the placed sources, nearest pairs first.
+  const std::vector<sarmap::sound_source_t> placed = SourcesOnMap(data, s);
+  const auto& emitters = data.truth->sources;
+  struct Pair {
+    double d;
+    size_t t, m;
+  };
+  std::vector<Pair> pairs;
+  std::vector<Eigen::Vector2d> emitter_xy;
+  for (const auto& e : emitters)
+    emitter_xy.push_back(s.alignment.Apply(Eigen::Vector2d(e.position_m[0], e.position_m[1])));
+  for (size_t t = 0; t < emitters.size(); ++t)
+    for (size_t m = 0; m < placed.size(); ++m) {
+      const double d =
+          (emitter_xy[t] - Eigen::Vector2d(placed[m].position_m[0], placed[m].position_m[1]))
+              .norm();
+      if (d <= match_radius_m) pairs.push_back({d, t, m});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
+  std::vector<int> emitter_to(emitters.size(), -1), placed_used(placed.size(), 0);
+  std::vector<double> emitter_error(emitters.size(), 0);
+  for (const Pair& p : pairs) {
+    if (emitter_to[p.t] >= 0 || placed_used[p.m]) continue;
+    emitter_to[p.t] = static_cast<int>(p.m);
+    emitter_error[p.t] = p.d;
+    placed_used[p.m] = 1;
+  }
+  for (size_t t = 0; t < emitters.size(); ++t) {
+    SourceTruthMatch m;
+    m.name = emitters[t].name;
+    const int8_t k = emitters[t].kind;
+    m.kind = k == sarmap::sim_sound_source_t::KIND_VOICE   ? "voice"
+             : k == sarmap::sim_sound_source_t::KIND_MUSIC ? "music"
+             : k == sarmap::sim_sound_source_t::KIND_ALARM ? "alarm"
+                                                           : "noise";
+    m.x_m = emitter_xy[t].x();
+    m.y_m = emitter_xy[t].y();
+    if (emitter_to[t] >= 0) {
+      const auto& src = placed[emitter_to[t]];
+      m.found = true;
+      m.source_id = src.id;
+      m.error_m = emitter_error[t];
+      m.mapped_class = SoundClassName(src.sound_class);
+      m.is_person = src.is_person;
+      m.class_right = m.mapped_class == (m.kind == "noise" ? "machinery" : m.kind);
+      if (m.is_person && m.kind != "voice") ++s.non_voice_people;
+    }
+    s.source_truth.push_back(m);
+  }
   return s;
 }
 
@@ -606,6 +677,36 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
       out << line;
     }
   }
+  for (const auto& src : SourcesOnMap(data, summary)) {
+    snprintf(line, sizeof(line), "  sound source #%lld at (%.2f, %.2f) m: %s%s\n",
+             static_cast<long long>(src.id), src.position_m[0], src.position_m[1],
+             SoundClassName(src.sound_class).c_str(),
+             src.is_person
+                 ? (src.priority == sarmap::sound_source_t::PRIORITY_CALL ? ", person, calling"
+                                                                          : ", person")
+                 : "");
+    out << line;
+  }
+  if (!summary.source_truth.empty()) {
+    int placed = 0, right = 0;
+    for (const auto& m : summary.source_truth) {
+      placed += m.found;
+      right += m.found && m.class_right;
+      snprintf(line, sizeof(line), "  emitter %s (%s): %s\n", m.name.c_str(), m.kind.c_str(),
+               m.found ? ("placed " + Fixed(m.error_m, 2) + " m off as " + m.mapped_class +
+                          (m.class_right ? "" : " (wrong class)") + (m.is_person ? ", person" : ""))
+                             .c_str()
+                       : "not placed");
+      out << line;
+    }
+    snprintf(
+        line, sizeof(line),
+        "sound sources: %d of %zu emitters placed within %.2f m, %d of them with the right class, "
+        "%d non-voice marked a person\n",
+        placed, summary.source_truth.size(), summary.match_radius_m, right,
+        summary.non_voice_people);
+    out << line;
+  }
   if (!summary.outside_map.empty()) {
     out << "unconverged or far outside the map (not counted as found):\n";
     for (const auto& o : summary.outside_map) {
@@ -719,7 +820,10 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
            {"z_m", s.position_m[2]},
            {"covariance", std::vector<double>(s.covariance, s.covariance + 9)},
            {"converged", s.state == sarmap::sound_source_t::STATE_CONVERGED},
-           {"is_person", s.is_person}});
+           {"is_person", s.is_person},
+           {"sound_class", SoundClassName(s.sound_class)},
+           {"class_confidence", s.class_confidence},
+           {"calling", s.priority == sarmap::sound_source_t::PRIORITY_CALL}});
     }
   }
   j["path_m"] = nlohmann::json::array();  // the robot's path (POSE, points 5 cm apart)
@@ -751,6 +855,19 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
                             {"error_m", t.error_m}});
     }
     j["false_positives"] = summary.false_positives;
+    j["sound_source_truth"] = nlohmann::json::array();
+    for (const auto& m : summary.source_truth)
+      j["sound_source_truth"].push_back({{"name", m.name},
+                                         {"kind", m.kind},
+                                         {"x_m", m.x_m},
+                                         {"y_m", m.y_m},
+                                         {"found", m.found},
+                                         {"source_id", m.source_id},
+                                         {"error_m", m.error_m},
+                                         {"mapped_class", m.mapped_class},
+                                         {"class_right", m.class_right},
+                                         {"is_person", m.is_person}});
+    j["non_voice_people"] = summary.non_voice_people;
     const Alignment& fit = summary.trail_fit;
     j["alignment"] = {{"method", summary.alignment.method},
                       {"yaw_rad", summary.alignment.yaw_rad},
@@ -862,17 +979,33 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
     }
   }
   html << "</table><h2>Sound sources</h2><table><tr><th>#</th><th>position "
-          "(m)</th><th>state</th><th>person</th></tr>";
+          "(m)</th><th>state</th><th>what</th><th>person</th></tr>";
   {
     for (const auto& s : SourcesOnMap(data, summary)) {
       char pos[64];
       snprintf(pos, sizeof(pos), "%.2f, %.2f", s.position_m[0], s.position_m[1]);
       html << "<tr><td>" << s.id << "</td><td>" << pos << "</td><td>"
-           << (s.state == sarmap::sound_source_t::STATE_CONVERGED ? "converged" : "initialising") << "</td><td>"
-           << (s.is_person ? "yes" : "") << "</td></tr>";
+           << (s.state == sarmap::sound_source_t::STATE_CONVERGED ? "converged" : "initialising")
+           << "</td><td>" << SoundClassName(s.sound_class) << " ("
+           << static_cast<int>(100 * s.class_confidence) << "%)</td><td>"
+           << (s.is_person
+                   ? (s.priority == sarmap::sound_source_t::PRIORITY_CALL ? "yes, calling" : "yes")
+                   : "")
+           << "</td></tr>";
     }
   }
   html << "</table>";
+  if (!summary.source_truth.empty()) {
+    html << "<h2>Sound sources against the "
+            "simulator</h2><table><tr><th>source</th><th>kind</th><th>mapped as</th>"
+            "<th>error</th><th>person</th></tr>";
+    for (const auto& m : summary.source_truth)
+      html << "<tr><td>" << Html(m.name) << "</td><td>" << m.kind << "</td><td>"
+           << (m.found ? m.mapped_class + (m.class_right ? "" : " (wrong)") : "not placed")
+           << "</td><td>" << (m.found ? Fixed(m.error_m, 2) + " m" : "—") << "</td><td>"
+           << (m.is_person ? "yes" : "") << "</td></tr>";
+    html << "</table>";
+  }
   if (!summary.outside_map.empty()) {
     html << "<h2>Unconverged / outside the map</h2><p>Not counted as found and not drawn: "
             "estimates far outside the map or with a standard deviation over "

@@ -92,6 +92,23 @@ struct MapExtent {
 };
 MapExtent ExtentOf(const MissionData& data);
 // Why a position with this xy covariance (row-major 3x3) is not counted as found; "" if it is.
+// A simulated sound source against the sound map: the nearest placed source within the match
+// radius (each used once, by ascending distance).
+struct SourceTruthMatch {
+  std::string name;
+  std::string kind;         // sim_sound_source_t kind: voice, music, alarm, noise
+  double x_m = 0, y_m = 0;  // in the estimated map frame
+  bool found = false;
+  int64_t source_id = -1;
+  double error_m = 0;
+  std::string mapped_class;  // voice, alarm, machinery, music, unknown
+  bool class_right = false;  // voice-voice, alarm-alarm, noise-machinery, music-music
+  bool is_person = false;
+};
+
+// The sound class names of sound_source_t::sound_class.
+std::string SoundClassName(int sound_class);
+
 std::string OutsideReason(const MapExtent& extent, const double* position_m,
                           const double* covariance_3x3, double* std_m);
 
@@ -104,6 +121,8 @@ struct MissionSummary {
   std::vector<OutsideMap> outside_map;  // listed apart, never drawn, never matched to truth
   std::vector<TruthMatch> truth;        // empty without SIM_TRUTH
   int false_positives = 0;              // reported people matching no true person
+  std::vector<SourceTruthMatch> source_truth;  // empty without SIM_TRUTH
+  int non_voice_people = 0;                    // mapped persons matched to a true non-voice source
   double match_radius_m = 0.5;
 };
 

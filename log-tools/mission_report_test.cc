@@ -7,6 +7,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include "sarmap/doa_source_t.hpp"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
 #include "sarmap/people_map_t.hpp"
@@ -89,6 +90,7 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     // The report reads what the stack accepts (DecodeMessage): a known state each.
     near.state = sarmap::sound_source_t::STATE_CONVERGED;
     far.state = sarmap::sound_source_t::STATE_INITIALISING;
+    near.has_position = far.has_position = true;
     sounds.sources = {near, far};
     sounds.num_sources = 2;
     Write(&log, "SOUND_MAP", sounds, 3'000'000);
@@ -363,6 +365,90 @@ TEST(MissionReportTest, HostileMessagesInTheLogAreSkipped) {
   ASSERT_TRUE(data.sources.has_value());
   ASSERT_EQ(data.sources->sources.size(), 1u);
   EXPECT_EQ(data.sources->sources[0].id, 7);
+}
+
+// The simulator's emitters against the sound map: placed sources are matched and their class
+// scored; a bearing is listed apart (never placed, drawn or matched); a mapped person on a
+// non-voice emitter is counted.
+TEST(MissionReportTest, SoundSourcesAreScoredAgainstTheEmitters) {
+  const std::string path = ::testing::TempDir() + "/sources.lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    for (int i = 0; i < 10; ++i) {  // the robot drives from (0, 0) to (4.5, 0); truth = map
+      sarmap::pose_t pose{};
+      pose.header.utime = 1'000'000 + i * 100'000;
+      pose.header.frame = "map";
+      pose.position_m[0] = 0.5 * i;
+      pose.orientation[0] = 1;
+      Write(&log, "POSE", pose, pose.header.utime);
+      sarmap::sim_truth_t t{};
+      t.header.utime = pose.header.utime;
+      t.robot_position_m[0] = 0.5 * i;
+      t.robot_orientation[0] = 1;
+      Write(&log, "SIM_TRUTH", t, t.header.utime);
+    }
+    sarmap::sim_truth_t truth{};
+    truth.header.utime = 2'000'000;
+    truth.robot_position_m[0] = 4.5;
+    truth.robot_orientation[0] = 1;
+    const struct {
+      const char* name;
+      int8_t kind;
+      double x, y;
+    } emitters[] = {{"carol_voice", sarmap::sim_sound_source_t::KIND_VOICE, 2.0, 1.5},
+                    {"smoke_alarm", sarmap::sim_sound_source_t::KIND_ALARM, 4.0, -1.0},
+                    {"servers", sarmap::sim_sound_source_t::KIND_NOISE, 1.0, -1.5}};
+    for (const auto& e : emitters) {
+      sarmap::sim_sound_source_t src{};
+      src.name = e.name;
+      src.kind = e.kind;
+      src.position_m[0] = e.x;
+      src.position_m[1] = e.y;
+      src.person_id = -1;
+      truth.sources.push_back(src);
+    }
+    truth.num_sources = 3;
+    Write(&log, "SIM_TRUTH", truth, 2'000'000);
+    sarmap::sound_map_t sounds{};
+    sounds.header.utime = 2'000'000;
+    sounds.header.frame = "map";
+    auto source = [](int64_t id, double x, double y, int8_t cls, bool placed, bool person) {
+      sarmap::sound_source_t s{};
+      s.id = id;
+      s.position_m[0] = x;
+      s.position_m[1] = y;
+      s.covariance[0] = s.covariance[4] = 0.02;
+      s.state = sarmap::sound_source_t::STATE_CONVERGED;
+      s.has_position = placed;
+      s.sound_class = cls;
+      s.class_confidence = 0.9f;
+      s.is_person = person;
+      return s;
+    };
+    sounds.sources = {
+        source(1, 2.2, 1.4, sarmap::doa_source_t::SOUND_CLASS_VOICE, true, true),
+        source(2, 3.8, -1.1, sarmap::doa_source_t::SOUND_CLASS_MUSIC, true, true),
+        // The servers heard but not yet ranged: a bearing from (0.5, 0).
+        source(3, 0.5, 0.0, sarmap::doa_source_t::SOUND_CLASS_MACHINERY, false, false)};
+    sounds.sources[2].bearing_rad = std::atan2(-1.5, 0.5);
+    sounds.num_sources = 3;
+    Write(&log, "SOUND_MAP", sounds, 2'000'000);
+  }
+  const MissionSummary s = Summarise(LoadMission(path), 0.5);
+  EXPECT_EQ(s.sources_mapped, 2);
+  ASSERT_EQ(s.source_truth.size(), 3u);
+  EXPECT_TRUE(s.source_truth[0].found);
+  EXPECT_TRUE(s.source_truth[0].class_right);
+  EXPECT_NEAR(s.source_truth[0].error_m, std::hypot(0.2, 0.1), 1e-6);
+  EXPECT_TRUE(s.source_truth[1].found);
+  EXPECT_EQ(s.source_truth[1].mapped_class, "music");
+  EXPECT_FALSE(s.source_truth[1].class_right);
+  EXPECT_FALSE(s.source_truth[2].found);  // a bearing is not a placed source
+  EXPECT_EQ(s.non_voice_people, 1);       // the "person" on the alarm
+  bool bearing_listed = false;
+  for (const auto& o : s.outside_map)
+    bearing_listed |= o.id == 3 && o.why.find("bearing") != std::string::npos;
+  EXPECT_TRUE(bearing_listed);
 }
 
 // A log of an attacked bus (make demo-hostile): a valid map sent on another type's channel and

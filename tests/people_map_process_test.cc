@@ -10,7 +10,9 @@
 
 #include "common/node.h"
 #include "common/robot_config.h"
+#include "sarmap/doa_source_t.hpp"
 #include "sarmap/node_status_t.hpp"
+#include "sarmap/sound_map_t.hpp"
 #include "tests/process.h"
 
 namespace sarmap {
@@ -96,6 +98,8 @@ class PeopleMapProcessTest : public ::testing::Test {
         s.position_m[1] = 3.0;
         s.covariance[0] = s.covariance[4] = s.covariance[8] = 0.05;
         s.state = sarmap::sound_source_t::STATE_CONVERGED;
+        s.has_position = true;
+        s.sound_class = sarmap::doa_source_t::SOUND_CLASS_VOICE;
         sound.sources.push_back(s);
         sound.num_sources = 1;
         lcm_->publish("SOUND_MAP", &sound);

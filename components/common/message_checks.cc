@@ -157,11 +157,19 @@ std::string CheckMessage(const sarmap::doa_t& m) {
   c.Header(m.header).Count(m.num_sources, m.sources.size(), "num_sources");
   for (const auto& s : m.sources) {
     c.That(s.kind >= sarmap::doa_source_t::KIND_ANGLE_1D &&
-               s.kind <= sarmap::doa_source_t::KIND_AZIMUTH_ELEVATION, "unknown DOA kind")
+               s.kind <= sarmap::doa_source_t::KIND_AZIMUTH_ELEVATION,
+           "unknown DOA kind")
         .That(s.method >= sarmap::doa_source_t::METHOD_GCC_PHAT &&
-                  s.method <= sarmap::doa_source_t::METHOD_ESPRIT, "unknown DOA method")
-        .Finite(s.azimuth_rad, "azimuth_rad").Finite(s.elevation_rad, "elevation_rad")
-        .Finite(s.covariance, "covariance").Probability(s.confidence, "confidence");
+                  s.method <= sarmap::doa_source_t::METHOD_ESPRIT,
+              "unknown DOA method")
+        .Finite(s.azimuth_rad, "azimuth_rad")
+        .Finite(s.elevation_rad, "elevation_rad")
+        .Finite(s.covariance, "covariance")
+        .Probability(s.confidence, "confidence")
+        .That(s.sound_class >= sarmap::doa_source_t::SOUND_CLASS_UNKNOWN &&
+                  s.sound_class <= sarmap::doa_source_t::SOUND_CLASS_MUSIC,
+              "unknown sound_class")
+        .Probability(s.class_confidence, "class_confidence");
   }
   return c.error();
 }
@@ -202,9 +210,16 @@ std::string CheckMessage(const sarmap::sound_map_t& m) {
   Check c;
   c.Header(m.header).Count(m.num_sources, m.sources.size(), "num_sources");
   for (const auto& s : m.sources) {
-    c.Finite(s.position_m, "position_m").Finite(s.covariance, "covariance")
+    c.Finite(s.position_m, "position_m")
+        .Finite(s.covariance, "covariance")
         .That(s.state >= sarmap::sound_source_t::STATE_INITIALISING &&
-                  s.state <= sarmap::sound_source_t::STATE_SILENT, "unknown state");
+                  s.state <= sarmap::sound_source_t::STATE_SILENT,
+              "unknown state")
+        .Finite(s.bearing_origin_m, "bearing_origin_m")
+        .That(std::isfinite(s.bearing_rad) && std::isfinite(s.bearing_variance),
+              "non-finite bearing")
+        .That(s.sound_class >= 0 && s.sound_class <= 4, "unknown sound_class")
+        .Probability(s.class_confidence, "class_confidence");
   }
   return c.error();
 }

@@ -14,6 +14,7 @@
 #include "common/stamp_gate.h"
 #include "common/state_file.h"
 #include "people_map/people_map.h"
+#include "sarmap/doa_source_t.hpp"
 
 namespace {
 
@@ -280,6 +281,9 @@ int main(int argc, char** argv) {
       if (!stamp_ok(kSoundMapGate, m.header.utime, info)) return;
       std::vector<people_map::SoundSource> sources;
       for (const auto& s : m.sources) {
+        // Only placed voices can be people: a bearing has no position yet, and a machine or
+        // an alarm is never a person, whatever the keyword spotter heard near it.
+        if (!s.has_position || s.sound_class != doa_source_t::SOUND_CLASS_VOICE) continue;
         people_map::SoundSource src;
         src.id = s.id;
         src.position_m = Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);

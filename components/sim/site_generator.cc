@@ -108,7 +108,8 @@ struct Door {
 
 class Builder {
  public:
-  Builder(const SiteOptions& options, uint64_t seed) : o_(options), rng_(seed) {}
+  Builder(const SiteOptions& options, uint64_t seed)
+      : o_(options), rng_(seed), extra_rng_(seed ^ 0x6d75736963ULL) {}
 
   bool Build(Site* site);
 
@@ -137,6 +138,7 @@ class Builder {
 
   const SiteOptions& o_;
   Random rng_;
+  Random extra_rng_;  // music and beepers: their own stream, so the layout does not depend on them
   double length_ = 0, depth_ = 0, height_ = 2.6;
   std::vector<SiteRoom> rooms_;
   std::vector<Wall> walls_;
@@ -561,6 +563,21 @@ void Builder::AddSounds() {
     s.start_s = std::round(rng_.Uniform(2, 15));
     s.every_s = std::round(rng_.Uniform(20, 40));
     s.duration_s = std::round(rng_.Uniform(3, 6));
+    // A beeper or the siren, from their own stream: the layout does not depend on it.
+    if (extra_rng_.Chance(0.5)) s.tone_hz = std::round(extra_rng_.Uniform(2500, 3200) / 10) * 10;
+    sources_.push_back(s);
+  }
+  if (rooms_.size() > 1 && extra_rng_.Chance(o_.music_probability)) {
+    const SiteRoom& r = rooms_[1 + extra_rng_.Int(0, static_cast<int>(rooms_.size()) - 2)];
+    SoundSource s;
+    s.name = "radio";
+    s.kind = SourceKind::kMusic;
+    s.position = {Mm(extra_rng_.Uniform(r.min.x() + 0.5, r.max.x() - 0.5)),
+                  Mm(extra_rng_.Uniform(r.min.y() + 0.5, r.max.y() - 0.5)), 1.0};
+    s.level_db_spl = std::round(extra_rng_.Uniform(55, 62));
+    s.start_s = std::round(extra_rng_.Uniform(0, 20));
+    s.every_s = std::round(extra_rng_.Uniform(30, 60));
+    s.duration_s = std::round(extra_rng_.Uniform(10, 20));
     sources_.push_back(s);
   }
   for (const Item& it : items_) {

@@ -55,6 +55,7 @@ struct SiteOptions {
   int hidden_max = 2;
   double voice_probability = 0.5;  // for people in view; hidden people always call
   double alarm_probability = 0.7;
+  double music_probability = 0.6;  // a radio playing in one room
   int machines_min = 1;
   int machines_max = 2;
   std::string lighting = "seed";  // lit, dark, or seed (dark with dark_probability)
@@ -84,7 +85,9 @@ struct SiteOptions {
     v("hidden_max", hidden_max, "");
     v("voice_probability", voice_probability,
       "chance that a person in view calls (hidden people always do)");
-    v("alarm_probability", alarm_probability, "chance of an alarm sounding in the corridor");
+    v("alarm_probability", alarm_probability,
+      "chance of an alarm sounding in the corridor (a siren or a beeper)");
+    v("music_probability", music_probability, "chance of a radio playing music in one room");
     v("machines_min", machines_min, "machines humming in rooms");
     v("machines_max", machines_max, "");
     v("lighting", lighting, "lit, dark, or seed (dark with dark_probability)");
@@ -120,6 +123,7 @@ struct SiteOptions {
     check.That(hidden_min <= people_min, "hidden_min", "must be <= people_min");
     check.InRange("voice_probability", voice_probability, 0, 1);
     check.InRange("alarm_probability", alarm_probability, 0, 1);
+    check.InRange("music_probability", music_probability, 0, 1);
     check.That(machines_min >= 0 && machines_max >= machines_min && machines_max <= 6,
                "machines_max", "need 0 <= min <= max <= 6");
     check.OneOf("lighting", lighting, {"lit", "dark", "seed"});

@@ -129,7 +129,8 @@ SourceSignal::SourceSignal(const SoundSource& source, std::vector<std::vector<fl
   // Normalise the synthetic signals to unit RMS over a few seconds.
   if (source_.kind == SourceKind::kMusic || source_.kind == SourceKind::kAlarm) {
     double energy = 0;
-    const int n = 4 * rate_;  // the tune repeats every 1.76 s, the alarm every 1 s
+    const int n = static_cast<int>(std::max(4.0, 2 * source_.beep_period_s) *
+                                   rate_);  // tune 1.76 s, alarm 1 s
     for (int k = 0; k < n; ++k) {
       const double t = static_cast<double>(k) / rate_;
       const double v = source_.kind == SourceKind::kMusic ? Music(t) : Alarm(t);
@@ -209,8 +210,15 @@ double SourceSignal::Music(double t) const {
   return v;
 }
 
-// Two-tone alarm (960 / 770 Hz, half a second each), band-limited square wave.
+// Two-tone alarm (960 / 770 Hz, half a second each), band-limited square wave; or a beeper:
+// a tone_hz sine with a weak 2nd harmonic (a piezo sounder), on for half of beep_period_s.
 double SourceSignal::Alarm(double t) const {
+  if (source_.tone_hz > 0) {
+    const double phase = std::fmod(t, source_.beep_period_s) / source_.beep_period_s;
+    if (phase >= 0.5) return 0.0;
+    return std::sin(2 * M_PI * source_.tone_hz * t) +
+           0.2 * std::sin(4 * M_PI * source_.tone_hz * t);
+  }
   const double f = std::fmod(t, 1.0) < 0.5 ? 960.0 : 770.0;
   double v = 0;
   for (int h = 1; h <= 7; h += 2) v += std::sin(2 * M_PI * f * h * t) / h;
@@ -240,7 +248,8 @@ bool SourceSignal::Render(int64_t first, int n, float* out) {
         if (ScheduledAt(t)) v = Alarm(t) * alarm_norm_;
         break;
       case SourceKind::kNoise: {
-        // Brown-ish (one-pole low-pass, like fans and air conditioning) plus some white.
+        // Brown-ish (one-pole low-pass, like fans and air conditioning) plus some white, and
+        // a hum with its 2nd harmonic (motors, transformers).
         const double w = normal_(rng_);
         lowpass_ = 0.97 * lowpass_ + 0.03 * w;
         if (ScheduledAt(t)) {

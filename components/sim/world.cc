@@ -335,6 +335,12 @@ World ParseWorld(const std::string& yaml_text, const std::string& name) {
     src.continuous = s.Bool("continuous", false);
     src.gap_s = s.NonNegative("gap_s", 0.5);
     src.hum_hz = s.NonNegative("hum_hz", 0.0);
+    src.tone_hz = s.NonNegative("tone_hz", 0.0);
+    src.beep_period_s = s.Has("beep_period_s") ? s.Positive("beep_period_s", 1.0) : 1.0;
+    if (src.tone_hz > 0 && src.kind != SourceKind::kAlarm)
+      s.FailKey("tone_hz", "only alarms have tone_hz");
+    if (src.tone_hz >= 8000)
+      s.FailKey("tone_hz", "must be below 8000 Hz (half the 16 kHz audio rate)");
     if (src.continuous && src.every_s > 0) s.FailKey("every_s", "a continuous source has no every_s");
     world.sources.push_back(src);
   });

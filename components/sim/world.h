@@ -94,6 +94,10 @@ struct SoundSource {
   bool continuous = false;
   double gap_s = 0.5;
   double hum_hz = 0.0;             // noise sources: add a mains hum at this frequency
+  // Alarms: 0 is the two-tone siren (960 / 770 Hz); > 0 a beeper (smoke alarm, reversing
+  // alarm) at this frequency, on for the first half of every beep_period_s.
+  double tone_hz = 0.0;
+  double beep_period_s = 1.0;
 };
 
 // Shoebox acoustics for the image-source method: the room box, and either rt60_s (absorption

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include <filesystem>
+#include <set>
 
 namespace sarmap {
 namespace sim {
@@ -31,6 +32,27 @@ TEST(WorldTest, ShippedWorldsLoad) {
   for (const Wall& w : corridor.walls) glass += w.glass;
   EXPECT_GE(glass, 2);
   EXPECT_EQ(corridor.people.size(), 2u);
+}
+
+// Every shipped world carries an emitter of every class (voice, music, alarm, machinery), so
+// the sound maps can be scored per class; beepers and the siren parse and write back.
+TEST(WorldTest, ShippedWorldsCarryEveryClassOfSource) {
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(SARMAP_SOURCE_DIR) + "/config/worlds")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().string());
+    const World world = LoadWorld(entry.path().string());
+    std::set<SourceKind> kinds;
+    for (const SoundSource& s : world.sources) kinds.insert(s.kind);
+    EXPECT_EQ(kinds.size(), 4u);
+    const World again = ParseWorld(WorldToYaml(world), "again");
+    ASSERT_EQ(again.sources.size(), world.sources.size());
+    for (size_t i = 0; i < world.sources.size(); ++i) {
+      EXPECT_EQ(again.sources[i].tone_hz, world.sources[i].tone_hz);
+      EXPECT_EQ(again.sources[i].beep_period_s, world.sources[i].beep_period_s);
+    }
+  }
+  EXPECT_THROW(ParseWorld("name: x\nsources:\n  - {kind: noise, position: [1, 1, 1], tone_hz: 3000}\n", "x"),
+               WorldError);
 }
 
 // The robot must be able to drive its scripted path: a person standing on it blocks the robot

@@ -152,6 +152,8 @@ std::string WorldToYaml(const World& world, const std::string& header) {
     if (s.continuous) out << ", continuous: true";
     if (s.gap_s != 0.5) out << ", gap_s: " << Num(s.gap_s);
     if (s.hum_hz != 0) out << ", hum_hz: " << Num(s.hum_hz);
+    if (s.tone_hz != 0) out << ", tone_hz: " << Num(s.tone_hz);
+    if (s.beep_period_s != 1.0) out << ", beep_period_s: " << Num(s.beep_period_s);
     out << "}\n";
   }
   const Acoustics& a = world.acoustics;

@@ -12,6 +12,7 @@
 #include "sound_localisation/async_alignment.h"
 #include "sound_localisation/audio_intake.h"
 #include "sound_localisation/localiser.h"
+#include "sound_localisation/source_class.h"
 
 using namespace sarmap;
 
@@ -35,6 +36,9 @@ struct SoundLocalisationOptions {
   // tracks than sarmap-speech's beams want). Empty: none.
   std::string map_doa_channel = "";
   sound::LocaliserOptions map_localiser;
+  // What each direction's source is (doa_source_t sound_class), from its own time-frequency bins.
+  bool classify = true;
+  sound::SourceClassOptions classes;
   template <class V>
   void Visit(V& v) {
     v("audio_channel", audio_channel, "input audio_frame_t channel");
@@ -51,6 +55,8 @@ struct SoundLocalisationOptions {
     v("localiser", localiser, "DOA estimation and tracking");
     v("map_doa_channel", map_doa_channel, "second doa_t stream for the sound map, from map_localiser ('' = none)");
     v("map_localiser", map_localiser, "DOA estimation and tracking of the map_doa_channel stream");
+    v("classify", classify, "tell each direction's source class (voice, alarm, machinery, music)");
+    v("classes", classes, "source classification");
   }
   void Validate(common::Validator& check) const {
     check.NonNegative("max_bridged_gap_s", max_bridged_gap_s);
@@ -86,6 +92,7 @@ int main(int argc, char** argv) {
     const std::string array_dir = options.array.substr(0, options.array.find_last_of('/') + 1);
     sound::ArrayGeometry geometry;
     std::unique_ptr<sound::Localiser> localiser, map_localiser;
+    std::unique_ptr<sound::DirectionalClassifier> classifier;
     try {
       geometry = sound::ArrayGeometry::FromOptions(array);
       localiser = std::make_unique<sound::Localiser>(geometry, options.localiser,
@@ -93,6 +100,9 @@ int main(int argc, char** argv) {
       if (!options.map_doa_channel.empty())
         map_localiser = std::make_unique<sound::Localiser>(geometry, options.map_localiser,
                                                            sound::SensorModel::FromArray(array, array_dir));
+      if (options.classify)
+        classifier = std::make_unique<sound::DirectionalClassifier>(geometry, localiser->kind(),
+                                                                    options.classes);
     } catch (const std::invalid_argument& e) {
       throw common::OptionsError(e.what());
     }
@@ -147,28 +157,53 @@ int main(int argc, char** argv) {
                                                                geometry.sample_rate_hz);
         doa.header.frame = "mic_array";
         doa.device_id = device;
-        auto add = [&](int64_t id, const sound::Direction& d, const Eigen::Matrix2d& cov, double power, double conf) {
-          sarmap::doa_source_t s;
-          s.track_id = id;
-          s.kind = kind;
-          s.azimuth_rad = d.azimuth_rad;
-          s.elevation_rad = d.elevation_rad;
-          for (int i = 0; i < 4; ++i) s.covariance[i] = cov(i / 2, i % 2);
-          s.power = static_cast<float>(power);
-          s.confidence = static_cast<float>(conf);
-          s.method = method;
-          doa.sources.push_back(s);
+        struct Entry {
+          int64_t id;
+          const sound::Direction* direction;
+          const Eigen::Matrix2d* covariance;
+          double power, confidence;
         };
+        std::vector<Entry> entries;
         for (const auto& t : o.tracks)
-          if (t.updated) add(t.id, t.direction, t.covariance, t.power, t.confidence);
+          if (t.updated)
+            entries.push_back({t.id, &t.direction, &t.covariance, t.power, t.confidence});
         if (options.publish_untracked)
           for (const auto& d : o.directions) {
             bool in_track = false;
             for (const auto& t : o.tracks)
               in_track |= t.updated && sound::AngularDistanceRad(geometry, localiser->kind(), t.direction, d.direction) <
                                            sound::DegToRad(lo.tracker.gate_deg);
-            if (!in_track) add(-1, d.direction, d.covariance, d.power, d.confidence);
+            if (!in_track)
+              entries.push_back({-1, &d.direction, &d.covariance, d.power, d.confidence});
           }
+        std::vector<sound::SoundClassEstimate> classes(entries.size());
+        if (classifier && !entries.empty()) {
+          std::vector<sound::Direction> directions;
+          for (const auto& e : entries) directions.push_back(*e.direction);
+          const int64_t block =
+              static_cast<int64_t>(std::llround(lo.block_s * geometry.sample_rate_hz));
+          // The stream the sound map reads marks the class tracks; the other one (the speech
+          // beams' DOA) only reads them: its reports of one source near another's direction
+          // marked the other's frames as sounding (lab tour: the smoke alarm mapped as a voice).
+          const bool marks = map_localiser ? &lo == &options.map_localiser : true;
+          classes = marks ? classifier->Observe(o.end_sample - block, o.end_sample, directions)
+                          : classifier->Lookup(directions);
+        }
+        for (size_t i = 0; i < entries.size(); ++i) {
+          const Entry& e = entries[i];
+          sarmap::doa_source_t s{};
+          s.track_id = e.id;
+          s.kind = kind;
+          s.azimuth_rad = e.direction->azimuth_rad;
+          s.elevation_rad = e.direction->elevation_rad;
+          for (int j = 0; j < 4; ++j) s.covariance[j] = (*e.covariance)(j / 2, j % 2);
+          s.power = static_cast<float>(e.power);
+          s.confidence = static_cast<float>(e.confidence);
+          s.method = method;
+          s.sound_class = static_cast<int8_t>(classes[i].sound_class);
+          s.class_confidence = static_cast<float>(classes[i].confidence);
+          doa.sources.push_back(s);
+        }
         doa.num_sources = static_cast<int32_t>(doa.sources.size());
         to->Publish(&doa);
         ++published;
@@ -229,6 +264,7 @@ int main(int argc, char** argv) {
         map_outs.clear();
         map_localiser->PushFloat(aligned, 0, n, &map_outs);
       }
+      if (classifier) classifier->PushFloat(aligned, 0, n);
       // Stream sample `before` is reference sample `first`.
       publish(ref_utime, before + (ref_first - first));
       node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " + std::to_string(dropped) +
@@ -288,6 +324,7 @@ int main(int argc, char** argv) {
                 // A lost datagram or a few: go on, the time line advanced by the gap.
                 localiser->SkipSamples(decision.gap_samples);
                 if (map_localiser) map_localiser->SkipSamples(decision.gap_samples);
+                if (classifier) classifier->SkipSamples(decision.gap_samples);
                 break;
               case sound::AudioIntake::Verdict::kRestart:
                 if (warn_limit.Allow(common::SteadySeconds()))
@@ -296,6 +333,7 @@ int main(int argc, char** argv) {
                       << msg.first_sample_index << "; restarting the analysis";
                 localiser->ResetStream();
                 if (map_localiser) map_localiser->ResetStream();
+                if (classifier) classifier->ResetStream();
                 break;
               default:
                 break;
@@ -307,6 +345,7 @@ int main(int argc, char** argv) {
               map_outs.clear();
               map_localiser->Push(msg.samples.data(), msg.num_samples, msg.num_channels, &map_outs);
             }
+            if (classifier) classifier->Push(msg.samples.data(), msg.num_samples, msg.num_channels);
             publish(msg.header.utime, before);
             node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " +
                                   std::to_string(dropped) + "; audio " + intake.Summary());

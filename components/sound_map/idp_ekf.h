@@ -101,6 +101,11 @@ class IdpEkf {
   Pose2 current() const { return Pose2::FromVec(x_.head<3>()); }
   Eigen::Matrix3d current_covariance() const { return p_.topLeftCorner<3, 3>(); }
   Pose2 anchor(int64_t id) const;
+  // Covariance of an anchor's (x, y, yaw).
+  Eigen::Matrix3d anchor_covariance(int64_t id) const {
+    const int a = anchors_.at(id);
+    return p_.block<3, 3>(a, a);
+  }
   Eigen::Vector2d landmark(int64_t id) const;
   Eigen::Matrix2d landmark_covariance(int64_t id) const;
   // Map-frame point of a source (z includes the array height) and its covariance. Sources
@@ -111,6 +116,12 @@ class IdpEkf {
   void SourceInverseDepth(int64_t id, double* rho, double* variance) const {
     const int i = sources_.at(id).index + source_dim() - 1;
     *rho = x_[i];
+    *variance = p_(i, i);
+  }
+  // Map-frame azimuth theta of a source's ray and its variance.
+  void SourceBearing(int64_t id, double* theta, double* variance) const {
+    const int i = sources_.at(id).index;
+    *theta = x_[i];
     *variance = p_(i, i);
   }
   std::vector<int64_t> source_ids() const;

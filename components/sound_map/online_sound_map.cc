@@ -283,6 +283,7 @@ void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::
     used.insert(source);
     associator_.Commit(device, doa.track_id, source, doa.signature);
     Meta& meta = meta_[source];
+    if (doa.sound_class > 0 && doa.sound_class < 5) meta.class_votes[doa.sound_class] += 1;
     meta.last = utime;
     ++meta.n;
     meta.mirror_misses = 0;
@@ -467,13 +468,24 @@ void OnlineSoundMap::Prune(int64_t utime) {
   }
 }
 
-void OnlineSoundMap::OnHeardPerson(const std::string& device, int64_t track_id) {
+void OnlineSoundMap::OnHeardPerson(const std::string& device, int64_t track_id, bool called) {
   const int64_t s = associator_.SourceOfTrack(device, track_id);
   if (s >= 0 && ekf_.HasSource(s)) {
     meta_[s].is_person = true;
+    meta_[s].called |= called;
     const int64_t twin = meta_[s].twin;
-    if (twin >= 0 && ekf_.HasSource(twin)) meta_[twin].is_person = true;
+    if (twin >= 0 && ekf_.HasSource(twin)) {
+      meta_[twin].is_person = true;
+      meta_[twin].called |= called;
+    }
   }
+}
+
+void OnlineSoundMap::SetSite(const Eigen::Vector2d& min_m, const Eigen::Vector2d& max_m) {
+  if (!min_m.allFinite() || !max_m.allFinite() || (max_m.array() < min_m.array()).any()) return;
+  have_site_ = true;
+  site_min_ = min_m;
+  site_max_ = max_m;
 }
 
 int64_t OnlineSoundMap::OnHeardDirection(const Doa& doa) {
@@ -490,8 +502,12 @@ int64_t OnlineSoundMap::OnHeardDirection(const Doa& doa) {
   }
   if (best < 0) return -1;
   meta_[best].is_person = true;
+  meta_[best].called |= doa.called;
   const int64_t twin = meta_[best].twin;
-  if (twin >= 0 && ekf_.HasSource(twin)) meta_[twin].is_person = true;
+  if (twin >= 0 && ekf_.HasSource(twin)) {
+    meta_[twin].is_person = true;
+    meta_[twin].called |= doa.called;
+  }
   return best;
 }
 
@@ -525,7 +541,47 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
     s.id = id;
     ekf_.SourcePoint(id, &s.position_m, &s.covariance);
     const Meta& m = meta_.at(id);
-    s.is_person = m.is_person;
+    // Range observability: the inverse depth is known to be positive by observable_sigmas,
+    // and the planar position is settled to max_position_sigma_m.
+    double rho = 0, rho_var = 0;
+    ekf_.SourceInverseDepth(id, &rho, &rho_var);
+    const Eigen::Matrix2d c =
+        0.5 * (s.covariance.topLeftCorner<2, 2>() + s.covariance.topLeftCorner<2, 2>().transpose());
+    const double half_trace = 0.5 * c.trace();
+    const double largest =
+        half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - c.determinant()));
+    s.has_position = s.position_m.allFinite() && std::isfinite(largest) &&
+                     rho > options_.observable_sigmas * std::sqrt(std::max(rho_var, 0.0)) &&
+                     std::sqrt(largest) <= options_.max_position_sigma_m;
+    ekf_.SourceBearing(id, &s.bearing_rad, &s.bearing_variance);
+    {
+      const Pose2 anchor = ekf_.anchor(ekf_.source_anchor(id));
+      double a[3] = {anchor.x, anchor.y, anchor.yaw}, o[2];
+      ArrayOrigin(a, ekf_.options().mount, o);
+      s.bearing_origin_m = Eigen::Vector3d(o[0], o[1], ekf_.options().mount.z_m);
+    }
+    if (!s.has_position) {
+      s.position_m = s.bearing_origin_m;
+      s.covariance.setZero();
+      s.covariance.topLeftCorner<2, 2>() =
+          ekf_.anchor_covariance(ekf_.source_anchor(id)).topLeftCorner<2, 2>();
+    }
+    int best_class = kClassUnknown;
+    double votes = 0;
+    for (int k = 1; k < 5; ++k) {
+      votes += m.class_votes[k];
+      if (m.class_votes[k] > (best_class ? m.class_votes[best_class] : 0.0)) best_class = k;
+    }
+    if (votes < options_.min_class_votes) best_class = kClassUnknown;
+    s.sound_class = best_class;
+    s.class_confidence = best_class != kClassUnknown ? m.class_votes[best_class] / votes : 0.0;
+    s.priority =
+        best_class == kClassVoice ? (m.called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
+    const Eigen::Array2d xy = s.position_m.head<2>().array();
+    s.inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
+                                    (xy <= site_max_.array() + options_.site_margin_m).all());
+    // Only a placed voice inside the site is a person; machines and alarms never are.
+    s.is_person = m.is_person && best_class == kClassVoice && s.has_position && s.inside_site;
     s.first_heard_utime = m.first;
     s.last_heard_utime = m.last;
     s.num_observations = m.n;
@@ -542,7 +598,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
 
 namespace {
 constexpr char kStateMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'S', 'M'};
-constexpr int32_t kStateVersion = 1;
+constexpr int32_t kStateVersion = 2;  // 2: class votes and calls per source
 constexpr char kStateKind[] = "sound-map";  // the seal's kind (common/state_file.h)
 
 void WritePose(common::BinaryWriter* w, const Pose2& p) { w->Pod(p.x), w->Pod(p.y), w->Pod(p.yaw); }
@@ -576,6 +632,8 @@ void OnlineSoundMap::Save(const std::string& path) const {
     for (const auto& [id, m] : meta_) {
       w->Pod(id), w->Pod<int8_t>(m.is_person), w->Pod(m.first), w->Pod(m.last);
       w->Pod<int32_t>(m.n), w->Pod(m.twin), w->Pod<int32_t>(m.mirror_misses);
+      w->Pod<int8_t>(m.called);
+      for (double v : m.class_votes) w->Pod(v);
     }
     w->Pod(counters_);
     w->Pod<int64_t>(static_cast<int64_t>(anchor_links_.size()));
@@ -637,6 +695,8 @@ bool OnlineSoundMap::Load(const std::string& path) {
     meta.is_person = r.Pod<int8_t>() != 0;
     meta.first = r.Pod<int64_t>(), meta.last = r.Pod<int64_t>();
     meta.n = r.Pod<int32_t>(), meta.twin = r.Pod<int64_t>(), meta.mirror_misses = r.Pod<int32_t>();
+    meta.called = r.Pod<int8_t>() != 0;
+    for (double& v : meta.class_votes) v = r.Pod<double>();
   }
   m.counters_ = r.Pod<Counters>();
   const int64_t num_links = r.Count(1000000);

@@ -12,10 +12,20 @@
 //     angle); the one the DOAs stop explaining is removed.
 //   * SLAM_ANCHORS: back-propagation (eqs. 4.20-4.25) of [current, anchors] into the sound
 //     map; nothing flows back into SLAM.
-//   * PEOPLE_AUDIO: a heard person's DOA track marks its source as a person.
+//   * PEOPLE_AUDIO: a heard person's DOA track marks its source as heard (calling, when a
+//     keyword came with it).
+//   * Classes: each DOA's sound class (voice, alarm, machinery, music) is a vote for its
+//     source; the source's class is the class with most votes once it has min_class_votes.
+//   * Published (Sources): a source's range is observable when its inverse depth rho exceeds
+//     observable_sigmas times its standard deviation (the 3-sigma range interval is bounded)
+//     and its largest planar position std is below max_position_sigma_m. Until then it is a
+//     bearing from its anchor (has_position false), never a position. A source is a person
+//     only when it was heard (PEOPLE_AUDIO), its class is voice, its position is observable
+//     and it lies within site_margin_m of the mapped site (SetSite; no site known: anywhere).
 // Inputs must arrive in time order (the node puts a TimeOrderedQueue in front).
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -44,6 +54,11 @@ struct OnlineSoundMapOptions {
   double motion_noise_rad_per_m = 0.02;
   double motion_noise_rad_per_rad = 0.05;
   double converged_sigma_m = 0.5;   // converged when the largest position std is below
+  // Range observability (published position vs bearing only).
+  double observable_sigmas = 3.0;
+  double max_position_sigma_m = 2.0;
+  double site_margin_m = 1.0;       // a person must lie this close to the mapped site
+  int min_class_votes = 3;          // DOAs with a class needed before a source has one
   double silent_after_s = 30.0;     // not heard for this long: STATE_SILENT
   // Births: a DOA that fits no source starts a tentative track in the map frame; it becomes a
   // source after birth_min_observations DOAs whose map-frame bearings agree (chi-square
@@ -118,6 +133,14 @@ struct OnlineSoundMapOptions {
     v("motion_noise_rad_per_rad", motion_noise_rad_per_rad, "current-pose heading noise per radian turned");
     v("converged_sigma_m", converged_sigma_m, "a source is converged when its largest position std is below this");
     v("silent_after_s", silent_after_s, "a source not heard for this long is reported silent");
+    v("observable_sigmas", observable_sigmas,
+      "a source has a position once its inverse depth exceeds this many of its standard "
+      "deviations");
+    v("max_position_sigma_m", max_position_sigma_m,
+      "... and its largest planar position std is below this");
+    v("site_margin_m", site_margin_m,
+      "a person must lie within this distance of the mapped site's known cells' box");
+    v("min_class_votes", min_class_votes, "classified DOAs a source needs before it has a class (unknown until then)");
     v("birth_min_observations", birth_min_observations, "consistent DOAs needed before a new source is born");
     v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time");
     v("birth_gate_chi2", birth_gate_chi2, "chi-square gate between map-frame bearings of a tentative source");
@@ -161,6 +184,10 @@ struct OnlineSoundMapOptions {
     check.NonNegative("motion_noise_rad_per_rad", motion_noise_rad_per_rad);
     check.Positive("converged_sigma_m", converged_sigma_m);
     check.Positive("silent_after_s", silent_after_s);
+    check.Positive("observable_sigmas", observable_sigmas);
+    check.Positive("max_position_sigma_m", max_position_sigma_m);
+    check.NonNegative("site_margin_m", site_margin_m);
+    check.That(min_class_votes >= 1, "min_class_votes", "must be at least 1");
     check.That(birth_min_observations >= 1, "birth_min_observations", "must be at least 1");
     check.Positive("birth_window_s", birth_window_s);
     check.Positive("birth_gate_chi2", birth_gate_chi2);
@@ -186,7 +213,17 @@ class OnlineSoundMap {
     double azimuth_rad = 0, elevation_rad = 0;
     Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity() * 0.03;
     std::vector<double> signature;  // e.g. mean MFCCs; empty if none
+    int sound_class = 0;            // kClass*; 0 unknown
+    bool called = false;            // heard directions (PEOPLE_AUDIO): a keyword came with it
   };
+  enum SoundClass {
+    kClassUnknown = 0,
+    kClassVoice = 1,
+    kClassAlarm = 2,
+    kClassMachinery = 3,
+    kClassMusic = 4
+  };
+  enum Priority { kPriorityNone = 0, kPriorityVoice = 1, kPriorityCall = 2 };
   struct Source {
     int64_t id;
     Eigen::Vector3d position_m;
@@ -196,6 +233,15 @@ class OnlineSoundMap {
     bool is_person = false;
     int64_t first_heard_utime = 0, last_heard_utime = 0;
     int num_observations = 0;
+    // Range observable: position_m is the source. Otherwise it is a bearing: position_m and
+    // covariance are the bearing origin's (the array at its anchor).
+    bool has_position = false;
+    Eigen::Vector3d bearing_origin_m = Eigen::Vector3d::Zero();
+    double bearing_rad = 0, bearing_variance = 0;  // map frame
+    int sound_class = kClassUnknown;
+    double class_confidence = 0;  // vote share of that class
+    int priority = kPriorityNone;
+    bool inside_site = true;
   };
   struct Counters {
     int64_t doa_used = 0, doa_new_sources = 0, doa_reassociated = 0, doa_gated_out = 0;
@@ -216,7 +262,9 @@ class OnlineSoundMap {
   bool OnSlamAnchors(int64_t utime, const Pose2& current, const std::vector<std::pair<int64_t, Pose2>>& anchors,
                      const Eigen::MatrixXd& covariance, bool loop_closed = true);
   void OnDoa(int64_t utime, const std::string& device, const std::vector<Doa>& doas);
-  void OnHeardPerson(const std::string& device, int64_t track_id);
+  void OnHeardPerson(const std::string& device, int64_t track_id, bool called = false);
+  // The mapped site: the box of the known cells of the localisation map (map frame).
+  void SetSite(const Eigen::Vector2d& min_m, const Eigen::Vector2d& max_m);
   // PEOPLE_AUDIO by direction (array frame, at the current pose): the source whose predicted
   // bearing gates it best (chi-square gate_chi2) is a person. For when the heard person's track
   // ids come from another DOA stream than the map's (sarmap-speech beams at DOA, the map reads
@@ -249,7 +297,9 @@ class OnlineSoundMap {
 
  private:
   struct Meta {
-    bool is_person = false;
+    bool is_person = false;  // heard (PEOPLE_AUDIO); a person when Sources() says so
+    bool called = false;
+    std::array<double, 5> class_votes{};
     int64_t first = 0, last = 0;
     int n = 0;
     int64_t twin = -1;  // linear arrays: the mirror source born with this one
@@ -292,6 +342,8 @@ class OnlineSoundMap {
   int64_t next_source_id_ = 1;
   std::map<int64_t, Meta> meta_;
   bool Converged(int64_t id) const;
+  bool have_site_ = false;
+  Eigen::Vector2d site_min_ = Eigen::Vector2d::Zero(), site_max_ = Eigen::Vector2d::Zero();
   bool anchors_changed_ = false;
   Counters counters_;
   // A source's anchor is the pose it was first heard from, which is the SLAM node named by

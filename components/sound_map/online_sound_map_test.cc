@@ -330,12 +330,19 @@ TEST(OnlineSoundMap, TrueAnchorsAtSparseNodesDoNotMoveSources) {
           for (int j = 0; j < n; ++j) cov.block<3, 3>(3 * i, 3 * j) = shared + (i == j ? own : Eigen::Matrix3d::Zero());
         EXPECT_TRUE(map.OnSlamAnchors(utime, nodes.at(node), kept, cov));
       }
-      const auto now = map.Sources(utime);
-      track->push_back(now.empty() ? Eigen::Vector2d(NAN, NAN) : Eigen::Vector2d(now[0].position_m.head<2>()));
+      // The filter's estimate (published only once its range is observable).
+      const auto ids = map.ekf().source_ids();
+      Eigen::Vector3d point;
+      Eigen::Matrix3d point_cov;
+      if (!ids.empty()) map.ekf().SourcePoint(ids[0], &point, &point_cov);
+      track->push_back(ids.empty() ? Eigen::Vector2d(NAN, NAN) : Eigen::Vector2d(point.head<2>()));
     }
     *back_propagations = map.counters().back_propagations;
     const auto sources = map.Sources(300 * 100000);
     EXPECT_EQ(sources.size(), 1u);
+    if (!sources.empty()) {
+      EXPECT_TRUE(sources[0].has_position);
+    }
     return sources.empty() ? Eigen::Vector2d(1e9, 1e9) : Eigen::Vector2d(sources[0].position_m.head<2>());
   };
   int64_t bp_pose = 0, bp_anchors = 0, bp_slam_cov = 0;
@@ -402,6 +409,7 @@ TEST(OnlineSoundMap, HeardDirectionMarksThePerson) {
     doa.track_id = 7;
     doa.azimuth_rad = std::atan2(source.y() - pose.y, source.x() - pose.x);
     doa.covariance = Eigen::Matrix2d::Identity() * std::pow(2 * M_PI / 180, 2);
+    doa.sound_class = OnlineSoundMap::kClassVoice;
     map.OnDoa(t, "a", {doa});
   }
   ASSERT_EQ(map.Sources(30 * 128000).size(), 1u);
@@ -578,6 +586,120 @@ TEST(OnlineSoundMap, ASourceWhereTheRobotDroveIsRemoved) {
   EXPECT_EQ(on.second, 1);
   ASSERT_EQ(on.first.size(), 1u);
   EXPECT_LT((on.first[0].position_m.head<2>() - Eigen::Vector2d(4.0, -2.0)).norm(), 0.3);
+}
+
+// Sources heard from poses along `poses` (10 Hz), each DOA labelled with its source's class.
+std::vector<OnlineSoundMap::Source> HearClassified(OnlineSoundMap* map,
+                                                   const std::vector<Pose2>& poses,
+                                                   const std::vector<Eigen::Vector2d>& sources,
+                                                   const std::vector<int>& classes) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1 * M_PI / 180);
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const int64_t t = static_cast<int64_t>(k) * 100000;
+    map->OnPose(t, poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+    std::vector<OnlineSoundMap::Doa> doas;
+    for (size_t j = 0; j < sources.size(); ++j) {
+      OnlineSoundMap::Doa d;
+      d.track_id = static_cast<int64_t>(j);
+      d.azimuth_rad = WrapAngleD(DriveBy::Bearing(poses[k], sources[j]) + noise(rng));
+      d.covariance = Eigen::Matrix2d::Identity() * std::pow(2 * M_PI / 180, 2);
+      d.sound_class = classes[j];
+      doas.push_back(d);
+    }
+    map->OnDoa(t, "respeaker", doas);
+  }
+  return map->Sources(static_cast<int64_t>(poses.size()) * 100000);
+}
+
+OnlineSoundMap::Doa HeardToward(const Pose2& pose, const Eigen::Vector2d& source, bool called) {
+  OnlineSoundMap::Doa heard;
+  heard.track_id = 99;
+  heard.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+  heard.azimuth_rad = DriveBy::Bearing(pose, source);
+  heard.called = called;
+  return heard;
+}
+
+TEST(OnlineSoundMap, ABearingOnlySourceIsNeverAPersonOrAPosition) {
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  const Eigen::Vector2d voice(6.0, 4.0);
+  // The robot turns on the spot: bearings without parallax, the range is not observable.
+  std::vector<Pose2> poses;
+  for (int k = 0; k < 100; ++k) poses.emplace_back(1.0, 1.0, 0.002 * k);
+  auto sources = HearClassified(&map, poses, {voice}, {OnlineSoundMap::kClassVoice});
+  ASSERT_EQ(sources.size(), 1u);
+  EXPECT_EQ(map.OnHeardDirection(HeardToward(poses.back(), voice, true)), sources[0].id);
+  sources = map.Sources(100 * 100000);
+  ASSERT_EQ(sources.size(), 1u);
+  const auto& s = sources[0];
+  EXPECT_EQ(s.sound_class, OnlineSoundMap::kClassVoice);
+  EXPECT_FALSE(s.has_position);
+  EXPECT_FALSE(s.is_person);
+  // Published as a bearing from where it was heard, not as a point along the ray.
+  EXPECT_LT((s.position_m.head<2>() - Eigen::Vector2d(1.0, 1.0)).norm(), 0.1);
+  EXPECT_LT((s.bearing_origin_m.head<2>() - Eigen::Vector2d(1.0, 1.0)).norm(), 0.1);
+  EXPECT_NEAR(WrapAngleD(s.bearing_rad - std::atan2(3.0, 5.0)), 0.0, 3 * M_PI / 180);
+  EXPECT_GT(s.bearing_variance, 0.0);
+  // Once the robot drives sideways the range becomes observable: a placed person who called.
+  std::vector<Pose2> more = poses;
+  for (int k = 1; k <= 120; ++k) more.emplace_back(1.0 + 0.025 * k, 1.0 - 0.01 * k, 0.0);
+  OnlineSoundMap map2(OnlineSoundMapOptions{}, ArrayMount{});
+  sources = HearClassified(&map2, more, {voice}, {OnlineSoundMap::kClassVoice});
+  ASSERT_EQ(sources.size(), 1u);
+  map2.OnHeardDirection(HeardToward(more.back(), voice, true));
+  sources = map2.Sources(static_cast<int64_t>(more.size()) * 100000);
+  EXPECT_TRUE(sources[0].has_position);
+  EXPECT_TRUE(sources[0].is_person);
+  EXPECT_EQ(sources[0].priority, OnlineSoundMap::kPriorityCall);
+  EXPECT_LT((sources[0].position_m.head<2>() - voice).norm(), 0.5);
+}
+
+TEST(OnlineSoundMap, MachinesAndAlarmsNeverBecomePeople) {
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  const std::vector<Eigen::Vector2d> where{{3.0, 2.5}, {5.0, -2.0}, {7.0, 1.5}};
+  const std::vector<int> classes{OnlineSoundMap::kClassMachinery, OnlineSoundMap::kClassAlarm,
+                                 OnlineSoundMap::kClassVoice};
+  DriveBy drive;
+  auto sources = HearClassified(&map, drive.poses, where, classes);
+  ASSERT_EQ(sources.size(), 3u);
+  // The keyword spotter "hears a call" from every source (false alarms on machines).
+  for (const auto& w : where) map.OnHeardDirection(HeardToward(drive.poses.back(), w, true));
+  sources = map.Sources(static_cast<int64_t>(drive.poses.size()) * 100000);
+  ASSERT_EQ(sources.size(), 3u);
+  for (const auto& s : sources) {
+    size_t nearest = 0;
+    for (size_t j = 1; j < where.size(); ++j)
+      if ((s.position_m.head<2>() - where[j]).norm() <
+          (s.position_m.head<2>() - where[nearest]).norm())
+        nearest = j;
+    EXPECT_TRUE(s.has_position);
+    EXPECT_LT((s.position_m.head<2>() - where[nearest]).norm(), 0.5);
+    EXPECT_EQ(s.sound_class, classes[nearest]);
+    EXPECT_NEAR(s.class_confidence, 1.0, 1e-9);
+    EXPECT_EQ(s.is_person, classes[nearest] == OnlineSoundMap::kClassVoice)
+        << "source near " << where[nearest].transpose();
+    EXPECT_EQ(s.priority, classes[nearest] == OnlineSoundMap::kClassVoice
+                              ? OnlineSoundMap::kPriorityCall
+                              : OnlineSoundMap::kPriorityNone);
+  }
+}
+
+TEST(OnlineSoundMap, NoPersonOutsideTheMappedSite) {
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  const Eigen::Vector2d voice(5.0, -2.0);
+  DriveBy drive;
+  auto sources = HearClassified(&map, drive.poses, {voice}, {OnlineSoundMap::kClassVoice});
+  ASSERT_EQ(sources.size(), 1u);
+  map.OnHeardDirection(HeardToward(drive.poses.back(), voice, false));
+  const int64_t now = static_cast<int64_t>(drive.poses.size()) * 100000;
+  ASSERT_TRUE(map.Sources(now)[0].is_person);
+  EXPECT_EQ(map.Sources(now)[0].priority, OnlineSoundMap::kPriorityVoice);
+  map.SetSite(Eigen::Vector2d(0, 0), Eigen::Vector2d(6.5, 2.0));  // the source is 2 m south of it
+  EXPECT_FALSE(map.Sources(now)[0].inside_site);
+  EXPECT_FALSE(map.Sources(now)[0].is_person);
+  map.SetSite(Eigen::Vector2d(0, -3), Eigen::Vector2d(6.5, 2.0));
+  EXPECT_TRUE(map.Sources(now)[0].is_person);
 }
 
 }  // namespace

@@ -33,6 +33,7 @@
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_localisation/localiser.h"
+#include "sound_localisation/source_class.h"
 #include "sound_map/joint_optimizer.h"
 #include "sound_map/sound_map_messages.h"
 
@@ -51,6 +52,12 @@ bool Decode(const lcm::LogEvent& e, T* msg) {
          sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
 }
 
+}  // namespace
+
+namespace {
+const char* ClassName(int c) {
+  return sarmap::sound::SoundClassName(static_cast<sarmap::sound::SoundClass>(c));
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -123,8 +130,10 @@ int main(int argc, char** argv) {
     int64_t live_msgs = 0;
     int64_t doa_msgs = 0, doa_sources = 0, max_track = -1, first_utime = -1;
     std::map<int, int64_t> kinds;
+    std::map<int64_t, std::vector<char>> truth_active;  // SIM_TRUTH time -> each source sounding
     // --relocalise: the localiser over the logged AUDIO, as the node runs it.
     std::unique_ptr<sarmap::sound::Localiser> localiser;
+    std::unique_ptr<sarmap::sound::DirectionalClassifier> classifier;  // the file's `classes`
     sarmap::sound::ArrayGeometry geometry;
     sarmap::sound::LocaliserOptions loc_options;
     if (!relocalise_config.empty()) {
@@ -138,11 +147,20 @@ int main(int argc, char** argv) {
       localiser = std::make_unique<sarmap::sound::Localiser>(
           geometry, loc_options,
           sarmap::sound::SensorModel::FromArray(array, array_path.substr(0, array_path.find_last_of('/') + 1)));
+      // The file's `classes` section, as the node classifies each direction (none: unclassified).
+      try {
+        classifier = std::make_unique<sarmap::sound::DirectionalClassifier>(
+            geometry, localiser->kind(),
+            sarmap::common::LoadOptions<sarmap::sound::SourceClassOptions>(path, {}, "classes"));
+      } catch (const sarmap::common::OptionsError& e) {
+        printf("no source classes: %s\n", e.what());
+      }
     }
     int64_t expected_index = -1;
     // --heard-check: each heard keyword direction against the truth, and the source it marks.
     std::function<void(int64_t, const OnlineSoundMap::Doa&, const std::string&, int64_t)> on_heard_check;
     double localiser_cpu_s = 0;  // --relocalise: the localiser's own CPU time
+    double classifier_cpu_s = 0;  // --relocalise: the source classifier's
     std::vector<sarmap::sound::LocaliserOutput> outs;
     const int64_t doa_shift_us = static_cast<int64_t>(std::llround(doa_shift_s * 1e6));
     auto on_doa = [&](const sarmap::doa_t& m) {
@@ -217,20 +235,29 @@ int main(int argc, char** argv) {
       } else if (e->channel == "AUDIO" && localiser) {
         sarmap::audio_frame_t a;
         if (!Decode(*e, &a) || a.sample_format != sarmap::audio_frame_t::SAMPLE_INT16) continue;
-        if (expected_index >= 0 && a.first_sample_index != expected_index) localiser->ResetStream();
+        if (expected_index >= 0 && a.first_sample_index != expected_index) {
+          localiser->ResetStream();
+          if (classifier) classifier->ResetStream();
+        }
         expected_index = a.first_sample_index + a.num_samples;
         const int64_t before = localiser->samples_seen();
         outs.clear();
         const std::clock_t cpu0 = std::clock();
         localiser->Push(a.samples.data(), a.num_samples, a.num_channels, &outs);
         localiser_cpu_s += static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
+        if (classifier) {
+          const std::clock_t c0 = std::clock();
+          classifier->Push(a.samples.data(), a.num_samples, a.num_channels);
+          classifier_cpu_s += static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        }
         for (const auto& o : outs) {  // as sarmap-sound-localisation publishes them
           sarmap::doa_t d;
           d.header.utime = a.header.utime + static_cast<int64_t>(std::llround(
                                                 static_cast<double>(o.centre_sample - before) / geometry.sample_rate_hz * 1e6));
           d.device_id = a.device_id;
-          auto add = [&](int64_t id, const sarmap::sound::Direction& dir, const Eigen::Matrix2d& cov) {
-            sarmap::doa_source_t s;
+          auto add = [&](int64_t id, const sarmap::sound::Direction& dir,
+                         const Eigen::Matrix2d& cov) {
+            sarmap::doa_source_t s{};
             s.track_id = id;
             s.kind = static_cast<int8_t>(localiser->kind());
             s.azimuth_rad = dir.azimuth_rad;
@@ -249,6 +276,19 @@ int main(int argc, char** argv) {
             if (!in_track) add(-1, dir.direction, dir.covariance);
           }
           d.num_sources = static_cast<int32_t>(d.sources.size());
+          if (classifier && !d.sources.empty()) {
+            std::vector<sarmap::sound::Direction> dirs;
+            for (const auto& s : d.sources) dirs.push_back({s.azimuth_rad, s.elevation_rad});
+            const int64_t block =
+                static_cast<int64_t>(std::llround(loc_options.block_s * geometry.sample_rate_hz));
+            const std::clock_t c0 = std::clock();
+            const auto classes = classifier->Observe(o.end_sample - block, o.end_sample, dirs);
+            classifier_cpu_s += static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+            for (size_t i = 0; i < classes.size(); ++i) {
+              d.sources[i].sound_class = static_cast<int8_t>(classes[i].sound_class);
+              d.sources[i].class_confidence = static_cast<float>(classes[i].confidence);
+            }
+          }
           on_doa(d);
         }
       } else if (e->channel == options.anchors_channel && !no_anchors && !truth_poses_in) {
@@ -280,6 +320,12 @@ int main(int argc, char** argv) {
           if (debug)
             for (const auto& s : map.Sources(t)) printf("  after: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
         });
+      } else if (!options.site_map_channel.empty() && e->channel == options.site_map_channel) {
+        sarmap::occupancy_grid_t m;
+        Eigen::Vector2d lo, hi;
+        if (!Decode(*e, &m) || !sarmap::sound_map::SiteBox(m, &lo, &hi)) continue;
+        const int64_t t = m.header.utime;
+        inputs.emplace(t, [&map, lo, hi] { map.SetSite(lo, hi); });
       } else if (e->channel == options.people_audio_channel) {
         sarmap::people_detections_t m;
         if (!Decode(*e, &m)) continue;
@@ -306,6 +352,8 @@ int main(int argc, char** argv) {
         if (!Decode(*e, &m)) continue;
         truth = m;
         have_truth = true;
+        std::vector<char>& active = truth_active[m.header.utime];
+        for (const auto& ts : m.sources) active.push_back(ts.active);
         const Eigen::Quaterniond q(m.robot_orientation[0], m.robot_orientation[1], m.robot_orientation[2],
                                    m.robot_orientation[3]);
         const Eigen::Vector3d x = q.normalized() * Eigen::Vector3d::UnitX();
@@ -323,6 +371,12 @@ int main(int argc, char** argv) {
              static_cast<long long>(gates.dropped()));
     if (inputs.empty()) throw std::runtime_error("no sound map input in " + log_path);
     first_utime = inputs.begin()->first;
+    // Which true sources sounded at time t (the SIM_TRUTH before it); empty: unknown.
+    auto active_at = [&](int64_t t) -> std::vector<char> {
+      auto it = truth_active.upper_bound(t);
+      if (it == truth_active.begin()) return {};
+      return std::prev(it)->second;
+    };
     auto truth_at = [&](int64_t t) {
       auto it = truth_poses.lower_bound(t);
       if (it == truth_poses.end()) --it;
@@ -424,25 +478,33 @@ int main(int argc, char** argv) {
       // nearest true source: how good are the localiser's bearings?
       const auto mount = sarmap::sound_map::MountFromRobot(robot);
       std::map<std::string, std::vector<double>> errors, signed_errors;
+      std::map<std::string, std::map<int, int>> classes;  // DOAs within 10 deg of a sounding source
       std::vector<double> all;
       for (const auto& [t, m] : doa_log) {
         const Pose2 base = truth_at(t + doa_shift_us);
         const Pose2 arr = sarmap::sound_map::Compose(base, Pose2(mount.x_m, mount.y_m, mount.yaw_rad));
+        const std::vector<char> active = active_at(t + doa_shift_us);
         for (const auto& s : m.sources) {
           double best = 1e9, signed_best = 0;
           std::string name;
-          for (const auto& ts : truth.sources) {
+          bool best_active = false;
+          for (size_t j = 0; j < truth.sources.size(); ++j) {
+            const auto& ts = truth.sources[j];
             double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
             // Linear arrays: the angle to the array's x axis (0..pi), in the plane |bearing|.
             if (s.kind == sarmap::doa_source_t::KIND_ANGLE_1D) b = std::abs(sarmap::sound_map::WrapAngleD(b));
             const double se = sarmap::sound_map::WrapAngleD(s.azimuth_rad - b) * 180 / M_PI;
-            if (std::abs(se) < best) {
+            const bool sounding = j < active.size() && active[j];
+            // A sounding source takes precedence over a silent one a little nearer.
+            if ((sounding && !best_active && std::abs(se) < 10) || ((sounding || !best_active) && std::abs(se) < best)) {
               best = std::abs(se);
               signed_best = se;
               name = ts.name;
+              best_active = sounding;
             }
           }
           errors[name].push_back(best);
+          if (best < 10 && best_active) ++classes[name][s.sound_class];
           if (name == doa_trace)
             printf("  trace t=%6.2f robot (%5.2f, %5.2f, %6.1f deg) track %3ld doa %7.1f true %7.1f err %6.1f sigma %.1f\n",
                    (t - doa_log.front().first) * 1e-6, base.x, base.y, base.yaw * 180 / M_PI,
@@ -461,9 +523,13 @@ int main(int argc, char** argv) {
       for (double e : all) within10 += e < 10;
       printf("DOA check: %zu DOAs, %d within 10 deg of a true source, median error %.1f deg\n", all.size(), within10,
              median(all));
-      for (const auto& [name, v] : errors)
-        printf("  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg\n", name.c_str(),
-               v.size(), median(v), median(signed_errors[name]));
+      for (const auto& [name, v] : errors) {
+        printf("  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg; classes within 10 deg "
+               "while it sounded:",
+               name.c_str(), v.size(), median(v), median(signed_errors[name]));
+        for (const auto& [c, n] : classes[name]) printf(" %s %d", ClassName(c), n);
+        printf("\n");
+      }
     }
 
     auto report = [&](int64_t now, bool final_report) {
@@ -483,26 +549,42 @@ int main(int argc, char** argv) {
         for (const auto& s : sources) {
           const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.covariance.topLeftCorner<2, 2>());
           const Eigen::Vector2d w = to_world(s.position_m);
-          printf("  source %3ld at (%6.2f, %6.2f, %5.2f) m (world %6.2f, %6.2f), std %.2f m, %s, %d DOAs%s\n",
-                 static_cast<long>(s.id), s.position_m.x(), s.position_m.y(), s.position_m.z(), w.x(), w.y(),
-                 std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())),
-                 s.state == OnlineSoundMap::Source::kConverged ? "converged"
-                 : s.state == OnlineSoundMap::Source::kSilent  ? "silent"
-                                                               : "initialising",
-                 s.num_observations, s.is_person ? ", person" : "");
+          printf(
+              "  source %3ld at (%6.2f, %6.2f, %5.2f) m (world %6.2f, %6.2f), std %.2f m, %s, %d "
+              "DOAs, %s %.0f%%%s%s\n",
+              static_cast<long>(s.id), s.position_m.x(), s.position_m.y(), s.position_m.z(), w.x(),
+              w.y(), std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())),
+              s.state == OnlineSoundMap::Source::kConverged ? "converged"
+              : s.state == OnlineSoundMap::Source::kSilent  ? "silent"
+                                                            : "initialising",
+              s.num_observations, ClassName(s.sound_class), 100 * s.class_confidence,
+              s.has_position ? "" : ", bearing only (position = where heard from)",
+              s.is_person ? ", person" : "");
         }
       }
       if (!have_truth) return;
       for (const auto& ts : truth.sources) {
         const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
-        double best = std::numeric_limits<double>::infinity(), best_conv = best;
+        double best = std::numeric_limits<double>::infinity(), best_conv = best, best_placed = best;
+        const OnlineSoundMap::Source* placed = nullptr;
         for (const auto& s : sources) {
           const double d = (to_world(s.position_m) - p).norm();
           best = std::min(best, d);
           if (s.state != OnlineSoundMap::Source::kInitialising) best_conv = std::min(best_conv, d);
+          if (s.has_position && d < best_placed) {
+            best_placed = d;
+            placed = &s;
+          }
         }
-        printf("  truth %-18s (%5.2f, %5.2f): nearest source %.3f m, nearest converged %.3f m\n", ts.name.c_str(),
-               p.x(), p.y(), best, best_conv);
+        static const char* kKinds[] = {"?", "voice", "music", "alarm", "noise"};
+        printf(
+            "  truth %-18s %-5s (%5.2f, %5.2f): nearest source %.3f m, nearest converged %.3f m, "
+            "nearest placed %.3f m",
+            ts.name.c_str(), ts.kind >= 1 && ts.kind <= 4 ? kKinds[ts.kind] : "?", p.x(), p.y(),
+            best, best_conv, best_placed);
+        if (placed)
+          printf(" (%s%s)", ClassName(placed->sound_class), placed->is_person ? ", person" : "");
+        printf("\n");
       }
     };
 
@@ -521,6 +603,8 @@ int main(int argc, char** argv) {
            static_cast<long>(doa_sources));
     for (const auto& k : kinds) printf(" kind %d: %ld", k.first, static_cast<long>(k.second));
     printf(" ), largest DOA track id %ld%s\n", static_cast<long>(max_track), no_anchors ? ", SLAM_ANCHORS ignored" : "");
+    if (classifier)
+      printf("relocalised: the source classifier took %.2f s of CPU\n", classifier_cpu_s);
     if (localiser && localiser->samples_seen() > 0)
       printf("relocalised: the localiser took %.2f s of CPU for %.1f s of audio = %.2f%% of a core\n", localiser_cpu_s,
              static_cast<double>(localiser->samples_seen()) / geometry.sample_rate_hz,

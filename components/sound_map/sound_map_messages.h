@@ -8,10 +8,12 @@
 #include <utility>
 #include <vector>
 
+#include "common/compression.h"
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
 #include "sarmap/doa_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/slam_anchors_t.hpp"
@@ -30,6 +32,7 @@ struct SoundMapNodeOptions {
   std::string anchors_channel = "SLAM_ANCHORS";
   std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
   std::string sound_map_channel = "SOUND_MAP";
+  std::string site_map_channel = "MAP";  // the mapped site: a person must lie on it
   // Inputs wait this long for older ones still on their way. PEOPLE_AUDIO comes 1.9-2.8 s after
   // its time (the utterance is decoded when it ends and its keyword hits wait 2 s for the other
   // beams'), and POSE up to 2.8 s late while SLAM optimises a long mission's graph: with 0.3 s
@@ -53,6 +56,8 @@ struct SoundMapNodeOptions {
     v("anchors_channel", anchors_channel, "SLAM anchors and joint covariance in");
     v("anchor_request_channel", anchor_request_channel, "anchor node requests out");
     v("sound_map_channel", sound_map_channel, "the sound map out");
+    v("site_map_channel", site_map_channel,
+      "occupancy grid of the mapped site in (a person must lie near its known cells; '' = none)");
     v("reorder_delay_s", reorder_delay_s, "inputs are processed in time order once this much newer data arrived");
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
     v("request_repeat_s", request_repeat_s, "re-send the anchor request this often (wall clock; 0: only on change)");
@@ -109,6 +114,7 @@ inline std::vector<OnlineSoundMap::Doa> DoasFromMessage(const sarmap::doa_t& msg
     d.azimuth_rad = s.azimuth_rad;
     d.elevation_rad = s.elevation_rad;
     d.covariance << s.covariance[0], s.covariance[1], s.covariance[2], s.covariance[3];
+    d.sound_class = s.sound_class >= 0 && s.sound_class <= 4 ? s.sound_class : 0;
     if (!std::isfinite(d.azimuth_rad) || !std::isfinite(d.elevation_rad) || !d.covariance.allFinite()) continue;
     doas.push_back(d);
   }
@@ -155,10 +161,45 @@ inline std::vector<OnlineSoundMap::Doa> HeardDirections(const sarmap::people_det
     doa.elevation_rad = d.elevation_rad;
     doa.covariance << d.direction_covariance[0], d.direction_covariance[1], d.direction_covariance[2],
         d.direction_covariance[3];
+    doa.called = !d.keyword.empty();
     if (!std::isfinite(doa.azimuth_rad) || !doa.covariance.allFinite()) continue;
     out.push_back(doa);
   }
   return out;
+}
+
+// The box (map frame) of a grid's known cells; false when it has none or cannot be read.
+inline bool SiteBox(const sarmap::occupancy_grid_t& grid, Eigen::Vector2d* min_m,
+                    Eigen::Vector2d* max_m) {
+  if (grid.width <= 0 || grid.height <= 0 || !(grid.resolution_m > 0)) return false;
+  const size_t cells = static_cast<size_t>(grid.width) * grid.height;
+  std::vector<uint8_t> data;
+  if (grid.compression == sarmap::occupancy_grid_t::COMPRESSION_ZSTD) {
+    std::string error;
+    if (!common::DecompressBytes(grid.data.data(), grid.data.size(), cells, &data, &error))
+      return false;
+  } else {
+    if (grid.data.size() != cells) return false;
+    data.assign(grid.data.begin(), grid.data.end());
+  }
+  int c0 = grid.width, c1 = -1, r0 = grid.height, r1 = -1;
+  for (int r = 0; r < grid.height; ++r)
+    for (int c = 0; c < grid.width; ++c)
+      if (static_cast<int8_t>(data[static_cast<size_t>(r) * grid.width + c]) >= 0) {
+        c0 = std::min(c0, c), c1 = std::max(c1, c), r0 = std::min(r0, r), r1 = std::max(r1, r);
+      }
+  if (c1 < 0) return false;
+  const double ca = std::cos(grid.origin_yaw_rad), sa = std::sin(grid.origin_yaw_rad);
+  *min_m = Eigen::Vector2d::Constant(INFINITY);
+  *max_m = Eigen::Vector2d::Constant(-INFINITY);
+  for (double u : {static_cast<double>(c0), c1 + 1.0})
+    for (double v : {static_cast<double>(r0), r1 + 1.0}) {
+      const Eigen::Vector2d p(grid.origin_x_m + grid.resolution_m * (ca * u - sa * v),
+                              grid.origin_y_m + grid.resolution_m * (sa * u + ca * v));
+      *min_m = min_m->cwiseMin(p);
+      *max_m = max_m->cwiseMax(p);
+    }
+  return true;
 }
 
 inline sarmap::sound_map_t SoundMapMessage(const OnlineSoundMap& map, int64_t utime) {
@@ -177,6 +218,13 @@ inline sarmap::sound_map_t SoundMapMessage(const OnlineSoundMap& map, int64_t ut
     out.first_heard_utime = s.first_heard_utime;
     out.last_heard_utime = s.last_heard_utime;
     out.num_observations = s.num_observations;
+    out.has_position = s.has_position;
+    out.bearing_rad = s.bearing_rad;
+    out.bearing_variance = s.bearing_variance;
+    for (int i = 0; i < 3; ++i) out.bearing_origin_m[i] = s.bearing_origin_m[i];
+    out.sound_class = static_cast<int8_t>(s.sound_class);
+    out.class_confidence = static_cast<float>(s.class_confidence);
+    out.priority = static_cast<int8_t>(s.priority);
     msg.sources.push_back(out);
   }
   msg.num_sources = static_cast<int32_t>(msg.sources.size());

@@ -1,22 +1,24 @@
 // sarmap-sound-map: the CI sound-source map (Su 2017 §4.3) as an LCM node.
-//   in:  DOA_MAP (doa_t, doa_channel), PEOPLE_AUDIO (people_detections_t), POSE (pose_t), SLAM_ANCHORS
+//   in:  DOA_MAP (doa_t, doa_channel), PEOPLE_AUDIO (people_detections_t), POSE (pose_t),
+//   SLAM_ANCHORS,
+//        MAP (occupancy_grid_t: the mapped site)
 //   out: SLAM_ANCHOR_REQUEST (slam_anchor_request_t), SOUND_MAP (sound_map_t)
 // Inputs go through a time-ordered queue; results depend on message time only.
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <functional>
 #include <set>
 
-#include <Eigen/Geometry>
-
-#include "common/node_main.h"
 #include "common/logging.h"
 #include "common/node.h"
+#include "common/node_main.h"
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
 #include "common/state_file.h"
 #include "common/time.h"
 #include "sarmap/doa_t.hpp"
+#include "sarmap/occupancy_grid_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/slam_anchor_request_t.hpp"
@@ -41,7 +43,8 @@ int main(int argc, char** argv) {
         "back-propagation after every SLAM optimisation.");
     sarmap::common::NodeArgs node_args;
     parser.SetEpilog(
-        "Channels in: DOA, PEOPLE_AUDIO, POSE, SLAM_ANCHORS. Out: SLAM_ANCHOR_REQUEST, SOUND_MAP.");
+        "Channels in: DOA, PEOPLE_AUDIO, POSE, SLAM_ANCHORS, MAP. Out: SLAM_ANCHOR_REQUEST, "
+        "SOUND_MAP.");
     const auto parsed = sarmap::common::ParseNodeOptions<SoundMapNodeOptions>(&parser, &node_args, argc, argv, "config/sound_map.yaml");
     if (!parsed) return 0;
     const SoundMapNodeOptions& options = *parsed;
@@ -168,6 +171,13 @@ int main(int argc, char** argv) {
             for (const auto& d : heard) map.OnHeardDirection(d);
           });
         });
+    if (!options.site_map_channel.empty())
+      node.Subscribe<sarmap::occupancy_grid_t>(
+          options.site_map_channel, [&](const sarmap::occupancy_grid_t& msg, const auto&) {
+            // The site only grows: applied at once, not in time order.
+            Eigen::Vector2d lo, hi;
+            if (sarmap::sound_map::SiteBox(msg, &lo, &hi)) map.SetSite(lo, hi);
+          });
     if (options.request_repeat_s > 0)
       node.AddTimer(options.request_repeat_s, [&] {
         if (!map.AnchorNodeIds().empty()) send_request(newest);

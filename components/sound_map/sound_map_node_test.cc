@@ -58,6 +58,8 @@ void PublishStep(lcm::LCM& lcm, int k, double sx, double sy) {
   s.kind = sarmap::doa_source_t::KIND_AZIMUTH;
   s.method = sarmap::doa_source_t::METHOD_SRP_PHAT;
   s.confidence = 1;
+  s.sound_class = sarmap::doa_source_t::SOUND_CLASS_VOICE;
+  s.class_confidence = 0.8f;
   s.azimuth_rad = std::atan2(sy, sx - (0.05 * k + 0.10));
   s.covariance[0] = std::pow(3 * M_PI / 180, 2);
   s.covariance[3] = 1;
@@ -131,6 +133,9 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   EXPECT_NEAR(src.position_m[1], sy, 0.3);
   EXPECT_GE(src.num_observations, 30);
   // The late call still reached the map (with a 0.3 s delay it was dropped as late).
+  EXPECT_TRUE(src.has_position) << node.Output();
+  EXPECT_EQ(src.sound_class, +sarmap::doa_source_t::SOUND_CLASS_VOICE);
+  EXPECT_EQ(src.priority, +sarmap::sound_source_t::PRIORITY_CALL);
   EXPECT_TRUE(src.is_person) << node.Output();
 }
 

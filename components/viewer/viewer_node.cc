@@ -191,6 +191,13 @@ int main(int argc, char** argv) {
                       : s.state == sound_source_t::STATE_SILENT  ? "silent"
                                                                  : "initialising";
             v.is_person = s.is_person;
+            static const char* kClasses[] = {"unknown", "voice", "alarm", "machinery", "music"};
+            v.sound_class =
+                s.sound_class >= 0 && s.sound_class <= 4 ? kClasses[s.sound_class] : "unknown";
+            v.calling = s.priority == sound_source_t::PRIORITY_CALL;
+            v.has_position = s.has_position;
+            v.bearing_rad = s.bearing_rad;
+            v.bearing_sigma_rad = std::sqrt(std::max(0.0, s.bearing_variance));
             sources.push_back(v);
           }
           state.SetSources(std::move(sources));

@@ -182,7 +182,12 @@ std::string ViewerState::Json(double now_s) const {
                             {"y_m", s.y_m},
                             {"ellipse", EllipseJson(s.ellipse)},
                             {"state", s.state},
-                            {"is_person", s.is_person}});
+                            {"is_person", s.is_person},
+                            {"sound_class", s.sound_class},
+                            {"calling", s.calling},
+                            {"has_position", s.has_position},
+                            {"bearing_rad", s.bearing_rad},
+                            {"bearing_sigma_rad", s.bearing_sigma_rad}});
   }
   j["processes"] = nlohmann::json::array();
   for (const auto& [deputy, entry] : processes_) {

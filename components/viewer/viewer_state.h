@@ -44,6 +44,11 @@ struct SourceView {
   Ellipse ellipse;
   std::string state;
   bool is_person = false;
+  std::string sound_class = "unknown";  // voice, alarm, machinery, music, unknown
+  bool calling = false;                 // a voice that called for help
+  // false: a bearing from (x_m, y_m), the point it was heard from; its range is not known.
+  bool has_position = true;
+  double bearing_rad = 0, bearing_sigma_rad = 0;
 };
 
 struct ProcessView {
