@@ -2,7 +2,8 @@
 # make demo-hostile, shortened: the dark-lab mission under the launcher while sarmap-net-fuzz
 # sends crafted datagrams to every channel of the bus and 10 % of the datagrams are lost
 # (launch-scripts/demo.sh DEMO_HOSTILE=1). Checks that no process of the stack crashed or was
-# restarted (the launcher's signed reports), that the attack and the loss happened, and that the
+# restarted (the launcher's signed reports), that the attack and the loss happened, that the
+# simulated base refused the forged velocity commands (unsigned), and that the
 # report was written from the log (hostile datagrams included) and puts someone on the map.
 # Run by CTest inside tests/harness/sarmap-netns.
 set -euo pipefail
@@ -35,6 +36,9 @@ for f in "$out"/run/output/*.txt; do
     fail "$(basename "$f" .txt) crashed: $(grep -aE "terminate called|Segmentation|Aborted|core dumped|exited with code" "$f" | head -3)"
   fi
 done
+# The launcher gives the explorer and the simulator the command key: forged CMD_VEL is refused.
+cat "$out"/run/output/*sarmap-sim.txt 2>/dev/null | grep -aq "CMD_VEL not signed with the command key" ||
+  fail "the simulator refused no forged CMD_VEL"
 people="$(sed -nE 's/^mission: .*; ([0-9]+) people on the map.*/\1/p' "$out/demo.txt")"
 [ -n "$people" ] && [ "$people" -ge 1 ] || fail "nobody on the map after the attacked mission"
 grep -E "^ *sent |datagrams lost|^mission:|FOUND|MISSED|skipped" "$out/demo.txt"

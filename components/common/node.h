@@ -78,6 +78,14 @@ class Node {
       msg->header.seq = seq_++;
       lcm_->publish(channel_, msg);
     }
+    // As Publish, with `finish(msg)` run once the sequence number is set (to sign the message:
+    // common/command_auth.h).
+    template <class F>
+    void Publish(T* msg, F&& finish) {
+      msg->header.seq = seq_++;
+      finish(msg);
+      lcm_->publish(channel_, msg);
+    }
     const std::string& channel() const { return channel_; }
 
    private:

@@ -7,6 +7,7 @@
 
 #include "common/image_messages.h"
 #include "common/message_conversions.h"
+#include "common/command_auth.h"
 #include "common/node.h"
 #include "common/node_main.h"
 #include "explore/explore.h"
@@ -28,6 +29,12 @@ class ExploreNode {
         controller_(options.explore),
         command_pub_(node->Advertise<velocity_command_t>(options.command_channel)),
         status_pub_(node->Advertise<explore_status_t>(options.status_channel)) {
+    if (!options.command_key_file.empty()) {
+      command_key_ = common::LoadAuthKeyFile(options.command_key_file);
+      teleop_gate_ = common::CommandGate(command_key_);
+    } else {
+      SARMAP_LOG(WARN) << "no command_key_file: CMD_VEL goes out unsigned and any TELEOP on the bus is obeyed";
+    }
     node->Subscribe<teleop_t>(options.teleop_channel,
                               [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
     node->Subscribe<pose_t>(
@@ -42,6 +49,11 @@ class ExploreNode {
 
  private:
   void OnTeleop(const teleop_t& m, const common::ReceiveInfo& info) {
+    std::string why;
+    if (!teleop_gate_.Accept(m, &why)) {
+      node_->Reject(info.channel, "TELEOP " + why);
+      return;
+    }
     explore::TeleopCommand t;
     // The dead man runs on this process's clock: a sender's stamp ahead of ours must not
     // keep an override alive.
@@ -108,7 +120,11 @@ class ExploreNode {
     cmd.linear_mps = v.linear_mps;
     cmd.angular_radps = v.angular_radps;
     cmd.source = v.source;
-    command_pub_.Publish(&cmd);
+    if (command_key_.empty()) {
+      command_pub_.Publish(&cmd);
+    } else {
+      command_pub_.Publish(&cmd, [this](velocity_command_t* c) { common::SignMessage(command_key_, c); });
+    }
     const explore::ExploreStatus& s = controller_.status();
     if (s.state != last_state_) {
       SARMAP_LOG(INFO) << "mission state " << s.state << (s.goal_kind.empty() ? "" : ", goal " + s.goal_kind);
@@ -134,6 +150,8 @@ class ExploreNode {
   common::Node::Publisher<explore_status_t> status_pub_;
   std::string last_state_;
   double last_status_s_ = -1e9;
+  common::AuthKey command_key_;
+  common::CommandGate teleop_gate_;
 };
 
 }  // namespace

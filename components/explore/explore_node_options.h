@@ -19,6 +19,9 @@ struct ExploreNodeOptions {
   std::string command_channel = "CMD_VEL";
   std::string status_channel = "EXPLORE_STATUS";
   double status_period_s = 0.5;
+  // Signed commands (common/command_auth.h): CMD_VEL is signed with this key and TELEOP is
+  // obeyed only when signed with it; empty: unsigned (any host on the bus can command).
+  std::string command_key_file;
   ExploreOptions explore;
   template <class V>
   void Visit(V& v) {
@@ -30,6 +33,8 @@ struct ExploreNodeOptions {
     v("command_channel", command_channel, "velocity commands out");
     v("status_channel", status_channel, "mission state, goal and path out");
     v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often");
+    v("command_key_file", command_key_file,
+      "key (>= 16 random bytes, mode 600) that signs CMD_VEL and must sign TELEOP; empty: unsigned");
     v("explore", explore, "exploration");
   }
   void Validate(common::Validator& check) const { check.Positive("status_period_s", status_period_s); }

@@ -12,6 +12,7 @@
 #include "common/node.h"
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "common/command_auth.h"
 #include "sarmap/velocity_command_t.hpp"
 #include "sim/simulator.h"
 
@@ -96,8 +97,21 @@ int Run(int argc, char** argv) {
   SARMAP_LOG(INFO) << "world '" << setup.world.name << "' (" << setup.world.source_file << "), array '"
                    << setup.array.name << "' (" << setup.array.num_mics() << " mics), speed "
                    << options.speed << ", seed " << options.seed;
+  // With a command key the base obeys only signed, fresh commands (a forged or replayed
+  // CMD_VEL on the bus is counted and dropped), as a robot's base driver would.
+  common::CommandGate command_gate;
+  if (!options.command_key_file.empty()) {
+    command_gate = common::CommandGate(common::LoadAuthKeyFile(options.command_key_file));
+  } else if (options.drive != "path") {
+    SARMAP_LOG(WARN) << "no command_key_file: any CMD_VEL on the bus drives the robot";
+  }
   node.Subscribe<sarmap::velocity_command_t>(
-      options.channels.cmd_vel, [&](const sarmap::velocity_command_t& cmd, const common::ReceiveInfo&) {
+      options.channels.cmd_vel, [&](const sarmap::velocity_command_t& cmd, const common::ReceiveInfo& info) {
+        std::string why;
+        if (!command_gate.Accept(cmd, &why)) {
+          node.Reject(info.channel, "CMD_VEL " + why);
+          return;
+        }
         if (std::isfinite(cmd.linear_mps) && std::isfinite(cmd.angular_radps)) {
           simulator.SetVelocityCommand(cmd.linear_mps, cmd.angular_radps);
         }

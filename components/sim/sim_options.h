@@ -202,6 +202,7 @@ struct SimOptions {
   double duration_s = 0.0;              // stop after this much simulated time; 0 = run on
   std::string drive = "auto";           // auto | cmd_vel | path
   double cmd_vel_timeout_s = 0.5;
+  std::string command_key_file;  // CMD_VEL obeyed only when signed with it (common/command_auth.h)
   double physics_rate_hz = 200.0;
   double truth_rate_hz = 10.0;
   double robot_radius_m = 0.25;
@@ -221,6 +222,8 @@ struct SimOptions {
     v("duration_s", duration_s, "stop after this many simulated seconds; 0 = until stopped");
     v("drive", drive, "auto (path until CMD_VEL arrives), cmd_vel, or path");
     v("cmd_vel_timeout_s", cmd_vel_timeout_s, "stop when CMD_VEL is older than this");
+    v("command_key_file", command_key_file,
+      "key (>= 16 random bytes, mode 600) that must sign CMD_VEL; empty: any CMD_VEL is obeyed");
     v("physics_rate_hz", physics_rate_hz, "robot integration rate");
     v("truth_rate_hz", truth_rate_hz, "SIM_TRUTH rate");
     v("robot_radius_m", robot_radius_m, "robot footprint radius for collisions");

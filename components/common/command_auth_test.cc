@@ -1,0 +1,117 @@
+#include "common/command_auth.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <string>
+
+#include "sarmap/teleop_t.hpp"
+#include "sarmap/velocity_command_t.hpp"
+
+namespace sarmap {
+namespace common {
+namespace {
+
+AuthKey TestKey(uint8_t seed) {
+  AuthKey key(32);
+  for (size_t i = 0; i < key.size(); ++i) key[i] = static_cast<uint8_t>(seed + 7 * i);
+  return key;
+}
+
+velocity_command_t Command(int64_t utime, double linear_mps) {
+  velocity_command_t m{};
+  m.header.utime = utime;
+  m.header.frame = "base";
+  m.linear_mps = linear_mps;
+  m.angular_radps = 0.1;
+  m.source = "explore";
+  return m;
+}
+
+// RFC 4231 test case 2: the HMAC itself.
+TEST(CommandAuth, HmacSha256MatchesRfc4231) {
+  const std::string k = "Jefe", data = "what do ya want for nothing?";
+  const AuthDigest d = HmacSha256(AuthKey(k.begin(), k.end()),
+                                  reinterpret_cast<const uint8_t*>(data.data()), data.size());
+  const uint8_t expected[4] = {0x5b, 0xdc, 0xc1, 0x46};
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(d[i], expected[i]) << i;
+  EXPECT_EQ(d[31], 0x43);
+}
+
+TEST(CommandAuth, SignedCommandsPassForgedTamperedAndReplayedOnesDoNot) {
+  const AuthKey key = TestKey(1);
+  CommandGate gate(key);
+  std::string why;
+
+  velocity_command_t unsigned_cmd = Command(100, 0.3);
+  EXPECT_FALSE(gate.Accept(unsigned_cmd, &why));
+  EXPECT_NE(why.find("not signed"), std::string::npos) << why;
+
+  velocity_command_t other_key = Command(100, 0.3);
+  ASSERT_TRUE(SignMessage(TestKey(2), &other_key));
+  EXPECT_FALSE(gate.Accept(other_key, &why));
+
+  velocity_command_t good = Command(100, 0.3);
+  ASSERT_TRUE(SignMessage(key, &good));
+  EXPECT_TRUE(MessageSigned(key, good));
+  velocity_command_t tampered = good;
+  tampered.linear_mps = 1e6;  // a signed command's speed changed on the way
+  EXPECT_FALSE(gate.Accept(tampered, &why));
+  EXPECT_TRUE(gate.Accept(good, &why)) << why;
+  // The same command again, and an older one: replays.
+  EXPECT_FALSE(gate.Accept(good, &why));
+  EXPECT_NE(why.find("replay"), std::string::npos) << why;
+  velocity_command_t older = Command(50, 0.0);
+  ASSERT_TRUE(SignMessage(key, &older));
+  EXPECT_FALSE(gate.Accept(older, &why));
+  velocity_command_t next = Command(133, 0.2);
+  ASSERT_TRUE(SignMessage(key, &next));
+  EXPECT_TRUE(gate.Accept(next, &why)) << why;
+
+  // TELEOP the same way; a string with a NUL byte has no encoding and is never accepted.
+  teleop_t stop{};
+  stop.header.utime = 10;
+  stop.operator_id = "op";
+  stop.emergency_stop = true;
+  ASSERT_TRUE(SignMessage(key, &stop));
+  CommandGate teleop_gate(key);
+  EXPECT_TRUE(teleop_gate.Accept(stop, &why));
+  teleop_t nul = stop;
+  nul.header.utime = 11;
+  nul.operator_id = std::string("o\0p", 3);
+  EXPECT_FALSE(SignMessage(key, &nul));
+  EXPECT_FALSE(teleop_gate.Accept(nul, &why));
+}
+
+TEST(CommandAuth, WithoutAKeyEveryCommandPasses) {
+  CommandGate gate;
+  EXPECT_FALSE(gate.enabled());
+  std::string why;
+  EXPECT_TRUE(gate.Accept(Command(5, 0.1), &why));
+  EXPECT_TRUE(gate.Accept(Command(5, 0.1), &why));
+}
+
+TEST(CommandAuth, KeyFilesThatAreMissingShortOrOpenAreErrors) {
+  const std::string dir = "/tmp/sarmap_command_auth_test_" + std::to_string(getpid());
+  mkdir(dir.c_str(), 0700);
+  EXPECT_THROW(LoadAuthKeyFile(dir + "/missing.key"), std::runtime_error);
+  const std::string short_key = dir + "/short.key";
+  std::ofstream(short_key) << "0123456789";
+  chmod(short_key.c_str(), 0600);
+  EXPECT_THROW(LoadAuthKeyFile(short_key), std::runtime_error);
+  const std::string open_key = dir + "/open.key";
+  std::ofstream(open_key) << "0123456789abcdef0123456789abcdef";
+  chmod(open_key.c_str(), 0644);
+  EXPECT_THROW(LoadAuthKeyFile(open_key), std::runtime_error);
+  chmod(open_key.c_str(), 0600);
+  EXPECT_EQ(LoadAuthKeyFile(open_key).size(), 32u);
+  unlink(short_key.c_str());
+  unlink(open_key.c_str());
+  rmdir(dir.c_str());
+}
+
+}  // namespace
+}  // namespace common
+}  // namespace sarmap
