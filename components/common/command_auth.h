@@ -7,7 +7,8 @@
 //   hmac_sha256 = HMAC-SHA256(key, LCM encoding of the message with hmac_sha256 zeroed)
 //
 // "Newer" is header.utime strictly above the last accepted one, so a recorded command played
-// back later moves nothing. Uses only the generated message types, not the LCM runtime.
+// back later moves nothing; a receiver that has a clock also refuses commands stamped far
+// ahead of it. Uses only the generated message types, not the LCM runtime.
 
 #include <algorithm>
 #include <array>
@@ -69,12 +70,21 @@ class CommandGate {
   explicit CommandGate(AuthKey key) : key_(std::move(key)) {}
   bool enabled() const { return !key_.empty(); }
 
-  // True when the command may act; otherwise `*why` says why not.
+  // True when the command may act; otherwise `*why` says why not. With `now_utime` (the
+  // receiver's clock, > 0), a command stamped more than `max_ahead_us` ahead of it is refused
+  // and not adopted as the newest: a sender that stamps its commands with its input's time
+  // (the explorer: the scan's) can be made to sign a far-future stamp by a forged input, and
+  // adopting it would make every later real command look like a replay.
   template <class T>
-  bool Accept(const T& msg, std::string* why) {
+  bool Accept(const T& msg, std::string* why, int64_t now_utime = 0,
+              int64_t max_ahead_us = 5000000) {
     if (key_.empty()) return true;
     if (!MessageSigned(key_, msg)) {
       if (why) *why = "not signed with the command key";
+      return false;
+    }
+    if (now_utime > 0 && msg.header.utime > now_utime + max_ahead_us) {
+      if (why) *why = "stamped ahead of this clock";
       return false;
     }
     if (has_last_ && msg.header.utime <= last_utime_) {

@@ -6,7 +6,9 @@
 
 #include <fstream>
 #include <string>
+#include <vector>
 
+#include "common/decode.h"
 #include "sarmap/teleop_t.hpp"
 #include "sarmap/velocity_command_t.hpp"
 
@@ -69,6 +71,15 @@ TEST(CommandAuth, SignedCommandsPassForgedTamperedAndReplayedOnesDoNot) {
   velocity_command_t next = Command(133, 0.2);
   ASSERT_TRUE(SignMessage(key, &next));
   EXPECT_TRUE(gate.Accept(next, &why)) << why;
+  // A signed command stamped far ahead of the receiver's clock (its sender was fed a forged
+  // input) is refused and does not become the newest: the next real command still acts.
+  velocity_command_t future = Command(133 + 3600000000LL, 0.2);
+  ASSERT_TRUE(SignMessage(key, &future));
+  EXPECT_FALSE(gate.Accept(future, &why, 140));
+  EXPECT_NE(why.find("ahead"), std::string::npos) << why;
+  velocity_command_t after = Command(166, 0.2);
+  ASSERT_TRUE(SignMessage(key, &after));
+  EXPECT_TRUE(gate.Accept(after, &why, 170)) << why;
 
   // TELEOP the same way; a string with a NUL byte has no encoding and is never accepted.
   teleop_t stop{};
@@ -83,6 +94,21 @@ TEST(CommandAuth, SignedCommandsPassForgedTamperedAndReplayedOnesDoNot) {
   nul.operator_id = std::string("o\0p", 3);
   EXPECT_FALSE(SignMessage(key, &nul));
   EXPECT_FALSE(teleop_gate.Accept(nul, &why));
+}
+
+// What the receiver checks is the message decoded from the bytes the sender published.
+TEST(CommandAuth, ASignatureSurvivesEncodingAndDecoding) {
+  const AuthKey key = TestKey(3);
+  velocity_command_t sent = Command(1700000000123456, -0.25);
+  sent.header.seq = 41;
+  ASSERT_TRUE(SignMessage(key, &sent));
+  std::vector<uint8_t> bytes(static_cast<size_t>(sent.getEncodedSize()));
+  ASSERT_EQ(sent.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  velocity_command_t received;
+  std::string why;
+  ASSERT_TRUE(DecodeMessage(bytes.data(), bytes.size(), &received, &why)) << why;
+  EXPECT_TRUE(MessageSigned(key, received));
 }
 
 TEST(CommandAuth, WithoutAKeyEveryCommandPasses) {

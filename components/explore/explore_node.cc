@@ -10,6 +10,7 @@
 #include "common/command_auth.h"
 #include "common/node.h"
 #include "common/node_main.h"
+#include "common/stamp_gate.h"
 #include "explore/explore.h"
 #include "explore/explore_node_options.h"
 #include "explore/status_message.h"
@@ -107,6 +108,10 @@ class ExploreNode {
   }
 
   void OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {
+    if (!scan_gate_.Accept(0, m.header.utime, info.receive_time_s)) {
+      node_->Reject(info.channel, "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
+      return;
+    }
     explore::Scan scan;
     scan.angle_min_rad = m.angle_min_rad;
     scan.angle_increment_rad = m.angle_increment_rad;
@@ -152,6 +157,7 @@ class ExploreNode {
   double last_status_s_ = -1e9;
   common::AuthKey command_key_;
   common::CommandGate teleop_gate_;
+  common::StampGates scan_gate_{options_.stamp_gate};
 };
 
 }  // namespace

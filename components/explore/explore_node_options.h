@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/options.h"
+#include "common/stamp_gate.h"
 #include "explore/explore.h"
 
 namespace sarmap {
@@ -22,22 +23,33 @@ struct ExploreNodeOptions {
   // Signed commands (common/command_auth.h): CMD_VEL is signed with this key and TELEOP is
   // obeyed only when signed with it; empty: unsigned (any host on the bus can command).
   std::string command_key_file;
+  // SCAN is gated on its own clock: a forged scan stamped far ahead would otherwise become a
+  // command stamped far ahead (CMD_VEL carries the scan's stamp).
+  common::StampGateOptions stamp_gate;
   ExploreOptions explore;
   template <class V>
   void Visit(V& v) {
-    v("scan_channel", scan_channel, "laser scan (safety layer, and the explorer's picture between maps)");
+    v("scan_channel", scan_channel,
+      "laser scan (safety layer, and the explorer's picture between maps)");
     v("map_channel", map_channel, "occupancy grid from SLAM");
     v("pose_channel", pose_channel, "robot pose in the map");
-    v("people_channel", people_channel, "people map: people heard but not seen become goals (mode sound_guided)");
+    v("people_channel", people_channel,
+      "people map: people heard but not seen become goals (mode sound_guided)");
     v("teleop_channel", teleop_channel, "operator override");
     v("command_channel", command_channel, "velocity commands out");
     v("status_channel", status_channel, "mission state, goal and path out");
     v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often");
     v("command_key_file", command_key_file,
-      "key (>= 16 random bytes, mode 600) that signs CMD_VEL and must sign TELEOP; empty: unsigned");
+      "key (>= 16 random bytes, mode 600) that signs CMD_VEL and must sign TELEOP; empty: "
+      "unsigned");
+    v("stamp_gate", stamp_gate,
+      "SCAN stamped far from its stream's clock is dropped and counted "
+      "(components/common/README.md)");
     v("explore", explore, "exploration");
   }
-  void Validate(common::Validator& check) const { check.Positive("status_period_s", status_period_s); }
+  void Validate(common::Validator& check) const {
+    check.Positive("status_period_s", status_period_s);
+  }
 };
 
 }  // namespace explore

@@ -108,7 +108,7 @@ int Run(int argc, char** argv) {
   node.Subscribe<sarmap::velocity_command_t>(
       options.channels.cmd_vel, [&](const sarmap::velocity_command_t& cmd, const common::ReceiveInfo& info) {
         std::string why;
-        if (!command_gate.Accept(cmd, &why)) {
+        if (!command_gate.Accept(cmd, &why, simulator.utime())) {
           node.Reject(info.channel, "CMD_VEL " + why);
           return;
         }
