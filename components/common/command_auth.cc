@@ -17,9 +17,13 @@ namespace common {
 AuthKey LoadAuthKeyFile(const std::string& path) {
   struct stat st;
   if (stat(path.c_str(), &st) != 0) {
+    const size_t slash = path.rfind('/');
+    const std::string mkdir = slash == std::string::npos || slash == 0
+                                  ? ""
+                                  : "mkdir -p " + path.substr(0, slash) + " && ";
     throw std::runtime_error("key file " + path + ": " + strerror(errno) +
-                             " (create one: head -c 32 /dev/urandom > " + path + " && chmod 600 " +
-                             path + ")");
+                             " (create one: " + mkdir + "head -c 32 /dev/urandom > " + path +
+                             " && chmod 600 " + path + ")");
   }
   if (st.st_mode & (S_IRWXG | S_IRWXO)) {
     throw std::runtime_error("key file " + path + " is accessible by group or others; chmod 600 " +

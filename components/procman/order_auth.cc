@@ -1,5 +1,7 @@
 #include "procman/order_auth.h"
 
+#include "common/command_auth.h"
+
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
@@ -26,38 +28,11 @@ std::string DefaultKeyPath() {
   return std::string(home && *home ? home : ".") + "/.config/sarmap/procman.key";
 }
 
-Key LoadKeyFile(const std::string& path) {
-  struct stat st;
-  if (stat(path.c_str(), &st) != 0) {
-    throw std::runtime_error(
-        "key file " + path + ": " + strerror(errno) +
-        " (create one: mkdir -p ~/.config/sarmap && head -c 32 /dev/urandom > " + path +
-        " && chmod 600 " + path + ")");
-  }
-  if (st.st_mode & (S_IRWXG | S_IRWXO)) {
-    throw std::runtime_error("key file " + path + " is accessible by group or others; chmod 600 " +
-                             path);
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("key file " + path + ": cannot read");
-  Key key((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (key.size() < kMinKeyBytes) {
-    throw std::runtime_error("key file " + path + " holds " + std::to_string(key.size()) +
-                             " bytes; at least " + std::to_string(kMinKeyBytes) +
-                             " random bytes are needed (head -c 32 /dev/urandom)");
-  }
-  return key;
-}
+// One key-file reader and one HMAC for the launcher and the signed commands.
+Key LoadKeyFile(const std::string& path) { return common::LoadAuthKeyFile(path); }
 
 Digest HmacSha256(const Key& key, const uint8_t* data, size_t size) {
-  Digest digest{};
-  unsigned int length = 0;
-  if (!HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()), data, size, digest.data(),
-            &length) ||
-      length != digest.size()) {
-    throw std::runtime_error("HMAC-SHA256 failed");
-  }
-  return digest;
+  return common::HmacSha256(key, data, size);
 }
 
 namespace {
