@@ -11,15 +11,28 @@ namespace sarmap {
 namespace sim {
 namespace {
 
-// The shortest decimal that reads back as exactly `v` (%.17g always does).
+// The shortest decimal for `v` that `reads_back` accepts, in plain notation (90, not 9e+01)
+// unless the magnitude needs an exponent.
+template <typename ReadsBack>
+std::string Shortest(double v, ReadsBack reads_back) {
+  char buf[64];
+  const bool plain = std::abs(v) >= 1e-4 && std::abs(v) < 1e15;
+  for (int p = 0; p <= 17; ++p) {
+    if (plain) {
+      std::snprintf(buf, sizeof buf, "%.*f", p, v);
+    } else {
+      std::snprintf(buf, sizeof buf, "%.*g", std::max(p, 1), v);
+    }
+    if (reads_back(std::strtod(buf, nullptr))) return buf;
+  }
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// The shortest decimal that reads back as exactly `v`.
 std::string Num(double v) {
   if (v == 0) return "0";
-  char buf[40];
-  for (int p = 1; p <= 17; ++p) {
-    std::snprintf(buf, sizeof buf, "%.*g", p, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  return buf;
+  return Shortest(v, [v](double r) { return r == v; });
 }
 
 std::string Vec(std::initializer_list<double> v) {
@@ -52,14 +65,7 @@ std::string Str(const std::string& s) {
 
 // A colour component as the 0..255 value the loader turns back into it: float(v / 255).
 std::string Component(float c) {
-  const double k = std::round(static_cast<double>(c) * 255);
-  if (static_cast<float>(k / 255) == c) return Num(k);
-  char buf[40];
-  for (int p = 1; p <= 17; ++p) {
-    std::snprintf(buf, sizeof buf, "%.*g", p, static_cast<double>(c) * 255);
-    if (static_cast<float>(std::strtod(buf, nullptr) / 255) == c) break;
-  }
-  return buf;
+  return Shortest(static_cast<double>(c) * 255, [c](double r) { return static_cast<float>(r / 255) == c; });
 }
 
 std::string Colour(const Rgb& c) {
@@ -69,12 +75,9 @@ std::string Colour(const Rgb& c) {
 // ", yaw_deg: D" when D reads back to exactly `yaw_rad`, else ", yaw_rad: R"; nothing for 0.
 std::string Yaw(double yaw_rad) {
   if (yaw_rad == 0) return "";
-  char buf[40];
-  for (int p = 1; p <= 12; ++p) {
-    std::snprintf(buf, sizeof buf, "%.*g", p, yaw_rad * 180.0 / M_PI);
-    if (std::strtod(buf, nullptr) * M_PI / 180.0 == yaw_rad)
-      return std::string(", yaw_deg: ") + buf;
-  }
+  const std::string deg =
+      Shortest(yaw_rad * 180.0 / M_PI, [yaw_rad](double r) { return r * M_PI / 180.0 == yaw_rad; });
+  if (std::strtod(deg.c_str(), nullptr) * M_PI / 180.0 == yaw_rad && deg.size() <= 14) return ", yaw_deg: " + deg;
   return ", yaw_rad: " + Num(yaw_rad);
 }
 
