@@ -143,6 +143,7 @@ int main(int argc, char** argv) {
         }
         row.rate_m2_per_min = at_t > 0 ? at / (at_t / 60) : 0;
         row.collisions = r.collisions;
+        for (const std::string& c : r.contacts) std::fprintf(stderr, "  %s %s collision %s\n", target.name.c_str(), mode.c_str(), c.c_str());
         row.longest_stuck_s = m.longest_stuck_s.value_or(0);
         row.home = r.came_home;
         row.home_s = r.home_after_s;

@@ -15,6 +15,7 @@
 #include "explore/explore.h"
 #include "explore/explore_node_options.h"
 #include "explore/status_message.h"
+#include "sim/robot.h"
 #include "sim/simulator.h"
 #include "slam/slam.h"
 #include "slam/slam_node_options.h"
@@ -259,6 +260,14 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   double next_progress = 10;
   for (double t = step_s; t <= options.duration_s + 1e-9; t += step_s) {
     simulator.AdvanceTo(t, &loop);
+    if (simulator.collisions() > static_cast<int>(result.contacts.size())) {
+      const sim::Contact& c = simulator.last_contact();
+      char text[160];
+      std::snprintf(text, sizeof(text), "t=%.1f s at (%.2f, %.2f) m heading %.0f deg: %s", c.t_s,
+                    c.map_from_base.translation().x(), c.map_from_base.translation().y(),
+                    c.map_from_base.yaw_rad() * 180 / M_PI, c.what.c_str());
+      result.contacts.resize(simulator.collisions(), text);
+    }
     if (progress && t >= next_progress) {
       progress(t);
       next_progress += 10;

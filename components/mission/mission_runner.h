@@ -53,6 +53,7 @@ struct MissionResult {
   double explore_cpu_s = 0;          // the explorer alone
   double distance_m = 0;
   int collisions = 0;
+  std::vector<std::string> contacts;  // each collision: when, where (world frame) and against what
   int recoveries = 0;
   bool came_home = false;
   double home_after_s = -1;

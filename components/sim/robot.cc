@@ -7,17 +7,18 @@ namespace sarmap {
 namespace sim {
 namespace {
 
-void AddRectangle(std::vector<Obstacle>* out, const Eigen::Vector2d& c, double yaw, double sx, double sy) {
+void AddRectangle(std::vector<Obstacle>* out, const Eigen::Vector2d& c, double yaw, double sx, double sy,
+                  const std::string& what) {
   const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw)), ay(-ax.y(), ax.x());
   const Eigen::Vector2d p[4] = {c - ax * sx / 2 - ay * sy / 2, c + ax * sx / 2 - ay * sy / 2,
                                 c + ax * sx / 2 + ay * sy / 2, c - ax * sx / 2 + ay * sy / 2};
-  for (int k = 0; k < 4; ++k) out->push_back({p[k], p[(k + 1) % 4], 0.0});
+  for (int k = 0; k < 4; ++k) out->push_back({p[k], p[(k + 1) % 4], 0.0, what});
   // The inside, too (a centre placed inside collides): the capsule along the long axis whose
   // radius is half the short side and whose ends touch the short sides lies within the box;
   // what it leaves out (near the corners) is within the edges' reach.
   const Eigen::Vector2d along = sx >= sy ? ax : ay;
   const double half_core = 0.5 * std::abs(sx - sy);
-  out->push_back({c - along * half_core, c + along * half_core, 0.5 * std::min(sx, sy)});
+  out->push_back({c - along * half_core, c + along * half_core, 0.5 * std::min(sx, sy), what});
 }
 
 }  // namespace
@@ -32,10 +33,10 @@ double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const
 std::vector<Obstacle> CollisionObstacles(const World& world, bool with_people) {
   std::vector<Obstacle> obstacles;
   for (const Wall& w : world.walls) {
-    if (w.base_m < kRobotHeightM) obstacles.push_back({w.from, w.to, w.thickness_m / 2});
+    if (w.base_m < kRobotHeightM) obstacles.push_back({w.from, w.to, w.thickness_m / 2, w.glass ? "glass" : "wall"});
   }
   for (const Box& b : world.boxes) {
-    if (b.base_m < kRobotHeightM) AddRectangle(&obstacles, b.centre, b.yaw_rad, b.size_m.x(), b.size_m.y());
+    if (b.base_m < kRobotHeightM) AddRectangle(&obstacles, b.centre, b.yaw_rad, b.size_m.x(), b.size_m.y(), "box");
   }
   for (const Table& t : world.tables) {
     const Eigen::Vector2d ax(std::cos(t.yaw_rad), std::sin(t.yaw_rad)), ay(-ax.y(), ax.x());
@@ -43,17 +44,17 @@ std::vector<Obstacle> CollisionObstacles(const World& world, bool with_people) {
       for (double sy : {-1.0, 1.0}) {
         const Eigen::Vector2d c = t.centre + ax * sx * (t.size_m.x() / 2 - t.leg_width_m) +
                                   ay * sy * (t.size_m.y() / 2 - t.leg_width_m);
-        obstacles.push_back({c, c, t.leg_width_m / 2});
+        obstacles.push_back({c, c, t.leg_width_m / 2, "table leg"});
       }
     }
     if (t.height_m - t.top_thickness_m < kRobotHeightM) {
-      AddRectangle(&obstacles, t.centre, t.yaw_rad, t.size_m.x(), t.size_m.y());
+      AddRectangle(&obstacles, t.centre, t.yaw_rad, t.size_m.x(), t.size_m.y(), "table");
     }
   }
   if (with_people) {
     for (const Person& p : world.people) {
       const double r = p.posture == Posture::kLying ? 0.5 : 0.25;
-      obstacles.push_back({p.position, p.position, r});
+      obstacles.push_back({p.position, p.position, r, "person " + p.name});
     }
   }
   return obstacles;
@@ -83,8 +84,11 @@ void Robot::SetCommand(double linear_mps, double angular_radps, double t_s) {
   got_cmd_ = true;
 }
 
-bool Robot::Collides(const Eigen::Vector2d& p) const {
-  return CircleCollides(p, options_.robot_radius_m, obstacles_);
+const Obstacle* Robot::Touched(const Eigen::Vector2d& p) const {
+  for (const Obstacle& o : obstacles_) {
+    if (SegmentDistance(p, o.a, o.b) < options_.robot_radius_m + o.half_width) return &o;
+  }
+  return nullptr;
 }
 
 void Robot::FollowPath(double* v, double* w) {
@@ -130,8 +134,12 @@ void Robot::Step(double t_s, double dt) {
   const double true_ds = ds * (1 - slip), true_dtheta = dtheta * (1 - slip);
   const common::Rigid2d next = map_from_base_ * common::Rigid2d(true_ds, 0.0, true_dtheta);
   // Blocked by an obstacle (a robot placed overlapping one may drive out of it).
-  if (std::abs(true_ds) > 0 && Collides(next.translation()) && !Collides(map_from_base_.translation())) {
-    if (!in_contact_) ++collisions_;  // one contact, however many steps it is pushed against
+  const Obstacle* touched = std::abs(true_ds) > 0 ? Touched(next.translation()) : nullptr;
+  if (touched != nullptr && !Collides(map_from_base_.translation())) {
+    if (!in_contact_) {  // one contact, however many steps it is pushed against
+      ++collisions_;
+      last_contact_ = {t_s, map_from_base_, touched->what};
+    }
     in_contact_ = true;
     linear_ = 0;
     angular_ = w;

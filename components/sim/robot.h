@@ -22,6 +22,14 @@ namespace sim {
 struct Obstacle {  // a 2D segment with a half-width (walls, box edges, table legs)
   Eigen::Vector2d a, b;
   double half_width;
+  std::string what;  // for messages: "wall", "box", "table leg", "table", "person <name>"
+};
+
+// Where and against what the base last came into contact.
+struct Contact {
+  double t_s = 0;
+  common::Rigid2d map_from_base;
+  std::string what;
 };
 
 // The base is this tall: parts of the world above it (table tops, high window bands) do not
@@ -58,11 +66,15 @@ class Robot {
   double odom_var_yaw() const { return var_yaw_; }
   // Contacts with obstacles: a blocked motion counts once until the robot moves freely again.
   int collisions() const { return collisions_; }
+  // The contact that counted last (valid when collisions() > 0).
+  const Contact& last_contact() const { return last_contact_; }
   double distance_m() const { return distance_m_; }  // true path length driven
   bool following_path() const { return following_path_; }
 
  private:
-  bool Collides(const Eigen::Vector2d& p) const;
+  // The obstacle a base at p touches, or nullptr.
+  const Obstacle* Touched(const Eigen::Vector2d& p) const;
+  bool Collides(const Eigen::Vector2d& p) const { return Touched(p) != nullptr; }
   void FollowPath(double* v, double* w);
 
   SimOptions options_;
@@ -80,6 +92,7 @@ class Robot {
   double wheel_ds_ = 0, wheel_dtheta_ = 0;  // since the last odometry update
   double var_xy_ = 0, var_yaw_ = 0;
   int collisions_ = 0;
+  Contact last_contact_;
   bool in_contact_ = false;
   double distance_m_ = 0;
   std::mt19937_64 rng_;

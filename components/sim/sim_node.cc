@@ -14,6 +14,7 @@
 #include "common/robot_config.h"
 #include "common/command_auth.h"
 #include "sarmap/velocity_command_t.hpp"
+#include "sim/robot.h"
 #include "sim/simulator.h"
 
 namespace {
@@ -122,9 +123,18 @@ int Run(int argc, char** argv) {
   const double step_s = 1.0 / 100;  // advance in 10 ms slices, serving LCM in between
   const auto wall0 = std::chrono::steady_clock::now();
   double last_status = -1;
+  int collisions = 0;
   while (!node.stopping()) {
     if (options.duration_s > 0 && simulator.time_s() >= options.duration_s - 1e-9) break;
     simulator.AdvanceTo(simulator.time_s() + step_s, &sink);
+    if (simulator.collisions() > collisions) {
+      collisions = simulator.collisions();
+      const sim::Contact& c = simulator.last_contact();
+      SARMAP_LOG(WARN) << "collision " << collisions << " at t=" << c.t_s << " s: the base at ("
+                       << c.map_from_base.translation().x() << ", " << c.map_from_base.translation().y()
+                       << ") m, heading " << c.map_from_base.yaw_rad() * 180 / M_PI
+                       << " deg, touched the " << c.what;
+    }
     // Serve LCM (CMD_VEL) every step, also when running behind the requested speed (a few
     // non-blocking rounds: each handles at most one message).
     for (int k = 0; k < 4 && !node.stopping(); ++k) node.SpinOnce(0.0);

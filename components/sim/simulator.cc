@@ -180,6 +180,8 @@ Simulator::~Simulator() = default;
 int64_t Simulator::utime() const { return start_utime_ + static_cast<int64_t>(std::llround(t_ * 1e6)); }
 
 common::Rigid2d Simulator::map_from_base() const { return impl_->robot->map_from_base(); }
+int Simulator::collisions() const { return impl_->robot->collisions(); }
+const Contact& Simulator::last_contact() const { return impl_->robot->last_contact(); }
 
 common::Rigid3d Simulator::map_from_camera() const {
   return common::Rigid3d::FromRigid2d(impl_->robot->map_from_base()) * impl_->base_from_camera;

@@ -69,6 +69,9 @@ class Simulator {
   const SimTiming& timing() const { return timing_; }
   const World& world() const { return setup_.world; }
   common::Rigid2d map_from_base() const;
+  // The base's contacts with obstacles so far, and the last one.
+  int collisions() const;
+  const struct Contact& last_contact() const;
   // The camera's optical frame in the map at the current pose.
   common::Rigid3d map_from_camera() const;
   // Renders the current view without publishing (tests): raw RGB and depth in mm, plus each
