@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "common/decode.h"
+#include "common/logging.h"
 #include "common/time.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pm_output_t.hpp"
@@ -81,7 +82,8 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     ++malformed_;
     long suppressed = 0;
     if (refuse_log_limit_.try_emplace("malformed", 5.0).first->second.Allow(Now(), &suppressed)) {
-      SARMAP_LOG(WARN) << "dropped a message on " << channel << ": " << problem << " (so far "
+      SARMAP_LOG(WARN) << "dropped a message on " << common::EscapeForLog(channel) << ": "
+                       << common::EscapeForLog(problem, 512) << " (so far "
                        << malformed_ << ")";
     }
     return;
@@ -106,7 +108,8 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     long suppressed = 0;
     if (refuse_log_limit_.try_emplace(ToString(verdict), 1.0)
             .first->second.Allow(Now(), &suppressed)) {
-      SARMAP_LOG(WARN) << "REFUSED orders claiming sheriff '" << orders.sheriff_id << "', counter "
+      SARMAP_LOG(WARN) << "REFUSED orders claiming sheriff '"
+                       << common::EscapeForLog(orders.sheriff_id) << "', counter "
                        << orders.counter << ": " << ToString(verdict)
                        << "; nothing changed (refused so far: " << refused_
                        << (suppressed ? ", " + std::to_string(suppressed) + " not logged" : "")

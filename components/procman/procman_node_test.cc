@@ -80,6 +80,41 @@ TEST(ProcmanNodeTest, SheriffDropsOrdersWithANulByteAndGoesOn) {
   EXPECT_EQ(sheriff.malformed_messages(), 2);
 }
 
+// Names from the bus reach the deputy's log and the sheriff's terminal escaped: a newline or an
+// ANSI escape in them cannot forge a log line or clear the operator's screen.
+TEST(ProcmanNodeTest, BusStringsAreEscapedInLogsAndOutput) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  ProcmanOptions options;
+  Deputy deputy(&lcm, options, "d1", kKey);
+  sarmap::pm_orders_t orders{};
+  orders.sheriff_id = "x'\nE 10:00:00.000 sarmap-procman-deputy] \x1b[2Jall commands stopped";
+  orders.deputy_id = "d1";
+  orders.counter = 1;
+  testing::internal::CaptureStderr();
+  lcm.publish("PM_ORDERS", &orders);
+  ASSERT_GT(lcm.handleTimeout(1000), 0);
+  const std::string logged = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(deputy.refused_orders(), 1);
+  ASSERT_NE(logged.find("REFUSED"), std::string::npos) << logged;
+  EXPECT_EQ(logged.find('\n'), logged.size() - 1) << logged;  // one line
+  EXPECT_EQ(logged.find('\x1b'), std::string::npos) << logged;
+
+  // An observer (no key) shows output unverified, but never raw.
+  const Config config = ParseConfig(R"(cmd "x" { exec = "sleep 1"; deputy = "d1"; })", "test");
+  Sheriff observer(&lcm, options, config, nullptr, "observer/1");
+  sarmap::pm_output_t out{};
+  out.deputy_id = "d1";
+  out.num_commands = 1;
+  out.command_ids = {"x"};
+  out.text = {"ok \x1b[2J\x1b]0;owned\x07" "done\n"};
+  lcm.publish("PM_OUTPUT", &out);
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  const std::string tail = observer.OutputTail(10);
+  EXPECT_EQ(tail, "[x] ok \\x1b[2J\\x1b]0;owned\\x07done\n");
+}
+
 // The signature check itself never throws, whatever the orders hold.
 TEST(ProcmanNodeTest, SignatureOfUnencodableOrdersIsInvalidNotAnException) {
   sarmap::pm_orders_t orders;

@@ -145,7 +145,8 @@ bool Sheriff::Decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
   ++malformed_;
   long suppressed = 0;
   if (drop_log_limit_.try_emplace(channel, 5.0).first->second.Allow(Now(), &suppressed)) {
-    SARMAP_LOG(WARN) << "dropped a message on " << channel << ": " << why << " (so far "
+    SARMAP_LOG(WARN) << "dropped a message on " << common::EscapeForLog(channel) << ": "
+                     << common::EscapeForLog(why, 512) << " (so far "
                      << malformed_ << ")";
   }
   return false;
@@ -168,8 +169,9 @@ void Sheriff::OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string& channel)
       ++ignored_info_;
       long suppressed = 0;
       if (drop_log_limit_.try_emplace("info", 60.0).first->second.Allow(now, &suppressed)) {
-        SARMAP_LOG(WARN) << "IGNORED a report on " << channel << " claiming deputy '"
-                         << info.deputy_id << "': " << ToString(verdict)
+        SARMAP_LOG(WARN) << "IGNORED a report on " << common::EscapeForLog(channel)
+                         << " claiming deputy '" << common::EscapeForLog(info.deputy_id)
+                         << "': " << ToString(verdict)
                          << "; only signed, live reports count (ignored so far: " << ignored_info_
                          << ")";
       }
@@ -217,7 +219,7 @@ void Sheriff::Adopt(DeputyView* d) {
   std::string strangers;
   for (const auto& s : d->info.commands) {
     const CommandView* c = FindCommand(s.command_id);
-    if (!c || c->cfg.deputy != d->id) strangers += " " + s.command_id;
+    if (!c || c->cfg.deputy != d->id) strangers += " " + common::EscapeForLog(s.command_id);
   }
   d->initialised = true;
   if (!strangers.empty() && !observer()) {
@@ -520,7 +522,7 @@ std::string Sheriff::Table(double now_s) const {
       snprintf(line, sizeof(line), "%-14s %-16s %-9s\n", d->id.c_str(), "-", "not seen");
     } else {
       snprintf(line, sizeof(line), "%-14s %-16s %-9s %7.1f s %7.0f%% %7s MB %8d\n", d->id.c_str(),
-               d->info.host.c_str(), DeputyLost(d->id, now_s) ? "LOST" : "ok",
+               common::EscapeForLog(d->info.host, 64).c_str(), DeputyLost(d->id, now_s) ? "LOST" : "ok",
                now_s - d->last_heard_s, 100.0 * d->info.cpu_load,
                Mb(d->info.phys_mem_free_bytes).c_str(), d->info.refused_orders);
     }
@@ -558,7 +560,7 @@ std::string Sheriff::OutputTail(int lines, const std::string& command_id) const 
   for (auto it = tail_.rbegin(); it != tail_.rend() && static_cast<int>(picked.size()) < lines;
        ++it) {
     if (command_id.empty() || it->first == command_id)
-      picked.push_back("[" + it->first + "] " + it->second);
+      picked.push_back("[" + it->first + "] " + common::EscapeForLog(it->second, 4096));
   }
   std::string out;
   for (auto it = picked.rbegin(); it != picked.rend(); ++it) out += *it + "\n";
