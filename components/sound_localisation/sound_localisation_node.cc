@@ -238,8 +238,9 @@ int main(int argc, char** argv) {
       // Rate-limited: at datagram loss every lost block is a gap (the aligner counts them all).
       if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d] &&
           warn_limit.Allow(common::SteadySeconds())) {
-        SARMAP_LOG(WARN) << "device '" << common::EscapeForLog(msg.device_id) << "': gap, expected sample " << device_expected[d]
-                         << ", got " << msg.first_sample_index << " (filled with zeros)";
+        SARMAP_LOG(WARN) << "device '" << common::EscapeForLog(msg.device_id)
+                         << "': gap, expected sample " << device_expected[d] << ", got "
+                         << msg.first_sample_index << " (filled with zeros)";
       }
       device_expected[d] = msg.first_sample_index + msg.num_samples;
       for (int m = 0; m < geometry.num_mics(); ++m) {
