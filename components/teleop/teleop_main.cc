@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     std::string last_driven_by;
     node.Subscribe<explore_status_t>(
         options.status_channel, [&](const explore_status_t& m, const common::ReceiveInfo&) {
-          last_driven_by = m.driven_by;
+          last_driven_by = common::EscapeForLog(m.driven_by, 64);
           if (sending && teleop::StatusConfirms(request.action, m.driven_by)) confirmed = true;
         });
     teleop::TeleopSender sender(&node, options, key);
@@ -99,6 +99,7 @@ int main(int argc, char** argv) {
     const double period_s = 1.0 / options.rate_hz;
     const double start_s = common::SteadySeconds();
     bool interrupted = false;
+    size_t sent = 0;
     sending = true;
     for (size_t i = 0; i < steps.size(); ++i) {
       if (!interrupted) {
@@ -116,9 +117,10 @@ int main(int argc, char** argv) {
         usleep(static_cast<useconds_t>(period_s * 1e6));
       }
       sender.Send(steps[i]);
+      ++sent;
     }
-    printf("sarmap-teleop: %s sent (%zu messages on %s, %s)\n", ActionName(request.action),
-           steps.size(), options.channel.c_str(), sender.signs() ? "signed" : "unsigned");
+    printf("sarmap-teleop: %s sent (%zu messages on %s, %s)\n", ActionName(request.action), sent,
+           options.channel.c_str(), sender.signs() ? "signed" : "unsigned");
     if (interrupted) return 1;
     if (options.confirm_timeout_s <= 0) return 0;
 
