@@ -1,7 +1,8 @@
 // sarmap-log output LOG: what every process printed while it ran under the launcher, from the
 // deputies' PM_OUTPUT messages in the log, one file per command (or one command to stdout).
-// PM_OUTPUT is not signed: with --key, only the output of commands that a signed PM_INFO of
-// the log names is kept (a forged deputy's or command's output is skipped).
+// Deputies sign PM_OUTPUT with the launcher's key: with --key only output whose signature holds
+// is kept (a forged deputy's or command's output, or forged lines of a real command, are
+// skipped).
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -9,14 +10,12 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <set>
 #include <utility>
 
 #include "common/args.h"
 #include "common/decode.h"
 #include "log-tools/lcm_log_reader.h"
 #include "procman/order_auth.h"
-#include "sarmap/pm_info_t.hpp"
 #include "sarmap/pm_output_t.hpp"
 
 int main(int argc, char** argv) {
@@ -31,36 +30,20 @@ int main(int argc, char** argv) {
     parser.AddFlag("-o", &dir, "output directory (one file per deputy and command)");
     parser.AddFlag("--command", &command, "print only this command's output to stdout");
     parser.AddFlag("--channel", &channel, "channel of the deputies' output");
-    std::string key_path, info_channel = "PM_INFO";
+    std::string key_path;
     parser.AddFlag("--key", &key_path,
-                   "the launcher's key file: only output of commands named in a deputy report "
-                   "signed with it is kept");
-    parser.AddFlag("--info-channel", &info_channel, "channel of the deputies' reports (--key)");
+                   "the launcher's key file: only output signed with it is kept");
     if (!parser.Parse(argc, argv)) return 0;
-    if (dir.empty() && command.empty()) throw sarmap::common::ArgError("give -o DIR or --command NAME");
-
-    // --key: the (deputy, command) pairs of the signed reports, from a first pass over the log.
-    std::optional<std::set<std::pair<std::string, std::string>>> signed_commands;
-    if (!key_path.empty()) {
-      const sarmap::procman::Key key = sarmap::procman::LoadKeyFile(key_path);
-      signed_commands.emplace();
-      sarmap::logtools::LcmLogReader first(log);
-      sarmap::logtools::LogEvent event;
-      while (first.Next(&event)) {
-        sarmap::pm_info_t info;
-        if (event.channel != info_channel ||
-            !sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &info) ||
-            !sarmap::procman::SignatureValid(key, info))
-          continue;
-        for (const auto& c : info.commands) signed_commands->emplace(info.deputy_id, c.command_id);
-      }
-    }
+    if (dir.empty() && command.empty())
+      throw sarmap::common::ArgError("give -o DIR or --command NAME");
+    std::optional<sarmap::procman::Key> key;
+    if (!key_path.empty()) key = sarmap::procman::LoadKeyFile(key_path);
 
     if (!dir.empty()) std::filesystem::create_directories(dir);
     sarmap::logtools::LcmLogReader reader(log);
     sarmap::logtools::LogEvent event;
     std::map<std::string, std::unique_ptr<std::ofstream>> files;
-    int64_t messages = 0, bad = 0, unsigned_outputs = 0;
+    int64_t messages = 0, bad = 0, unsigned_messages = 0;
     while (reader.Next(&event)) {
       if (event.channel != channel) continue;
       sarmap::pm_output_t out;
@@ -68,18 +51,18 @@ int main(int argc, char** argv) {
         ++bad;
         continue;
       }
+      if (key && !sarmap::procman::SignatureValid(*key, out)) {
+        ++unsigned_messages;
+        continue;
+      }
       ++messages;
       for (size_t i = 0; i < out.command_ids.size(); ++i) {
-        if (signed_commands && !signed_commands->count({out.deputy_id, out.command_ids[i]})) {
-          ++unsigned_outputs;
-          continue;
-        }
         if (!command.empty()) {
           if (out.command_ids[i] == command) fputs(out.text[i].c_str(), stdout);
           continue;
         }
-        // Command ids are names from the launch file; keep file names plain and short (the
-        // message is unsigned: names may hold anything).
+        // Command ids are names from the launch file; keep file names plain and short (without
+        // --key the message may come from anyone: names may hold anything).
         std::string name = out.deputy_id + "-" + out.command_ids[i];
         for (char& c : name) {
           const unsigned char u = static_cast<unsigned char>(c);
@@ -95,13 +78,16 @@ int main(int argc, char** argv) {
         *file << out.text[i];
       }
     }
-    if (unsigned_outputs > 0) {
-      fprintf(stderr, "%lld outputs of commands no signed report names skipped\n",
-              static_cast<long long>(unsigned_outputs));
+    if (unsigned_messages > 0) {
+      fprintf(stderr, "%lld unsigned or forged output messages skipped\n",
+              static_cast<long long>(unsigned_messages));
     }
-    if (bad > 0) fprintf(stderr, "warning: %lld undecodable %s messages skipped\n", static_cast<long long>(bad), channel.c_str());
+    if (bad > 0)
+      fprintf(stderr, "warning: %lld undecodable %s messages skipped\n",
+              static_cast<long long>(bad), channel.c_str());
     if (!dir.empty()) {
-      fprintf(stderr, "%lld output messages; %zu files in %s\n", static_cast<long long>(messages), files.size(), dir.c_str());
+      fprintf(stderr, "%lld output messages; %zu files in %s\n", static_cast<long long>(messages),
+              files.size(), dir.c_str());
     }
     return 0;
   });

@@ -1,5 +1,6 @@
-// sarmap-log output on a log of an attacked bus: PM_OUTPUT is not signed, so a forged deputy's
-// output is written only without --key, under a plain, short file name inside the directory.
+// sarmap-log output on a log of an attacked bus: deputies sign PM_OUTPUT, so with --key only
+// their own output is written (forged lines of a real command too are skipped); without --key
+// a forged deputy's output is written under a plain, short file name inside the directory.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -80,8 +81,15 @@ TEST(LogOutput, ForgedOutputIsSkippedWithTheKeyAndNamedPlainlyWithout) {
     info.commands = {c};
     info.num_commands = 1;
     sarmap::procman::SignInfo(key, &info);
-    Write(&log, "PM_OUTPUT", Output("robot", "sarmap-slam", "mapping\n"), 1000000);
+    sarmap::pm_output_t genuine = Output("robot", "sarmap-slam", "mapping\n");
+    sarmap::procman::SignOutput(key, &genuine);
+    Write(&log, "PM_OUTPUT", genuine, 1000000);
     Write(&log, "PM_INFO", info, 1100000);
+    // Forged lines of a real command, unsigned and signed with another key.
+    Write(&log, "PM_OUTPUT", Output("robot", "sarmap-slam", "forged: diverged\n"), 1150000);
+    sarmap::pm_output_t other_key = Output("robot", "sarmap-slam", "forged: stopping\n");
+    sarmap::procman::SignOutput(sarmap::procman::Key(32, 'x'), &other_key);
+    Write(&log, "PM_OUTPUT", other_key, 1160000);
     Write(&log, "PM_OUTPUT", Output("../../evil", "<script>alert(1)</script>", "forged\n"),
           1200000);
     Write(&log, "PM_OUTPUT", Output(std::string(60000, 'C'), "x", "forged\n"), 1300000);
@@ -92,7 +100,7 @@ TEST(LogOutput, ForgedOutputIsSkippedWithTheKeyAndNamedPlainlyWithout) {
   ASSERT_EQ(with_key.Wait(30), 0) << with_key.Output();
   EXPECT_EQ(Files(signed_dir), std::set<std::string>{"robot-sarmap-slam.txt"});
   EXPECT_EQ(Read(signed_dir + "/robot-sarmap-slam.txt"), "mapping\n");
-  EXPECT_NE(with_key.Output().find("2 outputs of commands no signed report names skipped"),
+  EXPECT_NE(with_key.Output().find("4 unsigned or forged output messages skipped"),
             std::string::npos)
       << with_key.Output();
 

@@ -2,6 +2,7 @@
 
 #include <sys/time.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <mutex>
@@ -20,10 +21,14 @@ std::mutex g_mutex;
 
 const char* LevelName(LogLevel level) {
   switch (level) {
-    case LogLevel::DEBUG: return "D";
-    case LogLevel::INFO: return "I";
-    case LogLevel::WARN: return "W";
-    case LogLevel::ERROR: return "E";
+    case LogLevel::DEBUG:
+      return "D";
+    case LogLevel::INFO:
+      return "I";
+    case LogLevel::WARN:
+      return "W";
+    case LogLevel::ERROR:
+      return "E";
   }
   return "?";
 }
@@ -55,8 +60,8 @@ LogMessage::LogMessage(LogLevel level, const char* file, int line) : level_(leve
   }
   char prefix[64];
   snprintf(prefix, sizeof(prefix), ".%03ld ", static_cast<long>(tv.tv_usec / 1000));
-  stream_ << LevelName(level_) << " " << stamp << prefix << LogName() << " " << base << ":"
-          << line << "] ";
+  stream_ << LevelName(level_) << " " << stamp << prefix << LogName() << " " << base << ":" << line
+          << "] ";
 }
 
 LogMessage::~LogMessage() {
@@ -75,6 +80,27 @@ bool RateLimiter::Allow(double now_s, long* suppressed) {
   }
   ++suppressed_;
   return false;
+}
+
+std::string EscapeForLog(std::string_view text, size_t max_bytes) {
+  static const char kHex[] = "0123456789abcdef";
+  const size_t n = std::min(text.size(), max_bytes);
+  std::string out;
+  out.reserve(n + 16);
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\\') {
+      out += "\\\\";
+    } else if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  if (n < text.size()) out += "...(" + std::to_string(text.size()) + " bytes)";
+  return out;
 }
 
 }  // namespace common

@@ -5,8 +5,10 @@
 //   SARMAP_LOG(INFO) << "listening on " << url;
 //   RateLimiter limit(1.0);  if (limit.Allow(now_s)) SARMAP_LOG(WARN) << ...;
 
+#include <cstddef>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 namespace sarmap {
 namespace common {
@@ -30,6 +32,13 @@ class LogMessage {
   LogLevel level_;
   std::ostringstream stream_;
 };
+
+// A string from the bus (a name, an id, a keyword, a decode error quoting one) made safe for a
+// log line or a terminal: printable ASCII is kept, a backslash is doubled, and every other byte
+// (newlines, control characters, ANSI escapes, anything not ASCII) becomes \xNN, so no message
+// can forge a log line or drive the terminal. Input beyond `max_bytes` is cut and counted
+// ("...(N bytes)").
+std::string EscapeForLog(std::string_view text, size_t max_bytes = 256);
 
 // Allows at most one event per `period_s` (of the caller's clock); counts the rest so the
 // next allowed line can say how many were suppressed.
@@ -58,8 +67,9 @@ struct LogVoidify {
 }  // namespace common
 }  // namespace sarmap
 
-#define SARMAP_LOG(level)                                                       \
-  (::sarmap::common::LogLevel::level < ::sarmap::common::GetLogLevel())        \
-      ? (void)0                                                                 \
-      : ::sarmap::common::LogVoidify() &                                        \
-            ::sarmap::common::LogMessage(::sarmap::common::LogLevel::level, __FILE__, __LINE__).stream()
+#define SARMAP_LOG(level)                                                                       \
+  (::sarmap::common::LogLevel::level < ::sarmap::common::GetLogLevel())                         \
+      ? (void)0                                                                                 \
+      : ::sarmap::common::LogVoidify() &                                                        \
+            ::sarmap::common::LogMessage(::sarmap::common::LogLevel::level, __FILE__, __LINE__) \
+                .stream()

@@ -168,8 +168,9 @@ void Node::Dropped(const std::string& channel, ChannelStats* stats, const std::s
   long suppressed = 0;
   auto it = drop_log_limit_.try_emplace(channel, 1.0).first;
   if (it->second.Allow(SteadySeconds(), &suppressed)) {
-    SARMAP_LOG(WARN) << "dropped a message on " << channel << ": " << why << " (dropped so far: "
-                     << stats->dropped_malformed
+    // Channel names, decode errors and handler errors can quote what a sender put on the bus.
+    SARMAP_LOG(WARN) << "dropped a message on " << EscapeForLog(channel) << ": "
+                     << EscapeForLog(why, 512) << " (dropped so far: " << stats->dropped_malformed
                      << (suppressed ? ", " + std::to_string(suppressed) + " not logged" : "")
                      << ")";
   }
@@ -180,8 +181,9 @@ void Node::HandlerError(const std::string& channel, ChannelStats* stats, const s
   long suppressed = 0;
   auto it = drop_log_limit_.try_emplace("handler:" + channel, 1.0).first;
   if (it->second.Allow(SteadySeconds(), &suppressed)) {
-    SARMAP_LOG(ERROR) << "handler for " << channel << " failed: " << what << " (errors so far: "
-                      << stats->handler_errors << ")";
+    SARMAP_LOG(ERROR) << "handler for " << EscapeForLog(channel)
+                      << " failed: " << EscapeForLog(what, 512)
+                      << " (errors so far: " << stats->handler_errors << ")";
   }
 }
 

@@ -121,7 +121,8 @@ int main(int argc, char** argv) {
         }
       } catch (const std::exception& e) {
         const std::string aside = common::SetAsideStateFile(options.state_file);
-        SARMAP_LOG(ERROR) << "not resumed, starting with an empty people map: " << e.what()
+        SARMAP_LOG(ERROR) << "not resumed, starting with an empty people map: "
+                          << common::EscapeForLog(e.what(), 512)
                           << (aside.empty() ? "" : " (moved to " + aside + ")");
       }
     }
@@ -312,7 +313,7 @@ int main(int argc, char** argv) {
         map.Save(options.state_file);
         dirty = false;
       } catch (const std::exception& e) {
-        SARMAP_LOG(ERROR) << e.what();
+        SARMAP_LOG(ERROR) << common::EscapeForLog(e.what(), 512);  // may quote a keyword
       }
     };
     node.AddTimer(options.save_period_s, save);

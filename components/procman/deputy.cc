@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "common/decode.h"
+#include "common/logging.h"
 #include "common/time.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pm_output_t.hpp"
@@ -81,8 +82,8 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     ++malformed_;
     long suppressed = 0;
     if (refuse_log_limit_.try_emplace("malformed", 5.0).first->second.Allow(Now(), &suppressed)) {
-      SARMAP_LOG(WARN) << "dropped a message on " << channel << ": " << problem << " (so far "
-                       << malformed_ << ")";
+      SARMAP_LOG(WARN) << "dropped a message on " << common::EscapeForLog(channel) << ": "
+                       << common::EscapeForLog(problem, 512) << " (so far " << malformed_ << ")";
     }
     return;
   }
@@ -106,8 +107,9 @@ void Deputy::OnOrders(const lcm::ReceiveBuffer* rbuf, const std::string& channel
     long suppressed = 0;
     if (refuse_log_limit_.try_emplace(ToString(verdict), 1.0)
             .first->second.Allow(Now(), &suppressed)) {
-      SARMAP_LOG(WARN) << "REFUSED orders claiming sheriff '" << orders.sheriff_id << "', counter "
-                       << orders.counter << ": " << ToString(verdict)
+      SARMAP_LOG(WARN) << "REFUSED orders claiming sheriff '"
+                       << common::EscapeForLog(orders.sheriff_id) << "', counter " << orders.counter
+                       << ": " << ToString(verdict)
                        << "; nothing changed (refused so far: " << refused_
                        << (suppressed ? ", " + std::to_string(suppressed) + " not logged" : "")
                        << ")";
@@ -271,6 +273,18 @@ void Deputy::PublishOutput() {
     out.text.push_back(std::move(text));
   }
   out.num_commands = static_cast<int32_t>(out.command_ids.size());
+  // Signed and tied to this session like PM_INFO, so that no one else can put lines into the
+  // sheriff's view of a command; its own clock, strictly increasing, against playback.
+  out.session = replay_.session();
+  last_output_clock_us_ = std::max(last_output_clock_us_ + 1, SessionClockUs());
+  out.session_clock_us = last_output_clock_us_;
+  std::fill(std::begin(out.hmac_sha256), std::end(out.hmac_sha256), 0);
+  try {
+    SignOutput(key_, &out);
+  } catch (const std::runtime_error& e) {
+    SARMAP_LOG(ERROR) << e.what();  // cannot happen: NUL bytes are replaced above
+    return;
+  }
   lcm_->publish(options_.output_channel, &out);
 }
 

@@ -79,6 +79,7 @@ class Deputy : public EventLoop::Participant {
   bool probe_pending_ = false;
   int64_t probe_echo_ = 0;
   int64_t last_info_clock_us_ = 0;
+  int64_t last_output_clock_us_ = 0;
   int64_t start_us_ = 0;  // steady clock, microseconds
   std::map<std::string, common::RateLimiter> refuse_log_limit_;
 };

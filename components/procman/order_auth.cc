@@ -1,10 +1,5 @@
 #include "procman/order_auth.h"
 
-#include "common/command_auth.h"
-
-#include <openssl/crypto.h>
-#include <openssl/evp.h>
-#include <openssl/hmac.h>
 #include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -17,6 +12,8 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "common/command_auth.h"
 
 namespace sarmap {
 namespace procman {
@@ -37,44 +34,31 @@ Digest HmacSha256(const Key& key, const uint8_t* data, size_t size) {
 
 namespace {
 
-// False when `msg` has no LCM encoding: LCM's encoder writes a string up to its first NUL
-// while getEncodedSize() counts every byte, so a string holding a NUL (which only a hostile
-// sender puts there) cannot be encoded.
-template <class T>
-bool MessageDigest(const Key& key, const T& msg, Digest* digest) {
-  T copy = msg;
-  std::fill(std::begin(copy.hmac_sha256), std::end(copy.hmac_sha256), 0);
-  const int size = copy.getEncodedSize();
-  std::vector<uint8_t> buffer(static_cast<size_t>(size));
-  if (copy.encode(buffer.data(), 0, size) != size) return false;
-  *digest = HmacSha256(key, buffer.data(), buffer.size());
-  return true;
-}
-
+// Signing and checking are common/command_auth's, as for CMD_VEL and TELEOP.
 template <class T>
 void Sign(const Key& key, T* msg, const char* type) {
-  Digest d;
-  if (!MessageDigest(key, *msg, &d)) {
+  if (!common::SignMessage(key, msg)) {
     throw std::runtime_error(std::string("cannot encode ") + type + " (a string holds a NUL byte)");
   }
-  std::copy(d.begin(), d.end(), std::begin(msg->hmac_sha256));
 }
 
 template <class T>
 bool Valid(const Key& key, const T& msg) {
-  Digest d;
-  if (!MessageDigest(key, msg, &d)) return false;
-  return CRYPTO_memcmp(d.data(), msg.hmac_sha256, d.size()) == 0;
+  return common::MessageSigned(key, msg);
 }
 
 }  // namespace
 
 void SignOrders(const Key& key, sarmap::pm_orders_t* orders) { Sign(key, orders, "pm_orders_t"); }
 void SignInfo(const Key& key, sarmap::pm_info_t* info) { Sign(key, info, "pm_info_t"); }
+void SignOutput(const Key& key, sarmap::pm_output_t* output) { Sign(key, output, "pm_output_t"); }
 bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders) {
   return Valid(key, orders);
 }
 bool SignatureValid(const Key& key, const sarmap::pm_info_t& info) { return Valid(key, info); }
+bool SignatureValid(const Key& key, const sarmap::pm_output_t& output) {
+  return Valid(key, output);
+}
 
 bool IsUnsigned(const uint8_t (&hmac_sha256)[32]) {
   uint8_t any = 0;
@@ -190,10 +174,23 @@ InfoVerdict InfoGuard::Verify(const Key& key, const sarmap::pm_info_t& info) {
       seen.session = info.session;
       seen.clock_us = info.session_clock_us;
       seen.challenge_index = index;
+      seen.output_clock_us = -1;
       return InfoVerdict::kNewSession;
     }
   }
   return InfoVerdict::kUnconfirmed;
+}
+
+InfoVerdict InfoGuard::VerifyOutput(const Key& key, const sarmap::pm_output_t& output) {
+  if (IsUnsigned(output.hmac_sha256)) return InfoVerdict::kUnsigned;
+  if (!SignatureValid(key, output)) return InfoVerdict::kForged;
+  auto it = seen_.find(output.deputy_id);
+  if (it == seen_.end() || it->second.session == 0 || output.session != it->second.session) {
+    return InfoVerdict::kUnconfirmed;
+  }
+  if (output.session_clock_us <= it->second.output_clock_us) return InfoVerdict::kStale;
+  it->second.output_clock_us = output.session_clock_us;
+  return InfoVerdict::kAccepted;
 }
 
 int64_t InfoGuard::Session(const std::string& deputy_id) const {

@@ -29,6 +29,7 @@
 
 #include "sarmap/pm_info_t.hpp"
 #include "sarmap/pm_orders_t.hpp"
+#include "sarmap/pm_output_t.hpp"
 
 namespace sarmap {
 namespace procman {
@@ -56,10 +57,12 @@ Digest HmacSha256(const Key& key, const uint8_t* data, size_t size);
 // string holds a NUL byte).
 void SignOrders(const Key& key, sarmap::pm_orders_t* orders);
 void SignInfo(const Key& key, sarmap::pm_info_t* info);
+void SignOutput(const Key& key, sarmap::pm_output_t* output);
 // True when hmac_sha256 matches (constant-time comparison); false, never a throw, for
 // messages that cannot be encoded (whatever arrives from the bus comes here).
 bool SignatureValid(const Key& key, const sarmap::pm_orders_t& orders);
 bool SignatureValid(const Key& key, const sarmap::pm_info_t& info);
+bool SignatureValid(const Key& key, const sarmap::pm_output_t& output);
 // All 32 bytes zero.
 bool IsUnsigned(const uint8_t (&hmac_sha256)[32]);
 
@@ -118,6 +121,10 @@ class InfoGuard {
   // A nonce this sheriff just sent in a signed probe.
   void AddChallenge(int64_t nonce);
   InfoVerdict Verify(const Key& key, const sarmap::pm_info_t& info);
+  // PM_OUTPUT of a deputy: kAccepted when signed, of the deputy's confirmed session (its
+  // reports confirm it; an earlier session's output is kUnconfirmed) and newer
+  // (session_clock_us) than the last output accepted from that session (else kStale).
+  InfoVerdict VerifyOutput(const Key& key, const sarmap::pm_output_t& output);
   // The confirmed session of a deputy; 0 if none yet.
   int64_t Session(const std::string& deputy_id) const;
 
@@ -126,6 +133,7 @@ class InfoGuard {
     int64_t session = 0;
     int64_t clock_us = -1;
     int64_t challenge_index = -1;  // of the nonce that confirmed the session
+    int64_t output_clock_us = -1;  // of the last output accepted in the session
   };
   std::map<std::string, Seen> seen_;
   std::vector<std::pair<int64_t, int64_t>> challenges_;  // (index, nonce), the last 8

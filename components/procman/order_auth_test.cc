@@ -225,6 +225,65 @@ TEST(OrderAuth, SheriffAcceptsOnlySignedLiveReports) {
   EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession, 500, 777)), InfoVerdict::kUnconfirmed);
 }
 
+sarmap::pm_output_t Output(int64_t session, int64_t clock_us, const std::string& text) {
+  sarmap::pm_output_t out{};
+  out.deputy_id = "compute";
+  out.num_commands = 1;
+  out.command_ids = {"sarmap-slam"};
+  out.text = {text};
+  out.session = session;
+  out.session_clock_us = clock_us;
+  return out;
+}
+
+sarmap::pm_output_t SignedOutput(const Key& key, int64_t session, int64_t clock_us,
+                                 const std::string& text) {
+  sarmap::pm_output_t out = Output(session, clock_us, text);
+  SignOutput(key, &out);
+  return out;
+}
+
+TEST(OrderAuth, SheriffShowsOnlyTheDeputysOwnOutput) {
+  const Key key = TestKey(1);
+  InfoGuard guard;
+  // Nothing is shown before the deputy's session is confirmed by one of its reports.
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(key, kSession, 100, "a\n")),
+            InfoVerdict::kUnconfirmed);
+  guard.AddChallenge(777);
+  ASSERT_EQ(guard.Verify(key, SignedInfo(key, kSession, 300, 777)), InfoVerdict::kNewSession);
+
+  EXPECT_EQ(guard.VerifyOutput(key, Output(kSession, 310, "fake line\n")), InfoVerdict::kUnsigned);
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(TestKey(9), kSession, 310, "fake line\n")),
+            InfoVerdict::kForged);
+  sarmap::pm_output_t tampered = SignedOutput(key, kSession, 310, "mapping\n");
+  tampered.text[0] = "diverged, stopping\n";
+  EXPECT_EQ(guard.VerifyOutput(key, tampered), InfoVerdict::kForged);
+  sarmap::pm_output_t other_command = SignedOutput(key, kSession, 310, "mapping\n");
+  other_command.command_ids[0] = "sarmap-explore";
+  EXPECT_EQ(guard.VerifyOutput(key, other_command), InfoVerdict::kForged);
+
+  const sarmap::pm_output_t genuine = SignedOutput(key, kSession, 310, "mapping\n");
+  EXPECT_EQ(guard.VerifyOutput(key, genuine), InfoVerdict::kAccepted);
+  // The output clock is its own: a report in between does not make the next output stale.
+  EXPECT_EQ(guard.Verify(key, SignedInfo(key, kSession, 400, 777)), InfoVerdict::kAccepted);
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(key, kSession, 320, "more\n")),
+            InfoVerdict::kAccepted);
+  // Played back, or an older message of the session: shown once only.
+  EXPECT_EQ(guard.VerifyOutput(key, genuine), InfoVerdict::kStale);
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(key, kSession, 315, "x\n")), InfoVerdict::kStale);
+  // Another session's output (a recording) is not the deputy's current output...
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(key, kSession + 1, 5000, "old\n")),
+            InfoVerdict::kUnconfirmed);
+  // ...and once a restarted deputy is confirmed, its output starts afresh and the old
+  // session's is refused.
+  guard.AddChallenge(888);
+  ASSERT_EQ(guard.Verify(key, SignedInfo(key, kSession + 2, 50, 888)), InfoVerdict::kNewSession);
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(key, kSession + 2, 60, "up\n")),
+            InfoVerdict::kAccepted);
+  EXPECT_EQ(guard.VerifyOutput(key, SignedOutput(key, kSession, 330, "old\n")),
+            InfoVerdict::kUnconfirmed);
+}
+
 TEST(OrderAuth, RandomNoncesArePositiveAndDiffer) {
   const int64_t a = RandomNonce(), b = RandomNonce();
   EXPECT_GT(a, 0);

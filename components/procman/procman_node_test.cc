@@ -80,6 +80,43 @@ TEST(ProcmanNodeTest, SheriffDropsOrdersWithANulByteAndGoesOn) {
   EXPECT_EQ(sheriff.malformed_messages(), 2);
 }
 
+// Names from the bus reach the deputy's log and the sheriff's terminal escaped: a newline or an
+// ANSI escape in them cannot forge a log line or clear the operator's screen.
+TEST(ProcmanNodeTest, BusStringsAreEscapedInLogsAndOutput) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  ProcmanOptions options;
+  Deputy deputy(&lcm, options, "d1", kKey);
+  sarmap::pm_orders_t orders{};
+  orders.sheriff_id = "x'\nE 10:00:00.000 sarmap-procman-deputy] \x1b[2Jall commands stopped";
+  orders.deputy_id = "d1";
+  orders.counter = 1;
+  testing::internal::CaptureStderr();
+  lcm.publish("PM_ORDERS", &orders);
+  ASSERT_GT(lcm.handleTimeout(1000), 0);
+  const std::string logged = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(deputy.refused_orders(), 1);
+  ASSERT_NE(logged.find("REFUSED"), std::string::npos) << logged;
+  EXPECT_EQ(logged.find('\n'), logged.size() - 1) << logged;  // one line
+  EXPECT_EQ(logged.find('\x1b'), std::string::npos) << logged;
+
+  // An observer (no key) shows output unverified, but never raw.
+  const Config config = ParseConfig(R"(cmd "x" { exec = "sleep 1"; deputy = "d1"; })", "test");
+  Sheriff observer(&lcm, options, config, nullptr, "observer/1");
+  sarmap::pm_output_t out{};
+  out.deputy_id = "d1";
+  out.num_commands = 1;
+  out.command_ids = {"x"};
+  out.text = {
+      "ok \x1b[2J\x1b]0;owned\x07"
+      "done\n"};
+  lcm.publish("PM_OUTPUT", &out);
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  const std::string tail = observer.OutputTail(10);
+  EXPECT_EQ(tail, "[x] ok \\x1b[2J\\x1b]0;owned\\x07done\n");
+}
+
 // The signature check itself never throws, whatever the orders hold.
 TEST(ProcmanNodeTest, SignatureOfUnencodableOrdersIsInvalidNotAnException) {
   sarmap::pm_orders_t orders;
@@ -207,6 +244,58 @@ TEST(ProcmanNodeTest, ForgedStoppedReportsDoNotAdvanceTheScript) {
   kill(sim_pid, SIGTERM);
   EXPECT_TRUE(rig.Pump([&] { return rig.result() != ScriptRunner::kRunning; }, 20));
   EXPECT_EQ(rig.result(), ScriptRunner::kDone) << rig.runner().error();
+}
+
+// PM_OUTPUT used to be unsigned: anyone could put lines into a command's output on the
+// sheriff's screen. Now only the deputy's own signed output of its current session shows.
+TEST(ProcmanNodeTest, ForgedAndPlayedBackOutputNeverReachesTheSheriffsView) {
+  Rig rig(R"(
+cmd "talker" { exec = "sh -c 'echo hello-from-talker; exec sleep 600'"; deputy = "d1"; }
+script "mission" { start cmd "talker" wait "running" timeout 20; }
+)");
+  std::vector<sarmap::pm_output_t> genuine;
+  rig.lcm().subscribeFunction(
+      "^PM_OUTPUT$",
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&,
+          std::vector<sarmap::pm_output_t>* out) {
+        sarmap::pm_output_t msg;
+        if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) out->push_back(msg);
+      },
+      &genuine);
+  ASSERT_TRUE(rig.Pump(
+      [&] { return rig.sheriff().OutputTail(10).find("hello-from-talker") != std::string::npos; },
+      20))
+      << rig.sheriff().OutputTail(10);
+  ASSERT_FALSE(genuine.empty());
+  const sarmap::pm_output_t real = genuine.back();
+  EXPECT_FALSE(IsUnsigned(real.hmac_sha256));
+  EXPECT_TRUE(SignatureValid(kKey, real));
+
+  std::vector<sarmap::pm_output_t> forged;
+  sarmap::pm_output_t f = real;
+  f.text = {"FORGED-unsigned: all commands stopped\n"};
+  f.session_clock_us += 1000000;
+  std::fill(std::begin(f.hmac_sha256), std::end(f.hmac_sha256), 0);
+  forged.push_back(f);
+  f.text = {"FORGED-other-key\n"};
+  SignOutput(Key(32, 0x43), &f);
+  forged.push_back(f);
+  sarmap::pm_output_t tampered = real;
+  tampered.text = {"FORGED-tampered\n"};
+  tampered.session_clock_us += 2000000;
+  forged.push_back(tampered);
+  forged.push_back(real);  // the genuine message played back
+  const int ignored_before = rig.sheriff().ignored_output();
+  for (const auto& m : forged) {
+    rig.lcm().publish("PM_OUTPUT", &m);
+    rig.Pump([] { return false; }, 0.05);
+  }
+  const std::string tail = rig.sheriff().OutputTail(50);
+  EXPECT_EQ(tail.find("FORGED"), std::string::npos) << tail;
+  EXPECT_EQ(tail.find("hello-from-talker"), tail.rfind("hello-from-talker")) << tail;  // once
+  EXPECT_EQ(rig.sheriff().ignored_output() - ignored_before, 4);
+  EXPECT_NE(rig.sheriff().Table(Now()).find("4 unsigned, forged or played-back PM_OUTPUT"),
+            std::string::npos);
 }
 
 // A killed deputy used to leave the script waiting for its whole timeout (30 min in the demo).

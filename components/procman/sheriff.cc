@@ -145,8 +145,8 @@ bool Sheriff::Decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
   ++malformed_;
   long suppressed = 0;
   if (drop_log_limit_.try_emplace(channel, 5.0).first->second.Allow(Now(), &suppressed)) {
-    SARMAP_LOG(WARN) << "dropped a message on " << channel << ": " << why << " (so far "
-                     << malformed_ << ")";
+    SARMAP_LOG(WARN) << "dropped a message on " << common::EscapeForLog(channel) << ": "
+                     << common::EscapeForLog(why, 512) << " (so far " << malformed_ << ")";
   }
   return false;
 }
@@ -168,8 +168,9 @@ void Sheriff::OnInfo(const lcm::ReceiveBuffer* rbuf, const std::string& channel)
       ++ignored_info_;
       long suppressed = 0;
       if (drop_log_limit_.try_emplace("info", 60.0).first->second.Allow(now, &suppressed)) {
-        SARMAP_LOG(WARN) << "IGNORED a report on " << channel << " claiming deputy '"
-                         << info.deputy_id << "': " << ToString(verdict)
+        SARMAP_LOG(WARN) << "IGNORED a report on " << common::EscapeForLog(channel)
+                         << " claiming deputy '" << common::EscapeForLog(info.deputy_id)
+                         << "': " << ToString(verdict)
                          << "; only signed, live reports count (ignored so far: " << ignored_info_
                          << ")";
       }
@@ -217,7 +218,7 @@ void Sheriff::Adopt(DeputyView* d) {
   std::string strangers;
   for (const auto& s : d->info.commands) {
     const CommandView* c = FindCommand(s.command_id);
-    if (!c || c->cfg.deputy != d->id) strangers += " " + s.command_id;
+    if (!c || c->cfg.deputy != d->id) strangers += " " + common::EscapeForLog(s.command_id);
   }
   d->initialised = true;
   if (!strangers.empty() && !observer()) {
@@ -236,6 +237,28 @@ void Sheriff::Adopt(DeputyView* d) {
 void Sheriff::OnOutput(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   sarmap::pm_output_t out;
   if (!Decode(rbuf, channel, &out)) return;
+  if (!FindDeputy(out.deputy_id)) return;  // a deputy this config does not use
+  if (key_) {
+    // Only the deputy's own lines, of its current session, each message once: a forger cannot
+    // put lines into a command's output.
+    const InfoVerdict verdict = info_guard_.VerifyOutput(*key_, out);
+    // Signed, of a session not confirmed yet: the deputy's output before this sheriff has heard
+    // its echo (at start, after a deputy restart), or a recording. Dropped, not alarming.
+    if (verdict == InfoVerdict::kUnconfirmed) return;
+    if (verdict != InfoVerdict::kAccepted) {
+      ++ignored_output_;
+      long suppressed = 0;
+      if (drop_log_limit_.try_emplace("output", 60.0).first->second.Allow(Now(), &suppressed)) {
+        SARMAP_LOG(WARN) << "IGNORED output on " << common::EscapeForLog(channel)
+                         << " claiming deputy '" << common::EscapeForLog(out.deputy_id)
+                         << "': " << ToString(verdict)
+                         << "; only signed output of the deputy's current session is shown "
+                            "(ignored so far: "
+                         << ignored_output_ << ")";
+      }
+      return;
+    }
+  }
   for (int i = 0; i < out.num_commands; ++i) {
     CommandView* c = nullptr;
     for (auto& v : commands_) {
@@ -520,14 +543,18 @@ std::string Sheriff::Table(double now_s) const {
       snprintf(line, sizeof(line), "%-14s %-16s %-9s\n", d->id.c_str(), "-", "not seen");
     } else {
       snprintf(line, sizeof(line), "%-14s %-16s %-9s %7.1f s %7.0f%% %7s MB %8d\n", d->id.c_str(),
-               d->info.host.c_str(), DeputyLost(d->id, now_s) ? "LOST" : "ok",
-               now_s - d->last_heard_s, 100.0 * d->info.cpu_load,
-               Mb(d->info.phys_mem_free_bytes).c_str(), d->info.refused_orders);
+               common::EscapeForLog(d->info.host, 64).c_str(),
+               DeputyLost(d->id, now_s) ? "LOST" : "ok", now_s - d->last_heard_s,
+               100.0 * d->info.cpu_load, Mb(d->info.phys_mem_free_bytes).c_str(),
+               d->info.refused_orders);
     }
     out << line;
   }
   if (ignored_info_ > 0) {
     out << ignored_info_ << " unsigned, forged or played-back PM_INFO reports ignored\n";
+  }
+  if (ignored_output_ > 0) {
+    out << ignored_output_ << " unsigned, forged or played-back PM_OUTPUT messages ignored\n";
   }
   out << "\n";
   snprintf(line, sizeof(line), "%-28s %-10s %-18s %-5s %-13s %7s %5s %5s %6s %8s\n", "COMMAND",
@@ -558,7 +585,7 @@ std::string Sheriff::OutputTail(int lines, const std::string& command_id) const 
   for (auto it = tail_.rbegin(); it != tail_.rend() && static_cast<int>(picked.size()) < lines;
        ++it) {
     if (command_id.empty() || it->first == command_id)
-      picked.push_back("[" + it->first + "] " + it->second);
+      picked.push_back("[" + it->first + "] " + common::EscapeForLog(it->second, 4096));
   }
   std::string out;
   for (auto it = picked.rbegin(); it != picked.rend(); ++it) out += *it + "\n";

@@ -68,6 +68,9 @@ class Sheriff : public EventLoop::Participant {
   int malformed_messages() const { return malformed_; }
   // PM_INFO reports ignored: unsigned or forged (with a key), or played back (stale).
   int ignored_info() const { return ignored_info_; }
+  // PM_OUTPUT messages ignored (with a key): unsigned, forged, of another session or played
+  // back. Without a key (an observer) output is shown unverified.
+  int ignored_output() const { return ignored_output_; }
   // State of a command as last reported (-1: not reported).
   int CommandState(const std::string& command_id) const;
   int CommandPid(const std::string& command_id) const;
@@ -111,6 +114,7 @@ class Sheriff : public EventLoop::Participant {
   void SendProbe();
   double last_probe_s_ = -1e9;
   int ignored_info_ = 0;
+  int ignored_output_ = 0;
   double next_resend_s_ = 0;
   double next_probe_s_ = 0;
   int probes_sent_ = 0;

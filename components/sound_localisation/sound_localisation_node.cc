@@ -238,8 +238,9 @@ int main(int argc, char** argv) {
       // Rate-limited: at datagram loss every lost block is a gap (the aligner counts them all).
       if (device_expected[d] >= 0 && msg.first_sample_index != device_expected[d] &&
           warn_limit.Allow(common::SteadySeconds())) {
-        SARMAP_LOG(WARN) << "device '" << msg.device_id << "': gap, expected sample " << device_expected[d]
-                         << ", got " << msg.first_sample_index << " (filled with zeros)";
+        SARMAP_LOG(WARN) << "device '" << common::EscapeForLog(msg.device_id)
+                         << "': gap, expected sample " << device_expected[d] << ", got "
+                         << msg.first_sample_index << " (filled with zeros)";
       }
       device_expected[d] = msg.first_sample_index + msg.num_samples;
       for (int m = 0; m < geometry.num_mics(); ++m) {
@@ -286,9 +287,9 @@ int main(int argc, char** argv) {
             const bool ours = intake.FromDevice(msg.device_id, &report);
             if (!report.empty()) {
               if (ours)
-                SARMAP_LOG(INFO) << report;
+                SARMAP_LOG(INFO) << common::EscapeForLog(report, 512);  // names devices heard
               else
-                SARMAP_LOG(ERROR) << report;
+                SARMAP_LOG(ERROR) << common::EscapeForLog(report, 512);
             }
             if (!ours) {
               ++dropped;
@@ -310,7 +311,7 @@ int main(int argc, char** argv) {
               return warn("malformed audio block (format or size); dropped");
             if (msg.overrun_samples != last_overrun) {
               if (warn_limit.Allow(common::SteadySeconds()))
-                SARMAP_LOG(WARN) << "device '" << device << "' lost "
+                SARMAP_LOG(WARN) << "device '" << common::EscapeForLog(device) << "' lost "
                                  << (msg.overrun_samples - last_overrun) << " samples (overrun)";
               last_overrun = msg.overrun_samples;
             }

@@ -462,9 +462,11 @@ int main(int argc, char** argv) {
             nearest = ts.name;
           }
         }
-        printf("  heard t=%6.2f track %3ld '%s' az %7.1f: nearest true %s (%+.1f deg) -> source %ld", (t - first_utime) * 1e-6,
-               static_cast<long>(d.track_id), keyword.c_str(), d.azimuth_rad * 180 / M_PI, nearest.c_str(), best,
-               static_cast<long>(id));
+        printf(
+            "  heard t=%6.2f track %3ld '%s' az %7.1f: nearest true %s (%+.1f deg) -> source %ld",
+            (t - first_utime) * 1e-6, static_cast<long>(d.track_id),
+            sarmap::common::EscapeForLog(keyword).c_str(), d.azimuth_rad * 180 / M_PI,
+            nearest.c_str(), best, static_cast<long>(id));
         for (const auto& s : map.Sources(t))
           if (s.id == id) {
             const Eigen::Vector2d w = to_world(s.position_m);

@@ -63,7 +63,8 @@ int main(int argc, char** argv) {
         }
       } catch (const std::exception& e) {  // one clear line and a clean start, no crash loop
         const std::string aside = sarmap::common::SetAsideStateFile(options.state_file);
-        SARMAP_LOG(ERROR) << "not resumed, starting empty: " << e.what()
+        SARMAP_LOG(ERROR) << "not resumed, starting empty: "
+                          << sarmap::common::EscapeForLog(e.what(), 512)
                           << (aside.empty() ? "" : " (moved to " + aside + ")");
       }
     }
@@ -189,7 +190,8 @@ int main(int argc, char** argv) {
         map.Save(options.state_file);
       } catch (const std::exception& e) {
         static sarmap::common::RateLimiter limit(30.0);
-        if (limit.Allow(sarmap::common::SteadySeconds())) SARMAP_LOG(WARN) << "state not saved: " << e.what();
+        if (limit.Allow(sarmap::common::SteadySeconds()))
+          SARMAP_LOG(WARN) << "state not saved: " << sarmap::common::EscapeForLog(e.what(), 512);
       }
     };
     if (!options.state_file.empty()) node.AddTimer(options.state_save_period_s, save_state);

@@ -99,9 +99,9 @@ int main(int argc, char** argv) {
       const bool ours = intake.FromDevice(msg.device_id, &report);
       if (!report.empty()) {
         if (ours)
-          SARMAP_LOG(INFO) << report;
+          SARMAP_LOG(INFO) << common::EscapeForLog(report, 512);  // names devices heard
         else
-          SARMAP_LOG(ERROR) << report;
+          SARMAP_LOG(ERROR) << common::EscapeForLog(report, 512);
       }
       if (!ours) {
         ++dropped;

@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
           grid.origin_y_m = m.origin_y_m;
           std::string error;
           if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
-            SARMAP_LOG(WARN) << "bad MAP: " << error;
+            SARMAP_LOG(WARN) << "bad MAP: " << common::EscapeForLog(error, 512);
             return;
           }
           state.SetMap(std::move(grid));

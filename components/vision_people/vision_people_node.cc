@@ -69,8 +69,8 @@ int main(int argc, char** argv) {
         last_warnings = assembler.total_warnings();
         long suppressed = 0;
         if (warn_limit.Allow(common::SteadySeconds(), &suppressed)) {
-          SARMAP_LOG(WARN) << assembler.last_warning() << " (" << last_warnings
-                           << " input warnings so far)";
+          SARMAP_LOG(WARN) << common::EscapeForLog(assembler.last_warning(), 512) << " ("
+                           << last_warnings << " input warnings so far)";
         }
       }
       for (RgbdFrame& frame : ready) {
@@ -81,7 +81,8 @@ int main(int argc, char** argv) {
           ++bad_frames;
           long suppressed = 0;
           if (warn_limit.Allow(common::SteadySeconds(), &suppressed)) {
-            SARMAP_LOG(WARN) << "frame at " << frame.utime << ": " << error << " (" << bad_frames
+            SARMAP_LOG(WARN) << "frame at " << frame.utime << ": "
+                             << common::EscapeForLog(error, 512) << " (" << bad_frames
                              << " so far)";
           }
         }
