@@ -90,7 +90,6 @@ std::string CheckMessage(const sarmap::laser_scan_t& m) {
       .That(m.angle_increment_rad != 0.0, "zero angle_increment_rad")
       .That(std::isfinite(m.range_min_m) && std::isfinite(m.range_max_m) && m.range_min_m >= 0 &&
                 m.range_max_m > m.range_min_m, "bad range limits")
-      .That(std::isfinite(m.free_from_m) && m.free_from_m >= 0, "free_from_m not a finite range >= 0")
       .Count(m.num_ranges, m.ranges_m.size(), "num_ranges")
       .Count(m.num_intensities, m.intensities.size(), "num_intensities")
       .That(m.num_intensities == 0 || m.num_intensities == m.num_ranges,

@@ -90,7 +90,6 @@ class Publisher {
     scan.angle_increment_rad = s.angle_increment_rad;
     scan.range_min_m = s.range_min_m;
     scan.range_max_m = s.range_max_m;
-    scan.free_from_m = s.free_from_m;
     scan.ranges_m = s.ranges_m;
     scan.num_ranges = static_cast<int32_t>(s.ranges_m.size());
     scan.num_intensities = 0;

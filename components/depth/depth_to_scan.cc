@@ -31,19 +31,6 @@ DepthToScan::DepthToScan(const DepthToScanOptions& options, const PinholeIntrins
   };
   double a0 = azimuth(0), a1 = azimuth(in.width - 1);
   if (a0 > a1) std::swap(a0, a1);
-  // Where the image's lowest rays reach min_height_m: nearer, an obstacle that low is below the
-  // view. For the bottom row's pixel u: t = (min_height - o_z) / ray_z (the ray must descend),
-  // range = |o_xy + t * ray_xy|; the farthest over the row (the corners) bounds every azimuth.
-  // A row that never descends to min_height_m within range_max_m sees no low obstacle at all.
-  free_from_m_ = 0;
-  for (int u = 0; u < in.width; ++u) {
-    const Eigen::Vector3f& ray = rays_[static_cast<size_t>(in.height - 1) * in.width + u];
-    const double drop = options.min_height_m - origin_.z();
-    const double t = ray.z() < 0 && drop < 0 ? drop / ray.z() : std::numeric_limits<double>::infinity();
-    const double range = std::isfinite(t) ? std::hypot(origin_.x() + t * ray.x(), origin_.y() + t * ray.y())
-                                          : options.range_max_m;
-    free_from_m_ = std::max(free_from_m_, std::min(range, options.range_max_m));
-  }
   const double margin = 0.02;
   num_beams_ = options.num_beams > 0 ? options.num_beams : in.width;
   angle_min_ = a0 - margin;
@@ -56,7 +43,6 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   scan.angle_increment_rad = angle_increment_;
   scan.range_min_m = static_cast<float>(options_.range_min_m);
   scan.range_max_m = static_cast<float>(options_.range_max_m);
-  scan.free_from_m = static_cast<float>(free_from_m_);
   const float inf = std::numeric_limits<float>::infinity();
   std::vector<float> best(num_beams_, inf);
   std::vector<uint8_t> seen_far(num_beams_, 0);

@@ -41,9 +41,6 @@ struct PlanarScan {
   double angle_min_rad = 0;
   double angle_increment_rad = 0;
   float range_min_m = 0, range_max_m = 0;
-  // Nearer than this the camera does not see obstacles as low as min_height_m (they are below
-  // its view), so a ray is evidence of free space only beyond it.
-  float free_from_m = 0;
   std::vector<float> ranges_m;
   int in_band_pixels = 0;  // statistics
   int invalid_pixels = 0;
@@ -59,7 +56,6 @@ class DepthToScan {
   PlanarScan Convert(const uint16_t* depth, double depth_unit_m) const;
 
   const PinholeIntrinsics& intrinsics() const { return intrinsics_; }
-  double free_from_m() const { return free_from_m_; }
 
  private:
   DepthToScanOptions options_;
@@ -70,7 +66,6 @@ class DepthToScan {
   Eigen::Vector3f origin_;
   double angle_min_ = 0, angle_increment_ = 0;
   int num_beams_ = 0;
-  double free_from_m_ = 0;
 };
 
 }  // namespace depth

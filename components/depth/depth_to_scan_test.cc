@@ -52,29 +52,6 @@ std::vector<uint16_t> Render(double wall_x, double table_h = -1, double table_a 
   return depth;
 }
 
-TEST(DepthToScanTest, FreeSpaceStartsWhereTheLowestRaysReachTheLowestObstacle) {
-  // Level camera 0.55 m up, 0.10 m ahead of the base: the bottom row looks down by
-  // atan(240.5 / 525) and meets z = min_height at 0.50 / (240.5 / 525) = 1.09 m ahead of the
-  // lens; the corner pixel also 1.09 * 319.5 / 525 = 0.66 m aside.
-  DepthToScanOptions o;
-  DepthToScan level(o, Kinect(), DefaultBaseFromCamera());
-  const double ahead = (0.55 - o.min_height_m) / ((479 - 239.5) / 525.0);
-  const double expected = std::hypot(0.10 + ahead, ahead * 319.5 / 525);
-  EXPECT_NEAR(level.free_from_m(), expected, 1e-3);
-  const auto depth = Render(2.5);
-  EXPECT_NEAR(level.Convert(depth.data(), 0.001).free_from_m, expected, 1e-3);
-  // Tilted 20 deg down it sees low obstacles much nearer; tilted up, not at all within range.
-  auto tilted = [](double down_rad) {
-    Eigen::Isometry3d t = DefaultBaseFromCamera();
-    t.linear() = Eigen::AngleAxisd(down_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * t.linear();
-    return t;
-  };
-  DepthToScan down(o, Kinect(), tilted(20 * M_PI / 180));
-  EXPECT_LT(down.free_from_m(), 0.6 * expected);
-  DepthToScan up(o, Kinect(), tilted(-30 * M_PI / 180));
-  EXPECT_EQ(up.free_from_m(), o.range_max_m);
-}
-
 TEST(DepthToScanTest, WallInFrontGivesItsDistancePerAzimuth) {
   DepthToScanOptions o;
   DepthToScan conv(o, Kinect(), DefaultBaseFromCamera());

@@ -117,7 +117,6 @@ class ExploreNode {
     scan.angle_increment_rad = m.angle_increment_rad;
     scan.range_min_m = m.range_min_m;
     scan.range_max_m = m.range_max_m;
-    scan.free_from_m = m.free_from_m;
     scan.ranges_m = m.ranges_m;
     const explore::Velocity v = controller_.OnScan(info.receive_time_s, scan);
     velocity_command_t cmd;

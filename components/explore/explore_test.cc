@@ -152,31 +152,6 @@ TEST(ExploreMapTest, ScansFillTheGridNoReturnIsFreeToRangeAndTheRobotsOwnPlaceIs
   EXPECT_FALSE(m.Occupied(hit));
   m.SetMap(PartlyKnownRoom());
   EXPECT_FALSE(m.Occupied(hit));
-  // A low object seen from 4 m, then approached to 0.8 m: a depth camera's ray now passes over
-  // it (it is below the view), but nearer than the scan's free_from_m a ray erases no obstacle.
-  m.IntegrateScan(pose, wall);
-  EXPECT_TRUE(m.Occupied(hit));
-  const common::Rigid2d close(hit.x() - 0.8 * std::cos(a), hit.y() - 0.8 * std::sin(a), 0.0);
-  Scan over = through;
-  over.free_from_m = 1.2;
-  m.IntegrateScan(close, over);
-  EXPECT_TRUE(m.Occupied(hit));
-  {
-    ExploreMap fresh{PlannerOptions()};
-    fresh.SetMap(PartlyKnownRoom());  // known for x < 2.5 m
-    Scan open = MakeScan(INFINITY, INFINITY);
-    open.free_from_m = 2.0;
-    fresh.IntegrateScan(pose, open);
-    // Nearer than free_from_m an unknown cell is still filled (free of anything the camera
-    // sees there); only evidence of an obstacle is kept.
-    EXPECT_TRUE(fresh.Known(Eigen::Vector2d(2.7, 2.0)));
-    EXPECT_FALSE(fresh.Occupied(Eigen::Vector2d(2.7, 2.0)));
-    EXPECT_TRUE(fresh.Known(Eigen::Vector2d(3.5, 2.0)));
-    EXPECT_FALSE(fresh.Occupied(Eigen::Vector2d(3.5, 2.0)));
-  }
-  m.SetMap(PartlyKnownRoom());
-  m.IntegrateScan(close, through);  // a laser's ray (free_from_m 0) does clear it
-  EXPECT_FALSE(m.Occupied(hit));
   // The robot's own footprint is free once it has been there.
   EXPECT_FALSE(m.Known(Eigen::Vector2d(4.2, 3.2)));
   m.AddTrail(Eigen::Vector2d(4.0, 3.0));

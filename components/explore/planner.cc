@@ -260,22 +260,20 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
     }
     const double angle = map_from_base.yaw_rad() + scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
     const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
-    // Free up to one cell short of the return, sampled at half a cell. Nearer than free_from_m
-    // the camera does not see low obstacles: there the ray only fills unknown cells and
-    // confirms free ones, and erases no obstacle.
+    // Free from free_from_m (nearer, the camera does not see low obstacles) up to one cell
+    // short of the return, sampled at half a cell.
     const int steps = static_cast<int>((length - (hit ? res : 0.0)) / (0.5 * res));
-    const int near_steps =
-        std::isfinite(scan.free_from_m) && scan.free_from_m > 0 ? static_cast<int>(scan.free_from_m / (0.5 * res)) : 0;
-    for (int k = 0; k <= steps; ++k) {
+    const int first = std::isfinite(scan.free_from_m) && scan.free_from_m > 0
+                          ? static_cast<int>(std::ceil(scan.free_from_m / (0.5 * res)))
+                          : 0;
+    for (int k = first; k <= steps; ++k) {
       const Eigen::Vector2i c = grid_.CellOf(origin + dir * (0.5 * res * k));
       if (!grid_.Contains(c.x(), c.y())) break;
       const int index = grid_.Index(c.x(), c.y());
       int8_t& v = grid_.at(c.x(), c.y());
       // Unknown, uncertain, or one of the explorer's own returns that is no longer there: the
       // ray passed. MAP's obstacles stay (the next MAP is the judge of those).
-      const bool clears = k < near_steps ? v < options_.free_threshold && !hit_[index]
-                                         : v < options_.occupied_threshold || hit_[index];
-      if (clears) {
+      if (v < options_.occupied_threshold || hit_[index]) {
         v = 0;
         crossed_[index] = 1;
         hit_[index] = 0;

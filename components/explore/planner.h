@@ -30,7 +30,7 @@ struct Scan {
   double angle_increment_rad = 0;
   double range_min_m = 0;
   double range_max_m = 0;
-  double free_from_m = 0;  // nearer, rays erase no obstacle (laser_scan_t.free_from_m)
+  double free_from_m = 0;  // a ray clears no cell nearer than this (laser_scan_t.free_from_m)
   std::vector<float> ranges_m;
 };
 

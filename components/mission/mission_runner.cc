@@ -72,7 +72,6 @@ class Loop : public sim::SimSink {
     scan.angle_increment_rad = planar.angle_increment_rad;
     scan.range_min_m = planar.range_min_m;
     scan.range_max_m = planar.range_max_m;
-    scan.free_from_m = planar.free_from_m;
     scan.ranges_m = planar.ranges_m;
     const slam::ScanResult r = slam_.AddScan(scan);
     const double t = scan.time_s - start_s_;
@@ -86,7 +85,6 @@ class Loop : public sim::SimSink {
     es.angle_increment_rad = scan.angle_increment_rad;
     es.range_min_m = scan.range_min_m;
     es.range_max_m = scan.range_max_m;
-    es.free_from_m = scan.free_from_m;
     es.ranges_m = scan.ranges_m;
     const double explore0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     const explore::Velocity v = explore_.OnScan(t, es);

@@ -33,7 +33,6 @@ inline laser_scan_t ToScanMessage(const CarmenLaser& l) {
   msg.angle_min_rad = l.angle_min_rad;
   msg.angle_increment_rad = l.angle_increment_rad;
   msg.range_min_m = 0.0f;
-  msg.free_from_m = 0.0f;
   // laser_scan_t: a range outside [min, max] is no return; CARMEN's max reading is one.
   msg.range_max_m = std::nextafter(static_cast<float>(l.range_max_m), 0.0f);
   msg.num_ranges = static_cast<int32_t>(l.ranges_m.size());

@@ -11,7 +11,6 @@ RangeData TransformRangeData(const RangeData& data, const Rigid2d& t) {
   const Eigen::Vector2f tr = t.translation().cast<float>();
   RangeData out;
   out.origin = r * data.origin + tr;
-  out.free_from_m = data.free_from_m;
   out.hits.reserve(data.hits.size());
   out.misses.reserve(data.misses.size());
   for (const auto& p : data.hits) out.hits.push_back(r * p + tr);
@@ -85,11 +84,7 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
     ApplyOdds(i, hit_odds);
   }
   // Rays: walk the cells from the origin towards each end point (Amanatides-Woo traversal),
-  // excluding the end cell for hits. Nearer than free_from_m the sensor cannot see a low
-  // obstacle, so there a ray lowers no cell that holds evidence of one (p > 0.5): it only
-  // fills unknown cells and confirms free ones.
-  const Eigen::Vector2d origin = data.origin.cast<double>();
-  const double free_from2 = static_cast<double>(data.free_from_m) * data.free_from_m;
+  // excluding the end cell for hits.
   auto cast = [&](const Eigen::Vector2f& end, bool include_end) {
     const double ox = (data.origin.x() - corner_.x()) * inv_resolution_;
     const double oy = (data.origin.y() - corner_.y()) * inv_resolution_;
@@ -110,9 +105,7 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
       const bool at_end = x == end_x && y == end_y;
       if (at_end && !include_end) break;
       const int i = y * width_ + x;
-      if (x >= 0 && y >= 0 && x < width_ && y < height_ && update_mark_[i] != current_mark_ &&
-          (free_from2 <= 0 || cells_[i] <= 0.5f ||
-           (corner_ + resolution_ * Eigen::Vector2d(x + 0.5, y + 0.5) - origin).squaredNorm() >= free_from2)) {
+      if (x >= 0 && y >= 0 && x < width_ && y < height_ && update_mark_[i] != current_mark_) {
         update_mark_[i] = current_mark_;
         ApplyOdds(i, miss_odds);
       }

@@ -27,7 +27,6 @@ struct RangeData {
   Eigen::Vector2f origin = Eigen::Vector2f::Zero();  // sensor position
   PointCloud hits;                                   // returns
   PointCloud misses;  // end points of no-return rays (free space only)
-  float free_from_m = 0;  // nearer the origin, rays lower no cell with p > 0.5 (grid.cc)
 };
 
 RangeData TransformRangeData(const RangeData& data, const Rigid2d& transform);

@@ -19,7 +19,6 @@ inline LaserScan FromScanMessage(const laser_scan_t& msg) {
   s.angle_increment_rad = msg.angle_increment_rad;
   s.range_min_m = msg.range_min_m;
   s.range_max_m = msg.range_max_m;
-  s.free_from_m = msg.free_from_m;
   s.ranges_m = msg.ranges_m;
   return s;
 }

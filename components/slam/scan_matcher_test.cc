@@ -81,30 +81,6 @@ TEST_F(ScanMatcherTest, GridStoresHitsAndFreeSpace) {
   EXPECT_NEAR(g.Raw(g.CellIndex(Eigen::Vector2f(0.15f, 0.05f))), miss_odds / (1 + miss_odds), 1e-6);
 }
 
-TEST_F(ScanMatcherTest, RaysClearNoCellNearerThanFreeFrom) {
-  // A depth camera's scan: a low box 0.5 m ahead was seen from afar (a hit); now the robot is
-  // close and the ray passes over it to a wall at 3 m. With free_from_m = 1.0 the ray lowers
-  // no cell with obstacle evidence in the first metre, so the box stays; it still fills
-  // unknown cells there, and beyond it clears as before.
-  ProbabilityGrid g(0.1, Eigen::Vector2d::Zero(), 60);
-  RangeData seen;
-  seen.hits.push_back(Eigen::Vector2f(0.55f, 0.05f));
-  g.Insert(seen, 0.55f, 0.49f);
-  RangeData close;
-  close.hits.push_back(Eigen::Vector2f(3.05f, 0.05f));
-  close.free_from_m = 1.0f;
-  g.Insert(close, 0.55f, 0.49f);
-  EXPECT_NEAR(g.Raw(g.CellIndex(Eigen::Vector2f(0.55f, 0.05f))), 0.55f, 1e-6);  // not crossed
-  EXPECT_NEAR(g.Raw(g.CellIndex(Eigen::Vector2f(0.85f, 0.05f))), 0.49f, 1e-6);   // filled
-  EXPECT_NEAR(g.Raw(g.CellIndex(Eigen::Vector2f(1.55f, 0.05f))), 0.49f, 1e-6);   // free
-  // The same ray from a laser (free_from_m 0) clears the box's cell.
-  close.free_from_m = 0;
-  g.Insert(close, 0.55f, 0.49f);
-  EXPECT_LT(g.Raw(g.CellIndex(Eigen::Vector2f(0.55f, 0.05f))), 0.55f);
-  // It travels with the data into another frame.
-  EXPECT_EQ(TransformRangeData(seen, Rigid2d(1, 2, 0.5)).free_from_m, seen.free_from_m);
-}
-
 TEST_F(ScanMatcherTest, AngularStepMovesFarthestPointByOneCell) {
   PointCloud p = {Eigen::Vector2f(10, 0)};
   const double step = AngularSearchStep(p, 0.05);

@@ -183,7 +183,6 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
   data->origin = base_from_laser.translation().cast<float>();
   data->hits.clear();
   data->misses.clear();
-  data->free_from_m = std::isfinite(scan.free_from_m) ? std::max(0.0f, scan.free_from_m) : 0.0f;
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const float r = scan.ranges_m[i];
     const double a = scan.angle_min_rad + i * scan.angle_increment_rad + base_from_laser.yaw_rad();
@@ -468,7 +467,6 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     local_data.origin = data.origin;
     local_data.hits = voxel_hits;
     local_data.misses = data.misses;
-    local_data.free_from_m = data.free_from_m;
     const RangeData in_local = TransformRangeData(local_data, local);
     std::vector<int> inserted = active_submaps_;
     for (int id : active_submaps_) {
@@ -833,7 +831,7 @@ class Reader : public common::BinaryReader {
 };
 
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
-constexpr int32_t kVersion = 2;  // of the body; 2 added each node's free_from_m (1 is read as 0)
+constexpr int32_t kVersion = 1;  // of the body
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -886,7 +884,6 @@ void Slam::Save(const std::string& path) const {
       w.Pose(n.odom_pose);
       w.Cloud(n.loop_points);
       w.Pod(n.range_data.origin.x()), w.Pod(n.range_data.origin.y());
-      w.Pod(n.range_data.free_from_m);
       w.Cloud(n.range_data.hits);
       w.Cloud(n.range_data.misses);
     }
@@ -929,8 +926,7 @@ void Slam::Load(const std::string& path) {
   if (!in || !std::equal(magic, magic + 8, kMagic)) {
     throw std::runtime_error("'" + path + "' is not a sarmap pose-graph file");
   }
-  const int32_t version = r.Pod<int32_t>();
-  if (version != 1 && version != kVersion) throw std::runtime_error("unsupported pose-graph version");
+  if (r.Pod<int32_t>() != kVersion) throw std::runtime_error("unsupported pose-graph version");
   const double resolution = r.Pod<double>();
   std::vector<Submap> submaps;
   std::vector<Rigid2d> submap_global;
@@ -975,7 +971,6 @@ void Slam::Load(const std::string& path) {
     n.loop_points = r.Cloud();
     n.range_data.origin.x() = r.Pod<float>();
     n.range_data.origin.y() = r.Pod<float>();
-    if (version >= 2) n.range_data.free_from_m = r.Pod<float>();
     n.range_data.hits = r.Cloud();
     n.range_data.misses = r.Cloud();
     nodes.push_back(std::move(n));

@@ -39,7 +39,6 @@ struct LaserScan {
   double angle_increment_rad = 0;
   float range_min_m = 0;
   float range_max_m = 0;  // a reading outside [min, max] or not finite is "no return"
-  float free_from_m = 0;  // nearer, rays erase no obstacle evidence (laser_scan_t.free_from_m)
   std::vector<float> ranges_m;
   // base_from_laser of this scan (CARMEN ROBOTLASER1 lines carry it); unset: slam.scan.laser_*.
   bool has_base_from_laser = false;

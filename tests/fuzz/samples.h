@@ -62,7 +62,6 @@ inline void SaneUp(sarmap::laser_scan_t* m) {
   m->angle_increment_rad = 0.01;
   m->range_min_m = 0.1f;
   m->range_max_m = 10.f;
-  m->free_from_m = 0.f;
   m->num_intensities = 0;
   m->intensities.clear();
 }
