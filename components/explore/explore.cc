@@ -380,21 +380,9 @@ Velocity ExploreController::Follow(const Scan& scan) {
       nearest = i;
     }
   }
-  // Pure pursuit cuts the inside of a bend by about lookahead^2 / (8 radius): near a corner the
-  // carrot is the furthest path point the straight line to which keeps the clearance the path
-  // keeps (the planner's robot radius, or the robot's own when it is already nearer), so the
-  // robot does not brush the corner it is turning round.
-  const bool check = map_.has_map();
-  const Eigen::Vector2i robot_cell = map_.grid().CellOf(robot);
-  const double keep = check ? std::min(options_.planner.robot_radius_m, map_.Clearance(robot_cell.x(), robot_cell.y())) - 1e-6 : 0;
   Eigen::Vector2d target = path_.back();
   for (size_t i = nearest; i < path_.size(); ++i) {
-    const bool beyond = (path_[i] - robot).norm() >= options_.follower.lookahead_m;
-    if (check && i > nearest + 1 && map_.SegmentClearance(robot, path_[i]) < keep) {
-      target = path_[i - 1];
-      break;
-    }
-    if (beyond) {
+    if ((path_[i] - robot).norm() >= options_.follower.lookahead_m) {
       target = path_[i];
       break;
     }

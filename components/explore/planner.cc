@@ -260,13 +260,9 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
     }
     const double angle = map_from_base.yaw_rad() + scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
     const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
-    // Free from free_from_m (nearer, the camera does not see low obstacles) up to one cell
-    // short of the return, sampled at half a cell.
+    // Free up to one cell short of the return, sampled at half a cell.
     const int steps = static_cast<int>((length - (hit ? res : 0.0)) / (0.5 * res));
-    const int first = std::isfinite(scan.free_from_m) && scan.free_from_m > 0
-                          ? static_cast<int>(std::ceil(scan.free_from_m / (0.5 * res)))
-                          : 0;
-    for (int k = first; k <= steps; ++k) {
+    for (int k = 0; k <= steps; ++k) {
       const Eigen::Vector2i c = grid_.CellOf(origin + dir * (0.5 * res * k));
       if (!grid_.Contains(c.x(), c.y())) break;
       const int index = grid_.Index(c.x(), c.y());
@@ -364,16 +360,6 @@ bool ExploreMap::LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b)
     if (Occupied(a + (b - a) * (static_cast<double>(k) / steps))) return false;
   }
   return true;
-}
-
-double ExploreMap::SegmentClearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  const int steps = static_cast<int>((b - a).norm() / (0.5 * grid_.resolution_m)) + 1;
-  double least = std::numeric_limits<double>::infinity();
-  for (int k = 0; k <= steps; ++k) {
-    const Eigen::Vector2i c = grid_.CellOf(a + (b - a) * (static_cast<double>(k) / steps));
-    least = std::min(least, Clearance(c.x(), c.y()));
-  }
-  return least;
 }
 
 double ExploreMap::StepCost(int index) const {

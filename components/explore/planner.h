@@ -30,7 +30,6 @@ struct Scan {
   double angle_increment_rad = 0;
   double range_min_m = 0;
   double range_max_m = 0;
-  double free_from_m = 0;  // a ray clears no cell nearer than this (laser_scan_t.free_from_m)
   std::vector<float> ranges_m;
 };
 
@@ -145,8 +144,6 @@ class ExploreMap {
   bool Known(const Eigen::Vector2d& p) const;
   // No obstacle cell on the segment (unknown cells do not block).
   bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
-  // The least Clearance() of the cells on the segment [a, b] (sampled every half cell).
-  double SegmentClearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 
   // Dijkstra from `from`. When `from` is not traversable (the robot brushed a wall, or stands
   // in a cell the map calls occupied), the search starts from the nearest traversable cell
