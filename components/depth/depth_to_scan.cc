@@ -67,6 +67,9 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   const float rmax = static_cast<float>(options_.range_max_m);
   const int w = intrinsics_.width, h = intrinsics_.height;
   const int step = std::max(1, options_.row_step);
+  const bool nearest_surface = options_.range_noise_k > 0;
+  pixel_bin_.clear();
+  pixel_range_.clear();
   for (int v = 0; v < h; v += step) {
     for (int u = 0; u < w; ++u) {
       const size_t i = static_cast<size_t>(v) * w + u;
@@ -95,8 +98,13 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
       }
       ++scan.in_band_pixels;
       best[bin] = std::min(best[bin], range);
+      if (nearest_surface) {
+        pixel_bin_.push_back(bin);
+        pixel_range_.push_back(range);
+      }
     }
   }
+  if (nearest_surface) NearestSurfaces(&best);
   scan.ranges_m.resize(num_beams_);
   for (int b = 0; b < num_beams_; ++b) {
     if (std::isfinite(best[b])) {
@@ -106,6 +114,38 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
     }
   }
   return scan;
+}
+
+void DepthToScan::NearestSurfaces(std::vector<float>* best) const {
+  // Group the in-band ranges by bin (counting sort), then per bin take the median of those
+  // within the window above the bin's minimum.
+  bin_start_.assign(num_beams_ + 1, 0);
+  for (int b : pixel_bin_) ++bin_start_[b + 1];
+  for (int b = 0; b < num_beams_; ++b) bin_start_[b + 1] += bin_start_[b];
+  sorted_range_.resize(pixel_range_.size());
+  std::vector<int> fill(bin_start_.begin(), bin_start_.end() - 1);
+  for (size_t i = 0; i < pixel_bin_.size(); ++i) sorted_range_[fill[pixel_bin_[i]]++] = pixel_range_[i];
+  const float k = static_cast<float>(options_.range_noise_k);
+  const float sigmas = static_cast<float>(options_.surface_window_sigmas);
+  for (int b = 0; b < num_beams_; ++b) {
+    float* first = sorted_range_.data() + bin_start_[b];
+    float* last = sorted_range_.data() + bin_start_[b + 1];
+    if (last - first < 2) continue;
+    const float r_min = (*best)[b];
+    const float limit = r_min + sigmas * k * r_min * r_min;
+    float* end = std::partition(first, last, [limit](float r) { return r <= limit; });
+    float* mid = first + (end - first) / 2;
+    std::nth_element(first, mid, end);
+    // The median sits on one of the quantised depth levels (5 cm apart at 4 m for a Kinect):
+    // the mean of the pixels within half a window of it, symmetric, averages the levels.
+    const float median = *mid, half = 0.5f * (limit - r_min);
+    double sum = 0;
+    int n = 0;
+    for (const float* r = first; r != last; ++r) {
+      if (std::abs(*r - median) <= half) sum += *r, ++n;
+    }
+    (*best)[b] = static_cast<float>(sum / n);
+  }
 }
 
 }  // namespace depth

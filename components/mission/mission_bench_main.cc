@@ -110,6 +110,9 @@ int main(int argc, char** argv) {
     parser.AddFlag("--camera-rate", &run.camera_rate_hz, "depth frames per simulated second");
     parser.AddFlag("--out", &out_dir, "folder for the generated worlds and the curves");
     parser.AddRepeated("--set-explore", &run.explore_overrides, "explorer option override (key=value)");
+    parser.AddRepeated("--set-sim", &run.sim_overrides, "simulator option override (key=value)");
+    parser.AddRepeated("--set-slam", &run.slam_overrides, "SLAM option override (key=value)");
+    parser.AddRepeated("--set-depth", &run.depth_overrides, "depth-to-scan option override (key=value)");
     if (!parser.Parse(argc, argv)) return 0;
     if (sites <= 0 && worlds.empty()) throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
     ::mkdir(out_dir.c_str(), 0755);
