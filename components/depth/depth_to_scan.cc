@@ -124,7 +124,9 @@ void DepthToScan::NearestSurfaces(std::vector<float>* best) const {
   for (int b = 0; b < num_beams_; ++b) bin_start_[b + 1] += bin_start_[b];
   sorted_range_.resize(pixel_range_.size());
   std::vector<int> fill(bin_start_.begin(), bin_start_.end() - 1);
-  for (size_t i = 0; i < pixel_bin_.size(); ++i) sorted_range_[fill[pixel_bin_[i]]++] = pixel_range_[i];
+  for (size_t i = 0; i < pixel_bin_.size(); ++i) {
+    sorted_range_[fill[pixel_bin_[i]]++] = pixel_range_[i];
+  }
   const float k = static_cast<float>(options_.range_noise_k);
   const float sigmas = static_cast<float>(options_.surface_window_sigmas);
   for (int b = 0; b < num_beams_; ++b) {
