@@ -70,6 +70,13 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   const bool nearest_surface = options_.range_noise_k > 0;
   pixel_bin_.clear();
   pixel_range_.clear();
+  // With the nearest surface, pixels up to a window beyond range_max_m still count: a wall just
+  // inside the limit has noisy pixels on both sides of it, and keeping only the near ones
+  // would pull it closer; a surface whose range comes out beyond the limit is no return.
+  const float rlimit =
+      nearest_surface ? rmax + static_cast<float>(options_.surface_window_sigmas *
+                                                  options_.range_noise_k * rmax * rmax)
+                      : rmax;
   for (int v = 0; v < h; v += step) {
     for (int u = 0; u < w; ++u) {
       const size_t i = static_cast<size_t>(v) * w + u;
@@ -82,17 +89,17 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
       const double az = std::atan2(p.y(), p.x());
       const int bin = static_cast<int>(std::lround((az - angle_min_) / angle_increment_));
       if (bin < 0 || bin >= num_beams_) continue;
-      if (d > rmax) {  // beyond the sensor's trusted range: free up to the limit
+      if (d > rlimit) {  // beyond the sensor's trusted range: free up to the limit
         seen_far[bin] = 1;
         continue;
       }
+      const float range = std::hypot(p.x(), p.y());
       if (p.z() < zmin || p.z() > zmax) {
         // Floor or ceiling: the bin is free at least up to this pixel.
-        if (std::hypot(p.x(), p.y()) >= rmax * 0.95f) seen_far[bin] = 1;
+        if (d > rmax || range >= rmax * 0.95f) seen_far[bin] = 1;
         continue;
       }
-      const float range = std::hypot(p.x(), p.y());
-      if (range > rmax) {  // off-axis: the horizontal range is what the scan limits
+      if (range > rlimit) {  // off-axis: the horizontal range is what the scan limits
         seen_far[bin] = 1;
         continue;
       }
@@ -104,7 +111,15 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
       }
     }
   }
-  if (nearest_surface) NearestSurfaces(&best);
+  if (nearest_surface) {
+    NearestSurfaces(&best);
+    for (int b = 0; b < num_beams_; ++b) {
+      if (best[b] > rmax) {
+        best[b] = inf;
+        seen_far[b] = 1;
+      }
+    }
+  }
   scan.ranges_m.resize(num_beams_);
   for (int b = 0; b < num_beams_; ++b) {
     if (std::isfinite(best[b])) {

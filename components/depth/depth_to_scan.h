@@ -16,7 +16,10 @@
 //     The minimum of n noisy pixels of one wall lies ~2.5 sigma short for n ~ 70 (6 cm at 4 m
 //     for a Kinect); a scan short by a range-dependent amount shrinks the map along the
 //     direction of travel, and SLAM then falls behind by a share of every metre driven into
-//     new space. The nearest surface's range is within 0.2 sigma of the truth;
+//     new space. Pixels up to W beyond range_max_m count too (a wall just inside the limit
+//     has noisy pixels on both sides of it; keeping only the near ones pulls it closer), and
+//     a surface whose range comes out beyond range_max_m is no return. The nearest surface's
+//     range is within 1 mm of the truth on walls at 2-4.45 m;
 //   - +inf ("no return": free up to the range limit) when it saw only pixels beyond
 //     range_max_m, or in-band pixels nowhere but floor/ceiling pixels farther than
 //     range_max_m;

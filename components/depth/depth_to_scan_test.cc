@@ -154,7 +154,7 @@ TEST(DepthToScanTest, NoisyWallIsNotPulledCloserByTheMinimum) {
   DepthToScan minimum(o, Kinect(), DefaultBaseFromCamera());
   o.range_noise_k = 1.425e-3;
   DepthToScan surface(o, Kinect(), DefaultBaseFromCamera());
-  for (double wall_x : {2.0, 3.0, 4.0}) {
+  for (double wall_x : {2.0, 3.0, 4.0, 4.3, 4.4, 4.45}) {
     const auto depth = AddKinectNoise(Render(wall_x), static_cast<uint32_t>(wall_x * 10));
     const double sigma = 1.425e-3 * wall_x * wall_x;
     const double min_error = MeanRangeError(minimum.Convert(depth.data(), 0.001), wall_x);
