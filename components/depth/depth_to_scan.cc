@@ -114,7 +114,7 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   if (nearest_surface) {
     NearestSurfaces(&best);
     for (int b = 0; b < num_beams_; ++b) {
-      if (best[b] > rmax) {
+      if (std::isfinite(best[b]) && best[b] > rmax) {  // a surface beyond the limit
         best[b] = inf;
         seen_far[b] = 1;
       }

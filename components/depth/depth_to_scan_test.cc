@@ -159,6 +159,11 @@ TEST(DepthToScanTest, NoisyWallIsNotPulledCloserByTheMinimum) {
     const double sigma = 1.425e-3 * wall_x * wall_x;
     const double min_error = MeanRangeError(minimum.Convert(depth.data(), 0.001), wall_x);
     const double surface_error = MeanRangeError(surface.Convert(depth.data(), 0.001), wall_x);
+    // A bin with nothing in it stays "no information" (0), never "no return" (+inf): a wall
+    // well inside the range limit gives no +inf beam.
+    if (wall_x <= 3.0) {
+      for (float r : surface.Convert(depth.data(), 0.001).ranges_m) EXPECT_FALSE(std::isinf(r));
+    }
     EXPECT_LT(min_error, -1.5 * sigma) << "wall at " << wall_x << " m";
     EXPECT_LT(std::abs(surface_error), 0.25 * sigma + 0.002) << "wall at " << wall_x << " m";
   }
