@@ -73,10 +73,10 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   // With the nearest surface, pixels up to a window beyond range_max_m still count: a wall just
   // inside the limit has noisy pixels on both sides of it, and keeping only the near ones
   // would pull it closer; a surface whose range comes out beyond the limit is no return.
-  const float rlimit =
-      nearest_surface ? rmax + static_cast<float>(options_.surface_window_sigmas *
-                                                  options_.range_noise_k * rmax * rmax)
-                      : rmax;
+  const float rlimit = nearest_surface
+                           ? rmax + static_cast<float>(options_.surface_window_sigmas *
+                                                       options_.range_noise_k * rmax * rmax)
+                           : rmax;
   for (int v = 0; v < h; v += step) {
     for (int u = 0; u < w; ++u) {
       const size_t i = static_cast<size_t>(v) * w + u;
