@@ -21,6 +21,14 @@ bool JudgesStuck(const std::string& state) {
 
 }  // namespace
 
+double TrailResidualRms(const common::Rigid2d& map_from_world,
+                        const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& estimate_truth) {
+  if (estimate_truth.empty()) return 0;
+  double sum = 0;
+  for (const auto& [estimate, truth] : estimate_truth) sum += (map_from_world * truth - estimate).squaredNorm();
+  return std::sqrt(sum / estimate_truth.size());
+}
+
 std::vector<int> MatchPeople(const std::vector<Eigen::Vector2d>& truth_in_map,
                              const std::vector<sarmap::mapped_person_t>& mapped, double radius_m,
                              std::vector<double>* distance_m) {

@@ -59,6 +59,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/transform.h"
@@ -86,6 +87,13 @@ struct MissionMetricsOptions {
 std::vector<int> MatchPeople(const std::vector<Eigen::Vector2d>& truth_in_map,
                              const std::vector<sarmap::mapped_person_t>& mapped, double radius_m,
                              std::vector<double>* distance_m = nullptr);
+
+// SLAM's trail error: RMS of |map_from_world * truth - estimate| over time-matched robot
+// positions (estimate in the map frame, truth in the world frame). With map_from_world the start
+// pose's inverse (MissionMetricsResult::world_from_map) this is the report's "robot trail
+// residual". 0 without pairs.
+double TrailResidualRms(const common::Rigid2d& map_from_world,
+                        const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& estimate_truth);
 
 struct CoveragePoint {
   double time_s = 0;

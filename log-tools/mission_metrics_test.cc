@@ -259,6 +259,25 @@ TEST(MissionMetricsTest, NoFloorNoCoverage) {
   EXPECT_TRUE(metrics.UnmappedFloorInMap().empty());
 }
 
+// The trail residual takes the true positions into the map frame by the start pose: a robot
+// started at (2, 1) facing +y whose SLAM trail is exact has no residual; a trail 0.3 m short
+// in the map's x on half of the samples has sqrt(0.3^2 / 2).
+TEST(MissionMetricsTest, TrailResidualAlignsTheTruthByTheStartPose) {
+  const common::Rigid2d world_from_map(2.0, 1.0, M_PI / 2);
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d in_map(0.5 * i, 0.2 * i);
+    pairs.emplace_back(in_map, world_from_map * in_map);
+  }
+  EXPECT_NEAR(TrailResidualRms(world_from_map.inverse(), pairs), 0.0, 1e-12);
+  // The identity would leave the start pose's offset and turn in.
+  EXPECT_GT(TrailResidualRms(common::Rigid2d(), pairs), 1.0);
+  pairs[1].first.x() -= 0.3;
+  pairs[3].first.x() -= 0.3;
+  EXPECT_NEAR(TrailResidualRms(world_from_map.inverse(), pairs), std::sqrt(0.09 / 2), 1e-12);
+  EXPECT_EQ(TrailResidualRms(world_from_map.inverse(), {}), 0.0);
+}
+
 TEST(MissionMetricsTest, MatchPeopleUsesEachPersonOnceClosestFirst) {
   // One mapped person between two true ones goes to the closer; the other stays unmatched.
   const std::vector<Eigen::Vector2d> truth = {{0, 0}, {0.6, 0}};

@@ -135,10 +135,7 @@ namespace {
 // RMS of |map_from_truth(truth) - estimate| over the time-matched robot positions.
 void TrailResidual(const MissionData& data, Alignment* a) {
   a->pairs = static_cast<int>(data.matched_positions.size());
-  if (a->pairs == 0) return;
-  double sum = 0;
-  for (const auto& [e, t] : data.matched_positions) sum += (a->Apply(t) - e).squaredNorm();
-  a->rms_m = std::sqrt(sum / a->pairs);
+  a->rms_m = TrailResidualRms(common::Rigid2d(a->translation, a->yaw_rad), data.matched_positions);
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ struct DepthNodeOptions {
   double range_max_m = 4.5;
   int num_beams = 0;
   int row_step = 2;
+  double range_noise_k = 0;
+  double surface_window_sigmas = 6;
   // The scan part, for depth::DepthToScan.
   DepthToScanOptions ScanOptions() const {
     DepthToScanOptions o;
@@ -45,6 +47,8 @@ struct DepthNodeOptions {
     o.range_max_m = range_max_m;
     o.num_beams = num_beams;
     o.row_step = row_step;
+    o.range_noise_k = range_noise_k;
+    o.surface_window_sigmas = surface_window_sigmas;
     return o;
   }
   template <class V>
@@ -82,6 +86,12 @@ struct DepthNodeOptions {
     v("range_max_m", range_max_m, "farther depth is no return (free up to here)");
     v("num_beams", num_beams, "beams per scan (0 = image width)");
     v("row_step", row_step, "use every n-th image row for the scan");
+    v("range_noise_k", range_noise_k,
+      "depth noise sigma = k * range^2 (m): a beam is the range of its nearest surface's pixels "
+      "(their mean about their median), not their minimum, which lies ~2.5 sigma short (0: the "
+      "minimum)");
+    v("surface_window_sigmas", surface_window_sigmas,
+      "the nearest surface: pixels within this many sigma of the beam's closest pixel");
   }
   void Validate(common::Validator& c) const {
     c.OneOf("source", source, {"openni2", "folder", "lcm"});
@@ -93,6 +103,8 @@ struct DepthNodeOptions {
     c.That(range_max_m > range_min_m, "range_max_m", "must be > range_min_m");
     c.That(num_beams >= 0, "num_beams", "must be >= 0");
     c.That(row_step >= 1, "row_step", "must be >= 1");
+    c.NonNegative("range_noise_k", range_noise_k);
+    c.Positive("surface_window_sigmas", surface_window_sigmas);
     c.InRange("jpeg_quality", jpeg_quality, 1, 100);
   }
 };

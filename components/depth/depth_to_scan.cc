@@ -53,6 +53,16 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   const float rmax = static_cast<float>(options_.range_max_m);
   const int w = intrinsics_.width, h = intrinsics_.height;
   const int step = std::max(1, options_.row_step);
+  const bool nearest_surface = options_.range_noise_k > 0;
+  pixel_bin_.clear();
+  pixel_range_.clear();
+  // With the nearest surface, pixels up to a window beyond range_max_m still count: a wall just
+  // inside the limit has noisy pixels on both sides of it, and keeping only the near ones
+  // would pull it closer; a surface whose range comes out beyond the limit is no return.
+  const float rlimit = nearest_surface
+                           ? rmax + static_cast<float>(options_.surface_window_sigmas *
+                                                       options_.range_noise_k * rmax * rmax)
+                           : rmax;
   for (int v = 0; v < h; v += step) {
     for (int u = 0; u < w; ++u) {
       const size_t i = static_cast<size_t>(v) * w + u;
@@ -65,22 +75,35 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
       const double az = std::atan2(p.y(), p.x());
       const int bin = static_cast<int>(std::lround((az - angle_min_) / angle_increment_));
       if (bin < 0 || bin >= num_beams_) continue;
-      if (d > rmax) {  // beyond the sensor's trusted range: free up to the limit
+      if (d > rlimit) {  // beyond the sensor's trusted range: free up to the limit
         seen_far[bin] = 1;
         continue;
       }
+      const float range = std::hypot(p.x(), p.y());
       if (p.z() < zmin || p.z() > zmax) {
         // Floor or ceiling: the bin is free at least up to this pixel.
-        if (std::hypot(p.x(), p.y()) >= rmax * 0.95f) seen_far[bin] = 1;
+        if (d > rmax || range >= rmax * 0.95f) seen_far[bin] = 1;
         continue;
       }
-      const float range = std::hypot(p.x(), p.y());
-      if (range > rmax) {  // off-axis: the horizontal range is what the scan limits
+      if (range > rlimit) {  // off-axis: the horizontal range is what the scan limits
         seen_far[bin] = 1;
         continue;
       }
       ++scan.in_band_pixels;
       best[bin] = std::min(best[bin], range);
+      if (nearest_surface) {
+        pixel_bin_.push_back(bin);
+        pixel_range_.push_back(range);
+      }
+    }
+  }
+  if (nearest_surface) {
+    NearestSurfaces(&best);
+    for (int b = 0; b < num_beams_; ++b) {
+      if (std::isfinite(best[b]) && best[b] > rmax) {  // a surface beyond the limit
+        best[b] = inf;
+        seen_far[b] = 1;
+      }
     }
   }
   scan.ranges_m.resize(num_beams_);
@@ -92,6 +115,40 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
     }
   }
   return scan;
+}
+
+void DepthToScan::NearestSurfaces(std::vector<float>* best) const {
+  // Group the in-band ranges by bin (counting sort), then per bin take the median of those
+  // within the window above the bin's minimum.
+  bin_start_.assign(num_beams_ + 1, 0);
+  for (int b : pixel_bin_) ++bin_start_[b + 1];
+  for (int b = 0; b < num_beams_; ++b) bin_start_[b + 1] += bin_start_[b];
+  sorted_range_.resize(pixel_range_.size());
+  std::vector<int> fill(bin_start_.begin(), bin_start_.end() - 1);
+  for (size_t i = 0; i < pixel_bin_.size(); ++i) {
+    sorted_range_[fill[pixel_bin_[i]]++] = pixel_range_[i];
+  }
+  const float k = static_cast<float>(options_.range_noise_k);
+  const float sigmas = static_cast<float>(options_.surface_window_sigmas);
+  for (int b = 0; b < num_beams_; ++b) {
+    float* first = sorted_range_.data() + bin_start_[b];
+    float* last = sorted_range_.data() + bin_start_[b + 1];
+    if (last - first < 2) continue;
+    const float r_min = (*best)[b];
+    const float limit = r_min + sigmas * k * r_min * r_min;
+    float* end = std::partition(first, last, [limit](float r) { return r <= limit; });
+    float* mid = first + (end - first) / 2;
+    std::nth_element(first, mid, end);
+    // The median sits on one of the quantised depth levels (5 cm apart at 4 m for a Kinect):
+    // the mean of the pixels within half a window of it, symmetric, averages the levels.
+    const float median = *mid, half = 0.5f * (limit - r_min);
+    double sum = 0;
+    int n = 0;
+    for (const float* r = first; r != last; ++r) {
+      if (std::abs(*r - median) <= half) sum += *r, ++n;
+    }
+    (*best)[b] = static_cast<float>(sum / n);
+  }
 }
 
 }  // namespace depth

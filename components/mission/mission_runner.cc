@@ -241,11 +241,11 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   sim_overrides.insert(sim_overrides.end(), options.sim_overrides.begin(), options.sim_overrides.end());
   const auto sim_options = common::LoadOptions<sim::SimOptions>(options.sim_config, sim_overrides);
   const sim::SimSetup setup = sim::LoadSetup(sim_options, sim::FindRepoRoot(options.sim_config));
-  const auto slam_file = common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, {});
+  const auto slam_file = common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, options.slam_overrides);
   std::vector<std::string> explore_overrides = options.explore_overrides;
   if (!options.mode.empty()) explore_overrides.push_back("explore.mode=" + options.mode);
   const auto explore_file = common::LoadOptions<explore::ExploreNodeOptions>(options.explore_config, explore_overrides);
-  const auto depth_file = common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, {});
+  const auto depth_file = common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, options.depth_overrides);
   const depth::DepthToScanOptions scan_options = depth_file.ScanOptions();
   const Eigen::Isometry3d base_from_camera = setup.robot.base_from_camera.ToRigid3d().ToIsometry();
 

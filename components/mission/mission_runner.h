@@ -33,6 +33,8 @@ struct MissionRunOptions {
   int64_t seed = 1;
   std::vector<std::string> sim_overrides;
   std::vector<std::string> explore_overrides;
+  std::vector<std::string> slam_overrides;
+  std::vector<std::string> depth_overrides;
   std::string explorer_map_pgm;      // when set: the explorer's final picture is written here
   std::string slam_map_pgm;          // when set: SLAM's final map is written here
 };

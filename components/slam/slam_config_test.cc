@@ -52,6 +52,9 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
   // The robot's loop-closure search stays near its own estimate (a Kinect scan is ambiguous).
   EXPECT_LT(robot.slam.loop.linear_window_m, base.slam.loop.linear_window_m);
 
+  // A depth scan's "no return" is free space only up to the sensor's range limit.
+  EXPECT_LT(robot.slam.scan.missing_data_ray_length_m, base.slam.scan.missing_data_ray_length_m);
+
   // Everything else is inherited: the printed options differ only in those lines.
   const auto base_lines = Lines(common::OptionsToYaml(base, false));
   const auto robot_lines = Lines(common::OptionsToYaml(robot, false));
@@ -77,7 +80,8 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
                                             "local_slam_sigma_deg",
                                             "unchanged_odometry_means_stopped",
                                             "odometry_extrapolation_s",
-                                            "linear_window_m"};
+                                            "linear_window_m",
+                                            "missing_data_ray_length_m"};
   EXPECT_GE(differing.size(), 2u);
   for (const auto& line : differing) {
     bool known = false;
