@@ -13,6 +13,7 @@
 #include "common/args.h"
 #include "common/node_main.h"
 #include "log-tools/mission_metrics.h"
+#include "log-tools/mission_report.h"
 #include "mission/mission_runner.h"
 #include "sim/floor_plan.h"
 #include "sim/site_generator.h"
@@ -22,23 +23,75 @@ namespace {
 
 using namespace sarmap;
 
+// People found, scored as `sarmap-log report` scores a log (logtools::Summarise: the last
+// PEOPLE_MAP against the truth moved into the map frame by the start pose, one-to-one within
+// 0.5 m; false = reported people matching nobody; time to find from MissionMetrics).
+class PeopleFound {
+ public:
+  void OnPose(double, const pose_t& m) {
+    if (!data_.has_start) {
+      data_.has_start = true;
+      data_.start_x_m = m.position_m[0];
+      data_.start_y_m = m.position_m[1];
+      data_.start_yaw_rad = 2 * std::atan2(m.orientation[3], m.orientation[0]);
+    }
+    if (data_.trail.empty() || std::hypot(data_.trail.back().first - m.position_m[0],
+                                          data_.trail.back().second - m.position_m[1]) > 0.05)
+      data_.trail.emplace_back(m.position_m[0], m.position_m[1]);
+  }
+  void OnPeopleMap(double t_s, const people_map_t& m, logtools::MissionMetrics* metrics) {
+    // Stamped with the mission's clock (its header carries the newest detection's time).
+    metrics->OnPeopleMap(start_utime_ + static_cast<int64_t>(std::llround(t_s * 1e6)), m);
+    data_.people = m;
+  }
+  void OnTruth(double t_s, const sim_truth_t& m) {
+    if (!data_.truth) start_utime_ = m.header.utime - static_cast<int64_t>(std::llround(t_s * 1e6));
+    data_.truth = m;
+  }
+  void OnMap(const occupancy_grid_t& m) { data_.map = m; }
+  void OnSoundMap(const sound_map_t& m) { data_.sources = m; }
+  // The summary, with the metrics fed so far.
+  logtools::MissionSummary Summary(const logtools::MissionMetrics& metrics) {
+    data_.metrics = metrics;
+    return logtools::Summarise(data_, kMatchRadiusM);
+  }
+  const std::optional<people_map_t>& people() const { return data_.people; }
+  static constexpr double kMatchRadiusM = 0.5;
+
+ private:
+  logtools::MissionData data_;
+  int64_t start_utime_ = 0;
+};
+
 // Feeds the mission's messages to the same metrics as `sarmap-log report`, and notes when each
 // person was first in the camera's view.
 class Metrics : public mission::MissionObserver {
  public:
   void OnTruth(double t_s, const sim_truth_t& m) override {
     metrics.OnTruth(m.header.utime, m);
+    people_found.OnTruth(t_s, m);
     for (const auto& p : m.people) {
       if (p.visible_to_camera && !in_view_s.count(p.id)) in_view_s[p.id] = t_s;
     }
     people = static_cast<int>(m.people.size());
   }
   void OnFloor(double, const occupancy_grid_t& m) override { metrics.OnFloor(m.header.utime, m); }
-  void OnMap(double, const occupancy_grid_t& m) override { metrics.OnMap(m.header.utime, m); }
-  void OnExploreStatus(double, const explore_status_t& m) override { metrics.OnExploreStatus(m.header.utime, m); }
+  void OnMap(double, const occupancy_grid_t& m) override {
+    metrics.OnMap(m.header.utime, m);
+    people_found.OnMap(m);
+  }
+  void OnExploreStatus(double, const explore_status_t& m) override {
+    metrics.OnExploreStatus(m.header.utime, m);
+  }
+  void OnPose(double t_s, const pose_t& m) override { people_found.OnPose(t_s, m); }
+  void OnPeopleMap(double t_s, const people_map_t& m) override {
+    people_found.OnPeopleMap(t_s, m, &metrics);
+  }
+  void OnSoundMap(double, const sound_map_t& m) override { people_found.OnSoundMap(m); }
   logtools::MissionMetrics metrics;
   std::map<int64_t, double> in_view_s;
   int people = 0;
+  PeopleFound people_found;
 };
 
 struct Row {
@@ -50,7 +103,39 @@ struct Row {
   double home_s = -1;
   int in_view = 0, people = 0;
   double distance_m = 0, cpu_s = 0, explore_cpu_percent = 0, simulated_s = 0;
+  // Perception (found within 0.5 m, as sarmap-log report scores it).
+  bool perception = false;
+  int found = 0, false_people = 0;
+  double median_find_s = -1, perception_cpu_s = 0;
+  int64_t heard_calls = 0;
+  std::string missed;  // "name (why)", ...
 };
+
+// Why a true person is not on the final people map: never in the camera's view, on the map
+// but further than the match radius from them (the nearest reported person nobody else
+// matched, within 2 m), or in view but never confirmed by the detector.
+std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, double>& in_view_s,
+                      const logtools::MissionSummary& summary,
+                      const std::optional<people_map_t>& people) {
+  if (t.dropped) return "dropped from the map";
+  double nearest = 1e9;
+  if (people) {
+    for (const auto& p : people->people) {
+      const bool used = std::any_of(
+          summary.truth.begin(), summary.truth.end(),
+          [&](const logtools::TruthMatch& o) { return o.found && o.person_id == p.id; });
+      if (!used)
+        nearest = std::min(nearest, std::hypot(p.position_m[0] - t.x_m, p.position_m[1] - t.y_m));
+    }
+  }
+  char text[64];
+  if (nearest <= 2.0) {
+    std::snprintf(text, sizeof(text), "placed %.2f m off", nearest);
+    return text;
+  }
+  if (!in_view_s.count(t.truth_id)) return "never in view";
+  return "in view, not detected";
+}
 
 std::vector<std::string> Split(const std::string& text) {
   std::vector<std::string> out;
@@ -61,34 +146,90 @@ std::vector<std::string> Split(const std::string& text) {
   return out;
 }
 
+// The people figures of one run into `row`, and each true person's outcome into `csv_path`.
+void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::MissionResult& r,
+               Row* row) {
+  const logtools::MissionSummary summary = metrics->people_found.Summary(metrics->metrics);
+  row->perception = true;
+  row->false_people = summary.false_positives;
+  row->perception_cpu_s = r.vision_cpu_s + r.people_map_cpu_s + r.sound_cpu_s;
+  row->heard_calls = r.heard_calls;
+  std::vector<double> times;
+  std::ofstream csv(csv_path);
+  csv << "name,found,found_after_s,error_m,how,first_in_view_s,why_missed\n";
+  for (const logtools::TruthMatch& t : summary.truth) {
+    const auto view = metrics->in_view_s.find(t.truth_id);
+    std::string why;
+    if (t.found) {
+      ++row->found;
+      if (t.found_after_s) times.push_back(*t.found_after_s);
+    } else {
+      why = WhyMissed(t, metrics->in_view_s, summary, metrics->people_found.people());
+      row->missed += (row->missed.empty() ? "" : ", ") + t.name + " (" + why + ")";
+    }
+    csv << t.name << "," << (t.found ? 1 : 0) << ","
+        << (t.found_after_s ? std::to_string(*t.found_after_s) : "") << ","
+        << (t.found ? std::to_string(t.error_m) : "") << "," << t.how << ","
+        << (view != metrics->in_view_s.end() ? std::to_string(view->second) : "") << "," << why
+        << "\n";
+  }
+  if (!times.empty()) {
+    std::sort(times.begin(), times.end());
+    const size_t n = times.size();
+    row->median_find_s = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-mission-bench", [&]() -> int {
     mission::MissionRunOptions run;
-    std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench", site_config = "config/site.yaml";
+    std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench",
+                        site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
+    bool no_perception = false, no_sound = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
-        "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the explorer\n"
-        "in one process, as fast as the CPU allows, on generated incident sites (sarmap-site) or given\n"
-        "worlds. For each site and exploration mode it prints the share of the reachable floor mapped,\n"
-        "the coverage rate against the physical bound, collisions, the longest time without progress,\n"
-        "whether the robot came home, and when each person was first in the camera's view; each run's\n"
+        "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the "
+        "explorer\n"
+        "in one process, as fast as the CPU allows, on generated incident sites (sarmap-site) or "
+        "given\n"
+        "worlds. For each site and exploration mode it prints the share of the reachable floor "
+        "mapped,\n"
+        "the coverage rate against the physical bound, collisions, the longest time without "
+        "progress,\n"
+        "whether the robot came home, and when each person was first in the camera's view; each "
+        "run's\n"
         "explored-area curve goes to OUT/<site>-<mode>.csv, the explorer's final grid to\n"
-        "OUT/<site>-<mode>-explorer.pgm. The perception chain (people, sound) runs\n"
-        "only in the live stack (make demo DEMO_SITE=N).");
+        "OUT/<site>-<mode>-explorer.pgm. People are found by sarmap-vision-people's detector\n"
+        "and sarmap-people-map (same libraries and files) on SLAM's poses, and scored as\n"
+        "sarmap-log report scores them (within 0.5 m); each person's outcome goes to\n"
+        "OUT/<site>-<mode>-people.csv. The sound chain (sarmap-sound-localisation, sarmap-speech,\n"
+        "sarmap-sound-map) runs on the simulator's audio and puts the people heard on the people\n"
+        "map and before the explorer (mode sound_guided).");
     parser.AddFlag("--sites", &sites, "generated sites: this many seeds, from --first-site");
     parser.AddFlag("--first-site", &first_site, "first seed of the generated sites");
     parser.AddFlag("--site-config", &site_config, "generator options for the sites");
-    parser.AddFlag("--worlds", &worlds, "comma-separated world files (instead of or besides the sites)");
-    parser.AddFlag("--modes", &modes, "comma-separated exploration modes: frontier, reactive, sound_guided");
+    parser.AddFlag("--worlds", &worlds,
+                   "comma-separated world files (instead of or besides the sites)");
+    parser.AddFlag("--modes", &modes,
+                   "comma-separated exploration modes: frontier, reactive, sound_guided");
     parser.AddFlag("--duration", &run.duration_s, "simulated seconds per mission");
     parser.AddFlag("--camera-rate", &run.camera_rate_hz, "depth frames per simulated second");
     parser.AddFlag("--out", &out_dir, "folder for the generated worlds and the curves");
-    parser.AddRepeated("--set-explore", &run.explore_overrides, "explorer option override (key=value)");
+    parser.AddRepeated("--set-explore", &run.explore_overrides,
+                       "explorer option override (key=value)");
+    parser.AddSwitch("--no-perception", &no_perception,
+                     "exploration only: no people detection, no people map");
+    parser.AddSwitch(
+        "--no-sound", &no_sound,
+        "people by sight only: no simulated audio, sound localisation, keywords or sound map");
     if (!parser.Parse(argc, argv)) return 0;
-    if (sites <= 0 && worlds.empty()) throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
+    if (sites <= 0 && worlds.empty())
+      throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
+    run.perception = !no_perception;
+    run.sound = !no_sound;
     ::mkdir(out_dir.c_str(), 0755);
 
     struct Target {
@@ -96,7 +237,8 @@ int main(int argc, char** argv) {
     };
     std::vector<Target> targets;
     for (int seed = first_site; seed < first_site + sites; ++seed) {
-      auto site = common::LoadOptions<sim::SiteOptions>(site_config, {"seed=" + std::to_string(seed)});
+      auto site =
+          common::LoadOptions<sim::SiteOptions>(site_config, {"seed=" + std::to_string(seed)});
       const sim::World world = sim::GenerateSite(site);
       const std::string path = out_dir + "/site-" + std::to_string(seed) + ".yaml";
       std::ofstream(path) << sim::SiteHeader(site) << sim::WorldToYaml(world);
@@ -152,32 +294,63 @@ int main(int argc, char** argv) {
         row.cpu_s = r.cpu_s;
         row.simulated_s = r.simulated_s;
         row.explore_cpu_percent = r.simulated_s > 0 ? 100 * r.explore_cpu_s / r.simulated_s : 0;
+        if (o.perception)
+          AddPeople(&metrics, out_dir + "/" + target.name + "-" + mode + "-people.csv", r, &row);
         rows.push_back(row);
         std::ofstream curve(out_dir + "/" + target.name + "-" + mode + ".csv");
         curve << "time_s,mapped_m2,fraction\n";
-        for (const auto& p : m.coverage) curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
+        for (const auto& p : m.coverage)
+          curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
       }
     }
 
-    std::printf("\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | collisions | "
-                "longest stuck | home | people in view | driven | explorer CPU |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | "
+        "collisions | "
+        "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
+        "median time to find "
+        "| heard calls | perception CPU | mission CPU |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows) {
-      std::printf("| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |\n",
-                  r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
-                  r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
-                  r.collisions, r.longest_stuck_s,
-                  r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
-                  r.distance_m, r.explore_cpu_percent);
+      std::printf(
+          "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f "
+          "%% |",
+          r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2,
+          100 * r.mapped_fraction, r.rate_m2_per_min,
+          r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
+          r.collisions, r.longest_stuck_s,
+          r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view,
+          r.people, r.distance_m, r.explore_cpu_percent);
+      if (r.perception) {
+        std::printf(" %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people,
+                    r.false_people,
+                    r.median_find_s < 0
+                        ? "-"
+                        : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
+                    static_cast<long long>(r.heard_calls),
+                    r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
+      } else {
+        std::printf(" - | - | - | - | - | %.0f s |\n", r.cpu_s);
+      }
     }
-    std::printf("\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f m)\n", bound,
-                speed, 2 * range * std::sin(hfov / 2), range);
+    for (const Row& r : rows) {
+      if (!r.missed.empty())
+        std::printf("%s %s missed: %s\n", r.site.c_str(), r.mode.c_str(), r.missed.c_str());
+    }
+    std::printf(
+        "\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f "
+        "m)\n",
+        bound, speed, 2 * range * std::sin(hfov / 2), range);
     for (const std::string& mode : Split(modes)) {
       std::vector<double> mapped;
-      int home = 0, collisions = 0;
+      int home = 0, collisions = 0, everyone = 0, found = 0, people = 0, false_people = 0;
       double stuck = 0;
       for (const Row& r : rows) {
         if (r.mode != mode) continue;
+        everyone += r.perception && r.found == r.people;
+        found += r.found;
+        people += r.people;
+        false_people += r.false_people;
         mapped.push_back(r.mapped_fraction);
         home += r.home;
         collisions += r.collisions;
@@ -185,10 +358,16 @@ int main(int argc, char** argv) {
       }
       if (mapped.empty()) continue;
       std::sort(mapped.begin(), mapped.end());
-      const double median = mapped.size() % 2 ? mapped[mapped.size() / 2]
-                                              : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
-      std::printf("%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s\n",
-                  mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
+      const double median = mapped.size() % 2
+                                ? mapped[mapped.size() / 2]
+                                : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
+      std::printf(
+          "%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
+          mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
+      if (run.perception)
+        std::printf("; everyone found on %d of %zu, %d of %d people, %d false", everyone,
+                    mapped.size(), found, people, false_people);
+      std::printf("\n");
     }
     return 0;
   });

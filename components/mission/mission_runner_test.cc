@@ -16,7 +16,9 @@ class Collect : public MissionObserver {
   void OnTruth(double, const sim_truth_t& m) override { metrics.OnTruth(m.header.utime, m); }
   void OnFloor(double, const occupancy_grid_t& m) override { metrics.OnFloor(m.header.utime, m); }
   void OnMap(double, const occupancy_grid_t& m) override { metrics.OnMap(m.header.utime, m); }
-  void OnExploreStatus(double, const explore_status_t& m) override { metrics.OnExploreStatus(m.header.utime, m); }
+  void OnExploreStatus(double, const explore_status_t& m) override {
+    metrics.OnExploreStatus(m.header.utime, m);
+  }
   logtools::MissionMetrics metrics;
 };
 
@@ -39,7 +41,8 @@ TEST(MissionRunnerTest, FrontierExplorationMapsTheLabWithoutCollisionAndComesHom
   const logtools::MissionMetricsResult m = collect.metrics.Result();
   ASSERT_TRUE(m.mapped_fraction.has_value());
   std::printf("lab: %.1f %% of %.1f m^2 mapped, %d collisions, home after %.0f s, %.1f m driven\n",
-              100 * *m.mapped_fraction, m.reachable_m2.value_or(0), r.collisions, r.home_after_s, r.distance_m);
+              100 * *m.mapped_fraction, m.reachable_m2.value_or(0), r.collisions, r.home_after_s,
+              r.distance_m);
   EXPECT_GE(*m.mapped_fraction, 0.9);
   EXPECT_EQ(r.collisions, 0);
   EXPECT_TRUE(r.came_home);
@@ -53,7 +56,8 @@ TEST(MissionRunnerTest, TheSameSeedGivesTheSameMission) {
   const MissionResult a = RunMission(o), b = RunMission(o);
   ASSERT_EQ(a.samples.size(), b.samples.size());
   for (size_t i = 0; i < a.samples.size(); ++i) {
-    EXPECT_EQ(a.samples[i].truth_pose, b.samples[i].truth_pose) << "at " << a.samples[i].t_s << " s";
+    EXPECT_EQ(a.samples[i].truth_pose, b.samples[i].truth_pose)
+        << "at " << a.samples[i].t_s << " s";
   }
 }
 
