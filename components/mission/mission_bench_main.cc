@@ -80,9 +80,7 @@ class Metrics : public mission::MissionObserver {
     metrics.OnMap(m.header.utime, m);
     people_found.OnMap(m);
   }
-  void OnExploreStatus(double, const explore_status_t& m) override {
-    metrics.OnExploreStatus(m.header.utime, m);
-  }
+  void OnExploreStatus(double, const explore_status_t& m) override { metrics.OnExploreStatus(m.header.utime, m); }
   void OnPose(double t_s, const pose_t& m) override { people_found.OnPose(t_s, m); }
   void OnPeopleMap(double t_s, const people_map_t& m) override {
     people_found.OnPeopleMap(t_s, m, &metrics);
@@ -185,22 +183,16 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-mission-bench", [&]() -> int {
     mission::MissionRunOptions run;
-    std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench",
-                        site_config = "config/site.yaml";
+    std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench", site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
     bool no_perception = false, no_sound = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
-        "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the "
-        "explorer\n"
-        "in one process, as fast as the CPU allows, on generated incident sites (sarmap-site) or "
-        "given\n"
-        "worlds. For each site and exploration mode it prints the share of the reachable floor "
-        "mapped,\n"
-        "the coverage rate against the physical bound, collisions, the longest time without "
-        "progress,\n"
-        "whether the robot came home, and when each person was first in the camera's view; each "
-        "run's\n"
+        "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the explorer\n"
+        "in one process, as fast as the CPU allows, on generated incident sites (sarmap-site) or given\n"
+        "worlds. For each site and exploration mode it prints the share of the reachable floor mapped,\n"
+        "the coverage rate against the physical bound, collisions, the longest time without progress,\n"
+        "whether the robot came home, and when each person was first in the camera's view; each run's\n"
         "explored-area curve goes to OUT/<site>-<mode>.csv, the explorer's final grid to\n"
         "OUT/<site>-<mode>-explorer.pgm. People are found by sarmap-vision-people's detector\n"
         "and sarmap-people-map (same libraries and files) on SLAM's poses, and scored as\n"
@@ -211,23 +203,17 @@ int main(int argc, char** argv) {
     parser.AddFlag("--sites", &sites, "generated sites: this many seeds, from --first-site");
     parser.AddFlag("--first-site", &first_site, "first seed of the generated sites");
     parser.AddFlag("--site-config", &site_config, "generator options for the sites");
-    parser.AddFlag("--worlds", &worlds,
-                   "comma-separated world files (instead of or besides the sites)");
-    parser.AddFlag("--modes", &modes,
-                   "comma-separated exploration modes: frontier, reactive, sound_guided");
+    parser.AddFlag("--worlds", &worlds, "comma-separated world files (instead of or besides the sites)");
+    parser.AddFlag("--modes", &modes, "comma-separated exploration modes: frontier, reactive, sound_guided");
     parser.AddFlag("--duration", &run.duration_s, "simulated seconds per mission");
     parser.AddFlag("--camera-rate", &run.camera_rate_hz, "depth frames per simulated second");
     parser.AddFlag("--out", &out_dir, "folder for the generated worlds and the curves");
-    parser.AddRepeated("--set-explore", &run.explore_overrides,
-                       "explorer option override (key=value)");
-    parser.AddSwitch("--no-perception", &no_perception,
-                     "exploration only: no people detection, no people map");
-    parser.AddSwitch(
-        "--no-sound", &no_sound,
-        "people by sight only: no simulated audio, sound localisation, keywords or sound map");
+    parser.AddRepeated("--set-explore", &run.explore_overrides, "explorer option override (key=value)");
+    parser.AddSwitch("--no-perception", &no_perception, "exploration only: no people detection, no people map");
+    parser.AddSwitch("--no-sound", &no_sound,
+                     "people by sight only: no simulated audio, sound localisation, keywords or sound map");
     if (!parser.Parse(argc, argv)) return 0;
-    if (sites <= 0 && worlds.empty())
-      throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
+    if (sites <= 0 && worlds.empty()) throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
     run.perception = !no_perception;
     run.sound = !no_sound;
     ::mkdir(out_dir.c_str(), 0755);
@@ -237,8 +223,7 @@ int main(int argc, char** argv) {
     };
     std::vector<Target> targets;
     for (int seed = first_site; seed < first_site + sites; ++seed) {
-      auto site =
-          common::LoadOptions<sim::SiteOptions>(site_config, {"seed=" + std::to_string(seed)});
+      auto site = common::LoadOptions<sim::SiteOptions>(site_config, {"seed=" + std::to_string(seed)});
       const sim::World world = sim::GenerateSite(site);
       const std::string path = out_dir + "/site-" + std::to_string(seed) + ".yaml";
       std::ofstream(path) << sim::SiteHeader(site) << sim::WorldToYaml(world);
@@ -299,34 +284,24 @@ int main(int argc, char** argv) {
         rows.push_back(row);
         std::ofstream curve(out_dir + "/" + target.name + "-" + mode + ".csv");
         curve << "time_s,mapped_m2,fraction\n";
-        for (const auto& p : m.coverage)
-          curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
+        for (const auto& p : m.coverage) curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
       }
     }
 
-    std::printf(
-        "\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | "
-        "collisions | "
-        "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
-        "median time to find "
-        "| heard calls | perception CPU | mission CPU |\n");
+    std::printf("\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | collisions | "
+                "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
+                "median time to find | heard calls | perception CPU | mission CPU |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows) {
-      std::printf(
-          "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f "
-          "%% |",
-          r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2,
-          100 * r.mapped_fraction, r.rate_m2_per_min,
-          r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
-          r.collisions, r.longest_stuck_s,
-          r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view,
-          r.people, r.distance_m, r.explore_cpu_percent);
+      std::printf("| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
+                  r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
+                  r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
+                  r.collisions, r.longest_stuck_s,
+                  r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
+                  r.distance_m, r.explore_cpu_percent);
       if (r.perception) {
-        std::printf(" %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people,
-                    r.false_people,
-                    r.median_find_s < 0
-                        ? "-"
-                        : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
+        std::printf(" %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people, r.false_people,
+                    r.median_find_s < 0 ? "-" : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
                     static_cast<long long>(r.heard_calls),
                     r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
       } else {
@@ -337,10 +312,8 @@ int main(int argc, char** argv) {
       if (!r.missed.empty())
         std::printf("%s %s missed: %s\n", r.site.c_str(), r.mode.c_str(), r.missed.c_str());
     }
-    std::printf(
-        "\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f "
-        "m)\n",
-        bound, speed, 2 * range * std::sin(hfov / 2), range);
+    std::printf("\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f m)\n", bound,
+                speed, 2 * range * std::sin(hfov / 2), range);
     for (const std::string& mode : Split(modes)) {
       std::vector<double> mapped;
       int home = 0, collisions = 0, everyone = 0, found = 0, people = 0, false_people = 0;
@@ -358,12 +331,10 @@ int main(int argc, char** argv) {
       }
       if (mapped.empty()) continue;
       std::sort(mapped.begin(), mapped.end());
-      const double median = mapped.size() % 2
-                                ? mapped[mapped.size() / 2]
-                                : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
-      std::printf(
-          "%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
-          mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
+      const double median = mapped.size() % 2 ? mapped[mapped.size() / 2]
+                                              : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
+      std::printf("%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
+                  mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
       if (run.perception)
         std::printf("; everyone found on %d of %zu, %d of %d people, %d false", everyone,
                     mapped.size(), found, people, false_people);
