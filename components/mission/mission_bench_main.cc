@@ -178,6 +178,24 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
   }
 }
 
+// One row of the table (a markdown table line).
+void PrintRow(const Row& r, FILE* out) {
+  std::fprintf(out, "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
+              r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
+              r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
+              r.collisions, r.longest_stuck_s,
+              r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
+              r.distance_m, r.explore_cpu_percent);
+  if (r.perception) {
+    std::fprintf(out, " %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people, r.false_people,
+                r.median_find_s < 0 ? "-" : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
+                static_cast<long long>(r.heard_calls),
+                r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
+  } else {
+    std::fprintf(out, " - | - | - | - | - | %.0f s |\n", r.cpu_s);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -282,6 +300,8 @@ int main(int argc, char** argv) {
         if (o.perception)
           AddPeople(&metrics, out_dir + "/" + target.name + "-" + mode + "-people.csv", r, &row);
         rows.push_back(row);
+        PrintRow(row, stderr);  // as soon as it is known: a long batch shows its rows as it goes
+        if (!row.missed.empty()) std::fprintf(stderr, "missed: %s\n", row.missed.c_str());
         std::ofstream curve(out_dir + "/" + target.name + "-" + mode + ".csv");
         curve << "time_s,mapped_m2,fraction\n";
         for (const auto& p : m.coverage) curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
@@ -292,22 +312,7 @@ int main(int argc, char** argv) {
                 "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
                 "median time to find | heard calls | perception CPU | mission CPU |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-    for (const Row& r : rows) {
-      std::printf("| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
-                  r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
-                  r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
-                  r.collisions, r.longest_stuck_s,
-                  r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
-                  r.distance_m, r.explore_cpu_percent);
-      if (r.perception) {
-        std::printf(" %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people, r.false_people,
-                    r.median_find_s < 0 ? "-" : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
-                    static_cast<long long>(r.heard_calls),
-                    r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
-      } else {
-        std::printf(" - | - | - | - | - | %.0f s |\n", r.cpu_s);
-      }
-    }
+    for (const Row& r : rows) PrintRow(r, stdout);
     for (const Row& r : rows) {
       if (!r.missed.empty())
         std::printf("%s %s missed: %s\n", r.site.c_str(), r.mode.c_str(), r.missed.c_str());
