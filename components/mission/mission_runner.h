@@ -9,7 +9,10 @@
 // With `perception`, people are found as in the live stack: sarmap-vision-people's detector
 // and k-of-n confirmation on the simulator's RGB-D frames (PEOPLE_VISUAL), and
 // sarmap-people-map's intake and map placing each detection with SLAM's POSE at its capture
-// time (PEOPLE_MAP), from the same libraries and configuration files as those nodes.
+// time (PEOPLE_MAP), from the same libraries and configuration files as those nodes. With
+// `sound` too, the simulator's audio goes through sarmap-sound-localisation's DoaStream,
+// sarmap-speech's SpeechStream and sarmap-sound-map's intake; PEOPLE_AUDIO and SOUND_MAP reach
+// the people map, and the people heard on PEOPLE_MAP reach the explorer (mode sound_guided).
 
 #include <Eigen/Core>
 #include <functional>
