@@ -73,7 +73,7 @@ TEST(MissionRunnerTest, TheSameSeedGivesTheSameMission) {
 // as sarmap-log report does), and nobody is there who is not; the sound chain runs beside it.
 TEST(MissionRunnerTest, PeopleSeenInTheLabAreOnThePeopleMapAndNobodyElse) {
   MissionRunOptions o = Lab("frontier");
-  o.duration_s = 12;
+  o.duration_s = 8;
   o.perception = true;
   o.sound = true;
   Collect collect;
