@@ -15,6 +15,7 @@
 #include "log-tools/mission_metrics.h"
 #include "log-tools/mission_report.h"
 #include "mission/mission_runner.h"
+#include "sarmap/doa_source_t.hpp"
 #include "sim/floor_plan.h"
 #include "sim/site_generator.h"
 #include "sim/world.h"
@@ -56,6 +57,7 @@ class PeopleFound {
     return logtools::Summarise(data_, kMatchRadiusM);
   }
   const std::optional<people_map_t>& people() const { return data_.people; }
+  const std::optional<sound_map_t>& sources() const { return data_.sources; }
   static constexpr double kMatchRadiusM = 0.5;
 
  private:
@@ -107,6 +109,7 @@ struct Row {
   double median_find_s = -1, perception_cpu_s = 0;
   int64_t heard_calls = 0;
   std::string missed;  // "name (why)", ...
+  std::string sound;   // the last SOUND_MAP against the simulated emitters
 };
 
 // Why a true person is not on the final people map: never in the camera's view, on the map
@@ -170,6 +173,21 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
         << (t.found ? std::to_string(t.error_m) : "") << "," << t.how << ","
         << (view != metrics->in_view_s.end() ? std::to_string(view->second) : "") << "," << why
         << "\n";
+  }
+  // The sound map: sources, those with a position, voices among them, persons; the simulated
+  // emitters a placed source matched (as sarmap-log report matches them, within 0.5 m).
+  if (const auto& sources = metrics->people_found.sources()) {
+    int placed = 0, voices = 0, persons = 0, matched = 0;
+    for (const auto& src : sources->sources) {
+      placed += src.has_position;
+      voices += src.has_position && src.sound_class == doa_source_t::SOUND_CLASS_VOICE;
+      persons += src.is_person;
+    }
+    for (const auto& e : summary.source_truth) matched += e.found;
+    char text[160];
+    std::snprintf(text, sizeof(text), "%zu sources, %d placed (%d voices, %d persons); %d of %zu emitters within 0.5 m",
+                  sources->sources.size(), placed, voices, persons, matched, summary.source_truth.size());
+    row->sound = text;
   }
   if (!times.empty()) {
     std::sort(times.begin(), times.end());
@@ -302,6 +320,7 @@ int main(int argc, char** argv) {
         rows.push_back(row);
         PrintRow(row, stderr);  // as soon as it is known: a long batch shows its rows as it goes
         if (!row.missed.empty()) std::fprintf(stderr, "missed: %s\n", row.missed.c_str());
+        if (!row.sound.empty()) std::fprintf(stderr, "sound map: %s\n", row.sound.c_str());
         std::ofstream curve(out_dir + "/" + target.name + "-" + mode + ".csv");
         curve << "time_s,mapped_m2,fraction\n";
         for (const auto& p : m.coverage) curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
