@@ -36,7 +36,8 @@ help:
 	@echo "             (sarmap-net-fuzz) and 10 % datagram loss, in the demo's network namespace"
 	@echo "make test    build and run every test (unit + multi-process) with CTest"
 	@echo "make bench   build and run every benchmark (prints figures)"
-	@echo "make bench-missions  autonomous missions on generated sites, frontier vs reactive (MISSION_SITES=6)"
+	@echo "make bench-missions  autonomous missions on generated sites with people detection and the sound chain,"
+	@echo "             frontier vs sound_guided (MISSION_SITES=6, MISSION_MODES=frontier,sound_guided)"
 	@echo "make fuzz    libFuzzer on the decoding of every message type (FUZZ_SECONDS=300), then the"
 	@echo "             network fuzzer against the running stack (NET_FUZZ_SECONDS=60, NET_FUZZ_RATE=2000)"
 	@echo "make build   just build;  make deps  just install packages;  make clean"
@@ -73,7 +74,7 @@ bench: build
 
 # Autonomous missions in simulated time on generated sites (components/mission/README.md).
 MISSION_SITES ?= 6
-MISSION_MODES ?= frontier,reactive
+MISSION_MODES ?= frontier,sound_guided
 MISSION_SECONDS ?= 600
 bench-missions: build
 	$(BUILD_DIR)/bin/sarmap-mission-bench --sites $(MISSION_SITES) --modes $(MISSION_MODES) \

@@ -13,7 +13,9 @@
 #include "common/args.h"
 #include "common/node_main.h"
 #include "log-tools/mission_metrics.h"
+#include "log-tools/mission_report.h"
 #include "mission/mission_runner.h"
+#include "sarmap/doa_source_t.hpp"
 #include "sim/floor_plan.h"
 #include "sim/site_generator.h"
 #include "sim/world.h"
@@ -22,23 +24,74 @@ namespace {
 
 using namespace sarmap;
 
+// People found, scored as `sarmap-log report` scores a log (logtools::Summarise: the last
+// PEOPLE_MAP against the truth moved into the map frame by the start pose, one-to-one within
+// 0.5 m; false = reported people matching nobody; time to find from MissionMetrics).
+class PeopleFound {
+ public:
+  void OnPose(double, const pose_t& m) {
+    if (!data_.has_start) {
+      data_.has_start = true;
+      data_.start_x_m = m.position_m[0];
+      data_.start_y_m = m.position_m[1];
+      data_.start_yaw_rad = 2 * std::atan2(m.orientation[3], m.orientation[0]);
+    }
+    if (data_.trail.empty() || std::hypot(data_.trail.back().first - m.position_m[0],
+                                          data_.trail.back().second - m.position_m[1]) > 0.05)
+      data_.trail.emplace_back(m.position_m[0], m.position_m[1]);
+  }
+  void OnPeopleMap(double t_s, const people_map_t& m, logtools::MissionMetrics* metrics) {
+    // Stamped with the mission's clock (its header carries the newest detection's time).
+    metrics->OnPeopleMap(start_utime_ + static_cast<int64_t>(std::llround(t_s * 1e6)), m);
+    data_.people = m;
+  }
+  void OnTruth(double t_s, const sim_truth_t& m) {
+    if (!data_.truth) start_utime_ = m.header.utime - static_cast<int64_t>(std::llround(t_s * 1e6));
+    data_.truth = m;
+  }
+  void OnMap(const occupancy_grid_t& m) { data_.map = m; }
+  void OnSoundMap(const sound_map_t& m) { data_.sources = m; }
+  // The summary, with the metrics fed so far.
+  logtools::MissionSummary Summary(const logtools::MissionMetrics& metrics) {
+    data_.metrics = metrics;
+    return logtools::Summarise(data_, kMatchRadiusM);
+  }
+  const std::optional<people_map_t>& people() const { return data_.people; }
+  const std::optional<sound_map_t>& sources() const { return data_.sources; }
+  static constexpr double kMatchRadiusM = 0.5;
+
+ private:
+  logtools::MissionData data_;
+  int64_t start_utime_ = 0;
+};
+
 // Feeds the mission's messages to the same metrics as `sarmap-log report`, and notes when each
 // person was first in the camera's view.
 class Metrics : public mission::MissionObserver {
  public:
   void OnTruth(double t_s, const sim_truth_t& m) override {
     metrics.OnTruth(m.header.utime, m);
+    people_found.OnTruth(t_s, m);
     for (const auto& p : m.people) {
       if (p.visible_to_camera && !in_view_s.count(p.id)) in_view_s[p.id] = t_s;
     }
     people = static_cast<int>(m.people.size());
   }
   void OnFloor(double, const occupancy_grid_t& m) override { metrics.OnFloor(m.header.utime, m); }
-  void OnMap(double, const occupancy_grid_t& m) override { metrics.OnMap(m.header.utime, m); }
+  void OnMap(double, const occupancy_grid_t& m) override {
+    metrics.OnMap(m.header.utime, m);
+    people_found.OnMap(m);
+  }
   void OnExploreStatus(double, const explore_status_t& m) override { metrics.OnExploreStatus(m.header.utime, m); }
+  void OnPose(double t_s, const pose_t& m) override { people_found.OnPose(t_s, m); }
+  void OnPeopleMap(double t_s, const people_map_t& m) override {
+    people_found.OnPeopleMap(t_s, m, &metrics);
+  }
+  void OnSoundMap(double, const sound_map_t& m) override { people_found.OnSoundMap(m); }
   logtools::MissionMetrics metrics;
   std::map<int64_t, double> in_view_s;
   int people = 0;
+  PeopleFound people_found;
 };
 
 struct Row {
@@ -51,6 +104,13 @@ struct Row {
   int in_view = 0, people = 0;
   double distance_m = 0, cpu_s = 0, explore_cpu_percent = 0, simulated_s = 0;
   double trail_rms_m = 0, trail_max_m = 0;  // SLAM pose against truth, aligned by the start pose
+  // Perception (found within 0.5 m, as sarmap-log report scores it).
+  bool perception = false;
+  int found = 0, false_people = 0;
+  double median_find_s = -1, perception_cpu_s = 0;
+  int64_t heard_calls = 0;
+  std::string missed;  // "name (why)", ...
+  std::string sound;   // the last SOUND_MAP against the simulated emitters
 };
 
 // SLAM's trail error over the mission's samples, with the truth taken into the map frame by the
@@ -74,6 +134,32 @@ void TrailError(const mission::MissionResult& r, const common::Rigid2d& world_fr
   row->trail_rms_m = logtools::TrailResidualRms(map_from_world, pairs);
 }
 
+// Why a true person is not on the final people map: never in the camera's view, on the map
+// but further than the match radius from them (the nearest reported person nobody else
+// matched, within 2 m), or in view but never confirmed by the detector.
+std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, double>& in_view_s,
+                      const logtools::MissionSummary& summary,
+                      const std::optional<people_map_t>& people) {
+  if (t.dropped) return "dropped from the map";
+  double nearest = 1e9;
+  if (people) {
+    for (const auto& p : people->people) {
+      const bool used = std::any_of(
+          summary.truth.begin(), summary.truth.end(),
+          [&](const logtools::TruthMatch& o) { return o.found && o.person_id == p.id; });
+      if (!used)
+        nearest = std::min(nearest, std::hypot(p.position_m[0] - t.x_m, p.position_m[1] - t.y_m));
+    }
+  }
+  char text[64];
+  if (nearest <= 2.0) {
+    std::snprintf(text, sizeof(text), "placed %.2f m off", nearest);
+    return text;
+  }
+  if (!in_view_s.count(t.truth_id)) return "never in view";
+  return "in view, not detected";
+}
+
 std::vector<std::string> Split(const std::string& text) {
   std::vector<std::string> out;
   std::stringstream in(text);
@@ -83,6 +169,73 @@ std::vector<std::string> Split(const std::string& text) {
   return out;
 }
 
+// The people figures of one run into `row`, and each true person's outcome into `csv_path`.
+void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::MissionResult& r,
+               Row* row) {
+  const logtools::MissionSummary summary = metrics->people_found.Summary(metrics->metrics);
+  row->perception = true;
+  row->false_people = summary.false_positives;
+  row->perception_cpu_s = r.vision_cpu_s + r.people_map_cpu_s + r.sound_cpu_s;
+  row->heard_calls = r.heard_calls;
+  std::vector<double> times;
+  std::ofstream csv(csv_path);
+  csv << "name,found,found_after_s,error_m,how,first_in_view_s,why_missed\n";
+  for (const logtools::TruthMatch& t : summary.truth) {
+    const auto view = metrics->in_view_s.find(t.truth_id);
+    std::string why;
+    if (t.found) {
+      ++row->found;
+      if (t.found_after_s) times.push_back(*t.found_after_s);
+    } else {
+      why = WhyMissed(t, metrics->in_view_s, summary, metrics->people_found.people());
+      row->missed += (row->missed.empty() ? "" : ", ") + t.name + " (" + why + ")";
+    }
+    csv << t.name << "," << (t.found ? 1 : 0) << ","
+        << (t.found_after_s ? std::to_string(*t.found_after_s) : "") << ","
+        << (t.found ? std::to_string(t.error_m) : "") << "," << t.how << ","
+        << (view != metrics->in_view_s.end() ? std::to_string(view->second) : "") << "," << why
+        << "\n";
+  }
+  // The sound map: sources, those with a position, voices among them, persons; the simulated
+  // emitters a placed source matched (as sarmap-log report matches them, within 0.5 m).
+  if (const auto& sources = metrics->people_found.sources()) {
+    int placed = 0, voices = 0, persons = 0, matched = 0;
+    for (const auto& src : sources->sources) {
+      placed += src.has_position;
+      voices += src.has_position && src.sound_class == doa_source_t::SOUND_CLASS_VOICE;
+      persons += src.is_person;
+    }
+    for (const auto& e : summary.source_truth) matched += e.found;
+    char text[160];
+    std::snprintf(text, sizeof(text), "%zu sources, %d placed (%d voices, %d persons); %d of %zu emitters within 0.5 m",
+                  sources->sources.size(), placed, voices, persons, matched, summary.source_truth.size());
+    row->sound = text;
+  }
+  if (!times.empty()) {
+    std::sort(times.begin(), times.end());
+    const size_t n = times.size();
+    row->median_find_s = n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
+  }
+}
+
+// One row of the table (a markdown table line).
+void PrintRow(const Row& r, FILE* out) {
+  std::fprintf(out, "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
+              r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
+              r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
+              r.collisions, r.longest_stuck_s,
+              r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
+              r.distance_m, r.explore_cpu_percent);
+  if (r.perception) {
+    std::fprintf(out, " %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people, r.false_people,
+                r.median_find_s < 0 ? "-" : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
+                static_cast<long long>(r.heard_calls),
+                r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
+  } else {
+    std::fprintf(out, " - | - | - | - | - | %.0f s |\n", r.cpu_s);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -90,6 +243,7 @@ int main(int argc, char** argv) {
     mission::MissionRunOptions run;
     std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench", site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
+    bool no_perception = false, no_sound = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
         "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the explorer\n"
@@ -99,8 +253,12 @@ int main(int argc, char** argv) {
         "whether the robot came home, and when each person was first in the camera's view; each run's\n"
         "explored-area curve goes to OUT/<site>-<mode>.csv, the explorer's final grid to\n"
         "OUT/<site>-<mode>-explorer.pgm, SLAM's trail against the truth (aligned by the start\n"
-        "pose, as sarmap-log report does) to OUT/<site>-<mode>-trail.csv. The perception chain\n"
-        "(people, sound) runs only in the live stack (make demo DEMO_SITE=N).");
+        "pose, as sarmap-log report does) to OUT/<site>-<mode>-trail.csv. People are found by\n"
+        "sarmap-vision-people's detector and sarmap-people-map (same libraries and files) on\n"
+        "SLAM's poses, and scored as sarmap-log report scores them (within 0.5 m); each person's\n"
+        "outcome goes to OUT/<site>-<mode>-people.csv. The sound chain (sarmap-sound-localisation,\n"
+        "sarmap-speech, sarmap-sound-map) runs on the simulator's audio and puts the people heard\n"
+        "on the people map and before the explorer (mode sound_guided).");
     parser.AddFlag("--sites", &sites, "generated sites: this many seeds, from --first-site");
     parser.AddFlag("--first-site", &first_site, "first seed of the generated sites");
     parser.AddFlag("--site-config", &site_config, "generator options for the sites");
@@ -113,8 +271,13 @@ int main(int argc, char** argv) {
     parser.AddRepeated("--set-sim", &run.sim_overrides, "simulator option override (key=value)");
     parser.AddRepeated("--set-slam", &run.slam_overrides, "SLAM option override (key=value)");
     parser.AddRepeated("--set-depth", &run.depth_overrides, "depth-to-scan option override (key=value)");
+    parser.AddSwitch("--no-perception", &no_perception, "exploration only: no people detection, no people map");
+    parser.AddSwitch("--no-sound", &no_sound,
+                     "people by sight only: no simulated audio, sound localisation, keywords or sound map");
     if (!parser.Parse(argc, argv)) return 0;
     if (sites <= 0 && worlds.empty()) throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
+    run.perception = !no_perception;
+    run.sound = !no_sound;
     ::mkdir(out_dir.c_str(), 0755);
 
     struct Target {
@@ -179,7 +342,12 @@ int main(int argc, char** argv) {
         row.cpu_s = r.cpu_s;
         row.simulated_s = r.simulated_s;
         row.explore_cpu_percent = r.simulated_s > 0 ? 100 * r.explore_cpu_s / r.simulated_s : 0;
+        if (o.perception)
+          AddPeople(&metrics, out_dir + "/" + target.name + "-" + mode + "-people.csv", r, &row);
         rows.push_back(row);
+        PrintRow(row, stderr);  // as soon as it is known: a long batch shows its rows as it goes
+        if (!row.missed.empty()) std::fprintf(stderr, "missed: %s\n", row.missed.c_str());
+        if (!row.sound.empty()) std::fprintf(stderr, "sound map: %s\n", row.sound.c_str());
         std::ofstream curve(out_dir + "/" + target.name + "-" + mode + ".csv");
         curve << "time_s,mapped_m2,fraction\n";
         for (const auto& p : m.coverage) curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
@@ -193,15 +361,13 @@ int main(int argc, char** argv) {
     }
 
     std::printf("\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | collisions | "
-                "longest stuck | home | people in view | driven | explorer CPU |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
+                "median time to find | heard calls | perception CPU | mission CPU |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const Row& r : rows) PrintRow(r, stdout);
     for (const Row& r : rows) {
-      std::printf("| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |\n",
-                  r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
-                  r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
-                  r.collisions, r.longest_stuck_s,
-                  r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
-                  r.distance_m, r.explore_cpu_percent);
+      if (!r.missed.empty())
+        std::printf("%s %s missed: %s\n", r.site.c_str(), r.mode.c_str(), r.missed.c_str());
     }
     std::printf("\nSLAM trail against the truth (aligned by the start pose, as sarmap-log report):\n");
     std::printf("| site | mode | trail RMS | trail max | mapped | collisions |\n|---|---|---|---|---|---|\n");
@@ -213,10 +379,14 @@ int main(int argc, char** argv) {
                 speed, 2 * range * std::sin(hfov / 2), range);
     for (const std::string& mode : Split(modes)) {
       std::vector<double> mapped;
-      int home = 0, collisions = 0;
+      int home = 0, collisions = 0, everyone = 0, found = 0, people = 0, false_people = 0;
       double stuck = 0;
       for (const Row& r : rows) {
         if (r.mode != mode) continue;
+        everyone += r.perception && r.found == r.people;
+        found += r.found;
+        people += r.people;
+        false_people += r.false_people;
         mapped.push_back(r.mapped_fraction);
         home += r.home;
         collisions += r.collisions;
@@ -226,8 +396,12 @@ int main(int argc, char** argv) {
       std::sort(mapped.begin(), mapped.end());
       const double median = mapped.size() % 2 ? mapped[mapped.size() / 2]
                                               : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
-      std::printf("%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s\n",
+      std::printf("%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
                   mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
+      if (run.perception)
+        std::printf("; everyone found on %d of %zu, %d of %d people, %d false", everyone,
+                    mapped.size(), found, people, false_people);
+      std::printf("\n");
     }
     return 0;
   });

@@ -2,23 +2,38 @@
 
 #include <time.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <stdexcept>
 
 #include "common/image_messages.h"
 #include "common/message_conversions.h"
-#include "common/time.h"
 #include "common/robot_config.h"
+#include "common/time.h"
 #include "depth/depth_node_options.h"
 #include "depth/depth_to_scan.h"
 #include "explore/explore.h"
 #include "explore/explore_node_options.h"
 #include "explore/status_message.h"
+#include "people_map/people_map.h"
+#include "people_map/people_map_intake.h"
+#include "sarmap/slam_anchor_request_t.hpp"
+#include "sarmap/slam_anchors_t.hpp"
 #include "sim/robot.h"
 #include "sim/simulator.h"
 #include "slam/slam.h"
 #include "slam/slam_node_options.h"
+#include "sound_localisation/doa_stream.h"
+#include "sound_map/online_sound_map.h"
+#include "sound_map/sound_map_intake.h"
+#include "sound_map/sound_map_messages.h"
+#include "speech/speech_stream.h"
+#include "vision_people/confirmation_tracker.h"
+#include "vision_people/detections_message.h"
+#include "vision_people/frame_assembler.h"
+#include "vision_people/vision_people_options.h"
 
 namespace sarmap {
 namespace mission {
@@ -31,12 +46,195 @@ double CpuSeconds(clockid_t clock) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+// A path from a configuration file, relative to the repository root when not absolute (the
+// nodes read them relative to their working directory, the repository root).
+std::string Resolve(const std::string& path, const std::string& repo_root) {
+  if (path.empty() || path[0] == '/' || repo_root.empty()) return path;
+  return repo_root + "/" + path;
+}
+
+// The sound chain in process, as sarmap-sound-localisation, sarmap-speech and sarmap-sound-map
+// run it: AUDIO -> DoaStream -> DOA (speech beams) and DOA_MAP (sound map); AUDIO + DOA ->
+// SpeechStream -> PEOPLE_AUDIO; DOA_MAP + PEOPLE_AUDIO + POSE + SLAM_ANCHORS + MAP ->
+// SoundMapIntake -> SOUND_MAP and SLAM_ANCHOR_REQUEST.
+struct SoundChain {
+  SoundChain(const sound::SoundLocalisationOptions& localisation,
+             const common::MicArrayOptions& array, const std::string& array_dir,
+             const speech::SpeechNodeOptions& speech_options,
+             const sound_map::SoundMapNodeOptions& map_options, const sound_map::ArrayMount& mount)
+      : doa(localisation, array, array_dir),
+        speech(speech_options, array),
+        map(map_options.map, mount) {}
+  sound::DoaStream doa;
+  speech::SpeechStream speech;
+  sound_map::OnlineSoundMap map;
+  std::unique_ptr<sound_map::SoundMapIntake> intake;
+  std::vector<sarmap::doa_t> doas, map_doas;
+  std::vector<sarmap::speech_event_t> events;
+  std::vector<sarmap::people_detections_t> heard;
+};
+
+// sarmap-vision-people and sarmap-people-map in process (and the sound chain when given):
+// RGB-D frames -> detector -> k-of-n confirmation -> PEOPLE_VISUAL -> the people map's intake,
+// which places each detection with SLAM's POSE at its capture time; PEOPLE_MAP goes to the
+// observer and, as sarmap-explore reads it, the people heard to the explorer.
+class Perception {
+ public:
+  Perception(const vision_people::VisionPeopleOptions& vision,
+             const people_map::PeopleMapNodeOptions& people,
+             const common::Rigid3d& base_from_camera, const common::Rigid3d& base_from_mic,
+             std::unique_ptr<SoundChain> sound, explore::ExploreController* explorer,
+             MissionObserver* observer, MissionResult* result)
+      : vision_(vision),
+        detector_(vision.detector, vision_people::InitialGround(vision),
+                  vision_people::MakeHogClassifier(vision.detector.color)),
+        tracker_(vision.confirmation),
+        assembler_(vision.max_pair_dt_s, vision.color_wait_s, vision.require_color),
+        map_(people.map),
+        intake_(people, base_from_camera, base_from_mic, &map_,
+                [this](common::Utime utime) { Publish(utime); }),
+        publish_period_s_(people.publish_period_s),
+        sound_(std::move(sound)),
+        explorer_(explorer),
+        observer_(observer),
+        result_(result) {}
+
+  void set_start_s(double s) { start_s_ = s; }
+  SoundChain* sound() { return sound_.get(); }
+
+  void OnPose(const sarmap::pose_t& m) {
+    now_s_ = common::UtimeToSeconds(m.header.utime) - start_s_;
+    const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    intake_.OnPose(m);
+    // The node's timer: what is due is applied and PEOPLE_MAP republished every publish_period_s.
+    if (now_s_ - last_publish_s_ >= publish_period_s_) {
+      intake_.Release();
+      if (intake_.latest_utime() > 0) Publish(intake_.latest_utime());
+    }
+    const double cpu1 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    result_->people_map_cpu_s += cpu1 - cpu0;
+    if (sound_) {
+      sound_->intake->OnPose(m);
+      result_->sound_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
+    }
+  }
+
+  void OnImage(const std::string& channel, const sarmap::image_t& m) {
+    if (channel != vision_.depth_channel && channel != vision_.rgb_channel) return;
+    const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    if (channel == vision_.depth_channel)
+      assembler_.AddDepth(m, &ready_);
+    else
+      assembler_.AddColor(m, &ready_);
+    std::vector<sarmap::people_detections_t> out;
+    for (vision_people::RgbdFrame& frame : ready_) {
+      const vision_people::DetectionResult r = detector_.Detect(frame);
+      ++result_->vision_frames;
+      out.push_back(vision_people::DetectionsMessage(tracker_.Update(r.people), frame.utime,
+                                                     vision_.sensor_id));
+    }
+    ready_.clear();
+    const double cpu1 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    result_->vision_cpu_s += cpu1 - cpu0;
+    for (const auto& msg : out) intake_.OnSeen(msg);
+    result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
+  }
+
+  // One audio block: the speech beams take it first (its DOAs come from the localiser after
+  // it, as over LCM), then the localiser's DOA steer the beams and DOA_MAP goes to the sound map.
+  void OnAudio(const sarmap::audio_frame_t& m) {
+    if (!sound_) return;
+    SoundChain& s = *sound_;
+    const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    const std::string device = m.device_id;
+    s.doa.set_device(device);
+    s.events.clear();
+    s.heard.clear();
+    s.speech.OnAudio(m.samples.data(), m.num_samples, m.num_channels, m.header.utime, device,
+                     &s.events, &s.heard);
+    s.doas.clear();
+    s.map_doas.clear();
+    s.doa.Push(m.samples.data(), m.num_samples, m.num_channels, m.header.utime, &s.doas,
+               &s.map_doas);
+    std::vector<std::string> warnings;
+    for (const auto& d : s.doas) s.speech.OnDoa(d, device, &warnings);
+    for (const auto& d : s.map_doas) s.intake->OnDoa(d);
+    for (const auto& h : s.heard) s.intake->OnHeard(h);
+    result_->sound_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0;
+    result_->heard_calls += static_cast<int64_t>(s.heard.size());
+    const double cpu1 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    for (const auto& h : s.heard) intake_.OnHeard(h);
+    result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
+  }
+
+  // SOUND_MAP from the sound map's intake.
+  void OnSoundMap(const sarmap::sound_map_t& m) {
+    const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+    intake_.OnSoundMap(m);
+    result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0;
+    if (observer_) observer_->OnSoundMap(now_s_, m);
+  }
+
+  void Finish() {
+    if (sound_) sound_->intake->Finish();
+    intake_.Finish();
+    if (intake_.latest_utime() > 0) Publish(intake_.latest_utime());
+    result_->detections_without_pose = intake_.without_pose();
+  }
+
+ private:
+  void Publish(common::Utime utime) {
+    last_publish_s_ = now_s_;
+    const sarmap::people_map_t msg = people_map::PeopleMapMessage(map_.Report(utime), utime);
+    if (explorer_) explorer_->OnHeardPeople(HeardPeople(msg));
+    if (observer_) observer_->OnPeopleMap(now_s_, msg);
+  }
+
+  // The people heard on PEOPLE_MAP as sarmap-explore takes them (explore_node.cc OnPeople):
+  // position, the largest planar standard deviation, and whether they were also seen.
+  static std::vector<explore::HeardPerson> HeardPeople(const sarmap::people_map_t& m) {
+    std::vector<explore::HeardPerson> heard;
+    for (const sarmap::mapped_person_t& p : m.people) {
+      if (!(p.cues & sarmap::mapped_person_t::CUE_HEARD)) continue;
+      explore::HeardPerson h;
+      h.id = p.id;
+      h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
+      Eigen::Matrix2d cov;
+      cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
+      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                                 0.5 * (cov + cov.transpose()), Eigen::EigenvaluesOnly)
+                                 .eigenvalues()
+                                 .maxCoeff();
+      h.position_std_m = std::sqrt(std::max(0.0, largest));
+      h.seen = (p.cues & (sarmap::mapped_person_t::CUE_SEEN_RGBD |
+                          sarmap::mapped_person_t::CUE_SEEN_DEPTH)) != 0;
+      heard.push_back(h);
+    }
+    return heard;
+  }
+
+  vision_people::VisionPeopleOptions vision_;
+  vision_people::PeopleDetector detector_;
+  vision_people::ConfirmationTracker tracker_;
+  vision_people::FrameAssembler assembler_;
+  std::vector<vision_people::RgbdFrame> ready_;
+  people_map::PeopleMap map_;
+  people_map::PeopleMapIntake intake_;
+  double publish_period_s_;
+  std::unique_ptr<SoundChain> sound_;
+  explore::ExploreController* explorer_;
+  MissionObserver* observer_;
+  MissionResult* result_;
+  double start_s_ = 0, now_s_ = 0, last_publish_s_ = -1e9;
+};
+
 class Loop : public sim::SimSink {
  public:
   Loop(const MissionRunOptions& options, const slam::SlamOptions& slam_options,
-       const explore::ExploreOptions& explore_options, const depth::DepthToScanOptions& scan_options,
-       const Eigen::Isometry3d& base_from_camera, sim::Simulator* simulator, MissionObserver* observer,
-       MissionResult* result)
+       const explore::ExploreOptions& explore_options,
+       const depth::DepthToScanOptions& scan_options, const Eigen::Isometry3d& base_from_camera,
+       sim::Simulator* simulator, MissionObserver* observer, MissionResult* result,
+       const Eigen::Vector2d& pose_sigma_xy_yaw)
       : options_(options),
         slam_(slam_options),
         explore_(explore_options),
@@ -44,14 +242,22 @@ class Loop : public sim::SimSink {
         base_from_camera_(base_from_camera),
         sim_(simulator),
         observer_(observer),
-        result_(result) {}
+        result_(result),
+        perception_(nullptr),
+        pose_sigma_xy_yaw_(pose_sigma_xy_yaw) {}
 
   void Publish(const std::string&, const sarmap::odometry_t& m) override {
-    slam_.AddOdometry(Seconds(m.header.utime), common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
+    slam_.AddOdometry(Seconds(m.header.utime),
+                      common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
   }
 
   void Publish(const std::string& channel, const sarmap::image_t& m) override {
-    if (channel != "DEPTH") return;
+    if (channel == "DEPTH") OnDepth(m);
+    // After SLAM: the frame's POSE is known when its detections reach the people map.
+    if (perception_) perception_->OnImage(channel, m);
+  }
+
+  void OnDepth(const sarmap::image_t& m) {
     std::vector<uint16_t> depth_mm;
     std::string error;
     if (!common::DecodeDepthImage(m, &depth_mm, &error)) return;
@@ -75,7 +281,10 @@ class Loop : public sim::SimSink {
     scan.ranges_m = planar.ranges_m;
     const slam::ScanResult r = slam_.AddScan(scan);
     const double t = scan.time_s - start_s_;
-    if (r.accepted) explore_.OnPose(r.map_from_base);
+    if (r.accepted) {
+      explore_.OnPose(r.map_from_base);
+      PublishPose(m.header.utime, t, r);
+    }
     if (r.accepted && t - last_map_s_ >= options_.map_period_s) {
       last_map_s_ = t;
       PublishMap(t);
@@ -97,7 +306,17 @@ class Loop : public sim::SimSink {
     slam_pose_ = r.map_from_base;
   }
 
-  void Publish(const std::string&, const sarmap::audio_frame_t&) override {}
+  void Publish(const std::string&, const sarmap::audio_frame_t& m) override {
+    if (perception_) perception_->OnAudio(m);
+  }
+
+  // SLAM_ANCHOR_REQUEST from the sound map: sarmap-slam keeps the client's node ids and answers
+  // with SLAM_ANCHORS at once and after every optimisation.
+  void OnAnchorRequest(const sarmap::slam_anchor_request_t& m) {
+    if (anchor_ids_ == m.node_ids) return;
+    anchor_ids_ = m.node_ids;
+    if (ComputeCovariance()) PublishAnchors(false);
+  }
 
   void Publish(const std::string&, const sarmap::sim_truth_t& m) override {
     const double t = Seconds(m.header.utime) - start_s_;
@@ -108,9 +327,12 @@ class Loop : public sim::SimSink {
       last_sample_s_ = t;
       MissionSample s;
       s.t_s = t;
-      const common::Rigid2d truth = common::ToRigid3d(m.robot_position_m, m.robot_orientation).ToRigid2d();
-      s.truth_pose = Eigen::Vector3d(truth.translation().x(), truth.translation().y(), truth.yaw_rad());
-      s.slam_pose = Eigen::Vector3d(slam_pose_.translation().x(), slam_pose_.translation().y(), slam_pose_.yaw_rad());
+      const common::Rigid2d truth =
+          common::ToRigid3d(m.robot_position_m, m.robot_orientation).ToRigid2d();
+      s.truth_pose =
+          Eigen::Vector3d(truth.translation().x(), truth.translation().y(), truth.yaw_rad());
+      s.slam_pose = Eigen::Vector3d(slam_pose_.translation().x(), slam_pose_.translation().y(),
+                                    slam_pose_.yaw_rad());
       s.state = explore_.status().state;
       s.collisions = m.collisions;
       s.distance_m = m.distance_m;
@@ -123,6 +345,8 @@ class Loop : public sim::SimSink {
   }
 
   void set_start_s(double s) { start_s_ = s; }
+  void set_perception(Perception* perception) { perception_ = perception; }
+  explore::ExploreController* mutable_explore() { return &explore_; }
   const explore::ExploreController& explore() const { return explore_; }
   const slam::Slam& slam() const { return slam_; }
 
@@ -139,7 +363,8 @@ class Loop : public sim::SimSink {
     grid.origin_y_m = map.origin_y_m;
     grid.cells = map.cells;
     explore_.OnMap(grid);
-    if (observer_) {
+    SoundChain* sound = perception_ ? perception_->sound() : nullptr;
+    if (observer_ || sound) {
       sarmap::occupancy_grid_t m;
       m.header.utime = static_cast<int64_t>((start_s_ + t) * 1e6);
       m.header.seq = map_seq_++;
@@ -153,8 +378,82 @@ class Loop : public sim::SimSink {
       m.compression = sarmap::occupancy_grid_t::COMPRESSION_NONE;
       m.data.assign(map.cells.begin(), map.cells.end());
       m.size = static_cast<int32_t>(m.data.size());
-      observer_->OnMap(t, m);
+      if (observer_) observer_->OnMap(t, m);
+      if (sound) sound->intake->OnSiteMap(m);
     }
+  }
+
+  // As sarmap-slam's ComputeCovariance: one joint covariance of the latest node and the
+  // requested anchors (the latest node's block goes on POSE).
+  bool ComputeCovariance() {
+    if (slam_.num_nodes() == 0) return false;
+    std::vector<int> ids = {slam_.num_nodes() - 1};
+    std::set<int64_t> wanted;
+    for (int64_t id : anchor_ids_) {
+      if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
+    }
+    for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
+    Eigen::MatrixXd cov;
+    if (!slam_.JointCovariance(ids, &cov)) return false;
+    covariance_ids_ = std::move(ids);
+    joint_covariance_ = std::move(cov);
+    node_covariance_ = joint_covariance_.topLeftCorner<3, 3>();
+    return true;
+  }
+
+  // As sarmap-slam's PublishAnchors: SLAM_ANCHORS from the last ComputeCovariance().
+  void PublishAnchors(bool loop_closed) {
+    SoundChain* sound = perception_ ? perception_->sound() : nullptr;
+    if (!sound || covariance_ids_.empty()) return;
+    const std::vector<int>& ids = covariance_ids_;
+    sarmap::slam_anchors_t msg{};
+    msg.header.utime = common::SecondsToUtime(slam_.NodeTime(ids[0]));
+    msg.header.frame = "map";
+    msg.optimisation_id = slam_.optimisation_id();
+    msg.loop_closed = loop_closed;
+    auto anchor = [&](int id) {
+      sarmap::slam_anchor_t a{};
+      a.node_id = id;
+      a.utime = common::SecondsToUtime(slam_.NodeTime(id));
+      const slam::Rigid2d p = slam_.NodePose(id);
+      a.x_m = p.translation().x();
+      a.y_m = p.translation().y();
+      a.yaw_rad = p.yaw_rad();
+      return a;
+    };
+    msg.current = anchor(ids[0]);
+    for (size_t i = 1; i < ids.size(); ++i) msg.anchors.push_back(anchor(ids[i]));
+    msg.num_anchors = static_cast<int32_t>(msg.anchors.size());
+    msg.covariance_dim = static_cast<int32_t>(3 * ids.size());
+    msg.covariance.assign(msg.covariance_dim, std::vector<double>(msg.covariance_dim));
+    for (int r = 0; r < msg.covariance_dim; ++r) {
+      for (int c = 0; c < msg.covariance_dim; ++c) msg.covariance[r][c] = joint_covariance_(r, c);
+    }
+    sound->intake->OnAnchors(msg);
+  }
+
+  // POSE as sarmap-slam publishes it: the scan's pose, with the latest node's covariance from
+  // the last optimisation plus the local matching uncertainty (pose_sigma_xy_m, _yaw_deg);
+  // SLAM_ANCHORS after it when the scan was optimised.
+  void PublishPose(int64_t utime, double t, const slam::ScanResult& r) {
+    if (!perception_ && !observer_) return;
+    const bool have_covariance = r.optimised && ComputeCovariance();
+    sarmap::pose_t msg{};
+    msg.header.utime = utime;
+    msg.header.frame = "map";
+    msg.child_frame = "base";
+    common::FromRigid3d(common::Rigid3d::FromRigid2d(r.map_from_base), msg.position_m,
+                        msg.orientation);
+    Eigen::Matrix3d cov = node_covariance_;
+    const double sxy = pose_sigma_xy_yaw_.x(), syaw = pose_sigma_xy_yaw_.y();
+    cov(0, 0) += sxy * sxy;
+    cov(1, 1) += sxy * sxy;
+    cov(2, 2) += syaw * syaw;
+    common::SetPlanarCovariance(cov, msg.covariance);
+    msg.node_id = r.node_id;
+    if (perception_) perception_->OnPose(msg);
+    if (observer_) observer_->OnPose(t, msg);
+    if (have_covariance) PublishAnchors(r.loop_closed);
   }
 
   void PublishStatus(int64_t utime, double t) {
@@ -175,6 +474,12 @@ class Loop : public sim::SimSink {
   sim::Simulator* sim_;
   MissionObserver* observer_;
   MissionResult* result_;
+  Perception* perception_;
+  Eigen::Vector2d pose_sigma_xy_yaw_;
+  Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
+  std::vector<int64_t> anchor_ids_;
+  std::vector<int> covariance_ids_;
+  Eigen::MatrixXd joint_covariance_;
   double start_s_ = 0;
   double last_map_s_ = -1e9, last_status_s_ = -1e9, last_sample_s_ = -1e9;
   int64_t map_seq_ = 0, status_seq_ = 0;
@@ -200,17 +505,18 @@ void WriteExplorerMap(const explore::ExploreController& controller, const std::s
     for (int x = 0; x < g.width; ++x) {
       const int8_t v = g.at(x, y);
       const auto& o = map.options();
-      uint8_t c = v < 0                          ? 128
-                  : v >= o.occupied_threshold    ? 0
-                  : v >= o.free_threshold        ? 170
-                  : map.Traversable(x, y)        ? 255
-                                                 : 200;
+      uint8_t c = v < 0                       ? 128
+                  : v >= o.occupied_threshold ? 0
+                  : v >= o.free_threshold     ? 170
+                  : map.Traversable(x, y)     ? 255
+                                              : 200;
       image[static_cast<size_t>(g.height - 1 - y) * g.width + x] = c;
     }
   }
   for (const auto& p : controller.status().path) {
     const Eigen::Vector2i c = g.CellOf(p);
-    if (g.Contains(c.x(), c.y())) image[static_cast<size_t>(g.height - 1 - c.y()) * g.width + c.x()] = 60;
+    if (g.Contains(c.x(), c.y()))
+      image[static_cast<size_t>(g.height - 1 - c.y()) * g.width + c.x()] = 60;
   }
   WritePgm(path, g.width, g.height, image);
 }
@@ -234,17 +540,29 @@ void WriteSlamMap(const slam::Slam& slam, const std::string& path) {
 MissionResult RunMission(const MissionRunOptions& options, MissionObserver* observer,
                          const std::function<void(double)>& progress) {
   const double cpu0 = CpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
+  const bool sound = options.perception && options.sound;
+  // With sound: the array the localiser's configuration describes, on the simulated robot (as
+  // make demo runs it).
   std::vector<std::string> sim_overrides = {
-      "world=" + options.world, "seed=" + std::to_string(options.seed), "drive=cmd_vel", "speed=0",
-      "audio.enabled=false", "camera.rate_hz=" + std::to_string(options.camera_rate_hz), "camera.jpeg_quality=0",
+      "world=" + options.world,
+      "seed=" + std::to_string(options.seed),
+      "drive=cmd_vel",
+      "speed=0",
+      sound ? "audio.enabled=true" : "audio.enabled=false",
+      "camera.rate_hz=" + std::to_string(options.camera_rate_hz),
+      "camera.jpeg_quality=0",
       "camera.compress_depth=false"};
-  sim_overrides.insert(sim_overrides.end(), options.sim_overrides.begin(), options.sim_overrides.end());
+  if (sound) sim_overrides.push_back("audio.mic_array=" + options.sim_mic_array);
+  sim_overrides.insert(sim_overrides.end(), options.sim_overrides.begin(),
+                       options.sim_overrides.end());
   const auto sim_options = common::LoadOptions<sim::SimOptions>(options.sim_config, sim_overrides);
-  const sim::SimSetup setup = sim::LoadSetup(sim_options, sim::FindRepoRoot(options.sim_config));
+  const std::string root = sim::FindRepoRoot(options.sim_config);
+  const sim::SimSetup setup = sim::LoadSetup(sim_options, root);
   const auto slam_file = common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, options.slam_overrides);
   std::vector<std::string> explore_overrides = options.explore_overrides;
   if (!options.mode.empty()) explore_overrides.push_back("explore.mode=" + options.mode);
-  const auto explore_file = common::LoadOptions<explore::ExploreNodeOptions>(options.explore_config, explore_overrides);
+  const auto explore_file =
+      common::LoadOptions<explore::ExploreNodeOptions>(options.explore_config, explore_overrides);
   const auto depth_file = common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, options.depth_overrides);
   const depth::DepthToScanOptions scan_options = depth_file.ScanOptions();
   const Eigen::Isometry3d base_from_camera = setup.robot.base_from_camera.ToRigid3d().ToIsometry();
@@ -253,9 +571,53 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   MissionResult result;
   MissionRunOptions loop_options = options;
   if (loop_options.map_period_s <= 0) loop_options.map_period_s = slam_file.map_period_s;
-  Loop loop(loop_options, slam_file.slam, explore_file.explore, scan_options, base_from_camera, &simulator, observer,
-            &result);
+  Loop loop(loop_options, slam_file.slam, explore_file.explore, scan_options, base_from_camera,
+            &simulator, observer, &result,
+            Eigen::Vector2d(slam_file.pose_sigma_xy_m, slam_file.pose_sigma_yaw_deg * M_PI / 180));
   loop.set_start_s(1e-6 * static_cast<double>(simulator.start_utime()));
+  std::unique_ptr<Perception> perception;
+  if (options.perception) {
+    // The nodes read their files relative to the repository root (their working directory).
+    auto vision = common::LoadOptions<vision_people::VisionPeopleOptions>(
+        Resolve(options.vision_config, root), {});
+    vision.robot_config = Resolve(vision.robot_config, root);
+    vision.detector.color.pcl_svm_file = Resolve(vision.detector.color.pcl_svm_file, root);
+    auto people = common::LoadOptions<people_map::PeopleMapNodeOptions>(
+        Resolve(options.people_map_config, root), {});
+    people.state_file.clear();  // one mission, nothing to resume
+    const common::RobotOptions robot = common::LoadRobot(Resolve(people.robot_config, root));
+    std::unique_ptr<SoundChain> sound;
+    if (options.sound) {
+      const auto localisation = common::LoadOptions<sound::SoundLocalisationOptions>(
+          Resolve(options.sound_localisation_config, root), {});
+      const std::string array_path = Resolve(localisation.array, root);
+      const auto array = common::LoadMicArray(array_path);
+      auto speech_options =
+          common::LoadOptions<speech::SpeechNodeOptions>(Resolve(options.speech_config, root), {});
+      auto map_options = common::LoadOptions<sound_map::SoundMapNodeOptions>(
+          Resolve(options.sound_map_config, root), {});
+      map_options.state_file.clear();
+      const common::RobotOptions map_robot =
+          common::LoadRobot(Resolve(map_options.robot_config, root));
+      try {
+        sound = std::make_unique<SoundChain>(
+            localisation, array, array_path.substr(0, array_path.find_last_of('/') + 1),
+            speech_options, map_options, sound_map::MountFromRobot(map_robot));
+      } catch (const std::invalid_argument& e) {
+        throw common::OptionsError(e.what());
+      }
+      SoundChain* chain = sound.get();
+      chain->intake = std::make_unique<sound_map::SoundMapIntake>(
+          map_options, &chain->map,
+          [&perception](sarmap::sound_map_t& m) { perception->OnSoundMap(m); },
+          [&loop](sarmap::slam_anchor_request_t& r) { loop.OnAnchorRequest(r); });
+    }
+    perception = std::make_unique<Perception>(
+        vision, people, robot.base_from_camera.ToRigid3d(), robot.base_from_mic_array.ToRigid3d(),
+        std::move(sound), loop.mutable_explore(), observer, &result);
+    perception->set_start_s(1e-6 * static_cast<double>(simulator.start_utime()));
+    loop.set_perception(perception.get());
+  }
   const double step_s = 0.05;
   double next_progress = 10;
   for (double t = step_s; t <= options.duration_s + 1e-9; t += step_s) {
@@ -280,6 +642,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     }
     result.simulated_s = t;
   }
+  if (perception) perception->Finish();
   if (!options.explorer_map_pgm.empty()) WriteExplorerMap(loop.explore(), options.explorer_map_pgm);
   if (!options.slam_map_pgm.empty()) WriteSlamMap(loop.slam(), options.slam_map_pgm);
   result.final_state = loop.explore().status().state;

@@ -5,6 +5,14 @@
 // the simulated base. No LCM, no wall clock: a 10-minute mission runs as fast as the CPU
 // allows and the same seed gives the same mission. The benchmark (sarmap-mission-bench) runs
 // it over generated sites and compares exploration modes.
+//
+// With `perception`, people are found as in the live stack: sarmap-vision-people's detector
+// and k-of-n confirmation on the simulator's RGB-D frames (PEOPLE_VISUAL), and
+// sarmap-people-map's intake and map placing each detection with SLAM's POSE at its capture
+// time (PEOPLE_MAP), from the same libraries and configuration files as those nodes. With
+// `sound` too, the simulator's audio goes through sarmap-sound-localisation's DoaStream,
+// sarmap-speech's SpeechStream and sarmap-sound-map's intake; PEOPLE_AUDIO and SOUND_MAP reach
+// the people map, and the people heard on PEOPLE_MAP reach the explorer (mode sound_guided).
 
 #include <Eigen/Core>
 #include <functional>
@@ -15,28 +23,42 @@
 #include "common/options.h"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
+#include "sarmap/people_map_t.hpp"
+#include "sarmap/pose_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
+#include "sarmap/sound_map_t.hpp"
 
 namespace sarmap {
 namespace mission {
 
 struct MissionRunOptions {
-  std::string world;                                     // world YAML
+  std::string world;  // world YAML
   std::string sim_config = "config/sim.yaml";
   std::string slam_config = "config/slam_kinect_robot.yaml";
   std::string explore_config = "config/explore.yaml";
   std::string depth_config = "config/depth.yaml";
-  std::string mode = "";             // overrides explore.mode when not empty
+  std::string vision_config = "config/vision_people.yaml";
+  std::string people_map_config = "config/people_map.yaml";
+  std::string sound_localisation_config = "config/sound_localisation.yaml";
+  std::string speech_config = "config/speech.yaml";
+  std::string sound_map_config = "config/sound_map.yaml";
+  // People from RGB-D (every camera frame) into the people map, placed with SLAM's POSE.
+  bool perception = false;
+  // With perception: the sound chain too (the simulator's audio, localisation, keyword
+  // spotting, the sound map), its people heard into the people map and to the explorer.
+  bool sound = true;
+  std::string sim_mic_array = "respeaker4";  // the simulated robot's array (make demo's)
+  std::string mode = "";                     // overrides explore.mode when not empty
   double duration_s = 600;
-  double camera_rate_hz = 15;        // depth frames (and scans) per simulated second
-  double map_period_s = 0;           // SLAM renders the map this often; 0: the SLAM file's map_period_s
+  double camera_rate_hz = 15;  // depth frames (and scans) per simulated second
+  double map_period_s = 0;     // SLAM renders the map this often; 0: the SLAM file's map_period_s
   int64_t seed = 1;
   std::vector<std::string> sim_overrides;
   std::vector<std::string> explore_overrides;
   std::vector<std::string> slam_overrides;
   std::vector<std::string> depth_overrides;
-  std::string explorer_map_pgm;      // when set: the explorer's final picture is written here
-  std::string slam_map_pgm;          // when set: SLAM's final map is written here
+  std::string explorer_map_pgm;  // when set: the explorer's final picture is written here
+  std::string slam_map_pgm;      // when set: SLAM's final map is written here
 };
 
 // One sample of the mission, every `sample_period_s` of simulated time.
@@ -51,8 +73,14 @@ struct MissionSample {
 
 struct MissionResult {
   double simulated_s = 0;
-  double cpu_s = 0;                  // whole process
-  double explore_cpu_s = 0;          // the explorer alone
+  double cpu_s = 0;             // whole process
+  double explore_cpu_s = 0;     // the explorer alone
+  double vision_cpu_s = 0;      // decoding, detection and confirmation of the RGB-D frames
+  double people_map_cpu_s = 0;  // the people map's intake and map
+  double sound_cpu_s = 0;       // localisation, speech and the sound map (not the audio simulation)
+  int64_t heard_calls = 0;      // PEOPLE_AUDIO messages (keywords with a direction)
+  int64_t vision_frames = 0;
+  int64_t detections_without_pose = 0;  // dropped by the people map (no POSE near their time)
   double distance_m = 0;
   int collisions = 0;
   std::vector<std::string> contacts;  // each collision: when, where (world frame) and against what
@@ -64,7 +92,8 @@ struct MissionResult {
 };
 
 // Called for every message the simulator emits (truth, floor), the SLAM map when it is
-// rendered, and the explorer's status, so that metrics can be computed in the same pass.
+// rendered, the explorer's status, SLAM's POSE and the people map, so that metrics can be
+// computed in the same pass.
 // Times are simulated seconds since the start.
 struct MissionObserver {
   virtual ~MissionObserver() = default;
@@ -72,6 +101,12 @@ struct MissionObserver {
   virtual void OnFloor(double /*t_s*/, const sarmap::occupancy_grid_t& /*floor*/) {}
   virtual void OnMap(double /*t_s*/, const sarmap::occupancy_grid_t& /*map*/) {}
   virtual void OnExploreStatus(double /*t_s*/, const sarmap::explore_status_t& /*status*/) {}
+  // SLAM's POSE of every accepted scan.
+  virtual void OnPose(double /*t_s*/, const sarmap::pose_t& /*pose*/) {}
+  // PEOPLE_MAP (perception on): after every input that changed it, and every publish_period_s.
+  virtual void OnPeopleMap(double /*t_s*/, const sarmap::people_map_t& /*people*/) {}
+  // SOUND_MAP (perception and sound on), every publish_period_s of message time.
+  virtual void OnSoundMap(double /*t_s*/, const sarmap::sound_map_t& /*sources*/) {}
 };
 
 // Runs one mission. Throws on bad configuration (OptionsError, WorldError).

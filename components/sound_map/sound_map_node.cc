@@ -25,6 +25,7 @@
 #include "sarmap/slam_anchors_t.hpp"
 #include "sarmap/sound_map_t.hpp"
 #include "sound_map/online_sound_map.h"
+#include "sound_map/sound_map_intake.h"
 #include "sound_map/sound_map_messages.h"
 
 namespace {
@@ -45,12 +46,14 @@ int main(int argc, char** argv) {
     parser.SetEpilog(
         "Channels in: DOA, PEOPLE_AUDIO, POSE, SLAM_ANCHORS, MAP. Out: SLAM_ANCHOR_REQUEST, "
         "SOUND_MAP.");
-    const auto parsed = sarmap::common::ParseNodeOptions<SoundMapNodeOptions>(&parser, &node_args, argc, argv, "config/sound_map.yaml");
+    const auto parsed = sarmap::common::ParseNodeOptions<SoundMapNodeOptions>(
+        &parser, &node_args, argc, argv, "config/sound_map.yaml");
     if (!parsed) return 0;
     const SoundMapNodeOptions& options = *parsed;
     const auto robot = sarmap::common::LoadRobot(options.robot_config);
     const sarmap::sound_map::ArrayMount mount = sarmap::sound_map::MountFromRobot(robot);
-    if (std::abs(robot.base_from_mic_array.roll_rad) > 1e-6 || std::abs(robot.base_from_mic_array.pitch_rad) > 1e-6) {
+    if (std::abs(robot.base_from_mic_array.roll_rad) > 1e-6 ||
+        std::abs(robot.base_from_mic_array.pitch_rad) > 1e-6) {
       SARMAP_LOG(WARN) << "base_from_mic_array roll/pitch are ignored by the planar sound map";
     }
 
@@ -70,47 +73,11 @@ int main(int argc, char** argv) {
     }
     sarmap::common::Node node("sarmap-sound-map", node_args.lcm_url);
     auto map_pub = node.Advertise<sarmap::sound_map_t>(options.sound_map_channel);
-    auto request_pub = node.Advertise<sarmap::slam_anchor_request_t>(options.anchor_request_channel);
-    sarmap::common::TimeOrderedQueue<std::function<void(Utime)>> queue(
-        sarmap::common::SecondsToUtime(options.reorder_delay_s));
-    Utime last_publish = INT64_MIN / 2, newest = 0;
-    int64_t warned_kind = 0;
-
-    auto send_request = [&](Utime utime) {
-      sarmap::slam_anchor_request_t req;
-      req.header.utime = utime;
-      req.header.frame = "map";
-      req.client_id = options.client_id;
-      req.node_ids = map.AnchorNodeIds();
-      req.num_node_ids = static_cast<int32_t>(req.node_ids.size());
-      request_pub.Publish(&req);
-    };
-    auto publish_map = [&](Utime utime) {
-      sarmap::sound_map_t msg = sarmap::sound_map::SoundMapMessage(map, utime);
-      map_pub.Publish(&msg);
-      last_publish = utime;
-    };
-    bool changed_since_save = false;
-    auto after_input = [&](Utime utime) {
-      changed_since_save = true;
-      if (map.TakeAnchorsChanged()) send_request(utime);
-      if (utime - last_publish >= sarmap::common::SecondsToUtime(options.publish_period_s))
-        publish_map(utime);
-      const auto& c = map.counters();
-      if (c.doa_unsupported_kind > warned_kind) {
-        warned_kind = c.doa_unsupported_kind;
-        static sarmap::common::RateLimiter limit(10.0);
-        if (limit.Allow(sarmap::common::SteadySeconds())) {
-          SARMAP_LOG(WARN) << c.doa_unsupported_kind
-                           << " DOA(s) of an unusable kind ignored (unknown kind, or ANGLE_1D cone angles "
-                              "with map.three_d: the 3D map needs azimuth + elevation)";
-        }
-      }
-    };
-    const auto apply = [&](Utime t, std::function<void(Utime)>& f) {
-      f(t);
-      after_input(t);
-    };
+    auto request_pub =
+        node.Advertise<sarmap::slam_anchor_request_t>(options.anchor_request_channel);
+    sarmap::sound_map::SoundMapIntake intake(
+        options, &map, [&](sarmap::sound_map_t& m) { map_pub.Publish(&m); },
+        [&](sarmap::slam_anchor_request_t& r) { request_pub.Publish(&r); });
     // One far-future stamp must not become the queue's clock (every later input "late"): each
     // input stream is gated on its own clock (common/stamp_gate.h).
     enum Gate { kPoseGate, kAnchorsGate, kDoaGate, kHeardGate };
@@ -120,72 +87,43 @@ int main(int argc, char** argv) {
       node.Reject(info.channel, "stamp " + std::to_string(utime) + " far from the stream's clock");
       return false;
     };
-    auto push = [&](Utime utime, std::function<void(Utime)> fn) {
-      newest = std::max(newest, utime);
-      if (!queue.Push(utime, std::move(fn))) return;
-      queue.Release(apply);
-    };
-
-    node.Subscribe<sarmap::pose_t>(options.pose_channel, [&](const sarmap::pose_t& msg, const auto& info) {
-      if (!stamp_ok(kPoseGate, msg.header.utime, info)) return;
-      const Pose2 pose = sarmap::sound_map::PlanarPose(msg);
-      const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(msg.covariance);
-      const int64_t node_id = msg.node_id;
-      push(msg.header.utime, [&map, pose, cov, node_id](Utime t) { map.OnPose(t, pose, cov, node_id); });
-    });
-    node.Subscribe<sarmap::slam_anchors_t>(options.anchors_channel, [&](const sarmap::slam_anchors_t& msg, const auto& info) {
-      if (!stamp_ok(kAnchorsGate, msg.header.utime, info)) return;
-      Pose2 current;
-      std::vector<std::pair<int64_t, Pose2>> anchors;
-      Eigen::MatrixXd cov;
-      if (!sarmap::sound_map::AnchorsFromMessage(msg, &current, &anchors, &cov)) {
-        static sarmap::common::RateLimiter limit(5.0);
-        if (limit.Allow(sarmap::common::SteadySeconds())) {
-          SARMAP_LOG(WARN) << "SLAM_ANCHORS: covariance_dim " << msg.covariance_dim << " != 3(1+"
-                           << msg.num_anchors << ") or rows missing, dropped";
-        }
-        return;
-      }
-      const bool loop_closed = msg.loop_closed;
-      push(msg.header.utime, [&map, current, anchors, cov, loop_closed](Utime t) {
-        if (!map.OnSlamAnchors(t, current, anchors, cov, loop_closed)) {
-          static sarmap::common::RateLimiter limit(5.0);
-          if (limit.Allow(sarmap::common::SteadySeconds())) {
-            SARMAP_LOG(WARN) << "SLAM_ANCHORS rejected (non-finite covariance)";
+    node.Subscribe<sarmap::pose_t>(options.pose_channel,
+                                   [&](const sarmap::pose_t& msg, const auto& info) {
+                                     if (stamp_ok(kPoseGate, msg.header.utime, info))
+                                       intake.OnPose(msg);
+                                   });
+    node.Subscribe<sarmap::slam_anchors_t>(
+        options.anchors_channel, [&](const sarmap::slam_anchors_t& msg, const auto& info) {
+          if (!stamp_ok(kAnchorsGate, msg.header.utime, info)) return;
+          if (!intake.OnAnchors(msg)) {
+            static sarmap::common::RateLimiter limit(5.0);
+            if (limit.Allow(sarmap::common::SteadySeconds())) {
+              SARMAP_LOG(WARN) << "SLAM_ANCHORS: covariance_dim " << msg.covariance_dim
+                               << " != 3(1+" << msg.num_anchors << ") or rows missing, dropped";
+            }
           }
-        }
-      });
-    });
-    node.Subscribe<sarmap::doa_t>(options.doa_channel, [&](const sarmap::doa_t& msg, const auto& info) {
-      if (!stamp_ok(kDoaGate, msg.header.utime, info)) return;
-      std::vector<OnlineSoundMap::Doa> doas = sarmap::sound_map::DoasFromMessage(msg);
-      const std::string device = msg.device_id;
-      push(msg.header.utime, [&map, device, doas](Utime t) { map.OnDoa(t, device, doas); });
-    });
+        });
+    node.Subscribe<sarmap::doa_t>(options.doa_channel,
+                                  [&](const sarmap::doa_t& msg, const auto& info) {
+                                    if (stamp_ok(kDoaGate, msg.header.utime, info))
+                                      intake.OnDoa(msg);
+                                  });
     node.Subscribe<sarmap::people_detections_t>(
-        options.people_audio_channel, [&](const sarmap::people_detections_t& msg, const auto& info) {
-          if (!stamp_ok(kHeardGate, msg.header.utime, info)) return;
-          // By direction: the heard people's track ids are sarmap-speech's (DOA), not the
-          // map stream's (DOA_MAP).
-          const auto heard = sarmap::sound_map::HeardDirections(msg);
-          push(msg.header.utime, [&map, heard](Utime) {
-            for (const auto& d : heard) map.OnHeardDirection(d);
-          });
+        options.people_audio_channel,
+        [&](const sarmap::people_detections_t& msg, const auto& info) {
+          if (stamp_ok(kHeardGate, msg.header.utime, info)) intake.OnHeard(msg);
         });
     if (!options.site_map_channel.empty())
       node.Subscribe<sarmap::occupancy_grid_t>(
-          options.site_map_channel, [&](const sarmap::occupancy_grid_t& msg, const auto&) {
-            // The site only grows: applied at once, not in time order.
-            Eigen::Vector2d lo, hi;
-            if (sarmap::sound_map::SiteBox(msg, &lo, &hi)) map.SetSite(lo, hi);
-          });
+          options.site_map_channel,
+          [&](const sarmap::occupancy_grid_t& msg, const auto&) { intake.OnSiteMap(msg); });
     if (options.request_repeat_s > 0)
       node.AddTimer(options.request_repeat_s, [&] {
-        if (!map.AnchorNodeIds().empty()) send_request(newest);
+        if (!map.AnchorNodeIds().empty()) intake.SendRequest(intake.newest_utime());
       });
     const auto save_state = [&] {
-      if (options.state_file.empty() || !changed_since_save) return;
-      changed_since_save = false;
+      if (options.state_file.empty() || !intake.changed()) return;
+      intake.clear_changed();
       try {
         map.Save(options.state_file);
       } catch (const std::exception& e) {
@@ -200,20 +138,20 @@ int main(int argc, char** argv) {
       node.SetStatusMessage("sources " + std::to_string(map.ekf().source_ids().size()) + " (born " +
                             std::to_string(c.doa_new_sources) + ", pruned " +
                             std::to_string(c.sources_pruned + c.mirrors_pruned) + "), doa used " +
-                            std::to_string(c.doa_used) + ", gated " + std::to_string(c.doa_gated_out) +
-                            ", too steep " + std::to_string(c.doa_too_steep) + ", on path " +
-                            std::to_string(c.sources_on_path) +
-                            ", back-propagations " + std::to_string(c.back_propagations) + " (anchors skipped " +
+                            std::to_string(c.doa_used) + ", gated " +
+                            std::to_string(c.doa_gated_out) + ", too steep " +
+                            std::to_string(c.doa_too_steep) + ", on path " +
+                            std::to_string(c.sources_on_path) + ", back-propagations " +
+                            std::to_string(c.back_propagations) + " (anchors skipped " +
                             std::to_string(c.anchors_skipped) + "), late inputs " +
-                            std::to_string(queue.dropped_late()) + ", off-clock stamps " +
+                            std::to_string(intake.dropped_late()) + ", off-clock stamps " +
                             std::to_string(gates.dropped()) + " (re-anchors " +
                             std::to_string(gates.reanchors()) + ")");
     });
     const int code = node.Run();
     // What still waits in the queue (the last reorder_delay_s of the mission) is applied, and the
     // final map published and saved.
-    queue.Flush(apply);
-    if (newest > 0) publish_map(newest);
+    intake.Finish();
     save_state();
     return code;
   });

@@ -12,31 +12,12 @@
 #include "common/options.h"
 #include "sarmap/people_detections_t.hpp"
 #include "vision_people/confirmation_tracker.h"
+#include "vision_people/detections_message.h"
 #include "vision_people/frame_assembler.h"
 #include "vision_people/vision_people_options.h"
 
 using namespace sarmap;
 using namespace sarmap::vision_people;
-
-namespace {
-
-// Direction in the camera optical frame (z forward, x right, y down): azimuth positive to
-// the left, elevation positive up, with the covariance propagated from the position's.
-void FillDirection(const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, person_detection_t* out) {
-  const double x = p.x(), y = p.y(), z = p.z();
-  const double rho2 = x * x + z * z, rho = std::sqrt(rho2), r2 = rho2 + y * y;
-  out->azimuth_rad = std::atan2(-x, z);
-  out->elevation_rad = std::atan2(-y, rho);
-  Eigen::Matrix<double, 2, 3> J = Eigen::Matrix<double, 2, 3>::Zero();
-  if (rho2 > 1e-12 && r2 > 1e-12) {
-    J << -z / rho2, 0, x / rho2,                            // d atan2(-x, z)
-        y * x / (rho * r2), -rho / r2, y * z / (rho * r2);  // d atan2(-y, rho)
-  }
-  const Eigen::Matrix2d dcov = J * cov * J.transpose();
-  for (int i = 0; i < 4; ++i) out->direction_covariance[i] = dcov(i / 2, i % 2);
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-vision-people", [&] {
@@ -120,25 +101,7 @@ int main(int argc, char** argv) {
           floor_status = f.str();
         }
         const auto confirmed = tracker.Update(result.people);
-        people_detections_t msg;
-        msg.header.utime = frame.utime;
-        msg.header.frame = "camera";
-        msg.sensor_id = options.sensor_id;
-        for (const auto& c : confirmed) {
-          person_detection_t d{};
-          d.track_id = c.track_id;
-          d.cue = c.person.hog_used ? person_detection_t::CUE_SEEN_RGBD
-                                    : person_detection_t::CUE_SEEN_DEPTH;
-          d.has_range = true;
-          for (int i = 0; i < 3; ++i) d.position_m[i] = c.person.position_camera(i);
-          for (int i = 0; i < 9; ++i) d.position_covariance[i] = c.person.covariance(i / 3, i % 3);
-          FillDirection(c.person.position_camera, c.person.covariance, &d);
-          d.height_m = static_cast<float>(c.person.height_m);
-          d.confidence = static_cast<float>(std::clamp(c.person.confidence, 0.0, 1.0));
-          d.keyword = "";
-          msg.detections.push_back(d);
-        }
-        msg.num_detections = static_cast<int32_t>(msg.detections.size());
+        people_detections_t msg = DetectionsMessage(confirmed, frame.utime, options.sensor_id);
         published_people += msg.num_detections;
         publisher.Publish(&msg);
       }
@@ -169,7 +132,8 @@ int main(int argc, char** argv) {
     common::StampGates gates(options.stamp_gate);
     const auto stamp_ok = [&](int gate, const image_t& m, const common::ReceiveInfo& info) {
       if (gates.Accept(gate, m.header.utime, info.receive_time_s)) return true;
-      node.Reject(info.channel, "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
+      node.Reject(info.channel,
+                  "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
       return false;
     };
     node.Subscribe<image_t>(

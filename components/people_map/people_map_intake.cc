@@ -1,0 +1,207 @@
+#include "people_map/people_map_intake.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/logging.h"
+#include "common/message_conversions.h"
+#include "sarmap/doa_source_t.hpp"
+
+namespace sarmap {
+namespace people_map {
+
+using common::Utime;
+
+namespace {
+// Each input is ordered within its own stream: a keyword is published only after its
+// utterance has been decoded (0.1-2 s after it was said), later than the visual detections
+// of the same instant, and must not be dropped as late.
+constexpr int kSeenStream = 0, kHeardStream = 1, kSoundMapStream = 2;
+}  // namespace
+
+sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, Utime utime) {
+  sarmap::people_map_t msg;
+  msg.header.utime = utime;
+  msg.header.frame = "map";
+  for (const auto& p : people) {
+    sarmap::mapped_person_t m;
+    m.id = p.id;
+    for (int i = 0; i < 3; ++i) m.position_m[i] = p.position_m[i];
+    for (int i = 0; i < 9; ++i) m.covariance[i] = p.covariance(i / 3, i % 3);
+    m.confidence = static_cast<float>(p.confidence);
+    m.cues = static_cast<int8_t>(p.cues);
+    m.num_detections = p.num_detections;
+    m.people_count = p.people_count;
+    m.first_detected_utime = p.first_detected_utime;
+    m.last_detected_utime = p.last_detected_utime;
+    m.keyword = p.keyword;
+    m.sound_source_id = p.sound_source_id;
+    msg.people.push_back(m);
+  }
+  msg.num_people = static_cast<int32_t>(msg.people.size());
+  return msg;
+}
+
+PeopleMapIntake::PeopleMapIntake(const PeopleMapNodeOptions& options,
+                                 const common::Rigid3d& base_from_camera,
+                                 const common::Rigid3d& base_from_mic, PeopleMap* map,
+                                 std::function<void(Utime)> on_applied)
+    : options_(options),
+      base_from_camera_(base_from_camera),
+      base_from_mic_(base_from_mic),
+      map_(map),
+      on_applied_(std::move(on_applied)),
+      poses_(common::SecondsToUtime(60.0), common::SecondsToUtime(options.max_pose_gap_s)),
+      queue_(common::SecondsToUtime(options.reorder_delay_s)) {}
+
+void PeopleMapIntake::Applied(Utime utime) {
+  latest_utime_ = std::max(latest_utime_, utime);
+  dirty_ = true;
+  if (on_applied_) on_applied_(latest_utime_);
+}
+
+std::optional<common::StampedPose> PeopleMapIntake::PoseAt(Utime utime) {
+  auto pose = poses_.At(utime);
+  if (!pose) {
+    ++without_pose_;
+    SARMAP_LOG(WARN) << "no robot pose within " << options_.max_pose_gap_s
+                     << " s of a detection at " << utime << "; dropped (" << without_pose_
+                     << " so far)";
+  }
+  return pose;
+}
+
+void PeopleMapIntake::PlaceWaiting(bool final) {
+  const Utime pose_wait_us = common::SecondsToUtime(options_.pose_wait_s);
+  while (!waiting_for_pose_.empty()) {
+    const Utime utime = waiting_for_pose_.front().first;
+    if (utime > poses_.newest_utime()) {
+      if (!final && newest_input_utime_ - utime <= pose_wait_us) break;
+      // Never placed with a pose extrapolated into a turn: dropped and counted.
+      ++without_pose_;
+      waiting_for_pose_.pop_front();
+      continue;
+    }
+    waiting_for_pose_.front().second();
+    waiting_for_pose_.pop_front();
+    Applied(utime);
+  }
+}
+
+// Runs `place` (which looks up the pose at `utime`) now if a pose at or after `utime` is known
+// and nothing older waits, else queues it.
+void PeopleMapIntake::WhenPosed(Utime utime, std::function<void()> place) {
+  if (waiting_for_pose_.empty() && poses_.newest_utime() >= utime) {
+    place();
+    return;
+  }
+  waiting_for_pose_.emplace_back(utime, std::move(place));
+}
+
+void PeopleMapIntake::Release() {
+  queue_.Release([&](Utime utime, std::function<void()>& apply) {
+    apply();
+    Applied(utime);
+  });
+  PlaceWaiting(false);
+}
+
+void PeopleMapIntake::Finish() {
+  queue_.Flush([&](Utime utime, std::function<void()>& apply) {
+    apply();
+    latest_utime_ = std::max(latest_utime_, utime);
+    dirty_ = true;
+  });
+  PlaceWaiting(true);
+}
+
+void PeopleMapIntake::OnPose(const sarmap::pose_t& m) {
+  common::StampedPose p;
+  p.utime = m.header.utime;
+  p.pose = common::ToRigid3d(m.position_m, m.orientation);
+  p.covariance = common::ToCovariance6(m.covariance);
+  poses_.Add(p);
+  newest_input_utime_ = std::max(newest_input_utime_, p.utime);
+  // POSE is the one input that never stops (detections do when nobody is in view; the sound
+  // map publishes 3 s late): it moves the queue's clock.
+  queue_.AdvanceTo(p.utime);
+  Release();
+}
+
+void PeopleMapIntake::OnSeen(const sarmap::people_detections_t& m) {
+  const Utime utime = m.header.utime;
+  std::vector<SeenDetection> seen;
+  for (const auto& d : m.detections) {
+    if (!d.has_range || d.cue == sarmap::person_detection_t::CUE_HEARD) continue;
+    SeenDetection s;
+    s.position_camera_m = Eigen::Vector3d(d.position_m[0], d.position_m[1], d.position_m[2]);
+    s.covariance_camera =
+        Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d.position_covariance);
+    s.confidence = d.confidence;
+    s.cue = d.cue == sarmap::person_detection_t::CUE_SEEN_DEPTH ? kSeenDepth : kSeenRgbd;
+    seen.push_back(s);
+  }
+  if (seen.empty()) return;
+  newest_input_utime_ = std::max(newest_input_utime_, utime);
+  queue_.Push(
+      utime,
+      [this, utime, seen] {
+        WhenPosed(utime, [this, utime, seen] {
+          if (auto pose = PoseAt(utime)) {
+            const Eigen::Matrix3d planar = common::PlanarCovariance(pose->covariance);
+            map_->AddSeen(utime, seen, pose->pose * base_from_camera_, planar,
+                          pose->pose.translation().head<2>());
+          }
+        });
+      },
+      kSeenStream);
+  Release();
+}
+
+void PeopleMapIntake::OnHeard(const sarmap::people_detections_t& m) {
+  const Utime utime = m.header.utime;
+  std::vector<HeardDetection> heard;
+  for (const auto& d : m.detections) {
+    HeardDetection h;
+    h.azimuth_rad = d.azimuth_rad;
+    h.elevation_rad = d.elevation_rad;
+    h.azimuth_sigma_rad = std::sqrt(std::max(0.0, d.direction_covariance[0]));
+    h.confidence = d.confidence;
+    h.keyword = d.keyword;
+    heard.push_back(h);
+  }
+  if (heard.empty()) return;
+  newest_input_utime_ = std::max(newest_input_utime_, utime);
+  queue_.Push(
+      utime,
+      [this, utime, heard] {
+        WhenPosed(utime, [this, utime, heard] {
+          if (auto pose = PoseAt(utime)) map_->AddHeard(utime, heard, pose->pose * base_from_mic_);
+        });
+      },
+      kHeardStream);
+  Release();
+}
+
+void PeopleMapIntake::OnSoundMap(const sarmap::sound_map_t& m) {
+  std::vector<SoundSource> sources;
+  for (const auto& s : m.sources) {
+    // Only placed voices can be people: a bearing has no position yet, and a machine or an
+    // alarm is never a person, whatever the keyword spotter heard near it.
+    if (!s.has_position || s.sound_class != sarmap::doa_source_t::SOUND_CLASS_VOICE) continue;
+    SoundSource src;
+    src.id = s.id;
+    src.position_m = Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);
+    src.covariance = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(s.covariance);
+    src.is_person = s.is_person;
+    src.converged = s.state == sarmap::sound_source_t::STATE_CONVERGED;
+    sources.push_back(src);
+  }
+  const Utime utime = m.header.utime;
+  queue_.Push(
+      utime, [this, utime, sources] { map_->UpdateSoundSources(utime, sources); }, kSoundMapStream);
+  Release();
+}
+
+}  // namespace people_map
+}  // namespace sarmap

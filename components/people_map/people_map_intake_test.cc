@@ -1,0 +1,106 @@
+// sarmap-people-map's input handling without the bus: capture-time order, the pose
+// interpolated at each detection's time, detections waiting for a later pose.
+#include "people_map/people_map_intake.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/robot_config.h"
+
+namespace sarmap {
+namespace people_map {
+namespace {
+
+using common::Utime;
+
+// The robot at (x_m, 0) facing +x, with a small covariance.
+sarmap::pose_t Pose(Utime utime, double x_m) {
+  sarmap::pose_t m{};
+  m.header.utime = utime;
+  m.header.frame = "map";
+  m.position_m[0] = x_m;
+  m.orientation[0] = 1;
+  for (int i = 0; i < 6; ++i) m.covariance[7 * i] = 1e-4;
+  return m;
+}
+
+// One person straight ahead of the camera, forward_m along its optical axis.
+sarmap::people_detections_t Seen(Utime utime, double forward_m) {
+  sarmap::people_detections_t m{};
+  m.header.utime = utime;
+  m.header.frame = "camera";
+  sarmap::person_detection_t d{};
+  d.cue = sarmap::person_detection_t::CUE_SEEN_DEPTH;
+  d.has_range = true;
+  d.position_m[1] = 0.55 - 0.85;  // centre 0.85 m above the floor, camera 0.55 m up
+  d.position_m[2] = forward_m;
+  d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
+  d.confidence = 0.9f;
+  m.detections.push_back(d);
+  m.num_detections = 1;
+  return m;
+}
+
+struct Fixture {
+  PeopleMapNodeOptions options;
+  PeopleMap map{PeopleMapOptions()};
+  int applied = 0;
+  Utime last_applied = 0;
+  std::unique_ptr<PeopleMapIntake> intake;
+  Fixture() {
+    const common::RobotOptions robot;
+    intake = std::make_unique<PeopleMapIntake>(options, robot.base_from_camera.ToRigid3d(),
+                                               robot.base_from_mic_array.ToRigid3d(), &map,
+                                               [this](Utime u) {
+                                                 ++applied;
+                                                 last_applied = u;
+                                               });
+  }
+  double camera_ahead_m() const {
+    return common::RobotOptions().base_from_camera.ToRigid3d().translation().x();
+  }
+};
+
+TEST(PeopleMapIntakeTest, PlacesADetectionWithThePoseInterpolatedAtItsTime) {
+  Fixture f;
+  f.intake->OnPose(Pose(1'000'000, 0.0));
+  // Seen at 1.05 s, before the pose of 1.1 s arrives: it waits for it, then is placed halfway.
+  f.intake->OnSeen(Seen(1'050'000, 2.0));
+  for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000)
+    f.intake->OnPose(Pose(u, 0.1 * (u - 1'000'000) / 100'000));
+  ASSERT_EQ(f.map.people().size(), 1u);
+  const Person& p = f.map.people().begin()->second;
+  EXPECT_NEAR(p.position_m.x(), 0.05 + f.camera_ahead_m() + 2.0, 1e-6);
+  EXPECT_NEAR(p.position_m.y(), 0.0, 1e-6);
+  EXPECT_EQ(f.applied, 1);
+  EXPECT_EQ(f.last_applied, 1'050'000);
+  EXPECT_EQ(f.intake->without_pose(), 0);
+  const sarmap::people_map_t msg = PeopleMapMessage(f.map.Report(f.last_applied), f.last_applied);
+  ASSERT_EQ(msg.num_people, 1);
+  EXPECT_EQ(msg.people[0].cues, static_cast<int8_t>(mapped_person_t::CUE_SEEN_DEPTH));
+}
+
+TEST(PeopleMapIntakeTest, DropsADetectionNoPoseCovers) {
+  Fixture f;
+  // No pose within max_pose_gap_s (0.5 s) of 5 s: POSE jumps from 1 s to 10 s.
+  f.intake->OnPose(Pose(1'000'000, 0.0));
+  f.intake->OnSeen(Seen(5'000'000, 2.0));
+  f.intake->OnPose(Pose(10'000'000, 1.0));
+  f.intake->Finish();
+  EXPECT_TRUE(f.map.people().empty());
+  EXPECT_EQ(f.intake->without_pose(), 1);
+}
+
+TEST(PeopleMapIntakeTest, FinishDropsWhatStillWaitsForAPose) {
+  Fixture f;
+  f.intake->OnPose(Pose(1'000'000, 0.0));
+  f.intake->OnSeen(Seen(1'200'000, 2.0));  // newer than every pose: never placed by extrapolation
+  f.intake->Finish();
+  EXPECT_TRUE(f.map.people().empty());
+  EXPECT_EQ(f.intake->without_pose(), 1);
+}
+
+}  // namespace
+}  // namespace people_map
+}  // namespace sarmap
