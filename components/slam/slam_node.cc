@@ -194,7 +194,7 @@ class SlamNode {
       return;
     }
     client.answered = true;
-    SARMAP_LOG(INFO) << "client '" << m.client_id << "' keeps " << m.num_node_ids << " anchors";
+    SARMAP_LOG(INFO) << "client '" << common::EscapeForLog(m.client_id) << "' keeps " << m.num_node_ids << " anchors";
     if (ComputeCovariance()) PublishAnchors(false);
   }
 
