@@ -23,6 +23,7 @@
 #include "sarmap/slam_anchors_t.hpp"
 #include "sim/robot.h"
 #include "sim/simulator.h"
+#include "slam/messages.h"
 #include "slam/slam.h"
 #include "slam/slam_node_options.h"
 #include "sound_localisation/doa_stream.h"
@@ -406,29 +407,7 @@ class Loop : public sim::SimSink {
     SoundChain* sound = perception_ ? perception_->sound() : nullptr;
     if (!sound || covariance_ids_.empty()) return;
     const std::vector<int>& ids = covariance_ids_;
-    sarmap::slam_anchors_t msg{};
-    msg.header.utime = common::SecondsToUtime(slam_.NodeTime(ids[0]));
-    msg.header.frame = "map";
-    msg.optimisation_id = slam_.optimisation_id();
-    msg.loop_closed = loop_closed;
-    auto anchor = [&](int id) {
-      sarmap::slam_anchor_t a{};
-      a.node_id = id;
-      a.utime = common::SecondsToUtime(slam_.NodeTime(id));
-      const slam::Rigid2d p = slam_.NodePose(id);
-      a.x_m = p.translation().x();
-      a.y_m = p.translation().y();
-      a.yaw_rad = p.yaw_rad();
-      return a;
-    };
-    msg.current = anchor(ids[0]);
-    for (size_t i = 1; i < ids.size(); ++i) msg.anchors.push_back(anchor(ids[i]));
-    msg.num_anchors = static_cast<int32_t>(msg.anchors.size());
-    msg.covariance_dim = static_cast<int32_t>(3 * ids.size());
-    msg.covariance.assign(msg.covariance_dim, std::vector<double>(msg.covariance_dim));
-    for (int r = 0; r < msg.covariance_dim; ++r) {
-      for (int c = 0; c < msg.covariance_dim; ++c) msg.covariance[r][c] = joint_covariance_(r, c);
-    }
+    const sarmap::slam_anchors_t msg = slam::AnchorsMessage(slam_, ids, joint_covariance_, loop_closed);
     sound->intake->OnAnchors(msg);
   }
 

@@ -314,29 +314,7 @@ class SlamNode {
     const std::vector<int>& ids = covariance_ids_;
     const Eigen::MatrixXd& cov = joint_covariance_;
     if (ids.empty()) return;
-    slam_anchors_t msg{};
-    msg.header.utime = common::SecondsToUtime(slam_.NodeTime(ids[0]));
-    msg.header.frame = "map";
-    msg.optimisation_id = slam_.optimisation_id();
-    msg.loop_closed = loop_closed;
-    auto anchor = [&](int id) {
-      slam_anchor_t a{};
-      a.node_id = id;
-      a.utime = common::SecondsToUtime(slam_.NodeTime(id));
-      const slam::Rigid2d p = slam_.NodePose(id);
-      a.x_m = p.translation().x();
-      a.y_m = p.translation().y();
-      a.yaw_rad = p.yaw_rad();
-      return a;
-    };
-    msg.current = anchor(ids[0]);
-    for (size_t i = 1; i < ids.size(); ++i) msg.anchors.push_back(anchor(ids[i]));
-    msg.num_anchors = static_cast<int32_t>(msg.anchors.size());
-    msg.covariance_dim = static_cast<int32_t>(3 * ids.size());
-    msg.covariance.assign(msg.covariance_dim, std::vector<double>(msg.covariance_dim));
-    for (int r = 0; r < msg.covariance_dim; ++r) {
-      for (int c = 0; c < msg.covariance_dim; ++c) msg.covariance[r][c] = cov(r, c);
-    }
+    slam_anchors_t msg = slam::AnchorsMessage(slam_, ids, cov, loop_closed);
     anchors_pub_.Publish(&msg);
   }
 
