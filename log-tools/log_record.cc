@@ -20,10 +20,14 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/args.h"
 #include "common/lcm_guard.h"
 #include "common/node.h"
+#include "common/options.h"
+#include "common/robot_config.h"
+#include "log-tools/record_profile.h"
 
 namespace {
 
@@ -36,6 +40,13 @@ void OnStop(int) { g_stop = 1; }
 bool Exists(const std::string& path) {
   struct stat st;
   return stat(path.c_str(), &st) == 0;
+}
+
+// Microseconds since the epoch, the clock of liblcm's receive times.
+int64_t WallUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 double SteadyNowS() {
@@ -51,8 +62,13 @@ std::string WithReceiveBuffer(const std::string& url) {
 
 class Recorder {
  public:
-  Recorder(std::string base, bool increment, bool force, int64_t split_bytes)
-      : base_(std::move(base)), increment_(increment), force_(force), split_bytes_(split_bytes) {
+  Recorder(std::string base, bool increment, bool force, int64_t split_bytes,
+           std::unique_ptr<sarmap::logtools::RecordThinner> thinner)
+      : base_(std::move(base)),
+        increment_(increment),
+        force_(force),
+        split_bytes_(split_bytes),
+        thinner_(std::move(thinner)) {
     Open();
   }
 
@@ -66,8 +82,30 @@ class Recorder {
       ++skipped_;
       return;
     }
+    if (thinner_) {
+      sarmap::logtools::LogEvent event;
+      event.timestamp_us = rbuf->recv_utime;
+      event.channel = channel;
+      const auto* bytes = static_cast<const uint8_t*>(rbuf->data);
+      event.data.assign(bytes, bytes + rbuf->data_size);
+      thinner_->Add(std::move(event));
+      Release(rbuf->recv_utime);
+      return;
+    }
+    Write(rbuf->recv_utime, channel, rbuf->data, rbuf->data_size);
+  }
+
+  // With a profile: writes what the thinner has decided by `now_utime` (wall clock, us).
+  void Release(int64_t now_utime) {
+    if (!thinner_ || !error_.empty()) return;
+    released_.clear();
+    thinner_->Release(now_utime, &released_);
+    WriteReleased();
+  }
+
+  void Write(int64_t timestamp_us, const std::string& channel, const void* data, uint32_t size) {
     // Event header: sync word, event number, timestamp, channel length, data length.
-    const int64_t bytes = 28 + static_cast<int64_t>(channel.size()) + rbuf->data_size;
+    const int64_t bytes = 28 + static_cast<int64_t>(channel.size()) + size;
     if (split_bytes_ > 0 && file_bytes_ > 0 && file_bytes_ + bytes > split_bytes_) {
       Close();
       try {  // not through liblcm's C dispatch: the main loop reports it
@@ -79,15 +117,14 @@ class Recorder {
     }
     lcm::LogEvent event;
     event.eventnum = events_;
-    event.timestamp = rbuf->recv_utime;
+    event.timestamp = timestamp_us;
     event.channel = channel;
-    event.datalen = static_cast<int32_t>(rbuf->data_size);
-    event.data = rbuf->data;
+    event.datalen = static_cast<int32_t>(size);
+    event.data = const_cast<void*>(data);
     errno = 0;
     if (log_->writeEvent(&event) != 0) {
-      error_ = path_ + ": write failed (channel " + channel + ", " +
-               std::to_string(rbuf->data_size) + " bytes)" +
-               (errno ? std::string(": ") + std::strerror(errno) : "");
+      error_ = path_ + ": write failed (channel " + channel + ", " + std::to_string(size) +
+               " bytes)" + (errno ? std::string(": ") + std::strerror(errno) : "");
       return;
     }
     ++events_;
@@ -101,6 +138,13 @@ class Recorder {
       error_ = path_ + ": write failed: " + std::strerror(errno);
     }
   }
+  // End of the recording: with a profile, what is still held is decided and written.
+  void Finish() {
+    if (!thinner_ || !log_ || !error_.empty()) return;
+    released_.clear();
+    thinner_->Finish(&released_);
+    WriteReleased();
+  }
   void Close() {
     Flush();
     log_.reset();
@@ -111,8 +155,16 @@ class Recorder {
   int64_t events() const { return events_; }
   int64_t skipped() const { return skipped_; }  // empty or impossible sizes
   int64_t total_bytes() const { return total_bytes_; }
+  const sarmap::logtools::RecordThinner* thinner() const { return thinner_.get(); }
 
  private:
+  void WriteReleased() {
+    for (const auto& e : released_) {
+      if (!error_.empty()) return;
+      Write(e.timestamp_us, e.channel, e.data.data(), static_cast<uint32_t>(e.data.size()));
+    }
+  }
+
   // The next file: BASE, or with increment (and every split) BASE.NN, the first NN (from 00)
   // that does not exist yet, as lcm-logger names them.
   void Open() {
@@ -144,6 +196,8 @@ class Recorder {
   bool increment_, force_;
   int64_t split_bytes_;
   int next_suffix_ = 0;
+  std::unique_ptr<sarmap::logtools::RecordThinner> thinner_;
+  std::vector<sarmap::logtools::LogEvent> released_;
   std::unique_ptr<lcm::LogFile> log_;
   std::string path_, error_;
   int64_t events_ = 0, skipped_ = 0, file_bytes_ = 0, total_bytes_ = 0;
@@ -153,7 +207,8 @@ int Record(int argc, char** argv) {
   sarmap::common::ArgParser parser(
       "sarmap-log record",
       "Records sarmap channels to an LCM log (lcm-logger's format) until SIGINT or SIGTERM.");
-  std::string output, channels = ".*", url;
+  std::string output, channels = ".*", url, profile;
+  std::vector<std::string> overrides;
   bool force = false, increment = false, quiet = false;
   int flush_interval_ms = 100;
   double split_mb = 0;
@@ -167,8 +222,21 @@ int Record(int argc, char** argv) {
                  "start the next numbered file (as --increment) once a file reaches this size; 0: "
                  "one file");
   parser.AddFlag("--flush-interval", &flush_interval_ms, "flush the file every this many ms");
+  parser.AddFlag("--profile", &profile,
+                 "thin the camera frames and grids as this file says (e.g. "
+                 "config/record_long.yaml: 1 frame/s, every frame around a person seen)");
+  parser.AddRepeated("--set", &overrides,
+                     "override a profile option, e.g. --set frames.rate_hz=2 (needs --profile)");
   parser.AddSwitch("-q", &quiet, "no summary line at the end");
   if (!parser.Parse(argc, argv)) return 0;
+  if (!overrides.empty() && profile.empty())
+    throw sarmap::common::ArgError("--set needs --profile");
+  std::unique_ptr<sarmap::logtools::RecordThinner> thinner;
+  if (!profile.empty()) {
+    thinner = std::make_unique<sarmap::logtools::RecordThinner>(
+        sarmap::common::LoadOptions<sarmap::logtools::RecordProfileOptions>(
+            sarmap::common::ResolveConfigPath(profile), overrides));
+  }
   if (flush_interval_ms < 1) throw sarmap::common::ArgError("--flush-interval must be >= 1 ms");
   if (!(split_mb >= 0)) throw sarmap::common::ArgError("--split-mb must be >= 0");
   if (force && (increment || split_mb > 0)) {
@@ -190,7 +258,8 @@ int Record(int argc, char** argv) {
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
 
-  Recorder recorder(output, increment, force, static_cast<int64_t>(split_mb * 1024 * 1024));
+  Recorder recorder(output, increment, force, static_cast<int64_t>(split_mb * 1024 * 1024),
+                    std::move(thinner));
   lcm::LCM lcm(url);
   if (!lcm.good()) {
     throw std::runtime_error("cannot initialise LCM on '" + url +
@@ -215,11 +284,13 @@ int Record(int argc, char** argv) {
     if (lcm.handleTimeout(std::min(flush_interval_ms, 100)) < 0 && !g_stop && errno != EINTR) {
       throw std::runtime_error(std::string("LCM receive failed: ") + std::strerror(errno));
     }
+    recorder.Release(WallUtime());
     if (SteadyNowS() >= next_flush_s) {
       recorder.Flush();
       next_flush_s = SteadyNowS() + flush_period_s;
     }
   }
+  recorder.Finish();
   recorder.Close();
   if (!recorder.error().empty()) throw std::runtime_error(recorder.error());
   if (!quiet) {
@@ -228,6 +299,9 @@ int Record(int argc, char** argv) {
             "last file %s\n",
             static_cast<long long>(recorder.events()), recorder.total_bytes() / 1e6,
             static_cast<long long>(recorder.skipped()), recorder.path().c_str());
+    if (recorder.thinner()) {
+      fprintf(stderr, "%s", sarmap::logtools::ThinSummary(*recorder.thinner()).c_str());
+    }
   }
   return 0;
 }

@@ -19,6 +19,7 @@
 #include "common/decode.h"
 #include "common/node.h"
 #include "log-tools/lcm_log_reader.h"
+#include "sarmap/image_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "tests/process.h"
 
@@ -167,6 +168,46 @@ TEST_F(RecordTest, SplitMbStartsTheNextNumberedFileAndLosesNothing) {
   }
   EXPECT_GE(files, 3) << recorder.Output();
   EXPECT_GE(static_cast<int>(seqs.size()), kPoses * 3 / 4);
+}
+
+// With a profile: camera frames thinned by capture time (one per second, and the last), every
+// other message whole, and the held messages written when the recorder stops.
+TEST_F(RecordTest, AProfileThinsTheFramesAndKeepsEverythingElse) {
+  const std::string log = dir_ + "/thin.lcmlog";
+  Process recorder({"sarmap-log-record", "-o", log, "--profile", "config/record_long.yaml", "--set",
+                    "hold_s=0.5", "--set", "frames.around_people_s=0"},
+                   dir_ + "/thin.txt");
+  ASSERT_TRUE(WaitFor([&] { return recorder.Output().find("writing") != std::string::npos; }, 10))
+      << recorder.Output();
+  lcm::LCM lcm(sarmap::common::DefaultLcmUrl());
+  ASSERT_TRUE(lcm.good());
+  constexpr int kFrames = 60;  // capture times over 2 s: kept the first of each second and the last
+  for (int i = 0; i < kFrames; ++i) {
+    sarmap::image_t image{};
+    image.header.seq = i;
+    image.header.utime = 1000000 + i * 1000000 / 30;
+    image.header.frame = "camera";
+    lcm.publish("DEPTH", &image);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  PublishPoses(&lcm, 0, 20);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  recorder.Signal(SIGINT);
+  ASSERT_EQ(recorder.Wait(10), 0) << recorder.Output();
+  EXPECT_NE(recorder.Output().find("DEPTH"), std::string::npos) << recorder.Output();
+  sarmap::logtools::LcmLogReader reader(log);
+  sarmap::logtools::LogEvent event;
+  std::set<int64_t> frames;
+  int poses = 0;
+  while (reader.Next(&event)) {
+    int64_t utime, seq;
+    if (event.channel == "DEPTH" && sarmap::logtools::ReadSarmapHeader(event.data, &utime, &seq))
+      frames.insert(seq);
+    if (event.channel == "POSE") ++poses;
+  }
+  EXPECT_TRUE(reader.problems().empty());
+  EXPECT_EQ(frames, (std::set<int64_t>{0, 30, kFrames - 1})) << recorder.Output();
+  EXPECT_GE(poses, 15);
 }
 
 }  // namespace
