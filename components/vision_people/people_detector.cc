@@ -87,6 +87,16 @@ double HeightAtRow(const PinholeIntrinsics& k, const Eigen::Vector3d& foot,
 
 double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
+// The body centre behind the centroid of a visible surface (floor frame, camera above the
+// origin): moved away from the camera along the floor by (pi/8) * body thickness.
+Eigen::Vector3d BodyCentre(const Eigen::Vector3d& centroid_floor, const NoiseOptions& noise) {
+  const Eigen::Vector2d xy = centroid_floor.head<2>();
+  if (xy.norm() < 1e-6) return centroid_floor;
+  Eigen::Vector3d out = centroid_floor;
+  out.head<2>() += xy.normalized() * (M_PI / 8) * noise.body_thickness_m;
+  return out;
+}
+
 // Covariance of a cluster centroid: Kinect depth noise along the ray (sigma = c z^2), pixel
 // noise across it, plus the body centre's spread about the visible surface.
 Eigen::Matrix3d CentroidCovariance(const Eigen::Vector3d& p, const NoiseOptions& noise, double fx) {
@@ -214,7 +224,7 @@ PersonCandidate DescribeLying(const std::vector<int>& cluster,
   centroid /= static_cast<double>(cluster.size());
   c.height_m = top;
   c.bottom_m = bottom;
-  c.position_camera = floor_frame.ToCamera(centroid);
+  c.position_camera = floor_frame.ToCamera(BodyCentre(centroid, options.noise));
   c.head_camera = floor_frame.ToCamera(Eigen::Vector3d(centroid.x(), centroid.y(), top));
   // Principal axes of the footprint.
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
@@ -821,7 +831,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       for (int i : parent) bottom = std::min(bottom, ws.floor[i].z());
     }
     c.bottom_m = bottom;
-    c.position_camera = floor_frame.ToCamera(centroid_floor);
+    c.position_camera = floor_frame.ToCamera(BodyCentre(centroid_floor, o.noise));
     const Eigen::Vector2d ground_xy = centroid_floor.head<2>();
     const Eigen::Vector2d ray =
         ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);

@@ -25,12 +25,15 @@ bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 void Print(const DetectionResult& r) {
   for (const auto* list : {&r.people, &r.rejected}) {
     for (const auto& c : *list) {
-      printf("  %s pos (%.2f %.2f %.2f) H %.2f bottom %.2f width %.2f depth %.2f head %.2f/%.2f prom %.2f areas %.3f/%.3f "
-             "fill %.2f visible %.2f%s voxels %d | depth %.2f hog %d %.2f conf %.2f\n",
-             c.accepted ? "PERSON" : "reject", c.position_camera.x(), c.position_camera.y(),
-             c.position_camera.z(), c.height_m, c.bottom_m, c.width_m, c.depth_extent_m, c.head_width_m, c.shoulder_width_m, c.head_prominence_m,
-             c.head_area_m2, c.shoulder_area_m2, c.fill, c.visible_fraction, c.truncated_top ? " (top cut)" : "", c.num_voxels,
-             c.depth_score, c.hog_used, c.hog_score, c.confidence);
+      printf(
+          "  %s pos (%.2f %.2f %.2f) H %.2f bottom %.2f width %.2f depth %.2f head %.2f/%.2f prom "
+          "%.2f areas %.3f/%.3f "
+          "fill %.2f visible %.2f%s voxels %d | depth %.2f hog %d %.2f conf %.2f\n",
+          c.accepted ? "PERSON" : "reject", c.position_camera.x(), c.position_camera.y(),
+          c.position_camera.z(), c.height_m, c.bottom_m, c.width_m, c.depth_extent_m,
+          c.head_width_m, c.shoulder_width_m, c.head_prominence_m, c.head_area_m2,
+          c.shoulder_area_m2, c.fill, c.visible_fraction, c.truncated_top ? " (top cut)" : "",
+          c.num_voxels, c.depth_score, c.hog_used, c.hog_score, c.confidence);
     }
   }
 }
@@ -43,8 +46,9 @@ DetectorOptions DepthOnly() {
 
 // Detections matched to people (closest first, within 0.5 m on the floor); returns matches
 // and counts false positives.
-int Match(const SyntheticScene& scene, const std::vector<PersonCandidate>& people, int* false_positives,
-          double* worst_error_m = nullptr, const std::vector<bool>* required = nullptr) {
+int Match(const SyntheticScene& scene, const std::vector<PersonCandidate>& people,
+          int* false_positives, double* worst_error_m = nullptr,
+          const std::vector<bool>* required = nullptr) {
   std::vector<bool> used(scene.people.size(), false);
   int matched = 0;
   *false_positives = 0;
@@ -55,7 +59,8 @@ int Match(const SyntheticScene& scene, const std::vector<PersonCandidate>& peopl
     for (size_t i = 0; i < scene.people.size(); ++i) {
       if (used[i]) continue;
       const Eigen::Vector3d truth = scene.PersonInCamera(scene.people[i]);
-      const double e = std::hypot(truth.x() - d.position_camera.x(), truth.z() - d.position_camera.z());
+      const double e =
+          std::hypot(truth.x() - d.position_camera.x(), truth.z() - d.position_camera.z());
       if (e < best) {
         best = e;
         best_i = static_cast<int>(i);
@@ -85,8 +90,8 @@ TEST(GroundPlane, FromMountingOfALevelKinect) {
   // Tilted up by 8 degrees (Sales 2014): a point 1 m ahead on the floor is still at height 0.
   scene.camera_pitch_rad = 8 * M_PI / 180;
   const GroundPlane t = scene.ground();
-  const Eigen::Vector3d floor_point = scene.world_R_camera().transpose() *
-                                      (Eigen::Vector3d(1, 0, 0) - scene.world_t_camera());
+  const Eigen::Vector3d floor_point =
+      scene.world_R_camera().transpose() * (Eigen::Vector3d(1, 0, 0) - scene.world_t_camera());
   EXPECT_NEAR(t.Height(floor_point), 0.0, 1e-12);
   // PCL's coefficient convention (normal pointing down) is flipped to ours.
   const GroundPlane p = GroundPlane::FromCoefficients(kFivePeopleFloor);
@@ -123,6 +128,36 @@ TEST(PeopleDetector, OneSyntheticPersonDepthOnlyWithCovariance) {
   EXPECT_GT(along, c.covariance.trace() / 3 - 1e-12);  // depth is the noisiest direction
 }
 
+// The camera sees a body's near side: the position is moved (pi/8) x body thickness beyond the
+// visible surface's centroid, away from the camera along the floor, and lands nearer the body's
+// axis than the centroid does.
+TEST(PeopleDetector, PositionIsTheBodyCentreBehindTheVisibleSurface) {
+  SyntheticScene scene;
+  scene.people.push_back({3.0, 0.6, 1.75, 0.0});
+  RgbdFrame frame;
+  RenderFrame(scene, 1, false, &frame);
+  DetectorOptions centroid_only = DepthOnly();
+  centroid_only.noise.body_thickness_m = 0;
+  DetectorOptions body = DepthOnly();
+  body.noise.body_thickness_m = 0.25;
+  const DetectionResult a = PeopleDetector(centroid_only, scene.ground(), nullptr).Detect(frame);
+  const DetectionResult b = PeopleDetector(body, scene.ground(), nullptr).Detect(frame);
+  ASSERT_EQ(a.people.size(), 1u);
+  ASSERT_EQ(b.people.size(), 1u);
+  const GroundPlane floor = scene.ground();
+  auto on_floor = [&](const Eigen::Vector3d& p) {  // drop onto the floor plane
+    return (p - floor.Height(p) * floor.normal).eval();
+  };
+  const Eigen::Vector3d pa = on_floor(a.people[0].position_camera);
+  const Eigen::Vector3d pb = on_floor(b.people[0].position_camera);
+  const Eigen::Vector3d foot = on_floor(Eigen::Vector3d::Zero());  // below the camera
+  EXPECT_NEAR((pb - pa).norm(), M_PI / 8 * 0.25, 2e-3);
+  EXPECT_NEAR((pb - pa).normalized().dot((pa - foot).normalized()), 1.0, 1e-3)
+      << "away from the camera along the line of sight";
+  const Eigen::Vector3d truth = on_floor(scene.PersonInCamera(scene.people[0]));
+  EXPECT_LT((pb - truth).norm(), (pa - truth).norm());
+}
+
 // Facing a wall with little floor in view, the bottom rows of the wall lie in the floor band;
 // they must not tilt the fit, or the tilt grows frame by frame through the prior (the
 // simulated lab's floor drifted 8 degrees this way).
@@ -138,12 +173,14 @@ TEST(PeopleDetector, FloorDoesNotDriftFacingAWall) {
     RenderFrame(scene, seed, false, &frame);
     const DetectionResult r = detector.Detect(frame);
     refined += r.stats.ground_refined;
-    worst_tilt_deg = std::max(worst_tilt_deg,
-                              std::acos(std::min(1.0, r.ground.normal.dot(truth.normal))) * 180.0 / M_PI);
+    worst_tilt_deg = std::max(
+        worst_tilt_deg, std::acos(std::min(1.0, r.ground.normal.dot(truth.normal))) * 180.0 / M_PI);
     worst_offset_m = std::max(worst_offset_m, std::abs(r.ground.offset - truth.offset));
   }
-  printf("facing a wall at 2.2 m: %d/30 frames refined, worst tilt %.2f deg, worst height error %.3f m\n",
-         refined, worst_tilt_deg, worst_offset_m);
+  printf(
+      "facing a wall at 2.2 m: %d/30 frames refined, worst tilt %.2f deg, worst height error %.3f "
+      "m\n",
+      refined, worst_tilt_deg, worst_offset_m);
   EXPECT_GT(refined, 0);
   EXPECT_LT(worst_tilt_deg, 1.0);
   EXPECT_LT(worst_offset_m, 0.02);
@@ -199,7 +236,8 @@ TEST(PeopleDetector, SyntheticDarkLabFrameRecallFromDepthAlone) {
         SyntheticPerson p{1.8 + 3.7 * U(rng), 0, 1.5 + 0.4 * U(rng), 2 * M_PI * U(rng)};
         p.y_m = (U(rng) - 0.5) * 2 * 0.35 * p.x_m;  // inside +-19 degrees
         bool ok = true;
-        for (const auto& q : scene.people) ok = ok && std::hypot(p.x_m - q.x_m, p.y_m - q.y_m) > 1.0;
+        for (const auto& q : scene.people)
+          ok = ok && std::hypot(p.x_m - q.x_m, p.y_m - q.y_m) > 1.0;
         if (ok) {
           scene.people.push_back(p);
           break;
@@ -214,7 +252,8 @@ TEST(PeopleDetector, SyntheticDarkLabFrameRecallFromDepthAlone) {
         SyntheticObject o{kinds[(room + i) % 5], 1.8 + 4.0 * U(rng), 0, U(rng) * M_PI, 0};
         o.y_m = (U(rng) - 0.5) * 2 * 0.4 * o.x_m;
         bool ok = true;
-        for (const auto& q : scene.people) ok = ok && std::hypot(o.x_m - q.x_m, o.y_m - q.y_m) > 1.2;
+        for (const auto& q : scene.people)
+          ok = ok && std::hypot(o.x_m - q.x_m, o.y_m - q.y_m) > 1.2;
         if (ok) {
           scene.objects.push_back(o);
           break;
@@ -238,11 +277,12 @@ TEST(PeopleDetector, SyntheticDarkLabFrameRecallFromDepthAlone) {
       double err = 0;
       const int m = Match(scene, r.people, &fp, &err, &required);
       if (getenv("VP_DEBUG") && (m < num_required || fp > 0)) {
-        printf("room %d frame %d: %d/%zu found, %d fp; truth:", room, f, m, scene.people.size(), fp);
+        printf("room %d frame %d: %d/%zu found, %d fp; truth:", room, f, m, scene.people.size(),
+               fp);
         for (const auto& p : scene.people) {
           const Eigen::Vector3d t = scene.PersonInCamera(p);
-          printf(" (%.2f %.2f %.2f H %.2f yaw %.1f vis %.2f)", t.x(), t.y(), t.z(), p.height_m, p.yaw_rad,
-                 scene.VisibleFraction(&p - &scene.people[0]));
+          printf(" (%.2f %.2f %.2f H %.2f yaw %.1f vis %.2f)", t.x(), t.y(), t.z(), p.height_m,
+                 p.yaw_rad, scene.VisibleFraction(&p - &scene.people[0]));
         }
         printf("\n");
         Print(r);
@@ -256,8 +296,10 @@ TEST(PeopleDetector, SyntheticDarkLabFrameRecallFromDepthAlone) {
   }
   const double recall = static_cast<double>(found) / visible;
   const double fp_per_frame = static_cast<double>(false_positives) / frames;
-  printf("synthetic dark lab: %d frames, frame recall %.3f (%d/%d), %.3f false positives/frame, "
-         "worst floor error %.2f m\n", frames, recall, found, visible, fp_per_frame, worst);
+  printf(
+      "synthetic dark lab: %d frames, frame recall %.3f (%d/%d), %.3f false positives/frame, "
+      "worst floor error %.2f m\n",
+      frames, recall, found, visible, fp_per_frame, worst);
   EXPECT_GE(recall, 0.8);  // the dark goal
   // Depth alone can still confuse furniture with a person (here a 1.2 m pillar box at 4.7 m,
   // partly hidden by a person in front): measured 0.083 false positives per frame (2 in 24);
@@ -277,7 +319,8 @@ TEST(PeopleDetector, FivePeopleWithColour) {
     o.color.hog = hog;
     o.color.pcl_svm_file = kPclDir + "/trainedLinearSVMForPeopleDetectionWithHOG.yaml";
     if (std::string(hog) == "pcl") o.color.hog_threshold = -1.5;  // PCL's own min_confidence
-    PeopleDetector detector(o, GroundPlane::FromCoefficients(kFivePeopleFloor), MakeHogClassifier(o.color));
+    PeopleDetector detector(o, GroundPlane::FromCoefficients(kFivePeopleFloor),
+                            MakeHogClassifier(o.color));
     const DetectionResult r = detector.Detect(frame, &error);
     EXPECT_TRUE(error.empty()) << error;
     EXPECT_EQ(r.stats.color_state, ColorState::kUsable);
@@ -287,9 +330,9 @@ TEST(PeopleDetector, FivePeopleWithColour) {
       EXPECT_TRUE(c.hog_used);
       EXPECT_GT(c.height_m, 1.6);
       EXPECT_LT(c.height_m, 1.9);
-      printf("%s: person at (%.2f %.2f %.2f) height %.2f hog %.2f depth %.2f confidence %.2f\n", hog,
-             c.position_camera.x(), c.position_camera.y(), c.position_camera.z(), c.height_m, c.hog_score,
-             c.depth_score, c.confidence);
+      printf("%s: person at (%.2f %.2f %.2f) height %.2f hog %.2f depth %.2f confidence %.2f\n",
+             hog, c.position_camera.x(), c.position_camera.y(), c.position_camera.z(), c.height_m,
+             c.hog_score, c.depth_score, c.confidence);
     }
   }
 }
@@ -339,7 +382,8 @@ TEST(PeopleDetector, HeadAndShouldersOnlyIsNoPerson) {
   ASSERT_TRUE(LoadPcdFrame(path, PinholeIntrinsics(), &frame, &error)) << error;
   EXPECT_FALSE(frame.has_color());
   // The floor is not in view; whatever the mounting, nothing may fire.
-  std::vector<GroundPlane> floors = {GroundPlane::FromCoefficients(kFivePeopleFloor), SyntheticScene().ground()};
+  std::vector<GroundPlane> floors = {GroundPlane::FromCoefficients(kFivePeopleFloor),
+                                     SyntheticScene().ground()};
   for (double h : {0.8, 1.0, 1.2, 1.5, 1.8}) {
     floors.push_back(GroundPlane::FromCoefficients(Eigen::Vector4d(0, 1, 0, -h)));
   }

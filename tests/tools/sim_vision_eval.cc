@@ -12,6 +12,7 @@
 #include "tools/sim_vision_eval.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -54,9 +55,15 @@ int main(int argc, char** argv) {
     const char* names[3] = {"standing", "sitting", "lying"};
     for (int k = 0; k < 3; ++k)
       printf(" %s %d/%d", names[k], f.by_posture[k].found, f.by_posture[k].visible);
-    printf(" | %d-of-%d confirmed: recall %.3f FP/frame %.3f | detect cpu %.1f ms mean, %.1f max\n",
+    printf(" | %d-of-%d confirmed: recall %.3f FP/frame %.3f | detect cpu %.1f ms mean, %.1f max",
            f.confirm_k, f.confirm_n, f.confirmed_recall(), f.confirmed_fp_per_frame(),
            f.detect_cpu_ms_mean, f.detect_cpu_ms_max);
+    if (f.placed > 0) {
+      printf(" | placed: range bias %+.3f m, rms along %.3f across %.3f m", f.range_bias_m(),
+             std::sqrt(f.range_error_sq_sum_m2 / f.placed),
+             std::sqrt(f.cross_error_sq_sum_m2 / f.placed));
+    }
+    printf("\n");
     fflush(stdout);
   };
   try {

@@ -48,6 +48,11 @@ struct Figures {
   int confirmed_found = 0;
   int confirmed_false_positives = 0;
   double detect_cpu_ms_mean = 0, detect_cpu_ms_max = 0;  // PeopleDetector::Detect, CPU time
+  // Found fully visible people: the detection's range from the camera on the floor minus the
+  // person's (positive: placed beyond them), and its error across the line of sight.
+  int placed = 0;
+  double range_error_sum_m = 0, range_error_sq_sum_m2 = 0, cross_error_sq_sum_m2 = 0;
+  double range_bias_m() const { return placed ? range_error_sum_m / placed : 0.0; }
   double recall() const { return visible ? static_cast<double>(found) / visible : 0.0; }
   double fp_per_frame() const {
     return frames ? static_cast<double>(false_positives) / frames : 0.0;

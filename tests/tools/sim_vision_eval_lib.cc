@@ -186,6 +186,22 @@ Figures Evaluate(const EvalOptions& eval) {
     }
     Score(confirmed, people, whole, &fig.confirmed_found, &fig.confirmed_false_positives,
           &confirmed_hit);
+    const Eigen::Vector2d camera_xy = map_from_camera.translation().head<2>();
+    for (size_t i = 0; i < people.size(); ++i) {
+      if (!whole[i] || !hit[i]) continue;
+      const Eigen::Vector2d* nearest = nullptr;
+      for (const auto& d : detections) {
+        if (!nearest || (d - people[i].position).norm() < (*nearest - people[i].position).norm())
+          nearest = &d;
+      }
+      const Eigen::Vector2d ray = (people[i].position - camera_xy).normalized();
+      const Eigen::Vector2d error = *nearest - people[i].position;
+      const double along = error.dot(ray), across = error.x() * ray.y() - error.y() * ray.x();
+      ++fig.placed;
+      fig.range_error_sum_m += along;
+      fig.range_error_sq_sum_m2 += along * along;
+      fig.cross_error_sq_sum_m2 += across * across;
+    }
 
     if (!eval.verbose) continue;
     printf(
