@@ -1,8 +1,8 @@
 // sarmap-mic-calibrate: calibrates a microphone array (positions, start offsets, clock drift)
 // from a recording of a sound source moving around it (Su 2017 ch. 3) and writes the array
 // YAML that LoadMicArray() / sarmap-sound-localisation read, plus a report.
-#include <cstdio>
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -15,47 +15,12 @@
 #include "mic_calibrate/calibration.h"
 #include "mic_calibrate/calibration_io.h"
 #include "mic_calibrate/lcm_audio_log.h"
+#include "mic_calibrate/mic_calibrate_options.h"
 #include "mic_calibrate/tdoa_extraction.h"
 
 namespace sarmap {
 namespace mic_calibrate {
 namespace {
-
-// Known array motion (CalibrateWithArrayPoses): the robot carrying the array turned/drove
-// while one source stood still; the poses of the base come from a channel of an LCM log.
-struct ArrayPosesOptions {
-  std::string channel;                          // "" = off; ODOM, POSE or SIM_TRUTH
-  std::string robot_config = "config/robot.yaml";  // base_from_mic_array
-  double max_gap_s = 0.25;                      // an emission this far from any pose is dropped
-  template <class V>
-  void Visit(V& v) {
-    v("channel", channel,
-      "pose channel (odometry_t, pose_t or sim_truth_t) of the robot carrying the array while "
-      "a static source sounded; empty = off (the source moved around a static array)");
-    v("robot_config", robot_config, "robot YAML with base_from_mic_array");
-    v("max_gap_s", max_gap_s, "largest time from an emission to a pose (interpolation)");
-  }
-  void Validate(common::Validator& check) const { check.Positive("max_gap_s", max_gap_s); }
-};
-
-struct MicCalibrateOptions {
-  std::string array_name = "calibrated";
-  double step_s = 0.5;  // TDOA CSV without t_s: t_k = k * step_s (thesis: a chirp every 0.5 s)
-  std::string lcm_channel_prefix = "AUDIO";
-  SolverOptions solver;
-  ExtractionOptions extraction;
-  ArrayPosesOptions array_poses;
-  template <class V>
-  void Visit(V& v) {
-    v("array_name", array_name, "name written into the array YAML");
-    v("step_s", step_s, "TDOA CSV without t_s column: seconds between steps k");
-    v("lcm_channel_prefix", lcm_channel_prefix, "LCM log input: audio channels with this prefix");
-    v("solver", solver, "graph least-squares calibration");
-    v("extraction", extraction, "TDOA extraction from audio");
-    v("array_poses", array_poses, "known array motion with a static source");
-  }
-  void Validate(common::Validator& check) const { check.Positive("step_s", step_s); }
-};
 
 std::string Ext(const std::string& path) {
   const size_t dot = path.find_last_of('.');
@@ -74,10 +39,11 @@ std::vector<Eigen::Vector3d> PositionsOf(const common::MicArrayOptions& a) {
 // The text report on stderr, then the array YAML (`output`, checked to load back) and the report
 // files (`report`.txt/.json/.png), when asked for.
 template <class Progress>
-void WriteOutputs(const CalibrationResult& result, const TruthComparison& cmp, const SolverOptions& so,
-                  const std::string& array_name, int sample_rate_hz, const std::string& output,
-                  const std::string& report, bool quiet, const std::string& written_from,
-                  const std::string& positions_note, const Progress& progress) {
+void WriteOutputs(const CalibrationResult& result, const TruthComparison& cmp,
+                  const SolverOptions& so, const std::string& array_name, int sample_rate_hz,
+                  const std::string& output, const std::string& report, bool quiet,
+                  const std::string& written_from, const std::string& positions_note,
+                  const Progress& progress) {
   const std::string text = TextReport(result, cmp, so);
   if (!quiet) fprintf(stderr, "%s", text.c_str());
   if (!output.empty()) {
@@ -119,7 +85,8 @@ int RunWithArrayPoses(const MicCalibrateOptions& opt, const std::string& input,
                       const Progress& progress) {
   const ArrayPosesOptions& po = opt.array_poses;
   if (nominal.empty()) {
-    throw common::ArgError("array_poses needs the microphone positions in the array frame (--nominal)");
+    throw common::ArgError(
+        "array_poses needs the microphone positions in the array frame (--nominal)");
   }
   if (poses_log.empty()) {
     if (input_type != "lcm") {
@@ -128,8 +95,9 @@ int RunWithArrayPoses(const MicCalibrateOptions& opt, const std::string& input,
     poses_log = input;
   }
   if (static_cast<int>(data.utimes.size()) != data.num_emissions()) {
-    throw common::ArgError("array_poses: the TDOAs carry no absolute times (utime); use an LCM "
-                           "log, or a TDOA CSV written by --write-tdoa from one");
+    throw common::ArgError(
+        "array_poses: the TDOAs carry no absolute times (utime); use an LCM "
+        "log, or a TDOA CSV written by --write-tdoa from one");
   }
   LcmAudioLogStats st;
   const std::vector<common::StampedPose> poses = ReadLcmPoses(poses_log, po.channel, &st);
@@ -191,7 +159,7 @@ int RunWithArrayPoses(const MicCalibrateOptions& opt, const std::string& input,
 
 int Run(int argc, char** argv) {
   std::string input, input_type = "auto", output, report, nominal_path, mics_csv, motion_csv,
-              write_tdoa, config_path, poses_log;
+                     write_tdoa, config_path, poses_log;
   std::vector<std::string> overrides;
   std::string mic_list;
   bool print_config = false, init_from_nominal = false, quiet = false;
@@ -201,8 +169,9 @@ int Run(int argc, char** argv) {
   args.AddPositional("input", &input,
                      "multichannel WAV (channel 1 = reference mic), LCM log with one AUDIO_* "
                      "channel per sound card, or TDOA CSV");
-  args.AddFlag("--input-type", &input_type, "auto, wav, lcm or csv (auto: by extension; "
-                                            ".csv = TDOAs, .wav/.flac = audio, else LCM log)");
+  args.AddFlag("--input-type", &input_type,
+               "auto, wav, lcm or csv (auto: by extension; "
+               ".csv = TDOAs, .wav/.flac = audio, else LCM log)");
   args.AddFlag("--output", &output, "array YAML to write (MicArrayOptions schema)");
   args.AddFlag("--report", &report, "report prefix: writes PREFIX.txt, PREFIX.json, PREFIX.png");
   args.AddFlag("--nominal", &nominal_path,
@@ -211,7 +180,8 @@ int Run(int argc, char** argv) {
                  "first start from the nominal positions (mic CSV: its init_* columns)");
   args.AddFlag("--mics", &mic_list,
                "use only these microphones, e.g. 1,2,3,4 (the first is the reference)");
-  args.AddFlag("--motion-csv", &motion_csv, "source motion prior edges (k_from,k_to,dx,..,info_x,..)");
+  args.AddFlag("--motion-csv", &motion_csv,
+               "source motion prior edges (k_from,k_to,dx,..,info_x,..)");
   args.AddFlag("--write-tdoa", &write_tdoa, "also write the extracted TDOAs as CSV");
   args.AddFlag("--poses", &poses_log,
                "LCM log with the array's poses (array_poses.channel; default: the input log)");
@@ -272,13 +242,14 @@ int Run(int argc, char** argv) {
       progress("reading LCM log " + input + " (channels " + opt.lcm_channel_prefix + "*)");
       LcmAudioLogStats st;
       rec = ReadLcmAudioLog(input, opt.lcm_channel_prefix, &st);
-      progress(std::to_string(st.devices) + " devices, " + std::to_string(st.frames) +
-               " frames, " + std::to_string(st.bad_frames) + " bad");
+      progress(std::to_string(st.devices) + " devices, " + std::to_string(st.frames) + " frames, " +
+               std::to_string(st.bad_frames) + " bad");
       for (const auto& w : st.warnings) progress("warning: " + w);
     }
     sample_rate_hz = static_cast<int>(rec.sample_rate_hz);
     progress(std::to_string(rec.channels.size()) + " channels at " +
-             std::to_string(sample_rate_hz) + " Hz; extracting TDOAs (" + opt.extraction.method + ")");
+             std::to_string(sample_rate_hz) + " Hz; extracting TDOAs (" + opt.extraction.method +
+             ")");
     ExtractionStats es;
     data = ExtractTdoas(rec, opt.extraction, &es);
     progress(std::to_string(es.events) + " emissions found, " + std::to_string(es.missing) +
@@ -324,11 +295,13 @@ int Run(int argc, char** argv) {
       nominal = PositionsOf(common::LoadMicArray(nominal_path));
       guess.mic_positions_m = nominal;
     }
-    if (!selected.empty() && static_cast<int>(nominal.size()) >= *std::max_element(selected.begin(), selected.end())) {
+    if (!selected.empty() &&
+        static_cast<int>(nominal.size()) >= *std::max_element(selected.begin(), selected.end())) {
       std::vector<Eigen::Vector3d> n2, g2;
       for (int m : selected) {
         n2.push_back(nominal[m - 1]);
-        if (static_cast<int>(guess.mic_positions_m.size()) >= m) g2.push_back(guess.mic_positions_m[m - 1]);
+        if (static_cast<int>(guess.mic_positions_m.size()) >= m)
+          g2.push_back(guess.mic_positions_m[m - 1]);
       }
       nominal = n2;
       guess.mic_positions_m = g2;
@@ -358,8 +331,8 @@ int Run(int argc, char** argv) {
     if (so.dim() == 3 && so.height_prior_sigma_m > 0 && so.mic_heights_m.empty()) {
       // Known heights: the nominal z in the gauge frame (meaningful when the gauge mics span
       // the horizontal plane, e.g. --set solver.gauge_x_mic=2 --set solver.gauge_plane_mic=3).
-      for (const auto& p : ToGaugeFrame(nominal, 3, so.gauge_x_mic, so.gauge_plane_mic,
-                                        so.gauge_z_mic)) {
+      for (const auto& p :
+           ToGaugeFrame(nominal, 3, so.gauge_x_mic, so.gauge_plane_mic, so.gauge_z_mic)) {
         so.mic_heights_m.push_back(p.z());
       }
     }
@@ -370,10 +343,9 @@ int Run(int argc, char** argv) {
     }
   }
   so.verbose = so.verbose || !quiet;
-  progress(std::to_string(data.num_emissions()) + " emissions x " +
-           std::to_string(data.num_mics) + " mics; solving (" + so.geometry +
-           (so.synchronous ? ", synchronous" : "") + ", up to " + std::to_string(so.num_starts) +
-           " starts)");
+  progress(std::to_string(data.num_emissions()) + " emissions x " + std::to_string(data.num_mics) +
+           " mics; solving (" + so.geometry + (so.synchronous ? ", synchronous" : "") + ", up to " +
+           std::to_string(so.num_starts) + " starts)");
   CalibrationResult result;
   try {
     result = Calibrate(data, so, init_from_nominal ? &guess : nullptr);

@@ -9,60 +9,10 @@
 #include "common/node_main.h"
 #include "common/robot_config.h"
 #include "sarmap/explore_status_t.hpp"
+#include "viewer/viewer_options.h"
 #include "viewer/viewer_server.h"
 
 namespace {
-
-struct NodeOptions {
-  std::string bind_address = "127.0.0.1";
-  int port = 8080;
-  std::string token_file;  // "" = no token (only sensible on a closed network)
-  int camera_jpeg_quality = 70;
-  int http_threads = 16;
-  double http_connection_limit_s = 10.0;
-  double http_io_timeout_s = 3.0;
-  double forget_after_s = 60.0;
-  int max_deputies = 16;
-  int max_commands_per_deputy = 64;
-  int max_nodes = 64;
-  int max_items = 2000;
-  int max_text_bytes = 200;
-  template <class V>
-  void Visit(V& v) {
-    v("bind_address", bind_address, "address to listen on (0.0.0.0 for the robot's network)");
-    v("port", port, "HTTP port");
-    v("token_file", token_file, "file holding the access token; \"\" serves without a token");
-    v("camera_jpeg_quality", camera_jpeg_quality,
-      "quality of the re-encoded thumbnail when RGB is not JPEG");
-    v("http_threads", http_threads, "connections served at once");
-    v("http_connection_limit_s", http_connection_limit_s,
-      "a connection is closed after this long in all");
-    v("http_io_timeout_s", http_io_timeout_s,
-      "one read or write of a connection waits at most this long");
-    v("forget_after_s", forget_after_s,
-      "deputies and nodes not heard from this long leave the page");
-    v("max_deputies", max_deputies, "deputies shown at most (the least recently heard goes first)");
-    v("max_commands_per_deputy", max_commands_per_deputy, "commands shown per deputy at most");
-    v("max_nodes", max_nodes,
-      "nodes (NODE_STATUS) kept at most (the least recently heard goes first)");
-    v("max_items", max_items, "people, sound sources, scan points and path points shown at most");
-    v("max_text_bytes", max_text_bytes,
-      "longest string from the bus shown (names, keywords, messages)");
-  }
-  void Validate(sarmap::common::Validator& check) const {
-    check.That(port >= 0 && port < 65536, "port", "must be 0..65535");
-    check.InRange("camera_jpeg_quality", camera_jpeg_quality, 1, 100);
-    check.InRange("http_threads", http_threads, 1, 256);
-    check.Positive("http_connection_limit_s", http_connection_limit_s);
-    check.Positive("http_io_timeout_s", http_io_timeout_s);
-    check.Positive("forget_after_s", forget_after_s);
-    check.InRange("max_deputies", max_deputies, 1, 1000);
-    check.InRange("max_commands_per_deputy", max_commands_per_deputy, 1, 10000);
-    check.InRange("max_nodes", max_nodes, 1, 10000);
-    check.InRange("max_items", max_items, 1, 100000);
-    check.InRange("max_text_bytes", max_text_bytes, 8, 4096);
-  }
-};
 
 std::string ReadToken(const std::string& path) {
   FILE* f = fopen(path.c_str(), "r");
@@ -90,10 +40,10 @@ int main(int argc, char** argv) {
         "In: MAP, POSE, SCAN, PEOPLE_MAP, SOUND_MAP, RGB, EXPLORE_STATUS, PM_INFO, NODE_STATUS.  "
         "Out: HTTP.");
     common::NodeArgs args;
-    const auto parsed =
-        common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/viewer.yaml");
+    const auto parsed = common::ParseNodeOptions<sarmap::viewer::ViewerNodeOptions>(
+        &parser, &args, argc, argv, "config/viewer.yaml");
     if (!parsed) return 0;
-    const NodeOptions& options = *parsed;
+    const sarmap::viewer::ViewerNodeOptions& options = *parsed;
     viewer::ServerOptions server_options;
     server_options.bind_address = options.bind_address;
     server_options.port = options.port;
