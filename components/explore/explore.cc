@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 
-
 namespace sarmap {
 namespace explore {
 
@@ -49,7 +48,8 @@ ScanMetrics AnalyseScan(const Scan& scan, const ReactiveOptions& options) {
 
 Velocity ReactiveExplorer::Step(const Scan& scan, bool* danger) {
   const ScanMetrics m = AnalyseScan(scan, options_);
-  const bool in_danger = m.min_valid_m < options_.danger_distance_m || m.unknown_rate >= options_.unknown_rate_limit;
+  const bool in_danger =
+      m.min_valid_m < options_.danger_distance_m || m.unknown_rate >= options_.unknown_rate_limit;
   if (danger) *danger = in_danger;
   Velocity v;
   v.source = "reactive";
@@ -96,13 +96,22 @@ ExploreController::ExploreController(const ExploreOptions& options)
 
 const char* ExploreController::StateName(State s) {
   switch (s) {
-    case State::kLookAround: return "look_around";
-    case State::kExploring: return "exploring";
-    case State::kSeekingSound: return "seeking_sound";
-    case State::kRecovering: return "recovering";
-    case State::kReturning: return "returning";
-    case State::kHome: return "home";
-    case State::kFinished: return "finished";
+    case State::kLookAround:
+      return "look_around";
+    case State::kExploring:
+      return "exploring";
+    case State::kSeekingSound:
+      return "seeking_sound";
+    case State::kSweeping:
+      return "sweeping";
+    case State::kRecovering:
+      return "recovering";
+    case State::kReturning:
+      return "returning";
+    case State::kHome:
+      return "home";
+    case State::kFinished:
+      return "finished";
   }
   return "?";
 }
@@ -114,7 +123,8 @@ void ExploreController::OnMap(const Grid& grid) {
 
 void ExploreController::OnPose(const common::Rigid2d& map_from_base) {
   if (pose_ && state_ == State::kLookAround) {
-    look_turned_rad_ += std::abs(common::NormalizeAngle(map_from_base.yaw_rad() - pose_->yaw_rad()));
+    look_turned_rad_ +=
+        std::abs(common::NormalizeAngle(map_from_base.yaw_rad() - pose_->yaw_rad()));
   }
   pose_ = map_from_base;
   if (!home_) home_ = map_from_base.translation();
@@ -123,13 +133,19 @@ void ExploreController::OnPose(const common::Rigid2d& map_from_base) {
 
 bool ExploreController::IsBlacklisted(const Eigen::Vector2d& p, double now_s) const {
   for (const auto& b : blacklist_) {
-    if (b.until_s > now_s && (b.position_m - p).norm() < options_.goals.blacklist_radius_m) return true;
+    if (b.until_s > now_s && (b.position_m - p).norm() < options_.goals.blacklist_radius_m)
+      return true;
   }
   return false;
 }
 
 void ExploreController::GiveUpGoal(double now_s) {
-  if (goal_ && goal_->kind != "home") {
+  if (goal_ && goal_->kind == "sweep") {
+    // Not reachable now: its cell waits its turn again.
+    const double cell = options_.goals.sweep_cell_m;
+    visited_cells_[{static_cast<int>(std::floor(goal_->position_m.x() / cell)),
+                    static_cast<int>(std::floor(goal_->position_m.y() / cell))}] = now_s;
+  } else if (goal_ && goal_->kind != "home") {
     blacklist_.push_back({goal_->position_m, now_s + options_.goals.blacklist_expiry_s});
     if (goal_->kind == "sound") visited_sound_.push_back(goal_->face_m.value_or(goal_->position_m));
   }
@@ -145,7 +161,8 @@ std::optional<ExploreController::Goal> ExploreController::ChooseFrontier(
   const double yaw = pose_->yaw_rad();
   for (const Frontier& f : frontiers) {
     const Eigen::Vector2d d = f.goal_m - pose_->translation();
-    const double turn = d.norm() > 1e-3 ? std::abs(common::NormalizeAngle(std::atan2(d.y(), d.x()) - yaw)) : 0.0;
+    const double turn =
+        d.norm() > 1e-3 ? std::abs(common::NormalizeAngle(std::atan2(d.y(), d.x()) - yaw)) : 0.0;
     Goal g;
     g.position_m = f.goal_m;
     g.kind = "frontier";
@@ -158,14 +175,16 @@ std::optional<ExploreController::Goal> ExploreController::ChooseFrontier(
   return best;
 }
 
-std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(const CostField& field) const {
+std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(
+    const CostField& field) const {
   const SoundGoalOptions& o = options_.sound;
   const Grid& grid = map_.grid();
   std::optional<Goal> best;
   for (const HeardPerson& person : heard_) {
     if (person.seen || person.position_std_m > o.max_position_std_m) continue;
     bool visited = false;
-    for (const auto& v : visited_sound_) visited |= (v - person.position_m).norm() < o.revisit_radius_m;
+    for (const auto& v : visited_sound_)
+      visited |= (v - person.position_m).norm() < o.revisit_radius_m;
     if (visited) continue;
     const Eigen::Vector2i c = grid.CellOf(person.position_m);
     const int r = static_cast<int>(std::ceil(o.max_view_m / grid.resolution_m));
@@ -183,7 +202,8 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(const 
         const Eigen::Vector2d p = grid.CentreOf(x, y);
         const double dist = (p - person.position_m).norm();
         if (dist < o.min_view_m || dist > o.max_view_m) continue;
-        const Eigen::Vector2d body_edge = person.position_m + (p - person.position_m).normalized() * 0.5;
+        const Eigen::Vector2d body_edge =
+            person.position_m + (p - person.position_m).normalized() * 0.5;
         if (field.cost[i] < best_cost && map_.LineOfSight(p, body_edge)) {
           best_cost = field.cost[i];
           best_cell = p;
@@ -211,6 +231,74 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(const 
   return best;
 }
 
+void ExploreController::MarkVisited(double now_s) {
+  if (!pose_) return;
+  const double cell = options_.goals.sweep_cell_m;
+  const Eigen::Vector2d p = pose_->translation();
+  visited_cells_[{static_cast<int>(std::floor(p.x() / cell)),
+                  static_cast<int>(std::floor(p.y() / cell))}] = now_s;
+}
+
+std::optional<ExploreController::Goal> ExploreController::ChooseSweepGoal(
+    double now_s, const CostField& field) const {
+  const Grid& g = map_.grid();
+  const double cell = options_.goals.sweep_cell_m;
+  const double start_s = start_s_ ? *start_s_ : 0.0;
+  // One candidate per sweep cell: among its reached grid cells with room to stand (the
+  // planner's preferred clearance, and beyond where the safety layer stops the robot short of a
+  // wall), the one with the most room (up to 0.3 m more), then nearest the cell's centre; scored
+  // by the time since the cell's last visit minus the drive there.
+  struct Candidate {
+    Eigen::Vector2d position_m;
+    double room_m, from_centre_m, cost;
+  };
+  const double needed_room_m =
+      std::max(options_.planner.robot_radius_m + options_.planner.clearance_m,
+               options_.safety.stop_distance_m + 0.1);
+  const double enough_room_m = needed_room_m + 0.3;
+  std::map<std::pair<int, int>, Candidate> best;
+  for (int i = 0; i < static_cast<int>(field.cost.size()); ++i) {
+    if (!field.Reached(i)) continue;
+    const int x = i % g.width, y = i / g.width;
+    const Eigen::Vector2d c = g.CentreOf(x, y);
+    const std::pair<int, int> key{static_cast<int>(std::floor(c.x() / cell)),
+                                  static_cast<int>(std::floor(c.y() / cell))};
+    const Eigen::Vector2d centre((key.first + 0.5) * cell, (key.second + 0.5) * cell);
+    const double room_m = map_.Clearance(x, y);
+    if (room_m < needed_room_m) continue;
+    const Candidate candidate{c, std::min(room_m, enough_room_m), (c - centre).norm(),
+                              field.cost[i]};
+    auto it = best.find(key);
+    if (it == best.end() || candidate.room_m > it->second.room_m + 1e-9 ||
+        (candidate.room_m > it->second.room_m - 1e-9 &&
+         candidate.from_centre_m < it->second.from_centre_m)) {
+      best[key] = candidate;
+    }
+  }
+  // Cells visited within sweep_min_age_s wait; when every cell does, any but the robot's own.
+  const Eigen::Vector2d robot = pose_->translation();
+  const std::pair<int, int> here{static_cast<int>(std::floor(robot.x() / cell)),
+                                 static_cast<int>(std::floor(robot.y() / cell))};
+  for (const double min_age_s : {options_.goals.sweep_min_age_s, 0.0}) {
+    std::optional<Goal> goal;
+    for (const auto& [key, candidate] : best) {
+      const auto visited = visited_cells_.find(key);
+      const double age_s = now_s - (visited == visited_cells_.end() ? start_s : visited->second);
+      if (age_s < min_age_s || key == here) continue;
+      const double score = age_s - candidate.cost / options_.goals.return_speed_mps;
+      if (!goal || score > goal->score) {
+        Goal next;
+        next.position_m = candidate.position_m;
+        next.kind = "sweep";
+        next.score = score;
+        goal = next;
+      }
+    }
+    if (goal) return goal;
+  }
+  return std::nullopt;
+}
+
 bool ExploreController::TimeToGoHome(double now_s, const CostField& field) const {
   if (options_.goals.time_budget_s <= 0 || !start_s_ || !home_) return false;
   const Eigen::Vector2i h = map_.grid().CellOf(*home_);
@@ -219,11 +307,13 @@ bool ExploreController::TimeToGoHome(double now_s, const CostField& field) const
     home_cost = field.cost[map_.grid().Index(h.x(), h.y())];
   }
   // Reserve the way home at the assumed speed, plus time to turn and settle.
-  return now_s - *start_s_ + home_cost / options_.goals.return_speed_mps + 15.0 >= options_.goals.time_budget_s;
+  return now_s - *start_s_ + home_cost / options_.goals.return_speed_mps + 15.0 >=
+         options_.goals.time_budget_s;
 }
 
 void ExploreController::Replan(double now_s) {
   last_plan_s_ = now_s;
+  MarkVisited(now_s);
   map_changed_ = false;
   map_.UpdateCostMap();
   const CostField field = map_.Plan(pose_->translation());
@@ -234,10 +324,10 @@ void ExploreController::Replan(double now_s) {
     return;
   }
   // Cut off from most of the places the robot has driven through means it is shut in: by a
-  // contact marked in a doorway (it came in that way; forget the contacts around it), or by a doorway
-  // the map draws too narrow for now. Either way nothing is concluded from this plan (it does
-  // not count towards the end of exploration). Space it has never been in (a hall seen
-  // through glass) does not count.
+  // contact marked in a doorway (it came in that way; forget the contacts around it), or by a
+  // doorway the map draws too narrow for now. Either way nothing is concluded from this plan (it
+  // does not count towards the end of exploration). Space it has never been in (a hall seen through
+  // glass) does not count.
   if (map_.TrailReachedFraction(field, options_.planner.robot_radius_m + 0.05) < 0.5) {
     if (map_.ClearContactsBounding(field)) last_plan_s_ = -1e9;
     path_.clear();
@@ -290,7 +380,8 @@ void ExploreController::Replan(double now_s) {
   if (options_.mode == "sound_guided") {
     const auto sound = ChooseSoundGoal(field);
     const bool seeking = goal_ && goal_->kind == "sound";
-    if (sound && (!seeking || sound->person_id != goal_->person_id || sound->score < goal_->score - 2.0)) {
+    if (sound &&
+        (!seeking || sound->person_id != goal_->person_id || sound->score < goal_->score - 2.0)) {
       goal_ = sound;
       goal_recoveries_ = 0;
       dwell_until_s_.reset();
@@ -304,7 +395,8 @@ void ExploreController::Replan(double now_s) {
     }
   }
 
-  if (!goal_ || goal_->kind == "frontier") {
+  if (!goal_ || goal_->kind == "frontier" || (goal_->kind == "sweep" && !frontiers.empty())) {
+    if (goal_ && goal_->kind == "sweep") goal_.reset();  // a new frontier beats the sweep
     const auto best = ChooseFrontier(field, frontiers);
     bool keep = false;
     if (goal_) {
@@ -320,9 +412,11 @@ void ExploreController::Replan(double now_s) {
       }
       if (keep) {
         const Eigen::Vector2i gc = map_.grid().CellOf(goal_->position_m);
-        const int gi = map_.grid().Contains(gc.x(), gc.y()) ? map_.grid().Index(gc.x(), gc.y()) : -1;
+        const int gi =
+            map_.grid().Contains(gc.x(), gc.y()) ? map_.grid().Index(gc.x(), gc.y()) : -1;
         keep = field.Reached(gi) &&
-               !(best && best->score < field.cost[gi] - options_.goals.size_weight - options_.goals.switch_margin_m);
+               !(best && best->score < field.cost[gi] - options_.goals.size_weight -
+                                           options_.goals.switch_margin_m);
       }
     }
     if (!keep) {
@@ -331,6 +425,15 @@ void ExploreController::Replan(double now_s) {
     }
   }
 
+  if (!goal_ && options_.goals.when_explored == "sweep" && empty_plans_ >= 2) {
+    goal_ = ChooseSweepGoal(now_s, field);
+    if (goal_) {
+      state_ = State::kSweeping;
+      path_ = map_.PathTo(field, goal_->position_m);
+      if (path_.empty()) GiveUpGoal(now_s);
+      return;
+    }
+  }
   if (!goal_) {
     // Exploration ends only when several plans in a row find nothing (a new map can hide a
     // frontier for one plan while SLAM re-renders).
@@ -356,6 +459,12 @@ void ExploreController::Replan(double now_s) {
     state_ = options_.goals.return_home ? State::kReturning : State::kFinished;
     path_.clear();
     if (state_ == State::kReturning) Replan(now_s);
+    return;
+  }
+  if (goal_->kind == "sweep") {
+    state_ = State::kSweeping;
+    path_ = map_.PathTo(field, goal_->position_m);
+    if (path_.empty()) GiveUpGoal(now_s);
     return;
   }
   empty_plans_ = 0;
@@ -408,7 +517,8 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
   const Eigen::Vector2d side(-ahead.y(), ahead.x());
   for (double x = 0.3; x < std::min(clearance, o.slow_distance_m); x += step) {
     bool hit = false;
-    for (double y = -half; y <= half + 1e-9; y += step) hit |= map_.Occupied(pose_->translation() + ahead * x + side * y);
+    for (double y = -half; y <= half + 1e-9; y += step)
+      hit |= map_.Occupied(pose_->translation() + ahead * x + side * y);
     if (hit) {
       clearance = x;
       break;
@@ -425,7 +535,8 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
       const double t = o.sweep_horizon_s * k / 6;
       const double mean_yaw = pose_->yaw_rad() + 0.5 * desired.angular_radps * t;
       const Eigen::Vector2d p =
-          pose_->translation() + desired.linear_mps * t * Eigen::Vector2d(std::cos(mean_yaw), std::sin(mean_yaw));
+          pose_->translation() +
+          desired.linear_mps * t * Eigen::Vector2d(std::cos(mean_yaw), std::sin(mean_yaw));
       const Eigen::Vector2i c = map_.grid().CellOf(p);
       const double clearance_then = map_.Clearance(c.x(), c.y());
       if (clearance_then < o.footprint_radius_m && clearance_then < clearance_now - 1e-3) {
@@ -435,7 +546,8 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
       }
     }
   }
-  const double scale = std::clamp((clearance - o.stop_distance_m) / (o.slow_distance_m - o.stop_distance_m), 0.0, 1.0);
+  const double scale = std::clamp(
+      (clearance - o.stop_distance_m) / (o.slow_distance_m - o.stop_distance_m), 0.0, 1.0);
   if (scale < 1.0) {
     const double limited = desired.linear_mps * scale;
     if (limited < desired.linear_mps - 1e-6) {
@@ -472,10 +584,12 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     const Eigen::Vector2d side(-back.y(), back.x());
     bool clear = true;
     for (double x = 0.25; x <= 0.5; x += 0.05) {
-      for (double y = -0.2; y <= 0.2 + 1e-9; y += 0.1) clear &= !map_.Occupied(pose_->translation() + back * x + side * y);
+      for (double y = -0.2; y <= 0.2 + 1e-9; y += 0.1)
+        clear &= !map_.Occupied(pose_->translation() + back * x + side * y);
     }
-    const bool done = (pose_->translation() - recovery_xy0_).norm() >= o.backoff_m ||
-                      now_s - recovery_phase_start_s_ > 2.0 * o.backoff_m / o.backoff_speed_mps + 1.0;
+    const bool done =
+        (pose_->translation() - recovery_xy0_).norm() >= o.backoff_m ||
+        now_s - recovery_phase_start_s_ > 2.0 * o.backoff_m / o.backoff_speed_mps + 1.0;
     if (clear && !done && o.backoff_m > 0) {
       v.linear_mps = -o.backoff_speed_mps;
       return v;
@@ -485,7 +599,8 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     recovery_yaw0_ = pose_->yaw_rad();
   }
   const double turned = std::abs(common::NormalizeAngle(pose_->yaw_rad() - recovery_yaw0_));
-  if (turned < o.turn_rad && now_s - recovery_phase_start_s_ < 2.0 * o.turn_rad / o.turn_speed_radps + 1.0) {
+  if (turned < o.turn_rad &&
+      now_s - recovery_phase_start_s_ < 2.0 * o.turn_rad / o.turn_speed_radps + 1.0) {
     v.angular_radps = recovery_turn_sign_ * o.turn_speed_radps;
     return v;
   }
@@ -509,7 +624,8 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
     case State::kFinished:
       return stop;
     case State::kLookAround: {
-      const bool done = look_turned_rad_ >= 2 * M_PI || (start_s_ && now_s - *start_s_ > 4 * M_PI / 0.5);
+      const bool done =
+          look_turned_rad_ >= 2 * M_PI || (start_s_ && now_s - *start_s_ > 4 * M_PI / 0.5);
       if (!done) {
         Velocity v;
         v.source = "look";
@@ -527,7 +643,8 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
       break;
   }
   const double since_plan_s = now_s - last_plan_s_;
-  if (since_plan_s >= options_.goals.replan_period_s || (goal_ && path_.empty() && since_plan_s >= 0.25)) {
+  if (since_plan_s >= options_.goals.replan_period_s ||
+      (goal_ && path_.empty() && since_plan_s >= 0.25)) {
     Replan(now_s);
   }
   if (state_ == State::kHome || state_ == State::kFinished) return stop;
@@ -553,8 +670,9 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
       if (std::abs(error) > 0.25 && !dwell_until_s_) {
         Velocity v;
         v.source = "planner";
-        v.angular_radps = std::clamp(options_.follower.heading_gain * error, -options_.follower.max_angular_radps,
-                                     options_.follower.max_angular_radps);
+        v.angular_radps =
+            std::clamp(options_.follower.heading_gain * error, -options_.follower.max_angular_radps,
+                       options_.follower.max_angular_radps);
         progress_s_ = now_s;
         return v;
       }
@@ -568,7 +686,7 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
         return v;
       }
       visited_sound_.push_back(*goal_->face_m);
-    } else {
+    } else if (goal_->kind == "frontier") {
       // A frontier still there after looking at it from its edge is one the camera cannot
       // resolve from anywhere it can reach (under furniture, behind a screen): not again.
       blacklist_.push_back({goal_->position_m, std::numeric_limits<double>::infinity()});
@@ -585,7 +703,8 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
   commanded_m_ += std::max(0.0, last_linear_mps_) * std::max(0.0, now_s - last_scan_s_);
   if (now_s - contact_since_s_ >= options_.recovery.contact_window_s) {
     const double moved = (robot - contact_xy_).norm();
-    const bool contact = commanded_m_ > 0.1 && moved < options_.recovery.contact_ratio * commanded_m_;
+    const bool contact =
+        commanded_m_ > 0.1 && moved < options_.recovery.contact_ratio * commanded_m_;
     contact_since_s_ = now_s;
     contact_xy_ = robot;
     commanded_m_ = 0;
@@ -599,7 +718,8 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
   const Velocity safe = Safe(desired, scan);
   // Progress: moved or turned enough since the last mark.
   if ((robot - progress_xy_).norm() > options_.recovery.progress_m ||
-      std::abs(common::NormalizeAngle(pose_->yaw_rad() - progress_yaw_)) > options_.recovery.progress_rad) {
+      std::abs(common::NormalizeAngle(pose_->yaw_rad() - progress_yaw_)) >
+          options_.recovery.progress_rad) {
     progress_xy_ = robot;
     progress_yaw_ = pose_->yaw_rad();
     progress_s_ = now_s;
@@ -631,11 +751,13 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
     status_.driven_by = out.source;
     return out;
   }
-  if (teleop_ && teleop_->override_active && now_s - teleop_->receive_time_s <= options_.teleop_timeout_s &&
+  if (teleop_ && teleop_->override_active &&
+      now_s - teleop_->receive_time_s <= options_.teleop_timeout_s &&
       now_s >= teleop_->receive_time_s - 1e-3) {
-    out.linear_mps = std::clamp(teleop_->linear_mps, -options_.teleop_max_linear_mps, options_.teleop_max_linear_mps);
-    out.angular_radps =
-        std::clamp(teleop_->angular_radps, -options_.teleop_max_angular_radps, options_.teleop_max_angular_radps);
+    out.linear_mps = std::clamp(teleop_->linear_mps, -options_.teleop_max_linear_mps,
+                                options_.teleop_max_linear_mps);
+    out.angular_radps = std::clamp(teleop_->angular_radps, -options_.teleop_max_angular_radps,
+                                   options_.teleop_max_angular_radps);
     out.source = "teleop";
     status_.state = "override";
     status_.driven_by = out.source;
@@ -674,7 +796,9 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   status_.recoveries = recoveries_;
   status_.contacts = map_.contacts();
   last_scan_s_ = now_s;
-  status_.stuck_s = state_ == State::kHome || state_ == State::kFinished ? 0.0 : std::max(0.0, now_s - progress_s_);
+  status_.stuck_s = state_ == State::kHome || state_ == State::kFinished
+                        ? 0.0
+                        : std::max(0.0, now_s - progress_s_);
   return out;
 }
 

@@ -28,6 +28,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,10 +55,14 @@ struct ReactiveOptions {
   double turn_speed_radps = 0.5;
   template <class V>
   void Visit(V& v) {
-    v("danger_distance_m", danger_distance_m, "stop and turn when the nearest valid range is below this");
-    v("unknown_rate_limit", unknown_rate_limit, "stop and turn when this fraction of readings is unknown");
-    v("low_average_m", low_average_m, "when both sides' mean range is below this, turn to the side with more unknown");
-    v("max_range_margin_m", max_range_margin_m, "finite readings above range_max minus this are unknown");
+    v("danger_distance_m", danger_distance_m,
+      "stop and turn when the nearest valid range is below this");
+    v("unknown_rate_limit", unknown_rate_limit,
+      "stop and turn when this fraction of readings is unknown");
+    v("low_average_m", low_average_m,
+      "when both sides' mean range is below this, turn to the side with more unknown");
+    v("max_range_margin_m", max_range_margin_m,
+      "finite readings above range_max minus this are unknown");
     v("forward_speed_mps", forward_speed_mps, "speed when the way is safe");
     v("turn_speed_radps", turn_speed_radps, "turn rate of the avoiding behaviour");
   }
@@ -72,7 +77,7 @@ struct ReactiveOptions {
 };
 
 struct ScanMetrics {
-  double min_valid_m = 0;    // +inf when no valid reading
+  double min_valid_m = 0;  // +inf when no valid reading
   double unknown_rate = 0;
   double mean_left_m = 0, mean_right_m = 0;
   double unknown_left = 0, unknown_right = 0;  // rates per side
@@ -92,17 +97,19 @@ class ReactiveExplorer {
 };
 
 struct SafetyOptions {
-  double stop_distance_m = 0.55;   // from the base centre: robot radius + what the camera cannot see
+  double stop_distance_m = 0.55;  // from the base centre: robot radius + what the camera cannot see
   double slow_distance_m = 1.2;
   double corridor_half_width_m = 0.3;
-  double blind_fraction = 0.5;     // of the corridor's beams without information: blocked
+  double blind_fraction = 0.5;       // of the corridor's beams without information: blocked
   double footprint_radius_m = 0.28;  // the base's radius and a margin, for the swept check
   double sweep_horizon_s = 0.6;      // how far ahead the commanded arc is checked
   template <class V>
   void Visit(V& v) {
-    v("stop_distance_m", stop_distance_m, "no forward motion when an obstacle ahead is nearer (from the base centre)");
+    v("stop_distance_m", stop_distance_m,
+      "no forward motion when an obstacle ahead is nearer (from the base centre)");
     v("footprint_radius_m", footprint_radius_m,
-      "no forward motion when the commanded arc brings the base this close to a map obstacle (a corner cut while turning)");
+      "no forward motion when the commanded arc brings the base this close to a map obstacle (a "
+      "corner cut while turning)");
     v("sweep_horizon_s", sweep_horizon_s, "the commanded arc is checked this far ahead in time");
     v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
     v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
@@ -133,7 +140,8 @@ struct FollowerOptions {
     v("lookahead_m", lookahead_m, "pure-pursuit lookahead");
     v("max_linear_mps", max_linear_mps, "speed limit while following a path");
     v("max_angular_radps", max_angular_radps, "turn-rate limit");
-    v("rotate_in_place_rad", rotate_in_place_rad, "turn on the spot when the heading error exceeds this");
+    v("rotate_in_place_rad", rotate_in_place_rad,
+      "turn on the spot when the heading error exceeds this");
     v("heading_gain", heading_gain, "angular rate per radian of heading error");
   }
   void Validate(common::Validator& check) const {
@@ -146,30 +154,46 @@ struct FollowerOptions {
 };
 
 struct GoalOptions {
-  double size_weight = 0.5;          // path metres one metre of frontier is worth
-  double heading_weight_m = 0.6;     // path metres a half turn is worth (prefer what is ahead)
-  double switch_margin_m = 1.5;      // a new goal must be this much better to replace the current
+  double size_weight = 0.5;       // path metres one metre of frontier is worth
+  double heading_weight_m = 0.6;  // path metres a half turn is worth (prefer what is ahead)
+  double switch_margin_m = 1.5;   // a new goal must be this much better to replace the current
   double goal_reached_m = 0.3;
   double replan_period_s = 1.0;
   double blacklist_radius_m = 0.6;
   double blacklist_expiry_s = 120;
-  double time_budget_s = 0;          // 0: explore until nothing is left
-  double return_speed_mps = 0.2;     // for the time the way home needs (time budget)
+  double time_budget_s = 0;       // 0: explore until nothing is left
+  double return_speed_mps = 0.2;  // for the time the way home needs (time budget)
   bool return_home = true;
-  bool look_around = true;           // a full turn at the start
+  bool look_around = true;  // a full turn at the start
+  // When nothing is left to explore: "home" (return, or finish) or "sweep" (search the explored
+  // site again, the longest-unvisited reachable place first, until the time budget sends the
+  // robot home: a long search, where people move and wake up).
+  std::string when_explored = "home";
+  double sweep_cell_m = 2.0;     // the site is remembered as visited in cells this size
+  double sweep_min_age_s = 120;  // a cell visited more recently than this is not a goal
   template <class V>
   void Visit(V& v) {
     v("size_weight", size_weight, "path metres one metre of frontier is worth");
-    v("heading_weight_m", heading_weight_m, "path metres a half turn away from the heading is worth");
-    v("switch_margin_m", switch_margin_m, "a new frontier must score this much better to replace the current goal");
+    v("heading_weight_m", heading_weight_m,
+      "path metres a half turn away from the heading is worth");
+    v("switch_margin_m", switch_margin_m,
+      "a new frontier must score this much better to replace the current goal");
     v("goal_reached_m", goal_reached_m, "distance at which a goal counts as reached");
     v("replan_period_s", replan_period_s, "goals and paths are recomputed at most this often");
-    v("blacklist_radius_m", blacklist_radius_m, "frontiers this close to a given-up goal are skipped");
+    v("blacklist_radius_m", blacklist_radius_m,
+      "frontiers this close to a given-up goal are skipped");
     v("blacklist_expiry_s", blacklist_expiry_s, "a given-up goal may be tried again after this");
-    v("time_budget_s", time_budget_s, "mission time after which the robot goes home (0: none); the way home is reserved");
+    v("time_budget_s", time_budget_s,
+      "mission time after which the robot goes home (0: none); the way home is reserved");
     v("return_speed_mps", return_speed_mps, "average speed assumed for the way home");
     v("return_home", return_home, "go back to the start when exploration ends");
     v("look_around", look_around, "turn once on the spot at the start");
+    v("when_explored", when_explored,
+      "home: return (or finish) when nothing is left to explore; sweep: search the explored site "
+      "again, the longest-unvisited place first, until the time budget sends the robot home");
+    v("sweep_cell_m", sweep_cell_m, "sweep: the site is remembered as visited in cells this size");
+    v("sweep_min_age_s", sweep_min_age_s,
+      "sweep: a cell visited more recently than this is not a goal");
   }
   void Validate(common::Validator& check) const {
     check.NonNegative("size_weight", size_weight);
@@ -181,30 +205,37 @@ struct GoalOptions {
     check.Positive("blacklist_expiry_s", blacklist_expiry_s);
     check.NonNegative("time_budget_s", time_budget_s);
     check.Positive("return_speed_mps", return_speed_mps);
+    check.OneOf("when_explored", when_explored, {"home", "sweep"});
+    check.Positive("sweep_cell_m", sweep_cell_m);
+    check.NonNegative("sweep_min_age_s", sweep_min_age_s);
   }
 };
 
 struct RecoveryOptions {
-  double stuck_timeout_s = 6.0;      // no progress for this long while driving: stuck
-  double progress_m = 0.2;           // progress: this far from where the robot was...
-  double progress_rad = 0.6;         // ...or turned this much
-  double blocked_timeout_s = 3.0;    // the safety layer has held the robot this long: stuck
+  double stuck_timeout_s = 6.0;    // no progress for this long while driving: stuck
+  double progress_m = 0.2;         // progress: this far from where the robot was...
+  double progress_rad = 0.6;       // ...or turned this much
+  double blocked_timeout_s = 3.0;  // the safety layer has held the robot this long: stuck
   double backoff_m = 0.25;
   double backoff_speed_mps = 0.1;
   double turn_rad = 1.6;
   double turn_speed_radps = 0.6;
-  int attempts_per_goal = 2;         // recoveries before a goal is given up
-  double contact_window_s = 1.0;     // commanded forward this long...
-  double contact_ratio = 0.3;        // ...but moved less than this share of it: an unseen obstacle
+  int attempts_per_goal = 2;      // recoveries before a goal is given up
+  double contact_window_s = 1.0;  // commanded forward this long...
+  double contact_ratio = 0.3;     // ...but moved less than this share of it: an unseen obstacle
   template <class V>
   void Visit(V& v) {
-    v("contact_window_s", contact_window_s, "window over which commanded and actual forward motion are compared");
+    v("contact_window_s", contact_window_s,
+      "window over which commanded and actual forward motion are compared");
     v("contact_ratio", contact_ratio,
-      "moving less than this share of the commanded distance means an obstacle the sensors miss (glass): it is marked and avoided");
-    v("stuck_timeout_s", stuck_timeout_s, "no progress for this long while driving counts as stuck");
+      "moving less than this share of the commanded distance means an obstacle the sensors miss "
+      "(glass): it is marked and avoided");
+    v("stuck_timeout_s", stuck_timeout_s,
+      "no progress for this long while driving counts as stuck");
     v("progress_m", progress_m, "moving this far counts as progress");
     v("progress_rad", progress_rad, "turning this much counts as progress");
-    v("blocked_timeout_s", blocked_timeout_s, "the safety layer holding the robot this long counts as stuck");
+    v("blocked_timeout_s", blocked_timeout_s,
+      "the safety layer holding the robot this long counts as stuck");
     v("backoff_m", backoff_m, "recovery: reverse this far (when the map behind is free)");
     v("backoff_speed_mps", backoff_speed_mps, "recovery: reversing speed");
     v("turn_rad", turn_rad, "recovery: turn this much towards the open side");
@@ -227,20 +258,23 @@ struct RecoveryOptions {
 };
 
 struct SoundGoalOptions {
-  double max_position_std_m = 1.5;   // heard people placed less certainly are not goals
-  double min_view_m = 0.8;           // look at them from this far...
-  double max_view_m = 2.2;           // ...to this far, with a clear line of sight in the map
-  double dwell_s = 4.0;              // facing them, so the camera can confirm
-  double revisit_radius_m = 1.2;     // a visited place is not a goal again
-  double max_detour_m = 25;          // farther (by path) heard people wait for the frontiers
+  double max_position_std_m = 1.5;  // heard people placed less certainly are not goals
+  double min_view_m = 0.8;          // look at them from this far...
+  double max_view_m = 2.2;          // ...to this far, with a clear line of sight in the map
+  double dwell_s = 4.0;             // facing them, so the camera can confirm
+  double revisit_radius_m = 1.2;    // a visited place is not a goal again
+  double max_detour_m = 25;         // farther (by path) heard people wait for the frontiers
   template <class V>
   void Visit(V& v) {
-    v("max_position_std_m", max_position_std_m, "heard people placed less certainly than this are not goals");
+    v("max_position_std_m", max_position_std_m,
+      "heard people placed less certainly than this are not goals");
     v("min_view_m", min_view_m, "nearest viewing distance");
     v("max_view_m", max_view_m, "farthest viewing distance");
     v("dwell_s", dwell_s, "time spent facing a heard person so the camera can confirm");
-    v("revisit_radius_m", revisit_radius_m, "a heard person near an already visited place is not a goal again");
-    v("max_detour_m", max_detour_m, "heard people farther than this by path wait for exploration to bring the robot closer");
+    v("revisit_radius_m", revisit_radius_m,
+      "a heard person near an already visited place is not a goal again");
+    v("max_detour_m", max_detour_m,
+      "heard people farther than this by path wait for exploration to bring the robot closer");
   }
   void Validate(common::Validator& check) const {
     check.Positive("max_position_std_m", max_position_std_m);
@@ -281,10 +315,13 @@ struct ExploreOptions {
   SoundGoalOptions sound;
   template <class V>
   void Visit(V& v) {
-    v("mode", mode, "reactive (Sales 2014), frontier (map-driven), sound_guided (frontier + people heard)");
-    v("teleop_timeout_s", teleop_timeout_s, "operator override ends this long after the last TELEOP arrived");
+    v("mode", mode,
+      "reactive (Sales 2014), frontier (map-driven), sound_guided (frontier + people heard)");
+    v("teleop_timeout_s", teleop_timeout_s,
+      "operator override ends this long after the last TELEOP arrived");
     v("teleop_max_linear_mps", teleop_max_linear_mps, "operator speeds are clamped to this");
-    v("teleop_max_angular_radps", teleop_max_angular_radps, "operator turn rates are clamped to this");
+    v("teleop_max_angular_radps", teleop_max_angular_radps,
+      "operator turn rates are clamped to this");
     v("reactive", reactive, "reactive behaviour (mode reactive)");
     v("planner", planner, "cost map and planner");
     v("safety", safety, "safety layer on the scan and the map");
@@ -303,7 +340,8 @@ struct ExploreOptions {
 
 // What the controller is doing, for EXPLORE_STATUS.
 struct ExploreStatus {
-  std::string state;      // look_around, exploring, seeking_sound, recovering, returning, home, finished, override
+  std::string state;      // look_around, exploring, seeking_sound, recovering, returning, home,
+                          // finished, override
   std::string driven_by;  // the source of the last command
   std::optional<Eigen::Vector2d> goal_m;
   std::string goal_kind;  // frontier, sound, home
@@ -311,7 +349,7 @@ struct ExploreStatus {
   int frontiers = 0;
   int blacklisted = 0;
   int recoveries = 0;
-  int contacts = 0;       // obstacles found by running into them
+  int contacts = 0;  // obstacles found by running into them
   double stuck_s = 0;
   double elapsed_s = 0;
 };
@@ -332,7 +370,16 @@ class ExploreController {
   const ExploreMap& map() const { return map_; }
 
  private:
-  enum class State { kLookAround, kExploring, kSeekingSound, kRecovering, kReturning, kHome, kFinished };
+  enum class State {
+    kLookAround,
+    kExploring,
+    kSeekingSound,
+    kSweeping,
+    kRecovering,
+    kReturning,
+    kHome,
+    kFinished
+  };
   struct Goal {
     Eigen::Vector2d position_m;
     std::string kind;  // frontier, sound, home
@@ -347,8 +394,13 @@ class ExploreController {
 
   Velocity Drive(double now_s, const Scan& scan);
   void Replan(double now_s);
-  std::optional<Goal> ChooseFrontier(const CostField& field, const std::vector<Frontier>& frontiers) const;
+  std::optional<Goal> ChooseFrontier(const CostField& field,
+                                     const std::vector<Frontier>& frontiers) const;
   std::optional<Goal> ChooseSoundGoal(const CostField& field) const;
+  // Sweep: the reachable place whose cell was visited longest ago (never: the mission start),
+  // less the time to drive there; none younger than sweep_min_age_s.
+  std::optional<Goal> ChooseSweepGoal(double now_s, const CostField& field) const;
+  void MarkVisited(double now_s);
   Velocity Follow(const Scan& scan);
   Velocity Safe(Velocity desired, const Scan& scan) const;
   Velocity Recover(double now_s, const Scan& scan);
@@ -375,6 +427,8 @@ class ExploreController {
   bool map_changed_ = false;
   std::vector<BlacklistEntry> blacklist_;
   std::vector<Eigen::Vector2d> visited_sound_;
+  std::map<std::pair<int, int>, double>
+      visited_cells_;  // sweep cell -> last time the robot was in it
   std::optional<double> dwell_until_s_;
   int frontier_count_ = 0;
   bool cleared_blacklist_once_ = false;

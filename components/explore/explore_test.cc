@@ -1,7 +1,11 @@
 #include "explore/explore.h"
-#include "explore/status_message.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "explore/status_message.h"
 
 namespace sarmap {
 namespace explore {
@@ -40,7 +44,7 @@ TEST(ReactiveExplorerTest, ForwardWhenClearTurnsToTheOpenSideWhenClose) {
 
 TEST(ReactiveExplorerTest, TooManyUnknownReadingsAndNarrowPlacesTurnToTheUnknownSide) {
   ReactiveExplorer r{ReactiveOptions()};
-  Scan s = MakeScan(0.8, 0.9);  // both means under 1 m
+  Scan s = MakeScan(0.8, 0.9);                       // both means under 1 m
   for (int i = 0; i < 12; ++i) s.ranges_m[i] = NAN;  // 20 % unknown, all on the right
   bool danger = false;
   const Velocity v = r.Step(s, &danger);
@@ -188,10 +192,10 @@ TEST(ExploreMapTest, ContactsInLineAreOneGlassPaneExtendedToThePierAndKnownObsta
   EXPECT_EQ(m.glass_lines(), 0);
   EXPECT_TRUE(m.AddContact(common::Rigid2d(3.5, 3.0 - touching + 0.05, M_PI / 2 - 0.4)));
   EXPECT_EQ(m.glass_lines(), 1);
-  EXPECT_TRUE(marked(2.75));  // between the bumps
-  EXPECT_TRUE(marked(4.8));    // extended to the pier...
-  EXPECT_FALSE(marked(5.5));   // ...and not beyond it
-  m.SetMap(FreeSpaceWithPier());                         // kept through every MAP
+  EXPECT_TRUE(marked(2.75));      // between the bumps
+  EXPECT_TRUE(marked(4.8));       // extended to the pier...
+  EXPECT_FALSE(marked(5.5));      // ...and not beyond it
+  m.SetMap(FreeSpaceWithPier());  // kept through every MAP
   EXPECT_TRUE(marked(2.75));
   // Touching the pier, which the map has: no mark.
   EXPECT_FALSE(m.AddContact(common::Rigid2d(5.1, 3.0 - touching, M_PI / 2)));
@@ -277,10 +281,12 @@ TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
   ExploreController fresh{o};
   fresh.OnMap(PartlyKnownRoom());
   fresh.OnPose(pose);
-  for (double u = 0; u < o.recovery.stuck_timeout_s - 0.5; u += 0.1) fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
+  for (double u = 0; u < o.recovery.stuck_timeout_s - 0.5; u += 0.1)
+    fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(fresh.status().recoveries, 0);
   EXPECT_GT(fresh.status().stuck_s, o.recovery.stuck_timeout_s - 1.0);
-  for (double u = o.recovery.stuck_timeout_s - 0.5; u < o.recovery.stuck_timeout_s + 0.5; u += 0.1) {
+  for (double u = o.recovery.stuck_timeout_s - 0.5; u < o.recovery.stuck_timeout_s + 0.5;
+       u += 0.1) {
     fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
   }
   EXPECT_EQ(fresh.status().recoveries, 1);
@@ -308,6 +314,43 @@ TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
   EXPECT_EQ(c.OnScan(t + 1, MakeScan(INFINITY, INFINITY)).linear_mps, 0.0);
 }
 
+// when_explored: sweep: with nothing left to explore the robot searches the site again, the
+// longest-unvisited place first, and the time budget still brings it home.
+TEST(ExploreControllerTest, SweepRevisitsTheExploredSiteUntilTheTimeBudget) {
+  ExploreOptions o = NoLookAround();
+  o.goals.when_explored = "sweep";
+  o.goals.sweep_cell_m = 1.0;
+  o.goals.sweep_min_age_s = 20;
+  Grid done = PartlyKnownRoom();  // a closed 2.5 x 4 m room
+  for (auto& cell : done.cells) cell = cell < 0 ? 100 : cell;
+  auto run = [&](const ExploreOptions& options, double seconds,
+                 std::set<std::pair<int, int>>* cells) {
+    ExploreController c{options};
+    common::Rigid2d pose(1.0, 1.0, 0.0);
+    c.OnPose(pose);
+    c.OnMap(done);
+    for (double t = 0; t < seconds && c.status().state != "home"; t += 0.1) {
+      const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
+      pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
+      c.OnPose(pose);
+      if (cells)
+        cells->insert({static_cast<int>(std::floor(pose.translation().x())),
+                       static_cast<int>(std::floor(pose.translation().y()))});
+    }
+    return std::make_pair(c.status().state, pose);
+  };
+  std::set<std::pair<int, int>> cells;
+  const auto [state, pose] = run(o, 150, &cells);
+  EXPECT_EQ(state, "sweeping");
+  // The room's eight 1 m cells (2 of its 3 columns are whole): most of them driven through.
+  EXPECT_GE(cells.size(), 6u);
+  // With a time budget, home at the end.
+  o.goals.time_budget_s = 60;
+  const auto [end_state, end_pose] = run(o, 120, nullptr);
+  EXPECT_EQ(end_state, "home");
+  EXPECT_LT((end_pose.translation() - Eigen::Vector2d(1.0, 1.0)).norm(), 0.35);
+}
+
 TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   ExploreOptions o = NoLookAround();
   o.mode = "sound_guided";
@@ -331,7 +374,8 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   EXPECT_LE(d, o.sound.max_view_m + 0.1);
   // Behind a wall: no cell in view, so the cheapest one in range (parallax for the microphones).
   Grid walled = g;
-  for (int y = 1; y < walled.height - 1; ++y) walled.cells[y * walled.width + 44] = 100;  // x = 4.4 m
+  for (int y = 1; y < walled.height - 1; ++y)
+    walled.cells[y * walled.width + 44] = 100;  // x = 4.4 m
   ExploreController cover{o};
   cover.OnMap(walled);
   cover.OnPose(common::Rigid2d(1.0, 2.0, 0.0));

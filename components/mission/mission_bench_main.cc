@@ -82,7 +82,9 @@ class Metrics : public mission::MissionObserver {
     metrics.OnMap(m.header.utime, m);
     people_found.OnMap(m);
   }
-  void OnExploreStatus(double, const explore_status_t& m) override { metrics.OnExploreStatus(m.header.utime, m); }
+  void OnExploreStatus(double, const explore_status_t& m) override {
+    metrics.OnExploreStatus(m.header.utime, m);
+  }
   void OnPose(double t_s, const pose_t& m) override { people_found.OnPose(t_s, m); }
   void OnPeopleMap(double t_s, const people_map_t& m) override {
     people_found.OnPeopleMap(t_s, m, &metrics);
@@ -160,6 +162,49 @@ std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, dou
   return "in view, not detected";
 }
 
+// The long-mission figures: per period, each component's share of one core over that period,
+// the memory, SLAM's graph, and what is on the maps.
+void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out) {
+  std::fprintf(out,
+               "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
+               "sound | RSS MB | SLAM nodes | submaps | loop closures | optimise s (period) | "
+               "people | sound sources | detections without pose |\n");
+  const mission::MissionReport* prev = nullptr;
+  for (const mission::MissionReport& r : reports) {
+    const double dt = prev ? r.t_s - prev->t_s : r.t_s;
+    auto pct = [&](double now, double before) { return dt > 0 ? 100 * (now - before) / dt : 0.0; };
+    std::fprintf(
+        out,
+        "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %lld | %lld "
+        "| %lld | %.2f | %d | %d | %lld |\n",
+        r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
+        pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
+        pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
+        pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
+        pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
+        pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb,
+        static_cast<long long>(r.slam_nodes), static_cast<long long>(r.slam_submaps),
+        static_cast<long long>(r.slam_loop_closures),
+        r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0), r.people_on_map, r.sound_sources,
+        static_cast<long long>(r.detections_without_pose));
+    prev = &r;
+  }
+}
+
+void WriteReports(const std::vector<mission::MissionReport>& reports, const std::string& path) {
+  std::ofstream csv(path);
+  csv << "time_s,state,distance_m,cpu_s,slam_cpu_s,explore_cpu_s,vision_cpu_s,people_map_cpu_s,"
+         "sound_cpu_s,rss_mb,slam_nodes,slam_submaps,slam_optimisations,slam_loop_closures,"
+         "slam_optimise_s,people_on_map,sound_sources,detections_without_pose\n";
+  for (const mission::MissionReport& r : reports) {
+    csv << r.t_s << "," << r.state << "," << r.distance_m << "," << r.cpu_s << "," << r.slam_cpu_s
+        << "," << r.explore_cpu_s << "," << r.vision_cpu_s << "," << r.people_map_cpu_s << ","
+        << r.sound_cpu_s << "," << r.rss_mb << "," << r.slam_nodes << "," << r.slam_submaps << ","
+        << r.slam_optimisations << "," << r.slam_loop_closures << "," << r.slam_optimise_s << ","
+        << r.people_on_map << "," << r.sound_sources << "," << r.detections_without_pose << "\n";
+  }
+}
+
 std::vector<std::string> Split(const std::string& text) {
   std::vector<std::string> out;
   std::stringstream in(text);
@@ -207,8 +252,10 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
     }
     for (const auto& e : summary.source_truth) matched += e.found;
     char text[160];
-    std::snprintf(text, sizeof(text), "%zu sources, %d placed (%d voices, %d persons); %d of %zu emitters within 0.5 m",
-                  sources->sources.size(), placed, voices, persons, matched, summary.source_truth.size());
+    std::snprintf(text, sizeof(text),
+                  "%zu sources, %d placed (%d voices, %d persons); %d of %zu emitters within 0.5 m",
+                  sources->sources.size(), placed, voices, persons, matched,
+                  summary.source_truth.size());
     row->sound = text;
   }
   if (!times.empty()) {
@@ -220,17 +267,22 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
 
 // One row of the table (a markdown table line).
 void PrintRow(const Row& r, FILE* out) {
-  std::fprintf(out, "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
-              r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
-              r.rate_m2_per_min, r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(),
-              r.collisions, r.longest_stuck_s,
-              r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view, r.people,
-              r.distance_m, r.explore_cpu_percent);
+  std::fprintf(
+      out,
+      "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
+      r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
+      r.rate_m2_per_min,
+      r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(), r.collisions,
+      r.longest_stuck_s,
+      r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view,
+      r.people, r.distance_m, r.explore_cpu_percent);
   if (r.perception) {
-    std::fprintf(out, " %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people, r.false_people,
-                r.median_find_s < 0 ? "-" : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
-                static_cast<long long>(r.heard_calls),
-                r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
+    std::fprintf(
+        out, " %d/%d | %d | %s | %lld | %.1f %% | %.0f s |\n", r.found, r.people, r.false_people,
+        r.median_find_s < 0 ? "-"
+                            : (std::to_string(static_cast<int>(r.median_find_s)) + " s").c_str(),
+        static_cast<long long>(r.heard_calls),
+        r.simulated_s > 0 ? 100 * r.perception_cpu_s / r.simulated_s : 0.0, r.cpu_s);
   } else {
     std::fprintf(out, " - | - | - | - | - | %.0f s |\n", r.cpu_s);
   }
@@ -241,41 +293,59 @@ void PrintRow(const Row& r, FILE* out) {
 int main(int argc, char** argv) {
   return common::RunMain("sarmap-mission-bench", [&]() -> int {
     mission::MissionRunOptions run;
-    std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench", site_config = "config/site.yaml";
+    std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench",
+                        site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
     bool no_perception = false, no_sound = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
-        "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the explorer\n"
-        "in one process, as fast as the CPU allows, on generated incident sites (sarmap-site) or given\n"
-        "worlds. For each site and exploration mode it prints the share of the reachable floor mapped,\n"
-        "the coverage rate against the physical bound, collisions, the longest time without progress,\n"
-        "whether the robot came home, and when each person was first in the camera's view; each run's\n"
+        "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the "
+        "explorer\n"
+        "in one process, as fast as the CPU allows, on generated incident sites (sarmap-site) or "
+        "given\n"
+        "worlds. For each site and exploration mode it prints the share of the reachable floor "
+        "mapped,\n"
+        "the coverage rate against the physical bound, collisions, the longest time without "
+        "progress,\n"
+        "whether the robot came home, and when each person was first in the camera's view; each "
+        "run's\n"
         "explored-area curve goes to OUT/<site>-<mode>.csv, the explorer's final grid to\n"
         "OUT/<site>-<mode>-explorer.pgm, SLAM's trail against the truth (aligned by the start\n"
         "pose, as sarmap-log report does) to OUT/<site>-<mode>-trail.csv. People are found by\n"
         "sarmap-vision-people's detector and sarmap-people-map (same libraries and files) on\n"
         "SLAM's poses, and scored as sarmap-log report scores them (within 0.5 m); each person's\n"
-        "outcome goes to OUT/<site>-<mode>-people.csv. The sound chain (sarmap-sound-localisation,\n"
+        "outcome goes to OUT/<site>-<mode>-people.csv. The sound chain "
+        "(sarmap-sound-localisation,\n"
         "sarmap-speech, sarmap-sound-map) runs on the simulator's audio and puts the people heard\n"
         "on the people map and before the explorer (mode sound_guided).");
     parser.AddFlag("--sites", &sites, "generated sites: this many seeds, from --first-site");
     parser.AddFlag("--first-site", &first_site, "first seed of the generated sites");
     parser.AddFlag("--site-config", &site_config, "generator options for the sites");
-    parser.AddFlag("--worlds", &worlds, "comma-separated world files (instead of or besides the sites)");
-    parser.AddFlag("--modes", &modes, "comma-separated exploration modes: frontier, reactive, sound_guided");
+    parser.AddFlag("--worlds", &worlds,
+                   "comma-separated world files (instead of or besides the sites)");
+    parser.AddFlag("--modes", &modes,
+                   "comma-separated exploration modes: frontier, reactive, sound_guided");
     parser.AddFlag("--duration", &run.duration_s, "simulated seconds per mission");
     parser.AddFlag("--camera-rate", &run.camera_rate_hz, "depth frames per simulated second");
     parser.AddFlag("--out", &out_dir, "folder for the generated worlds and the curves");
-    parser.AddRepeated("--set-explore", &run.explore_overrides, "explorer option override (key=value)");
+    parser.AddRepeated("--set-explore", &run.explore_overrides,
+                       "explorer option override (key=value)");
     parser.AddRepeated("--set-sim", &run.sim_overrides, "simulator option override (key=value)");
     parser.AddRepeated("--set-slam", &run.slam_overrides, "SLAM option override (key=value)");
-    parser.AddRepeated("--set-depth", &run.depth_overrides, "depth-to-scan option override (key=value)");
-    parser.AddSwitch("--no-perception", &no_perception, "exploration only: no people detection, no people map");
-    parser.AddSwitch("--no-sound", &no_sound,
-                     "people by sight only: no simulated audio, sound localisation, keywords or sound map");
+    parser.AddRepeated("--set-depth", &run.depth_overrides,
+                       "depth-to-scan option override (key=value)");
+    parser.AddFlag("--report-period", &run.report_period_s,
+                   "long missions: every this many simulated seconds, each component's CPU, the "
+                   "memory, SLAM's graph and optimisation time, the people and sound sources on "
+                   "the maps (printed, and OUT/<site>-<mode>-long.csv); 0: off");
+    parser.AddSwitch("--no-perception", &no_perception,
+                     "exploration only: no people detection, no people map");
+    parser.AddSwitch(
+        "--no-sound", &no_sound,
+        "people by sight only: no simulated audio, sound localisation, keywords or sound map");
     if (!parser.Parse(argc, argv)) return 0;
-    if (sites <= 0 && worlds.empty()) throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
+    if (sites <= 0 && worlds.empty())
+      throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
     run.perception = !no_perception;
     run.sound = !no_sound;
     ::mkdir(out_dir.c_str(), 0755);
@@ -285,7 +355,8 @@ int main(int argc, char** argv) {
     };
     std::vector<Target> targets;
     for (int seed = first_site; seed < first_site + sites; ++seed) {
-      auto site = common::LoadOptions<sim::SiteOptions>(site_config, {"seed=" + std::to_string(seed)});
+      auto site =
+          common::LoadOptions<sim::SiteOptions>(site_config, {"seed=" + std::to_string(seed)});
       const sim::World world = sim::GenerateSite(site);
       const std::string path = out_dir + "/site-" + std::to_string(seed) + ".yaml";
       std::ofstream(path) << sim::SiteHeader(site) << sim::WorldToYaml(world);
@@ -314,6 +385,10 @@ int main(int argc, char** argv) {
           if (static_cast<int>(t) % 60 == 0) std::fprintf(stderr, " %.0f", t);
         });
         std::fprintf(stderr, " s\n");
+        if (!r.reports.empty()) {
+          PrintReports(r.reports, stderr);
+          WriteReports(r.reports, out_dir + "/" + target.name + "-" + mode + "-long.csv");
+        }
         const logtools::MissionMetricsResult m = metrics.metrics.Result();
         Row row;
         row.site = target.name;
@@ -332,7 +407,9 @@ int main(int argc, char** argv) {
         }
         row.rate_m2_per_min = at_t > 0 ? at / (at_t / 60) : 0;
         row.collisions = r.collisions;
-        for (const std::string& c : r.contacts) std::fprintf(stderr, "  %s %s collision %s\n", target.name.c_str(), mode.c_str(), c.c_str());
+        for (const std::string& c : r.contacts)
+          std::fprintf(stderr, "  %s %s collision %s\n", target.name.c_str(), mode.c_str(),
+                       c.c_str());
         row.longest_stuck_s = m.longest_stuck_s.value_or(0);
         row.home = r.came_home;
         row.home_s = r.home_after_s;
@@ -350,7 +427,8 @@ int main(int argc, char** argv) {
         if (!row.sound.empty()) std::fprintf(stderr, "sound map: %s\n", row.sound.c_str());
         std::ofstream curve(out_dir + "/" + target.name + "-" + mode + ".csv");
         curve << "time_s,mapped_m2,fraction\n";
-        for (const auto& p : m.coverage) curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
+        for (const auto& p : m.coverage)
+          curve << p.time_s << "," << p.mapped_m2 << "," << p.fraction << "\n";
         Row& last = rows.back();
         const std::string trail_csv = out_dir + "/" + target.name + "-" + mode + "-trail.csv";
         TrailError(r, m.world_from_map, trail_csv, &last);
@@ -360,23 +438,30 @@ int main(int argc, char** argv) {
       }
     }
 
-    std::printf("\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | collisions | "
-                "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
-                "median time to find | heard calls | perception CPU | mission CPU |\n");
+    std::printf(
+        "\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | "
+        "collisions | "
+        "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
+        "median time to find | heard calls | perception CPU | mission CPU |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows) PrintRow(r, stdout);
     for (const Row& r : rows) {
       if (!r.missed.empty())
         std::printf("%s %s missed: %s\n", r.site.c_str(), r.mode.c_str(), r.missed.c_str());
     }
-    std::printf("\nSLAM trail against the truth (aligned by the start pose, as sarmap-log report):\n");
-    std::printf("| site | mode | trail RMS | trail max | mapped | collisions |\n|---|---|---|---|---|---|\n");
+    std::printf(
+        "\nSLAM trail against the truth (aligned by the start pose, as sarmap-log report):\n");
+    std::printf(
+        "| site | mode | trail RMS | trail max | mapped | collisions "
+        "|\n|---|---|---|---|---|---|\n");
     for (const Row& r : rows) {
       std::printf("| %s | %s | %.3f m | %.2f m | %.1f %% | %d |\n", r.site.c_str(), r.mode.c_str(),
                   r.trail_rms_m, r.trail_max_m, 100 * r.mapped_fraction, r.collisions);
     }
-    std::printf("\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f m)\n", bound,
-                speed, 2 * range * std::sin(hfov / 2), range);
+    std::printf(
+        "\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f "
+        "m)\n",
+        bound, speed, 2 * range * std::sin(hfov / 2), range);
     for (const std::string& mode : Split(modes)) {
       std::vector<double> mapped;
       int home = 0, collisions = 0, everyone = 0, found = 0, people = 0, false_people = 0;
@@ -394,10 +479,12 @@ int main(int argc, char** argv) {
       }
       if (mapped.empty()) continue;
       std::sort(mapped.begin(), mapped.end());
-      const double median = mapped.size() % 2 ? mapped[mapped.size() / 2]
-                                              : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
-      std::printf("%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
-                  mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
+      const double median = mapped.size() % 2
+                                ? mapped[mapped.size() / 2]
+                                : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
+      std::printf(
+          "%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
+          mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
       if (run.perception)
         std::printf("; everyone found on %d of %zu, %d of %d people, %d false", everyone,
                     mapped.size(), found, people, false_people);

@@ -5,6 +5,8 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <set>
 #include <stdexcept>
 
@@ -45,6 +47,16 @@ double CpuSeconds(clockid_t clock) {
   timespec ts{};
   clock_gettime(clock, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// VmRSS of /proc/self/status, in MB (0 when unreadable).
+double ResidentMegabytes() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
+  }
+  return 0.0;
 }
 
 // A path from a configuration file, relative to the repository root when not absolute (the
@@ -102,6 +114,9 @@ class Perception {
 
   void set_start_s(double s) { start_s_ = s; }
   SoundChain* sound() { return sound_.get(); }
+  int people_on_map() const { return people_on_map_; }
+  int sound_sources() const { return sound_sources_; }
+  int64_t detections_without_pose() const { return intake_.without_pose(); }
 
   void OnPose(const sarmap::pose_t& m) {
     now_s_ = common::UtimeToSeconds(m.header.utime) - start_s_;
@@ -170,6 +185,7 @@ class Perception {
 
   // SOUND_MAP from the sound map's intake.
   void OnSoundMap(const sarmap::sound_map_t& m) {
+    sound_sources_ = static_cast<int>(m.sources.size());
     const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     intake_.OnSoundMap(m);
     result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0;
@@ -187,6 +203,7 @@ class Perception {
   void Publish(common::Utime utime) {
     last_publish_s_ = now_s_;
     const sarmap::people_map_t msg = people_map::PeopleMapMessage(map_.Report(utime), utime);
+    people_on_map_ = static_cast<int>(msg.people.size());
     if (explorer_) explorer_->OnHeardPeople(HeardPeople(msg));
     if (observer_) observer_->OnPeopleMap(now_s_, msg);
   }
@@ -227,6 +244,7 @@ class Perception {
   MissionObserver* observer_;
   MissionResult* result_;
   double start_s_ = 0, now_s_ = 0, last_publish_s_ = -1e9;
+  int people_on_map_ = 0, sound_sources_ = 0;
 };
 
 class Loop : public sim::SimSink {
@@ -259,6 +277,7 @@ class Loop : public sim::SimSink {
   }
 
   void OnDepth(const sarmap::image_t& m) {
+    const double slam0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     std::vector<uint16_t> depth_mm;
     std::string error;
     if (!common::DecodeDepthImage(m, &depth_mm, &error)) return;
@@ -290,6 +309,7 @@ class Loop : public sim::SimSink {
       last_map_s_ = t;
       PublishMap(t);
     }
+    result_->slam_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - slam0;
     explore::Scan es;
     es.angle_min_rad = scan.angle_min_rad;
     es.angle_increment_rad = scan.angle_increment_rad;
@@ -407,7 +427,8 @@ class Loop : public sim::SimSink {
     SoundChain* sound = perception_ ? perception_->sound() : nullptr;
     if (!sound || covariance_ids_.empty()) return;
     const std::vector<int>& ids = covariance_ids_;
-    const sarmap::slam_anchors_t msg = slam::AnchorsMessage(slam_, ids, joint_covariance_, loop_closed);
+    const sarmap::slam_anchors_t msg =
+        slam::AnchorsMessage(slam_, ids, joint_covariance_, loop_closed);
     sound->intake->OnAnchors(msg);
   }
 
@@ -537,12 +558,14 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   const auto sim_options = common::LoadOptions<sim::SimOptions>(options.sim_config, sim_overrides);
   const std::string root = sim::FindRepoRoot(options.sim_config);
   const sim::SimSetup setup = sim::LoadSetup(sim_options, root);
-  const auto slam_file = common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, options.slam_overrides);
+  const auto slam_file =
+      common::LoadOptions<slam::SlamNodeOptions>(options.slam_config, options.slam_overrides);
   std::vector<std::string> explore_overrides = options.explore_overrides;
   if (!options.mode.empty()) explore_overrides.push_back("explore.mode=" + options.mode);
   const auto explore_file =
       common::LoadOptions<explore::ExploreNodeOptions>(options.explore_config, explore_overrides);
-  const auto depth_file = common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, options.depth_overrides);
+  const auto depth_file =
+      common::LoadOptions<depth::DepthNodeOptions>(options.depth_config, options.depth_overrides);
   const depth::DepthToScanOptions scan_options = depth_file.ScanOptions();
   const Eigen::Isometry3d base_from_camera = setup.robot.base_from_camera.ToRigid3d().ToIsometry();
 
@@ -599,6 +622,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   }
   const double step_s = 0.05;
   double next_progress = 10;
+  double next_report = options.report_period_s;
   for (double t = step_s; t <= options.duration_s + 1e-9; t += step_s) {
     simulator.AdvanceTo(t, &loop);
     if (simulator.collisions() > static_cast<int>(result.contacts.size())) {
@@ -612,6 +636,32 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     if (progress && t >= next_progress) {
       progress(t);
       next_progress += 10;
+    }
+    if (options.report_period_s > 0 && t >= next_report - 1e-9) {
+      next_report += options.report_period_s;
+      MissionReport report;
+      report.t_s = t;
+      report.state = loop.explore().status().state;
+      report.distance_m = result.distance_m;
+      report.cpu_s = CpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
+      report.slam_cpu_s = result.slam_cpu_s;
+      report.explore_cpu_s = result.explore_cpu_s;
+      report.vision_cpu_s = result.vision_cpu_s;
+      report.people_map_cpu_s = result.people_map_cpu_s;
+      report.sound_cpu_s = result.sound_cpu_s;
+      report.rss_mb = ResidentMegabytes();
+      const slam::SlamStats& stats = loop.slam().stats();
+      report.slam_nodes = loop.slam().num_nodes();
+      report.slam_submaps = stats.submaps;
+      report.slam_optimisations = stats.optimisations;
+      report.slam_loop_closures = stats.loop_closures;
+      report.slam_optimise_s = stats.optimise_seconds;
+      if (perception) {
+        report.people_on_map = perception->people_on_map();
+        report.sound_sources = perception->sound_sources();
+        report.detections_without_pose = perception->detections_without_pose();
+      }
+      result.reports.push_back(report);
     }
     if (loop.explore().status().state == "home" && t > 5) {
       // Home: the mission is over; a few more seconds so that the last map is drawn.

@@ -57,6 +57,7 @@ struct MissionRunOptions {
   std::vector<std::string> explore_overrides;
   std::vector<std::string> slam_overrides;
   std::vector<std::string> depth_overrides;
+  double report_period_s = 0;    // > 0: a MissionReport every this many simulated seconds
   std::string explorer_map_pgm;  // when set: the explorer's final picture is written here
   std::string slam_map_pgm;      // when set: SLAM's final map is written here
 };
@@ -71,10 +72,26 @@ struct MissionSample {
   double distance_m = 0;
 };
 
+// The mission's state and cost so far, every report_period_s (long-mission figures: what grows
+// with mission time). CPU seconds are cumulative since the start.
+struct MissionReport {
+  double t_s = 0;
+  std::string state;
+  double distance_m = 0;
+  double cpu_s = 0, slam_cpu_s = 0, explore_cpu_s = 0, vision_cpu_s = 0, people_map_cpu_s = 0,
+         sound_cpu_s = 0;
+  double rss_mb = 0;  // the process's resident memory
+  int64_t slam_nodes = 0, slam_submaps = 0, slam_optimisations = 0, slam_loop_closures = 0;
+  double slam_optimise_s = 0;  // cumulative time in the global optimisation
+  int people_on_map = 0, sound_sources = 0;
+  int64_t detections_without_pose = 0;
+};
+
 struct MissionResult {
   double simulated_s = 0;
   double cpu_s = 0;             // whole process
   double explore_cpu_s = 0;     // the explorer alone
+  double slam_cpu_s = 0;        // depth-to-scan, SLAM, its map, POSE covariance and anchors
   double vision_cpu_s = 0;      // decoding, detection and confirmation of the RGB-D frames
   double people_map_cpu_s = 0;  // the people map's intake and map
   double sound_cpu_s = 0;       // localisation, speech and the sound map (not the audio simulation)
@@ -89,6 +106,7 @@ struct MissionResult {
   double home_after_s = -1;
   std::string final_state;
   std::vector<MissionSample> samples;
+  std::vector<MissionReport> reports;  // every report_period_s
 };
 
 // Called for every message the simulator emits (truth, floor), the SLAM map when it is
