@@ -199,6 +199,84 @@ void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double
 
 namespace {
 
+// The voxels of `cluster` on walls (and cupboard fronts): vertical planes found on the part
+// higher than a person's head (>= 2.0 m above the floor), up to three, by RANSAC
+// (deterministic) on lines on the floor: >= 30 of those high voxels within 0.04 m + 2 sigma
+// of the range noise, spanning >= 1.2 m along the line; every voxel of the cluster within
+// that band goes. A person standing 0.3 m in front of a wall at 4 m is joined to it by the
+// range noise (of the floor between them, of the mixed pixels at the silhouette); without the
+// wall the person is a cluster again. `lines`: per wall a point on it and its normal on the
+// floor, towards the camera.
+struct WallLine {
+  Eigen::Vector2d point, normal;
+};
+// Half-width of a wall's band at range z: 0.04 m + 2 sigma of the range noise.
+double WallBand(double z, double depth_coeff) { return 0.04 + 2 * depth_coeff * z * z; }
+std::vector<int> WallVoxels(const std::vector<int>& cluster,
+                            const std::vector<Eigen::Vector3d>& floor_points,
+                            const std::vector<Eigen::Vector3d>& camera_points, double depth_coeff,
+                            std::vector<WallLine>* lines) {
+  constexpr int kPlanes = 3, kIterations = 60, kMinHighInliers = 30;
+  constexpr double kHighM = 2.0, kMinWidthM = 1.2;
+  std::vector<int> walls;
+  std::vector<int> rest = cluster;
+  auto band = [&](int i) { return WallBand(camera_points[i].z(), depth_coeff); };
+  uint32_t state = 12345;  // a small LCG: the same voxels give the same walls
+  auto next = [&state](size_t n) {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<size_t>((state >> 8) % n);
+  };
+  for (int plane = 0; plane < kPlanes; ++plane) {
+    std::vector<int> high;
+    for (int i : rest) {
+      if (floor_points[i].z() >= kHighM) high.push_back(i);
+    }
+    if (static_cast<int>(high.size()) < kMinHighInliers) break;
+    size_t best_count = 0;
+    Eigen::Vector2d best_point = Eigen::Vector2d::Zero(), best_normal = Eigen::Vector2d::UnitY();
+    for (int it = 0; it < kIterations; ++it) {
+      const Eigen::Vector2d a = floor_points[high[next(high.size())]].head<2>();
+      const Eigen::Vector2d b = floor_points[high[next(high.size())]].head<2>();
+      if ((b - a).norm() < 0.5) continue;
+      const Eigen::Vector2d dir = (b - a).normalized();
+      const Eigen::Vector2d normal(-dir.y(), dir.x());
+      size_t count = 0;
+      for (int i : high) count += std::abs(normal.dot(floor_points[i].head<2>() - a)) <= band(i);
+      if (count > best_count) {
+        best_count = count;
+        best_point = a;
+        best_normal = normal;
+      }
+    }
+    if (static_cast<int>(best_count) < kMinHighInliers) break;
+    const Eigen::Vector2d along(best_normal.y(), -best_normal.x());
+    double smin = 1e9, smax = -1e9;
+    for (int i : high) {
+      const Eigen::Vector2d d = floor_points[i].head<2>() - best_point;
+      if (std::abs(best_normal.dot(d)) > band(i)) continue;
+      smin = std::min(smin, along.dot(d));
+      smax = std::max(smax, along.dot(d));
+    }
+    if (smax - smin < kMinWidthM) break;
+    std::vector<int> outliers;
+    for (int i : rest) {
+      const Eigen::Vector2d d = floor_points[i].head<2>() - best_point;
+      (std::abs(best_normal.dot(d)) <= band(i) ? walls : outliers).push_back(i);
+    }
+    rest.swap(outliers);
+    // The floor frame's origin is below the camera. The noise tail of a wall already found
+    // (parallel within 15 degrees, within 0.3 m of it) is no new wall.
+    const WallLine line{best_point, best_normal.dot(best_point) > 0 ? -best_normal : best_normal};
+    bool seen = false;
+    for (const WallLine& w : *lines) {
+      seen = seen || (w.normal.dot(line.normal) > std::cos(15 * M_PI / 180) &&
+                      std::abs(w.normal.dot(line.point - w.point)) < 0.3);
+    }
+    if (!seen) lines->push_back(line);
+  }
+  return walls;
+}
+
 // A body lying on the floor, from the floor-frame voxels of one cluster: top height, floor
 // contact, length and width along the principal axes of its footprint, relief (spread of the
 // highest point per 0.1 m along the body, inner 80 %) and fill; the whole body must be inside
@@ -611,6 +689,69 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       clusters.emplace_back();
     }
     clusters[root_cluster[r]].push_back(i);
+  }
+  // 4b. A cluster too large or too tall for a person is searched for walls; what is left
+  // without them is clustered again (a person in front of a wall). Only against a floor seen
+  // in this frame: a floor carried over may be tilted, and so would be the walls in its frame
+  // (their lower parts would stand in front of the band).
+  {
+    // Pieces are appended and searched too (a corner: two walls); each search removes voxels.
+    for (size_t c = 0; c < clusters.size(); ++c) {
+      double top = -std::numeric_limits<double>::infinity();
+      for (int i : clusters[c]) top = std::max(top, ws.floor[i].z());
+      if (!o.split_walls || !fit.found ||
+          (static_cast<int>(clusters[c].size()) <= o.max_cluster_voxels &&
+           top <= o.candidate_max_height_m)) {
+        continue;
+      }
+      std::vector<WallLine> planes;
+      const std::vector<int> walls =
+          WallVoxels(clusters[c], ws.floor, ws.centroid, o.noise.depth_coeff, &planes);
+      if (walls.empty()) continue;
+      for (int i : walls) ws.kept[i] = 0;
+      std::vector<int>& rest = clusters[c];
+      rest.erase(std::remove_if(rest.begin(), rest.end(), [&](int i) { return !ws.kept[i]; }),
+                 rest.end());
+      ws.uf.Reset(nv);
+      for (int i : rest) {
+        const int64_t cell = ws.voxel_cell[i];
+        for (int32_t off : ws.neighbour_offsets) {
+          const int32_t j = ws.cell_voxel[cell + off];
+          if (j < 0 || !ws.kept[j]) continue;
+          if ((ws.centroid[i] - ws.centroid[j]).squaredNorm() < tol2) ws.uf.Union(i, j);
+        }
+      }
+      std::vector<std::vector<int>> pieces;
+      std::vector<int> piece_of_root(nv, -1);
+      for (int i : rest) {
+        const int r = ws.uf.Find(i);
+        int& p = piece_of_root[r];
+        if (p < 0) {
+          p = static_cast<int>(pieces.size());
+          pieces.emplace_back();
+        }
+        pieces[p].push_back(i);
+      }
+      rest.clear();
+      // What stands clear in front of every wall (its centroid >= 0.15 m, about half a body's
+      // depth, in front of the removed band) is kept; the rest is part of the walls or stands
+      // against them (a recess, a door frame, a chair pushed to the wall).
+      for (auto& piece : pieces) {
+        Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+        double range = 0;
+        for (int i : piece) {
+          centre += ws.floor[i].head<2>();
+          range += ws.centroid[i].z();
+        }
+        centre /= static_cast<double>(piece.size());
+        range /= static_cast<double>(piece.size());
+        const double clear = WallBand(range, o.noise.depth_coeff) + 0.15;
+        bool in_front = true;
+        for (const WallLine& w : planes)
+          in_front = in_front && w.normal.dot(centre - w.point) >= clear;
+        if (in_front) clusters.push_back(std::move(piece));
+      }
+    }
   }
   clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
                                 [&](const std::vector<int>& c) {

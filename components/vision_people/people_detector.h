@@ -236,6 +236,7 @@ struct DetectorOptions {
   double cluster_tolerance_m = 0.12;  // 2 x voxel
   int min_cluster_voxels = 30;
   int max_cluster_voxels = 5000;
+  bool split_walls = true;        // a cluster too large or tall for a person loses its walls
   double merge_distance_m = 0.4;  // ground-plane centroid distance for merging clusters
   double min_head_distance_m = 0.3;
   double min_head_dip_m = 0.1;  // the height map must dip this much between two heads
@@ -258,6 +259,9 @@ struct DetectorOptions {
     v("cluster_tolerance_m", cluster_tolerance_m, "Euclidean clustering distance (2 x voxel)");
     v("min_cluster_voxels", min_cluster_voxels, "smallest cluster");
     v("max_cluster_voxels", max_cluster_voxels, "largest cluster");
+    v("split_walls", split_walls,
+      "search a cluster too large or too tall for a person for walls and cluster the rest again "
+      "(a person in front of a wall)");
     v("merge_distance_m", merge_distance_m,
       "merge clusters whose ground-plane centroids are closer");
     v("min_head_distance_m", min_head_distance_m,
