@@ -203,15 +203,18 @@ namespace {
 // higher than a person's head (>= 2.0 m above the floor), up to three, by RANSAC
 // (deterministic) on lines on the floor: >= 30 of those high voxels within 0.04 m + 2 sigma
 // of the range noise, spanning >= 1.2 m along the line; every voxel of the cluster within
-// that band goes. A person standing 0.3 m in front of a wall at 4 m is joined to it by the
-// range noise (of the floor between them, of the mixed pixels at the silhouette); without the
-// wall the person is a cluster again. `lines`: per wall a point on it and its normal on the
-// floor, towards the camera.
+// 0.04 m + 3 sigma of the line goes (Kinect's range steps at 4-5 m, 5-7 cm, leave a wall's
+// tail beyond 2 sigma, and on a person's head it makes the person too tall). A person standing 0.3
+// m in front of a wall at 4 m is joined to it by the range noise (of the floor between them, of the
+// mixed pixels at the silhouette); without the wall the person is a cluster again. `lines`: per
+// wall a point on it and its normal on the floor, towards the camera.
 struct WallLine {
   Eigen::Vector2d point, normal;
 };
-// Half-width of a wall's band at range z: 0.04 m + 2 sigma of the range noise.
-double WallBand(double z, double depth_coeff) { return 0.04 + 2 * depth_coeff * z * z; }
+// Half-width of a wall's band at range z: 0.04 m + `sigmas` sigma of the range noise.
+double WallBand(double z, double depth_coeff, double sigmas) {
+  return 0.04 + sigmas * depth_coeff * z * z;
+}
 std::vector<int> WallVoxels(const std::vector<int>& cluster,
                             const std::vector<Eigen::Vector3d>& floor_points,
                             const std::vector<Eigen::Vector3d>& camera_points, double depth_coeff,
@@ -220,7 +223,7 @@ std::vector<int> WallVoxels(const std::vector<int>& cluster,
   constexpr double kHighM = 2.0, kMinWidthM = 1.2;
   std::vector<int> walls;
   std::vector<int> rest = cluster;
-  auto band = [&](int i) { return WallBand(camera_points[i].z(), depth_coeff); };
+  auto band = [&](int i) { return WallBand(camera_points[i].z(), depth_coeff, 2); };
   uint32_t state = 12345;  // a small LCG: the same voxels give the same walls
   auto next = [&state](size_t n) {
     state = state * 1664525u + 1013904223u;
@@ -261,7 +264,9 @@ std::vector<int> WallVoxels(const std::vector<int>& cluster,
     std::vector<int> outliers;
     for (int i : rest) {
       const Eigen::Vector2d d = floor_points[i].head<2>() - best_point;
-      (std::abs(best_normal.dot(d)) <= band(i) ? walls : outliers).push_back(i);
+      const bool wall =
+          std::abs(best_normal.dot(d)) <= WallBand(camera_points[i].z(), depth_coeff, 3);
+      (wall ? walls : outliers).push_back(i);
     }
     rest.swap(outliers);
     // The floor frame's origin is below the camera. The noise tail of a wall already found
@@ -734,8 +739,8 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
       rest.clear();
       // What stands clear in front of every wall (its centroid >= 0.15 m, about half a body's
-      // depth, in front of the removed band) is kept; the rest is part of the walls or stands
-      // against them (a recess, a door frame, a chair pushed to the wall).
+      // depth, in front of the wall's 2-sigma band) is kept; the rest is part of the walls or
+      // stands against them (a recess, a door frame, a chair pushed to the wall).
       for (auto& piece : pieces) {
         Eigen::Vector2d centre = Eigen::Vector2d::Zero();
         double range = 0;
@@ -745,7 +750,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
         }
         centre /= static_cast<double>(piece.size());
         range /= static_cast<double>(piece.size());
-        const double clear = WallBand(range, o.noise.depth_coeff) + 0.15;
+        const double clear = WallBand(range, o.noise.depth_coeff, 2) + 0.15;
         bool in_front = true;
         for (const WallLine& w : planes)
           in_front = in_front && w.normal.dot(centre - w.point) >= clear;
