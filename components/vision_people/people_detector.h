@@ -61,7 +61,7 @@ void CloudFromDepth(const uint16_t* depth, int width, int height, double unit_m,
                     const PinholeIntrinsics& intrinsics, RgbdFrame* frame);
 
 struct DepthShapeOptions {
-  double min_height_m = 1.0;  // standing person: top of the head above the floor
+  double min_height_m = 1.15;  // standing person: top of the head above the floor
   double max_height_m = 2.1;
   double height_margin_m = 0.15;      // soft edge of the height membership
   double max_bottom_m = 0.35;         // lowest point above the floor when the feet are in view

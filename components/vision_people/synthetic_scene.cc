@@ -154,9 +154,16 @@ void AddObject(const SyntheticObject& ob, World* w) {
           w->cylinders.push_back({leg.x(), leg.y(), 0.02, 0.0, 0.45});
         }
       }
+      // The back from the seat (0.5 m) to 0.94 m; with height_m, an office chair's: the back
+      // to 0.2 m below height_m and a headrest 0.24 m wide above it.
       const Eigen::Vector2d back = at(0.2, 0);
-      w->boxes.push_back({Eigen::Vector3d(back.x(), back.y(), 0.72),
-                          Eigen::Vector3d(0.02, 0.22, 0.22), ob.yaw_rad});
+      const double back_top = ob.height_m > 0 ? ob.height_m - 0.2 : 0.94;
+      w->boxes.push_back({Eigen::Vector3d(back.x(), back.y(), 0.5 * (0.5 + back_top)),
+                          Eigen::Vector3d(0.02, 0.22, 0.5 * (back_top - 0.5)), ob.yaw_rad});
+      if (ob.height_m > 0) {
+        w->boxes.push_back({Eigen::Vector3d(back.x(), back.y(), ob.height_m - 0.1),
+                            Eigen::Vector3d(0.03, 0.12, 0.1), ob.yaw_rad});
+      }
       break;
     }
     case SyntheticObject::kTable: {

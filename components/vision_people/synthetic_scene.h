@@ -31,7 +31,8 @@ struct SyntheticObject {
     kSlab
   } kind = kChair;  // slab: 1.7 x 0.45 m, 0.25 m high
   double x_m = 2, y_m = 0, yaw_rad = 0;
-  double height_m = 0;  // kBox / kCabinet / kPole: overall height (0: default)
+  double height_m = 0;  // kBox / kCabinet / kPole: overall height; kChair: top of an office
+                        // chair's headrest (0: default, a plain back 0.94 m high)
 };
 
 struct SyntheticScene {
