@@ -136,6 +136,7 @@ class Metrics : public mission::MissionObserver {
     sound_log.Write("SOUND_MAP", m);
   }
   void OnDoaMap(double, const doa_t& m) override { sound_log.Write("DOA_MAP", m); }
+  void OnDoa(double, const doa_t& m) override { sound_log.Write("DOA", m); }
   void OnHeard(double, const people_detections_t& m) override {
     sound_log.Write("PEOPLE_AUDIO", m);
   }
@@ -340,7 +341,8 @@ int main(int argc, char** argv) {
                      "people by sight only: no simulated audio, sound localisation, keywords or sound map");
     parser.AddSwitch(
         "--sound-log", &sound_log,
-        "write the sound map's inputs, SIM_TRUTH and SOUND_MAP to OUT/<site>-<mode>-sound.lcmlog "
+        "write the sound map's inputs (and the every-bin DOA), SIM_TRUTH and SOUND_MAP to "
+        "OUT/<site>-<mode>-sound.lcmlog "
         "(for sarmap-log sound-map)");
     if (!parser.Parse(argc, argv)) return 0;
     if (sites <= 0 && worlds.empty()) throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");

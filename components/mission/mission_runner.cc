@@ -169,6 +169,8 @@ class Perception {
     if (observer_) {
       for (const auto& d : s.map_doas)
         observer_->OnDoaMap(common::UtimeToSeconds(d.header.utime) - start_s_, d);
+      for (const auto& d : s.doas)
+        observer_->OnDoa(common::UtimeToSeconds(d.header.utime) - start_s_, d);
       for (const auto& h : s.heard)
         observer_->OnHeard(common::UtimeToSeconds(h.header.utime) - start_s_, h);
     }

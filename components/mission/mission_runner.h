@@ -110,8 +110,10 @@ struct MissionObserver {
   virtual void OnPeopleMap(double /*t_s*/, const sarmap::people_map_t& /*people*/) {}
   // SOUND_MAP (perception and sound on), every publish_period_s of message time.
   virtual void OnSoundMap(double /*t_s*/, const sarmap::sound_map_t& /*sources*/) {}
-  // DOA_MAP (perception and sound on): the localiser's directions as the sound map takes them.
+  // DOA_MAP (perception and sound on): the localiser's directions as the sound map takes them;
+  // DOA: its every-bin directions, as the speech beams take them.
   virtual void OnDoaMap(double /*t_s*/, const sarmap::doa_t& /*doa*/) {}
+  virtual void OnDoa(double /*t_s*/, const sarmap::doa_t& /*doa*/) {}
   // PEOPLE_AUDIO (keywords with a direction) and SLAM_ANCHORS, as the sound map takes them.
   virtual void OnHeard(double /*t_s*/, const sarmap::people_detections_t& /*heard*/) {}
   virtual void OnSlamAnchors(double /*t_s*/, const sarmap::slam_anchors_t& /*anchors*/) {}
