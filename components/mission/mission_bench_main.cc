@@ -11,6 +11,8 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
+#include <vector>
 
 #include "common/args.h"
 #include "common/node_main.h"
