@@ -7,8 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <memory>
 #include <sstream>
+#include <stdexcept>
+#include <vector>
 
 #include "common/args.h"
 #include "common/node_main.h"
@@ -57,12 +61,49 @@ class PeopleFound {
     return logtools::Summarise(data_, kMatchRadiusM);
   }
   const std::optional<people_map_t>& people() const { return data_.people; }
+  // Reported people placed by sound alone (heard, never seen) who match no true person.
+  int FalseHeardOnly(const logtools::MissionSummary& summary) const {
+    int n = 0;
+    for (const auto& p : logtools::PeopleOnMap(data_, summary)) {
+      const bool seen = p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH);
+      const bool matched = std::any_of(
+          summary.truth.begin(), summary.truth.end(),
+          [&](const logtools::TruthMatch& t) { return t.found && t.person_id == p.id; });
+      n += !seen && (p.cues & mapped_person_t::CUE_HEARD) && !matched;
+    }
+    return n;
+  }
   const std::optional<sound_map_t>& sources() const { return data_.sources; }
   static constexpr double kMatchRadiusM = 0.5;
 
  private:
   logtools::MissionData data_;
   int64_t start_utime_ = 0;
+};
+
+// The sound map's inputs (and SIM_TRUTH, SOUND_MAP) as an LCM log, for `sarmap-log sound-map`.
+class SoundLog {
+ public:
+  void Open(const std::string& path) {
+    log_ = std::make_unique<lcm::LogFile>(path, "w");
+    if (!log_->good()) throw std::runtime_error("cannot write " + path);
+  }
+  template <class T>
+  void Write(const std::string& channel, const T& msg) {
+    if (!log_) return;
+    std::vector<uint8_t> buffer(msg.getEncodedSize());
+    msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+    lcm::LogEvent e;
+    e.eventnum = 0;
+    e.timestamp = msg.header.utime;
+    e.channel = channel;
+    e.datalen = static_cast<int32_t>(buffer.size());
+    e.data = buffer.data();
+    if (log_->writeEvent(&e) != 0) throw std::runtime_error("error writing the sound log");
+  }
+
+ private:
+  std::unique_ptr<lcm::LogFile> log_;
 };
 
 // Feeds the mission's messages to the same metrics as `sarmap-log report`, and notes when each
@@ -72,6 +113,7 @@ class Metrics : public mission::MissionObserver {
   void OnTruth(double t_s, const sim_truth_t& m) override {
     metrics.OnTruth(m.header.utime, m);
     people_found.OnTruth(t_s, m);
+    sound_log.Write("SIM_TRUTH", m);
     for (const auto& p : m.people) {
       if (p.visible_to_camera && !in_view_s.count(p.id)) in_view_s[p.id] = t_s;
     }
@@ -81,15 +123,31 @@ class Metrics : public mission::MissionObserver {
   void OnMap(double, const occupancy_grid_t& m) override {
     metrics.OnMap(m.header.utime, m);
     people_found.OnMap(m);
+    sound_log.Write("MAP", m);
   }
   void OnExploreStatus(double, const explore_status_t& m) override {
     metrics.OnExploreStatus(m.header.utime, m);
   }
-  void OnPose(double t_s, const pose_t& m) override { people_found.OnPose(t_s, m); }
+  void OnPose(double t_s, const pose_t& m) override {
+    people_found.OnPose(t_s, m);
+    sound_log.Write("POSE", m);
+  }
   void OnPeopleMap(double t_s, const people_map_t& m) override {
     people_found.OnPeopleMap(t_s, m, &metrics);
   }
-  void OnSoundMap(double, const sound_map_t& m) override { people_found.OnSoundMap(m); }
+  void OnSoundMap(double, const sound_map_t& m) override {
+    people_found.OnSoundMap(m);
+    sound_log.Write("SOUND_MAP", m);
+  }
+  void OnDoaMap(double, const doa_t& m) override { sound_log.Write("DOA_MAP", m); }
+  void OnDoa(double, const doa_t& m) override { sound_log.Write("DOA", m); }
+  void OnHeard(double, const people_detections_t& m) override {
+    sound_log.Write("PEOPLE_AUDIO", m);
+  }
+  void OnSlamAnchors(double, const slam_anchors_t& m) override {
+    sound_log.Write("SLAM_ANCHORS", m);
+  }
+  SoundLog sound_log;
   logtools::MissionMetrics metrics;
   std::map<int64_t, double> in_view_s;
   int people = 0;
@@ -109,6 +167,7 @@ struct Row {
   // Perception (found within 0.5 m, as sarmap-log report scores it).
   bool perception = false;
   int found = 0, false_people = 0;
+  int hidden = 0, hidden_found = 0, false_heard = 0;  // never in view; false people by sound alone
   double median_find_s = -1, perception_cpu_s = 0;
   int64_t heard_calls = 0;
   std::string missed;  // "name (why)", ...
@@ -220,6 +279,7 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
   const logtools::MissionSummary summary = metrics->people_found.Summary(metrics->metrics);
   row->perception = true;
   row->false_people = summary.false_positives;
+  row->false_heard = metrics->people_found.FalseHeardOnly(summary);
   row->perception_cpu_s = r.vision_cpu_s + r.people_map_cpu_s + r.sound_cpu_s;
   row->heard_calls = r.heard_calls;
   std::vector<double> times;
@@ -228,8 +288,11 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
   for (const logtools::TruthMatch& t : summary.truth) {
     const auto view = metrics->in_view_s.find(t.truth_id);
     std::string why;
+    const bool hidden = !metrics->in_view_s.count(t.truth_id);
+    row->hidden += hidden;
     if (t.found) {
       ++row->found;
+      row->hidden_found += hidden;
       if (t.found_after_s) times.push_back(*t.found_after_s);
     } else {
       why = WhyMissed(t, metrics->in_view_s, summary, metrics->people_found.people());
@@ -251,11 +314,13 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
       persons += src.is_person;
     }
     for (const auto& e : summary.source_truth) matched += e.found;
-    char text[160];
-    std::snprintf(text, sizeof(text),
-                  "%zu sources, %d placed (%d voices, %d persons); %d of %zu emitters within 0.5 m",
-                  sources->sources.size(), placed, voices, persons, matched,
-                  summary.source_truth.size());
+    char text[256];
+    std::snprintf(
+        text, sizeof(text),
+        "%zu sources, %d placed (%d voices, %d persons); %d of %zu emitters within 0.5 m; "
+        "never in view: %d of %d found; false people heard only: %d",
+        sources->sources.size(), placed, voices, persons, matched, summary.source_truth.size(),
+        row->hidden_found, row->hidden, row->false_heard);
     row->sound = text;
   }
   if (!times.empty()) {
@@ -296,7 +361,7 @@ int main(int argc, char** argv) {
     std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench",
                         site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
-    bool no_perception = false, no_sound = false;
+    bool no_perception = false, no_sound = false, sound_log = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
         "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the "
@@ -343,6 +408,9 @@ int main(int argc, char** argv) {
     parser.AddSwitch(
         "--no-sound", &no_sound,
         "people by sight only: no simulated audio, sound localisation, keywords or sound map");
+    parser.AddSwitch("--sound-log", &sound_log,
+                     "write the sound map's inputs (and the every-bin DOA), SIM_TRUTH and "
+                     "SOUND_MAP to OUT/<site>-<mode>-sound.lcmlog (for sarmap-log sound-map)");
     if (!parser.Parse(argc, argv)) return 0;
     if (sites <= 0 && worlds.empty())
       throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
@@ -380,6 +448,8 @@ int main(int argc, char** argv) {
         o.explorer_map_pgm = out_dir + "/" + target.name + "-" + mode + "-explorer.pgm";
         o.slam_map_pgm = out_dir + "/" + target.name + "-" + mode + "-slam.pgm";
         Metrics metrics;
+        if (o.perception && o.sound && sound_log)
+          metrics.sound_log.Open(out_dir + "/" + target.name + "-" + mode + "-sound.lcmlog");
         std::fprintf(stderr, "%s %s:", target.name.c_str(), mode.c_str());
         const mission::MissionResult r = mission::RunMission(o, &metrics, [](double t) {
           if (static_cast<int>(t) % 60 == 0) std::fprintf(stderr, " %.0f", t);
@@ -465,6 +535,7 @@ int main(int argc, char** argv) {
     for (const std::string& mode : Split(modes)) {
       std::vector<double> mapped;
       int home = 0, collisions = 0, everyone = 0, found = 0, people = 0, false_people = 0;
+      int hidden = 0, hidden_found = 0, false_heard = 0;
       double stuck = 0;
       for (const Row& r : rows) {
         if (r.mode != mode) continue;
@@ -472,6 +543,9 @@ int main(int argc, char** argv) {
         found += r.found;
         people += r.people;
         false_people += r.false_people;
+        hidden += r.hidden;
+        hidden_found += r.hidden_found;
+        false_heard += r.false_heard;
         mapped.push_back(r.mapped_fraction);
         home += r.home;
         collisions += r.collisions;
@@ -486,8 +560,11 @@ int main(int argc, char** argv) {
           "%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
           mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
       if (run.perception)
-        std::printf("; everyone found on %d of %zu, %d of %d people, %d false", everyone,
-                    mapped.size(), found, people, false_people);
+        std::printf(
+            "; everyone found on %d of %zu, %d of %d people, %d false; never in view: %d of %d "
+            "found; false people heard only: %d",
+            everyone, mapped.size(), found, people, false_people, hidden_found, hidden,
+            false_heard);
       std::printf("\n");
     }
     return 0;

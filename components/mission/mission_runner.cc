@@ -181,6 +181,14 @@ class Perception {
     const double cpu1 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     for (const auto& h : s.heard) intake_.OnHeard(h);
     result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
+    if (observer_) {
+      for (const auto& d : s.map_doas)
+        observer_->OnDoaMap(common::UtimeToSeconds(d.header.utime) - start_s_, d);
+      for (const auto& d : s.doas)
+        observer_->OnDoa(common::UtimeToSeconds(d.header.utime) - start_s_, d);
+      for (const auto& h : s.heard)
+        observer_->OnHeard(common::UtimeToSeconds(h.header.utime) - start_s_, h);
+    }
   }
 
   // SOUND_MAP from the sound map's intake.
@@ -430,6 +438,7 @@ class Loop : public sim::SimSink {
     const sarmap::slam_anchors_t msg =
         slam::AnchorsMessage(slam_, ids, joint_covariance_, loop_closed);
     sound->intake->OnAnchors(msg);
+    if (observer_) observer_->OnSlamAnchors(Seconds(msg.header.utime) - start_s_, msg);
   }
 
   // POSE as sarmap-slam publishes it: the scan's pose, with the latest node's covariance from

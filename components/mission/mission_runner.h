@@ -21,11 +21,14 @@
 #include <vector>
 
 #include "common/options.h"
+#include "sarmap/doa_t.hpp"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
+#include "sarmap/people_detections_t.hpp"
 #include "sarmap/people_map_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
+#include "sarmap/slam_anchors_t.hpp"
 #include "sarmap/sound_map_t.hpp"
 
 namespace sarmap {
@@ -125,6 +128,13 @@ struct MissionObserver {
   virtual void OnPeopleMap(double /*t_s*/, const sarmap::people_map_t& /*people*/) {}
   // SOUND_MAP (perception and sound on), every publish_period_s of message time.
   virtual void OnSoundMap(double /*t_s*/, const sarmap::sound_map_t& /*sources*/) {}
+  // DOA_MAP (perception and sound on): the localiser's directions as the sound map takes them;
+  // DOA: its every-bin directions, as the speech beams take them.
+  virtual void OnDoaMap(double /*t_s*/, const sarmap::doa_t& /*doa*/) {}
+  virtual void OnDoa(double /*t_s*/, const sarmap::doa_t& /*doa*/) {}
+  // PEOPLE_AUDIO (keywords with a direction) and SLAM_ANCHORS, as the sound map takes them.
+  virtual void OnHeard(double /*t_s*/, const sarmap::people_detections_t& /*heard*/) {}
+  virtual void OnSlamAnchors(double /*t_s*/, const sarmap::slam_anchors_t& /*anchors*/) {}
 };
 
 // Runs one mission. Throws on bad configuration (OptionsError, WorldError).
