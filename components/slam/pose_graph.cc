@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -19,22 +20,39 @@ T WrapAngle(const T& a) {
   return a - two_pi * ceres::floor((a + T(M_PI)) / two_pi);
 }
 
+// Square root of a symmetric positive semi-definite 2x2 matrix.
+Eigen::Matrix2d SqrtPsd(const Eigen::Matrix2d& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(m);
+  const Eigen::Vector2d root = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return es.eigenvectors() * root.asDiagonal() * es.eigenvectors().transpose();
+}
+
 class RelativePoseCost {
  public:
-  RelativePoseCost(const Rigid2d& z, double wt, double wr)
-      : zx_(z.translation().x()), zy_(z.translation().y()), zt_(z.yaw_rad()), wt_(wt), wr_(wr) {}
+  // sqrt_info_t: the translation's square-root information (w_t S^(1/2)).
+  RelativePoseCost(const Rigid2d& z, const Eigen::Matrix2d& sqrt_info_t, double wr)
+      : zx_(z.translation().x()),
+        zy_(z.translation().y()),
+        zt_(z.yaw_rad()),
+        a_(sqrt_info_t(0, 0)),
+        b_(sqrt_info_t(0, 1)),
+        c_(sqrt_info_t(1, 0)),
+        d_(sqrt_info_t(1, 1)),
+        wr_(wr) {}
   template <typename T>
   bool operator()(const T* const a, const T* const b, T* r) const {
     const T c = ceres::cos(a[2]), s = ceres::sin(a[2]);
     const T dx = b[0] - a[0], dy = b[1] - a[1];
-    r[0] = wt_ * (c * dx + s * dy - zx_);
-    r[1] = wt_ * (-s * dx + c * dy - zy_);
+    const T ex = c * dx + s * dy - zx_;
+    const T ey = -s * dx + c * dy - zy_;
+    r[0] = a_ * ex + b_ * ey;
+    r[1] = c_ * ex + d_ * ey;
     r[2] = wr_ * WrapAngle(b[2] - a[2] - zt_);
     return true;
   }
 
  private:
-  double zx_, zy_, zt_, wt_, wr_;
+  double zx_, zy_, zt_, a_, b_, c_, d_, wr_;
 };
 
 struct Blocks {
@@ -61,9 +79,12 @@ void BuildProblem(const std::vector<Constraint>& constraints, Blocks* b, ceres::
     ceres::LossFunction* loss =
         c.kind == Constraint::LOOP_CLOSURE ? new ceres::HuberLoss(options.huber_scale) : nullptr;
     const auto [wt, wr] = model ? model->Weights(c) : std::make_pair(c.translation_weight, c.rotation_weight);
-    problem->AddResidualBlock(
-        new ceres::AutoDiffCostFunction<RelativePoseCost, 3, 3, 3>(new RelativePoseCost(c.relative, wt, wr)),
-        loss, from, to);
+    const Eigen::Matrix2d sqrt_info_t = c.translation_shape == Eigen::Matrix2d::Identity()
+                                            ? Eigen::Matrix2d(wt * Eigen::Matrix2d::Identity())
+                                            : Eigen::Matrix2d(wt * SqrtPsd(c.translation_shape));
+    problem->AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseCost, 3, 3, 3>(
+                                  new RelativePoseCost(c.relative, sqrt_info_t, wr)),
+                              loss, from, to);
   }
 }
 
@@ -75,6 +96,17 @@ Blocks ToBlocks(const std::vector<Rigid2d>& nodes, const std::vector<Rigid2d>& s
 }
 
 }  // namespace
+
+bool TranslationShape(const Eigen::Matrix2d& information, Eigen::Matrix2d* shape) {
+  if (!information.allFinite()) return false;
+  const Eigen::Matrix2d h = 0.5 * (information + information.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(h);
+  const double lambda_max = es.eigenvalues()(1);
+  if (!(lambda_max > 0)) return false;
+  const Eigen::Vector2d lambda = es.eigenvalues().cwiseMax(0.0) / lambda_max;
+  *shape = es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
+  return true;
+}
 
 const ConstraintNoise& CovarianceModel::For(int kind) const {
   switch (kind) {

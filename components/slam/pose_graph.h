@@ -4,8 +4,10 @@
 //
 // A constraint says "node n seen from submap s (or node m) is at z = (z_t, z_theta)"; with
 // global poses (t_s, theta_s) and (t_n, theta_n) its residual is
-//   r_t     = w_t * ( R(theta_s)^T (t_n - t_s) - z_t )
+//   r_t     = w_t * S^(1/2) ( R(theta_s)^T (t_n - t_s) - z_t )
 //   r_theta = w_r * wrap(theta_n - theta_s - z_theta)
+// S (`translation_shape`, in the frame of s) is the identity unless the constraint's match can
+// tell some directions better than others (a scan of one wall: across it, not along it).
 // Costs are 1/2 |r|^2 (or the Huber loss of it for loop closures).
 
 #include <cstdint>
@@ -31,7 +33,16 @@ struct Constraint {
   Rigid2d relative;  // from_frame_from_to_frame
   double translation_weight, rotation_weight;
   double score = 0;  // loop closure match score
+  // Symmetric, positive semi-definite, largest eigenvalue 1: how well the match tells each
+  // direction of the translation, relative to its best one (TranslationShape).
+  Eigen::Matrix2d translation_shape = Eigen::Matrix2d::Identity();
 };
+
+// The shape of a match's translation information H (2x2, Gauss-Newton J^T J of the match in the
+// constraint's frame): H / lambda_max(H). A match along a wall gets ~0 along the wall and 1
+// across it; a match that sees corners stays near the identity. False when H tells nothing
+// (lambda_max not positive, or not finite).
+bool TranslationShape(const Eigen::Matrix2d& information, Eigen::Matrix2d* shape);
 
 struct PoseGraphOptions {
   int max_iterations = 50;

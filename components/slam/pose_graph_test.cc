@@ -1,10 +1,11 @@
 // The covariance the pose graph publishes: each constraint kind's stated noise, not the
-// optimiser's tuning weights.
+// optimiser's tuning weights; and a loop closure weighted per direction by what its match tells.
 
 #include "slam/pose_graph.h"
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace sarmap {
@@ -89,6 +90,55 @@ TEST(PoseGraphCovariance, AnUnconstrainedNodeHasNone) {
   EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {9}, &cov, PoseGraphOptions()));
   nodes.pop_back();
   EXPECT_TRUE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
+}
+
+// A match's translation information, rotated 30 deg: 50 across a wall, 0.001 along it. The shape
+// keeps the directions and scales the best one to 1.
+TEST(TranslationShapeTest, KeepsTheDirectionsAMatchCanTellWithTheBestAtOne) {
+  const Eigen::Matrix2d r = Eigen::Rotation2Dd(M_PI / 6).toRotationMatrix();
+  const Eigen::Matrix2d information = r * Eigen::Vector2d(1e-3, 50).asDiagonal() * r.transpose();
+  Eigen::Matrix2d shape;
+  ASSERT_TRUE(TranslationShape(information, &shape));
+  const Eigen::Vector2d along_wall = r.col(0), across_wall = r.col(1);
+  EXPECT_NEAR(across_wall.dot(shape * across_wall), 1.0, 1e-12);
+  EXPECT_NEAR(along_wall.dot(shape * along_wall), 2e-5, 1e-12);
+  EXPECT_NEAR(along_wall.dot(shape * across_wall), 0.0, 1e-12);
+  // Well-conditioned information gives nearly the identity; nothing to tell, or NaN: no shape.
+  ASSERT_TRUE(TranslationShape(Eigen::Vector2d(40, 50).asDiagonal(), &shape));
+  EXPECT_NEAR(shape(0, 0), 0.8, 1e-12);
+  EXPECT_NEAR(shape(1, 1), 1.0, 1e-12);
+  EXPECT_FALSE(TranslationShape(Eigen::Matrix2d::Zero(), &shape));
+  Eigen::Matrix2d nan = Eigen::Matrix2d::Identity();
+  nan(0, 1) = std::nan("");
+  EXPECT_FALSE(TranslationShape(nan, &shape));
+}
+
+// A loop closure whose scan saw one wall along x (it slid 0.5 m along the wall, 0.1 m across it
+// is real): with the match's shape it moves the node across the wall only; with the identity
+// (one weight for every direction) it drags the node 0.5 m along the wall too.
+TEST(PoseGraphShapeTest, ALoopClosureAlongAWallPullsAcrossItNotAlongIt) {
+  const auto optimised_last_node = [](const Eigen::Matrix2d& shape) {
+    std::vector<Rigid2d> nodes, submaps;
+    auto constraints = Chain(6, &nodes, &submaps);
+    for (auto& c : constraints) {
+      if (c.kind == Constraint::LOCAL_SLAM) c.translation_weight = 1e3;
+    }
+    Constraint loop{Constraint::LOOP_CLOSURE, 0, 5, Rigid2d(1.0 + 0.5, 0.1, 0), 1.1e4, 1e5};
+    loop.translation_shape = shape;
+    constraints.push_back(loop);
+    PoseGraphOptions options;
+    options.huber_scale = 1e9;  // quadratic: the test is about the weights, not the loss
+    OptimisePoseGraph(constraints, &nodes, &submaps, options);
+    return nodes[5].translation();
+  };
+  const Eigen::Vector2d plain = optimised_last_node(Eigen::Matrix2d::Identity());
+  EXPECT_GT(plain.x() - 1.0, 0.4);
+  EXPECT_GT(plain.y(), 0.08);
+  Eigen::Matrix2d across_only = Eigen::Matrix2d::Zero();
+  across_only(1, 1) = 1.0;
+  const Eigen::Vector2d shaped = optimised_last_node(across_only);
+  EXPECT_NEAR(shaped.x(), 1.0, 1e-6);
+  EXPECT_GT(shaped.y(), 0.08);
 }
 
 }  // namespace

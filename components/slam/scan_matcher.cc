@@ -244,10 +244,9 @@ Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const 
   return Rigid2d(pose[0], pose[1], pose[2]);
 }
 
-double RotationInformation(const ProbabilityGrid& grid, const PointCloud& points,
-                           const Rigid2d& pose, double occupied_space_weight,
-                           double translation_weight) {
-  if (points.empty()) return 0;
+Eigen::Matrix3d MapTermHessian(const ProbabilityGrid& grid, const PointCloud& points,
+                               const Rigid2d& pose, double occupied_space_weight) {
+  if (points.empty()) return Eigen::Matrix3d::Zero();
   const int n = static_cast<int>(points.size());
   ceres::AutoDiffCostFunction<OccupiedSpaceCost, ceres::DYNAMIC, 3> cost(
       new OccupiedSpaceCost(occupied_space_weight / std::sqrt(double(n)), points, grid), n);
@@ -255,10 +254,17 @@ double RotationInformation(const ProbabilityGrid& grid, const PointCloud& points
   const double* parameters[1] = {x};
   std::vector<double> residuals(n), jacobian(static_cast<size_t>(n) * 3);
   double* jacobians[1] = {jacobian.data()};
-  if (!cost.Evaluate(parameters, residuals.data(), jacobians)) return 0;
+  if (!cost.Evaluate(parameters, residuals.data(), jacobians)) return Eigen::Matrix3d::Zero();
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> j(
       jacobian.data(), n, 3);
-  Eigen::Matrix3d h = j.transpose() * j;
+  return j.transpose() * j;
+}
+
+double RotationInformation(const ProbabilityGrid& grid, const PointCloud& points,
+                           const Rigid2d& pose, double occupied_space_weight,
+                           double translation_weight) {
+  if (points.empty()) return 0;
+  Eigen::Matrix3d h = MapTermHessian(grid, points, pose, occupied_space_weight);
   h(0, 0) += translation_weight * translation_weight;
   h(1, 1) += translation_weight * translation_weight;
   const Eigen::Matrix2d h_xx = h.topLeftCorner<2, 2>();

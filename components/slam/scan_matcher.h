@@ -57,6 +57,13 @@ struct CeresMatcherOptions {
 Rigid2d CeresMatch(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& prior,
                    const Rigid2d& initial, const CeresMatcherOptions& options);
 
+// The Gauss-Newton information H = J^T J of CeresMatch's map term at `pose` (mean over the
+// points, as in CeresMatch), over (x, y, theta) in the grid frame. Its translation block tells
+// which directions the match pins: a scan of corridor walls pins the direction across them,
+// hardly the one along them. Zero for no points.
+Eigen::Matrix3d MapTermHessian(const ProbabilityGrid& grid, const PointCloud& points,
+                               const Rigid2d& pose, double occupied_space_weight);
+
 // What the map term of CeresMatch can tell about the heading at `pose`: with J the Jacobian of
 // its residuals r_i = w_o / sqrt(N) * (1 - P(T p_i)) with respect to (x, y, theta) and
 // H = J^T J (Gauss-Newton information, + w_t^2 on x and y for the translation prior), the

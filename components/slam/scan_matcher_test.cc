@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "slam/grid.h"
@@ -192,6 +193,58 @@ TEST_F(ScanMatcherTest, RotationInformationIsWhatTurningTellsBeyondSliding) {
   ASSERT_GE(sector.size(), 5u);
   EXPECT_LT(RotationInformation(*grid_, sector, truth_, 1.0, 0.0), 0.2 * free);
   EXPECT_EQ(RotationInformation(*grid_, PointCloud(), truth_, 1.0, 10.0), 0.0);
+}
+
+// A corridor 2 m wide along x (walls y = 0 and y = 2, x in [0, 20]) seen by a depth camera:
+// 57 deg, returns up to 4.5 m, 120 beams, from `pose`.
+RangeData SimulateCorridorScan(const Rigid2d& pose) {
+  RangeData data;
+  const int n = 120;
+  const double fov = 57 * M_PI / 180;
+  for (int i = 0; i < n; ++i) {
+    const double a = -fov / 2 + fov * i / (n - 1);
+    const double heading = pose.yaw_rad() + a;
+    const double dy = std::sin(heading);
+    if (std::abs(dy) < 1e-9) continue;
+    const double wall_y = dy > 0 ? 2.0 : 0.0;
+    const double range = (wall_y - pose.translation().y()) / dy;
+    const double x = pose.translation().x() + range * std::cos(heading);
+    if (range > 4.5 || x < 0 || x > 20) continue;
+    data.hits.push_back(Eigen::Vector2f(std::cos(a) * range, std::sin(a) * range));
+  }
+  return data;
+}
+
+// The grid of a robot that drove down the corridor from x = 1 to x = `to_x`.
+std::unique_ptr<ProbabilityGrid> CorridorGrid(double to_x) {
+  auto grid = std::make_unique<ProbabilityGrid>(0.05, Eigen::Vector2d(5.013, 1.011));
+  for (double x = 1.0; x <= to_x + 1e-9; x += 0.05) {
+    const Rigid2d p(x, 1.0, 0.0);
+    grid->Insert(TransformRangeData(SimulateCorridorScan(p), p), 0.55f, 0.49f);
+  }
+  return grid;
+}
+
+TEST_F(ScanMatcherTest, AMatchInACorridorCannotTellAlongItsAxis) {
+  const auto corridor = CorridorGrid(8.0);
+  const Rigid2d pose(5.0, 1.0, 0.0);
+  const PointCloud points = VoxelFilter(SimulateCorridorScan(pose).hits, 0.025f);
+  ASSERT_GE(points.size(), 50u);
+  const Eigen::Matrix3d h = MapTermHessian(*corridor, points, pose, 1.0);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> corridor_eigen(h.topLeftCorner<2, 2>());
+  // The weakest direction is the corridor's axis, and it tells almost nothing.
+  EXPECT_GT(std::abs(corridor_eigen.eigenvectors()(0, 0)), 0.95);
+  EXPECT_LT(corridor_eigen.eigenvalues()(0), 0.02 * corridor_eigen.eigenvalues()(1));
+  // The room (corners, a pillar, 360 deg) tells both directions.
+  const Eigen::Matrix3d room = MapTermHessian(*grid_, points_, truth_, 1.0);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> room_eigen(room.topLeftCorner<2, 2>());
+  EXPECT_GT(room_eigen.eigenvalues()(0), 0.2 * room_eigen.eigenvalues()(1));
+  // The Hessian is the one RotationInformation uses: its Schur complement on theta.
+  const Eigen::Matrix2d h_xx = h.topLeftCorner<2, 2>();
+  const Eigen::Vector2d h_xt = h.topRightCorner<2, 1>();
+  EXPECT_NEAR(RotationInformation(*corridor, points, pose, 1.0, 0.0),
+              std::max(0.0, h(2, 2) - h_xt.dot(h_xx.ldlt().solve(h_xt))), 1e-6 * h(2, 2));
+  EXPECT_TRUE(MapTermHessian(*corridor, PointCloud(), pose, 1.0).isZero());
 }
 
 TEST(AdaptiveRotationWeightTest, BaseBelowLowInformativeAboveHighLogLinearBetween) {

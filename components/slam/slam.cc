@@ -657,6 +657,17 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
       Constraint::LOOP_CLOSURE, submap_id,         node_id, s.local_pose.inverse() * refined,
       lo.translation_weight,    lo.rotation_weight};
   c.score = score;
+  if (lo.weight_by_match_information) {
+    // The match's Gauss-Newton information on the translation, from the grid frame into the
+    // submap frame the constraint is expressed in.
+    const Eigen::Matrix2d grid_from_submap = s.local_pose.rotation().toRotationMatrix();
+    const Eigen::Matrix2d information_grid =
+        MapTermHessian(*s.grid, n.loop_points, refined, 1.0).topLeftCorner<2, 2>();
+    if (!TranslationShape(grid_from_submap.transpose() * information_grid * grid_from_submap,
+                          &c.translation_shape)) {
+      return false;
+    }
+  }
   constraints_.push_back(c);
   ++stats_.loop_closures;
   return true;
@@ -831,7 +842,9 @@ class Reader : public common::BinaryReader {
 };
 
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
-constexpr int32_t kVersion = 1;  // of the body
+// Of the body. Version 2 adds each constraint's translation shape; version 1 bodies are still
+// read (shape: the identity).
+constexpr int32_t kVersion = 2;
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -893,6 +906,8 @@ void Slam::Save(const std::string& path) const {
       w.Pod<int32_t>(c.kind), w.Pod<int32_t>(c.from), w.Pod<int32_t>(c.to);
       w.Pose(c.relative);
       w.Pod(c.translation_weight), w.Pod(c.rotation_weight), w.Pod(c.score);
+      w.Pod(c.translation_shape(0, 0)), w.Pod(c.translation_shape(0, 1));
+      w.Pod(c.translation_shape(1, 1));
     }
     // Local state to continue.
     w.Pose(global_from_local_);
@@ -926,7 +941,10 @@ void Slam::Load(const std::string& path) {
   if (!in || !std::equal(magic, magic + 8, kMagic)) {
     throw std::runtime_error("'" + path + "' is not a sarmap pose-graph file");
   }
-  if (r.Pod<int32_t>() != kVersion) throw std::runtime_error("unsupported pose-graph version");
+  const int32_t body_version = r.Pod<int32_t>();
+  if (body_version != 1 && body_version != kVersion) {
+    throw std::runtime_error("unsupported pose-graph version");
+  }
   const double resolution = r.Pod<double>();
   std::vector<Submap> submaps;
   std::vector<Rigid2d> submap_global;
@@ -986,6 +1004,10 @@ void Slam::Load(const std::string& path) {
     c.translation_weight = r.Pod<double>();
     c.rotation_weight = r.Pod<double>();
     c.score = r.Pod<double>();
+    if (body_version >= 2) {
+      const double xx = r.Pod<double>(), xy = r.Pod<double>(), yy = r.Pod<double>();
+      c.translation_shape << xx, xy, xy, yy;
+    }
     const bool submap_kind =
         c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
     if (c.kind < 0 || c.kind > 3 || c.from < 0 || c.to < 0 || c.to >= num_nodes ||
@@ -1027,7 +1049,8 @@ void Slam::Load(const std::string& path) {
   for (size_t i = 0; finite && i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
     finite = Finite(c.relative) && std::isfinite(c.translation_weight) &&
-             std::isfinite(c.rotation_weight) && std::isfinite(c.score);
+             std::isfinite(c.rotation_weight) && std::isfinite(c.score) &&
+             c.translation_shape.allFinite();
   }
   if (!finite)
     throw std::runtime_error("pose-graph file '" + path + "' corrupt (non-finite value)");

@@ -154,6 +154,11 @@ struct LoopClosureOptions {
   int max_cached_precomputations = 8;
   int max_submaps_per_node = 8;       // nearest finished submaps searched for a new node
   int max_old_nodes_per_submap = 60;  // older nodes searched against a newly finished submap
+  // A loop closure's translation weight follows the match's own information per direction
+  // (Constraint::translation_shape): translation_weight along the direction the match tells
+  // best, less along one it cannot tell (a scan of one wall slides along it). Off: one weight
+  // for every direction.
+  bool weight_by_match_information = false;
   template <class V> void Visit(V& v) {
     v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
     v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
@@ -169,6 +174,8 @@ struct LoopClosureOptions {
     v("max_cached_precomputations", max_cached_precomputations, "Submap precomputation stacks kept in memory (least recently used; a stack is rebuilt in milliseconds)");
     v("max_submaps_per_node", max_submaps_per_node, "A new node is searched against at most this many nearest finished submaps");
     v("max_old_nodes_per_submap", max_old_nodes_per_submap, "A newly finished submap is searched for at most this many older nodes");
+    v("weight_by_match_information", weight_by_match_information,
+      "Loop closure translation weight per direction follows the match's information (a match along a wall pulls across it, not along it)");
   }
   void Validate(Validator& c) const {
     c.InRange("sampling_ratio", sampling_ratio, 0, 1);
