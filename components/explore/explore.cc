@@ -141,10 +141,7 @@ bool ExploreController::IsBlacklisted(const Eigen::Vector2d& p, double now_s) co
 
 void ExploreController::GiveUpGoal(double now_s) {
   if (goal_ && goal_->kind == "sweep") {
-    // Not reachable now: its cell waits its turn again.
-    const double cell = options_.goals.sweep_cell_m;
-    visited_cells_[{static_cast<int>(std::floor(goal_->position_m.x() / cell)),
-                    static_cast<int>(std::floor(goal_->position_m.y() / cell))}] = now_s;
+    visited_cells_[SweepCell(goal_->position_m)] = now_s;  // not reachable now: it waits its turn
   } else if (goal_ && goal_->kind != "home") {
     blacklist_.push_back({goal_->position_m, now_s + options_.goals.blacklist_expiry_s});
     if (goal_->kind == "sound") visited_sound_.push_back(goal_->face_m.value_or(goal_->position_m));
@@ -231,12 +228,13 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(
   return best;
 }
 
-void ExploreController::MarkVisited(double now_s) {
-  if (!pose_) return;
+std::pair<int, int> ExploreController::SweepCell(const Eigen::Vector2d& p) const {
   const double cell = options_.goals.sweep_cell_m;
-  const Eigen::Vector2d p = pose_->translation();
-  visited_cells_[{static_cast<int>(std::floor(p.x() / cell)),
-                  static_cast<int>(std::floor(p.y() / cell))}] = now_s;
+  return {static_cast<int>(std::floor(p.x() / cell)), static_cast<int>(std::floor(p.y() / cell))};
+}
+
+void ExploreController::MarkVisited(double now_s) {
+  if (pose_) visited_cells_[SweepCell(pose_->translation())] = now_s;
 }
 
 std::optional<ExploreController::Goal> ExploreController::ChooseSweepGoal(
@@ -261,8 +259,7 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSweepGoal(
     if (!field.Reached(i)) continue;
     const int x = i % g.width, y = i / g.width;
     const Eigen::Vector2d c = g.CentreOf(x, y);
-    const std::pair<int, int> key{static_cast<int>(std::floor(c.x() / cell)),
-                                  static_cast<int>(std::floor(c.y() / cell))};
+    const std::pair<int, int> key = SweepCell(c);
     const Eigen::Vector2d centre((key.first + 0.5) * cell, (key.second + 0.5) * cell);
     const double room_m = map_.Clearance(x, y);
     if (room_m < needed_room_m) continue;
@@ -276,9 +273,7 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSweepGoal(
     }
   }
   // Cells visited within sweep_min_age_s wait; when every cell does, any but the robot's own.
-  const Eigen::Vector2d robot = pose_->translation();
-  const std::pair<int, int> here{static_cast<int>(std::floor(robot.x() / cell)),
-                                 static_cast<int>(std::floor(robot.y() / cell))};
+  const std::pair<int, int> here = SweepCell(pose_->translation());
   for (const double min_age_s : {options_.goals.sweep_min_age_s, 0.0}) {
     std::optional<Goal> goal;
     for (const auto& [key, candidate] : best) {

@@ -401,6 +401,7 @@ class ExploreController {
   // less the time to drive there; none younger than sweep_min_age_s.
   std::optional<Goal> ChooseSweepGoal(double now_s, const CostField& field) const;
   void MarkVisited(double now_s);
+  std::pair<int, int> SweepCell(const Eigen::Vector2d& position_m) const;
   Velocity Follow(const Scan& scan);
   Velocity Safe(Velocity desired, const Scan& scan) const;
   Velocity Recover(double now_s, const Scan& scan);
