@@ -455,6 +455,9 @@ int main(int argc, char** argv) {
           if (static_cast<int>(t) % 60 == 0) std::fprintf(stderr, " %.0f", t);
         });
         std::fprintf(stderr, " s\n");
+        for (const std::string& w : r.warnings) {
+          std::fprintf(stderr, "  warning: simulator: %s\n", w.c_str());
+        }
         if (!r.reports.empty()) {
           PrintReports(r.reports, stderr);
           WriteReports(r.reports, out_dir + "/" + target.name + "-" + mode + "-long.csv");

@@ -580,6 +580,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
 
   sim::Simulator simulator(setup);
   MissionResult result;
+  result.warnings = simulator.warnings();
   MissionRunOptions loop_options = options;
   if (loop_options.map_period_s <= 0) loop_options.map_period_s = slam_file.map_period_s;
   Loop loop(loop_options, slam_file.slam, explore_file.explore, scan_options, base_from_camera,

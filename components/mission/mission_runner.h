@@ -110,6 +110,9 @@ struct MissionResult {
   std::string final_state;
   std::vector<MissionSample> samples;
   std::vector<MissionReport> reports;  // every report_period_s
+  // The simulator's warnings (people photos or voice clips not found: a mission that sees grey
+  // bodies and hears silent voices).
+  std::vector<std::string> warnings;
 };
 
 // Called for every message the simulator emits (truth, floor), the SLAM map when it is

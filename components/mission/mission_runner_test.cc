@@ -68,6 +68,17 @@ TEST(MissionRunnerTest, TheSameSeedGivesTheSameMission) {
   }
 }
 
+// Shared data the simulator cannot find (people photos, voice clips) is reported with the
+// result, not silently replaced by grey bodies and silent voices.
+TEST(MissionRunnerTest, MissingSharedDataIsAWarning) {
+  MissionRunOptions o = Lab("frontier");
+  o.duration_s = 1;
+  o.sim_overrides = {"data_dir=/nonexistent/shared/data"};
+  const MissionResult r = RunMission(o);
+  ASSERT_FALSE(r.warnings.empty());
+  EXPECT_NE(r.warnings.front().find("/nonexistent"), std::string::npos) << r.warnings.front();
+}
+
 // The perception chain in the loop: people seen in the lab's first seconds are on the people
 // map within 0.5 m of where they truly are (truth moved into the map frame by the start pose,
 // as sarmap-log report does), and nobody is there who is not; the sound chain runs beside it.
