@@ -647,7 +647,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       progress(t);
       next_progress += 10;
     }
-    if (options.report_period_s > 0 && t >= next_report - 1e-9) {
+    if (options.report_period_s > 0 && t >= next_report - 0.5 * step_s) {
       next_report += options.report_period_s;
       MissionReport report;
       report.t_s = t;
