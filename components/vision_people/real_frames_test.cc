@@ -22,6 +22,20 @@ constexpr double kDeg = M_PI / 180;
 
 bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 
+// URFD fall-01 depth frame n through `detector` (frames in sequence: the floor is tracked).
+DetectionResult DetectUrfd(PeopleDetector* detector, const std::string& dir, int n,
+                           std::string* name) {
+  char file[64];
+  snprintf(file, sizeof file, "/fall-01-cam0-d-%03d.png", n);
+  *name = file;
+  RgbdFrame frame;
+  std::string error;
+  EXPECT_TRUE(LoadDepthImageFrame(dir + file, "", 6.0 / 65535, PinholeIntrinsics(), &frame, &error))
+      << error;
+  frame.utime = n * 33333;
+  return detector->Detect(frame, &error);
+}
+
 // URFD fall-01 (depth only, one person, 6000/65535 mm per unit, Kinect v1 nominal
 // intrinsics): frames 060-075, the person walking in the middle of the room.
 TEST(RealFrames, UrfdPersonInTheRoomFoundFromDepthAlone) {
@@ -32,15 +46,8 @@ TEST(RealFrames, UrfdPersonInTheRoomFoundFromDepthAlone) {
   PeopleDetector detector(o, GroundFromCameraMounting({0.55, 0, 0}), nullptr);
   int right = 0, frames = 0;
   for (int n = 60; n <= 75; ++n) {
-    char name[64];
-    snprintf(name, sizeof name, "/fall-01-cam0-d-%03d.png", n);
-    RgbdFrame frame;
-    std::string error;
-    ASSERT_TRUE(
-        LoadDepthImageFrame(dir + name, "", 6.0 / 65535, PinholeIntrinsics(), &frame, &error))
-        << error;
-    frame.utime = n * 33333;
-    const DetectionResult r = detector.Detect(frame, &error);
+    std::string name;
+    const DetectionResult r = DetectUrfd(&detector, dir, n, &name);
     ++frames;
     right += r.people.size() == 1;
     // A camera about 1.06 m up, 4 degrees down, rolled 3 degrees (its URFD mounting is
@@ -69,15 +76,8 @@ TEST(RealFrames, UrfdPersonInFrontOfTheBackWall) {
     PeopleDetector detector(o, GroundFromCameraMounting({0.55, 0, 0}), nullptr);
     frames = 0;
     for (int n = 2; n <= 99; ++n) {
-      char name[64];
-      snprintf(name, sizeof name, "/fall-01-cam0-d-%03d.png", n);
-      RgbdFrame frame;
-      std::string error;
-      ASSERT_TRUE(
-          LoadDepthImageFrame(dir + name, "", 6.0 / 65535, PinholeIntrinsics(), &frame, &error))
-          << error;
-      frame.utime = n * 33333;
-      const DetectionResult r = detector.Detect(frame, &error);
+      std::string name;
+      const DetectionResult r = DetectUrfd(&detector, dir, n, &name);
       ++frames;
       right[split] += r.people.size() == 1;
       if (n <= 59) right_far[split] += r.people.size() == 1;
