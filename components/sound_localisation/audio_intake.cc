@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/logging.h"
+
 namespace sarmap {
 namespace sound {
 
@@ -13,6 +15,19 @@ AudioIntake::AudioIntake(std::string device_id, int sample_rate_hz, double max_b
     throw std::invalid_argument("audio intake: max_bridged_gap_s must be >= 0");
   }
   max_bridged_samples_ = static_cast<int64_t>(std::llround(max_bridged_gap_s * sample_rate_hz));
+}
+
+bool AudioIntake::FromDeviceLogged(const std::string& device_id) {
+  std::string report;
+  const bool ours = FromDevice(device_id, &report);
+  if (!report.empty()) {
+    if (ours) {
+      SARMAP_LOG(INFO) << common::EscapeForLog(report, 512);
+    } else {
+      SARMAP_LOG(ERROR) << common::EscapeForLog(report, 512);
+    }
+  }
+  return ours;
 }
 
 bool AudioIntake::FromDevice(const std::string& device_id, std::string* report) {

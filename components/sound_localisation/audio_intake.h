@@ -49,6 +49,9 @@ class AudioIntake {
   // Whether a block of `device_id` is this node's (the first call picks the device when none
   // is configured); blocks of other devices are counted. *report: a line to log, or "".
   bool FromDevice(const std::string& device_id, std::string* report);
+  // FromDevice with its report logged (escaped: a device id is whatever the bus sent): INFO
+  // when the block is this node's (the device picked, the others heard), ERROR when not.
+  bool FromDeviceLogged(const std::string& device_id);
   // The verdict for the next block of this node's device (nodes check its format in between).
   Decision Sequence(int64_t first_sample_index, int64_t num_samples);
 

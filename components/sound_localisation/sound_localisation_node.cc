@@ -159,15 +159,7 @@ int main(int argc, char** argv) {
     } else
       node.Subscribe<sarmap::audio_frame_t>(
           options.audio_channel, [&](const sarmap::audio_frame_t& msg, const common::ReceiveInfo&) {
-            std::string report;
-            const bool ours = intake.FromDevice(msg.device_id, &report);
-            if (!report.empty()) {
-              if (ours)
-                SARMAP_LOG(INFO) << common::EscapeForLog(report, 512);  // names devices heard
-              else
-                SARMAP_LOG(ERROR) << common::EscapeForLog(report, 512);
-            }
-            if (!ours) {
+            if (!intake.FromDeviceLogged(msg.device_id)) {
               ++dropped;
               node.SetStatusMessage("doa " + std::to_string(published) + ", dropped audio blocks " +
                                     std::to_string(dropped) + "; audio " + intake.Summary());
