@@ -392,6 +392,22 @@ TEST(SlamInputTest, ARobotStandingStillInAFeaturelessViewStaysWhereItStopped) {
   EXPECT_GT(DriftWhileStopped(false), 0.025);
 }
 
+// Step k of a robot driving back and forth along y = 0 in the room (x from -3 to 1 m and back,
+// 0.05 m a step) with a full 360-beam scan: odometry and the scan into `slam`.
+ScanResult BackAndForthStep(Slam* slam, int k) {
+  const double phase = std::fmod(0.05 * k, 8.0);
+  const double x = -3.0 + (phase < 4.0 ? phase : 8.0 - phase);
+  const double t = 0.1 * k;
+  slam->AddOdometry(t, Rigid2d(x, 0, 0));
+  LaserScan scan = MakeScan(t, 360);
+  scan.angle_min_rad = -M_PI;
+  scan.angle_increment_rad = 2 * M_PI / 360;
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    scan.ranges_m[i] = RoomRange(x, 0, scan.angle_min_rad + i * scan.angle_increment_rad);
+  }
+  return slam->AddScan(scan);
+}
+
 TEST(SlamInputTest, AnOptimisationSaysWhetherItHadNewLoopClosures) {
   // A robot drives back and forth along x in the room; small submaps finish early, so the return
   // legs close loops against them. SLAM_ANCHORS carries this flag to the sound map, which applies
@@ -405,17 +421,7 @@ TEST(SlamInputTest, AnOptimisationSaysWhetherItHadNewLoopClosures) {
   int optimisations = 0, with_closures = 0;
   int64_t closures_at_last = 0;
   for (int k = 0; k < 400; ++k) {
-    const double phase = std::fmod(0.05 * k, 8.0);
-    const double x = -3.0 + (phase < 4.0 ? phase : 8.0 - phase);
-    const double t = 0.1 * k;
-    slam.AddOdometry(t, Rigid2d(x, 0, 0));
-    LaserScan scan = MakeScan(t, 360);
-    scan.angle_min_rad = -M_PI;
-    scan.angle_increment_rad = 2 * M_PI / 360;
-    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      scan.ranges_m[i] = RoomRange(x, 0, scan.angle_min_rad + i * scan.angle_increment_rad);
-    }
-    const ScanResult r = slam.AddScan(scan);
+    const ScanResult r = BackAndForthStep(&slam, k);
     ASSERT_TRUE(r.accepted);
     if (!r.optimised) continue;
     ++optimisations;
@@ -523,17 +529,7 @@ TEST(SlamStateFileTest, LoopClosureShapesAreKeptThroughASaveAndALoad) {
   o.loop.weight_by_match_information = true;
   Slam slam{o};
   for (int k = 0; k < 200; ++k) {
-    const double phase = std::fmod(0.05 * k, 8.0);
-    const double x = -3.0 + (phase < 4.0 ? phase : 8.0 - phase);
-    const double t = 0.1 * k;
-    slam.AddOdometry(t, Rigid2d(x, 0, 0));
-    LaserScan scan = MakeScan(t, 360);
-    scan.angle_min_rad = -M_PI;
-    scan.angle_increment_rad = 2 * M_PI / 360;
-    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      scan.ranges_m[i] = RoomRange(x, 0, scan.angle_min_rad + i * scan.angle_increment_rad);
-    }
-    ASSERT_TRUE(slam.AddScan(scan).accepted);
+    ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
   }
   EXPECT_GT(slam.stats().loop_closures, 0);
   const std::string path = ::testing::TempDir() + "/slam_state_shapes.pg";
