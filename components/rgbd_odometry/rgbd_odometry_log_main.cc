@@ -55,6 +55,9 @@ int main(int argc, char** argv) {
                    "simulated robot (base_from_camera: where the camera sits)");
     parser.AddFlag("--check-every", &check_every_s,
                    "print the pose against the truth every this many seconds (0: off)");
+    bool print_large_steps = false;
+    parser.AddSwitch("--print-large-steps", &print_large_steps,
+                     "print every frame-to-frame step over 3 cm with its overlap and status");
     const auto parsed =
         sarmap::common::ParseNodeOptions<sarmap::rgbd_odometry::RgbdOdometryNodeOptions>(
             &parser, &node_args, argc, argv, "config/rgbd_odometry.yaml");
@@ -90,7 +93,7 @@ int main(int argc, char** argv) {
     auto run = [&] {
       for (const auto& f : ready) {
         RgbdOdometryResult r = odometry.Process(f);
-        if (std::getenv("SARMAP_RGBD_DEBUG") && r.previous_from_rig.translation().norm() > 0.03)
+        if (print_large_steps && r.previous_from_rig.translation().norm() > 0.03)
           fprintf(stderr,
                   "frame %ld: step %.3f m %.1f deg overlap %.2f valid %.2f keyframe %d %s\n",
                   static_cast<long>(r.utime), r.previous_from_rig.translation().norm(),

@@ -14,6 +14,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "common/logging.h"
 #include "sound_map/linear_array_costs.h"
 
 namespace sarmap {
@@ -602,7 +603,7 @@ class Mapper {
         if (kv.second.converged) flipped |= MirrorCheck(&kv.second);
       if (flipped) Optimise(0, static_cast<int>(n) - 1);
     }
-    if (std::getenv("SARMAP_SOUND_MAP_DEBUG")) {
+    if (common::GetLogLevel() == common::LogLevel::DEBUG) {
       for (auto& kv : tracks_) {
         const SourceTrack& tr = kv.second;
         fprintf(stderr, "source %ld obs %zu converged %d", static_cast<long>(kv.first), tr.obs.size(), tr.converged);

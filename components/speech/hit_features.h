@@ -1,7 +1,7 @@
 #pragma once
 // Per-detection features of a keyword hit, measured on the hit's voice-activity utterance
 // (no PocketSphinx here): for the keyword verifier (keyword_verifier.h) and the evaluation's
-// feature dump (SARMAP_KWS_FEATURES).
+// feature dump (kws_eval --features-csv).
 
 #include <cstdint>
 #include <string>

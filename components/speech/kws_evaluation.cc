@@ -268,13 +268,13 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   VerifierOptions verifier_options = keywords.verifier;  // applied below as a post-filter too
   keywords.verifier.enabled = false;
   KeywordSpotter spotter(keywords);
-  const bool want_features = verifier_options.enabled || !o.fit_verifier_features.empty() ||
-                             std::getenv("SARMAP_KWS_FEATURES") != nullptr;
-  bool with_phones = std::getenv("SARMAP_KWS_FEATURES") != nullptr || NeedsPhoneLoop(verifier_options);
+  const bool want_features =
+      verifier_options.enabled || !o.fit_verifier_features.empty() || !o.features_csv.empty();
+  bool with_phones = !o.features_csv.empty() || NeedsPhoneLoop(verifier_options);
   for (const auto& n : o.fit_verifier_features) with_phones |= n == "phone_distance";
-  // SARMAP_KWS_DUMP=llr also computes the (slow) acoustic verification of every hit.
-  if (const char* dump = std::getenv("SARMAP_KWS_DUMP"); dump && std::string(dump) == "llr")
-    spotter.set_compute_verification(true);
+  // dump "llr" also computes the (slow) acoustic verification of every hit.
+  const bool dump = !o.dump.empty();
+  if (o.dump == "llr") spotter.set_compute_verification(true);
   const auto t0 = std::chrono::steady_clock::now();
   struct Hit {
     double utterance_start_s;
@@ -286,12 +286,11 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     HitFeatures features;
     bool synthetic = false;      // negatives: the hit fell in an espeak-ng sentence
   };
-  int scene = 0;  // positive scene being decoded (for SARMAP_KWS_SEGDIR names)
-  // SARMAP_KWS_FEATURES=path: one CSV row per hit with its features (hit_features.h), its half
-  // (tune / held) and, in the negative stream, the recording it fell in.
+  int scene = 0;  // positive scene being decoded (for segment_dir names)
   FILE* features_csv = nullptr;
-  if (const char* path = std::getenv("SARMAP_KWS_FEATURES")) {
-    features_csv = std::fopen(path, "w");
+  if (!o.features_csv.empty()) {
+    features_csv = std::fopen(o.features_csv.c_str(), "w");
+    if (!features_csv) throw std::runtime_error("cannot write " + o.features_csv);
     if (features_csv)
       std::fprintf(features_csv,
                    "set,half,scene,source,synthetic,in_call,keyword,t,call_s,log_ratio,duration_s,ratio_per_s,"
@@ -317,11 +316,12 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
     }
     for (size_t k = 0; k < utts.size(); ++k) {
       const Utterance& u = utts[k];
-      if (std::getenv("SARMAP_KWS_DUMP"))
+      if (dump)
         std::fprintf(stderr, "UTT %s %.3f %.3f\n", &x == &data.negatives ? "neg" : "pos", u.start_sample / 16000.0,
                      u.end_sample / 16000.0);
       const auto d = spotter.Decode(u.samples.data(), u.samples.size(), false);
-      if (const char* segdir = std::getenv("SARMAP_KWS_SEGDIR")) {
+      if (!o.segment_dir.empty()) {
+        const char* segdir = o.segment_dir.c_str();
         // Each utterance with a hit, as raw s16le, named by its label and time (for offline probes).
         if (!d.keywords.empty() && u.samples.size() <= 2.0 * 16000) {
           char name[256];
@@ -367,7 +367,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
                        f.hit_level_db, f.voiced_fraction, f.pitch_hz, f.pitch_range_st, f.tilt_db,
                        f.phone_distance, f.phones.c_str());
         }
-        if (std::getenv("SARMAP_KWS_DUMP"))
+        if (dump)
           std::fprintf(stderr, "HIT %s %s t %.2f ratio %.3f kconf %.3f conf %.3f dur %.2f utt %.2f call %.2f llr %.4f\n",
                        &x == &data.negatives ? "neg" : "pos", h.keyword.c_str(), u.samples_start / 16000.0 + h.start_s,
                        h.log_ratio, h.kws_confidence, h.confidence, h.end_s - h.start_s, u.samples.size() / 16000.0,
@@ -379,7 +379,7 @@ std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const Keywo
   for (size_t i = 0; i < data.positives.size(); ++i) {
     scene = static_cast<int>(i);
     run(data.positives[i], &pos[i]);
-    if (std::getenv("SARMAP_KWS_DUMP")) {
+    if (dump) {
       std::fprintf(stderr, "POS %zu call %.2f-%.2f:", i, data.call_start_s[i], data.call_end_s[i]);
       for (const auto& h : pos[i]) std::fprintf(stderr, " %s@%.2f(%.2f)", h.keyword.c_str(), h.t, h.confidence);
       std::fprintf(stderr, "\n");

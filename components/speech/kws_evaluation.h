@@ -49,6 +49,14 @@ struct KwsEvalOptions {
   std::string tts = "espeak";
   double fit_l2 = 0.01;
   double fit_max_call_s = 1.8;
+  // Diagnostics. features_csv: one CSV row per hit with its features (hit_features.h), its half
+  // (tune / held) and, in the negative stream, the recording it fell in. dump: "" (none),
+  // "hits" (every utterance and hit on stderr) or "llr" (also the slow acoustic verification of
+  // every hit). segment_dir: each utterance with a hit (at most 2 s), as raw s16le, named by its
+  // label and time.
+  std::string features_csv;
+  std::string dump;
+  std::string segment_dir;
 };
 
 struct KwsEvalResult {

@@ -1,6 +1,7 @@
 // kws_probe: development probe. Decodes raw 16 kHz s16le segments (file names on stdin) with
 // the en-us n-gram LM under the given PocketSphinx arguments and prints, per file, the
-// hypothesis and the lattice posterior of a word. Used to choose the LM verification settings.
+// hypothesis and the lattice posterior of a word (-word W, default help; -segs also prints the
+// best path's segments). Used to choose the LM verification settings.
 #include <pocketsphinx.h>
 
 #include <cstdio>
@@ -12,22 +13,32 @@
 
 int main(int argc, char** argv) {
   const std::string model = "/usr/share/pocketsphinx/model/en-us";
-  std::vector<std::string> args = {"-hmm", model + "/en-us", "-dict", model + "/cmudict-en-us.dict",
-                                   "-lm", model + "/en-us.lm.bin", "-logfn", "/dev/null", "-cmn", "current"};
+  std::vector<std::string> args = {"-hmm",   model + "/en-us",
+                                   "-dict",  model + "/cmudict-en-us.dict",
+                                   "-lm",    model + "/en-us.lm.bin",
+                                   "-logfn", "/dev/null",
+                                   "-cmn",   "current"};
   std::string word = "help";
+  bool print_segments = false;    // -segs: every segment of the best path with its frames
   for (int i = 1; i < argc; ++i)  // another search instead of the n-gram LM
-    if (std::string(argv[i]) == "-jsgf" || std::string(argv[i]) == "-kws" || std::string(argv[i]) == "-lm")
+    if (std::string(argv[i]) == "-jsgf" || std::string(argv[i]) == "-kws" ||
+        std::string(argv[i]) == "-lm")
       args.erase(args.begin() + 4, args.begin() + 6);
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "-word" && i + 1 < argc) {
       word = argv[++i];
       continue;
     }
+    if (std::string(argv[i]) == "-segs") {
+      print_segments = true;
+      continue;
+    }
     args.push_back(argv[i]);
   }
   std::vector<char*> av;
   for (auto& a : args) av.push_back(&a[0]);
-  cmd_ln_t* config = cmd_ln_parse_r(nullptr, ps_args(), static_cast<int32>(av.size()), av.data(), TRUE);
+  cmd_ln_t* config =
+      cmd_ln_parse_r(nullptr, ps_args(), static_cast<int32>(av.size()), av.data(), TRUE);
   ps_decoder_t* ps = ps_init(config);
   if (!ps) return 1;
   logmath_t* lmath = ps_get_logmath(ps);
@@ -50,7 +61,7 @@ int main(int argc, char** argv) {
       const size_t paren = w.find('(');
       if (paren != std::string::npos) w = w.substr(0, paren);
       int32 a, l, b;
-      if (std::getenv("PROBE_SEGS")) {
+      if (print_segments) {
         int sf, ef;
         ps_seg_frames(seg, &sf, &ef);
         std::printf("  seg %s %d-%d prob %d\n", w.c_str(), sf, ef, ps_seg_prob(seg, &a, &l, &b));

@@ -5,15 +5,23 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "common/logging.h"
+
 namespace sarmap {
 namespace speech {
 
-SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind kind, SpeechOptions options)
-    : geometry_(geometry), kind_(kind), options_(options), enhancer_(geometry, options.enhancer),
-      spotter_(options.keywords), full_decoding_(options.keywords.full_decoding),
+SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind kind,
+                                 SpeechOptions options)
+    : geometry_(geometry),
+      kind_(kind),
+      options_(options),
+      enhancer_(geometry, options.enhancer),
+      spotter_(options.keywords),
+      full_decoding_(options.keywords.full_decoding),
       arbiter_(static_cast<int64_t>(options.beam_arbitration_s * geometry.sample_rate_hz)) {
   if (geometry_.sample_rate_hz != 16000)
-    throw std::invalid_argument("the PocketSphinx en-us model needs 16 kHz audio; array '" + geometry_.name + "' is " +
+    throw std::invalid_argument("the PocketSphinx en-us model needs 16 kHz audio; array '" +
+                                geometry_.name + "' is " +
                                 std::to_string(geometry_.sample_rate_hz) + " Hz");
   output_offset_ = options.enhancer.fft_size - options.enhancer.hop_size;
   if (options_.beam_arbitration_s > 0) {
@@ -24,8 +32,8 @@ SpeechProcessor::SpeechProcessor(sound::ArrayGeometry geometry, sound::DoaKind k
   }
 }
 
-double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, int64_t start_sample,
-                                             int64_t end_sample) const {
+double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction,
+                                             int64_t start_sample, int64_t end_sample) const {
   if (band_frames_.empty()) return 0;
   const int n = band_hi_ - band_lo_ + 1, mics = geometry_.num_mics();
   const int64_t floor_span = 5 * geometry_.sample_rate_hz;
@@ -46,11 +54,13 @@ double SpeechProcessor::SpeechDirectionScore(const sound::Direction& direction, 
   double score = 0;
   int used = 0;
   for (const BandFrame& f : band_frames_) {
-    if (f.end_sample <= start_sample || f.end_sample > end_sample + band_stft_->fft_size()) continue;
+    if (f.end_sample <= start_sample || f.end_sample > end_sample + band_stft_->fft_size())
+      continue;
     for (int b = 0; b < n; ++b) {
-      if (f.bins.row(b).squaredNorm() / mics < 4.0f * floor[b]) continue;  // not 6 dB over its floor
-      const double w =
-          2 * M_PI * (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) / band_stft_->fft_size();
+      if (f.bins.row(b).squaredNorm() / mics < 4.0f * floor[b])
+        continue;  // not 6 dB over its floor
+      const double w = 2 * M_PI * (band_lo_ + b) * static_cast<double>(geometry_.sample_rate_hz) /
+                       band_stft_->fft_size();
       // PHAT: each mic's phase only, aligned for the direction; |sum|^2 is mics^2 when they agree.
       std::complex<double> sum = 0;
       for (int m = 0; m < mics; ++m) {
@@ -96,17 +106,20 @@ bool SpeechProcessor::UpdateTrack(int64_t id, const sound::Direction& d, const E
   return true;
 }
 
-void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, std::vector<SpeechResult>* out) {
+void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels,
+                           std::vector<SpeechResult>* out) {
   std::vector<SpeechResult>* results = &fresh_;
   samples_seen_ += frames;
   if (band_stft_) {
-    band_stft_->PushInterleaved(data, frames, block_channels, geometry_.channel_map,
-                                [&](const Eigen::MatrixXcf& spectra, int64_t end_sample) {
-                                  band_frames_.push_back(
-                                      {end_sample, spectra.middleRows(band_lo_, band_hi_ - band_lo_ + 1)});
-                                });
+    band_stft_->PushInterleaved(
+        data, frames, block_channels, geometry_.channel_map,
+        [&](const Eigen::MatrixXcf& spectra, int64_t end_sample) {
+          band_frames_.push_back(
+              {end_sample, spectra.middleRows(band_lo_, band_hi_ - band_lo_ + 1)});
+        });
     // Kept: the floor span before the oldest hit still waiting, and that hit.
-    const int64_t keep = static_cast<int64_t>((options_.beam_arbitration_s + 12.0) * geometry_.sample_rate_hz);
+    const int64_t keep =
+        static_cast<int64_t>((options_.beam_arbitration_s + 12.0) * geometry_.sample_rate_hz);
     size_t old = 0;
     while (old < band_frames_.size() && samples_seen_ - band_frames_[old].end_sample > keep) ++old;
     band_frames_.erase(band_frames_.begin(), band_frames_.begin() + old);
@@ -119,14 +132,16 @@ void SpeechProcessor::Push(const int16_t* data, int frames, int block_channels, 
   for (const auto& [id, t] : tracks_) {
     if (t.updates >= options_.min_track_updates) order.push_back(&t);
   }
-  std::sort(order.begin(), order.end(), [](auto* a, auto* b) { return a->last_sample > b->last_sample; });
+  std::sort(order.begin(), order.end(),
+            [](auto* a, auto* b) { return a->last_sample > b->last_sample; });
   std::vector<Beam> beams;
   for (size_t i = 0; i < order.size() && static_cast<int>(i) < options_.max_sources; ++i)
     beams.push_back({order[i]->id, geometry_.Unit(kind_, order[i]->direction)});
   if (beams.empty() && options_.untracked_beam) {
     // Omnidirectional: broadside of the array (delay-and-sum of nearly aligned mics for
     // nearby talkers) is as good as any guess without a direction.
-    beams.push_back({-1, geometry_.is_linear() ? geometry_.axis.unitOrthogonal() : geometry_.normal});
+    beams.push_back(
+        {-1, geometry_.is_linear() ? geometry_.axis.unitOrthogonal() : geometry_.normal});
   }
   for (auto& [id, buf] : enhanced_) buf.clear();
   enhancer_.Push(data, frames, block_channels, beams, &enhanced_);
@@ -176,7 +191,8 @@ void SpeechProcessor::Flush(std::vector<SpeechResult>* out) {
   arbiter_.Push(&fresh_, samples_seen_, true, out);
 }
 
-void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush, std::vector<SpeechResult>* out) {
+void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush,
+                       std::vector<SpeechResult>* out) {
   for (SpeechResult& r : *fresh) {
     if (hold_samples_ <= 0 || r.keyword.empty())
       out->push_back(std::move(r));
@@ -188,8 +204,8 @@ void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush
   // A louder hit of another beam over the same stretch of the stream: this one is its leak.
   auto louder_elsewhere = [](const SpeechResult& r, const std::vector<SpeechResult>& others) {
     for (const SpeechResult& o : others)
-      if (o.track_id != r.track_id && o.start_sample < r.end_sample && r.start_sample < o.end_sample &&
-          o.direction_score > r.direction_score)
+      if (o.track_id != r.track_id && o.start_sample < r.end_sample &&
+          r.start_sample < o.end_sample && o.direction_score > r.direction_score)
         return true;
     return false;
   };
@@ -202,7 +218,8 @@ void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush
     now_decided.push_back(std::move(r));
   }
   for (const SpeechResult& r : now_decided) {
-    if (louder_elsewhere(r, now_decided) || louder_elsewhere(r, waiting) || louder_elsewhere(r, decided_))
+    if (louder_elsewhere(r, now_decided) || louder_elsewhere(r, waiting) ||
+        louder_elsewhere(r, decided_))
       ++dropped_;
     else
       out->push_back(r);
@@ -210,9 +227,10 @@ void BeamArbiter::Push(std::vector<SpeechResult>* fresh, int64_t now, bool flush
   decided_.insert(decided_.end(), now_decided.begin(), now_decided.end());
   held_ = std::move(waiting);
   // Decided hits matter only to hits that end at most hold_samples_ after them.
-  decided_.erase(std::remove_if(decided_.begin(), decided_.end(),
-                                [&](const SpeechResult& d) { return now - d.end_sample > 4 * hold_samples_; }),
-                 decided_.end());
+  decided_.erase(
+      std::remove_if(decided_.begin(), decided_.end(),
+                     [&](const SpeechResult& d) { return now - d.end_sample > 4 * hold_samples_; }),
+      decided_.end());
 }
 
 bool SpeechProcessor::joins_calls() const {
@@ -223,7 +241,8 @@ void SpeechProcessor::FinishCall(int64_t id, std::vector<SpeechResult>* results)
   auto it = calls_.find(id);
   if (it == calls_.end() || !it->second.open) return;
   PendingCall& c = it->second;
-  const double call_s = static_cast<double>(c.end_sample - c.samples_start) / geometry_.sample_rate_hz;
+  const double call_s =
+      static_cast<double>(c.end_sample - c.samples_start) / geometry_.sample_rate_hz;
   if (call_s <= options_.keywords.max_utterance_s)
     results->insert(results->end(), c.results.begin(), c.results.end());
   calls_.erase(it);
@@ -231,14 +250,13 @@ void SpeechProcessor::FinishCall(int64_t id, std::vector<SpeechResult>* results)
 
 void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechResult>* results) {
   ++utterances_;
-  if (std::getenv("SARMAP_KWS_DUMP"))
-    std::fprintf(stderr, "SEGMENT beam %lld %.2f-%.2f s (%.2f s)\n", static_cast<long long>(id),
-                 u.start_sample / static_cast<double>(geometry_.sample_rate_hz),
-                 u.end_sample / static_cast<double>(geometry_.sample_rate_hz),
-                 u.samples.size() / static_cast<double>(geometry_.sample_rate_hz));
-  const DecodeResult d = spotter_.Decode(u.samples.data(), u.samples.size(), full_decoding_,
-                                         static_cast<double>(u.start_sample - u.samples_start) / geometry_.sample_rate_hz,
-                                         static_cast<double>(u.end_sample - u.samples_start) / geometry_.sample_rate_hz);
+  SARMAP_LOG(DEBUG) << "segment: beam " << id << ", "
+                    << u.start_sample / static_cast<double>(geometry_.sample_rate_hz) << "-"
+                    << u.end_sample / static_cast<double>(geometry_.sample_rate_hz) << " s";
+  const DecodeResult d = spotter_.Decode(
+      u.samples.data(), u.samples.size(), full_decoding_,
+      static_cast<double>(u.start_sample - u.samples_start) / geometry_.sample_rate_hz,
+      static_cast<double>(u.end_sample - u.samples_start) / geometry_.sample_rate_hz);
   SpeechResult base;
   base.track_id = id;
   auto it = tracks_.find(id);
@@ -249,16 +267,19 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
   }
   // VAD sample counts -> stream samples: where this beam's VAD started, less the enhancer's delay.
   const auto origin_it = vad_origins_.find(id);
-  const int64_t to_stream = (origin_it == vad_origins_.end() ? 0 : origin_it->second) - output_offset_;
+  const int64_t to_stream =
+      (origin_it == vad_origins_.end() ? 0 : origin_it->second) - output_offset_;
   base.start_sample = u.start_sample + to_stream;
   base.end_sample = u.end_sample + to_stream;
   base.text = d.text;
   // With joined calls, keyword results wait for the end of their call (text does not).
   std::vector<SpeechResult>* keyword_out = results;
   if (joins_calls()) {
-    const int64_t join = static_cast<int64_t>(options_.keywords.call_join_s * geometry_.sample_rate_hz);
+    const int64_t join =
+        static_cast<int64_t>(options_.keywords.call_join_s * geometry_.sample_rate_hz);
     auto c = calls_.find(id);
-    if (c != calls_.end() && c->second.open && u.start_sample - c->second.end_sample >= join) FinishCall(id, results);
+    if (c != calls_.end() && c->second.open && u.start_sample - c->second.end_sample >= join)
+      FinishCall(id, results);
     PendingCall& call = calls_[id];
     if (!call.open) {
       call.open = true;
@@ -280,7 +301,8 @@ void SpeechProcessor::Handle(int64_t id, const Utterance& u, std::vector<SpeechR
       // The hit belongs to the tracked direction its speech came from (SpeechDirectionScore),
       // which need not be the beam that decoded it (a talker leaks into every beam, and his own
       // track may have no beam when more than max_sources are tracked).
-      if (r.has_direction) r.direction_score = SpeechDirectionScore(r.direction, r.start_sample, r.end_sample);
+      if (r.has_direction)
+        r.direction_score = SpeechDirectionScore(r.direction, r.start_sample, r.end_sample);
       for (const auto& [track_id, track] : tracks_) {
         if (track_id == r.track_id) continue;
         const double g = SpeechDirectionScore(track.direction, r.start_sample, r.end_sample);
