@@ -21,11 +21,13 @@ bool JudgesStuck(const std::string& state) {
 
 }  // namespace
 
-double TrailResidualRms(const common::Rigid2d& map_from_world,
-                        const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& estimate_truth) {
+double TrailResidualRms(
+    const common::Rigid2d& map_from_world,
+    const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& estimate_truth) {
   if (estimate_truth.empty()) return 0;
   double sum = 0;
-  for (const auto& [estimate, truth] : estimate_truth) sum += (map_from_world * truth - estimate).squaredNorm();
+  for (const auto& [estimate, truth] : estimate_truth)
+    sum += (map_from_world * truth - estimate).squaredNorm();
   return std::sqrt(sum / estimate_truth.size());
 }
 
@@ -112,6 +114,30 @@ void MissionMetrics::OnTruth(int64_t utime, const sarmap::sim_truth_t& truth) {
   }
   if (!stuck) run_s_ = 0;
   was_stuck_ = stuck;
+
+  confined_window_.push_back(window_.back());
+  const int64_t confined_start =
+      utime - static_cast<int64_t>(std::llround(options_.confined_window_s * 1e6));
+  while (confined_window_.size() >= 2 && confined_window_[1].utime <= confined_start) {
+    confined_window_.pop_front();
+  }
+  bool confined = false;
+  if (explore_ && JudgesStuck(explore_->state) &&
+      confined_window_.front().utime <= confined_start) {
+    confined = true;
+    for (const Sample& s : confined_window_) {
+      if ((s.position_m - window_.back().position_m).norm() >= options_.confined_radius_m) {
+        confined = false;
+        break;
+      }
+    }
+  }
+  if (!confined) {
+    confined_since_utime_.reset();
+  } else {
+    if (!confined_since_utime_) confined_since_utime_ = confined_window_.front().utime;
+    longest_confined_s_ = std::max(longest_confined_s_, (utime - *confined_since_utime_) * 1e-6);
+  }
 }
 
 void MissionMetrics::OnFloor(int64_t utime, const sarmap::occupancy_grid_t& floor) {
@@ -262,6 +288,7 @@ MissionMetricsResult MissionMetrics::Result() const {
   if (explore_) {
     r.stuck_s = stuck_s_;
     r.longest_stuck_s = longest_stuck_s_;
+    r.longest_confined_s = longest_confined_s_;
     r.last_explore_state = explore_->state;
   }
   return r;

@@ -50,6 +50,14 @@
 //                    counts about T - window (plus the time the robot is within
 //                    stuck_distance_m of the stop while arriving and leaving). Without any
 //                    EXPLORE_STATUS stuck is not judged (std::nullopt).
+//   confined         at truth sample k the robot is confined when the truth covers the
+//                    trailing confined_window_s, every sample j in it has
+//                    |p_j - p_k| < confined_radius_m, and the last EXPLORE_STATUS judges stuck
+//                    as above: it may move and turn, but goes nowhere (a robot that backs off,
+//                    turns and drives into the same doorway again and again). A run of
+//                    consecutive confined samples lasts from the window start of its first
+//                    sample to its last sample; longest_confined_s is the longest run (nullopt
+//                    without EXPLORE_STATUS).
 //   came_home        an EXPLORE_STATUS said home, and the last truth position is within
 //                    home_radius_m of the start pose; home_after_s = t of the first such status.
 //   mission_s        the last input's time - the first truth's.
@@ -78,6 +86,8 @@ struct MissionMetricsOptions {
   double stuck_window_s = 10.0;
   double stuck_distance_m = 0.15;  // moved less than this over the window ...
   double stuck_turn_rad = 0.5;     // ... and turned less than this: stuck
+  double confined_window_s = 60.0;
+  double confined_radius_m = 1.0;  // stayed this close to where it is over the window: confined
   double home_radius_m = 0.5;      // ends this close to the start pose: at home
 };
 
@@ -92,8 +102,9 @@ std::vector<int> MatchPeople(const std::vector<Eigen::Vector2d>& truth_in_map,
 // positions (estimate in the map frame, truth in the world frame). With map_from_world the start
 // pose's inverse (MissionMetricsResult::world_from_map) this is the report's "robot trail
 // residual". 0 without pairs.
-double TrailResidualRms(const common::Rigid2d& map_from_world,
-                        const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& estimate_truth);
+double TrailResidualRms(
+    const common::Rigid2d& map_from_world,
+    const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& estimate_truth);
 
 struct CoveragePoint {
   double time_s = 0;
@@ -127,6 +138,7 @@ struct MissionMetricsResult {
   double distance_m = 0;
   int collisions = 0;
   std::optional<double> stuck_s, longest_stuck_s;  // nullopt without EXPLORE_STATUS
+  std::optional<double> longest_confined_s;        // nullopt without EXPLORE_STATUS
   bool came_home = false;
   std::optional<double> home_after_s;
   std::string last_explore_state;  // "" without EXPLORE_STATUS
@@ -192,6 +204,10 @@ class MissionMetrics {
   std::deque<Sample> window_;  // truth samples of the trailing window, oldest first
   bool was_stuck_ = false;
   double stuck_s_ = 0, run_s_ = 0, longest_stuck_s_ = 0;
+  // Confined: a longer window of positions, and the start of the current run.
+  std::deque<Sample> confined_window_;
+  std::optional<int64_t> confined_since_utime_;
+  double longest_confined_s_ = 0;
   std::optional<sarmap::explore_status_t> explore_;
   std::optional<double> home_s_;
 };

@@ -236,6 +236,30 @@ TEST(MissionMetricsTest, TurningInPlaceIsNotStuckAndNoStatusIsNotJudged) {
   EXPECT_FALSE(unjudged.Result().home_after_s);
 }
 
+TEST(MissionMetricsTest, GoingBackAndForthIsGoingNowhereThoughNeverStuck) {
+  // Exploring for 200 s: 0-40 s driving straight at 0.2 m/s (8 m), then back and forth over
+  // 0.6 m at 0.2 m/s (a robot that backs off, turns and tries the same doorway again) until
+  // 150 s, then driving on.
+  MissionMetrics metrics;
+  metrics.OnExploreStatus(At(0), Status("exploring"));
+  double x = kStartX;
+  for (int k = 0; k <= 2000; ++k) {
+    const double t = 0.1 * k;
+    if (t <= 40 || t > 150) {
+      x += 0.02;
+    } else {
+      const double phase = std::fmod(t - 40, 6.0);  // 3 s out, 3 s back
+      x += phase < 3 ? 0.02 : -0.02;
+    }
+    metrics.OnTruth(At(t), Truth(x, kStartY, kStartYaw, 0, 0));
+  }
+  const MissionMetricsResult r = metrics.Result();
+  ASSERT_TRUE(r.longest_stuck_s && r.longest_confined_s);
+  EXPECT_EQ(*r.longest_stuck_s, 0.0);  // it always moves more than 0.15 m in 10 s
+  // Within 1 m of where it is from ~37 s (the last 0.6 m of the straight drive) to ~152 s.
+  EXPECT_NEAR(*r.longest_confined_s, 115.0, 6.0);
+}
+
 TEST(MissionMetricsTest, HomeStatusFarFromTheStartIsNotHome) {
   MissionMetrics metrics;
   metrics.OnExploreStatus(At(0), Status("returning"));

@@ -93,9 +93,11 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
       sarmap::sim_truth_t m;
       if (Decode(event.data, &m)) {
         data.metrics.OnTruth(event.timestamp_us, m);
-        truth_by_utime[m.header.utime] = Eigen::Vector2d(m.robot_position_m[0], m.robot_position_m[1]);
-        if (data.truth_trail.empty() || std::hypot(data.truth_trail.back().first - m.robot_position_m[0],
-                                                   data.truth_trail.back().second - m.robot_position_m[1]) > 0.05) {
+        truth_by_utime[m.header.utime] =
+            Eigen::Vector2d(m.robot_position_m[0], m.robot_position_m[1]);
+        if (data.truth_trail.empty() ||
+            std::hypot(data.truth_trail.back().first - m.robot_position_m[0],
+                       data.truth_trail.back().second - m.robot_position_m[1]) > 0.05) {
           data.truth_trail.emplace_back(m.robot_position_m[0], m.robot_position_m[1]);
         }
         data.truth = std::move(m);
@@ -428,7 +430,8 @@ void DrawEllipse(Canvas* c, double x, double y, const double (&cov)[9], const cv
   // Axes beyond a few image sizes look the same and would overflow the rasteriser.
   const double max_axis_px = 4.0 * std::max(c->image.cols, c->image.rows);
   const auto axis_px = [&](double variance) {
-    return std::max(2, static_cast<int>(std::min(max_axis_px, 3 * std::sqrt(variance) * c->pixels_per_m)));
+    return std::max(
+        2, static_cast<int>(std::min(max_axis_px, 3 * std::sqrt(variance) * c->pixels_per_m)));
   };
   const cv::Size axes(axis_px(v(1)), axis_px(v(0)));
   cv::ellipse(c->image, c->P(x, y), axes, angle_deg, 0, 360, colour, 2, cv::LINE_AA);
@@ -456,7 +459,8 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     grow(m.origin_x_m + m.width * m.resolution_m - 1, m.origin_y_m + m.height * m.resolution_m - 1);
     std::string error;
     std::vector<int8_t> decoded;
-    if (common::DecodeOccupancyGrid(m, &decoded, &error)) cells.assign(decoded.begin(), decoded.end());
+    if (common::DecodeOccupancyGrid(m, &decoded, &error))
+      cells.assign(decoded.begin(), decoded.end());
   }
   const std::vector<Eigen::Vector2d> unmapped = data.metrics.UnmappedFloorInMap();
   for (const auto& p : unmapped) grow(p.x(), p.y());
@@ -493,7 +497,8 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
         const int8_t v = static_cast<int8_t>(cells[static_cast<size_t>(gy) * m.width + gx]);
         const uint8_t g = v < 0 ? 205 : static_cast<uint8_t>(255 - v * 255 / 100);
         const double x = m.origin_x_m + gx * m.resolution_m, y = m.origin_y_m + gy * m.resolution_m;
-        cv::rectangle(c.image, c.P(x, y + m.resolution_m), c.P(x + m.resolution_m, y), cv::Scalar(g, g, g), cv::FILLED);
+        cv::rectangle(c.image, c.P(x, y + m.resolution_m), c.P(x + m.resolution_m, y),
+                      cv::Scalar(g, g, g), cv::FILLED);
       }
     }
   }
@@ -514,13 +519,17 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
     cv::addWeighted(overlay, 0.55, c.image, 0.45, 0.0, c.image);
   }
   for (size_t i = 1; i < data.truth_trail.size(); ++i) {
-    const Eigen::Vector2d a = summary.alignment.Apply({data.truth_trail[i - 1].first, data.truth_trail[i - 1].second});
-    const Eigen::Vector2d b = summary.alignment.Apply({data.truth_trail[i].first, data.truth_trail[i].second});
-    cv::line(c.image, c.P(a.x(), a.y()), c.P(b.x(), b.y()), cv::Scalar(160, 160, 160), 1, cv::LINE_AA);
+    const Eigen::Vector2d a =
+        summary.alignment.Apply({data.truth_trail[i - 1].first, data.truth_trail[i - 1].second});
+    const Eigen::Vector2d b =
+        summary.alignment.Apply({data.truth_trail[i].first, data.truth_trail[i].second});
+    cv::line(c.image, c.P(a.x(), a.y()), c.P(b.x(), b.y()), cv::Scalar(160, 160, 160), 1,
+             cv::LINE_AA);
   }
   for (size_t i = 1; i < data.trail.size(); ++i) {
     cv::line(c.image, c.P(data.trail[i - 1].first, data.trail[i - 1].second),
-             c.P(data.trail[i].first, data.trail[i].second), cv::Scalar(182, 89, 155), 2, cv::LINE_AA);
+             c.P(data.trail[i].first, data.trail[i].second), cv::Scalar(182, 89, 155), 2,
+             cv::LINE_AA);
   }
   if (explore) {  // the explorer's last plan: path and goal
     for (int i = 1; i < explore->num_path; ++i) {
@@ -543,15 +552,21 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   {
     for (const auto& p : people) {
       const bool heard = p.cues & sarmap::mapped_person_t::CUE_HEARD;
-      const bool seen = p.cues & (sarmap::mapped_person_t::CUE_SEEN_RGBD | sarmap::mapped_person_t::CUE_SEEN_DEPTH);
+      const bool seen = p.cues & (sarmap::mapped_person_t::CUE_SEEN_RGBD |
+                                  sarmap::mapped_person_t::CUE_SEEN_DEPTH);
       const cv::Scalar colour = seen && heard ? yellow : heard ? red : green;
       if (heard) DrawEllipse(&c, p.position_m[0], p.position_m[1], p.covariance, colour);
-      cv::circle(c.image, c.P(p.position_m[0], p.position_m[1]), 8, colour, cv::FILLED, cv::LINE_AA);
-      cv::circle(c.image, c.P(p.position_m[0], p.position_m[1]), 8, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-      const std::string label = "#" + std::to_string(p.id) + (p.keyword.empty() ? "" : " \"" + p.keyword + "\"");
+      cv::circle(c.image, c.P(p.position_m[0], p.position_m[1]), 8, colour, cv::FILLED,
+                 cv::LINE_AA);
+      cv::circle(c.image, c.P(p.position_m[0], p.position_m[1]), 8, cv::Scalar(0, 0, 0), 1,
+                 cv::LINE_AA);
+      const std::string label =
+          "#" + std::to_string(p.id) + (p.keyword.empty() ? "" : " \"" + p.keyword + "\"");
       const cv::Point at = c.P(p.position_m[0], p.position_m[1]) + cv::Point(11, -9);
-      cv::putText(c.image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-      cv::putText(c.image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      cv::putText(c.image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 3,
+                  cv::LINE_AA);
+      cv::putText(c.image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(255, 255, 255), 1,
+                  cv::LINE_AA);
     }
   }
   // Legend (on a dark panel) and scale bar.
@@ -570,14 +585,17 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
   int y = 24;
   for (const auto& [text, colour] : legend) {
     cv::rectangle(c.image, cv::Point(10, y - 12), cv::Point(24, y + 2), colour, cv::FILLED);
-    cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-    cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0),
+                3, cv::LINE_AA);
+    cv::putText(c.image, text, cv::Point(30, y), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     y += 20;
   }
   const int bar = static_cast<int>(c.pixels_per_m);
   cv::rectangle(c.image, cv::Point(4, c.image.rows - 28), cv::Point(bar + 50, c.image.rows - 4),
                 cv::Scalar(45, 45, 45), cv::FILLED);
-  cv::line(c.image, cv::Point(10, c.image.rows - 15), cv::Point(10 + bar, c.image.rows - 15), cv::Scalar(255, 255, 255), 3);
+  cv::line(c.image, cv::Point(10, c.image.rows - 15), cv::Point(10 + bar, c.image.rows - 15),
+           cv::Scalar(255, 255, 255), 3);
   cv::putText(c.image, "1 m", cv::Point(14 + bar, c.image.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
               cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   if (!summary.outside_map.empty()) {
@@ -592,10 +610,14 @@ Canvas RenderMap(const MissionData& data, const MissionSummary& summary) {
 std::string Html(const std::string& s) {
   std::string out;
   for (char ch : s) {
-    if (ch == '<') out += "&lt;";
-    else if (ch == '>') out += "&gt;";
-    else if (ch == '&') out += "&amp;";
-    else out += ch;
+    if (ch == '<')
+      out += "&lt;";
+    else if (ch == '>')
+      out += "&gt;";
+    else if (ch == '&')
+      out += "&amp;";
+    else
+      out += ch;
   }
   return out;
 }
@@ -663,14 +685,17 @@ std::string Seconds(const std::optional<double>& v) { return v ? Fixed(*v, 1) + 
 std::string SummaryText(const MissionData& data, const MissionSummary& summary) {
   std::ostringstream out;
   char line[256];
-  snprintf(line, sizeof(line), "mission: %.1f s, %lld messages; %d people on the map, %d sound sources\n",
-           data.duration_s, static_cast<long long>(data.messages), summary.people_found, summary.sources_mapped);
+  snprintf(line, sizeof(line),
+           "mission: %.1f s, %lld messages; %d people on the map, %d sound sources\n",
+           data.duration_s, static_cast<long long>(data.messages), summary.people_found,
+           summary.sources_mapped);
   out << line;
   {
     for (const auto& p : PeopleOnMap(data, summary)) {
       snprintf(line, sizeof(line), "  person #%lld at (%.2f, %.2f) m, %s, confidence %.0f%%%s\n",
-               static_cast<long long>(p.id), p.position_m[0], p.position_m[1], HowFound(p.cues).c_str(),
-               100.0 * p.confidence, p.keyword.empty() ? "" : (", said \"" + p.keyword + "\"").c_str());
+               static_cast<long long>(p.id), p.position_m[0], p.position_m[1],
+               HowFound(p.cues).c_str(), 100.0 * p.confidence,
+               p.keyword.empty() ? "" : (", said \"" + p.keyword + "\"").c_str());
       out << line;
     }
   }
@@ -715,7 +740,8 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
   if (!summary.truth.empty()) {
     int found = 0;
     for (const auto& t : summary.truth) found += t.found;
-    snprintf(line, sizeof(line), "against the simulator's truth: %d of %zu people found within %.2f m, %d false\n",
+    snprintf(line, sizeof(line),
+             "against the simulator's truth: %d of %zu people found within %.2f m, %d false\n",
              found, summary.truth.size(), summary.match_radius_m, summary.false_positives);
     out << line;
     snprintf(line, sizeof(line),
@@ -741,8 +767,8 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
   const MissionMetricsResult& m = summary.metrics;
   if (m.have_truth) {
     snprintf(line, sizeof(line),
-             "mission metrics: %.1f s since the first truth, %.2f m driven, %d collisions\n", m.mission_s,
-             m.distance_m, m.collisions);
+             "mission metrics: %.1f s since the first truth, %.2f m driven, %d collisions\n",
+             m.mission_s, m.distance_m, m.collisions);
     out << line;
     if (m.mapped_m2) {
       snprintf(line, sizeof(line),
@@ -754,8 +780,9 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
     }
     out << line;
     if (m.stuck_s) {
-      snprintf(line, sizeof(line), "  stuck: %.1f s in total, longest %.1f s\n", *m.stuck_s,
-               *m.longest_stuck_s);
+      snprintf(line, sizeof(line),
+               "  stuck: %.1f s in total, longest %.1f s; longest going nowhere: %.1f s\n",
+               *m.stuck_s, *m.longest_stuck_s, *m.longest_confined_s);
     } else {
       snprintf(line, sizeof(line), "  stuck: not judged (no EXPLORE_STATUS)\n");
     }
@@ -773,7 +800,8 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
   return out.str();
 }
 
-void WriteReport(const MissionData& data, const MissionSummary& summary, const std::string& directory) {
+void WriteReport(const MissionData& data, const MissionSummary& summary,
+                 const std::string& directory) {
   mkdir(directory.c_str(), 0755);
   const Canvas canvas = RenderMap(data, summary);
   if (!cv::imwrite(directory + "/map.png", canvas.image)) {
@@ -802,8 +830,11 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
                              {"y_m", p.position_m[1]},
                              {"z_m", p.position_m[2]},
                              {"covariance", std::vector<double>(p.covariance, p.covariance + 9)},
-                             {"confidence", p.confidence}, {"how", HowFound(p.cues)}, {"keyword", p.keyword},
-                             {"count", p.people_count}, {"detections", p.num_detections},
+                             {"confidence", p.confidence},
+                             {"how", HowFound(p.cues)},
+                             {"keyword", p.keyword},
+                             {"count", p.people_count},
+                             {"detections", p.num_detections},
                              {"sound_source_id", p.sound_source_id}});
     }
   }
@@ -896,6 +927,7 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   j["collisions"] = truth_or_null(m.collisions);
   j["stuck_s"] = Json(m.stuck_s);
   j["longest_stuck_s"] = Json(m.longest_stuck_s);
+  j["longest_confined_s"] = Json(m.longest_confined_s);
   j["came_home"] = truth_or_null(m.came_home);
   j["home_after_s"] = Json(m.home_after_s);
   j["explore_state"] =
@@ -903,26 +935,33 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
   std::ofstream(directory + "/report.json") << j.dump(2) << "\n";
 
   std::ofstream html(directory + "/report.html");
-  html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>sarmap mission report</title><style>"
-          "body{font:15px system-ui,sans-serif;margin:2em;max-width:1100px}table{border-collapse:collapse}"
-          "td,th{padding:.25em .8em;border-bottom:1px solid #ddd;text-align:left}.missed{color:#c0392b}"
+  html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>sarmap mission "
+          "report</title><style>"
+          "body{font:15px "
+          "system-ui,sans-serif;margin:2em;max-width:1100px}table{border-collapse:collapse}"
+          "td,th{padding:.25em .8em;border-bottom:1px solid "
+          "#ddd;text-align:left}.missed{color:#c0392b}"
           ".found{color:#1e8449}img{max-width:100%;border:1px solid #ccc}</style></head><body>"
-       << "<h1>sarmap mission report</h1><p>Log <code>" << Html(data.log_path) << "</code>: "
-       << static_cast<int>(data.duration_s) << " s, " << data.messages << " messages. <b>" << summary.people_found
-       << "</b> people and <b>" << summary.sources_mapped << "</b> sound sources on the map.</p>";
+       << "<h1>sarmap mission report</h1><p>Log <code>" << Html(data.log_path)
+       << "</code>: " << static_cast<int>(data.duration_s) << " s, " << data.messages
+       << " messages. <b>" << summary.people_found << "</b> people and <b>"
+       << summary.sources_mapped << "</b> sound sources on the map.</p>";
   if (!summary.truth.empty()) {
     int found = 0;
     for (const auto& t : summary.truth) found += t.found;
-    html << "<h2>Found versus the simulator's truth</h2><p>" << found << " of " << summary.truth.size()
-         << " people found within " << summary.match_radius_m << " m; " << summary.false_positives
-         << " reported people match nobody.</p><table><tr><th>person</th><th>true position (m)</th><th>result</th>"
+    html << "<h2>Found versus the simulator's truth</h2><p>" << found << " of "
+         << summary.truth.size() << " people found within " << summary.match_radius_m << " m; "
+         << summary.false_positives
+         << " reported people match nobody.</p><table><tr><th>person</th><th>true position "
+            "(m)</th><th>result</th>"
             "<th>how</th><th>error (m)</th></tr>";
     for (const auto& t : summary.truth) {
       char pos[64], err[32];
       snprintf(pos, sizeof(pos), "%.2f, %.2f", t.x_m, t.y_m);
       snprintf(err, sizeof(err), "%.2f", t.error_m);
-      html << "<tr><td>" << Html(t.name) << "</td><td>" << pos << "</td><td class=\"" << (t.found ? "found\">found" : "missed\">missed")
-           << "</td><td>" << Html(t.how) << "</td><td>" << (t.found ? err : "") << "</td></tr>";
+      html << "<tr><td>" << Html(t.name) << "</td><td>" << pos << "</td><td class=\""
+           << (t.found ? "found\">found" : "missed\">missed") << "</td><td>" << Html(t.how)
+           << "</td><td>" << (t.found ? err : "") << "</td></tr>";
     }
     html << "</table>";
   }
@@ -940,7 +979,8 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
       html << "not measured (needs SIM_FLOOR, SIM_TRUTH and MAP)";
     }
     html << "</td></tr><tr><th>stuck</th><td>"
-         << (m.stuck_s ? Seconds(m.stuck_s) + " in total, longest " + Seconds(m.longest_stuck_s)
+         << (m.stuck_s ? Seconds(m.stuck_s) + " in total, longest " + Seconds(m.longest_stuck_s) +
+                             "; longest going nowhere: " + Seconds(m.longest_confined_s)
                        : std::string("not judged (no EXPLORE_STATUS)"))
          << "</td></tr><tr><th>came home</th><td>"
          << (m.came_home ? "after " + Seconds(m.home_after_s)
@@ -970,9 +1010,9 @@ void WriteReport(const MissionData& data, const MissionSummary& summary, const s
     for (const auto& p : PeopleOnMap(data, summary)) {
       char pos[64];
       snprintf(pos, sizeof(pos), "%.2f, %.2f", p.position_m[0], p.position_m[1]);
-      html << "<tr><td>" << p.id << "</td><td>" << pos << "</td><td>" << HowFound(p.cues) << "</td><td>"
-           << static_cast<int>(100 * p.confidence) << "%</td><td>" << Html(p.keyword) << "</td><td>" << p.people_count
-           << "</td></tr>";
+      html << "<tr><td>" << p.id << "</td><td>" << pos << "</td><td>" << HowFound(p.cues)
+           << "</td><td>" << static_cast<int>(100 * p.confidence) << "%</td><td>" << Html(p.keyword)
+           << "</td><td>" << p.people_count << "</td></tr>";
     }
   }
   html << "</table><h2>Sound sources</h2><table><tr><th>#</th><th>position "

@@ -159,6 +159,7 @@ struct Row {
   double reachable_m2 = 0, mapped_fraction = 0, rate_m2_per_min = 0, t90_s = -1;
   int collisions = 0;
   double longest_stuck_s = 0;
+  double longest_confined_s = 0;  // within 1 m for 60 s or more (mission_metrics.h)
   bool home = false;
   double home_s = -1;
   int in_view = 0, people = 0;
@@ -334,11 +335,12 @@ void AddPeople(Metrics* metrics, const std::string& csv_path, const mission::Mis
 void PrintRow(const Row& r, FILE* out) {
   std::fprintf(
       out,
-      "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f s | %s | %d/%d | %.0f m | %.1f %% |",
+      "| %s | %s | %s | %.0f | %.1f %% | %.1f | %s | %d | %.0f / %.0f s | %s | %d/%d | %.0f m | "
+      "%.1f %% |",
       r.site.c_str(), r.lighting.c_str(), r.mode.c_str(), r.reachable_m2, 100 * r.mapped_fraction,
       r.rate_m2_per_min,
       r.t90_s < 0 ? "-" : (std::to_string(static_cast<int>(r.t90_s)) + " s").c_str(), r.collisions,
-      r.longest_stuck_s,
+      r.longest_stuck_s, r.longest_confined_s,
       r.home ? (std::to_string(static_cast<int>(r.home_s)) + " s").c_str() : "no", r.in_view,
       r.people, r.distance_m, r.explore_cpu_percent);
   if (r.perception) {
@@ -371,7 +373,8 @@ int main(int argc, char** argv) {
         "worlds. For each site and exploration mode it prints the share of the reachable floor "
         "mapped,\n"
         "the coverage rate against the physical bound, collisions, the longest time without "
-        "progress,\n"
+        "progress\n"
+        "and going nowhere (within 1 m for 60 s or more),\n"
         "whether the robot came home, and when each person was first in the camera's view; each "
         "run's\n"
         "explored-area curve goes to OUT/<site>-<mode>.csv, the explorer's final grid to\n"
@@ -484,6 +487,7 @@ int main(int argc, char** argv) {
           std::fprintf(stderr, "  %s %s collision %s\n", target.name.c_str(), mode.c_str(),
                        c.c_str());
         row.longest_stuck_s = m.longest_stuck_s.value_or(0);
+        row.longest_confined_s = m.longest_confined_s.value_or(0);
         row.home = r.came_home;
         row.home_s = r.home_after_s;
         row.in_view = static_cast<int>(metrics.in_view_s.size());
@@ -514,7 +518,8 @@ int main(int argc, char** argv) {
     std::printf(
         "\n| site | light | mode | reachable m^2 | mapped | m^2/min (first 5 min) | 90 %% after | "
         "collisions | "
-        "longest stuck | home | people in view | driven | explorer CPU | found (0.5 m) | false | "
+        "longest stuck / going nowhere | home | people in view | driven | explorer CPU | found "
+        "(0.5 m) | false | "
         "median time to find | heard calls | perception CPU | mission CPU |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows) PrintRow(r, stdout);
@@ -539,7 +544,7 @@ int main(int argc, char** argv) {
       std::vector<double> mapped;
       int home = 0, collisions = 0, everyone = 0, found = 0, people = 0, false_people = 0;
       int hidden = 0, hidden_found = 0, false_heard = 0;
-      double stuck = 0;
+      double stuck = 0, confined = 0;
       for (const Row& r : rows) {
         if (r.mode != mode) continue;
         everyone += r.perception && r.found == r.people;
@@ -553,6 +558,7 @@ int main(int argc, char** argv) {
         home += r.home;
         collisions += r.collisions;
         stuck = std::max(stuck, r.longest_stuck_s);
+        confined = std::max(confined, r.longest_confined_s);
       }
       if (mapped.empty()) continue;
       std::sort(mapped.begin(), mapped.end());
@@ -560,8 +566,9 @@ int main(int argc, char** argv) {
                                 ? mapped[mapped.size() / 2]
                                 : 0.5 * (mapped[mapped.size() / 2 - 1] + mapped[mapped.size() / 2]);
       std::printf(
-          "%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s",
-          mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck);
+          "%s: median mapped %.1f %% over %zu runs, home %d, collisions %d, longest stuck %.0f s, "
+          "longest going nowhere %.0f s",
+          mode.c_str(), 100 * median, mapped.size(), home, collisions, stuck, confined);
       if (run.perception)
         std::printf(
             "; everyone found on %d of %zu, %d of %d people, %d false; never in view: %d of %d "
