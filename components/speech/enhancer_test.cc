@@ -110,8 +110,8 @@ TEST(VoiceActivityDetector, DigitalSilenceDoesNotSetTheFloor) {
 }
 
 // The residual of a beam whose MVDR nulled a point noise and whose post-filter removed the
-// rest jumps by several dB from one 16 ms frame to the next (a simulated anechoic scene, session
-// 3). Against its minimum, half its frames read as speech and utterances ran to the 6 s cap, so
+// rest jumps by several dB from one 16 ms frame to the next (a simulated anechoic scene).
+// Against its minimum, half its frames read as speech and utterances ran to the 6 s cap, so
 // the call-shape rule dropped every call. Here: white noise whose level is redrawn every frame
 // (std 5 dB), then a 0.8 s tone 35 dB above it. With the threshold raised by the noise's own
 // fluctuation there is one utterance, at the tone; with the fixed 8 dB threshold there is not.

@@ -129,7 +129,7 @@ TEST(KeywordSpotterSimulated, CallsForHelpInNoise) {
 // on the ReSpeaker array in an anechoic room, the pinkish noise a point source that the caller's
 // MVDR beam nulls. The beam's residual jumps 4-5 dB from frame to frame; with a fixed 8 dB
 // threshold over the floor the VAD read it as speech, every segment ran to the 6 s cap, and the
-// rule dropped every call (sessions 3-7). With the threshold raised by that fluctuation the
+// rule dropped every call. With the threshold raised by that fluctuation the
 // short calls pass.
 TEST(KeywordSpotterSimulated, CallsOnACleanBeamPassTheCallShapeRule) {
   if (!EspeakAvailable()) GTEST_SKIP() << "espeak-ng not installed";

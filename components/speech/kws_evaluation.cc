@@ -153,7 +153,7 @@ KwsEvalData MakeKwsEvalData(const KwsEvalOptions& o) {
   std::uniform_int_distribution<int> speed(130, 180), pitch(35, 65);
   // Positives: 3.5 s scenes, call starting at 1.0 s.
   for (int i = 0; i < o.num_calls; ++i) {
-    // (espeak: the exact expression of sessions 2-3, so that its data set is unchanged)
+    // (espeak: this exact expression fixes the evaluation's data set)
     const size_t voice = (i / kCalls.size() + i) % kVoices.size();
     std::vector<float> call = o.tts == "flite"
                                   ? Render(o.tts, kCalls[i % kCalls.size()], "", voice, speed(rng), 50)

@@ -45,7 +45,7 @@ struct KwsEvalOptions {
   // shape: the test of a verifier that might only have learnt "synthetic voice".
   int num_confusers = 0;
   // Synthesiser of the calls, the confusers and the synthetic negative sentences: "espeak"
-  // (espeak-ng, sessions 2-3) or "flite".
+  // (espeak-ng) or "flite".
   std::string tts = "espeak";
   double fit_l2 = 0.01;
   double fit_max_call_s = 1.8;
