@@ -416,6 +416,40 @@ TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergency
   EXPECT_EQ(stop.linear_mps, 0);
 }
 
+TEST(ExploreControllerTest, ADriveDuringAnEmergencyStopDoesNotReleaseIt) {
+  ExploreController c{NoLookAround()};
+  c.OnMap(PartlyKnownRoom());
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  TeleopCommand stop;
+  stop.receive_time_s = 1.0;
+  stop.emergency_stop = true;
+  c.OnTeleop(stop);
+  EXPECT_EQ(c.OnScan(1.1, MakeScan(2, 2)).source, "stop");
+  // The operator drives the stopped robot: obeyed while the override lasts...
+  TeleopCommand drive;
+  drive.receive_time_s = 2.0;
+  drive.override_active = true;
+  drive.linear_mps = 0.2;
+  c.OnTeleop(drive);
+  const Velocity driven = c.OnScan(2.1, MakeScan(2, 2));
+  EXPECT_EQ(driven.source, "teleop");
+  EXPECT_DOUBLE_EQ(driven.linear_mps, 0.2);
+  // ...ended by zero-speed overrides, after which the robot is stopped again, not autonomous.
+  drive.receive_time_s = 2.2;
+  drive.linear_mps = 0;
+  c.OnTeleop(drive);
+  const Velocity after = c.OnScan(5.0, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(after.source, "stop");
+  EXPECT_EQ(after.linear_mps, 0);
+  EXPECT_TRUE(c.emergency_stop());
+  // A message with neither stop nor override is the release.
+  TeleopCommand release;
+  release.receive_time_s = 6.0;
+  c.OnTeleop(release);
+  EXPECT_FALSE(c.emergency_stop());
+  EXPECT_NE(c.OnScan(6.1, MakeScan(INFINITY, INFINITY)).source, "stop");
+}
+
 TEST(StatusMessageTest, EveryNthPathPointAndTheLastOne) {
   ExploreStatus s;
   s.state = "exploring";
