@@ -92,7 +92,10 @@ class Publisher {
     scan.range_max_m = s.range_max_m;
     scan.ranges_m = s.ranges_m;
     scan.num_ranges = static_cast<int32_t>(s.ranges_m.size());
-    scan.num_intensities = 0;
+    // A depth-derived scan's intensities are each return's visible-from range (components/
+    // depth/README.md): the explorer keeps a low obstacle it can no longer see from close by.
+    scan.intensities = s.visible_from_m;
+    scan.num_intensities = static_cast<int32_t>(scan.intensities.size());
     scan_pub_.Publish(&scan);
     ++frames_;
   }

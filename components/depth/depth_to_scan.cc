@@ -31,6 +31,19 @@ DepthToScan::DepthToScan(const DepthToScanOptions& options, const PinholeIntrins
   };
   double a0 = azimuth(0), a1 = azimuth(in.width - 1);
   if (a0 > a1) std::swap(a0, a1);
+  // The view's vertical edges: the bottom and top rows' rays, the shallowest of each row.
+  auto elevation_tan = [&](int v, double sign) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int u = 0; u < in.width; ++u) {
+      const Eigen::Vector3f& ray = rays_[static_cast<size_t>(v) * in.width + u];
+      best = std::min(best, sign * ray.z() / std::max(1e-9f, std::hypot(ray.x(), ray.y())));
+    }
+    return best;
+  };
+  const double bottom = elevation_tan(in.height - 1, -1.0), top = elevation_tan(0, -1.0);
+  // Rows run top to bottom in the image; with the camera upside down they swap.
+  tan_view_down_ = std::max(bottom, top);
+  tan_view_up_ = std::max(elevation_tan(0, 1.0), elevation_tan(in.height - 1, 1.0));
   const double margin = 0.02;
   num_beams_ = options.num_beams > 0 ? options.num_beams : in.width;
   angle_min_ = a0 - margin;
@@ -56,6 +69,7 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
   const bool nearest_surface = options_.range_noise_k > 0;
   pixel_bin_.clear();
   pixel_range_.clear();
+  pixel_z_.clear();
   // With the nearest surface, pixels up to a window beyond range_max_m still count: a wall just
   // inside the limit has noisy pixels on both sides of it, and keeping only the near ones
   // would pull it closer; a surface whose range comes out beyond the limit is no return.
@@ -91,10 +105,9 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
       }
       ++scan.in_band_pixels;
       best[bin] = std::min(best[bin], range);
-      if (nearest_surface) {
-        pixel_bin_.push_back(bin);
-        pixel_range_.push_back(range);
-      }
+      pixel_bin_.push_back(bin);
+      pixel_range_.push_back(range);
+      pixel_z_.push_back(p.z());
     }
   }
   if (nearest_surface) {
@@ -114,7 +127,40 @@ PlanarScan DepthToScan::Convert(const uint16_t* depth, double depth_unit_m) cons
       scan.ranges_m[b] = seen_far[b] ? inf : 0.0f;  // no return / no information
     }
   }
+  VisibleFrom(best, &scan);
   return scan;
+}
+
+void DepthToScan::VisibleFrom(const std::vector<float>& best, PlanarScan* scan) const {
+  // The surface of a bin: its pixels within the nearest-surface window of the return (5 cm
+  // without a noise model). Its height span [z_bottom, z_top] against the lens height h: the
+  // view reaches z_top < h from (h - z_top) / tan(a_down) on, z_bottom > h from
+  // (z_bottom - h) / tan(a_up) on, and a surface across h from the sensor's minimum range on.
+  const float inf = std::numeric_limits<float>::infinity();
+  const float k = static_cast<float>(options_.range_noise_k);
+  const float sigmas = static_cast<float>(options_.surface_window_sigmas);
+  std::vector<float> z_top(num_beams_, -inf), z_bottom(num_beams_, inf);
+  for (size_t i = 0; i < pixel_bin_.size(); ++i) {
+    const int b = pixel_bin_[i];
+    const float r = best[b];
+    if (!std::isfinite(r)) continue;
+    const float window = k > 0 ? sigmas * k * r * r : 0.05f;
+    if (std::abs(pixel_range_[i] - r) > window) continue;
+    z_top[b] = std::max(z_top[b], pixel_z_[i]);
+    z_bottom[b] = std::min(z_bottom[b], pixel_z_[i]);
+  }
+  const double lens_z = origin_.z();
+  scan->visible_from_m.assign(num_beams_, 0.0f);
+  for (int b = 0; b < num_beams_; ++b) {
+    if (!(std::isfinite(scan->ranges_m[b]) && scan->ranges_m[b] >= scan->range_min_m)) continue;
+    double from = options_.range_min_m;
+    if (z_top[b] < lens_z) {
+      from = tan_view_down_ > 0 ? (lens_z - z_top[b]) / tan_view_down_ : inf;
+    } else if (z_bottom[b] > lens_z) {
+      from = tan_view_up_ > 0 ? (z_bottom[b] - lens_z) / tan_view_up_ : inf;
+    }
+    scan->visible_from_m[b] = static_cast<float>(std::max(from, options_.range_min_m));
+  }
 }
 
 void DepthToScan::NearestSurfaces(std::vector<float>* best) const {

@@ -24,24 +24,29 @@
 //     range_max_m, or in-band pixels nowhere but floor/ceiling pixels farther than
 //     range_max_m;
 //   - 0 (below range_min_m: "no information", ignored by SLAM) when it saw nothing valid.
+// Each return also gets the range from which its surface is in the camera's view
+// (visible_from_m): a surface whose top is at z_top below the lens height h is seen down to
+// r = (h - z_top) / tan(a_down), with a_down the view's lowest ray below the horizontal (and
+// likewise above the lens with the view's highest ray); nearer, the camera looks over it.
+// Rubble 0.19 m high before a lens 0.55 m up with a 22.5 deg lower half-view leaves the view at
+// 0.87 m, so a ray that passes over it closer is no sign that it is gone.
 // Invalid pixels (0, or outside [range_min_m, range_max_m] along the optical axis) are skipped.
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 namespace sarmap {
 namespace depth {
 
 struct DepthToScanOptions {
-  double min_height_m = 0.05;   // above the floor (base z)
+  double min_height_m = 0.05;  // above the floor (base z)
   double max_height_m = 1.0;
-  double range_min_m = 0.45;    // Kinect-class sensors read nothing closer
+  double range_min_m = 0.45;  // Kinect-class sensors read nothing closer
   double range_max_m = 4.5;
-  int num_beams = 0;            // 0: one per image column
-  int row_step = 1;             // use every n-th row (speed)
-  double range_noise_k = 0;     // depth noise sigma = k r^2 (m); 0: a bin keeps its minimum
+  int num_beams = 0;                 // 0: one per image column
+  int row_step = 1;                  // use every n-th row (speed)
+  double range_noise_k = 0;          // depth noise sigma = k r^2 (m); 0: a bin keeps its minimum
   double surface_window_sigmas = 6;  // the nearest surface spans this many sigma from the minimum
 };
 
@@ -55,6 +60,10 @@ struct PlanarScan {
   double angle_increment_rad = 0;
   float range_min_m = 0, range_max_m = 0;
   std::vector<float> ranges_m;
+  // Per beam: for a return, the nearest range at which its surface is still in the camera's
+  // view (at least range_min_m; +inf when never, for a camera that does not see the floor);
+  // 0 for no return or no information.
+  std::vector<float> visible_from_m;
   int in_band_pixels = 0;  // statistics
   int invalid_pixels = 0;
 };
@@ -73,6 +82,8 @@ class DepthToScan {
  private:
   // Replaces each bin's minimum by its nearest surface's range (range_noise_k > 0).
   void NearestSurfaces(std::vector<float>* best) const;
+  // Fills scan->visible_from_m from the returns' surfaces.
+  void VisibleFrom(const std::vector<float>& best, PlanarScan* scan) const;
 
   DepthToScanOptions options_;
   PinholeIntrinsics intrinsics_;
@@ -82,9 +93,13 @@ class DepthToScan {
   Eigen::Vector3f origin_;
   double angle_min_ = 0, angle_increment_ = 0;
   int num_beams_ = 0;
-  // Per in-band pixel of the current frame: its bin and range (reused between frames).
+  // tan of the view's lowest ray below and highest ray above the horizontal (the smallest over
+  // the image's bottom and top rows: the conservative edge); <= 0 when the view never reaches
+  // that side.
+  double tan_view_down_ = 0, tan_view_up_ = 0;
+  // Per in-band pixel of the current frame: its bin, range and height (reused between frames).
   mutable std::vector<int> pixel_bin_, bin_start_;
-  mutable std::vector<float> pixel_range_, sorted_range_;
+  mutable std::vector<float> pixel_range_, pixel_z_, sorted_range_;
 };
 
 }  // namespace depth

@@ -1,15 +1,15 @@
 // Depth-to-scan: synthetic scenes pin the geometry; a real Kinect frame pins the behaviour.
 
-#include <gtest/gtest.h>
+#include "depth/depth_to_scan.h"
 
-#include <opencv2/imgcodecs.hpp>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "common/robot_config.h"
-#include "depth/depth_to_scan.h"
 
 namespace sarmap {
 namespace depth {
@@ -37,7 +37,8 @@ std::vector<uint16_t> Render(double wall_x, double table_h = -1, double table_a 
   std::vector<uint16_t> depth(in.width * in.height, 0);
   for (int v = 0; v < in.height; ++v) {
     for (int u = 0; u < in.width; ++u) {
-      const Eigen::Vector3d ray = bc.linear() * Eigen::Vector3d((u - in.cx) / in.fx, (v - in.cy) / in.fy, 1);
+      const Eigen::Vector3d ray =
+          bc.linear() * Eigen::Vector3d((u - in.cx) / in.fx, (v - in.cy) / in.fy, 1);
       const Eigen::Vector3d o = bc.translation();
       double t = 1e9;  // depth along the optical axis = the ray parameter (z_cam = 1)
       if (ray.x() > 1e-9) t = std::min(t, (wall_x - o.x()) / ray.x());
@@ -72,6 +73,35 @@ TEST(DepthToScanTest, WallInFrontGivesItsDistancePerAzimuth) {
   // origin, 0.1 m behind the camera, at 2 m), plus a 0.02 rad margin.
   const double edge = -std::atan2(2.0 * 319.5 / 525, 2.1);
   EXPECT_NEAR(s.angle_min_rad, edge - 0.02, 1e-3);
+}
+
+TEST(DepthToScanTest, ALowObjectIsVisibleOnlyFromWhereItsTopIsInTheView) {
+  DepthToScanOptions o;
+  DepthToScan conv(o, Kinect(), DefaultBaseFromCamera());
+  // Rubble: a slab 0.19 m high from x = 1.5 to 2.0 m, a wall at 4 m behind it.
+  const PlanarScan low = conv.Convert(Render(4.0, 0.19, 1.5, 2.0).data(), 0.001);
+  // The view's lowest ray, at the bottom row's corner (the shallowest of the row): tan =
+  // (239.5 / 525) / hypot(1, 319.5 / 525). The slab's top, 0.36 m below the lens, leaves the
+  // view nearer than 0.36 / tan.
+  const double tan_down = (239.5 / 525) / std::hypot(1.0, 319.5 / 525);
+  const double expected = (0.55 - 0.19) / tan_down;
+  ASSERT_EQ(low.visible_from_m.size(), low.ranges_m.size());
+  int checked = 0;
+  for (size_t b = 0; b < low.ranges_m.size(); ++b) {
+    if (!(low.ranges_m[b] > 0 && low.ranges_m[b] < 2.1)) continue;
+    EXPECT_NEAR(low.visible_from_m[b], expected, 0.01) << "bin " << b;
+    ++checked;
+  }
+  EXPECT_GT(checked, 300);
+  // A wall spans the lens height: seen down to the sensor's minimum range. No return: 0.
+  const PlanarScan wall = conv.Convert(Render(2.5).data(), 0.001);
+  for (size_t b = 0; b < wall.ranges_m.size(); ++b) {
+    if (wall.ranges_m[b] > 0 && std::isfinite(wall.ranges_m[b])) {
+      EXPECT_FLOAT_EQ(wall.visible_from_m[b], static_cast<float>(o.range_min_m)) << "bin " << b;
+    } else {
+      EXPECT_EQ(wall.visible_from_m[b], 0.0f) << "bin " << b;
+    }
+  }
 }
 
 TEST(DepthToScanTest, TableTopInsideTheBandIsAnObstacle) {
@@ -198,10 +228,12 @@ TEST(DepthToScanTest, RealKinectFrame) {
     for (int u = 0; u < d.cols; ++u) {
       const double z = d.at<uint16_t>(v, u) * 0.001;
       if (z < o.range_min_m || z > o.range_max_m) continue;
-      const Eigen::Vector3d p = bc * Eigen::Vector3d((u - in.cx) / in.fx * z, (v - in.cy) / in.fy * z, z);
+      const Eigen::Vector3d p =
+          bc * Eigen::Vector3d((u - in.cx) / in.fx * z, (v - in.cy) / in.fy * z, z);
       if (p.z() < o.min_height_m || p.z() > o.max_height_m) continue;
       if (std::hypot(p.x(), p.y()) > o.range_max_m) continue;
-      const long bin = std::lround((std::atan2(p.y(), p.x()) - s.angle_min_rad) / s.angle_increment_rad);
+      const long bin =
+          std::lround((std::atan2(p.y(), p.x()) - s.angle_min_rad) / s.angle_increment_rad);
       if (bin < 0 || bin >= static_cast<long>(brute.size())) continue;
       brute[bin] = std::min(brute[bin], static_cast<float>(std::hypot(p.x(), p.y())));
     }

@@ -738,15 +738,10 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
 Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   status_.driven_by.clear();
   Velocity out;
-  // The operator first: an emergency stop holds until released; an override lasts while
-  // messages keep arriving (measured on this process's clock), with clamped speeds.
-  if (teleop_ && teleop_->emergency_stop) {
-    out.source = "stop";
-    status_.state = "override";
-    status_.driven_by = out.source;
-    return out;
-  }
-  if (teleop_ && teleop_->override_active &&
+  // The operator first: an override lasts while messages keep arriving (measured on this
+  // process's clock), with clamped speeds; an emergency stop holds until released, through any
+  // override the operator drives in the meantime.
+  if (teleop_ && teleop_->override_active && !teleop_->emergency_stop &&
       now_s - teleop_->receive_time_s <= options_.teleop_timeout_s &&
       now_s >= teleop_->receive_time_s - 1e-3) {
     out.linear_mps = std::clamp(teleop_->linear_mps, -options_.teleop_max_linear_mps,
@@ -754,6 +749,12 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
     out.angular_radps = std::clamp(teleop_->angular_radps, -options_.teleop_max_angular_radps,
                                    options_.teleop_max_angular_radps);
     out.source = "teleop";
+    status_.state = "override";
+    status_.driven_by = out.source;
+    return out;
+  }
+  if (emergency_stop_) {
+    out.source = "stop";
     status_.state = "override";
     status_.driven_by = out.source;
     return out;

@@ -357,7 +357,14 @@ struct ExploreStatus {
 class ExploreController {
  public:
   explicit ExploreController(const ExploreOptions& options);
-  void OnTeleop(const TeleopCommand& command) { teleop_ = command; }
+  // An emergency stop latches: only a release (neither stop nor override) ends it. An override
+  // during a stop drives the robot while it lasts, and the robot is stopped again after it.
+  void OnTeleop(const TeleopCommand& command) {
+    if (command.emergency_stop) emergency_stop_ = true;
+    if (!command.emergency_stop && !command.override_active) emergency_stop_ = false;
+    teleop_ = command;
+  }
+  bool emergency_stop() const { return emergency_stop_; }
   void OnMap(const Grid& grid);
   void OnPose(const common::Rigid2d& map_from_base);
   void OnHeardPeople(std::vector<HeardPerson> people) { heard_ = std::move(people); }
@@ -415,6 +422,7 @@ class ExploreController {
   ReactiveExplorer reactive_;
   ExploreMap map_;
   std::optional<TeleopCommand> teleop_;
+  bool emergency_stop_ = false;
   std::optional<common::Rigid2d> pose_;
   std::optional<Eigen::Vector2d> home_;
   std::vector<HeardPerson> heard_;

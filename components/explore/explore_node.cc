@@ -1,13 +1,12 @@
 // sarmap-explore: SCAN, MAP, POSE, PEOPLE_MAP and TELEOP in; CMD_VEL (one per scan) and
 // EXPLORE_STATUS out. A thin adapter around explore::ExploreController.
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
 
-#include <Eigen/Eigenvalues>
-
+#include "common/command_auth.h"
 #include "common/image_messages.h"
 #include "common/message_conversions.h"
-#include "common/command_auth.h"
 #include "common/node.h"
 #include "common/node_main.h"
 #include "common/stamp_gate.h"
@@ -34,18 +33,24 @@ class ExploreNode {
       command_key_ = common::LoadAuthKeyFile(options.command_key_file);
       teleop_gate_ = common::CommandGate(command_key_);
     } else {
-      SARMAP_LOG(WARN) << "no command_key_file: CMD_VEL goes out unsigned and any TELEOP on the bus is obeyed";
+      SARMAP_LOG(WARN)
+          << "no command_key_file: CMD_VEL goes out unsigned and any TELEOP on the bus is obeyed";
     }
-    node->Subscribe<teleop_t>(options.teleop_channel,
-                              [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
+    node->Subscribe<teleop_t>(
+        options.teleop_channel,
+        [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
     node->Subscribe<pose_t>(
-        options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); }, 1);
+        options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); },
+        1);
     node->Subscribe<occupancy_grid_t>(
-        options.map_channel, [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
+        options.map_channel,
+        [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
     node->Subscribe<people_map_t>(
-        options.people_channel, [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
+        options.people_channel,
+        [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
     node->Subscribe<laser_scan_t>(
-        options.scan_channel, [this](const laser_scan_t& m, const common::ReceiveInfo& info) { OnScan(m, info); }, 1);
+        options.scan_channel,
+        [this](const laser_scan_t& m, const common::ReceiveInfo& info) { OnScan(m, info); }, 1);
   }
 
  private:
@@ -66,7 +71,9 @@ class ExploreNode {
     controller_.OnTeleop(t);
   }
 
-  void OnPose(const pose_t& m) { controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d()); }
+  void OnPose(const pose_t& m) {
+    controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
+  }
 
   void OnMap(const occupancy_grid_t& m) {
     if (std::abs(m.origin_yaw_rad) > 1e-6) {
@@ -96,8 +103,8 @@ class ExploreNode {
       h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
       Eigen::Matrix2d cov;
       cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
-      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(0.5 * (cov + cov.transpose()),
-                                                                           Eigen::EigenvaluesOnly)
+      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                                 0.5 * (cov + cov.transpose()), Eigen::EigenvaluesOnly)
                                  .eigenvalues()
                                  .maxCoeff();
       h.position_std_m = std::sqrt(std::max(0.0, largest));
@@ -109,7 +116,8 @@ class ExploreNode {
 
   void OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {
     if (!scan_gate_.Accept(0, m.header.utime, info.receive_time_s)) {
-      node_->Reject(info.channel, "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
+      node_->Reject(info.channel,
+                    "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
       return;
     }
     explore::Scan scan;
@@ -118,6 +126,9 @@ class ExploreNode {
     scan.range_min_m = m.range_min_m;
     scan.range_max_m = m.range_max_m;
     scan.ranges_m = m.ranges_m;
+    if (options_.scan_intensities_are_visible_from && m.num_intensities == m.num_ranges) {
+      scan.visible_from_m = m.intensities;
+    }
     const explore::Velocity v = controller_.OnScan(info.receive_time_s, scan);
     velocity_command_t cmd;
     cmd.header.utime = m.header.utime;
@@ -128,11 +139,13 @@ class ExploreNode {
     if (command_key_.empty()) {
       command_pub_.Publish(&cmd);
     } else {
-      command_pub_.Publish(&cmd, [this](velocity_command_t* c) { common::SignMessage(command_key_, c); });
+      command_pub_.Publish(&cmd,
+                           [this](velocity_command_t* c) { common::SignMessage(command_key_, c); });
     }
     const explore::ExploreStatus& s = controller_.status();
     if (s.state != last_state_) {
-      SARMAP_LOG(INFO) << "mission state " << s.state << (s.goal_kind.empty() ? "" : ", goal " + s.goal_kind);
+      SARMAP_LOG(INFO) << "mission state " << s.state
+                       << (s.goal_kind.empty() ? "" : ", goal " + s.goal_kind);
       last_state_ = s.state;
       node_->SetStatusMessage(s.state + ", driven by " + v.source);
     }
@@ -167,12 +180,14 @@ int main(int argc, char** argv) {
     common::ArgParser parser(
         "sarmap-explore",
         "Drives the robot through an unknown site: frontier exploration on SLAM's map (planner on\n"
-        "the inflated grid, pure pursuit, a safety layer on the scan and the map, stuck recovery),\n"
+        "the inflated grid, pure pursuit, a safety layer on the scan and the map, stuck "
+        "recovery),\n"
         "people heard but not seen as goals (mode sound_guided), then home; or the Sales 2014\n"
         "reactive behaviour (mode reactive). The operator's TELEOP overrides everything.\n"
         "In: SCAN, MAP, POSE, PEOPLE_MAP, TELEOP.  Out: CMD_VEL, EXPLORE_STATUS.");
     common::NodeArgs args;
-    const auto parsed = common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/explore.yaml");
+    const auto parsed =
+        common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/explore.yaml");
     if (!parsed) return 0;
     common::Node node("sarmap-explore", args.lcm_url);
     ExploreNode explore_node(*parsed, &node);

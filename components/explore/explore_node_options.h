@@ -20,6 +20,9 @@ struct ExploreNodeOptions {
   std::string command_channel = "CMD_VEL";
   std::string status_channel = "EXPLORE_STATUS";
   double status_period_s = 0.5;
+  // sarmap-depth's SCAN carries each return's visible-from range in its intensities; a laser's
+  // intensities are reflectance and must not be read so.
+  bool scan_intensities_are_visible_from = true;
   // Signed commands (common/command_auth.h): CMD_VEL is signed with this key and TELEOP is
   // obeyed only when signed with it; empty: unsigned (any host on the bus can command).
   std::string command_key_file;
@@ -39,6 +42,9 @@ struct ExploreNodeOptions {
     v("command_channel", command_channel, "velocity commands out");
     v("status_channel", status_channel, "mission state, goal and path out");
     v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often");
+    v("scan_intensities_are_visible_from", scan_intensities_are_visible_from,
+      "SCAN's intensities are each return's visible-from range, as sarmap-depth publishes them "
+      "(a depth camera looks over low objects close by); false for a laser's reflectance");
     v("command_key_file", command_key_file,
       "key (>= 16 random bytes, mode 600) that signs CMD_VEL and must sign TELEOP; empty: "
       "unsigned");

@@ -162,6 +162,48 @@ TEST(ExploreMapTest, ScansFillTheGridNoReturnIsFreeToRangeAndTheRobotsOwnPlaceIs
   EXPECT_TRUE(m.Known(Eigen::Vector2d(4.2, 3.2)));
 }
 
+TEST(ExploreMapTest, ALowObjectStaysWhenRaysFromCloserThanItsVisibleRangePassOverIt) {
+  ExploreMap m{PlannerOptions()};
+  m.SetMap(PartlyKnownRoom());
+  // Rubble straight ahead at x = 3.0 m, seen from x = 1.0 m; its top is in the camera's view
+  // from 0.9 m on.
+  Scan seen = MakeScan(0.0f, 0.0f);
+  seen.visible_from_m.assign(seen.ranges_m.size(), 0.0f);
+  seen.ranges_m[30] = 2.0f;
+  seen.visible_from_m[30] = 0.9f;
+  m.IntegrateScan(common::Rigid2d(1.0, 2.0, 0.0), seen);
+  const double a = seen.angle_min_rad + 30 * seen.angle_increment_rad;
+  const Eigen::Vector2d rubble(1.0 + 2.0 * std::cos(a), 2.0 + 2.0 * std::sin(a));
+  ASSERT_TRUE(m.Occupied(rubble));
+  // From 0.6 m before it the camera looks over it: the ray's "no return" does not clear it...
+  Scan over = MakeScan(0.0f, 0.0f);
+  over.visible_from_m.assign(over.ranges_m.size(), 0.0f);
+  over.ranges_m[30] = INFINITY;
+  const common::Rigid2d close(rubble.x() - 0.6 * std::cos(a), rubble.y() - 0.6 * std::sin(a), 0.0);
+  m.IntegrateScan(close, over);
+  EXPECT_TRUE(m.Occupied(rubble));
+  // ...nor does a MAP that calls it free (SLAM's rays from close by passed over it too).
+  Grid free = PartlyKnownRoom();
+  for (auto& c : free.cells) c = 0;
+  m.SetMap(free);
+  EXPECT_TRUE(m.Occupied(rubble));
+  // From 1.5 m, where its top would be in view, a ray through it says it is gone.
+  const common::Rigid2d far(rubble.x() - 1.5 * std::cos(a), rubble.y() - 1.5 * std::sin(a), 0.0);
+  m.IntegrateScan(far, over);
+  EXPECT_FALSE(m.Occupied(rubble));
+  // A laser's scan (no visible-from ranges) is seen down to its minimum range: cleared close by.
+  m.IntegrateScan(common::Rigid2d(1.0, 2.0, 0.0), [&] {
+    Scan laser = seen;
+    laser.visible_from_m.clear();
+    return laser;
+  }());
+  ASSERT_TRUE(m.Occupied(rubble));
+  Scan laser_over = over;
+  laser_over.visible_from_m.clear();
+  m.IntegrateScan(close, laser_over);
+  EXPECT_FALSE(m.Occupied(rubble));
+}
+
 // A 6 x 4 m space, all seen free (the camera sees through glass), with a pier at x = 5.0..5.2 m,
 // y = 3.0..3.2 m.
 Grid FreeSpaceWithPier() {
@@ -414,6 +456,40 @@ TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergency
   const Velocity stop = c.OnScan(9.0, MakeScan(2, 2));  // holds after the timeout too
   EXPECT_EQ(stop.source, "stop");
   EXPECT_EQ(stop.linear_mps, 0);
+}
+
+TEST(ExploreControllerTest, ADriveDuringAnEmergencyStopDoesNotReleaseIt) {
+  ExploreController c{NoLookAround()};
+  c.OnMap(PartlyKnownRoom());
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  TeleopCommand stop;
+  stop.receive_time_s = 1.0;
+  stop.emergency_stop = true;
+  c.OnTeleop(stop);
+  EXPECT_EQ(c.OnScan(1.1, MakeScan(2, 2)).source, "stop");
+  // The operator drives the stopped robot: obeyed while the override lasts...
+  TeleopCommand drive;
+  drive.receive_time_s = 2.0;
+  drive.override_active = true;
+  drive.linear_mps = 0.2;
+  c.OnTeleop(drive);
+  const Velocity driven = c.OnScan(2.1, MakeScan(2, 2));
+  EXPECT_EQ(driven.source, "teleop");
+  EXPECT_DOUBLE_EQ(driven.linear_mps, 0.2);
+  // ...ended by zero-speed overrides, after which the robot is stopped again, not autonomous.
+  drive.receive_time_s = 2.2;
+  drive.linear_mps = 0;
+  c.OnTeleop(drive);
+  const Velocity after = c.OnScan(5.0, MakeScan(INFINITY, INFINITY));
+  EXPECT_EQ(after.source, "stop");
+  EXPECT_EQ(after.linear_mps, 0);
+  EXPECT_TRUE(c.emergency_stop());
+  // A message with neither stop nor override is the release.
+  TeleopCommand release;
+  release.receive_time_s = 6.0;
+  c.OnTeleop(release);
+  EXPECT_FALSE(c.emergency_stop());
+  EXPECT_NE(c.OnScan(6.1, MakeScan(INFINITY, INFINITY)).source, "stop");
 }
 
 TEST(StatusMessageTest, EveryNthPathPointAndTheLastOne) {

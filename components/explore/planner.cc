@@ -18,7 +18,8 @@ Eigen::Vector2i Grid::CellOf(const Eigen::Vector2d& p) const {
 }
 
 Eigen::Vector2d Grid::CentreOf(int x, int y) const {
-  return Eigen::Vector2d(origin_x_m + (x + 0.5) * resolution_m, origin_y_m + (y + 0.5) * resolution_m);
+  return Eigen::Vector2d(origin_x_m + (x + 0.5) * resolution_m,
+                         origin_y_m + (y + 0.5) * resolution_m);
 }
 
 void ExploreMap::SetMap(const Grid& map) {
@@ -26,6 +27,7 @@ void ExploreMap::SetMap(const Grid& map) {
   const Grid previous = std::move(grid_);
   const std::vector<uint8_t> previous_crossed = std::move(crossed_);
   const std::vector<uint8_t> previous_hit = std::move(hit_);
+  const std::vector<float> previous_visible_from = std::move(hit_visible_from_m_);
   const int pad = static_cast<int>(std::ceil(options_.pad_m / map.resolution_m));
   grid_.resolution_m = map.resolution_m;
   grid_.width = map.width + 2 * pad;
@@ -40,19 +42,28 @@ void ExploreMap::SetMap(const Grid& map) {
   }
   // The explorer's own returns since they were last crossed stay obstacles unless the new map
   // calls the cell free: SLAM renders a low object seen from afar in a few scans as uncertain,
-  // and the camera cannot see it again once the robot is close. MAP's own obstacles are not
-  // carried over: SLAM moves its walls when it re-optimises, and old copies left in cells it
-  // has no verdict on (a doorway seen edge-on) would close the door.
+  // and the camera cannot see it again once the robot is close. A return the sensor loses from
+  // view close by (visible_from beyond the sensor's minimum range) stays even then: SLAM's rays
+  // from close by passed over it. MAP's own obstacles are not carried over: SLAM moves its
+  // walls when it re-optimises, and old copies left in cells it has no verdict on (a doorway
+  // seen edge-on) would close the door.
   hit_.assign(grid_.cells.size(), 0);
+  hit_visible_from_m_.assign(grid_.cells.size(), 0.0f);
   for (int y = 0; y < previous.height; ++y) {
     for (int x = 0; x < previous.width; ++x) {
-      if (!previous_hit[previous.Index(x, y)]) continue;
+      const int i = previous.Index(x, y);
+      if (!previous_hit[i]) continue;
       const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
       if (!grid_.Contains(c.x(), c.y())) continue;
       int8_t& v = grid_.at(c.x(), c.y());
-      if ((v >= 0 && v < options_.free_threshold) || v >= options_.occupied_threshold) continue;
+      const bool lost_close_by = previous_visible_from[i] > scan_range_min_m_ + 1e-3;
+      if ((v >= 0 && v < options_.free_threshold && !lost_close_by) ||
+          v >= options_.occupied_threshold) {
+        continue;
+      }
       v = 100;
       hit_[grid_.Index(c.x(), c.y())] = 1;
+      hit_visible_from_m_[grid_.Index(c.x(), c.y())] = previous_visible_from[i];
     }
   }
   // Cells the explorer's rays crossed stay free where MAP has no verdict; MAP's obstacles win.
@@ -82,7 +93,8 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
   // obstacle the map has (a pier, a wall) or glass_extend_m.
   const double ahead = options_.robot_radius_m + grid_.resolution_m;
   const Eigen::Vector2d point = map_from_base * Eigen::Vector2d(ahead, 0.0);
-  const Eigen::Vector2d heading(std::cos(map_from_base.yaw_rad()), std::sin(map_from_base.yaw_rad()));
+  const Eigen::Vector2d heading(std::cos(map_from_base.yaw_rad()),
+                                std::sin(map_from_base.yaw_rad()));
   // Something the map already has at the robot's front (a door jamb brushed in passing) needs
   // no mark; a mark beside it would narrow the doorway.
   if (has_map()) {
@@ -92,7 +104,8 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
     for (int dy = -r; dy <= r; ++dy) {
       for (int dx = -r; dx <= r; ++dx) {
         if (!grid_.Contains(c.x() + dx, c.y() + dy)) continue;
-        const Eigen::Vector2d local = map_from_base.inverse() * grid_.CentreOf(c.x() + dx, c.y() + dy);
+        const Eigen::Vector2d local =
+            map_from_base.inverse() * grid_.CentreOf(c.x() + dx, c.y() + dy);
         if (local.x() <= 0 || local.norm() > reach) continue;
         const int i = grid_.Index(c.x() + dx, c.y() + dy);
         if (grid_.cells[i] >= options_.occupied_threshold && !hit_[i]) return false;
@@ -108,9 +121,11 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
     const Eigen::Vector2d along = (point - other) / apart;
     const Eigen::Vector2d normal(-along.y(), along.x());
     const double into = std::cos(60.0 * M_PI / 180.0);
-    if (std::abs(heading.dot(normal)) < into || std::abs(other_heading.dot(normal)) < into) continue;
+    if (std::abs(heading.dot(normal)) < into || std::abs(other_heading.dot(normal)) < into)
+      continue;
     if (heading.dot(normal) * other_heading.dot(normal) < 0) continue;  // from opposite sides
-    if (has_map() && !NoObstacleBetween(other + along * options_.robot_radius_m, point - along * options_.robot_radius_m)) {
+    if (has_map() && !NoObstacleBetween(other + along * options_.robot_radius_m,
+                                        point - along * options_.robot_radius_m)) {
       continue;
     }
     lines_.push_back({other, point});
@@ -143,18 +158,23 @@ bool ExploreMap::NoObstacleBetween(const Eigen::Vector2d& a, const Eigen::Vector
   const int steps = static_cast<int>(length / (0.5 * grid_.resolution_m)) + 1;
   for (int k = 0; k <= steps; ++k) {
     const Eigen::Vector2i c = last_map_.CellOf(a + (b - a) * (static_cast<double>(k) / steps));
-    if (last_map_.Contains(c.x(), c.y()) && last_map_.at(c.x(), c.y()) >= options_.occupied_threshold) return false;
+    if (last_map_.Contains(c.x(), c.y()) &&
+        last_map_.at(c.x(), c.y()) >= options_.occupied_threshold)
+      return false;
   }
   return true;
 }
 
 bool ExploreMap::ClearContactsBounding(const CostField& field) {
-  const int r = static_cast<int>(std::ceil((options_.robot_radius_m + 2 * grid_.resolution_m) / grid_.resolution_m));
+  const int r = static_cast<int>(
+      std::ceil((options_.robot_radius_m + 2 * grid_.resolution_m) / grid_.resolution_m));
   const auto bounds = [&](const Eigen::Vector2d& p) {
     const Eigen::Vector2i c = grid_.CellOf(p);
     for (int dy = -r; dy <= r; ++dy) {
       for (int dx = -r; dx <= r; ++dx) {
-        if (grid_.Contains(c.x() + dx, c.y() + dy) && field.Reached(grid_.Index(c.x() + dx, c.y() + dy))) return true;
+        if (grid_.Contains(c.x() + dx, c.y() + dy) &&
+            field.Reached(grid_.Index(c.x() + dx, c.y() + dy)))
+          return true;
       }
     }
     return false;
@@ -170,14 +190,16 @@ bool ExploreMap::ClearContactsBounding(const CostField& field) {
   }
   contacts_ = std::move(kept);
   in_line_ = std::move(kept_in_line);
-  lines_.erase(std::remove_if(lines_.begin(), lines_.end(),
-                              [&](const GlassLine& line) {
-                                const double length = (line.b_m - line.a_m).norm();
-                                for (double t = 0; t <= length; t += grid_.resolution_m) {
-                                  if (bounds(line.a_m + (line.b_m - line.a_m) * (t / std::max(length, 1e-9)))) return true;
-                                }
-                                return false;
-                              }),
+  lines_.erase(std::remove_if(
+                   lines_.begin(), lines_.end(),
+                   [&](const GlassLine& line) {
+                     const double length = (line.b_m - line.a_m).norm();
+                     for (double t = 0; t <= length; t += grid_.resolution_m) {
+                       if (bounds(line.a_m + (line.b_m - line.a_m) * (t / std::max(length, 1e-9))))
+                         return true;
+                     }
+                     return false;
+                   }),
                lines_.end());
   if (contacts_.size() + lines_.size() == before) return false;
   const Grid map = last_map_;
@@ -229,7 +251,9 @@ void ExploreMap::Stamp(const Eigen::Vector2d& p) {
   const Eigen::Vector2i c = grid_.CellOf(p);
   for (int dy = -r; dy <= r; ++dy) {
     for (int dx = -r; dx <= r; ++dx) {
-      if ((dx * dx + dy * dy) * res * res > options_.assume_free_radius_m * options_.assume_free_radius_m) continue;
+      if ((dx * dx + dy * dy) * res * res >
+          options_.assume_free_radius_m * options_.assume_free_radius_m)
+        continue;
       const int x = c.x() + dx, y = c.y() + dy;
       if (grid_.Contains(x, y) && grid_.at(x, y) < 0) grid_.at(x, y) = 0;
     }
@@ -246,6 +270,8 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
   if (!has_map()) return;
   const double res = grid_.resolution_m;
   const Eigen::Vector2d origin = map_from_base.translation();
+  scan_range_min_m_ = scan.range_min_m;
+  const bool with_visibility = scan.visible_from_m.size() == scan.ranges_m.size();
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const double r = scan.ranges_m[i];
     bool hit = false;
@@ -258,7 +284,8 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
     } else {
       continue;  // no information
     }
-    const double angle = map_from_base.yaw_rad() + scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
+    const double angle = map_from_base.yaw_rad() + scan.angle_min_rad +
+                         scan.angle_increment_rad * static_cast<double>(i);
     const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
     // Free up to one cell short of the return, sampled at half a cell.
     const int steps = static_cast<int>((length - (hit ? res : 0.0)) / (0.5 * res));
@@ -267,12 +294,16 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
       if (!grid_.Contains(c.x(), c.y())) break;
       const int index = grid_.Index(c.x(), c.y());
       int8_t& v = grid_.at(c.x(), c.y());
+      // An own return nearer than the range from which its surface is in view: the ray passed
+      // over it (rubble before a depth camera), not through.
+      if (hit_[index] && 0.5 * res * k < hit_visible_from_m_[index]) continue;
       // Unknown, uncertain, or one of the explorer's own returns that is no longer there: the
       // ray passed. MAP's obstacles stay (the next MAP is the judge of those).
       if (v < options_.occupied_threshold || hit_[index]) {
         v = 0;
         crossed_[index] = 1;
         hit_[index] = 0;
+        hit_visible_from_m_[index] = 0;
       }
     }
     if (hit) {
@@ -280,8 +311,12 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
       if (grid_.Contains(c.x(), c.y())) {
         const int index = grid_.Index(c.x(), c.y());
         int8_t& v = grid_.at(c.x(), c.y());
-        if (v < options_.occupied_threshold) {
+        const float visible_from =
+            with_visibility ? scan.visible_from_m[i] : static_cast<float>(scan.range_min_m);
+        if (v < options_.occupied_threshold || hit_[index]) {
           v = 100;
+          hit_visible_from_m_[index] =
+              hit_[index] ? std::max(hit_visible_from_m_[index], visible_from) : visible_from;
           hit_[index] = 1;
         }
         crossed_[index] = 0;
@@ -335,7 +370,8 @@ double ExploreMap::Clearance(int x, int y) const {
 bool ExploreMap::Traversable(int x, int y) const {
   if (!grid_.Contains(x, y) || distance_m_.empty()) return false;
   const int8_t v = grid_.at(x, y);
-  return v >= 0 && v < options_.free_threshold && distance_m_[grid_.Index(x, y)] >= options_.robot_radius_m;
+  return v >= 0 && v < options_.free_threshold &&
+         distance_m_[grid_.Index(x, y)] >= options_.robot_radius_m;
 }
 
 bool ExploreMap::Traversable(const Eigen::Vector2d& p) const {
@@ -364,7 +400,8 @@ bool ExploreMap::LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b)
 
 double ExploreMap::StepCost(int index) const {
   const double free_room = distance_m_[index] - options_.robot_radius_m;
-  const double tight = options_.clearance_m > 0 ? std::max(0.0, 1.0 - free_room / options_.clearance_m) : 0.0;
+  const double tight =
+      options_.clearance_m > 0 ? std::max(0.0, 1.0 - free_room / options_.clearance_m) : 0.0;
   return 1.0 + options_.clearance_weight * tight;
 }
 
@@ -384,7 +421,8 @@ CostField ExploreMap::Plan(const Eigen::Vector2d& from, double escape_m) const {
     for (int dy = -r; dy <= r; ++dy) {
       for (int dx = -r; dx <= r; ++dx) {
         const double dist = std::hypot(dx, dy) * grid_.resolution_m;
-        if (dist > escape_m || dist >= best || !Traversable(start.x() + dx, start.y() + dy)) continue;
+        if (dist > escape_m || dist >= best || !Traversable(start.x() + dx, start.y() + dy))
+          continue;
         best = dist;
         best_cell = start + Eigen::Vector2i(dx, dy);
       }
@@ -412,7 +450,8 @@ CostField ExploreMap::Plan(const Eigen::Vector2d& from, double escape_m) const {
         const int nx = x + dx, ny = y + dy;
         if (!Traversable(nx, ny)) continue;
         const int j = grid_.Index(nx, ny);
-        const float step = (dx && dy ? static_cast<float>(M_SQRT2) : 1.0f) * res * static_cast<float>(StepCost(j));
+        const float step =
+            (dx && dy ? static_cast<float>(M_SQRT2) : 1.0f) * res * static_cast<float>(StepCost(j));
         if (c + step < field.cost[j]) {
           field.cost[j] = c + step;
           field.parent[j] = i;
@@ -424,13 +463,15 @@ CostField ExploreMap::Plan(const Eigen::Vector2d& from, double escape_m) const {
   return field;
 }
 
-std::vector<Eigen::Vector2d> ExploreMap::PathTo(const CostField& field, const Eigen::Vector2d& goal) const {
+std::vector<Eigen::Vector2d> ExploreMap::PathTo(const CostField& field,
+                                                const Eigen::Vector2d& goal) const {
   std::vector<Eigen::Vector2d> path;
   const Eigen::Vector2i g = grid_.CellOf(goal);
   if (!grid_.Contains(g.x(), g.y())) return path;
   const int gi = grid_.Index(g.x(), g.y());
   if (!field.Reached(gi)) return path;
-  for (int i = gi; i >= 0; i = field.parent[i]) path.push_back(grid_.CentreOf(i % grid_.width, i / grid_.width));
+  for (int i = gi; i >= 0; i = field.parent[i])
+    path.push_back(grid_.CentreOf(i % grid_.width, i / grid_.width));
   std::reverse(path.begin(), path.end());
   return path;
 }

@@ -31,6 +31,11 @@ struct Scan {
   double range_min_m = 0;
   double range_max_m = 0;
   std::vector<float> ranges_m;
+  // Per beam (or empty): the nearest range at which a return's surface is in the sensor's
+  // view. A depth camera looks over low objects close by, so a ray that passes a cell nearer
+  // than this is no sign that an obstacle seen there is gone. Empty: every return is seen
+  // down to range_min_m (a laser).
+  std::vector<float> visible_from_m;
 };
 
 struct Grid {
@@ -48,18 +53,19 @@ struct Grid {
 
 struct PlannerOptions {
   double robot_radius_m = 0.25;
-  double clearance_m = 0.35;       // extra clearance the cost prefers beyond the radius
-  double clearance_weight = 4.0;   // cost factor at the radius (1 + weight)
-  int free_threshold = 25;         // cells below are free
-  int occupied_threshold = 65;     // cells at or above are obstacles
-  int min_frontier_cells = 4;      // smaller frontiers are noise
-  double pad_m = 4.0;              // the explorer's grid extends MAP this far on each side
+  double clearance_m = 0.35;           // extra clearance the cost prefers beyond the radius
+  double clearance_weight = 4.0;       // cost factor at the radius (1 + weight)
+  int free_threshold = 25;             // cells below are free
+  int occupied_threshold = 65;         // cells at or above are obstacles
+  int min_frontier_cells = 4;          // smaller frontiers are noise
+  double pad_m = 4.0;                  // the explorer's grid extends MAP this far on each side
   double assume_free_radius_m = 0.45;  // around every pose the robot has been: its body was there
-  double glass_join_m = 3.0;       // two contacts in line this close are one invisible surface
-  double glass_extend_m = 4.0;     // such a surface is extended along its line up to this far
+  double glass_join_m = 3.0;           // two contacts in line this close are one invisible surface
+  double glass_extend_m = 4.0;         // such a surface is extended along its line up to this far
   template <class V>
   void Visit(V& v) {
-    v("robot_radius_m", robot_radius_m, "cells closer than this to an obstacle are not traversable");
+    v("robot_radius_m", robot_radius_m,
+      "cells closer than this to an obstacle are not traversable");
     v("clearance_m", clearance_m, "paths prefer this much room beyond the radius");
     v("clearance_weight", clearance_weight, "cost factor of a step at the radius is 1 + this");
     v("free_threshold", free_threshold, "occupancy below this is free");
@@ -67,18 +73,22 @@ struct PlannerOptions {
     v("min_frontier_cells", min_frontier_cells, "smaller frontiers are ignored");
     v("pad_m", pad_m, "the explorer's grid extends MAP by this on each side (scans fill it)");
     v("assume_free_radius_m", assume_free_radius_m,
-      "unknown cells this close to any pose the robot has had are free (the camera cannot see its own footprint)");
+      "unknown cells this close to any pose the robot has had are free (the camera cannot see its "
+      "own footprint)");
     v("glass_join_m", glass_join_m,
-      "two contacts in line (similar heading, each on the other's surface) this close are one invisible surface (glass)");
+      "two contacts in line (similar heading, each on the other's surface) this close are one "
+      "invisible surface (glass)");
     v("glass_extend_m", glass_extend_m,
-      "an invisible surface is extended along its line over seen-through cells, until an obstacle or this far");
+      "an invisible surface is extended along its line over seen-through cells, until an obstacle "
+      "or this far");
   }
   void Validate(common::Validator& check) const {
     check.Positive("robot_radius_m", robot_radius_m);
     check.NonNegative("clearance_m", clearance_m);
     check.NonNegative("clearance_weight", clearance_weight);
-    check.That(free_threshold >= 0 && free_threshold < occupied_threshold && occupied_threshold <= 100,
-               "occupied_threshold", "need 0 <= free_threshold < occupied_threshold <= 100");
+    check.That(
+        free_threshold >= 0 && free_threshold < occupied_threshold && occupied_threshold <= 100,
+        "occupied_threshold", "need 0 <= free_threshold < occupied_threshold <= 100");
     check.That(min_frontier_cells >= 1, "min_frontier_cells", "must be >= 1");
     check.NonNegative("pad_m", pad_m);
     check.NonNegative("assume_free_radius_m", assume_free_radius_m);
@@ -89,7 +99,7 @@ struct PlannerOptions {
 
 struct Frontier {
   std::vector<Eigen::Vector2i> cells;
-  Eigen::Vector2d goal_m = Eigen::Vector2d::Zero();      // its cell nearest the robot by path
+  Eigen::Vector2d goal_m = Eigen::Vector2d::Zero();  // its cell nearest the robot by path
   Eigen::Vector2d centroid_m = Eigen::Vector2d::Zero();
   double path_cost_m = 0;
   double size_m = 0;  // cells x resolution
@@ -101,7 +111,9 @@ struct CostField {
   Eigen::Vector2i start{0, 0};
   std::vector<float> cost;  // +inf where unreachable
   std::vector<int> parent;  // -1 at the start and where unreachable
-  bool Reached(int index) const { return index >= 0 && index < static_cast<int>(cost.size()) && std::isfinite(cost[index]); }
+  bool Reached(int index) const {
+    return index >= 0 && index < static_cast<int>(cost.size()) && std::isfinite(cost[index]);
+  }
 };
 
 class ExploreMap {
@@ -174,6 +186,9 @@ class ExploreMap {
   std::vector<uint8_t> crossed_;
   // 1 where one of the explorer's own scan returns marked the cell and no later ray crossed it.
   std::vector<uint8_t> hit_;
+  // Per own return: the nearest range from which its surface is in view (Scan::visible_from_m).
+  std::vector<float> hit_visible_from_m_;
+  double scan_range_min_m_ = 0;    // the latest scan's
   std::vector<float> distance_m_;  // to the nearest obstacle
   std::vector<Eigen::Vector2d> trail_;
   std::vector<common::Rigid2d> contacts_;

@@ -324,6 +324,7 @@ class Loop : public sim::SimSink {
     es.range_min_m = scan.range_min_m;
     es.range_max_m = scan.range_max_m;
     es.ranges_m = scan.ranges_m;
+    es.visible_from_m = planar.visible_from_m;
     const double explore0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     const explore::Velocity v = explore_.OnScan(t, es);
     result_->explore_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - explore0;

@@ -87,7 +87,10 @@ std::vector<Step> PlanRequest(const Request& request, const TeleopOptions& optio
       const int n =
           std::max(1, static_cast<int>(std::ceil(request.duration_s * options.rate_hz - 1e-9)));
       for (int i = 0; i < n; ++i) add(drive);
-      for (int i = 0; i < options.repeat; ++i) add(end);
+      Step halt;
+      halt.override_active = true;
+      halt.ends_drive = true;
+      for (int i = 0; i < options.repeat; ++i) add(halt);
       break;
     }
   }

@@ -65,10 +65,13 @@ struct Step {
   bool override_active = false;
   double linear_mps = 0;
   double angular_radps = 0;
+  bool ends_drive = false;  // a zero-speed override that ends a drive (not a release)
 };
 
 // stop: `repeat` emergency stops; release: `repeat` messages with neither stop nor override;
-// drive: an override every 1/rate_hz for the duration, then `repeat` messages ending it.
+// drive: an override every 1/rate_hz for the duration, then `repeat` zero-speed overrides
+// ending it (the explorer takes over `teleop_timeout_s` later; a drive never releases an
+// emergency stop).
 // Every step comes 1/rate_hz after the one before.
 std::vector<Step> PlanRequest(const Request& request, const TeleopOptions& options);
 

@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
       if (interrupted) {
         // Ctrl-C: a drive ends at once (its end messages still go out); a stop or a release is
         // sent in full.
-        if (steps[i].override_active) continue;
+        if (steps[i].override_active && !steps[i].ends_drive) continue;
         usleep(static_cast<useconds_t>(period_s * 1e6));
       }
       sender.Send(steps[i]);

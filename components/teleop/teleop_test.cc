@@ -64,8 +64,12 @@ TEST(TeleopTest, PlansRepeatStopsAndEndEveryDrive) {
   for (size_t i = 0; i < drive.size(); ++i) {
     EXPECT_NEAR(drive[i].at_s, 0.1 * static_cast<double>(i), 1e-9);
     EXPECT_FALSE(drive[i].emergency_stop);
-    EXPECT_EQ(drive[i].override_active, i < 15) << i;  // the override ends explicitly
+    // The override ends explicitly, at zero speed and still an override: the end of a drive
+    // is not a release, so it never ends an emergency stop.
+    EXPECT_TRUE(drive[i].override_active) << i;
+    EXPECT_EQ(drive[i].ends_drive, i >= 15) << i;
     EXPECT_EQ(drive[i].linear_mps, i < 15 ? 0.3 : 0.0) << i;
+    EXPECT_EQ(drive[i].angular_radps, i < 15 ? -0.4 : 0.0) << i;
   }
 }
 
