@@ -206,6 +206,23 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
       }
     }
     if (!p) p = NearestSeen(z, options_.merge_radius_m);
+    if (!p && options_.relative_pose_sigma_m > 0) {
+      // A new sighting of someone seen before, SLAM's pose error having changed in between. Not
+      // a person seen in this same frame: detections of one frame share one pose error, so
+      // their distance apart is real.
+      const Eigen::Matrix3d drift =
+          Eigen::Vector3d(1, 1, 0).asDiagonal() *
+          (options_.relative_pose_sigma_m * options_.relative_pose_sigma_m);
+      double best = options_.sighting_gate_chi2;
+      for (auto& [id, q] : people_) {
+        if (!q.has_seen || count_this_frame.count(id)) continue;
+        const double m2 = PlanarMahalanobis2(q.seen_position_m, q.seen_covariance + drift, z, Pz);
+        if (m2 <= best) {
+          best = m2;
+          p = &q;
+        }
+      }
+    }
     if (p) {
       if (d.track_id < 0 || d.track_id != p->sighting_track_id) CloseSighting(p);
     } else {

@@ -54,6 +54,11 @@ struct PeopleMapOptions {
   // restarted); its confirmation drops a track after n frames without a detection (0.33 s at
   // 15 Hz, 0.17 s at 30 Hz).
   double track_gap_s = 1.0;
+  // Two sightings of one person at different times differ by the change of SLAM's pose error
+  // between them, which SLAM's own covariance does not show: per axis, this std (0: none). A
+  // detection that starts a sighting joins a seen person within sighting_gate_chi2 of it.
+  double relative_pose_sigma_m = 0.27;
+  double sighting_gate_chi2 = 9.21;  // 99 % for 2 dof
   template <class V>
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
@@ -81,6 +86,12 @@ struct PeopleMapOptions {
     v("track_gap_s", track_gap_s,
       "a detector track id seen again after longer than this is another track (one sighting "
       "ends)");
+    v("relative_pose_sigma_m", relative_pose_sigma_m,
+      "std per axis of the change of the robot pose error between two sightings of one person "
+      "(SLAM drift that its covariance does not show); a new sighting joins a seen person it is "
+      "within sighting_gate_chi2 of (0: only within merge_radius_m)");
+    v("sighting_gate_chi2", sighting_gate_chi2,
+      "Mahalanobis gate (2 dof) for a new sighting to be a seen person");
   }
   void Validate(common::Validator& check) const {
     check.Positive("merge_radius_m", merge_radius_m);
@@ -97,6 +108,8 @@ struct PeopleMapOptions {
     check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
     check.NonNegative("same_call_s", same_call_s);
     check.Positive("track_gap_s", track_gap_s);
+    check.NonNegative("relative_pose_sigma_m", relative_pose_sigma_m);
+    check.Positive("sighting_gate_chi2", sighting_gate_chi2);
   }
 };
 

@@ -11,9 +11,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -77,6 +79,11 @@ int main(int argc, char** argv) {
     parser.AddSwitch("--truth-poses", &truth_poses,
                      "place every detection with the simulator's true pose instead of POSE");
     parser.AddFlag("--match-m", &match_m, "a map person this close to a true person is found");
+    std::string final_trail;
+    parser.AddFlag("--final-trail", &final_trail,
+                   "the bench's OUT/<site>-<mode>-trail.csv: every POSE is moved by the correction "
+                   "SLAM's final graph made at its time (what people anchored to SLAM's nodes "
+                   "would get)");
     common::NodeArgs node_args;
     const auto parsed = common::ParseNodeOptions<people_map::PeopleMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/people_map.yaml");
@@ -131,6 +138,22 @@ int main(int argc, char** argv) {
       return best;
     };
 
+    // Final-graph corrections (final * online^-1) at the trail's samples, by mission time.
+    std::map<double, common::Rigid2d> corrections;
+    if (!final_trail.empty()) {
+      std::ifstream csv(final_trail);
+      if (!csv) throw std::runtime_error("cannot read " + final_trail);
+      std::string line;
+      std::getline(csv, line);
+      while (std::getline(csv, line)) {
+        std::vector<double> v;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) v.push_back(std::stod(cell));
+        if (v.size() < 12) throw std::runtime_error(final_trail + ": no final-graph columns");
+        corrections[v[0]] =
+            common::Rigid2d(v[8], v[9], v[10]) * common::Rigid2d(v[4], v[5], v[6]).inverse();
+      }
+    }
     people_map::PeopleMap map(options.map);
     people_map::PeopleMapIntake intake(options, base_from_camera,
                                        robot.base_from_mic_array.ToRigid3d(), &map);
@@ -177,6 +200,13 @@ int main(int argc, char** argv) {
         if (truth_poses && trail.At(m.header.utime, &truth_pose))
           common::FromRigid3d(common::Rigid3d::FromRigid2d(truth_pose), m.position_m,
                               m.orientation);
+        if (!corrections.empty()) {
+          auto c = corrections.lower_bound(common::UtimeToSeconds(m.header.utime - t0));
+          if (c == corrections.end()) c = std::prev(c);
+          const common::Rigid2d online = common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
+          common::FromRigid3d(common::Rigid3d::FromRigid2d(c->second * online), m.position_m,
+                              m.orientation);
+        }
         intake.OnPose(m);
         ++poses;
       } else if (e->channel == options.visual_channel) {
@@ -198,7 +228,10 @@ int main(int argc, char** argv) {
     std::printf(
         "%ld PEOPLE_VISUAL, %ld POSE%s; %zu people on the map, %ld detections without "
         "a pose\n",
-        static_cast<long>(seen_msgs), static_cast<long>(poses), truth_poses ? " (true poses)" : "",
+        static_cast<long>(seen_msgs), static_cast<long>(poses),
+        truth_poses           ? " (true poses)"
+        : corrections.empty() ? ""
+                              : " (moved by the final graph)",
         report.size(), static_cast<long>(intake.without_pose()));
     // One-to-one, closest pairs first, as the mission metrics match.
     struct Pair {

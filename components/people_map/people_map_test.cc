@@ -102,6 +102,45 @@ TEST(PeopleMapTest, ALaterSightingWithADriftedPoseDoesNotDragThePerson) {
   EXPECT_GT(error_m, 0.1);
 }
 
+// SLAM's pose error changes between two sightings by more than its covariance shows (0.22-0.27
+// m per axis on the generated sites): a person seen again 0.65 m from where the first sighting
+// put them is the same person, not a second one. Two people 0.65 m apart in one frame share the
+// frame's pose error: they stay two.
+TEST(PeopleMapTest, ANewSightingWithinThePoseDriftIsTheSamePerson) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d pose(0, 0, 0);
+  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.0001).asDiagonal();
+  common::Utime t = 1'000'000;
+  for (int i = 0; i < 10; ++i, t += 66'000) {
+    SeenDetection d = PersonAhead(3.0, 0.0);
+    d.track_id = 1;
+    map.AddSeen(t, {d}, MapFromCamera(pose), pose_cov, pose.translation());
+  }
+  // 30 s later, a new track: the same person, placed 0.65 m to the side by the drifted pose.
+  t += 30'000'000;
+  SeenDetection again = PersonAhead(3.0, 0.65);
+  again.track_id = 2;
+  map.AddSeen(t, {again}, MapFromCamera(pose), pose_cov, pose.translation());
+  EXPECT_EQ(map.people().size(), 1u);
+  // Two people 0.65 m apart in one frame.
+  t += 30'000'000;
+  const Rigid2d elsewhere(0, 10, 0);
+  SeenDetection left = PersonAhead(3.0, -0.3), right = PersonAhead(3.0, 0.35);
+  left.track_id = 3;
+  right.track_id = 4;
+  map.AddSeen(t, {left, right}, MapFromCamera(elsewhere), pose_cov, elsewhere.translation());
+  EXPECT_EQ(map.people().size(), 3u);
+  // Without the drift model the 0.65 m sighting is a second person.
+  PeopleMapOptions no_drift;
+  no_drift.relative_pose_sigma_m = 0;
+  PeopleMap strict{no_drift};
+  SeenDetection first = PersonAhead(3.0, 0.0);
+  first.track_id = 1;
+  strict.AddSeen(1'000'000, {first}, MapFromCamera(pose), pose_cov, pose.translation());
+  strict.AddSeen(31'000'000, {again}, MapFromCamera(pose), pose_cov, pose.translation());
+  EXPECT_EQ(strict.people().size(), 2u);
+}
+
 TEST(PeopleMapTest, PoseUncertaintyGrowsTheCovarianceAcrossTheBearing) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0, 0, 0);
