@@ -74,8 +74,8 @@ int main(int argc, char** argv) {
     double match_m = 0.5;
     parser.AddPositional("log", &log_path, "LCM log file");
     parser.AddFlag("--trace", &trace,
-                   "a true person's name: every detection placed within 1.5 m of them, and "
-                   "every change of the map's people near them");
+                   "a true person's name: every detection placed within 1.5 m of them (where "
+                   "POSE and the true pose put it, and the person it updated)");
     parser.AddSwitch("--truth-poses", &truth_poses,
                      "place every detection with the simulator's true pose instead of POSE");
     parser.AddFlag("--match-m", &match_m, "a map person this close to a true person is found");
