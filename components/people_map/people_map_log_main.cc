@@ -7,7 +7,8 @@
 //   sarmap-log people-map site-3-frontier-people.lcmlog
 //   sarmap-log people-map site-3-frontier-people.lcmlog --trace person6
 //   sarmap-log people-map LOG --truth-poses          # every detection placed with the true pose
-//   sarmap-log people-map LOG --set map.merge_radius_m=0.3
+//   sarmap-log people-map LOG --final-trail OUT/site-3-frontier-trail.csv  # SLAM's final graph
+//   sarmap-log people-map LOG --set map.relative_pose_sigma_m=0
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
