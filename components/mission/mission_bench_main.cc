@@ -81,8 +81,10 @@ class PeopleFound {
   int64_t start_utime_ = 0;
 };
 
-// The sound map's inputs (and SIM_TRUTH, SOUND_MAP) as an LCM log, for `sarmap-log sound-map`.
-class SoundLog {
+// Messages of the mission as an LCM log: the sound map's inputs (and SIM_TRUTH, SOUND_MAP) for
+// `sarmap-log sound-map`, the people map's inputs (and SIM_TRUTH, PEOPLE_MAP) for
+// `sarmap-log people-map`. Not opened: writes nothing.
+class MissionLog {
  public:
   void Open(const std::string& path) {
     log_ = std::make_unique<lcm::LogFile>(path, "w");
@@ -99,7 +101,7 @@ class SoundLog {
     e.channel = channel;
     e.datalen = static_cast<int32_t>(buffer.size());
     e.data = buffer.data();
-    if (log_->writeEvent(&e) != 0) throw std::runtime_error("error writing the sound log");
+    if (log_->writeEvent(&e) != 0) throw std::runtime_error("error writing a mission log");
   }
 
  private:
@@ -114,6 +116,7 @@ class Metrics : public mission::MissionObserver {
     metrics.OnTruth(m.header.utime, m);
     people_found.OnTruth(t_s, m);
     sound_log.Write("SIM_TRUTH", m);
+    people_log.Write("SIM_TRUTH", m);
     for (const auto& p : m.people) {
       if (p.visible_to_camera && !in_view_s.count(p.id)) in_view_s[p.id] = t_s;
     }
@@ -131,23 +134,31 @@ class Metrics : public mission::MissionObserver {
   void OnPose(double t_s, const pose_t& m) override {
     people_found.OnPose(t_s, m);
     sound_log.Write("POSE", m);
+    people_log.Write("POSE", m);
   }
   void OnPeopleMap(double t_s, const people_map_t& m) override {
     people_found.OnPeopleMap(t_s, m, &metrics);
+    people_log.Write("PEOPLE_MAP", m);
+  }
+  void OnSeen(double, const people_detections_t& m) override {
+    people_log.Write("PEOPLE_VISUAL", m);
   }
   void OnSoundMap(double, const sound_map_t& m) override {
     people_found.OnSoundMap(m);
     sound_log.Write("SOUND_MAP", m);
+    people_log.Write("SOUND_MAP", m);
   }
   void OnDoaMap(double, const doa_t& m) override { sound_log.Write("DOA_MAP", m); }
   void OnDoa(double, const doa_t& m) override { sound_log.Write("DOA", m); }
   void OnHeard(double, const people_detections_t& m) override {
     sound_log.Write("PEOPLE_AUDIO", m);
+    people_log.Write("PEOPLE_AUDIO", m);
   }
   void OnSlamAnchors(double, const slam_anchors_t& m) override {
     sound_log.Write("SLAM_ANCHORS", m);
+    people_log.Write("SLAM_ANCHORS", m);
   }
-  SoundLog sound_log;
+  MissionLog sound_log, people_log;
   logtools::MissionMetrics metrics;
   std::map<int64_t, double> in_view_s;
   int people = 0;
@@ -182,8 +193,18 @@ void TrailError(const mission::MissionResult& r, const common::Rigid2d& world_fr
   const common::Rigid2d map_from_world = world_from_map.inverse();
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;
   std::ofstream csv(csv_path);
-  csv << "time_s,truth_x_m,truth_y_m,truth_yaw_rad,slam_x_m,slam_y_m,slam_yaw_rad,error_m\n";
+  csv << "time_s,truth_x_m,truth_y_m,truth_yaw_rad,slam_x_m,slam_y_m,slam_yaw_rad,error_m,"
+         "final_x_m,final_y_m,final_yaw_rad,final_error_m\n";
   for (const mission::MissionSample& s : r.samples) {
+    // SLAM's final graph at this time (the scan nearest in time).
+    Eigen::Vector4d final_pose(s.t_s, s.slam_pose.x(), s.slam_pose.y(), s.slam_pose.z());
+    const auto after =
+        std::lower_bound(r.final_slam_trail.begin(), r.final_slam_trail.end(), s.t_s,
+                         [](const Eigen::Vector4d& p, double t) { return p.x() < t; });
+    if (after != r.final_slam_trail.end())
+      final_pose = *after;
+    else if (!r.final_slam_trail.empty())
+      final_pose = r.final_slam_trail.back();
     pairs.emplace_back(s.slam_pose.head<2>(), s.truth_pose.head<2>());
     const common::Rigid2d truth =
         map_from_world * common::Rigid2d(s.truth_pose.x(), s.truth_pose.y(), s.truth_pose.z());
@@ -191,7 +212,9 @@ void TrailError(const mission::MissionResult& r, const common::Rigid2d& world_fr
     row->trail_max_m = std::max(row->trail_max_m, error_m);
     csv << s.t_s << "," << truth.translation().x() << "," << truth.translation().y() << ","
         << truth.yaw_rad() << "," << s.slam_pose.x() << "," << s.slam_pose.y() << ","
-        << s.slam_pose.z() << "," << error_m << "\n";
+        << s.slam_pose.z() << "," << error_m << "," << final_pose.y() << "," << final_pose.z()
+        << "," << final_pose.w() << "," << (truth.translation() - final_pose.segment<2>(1)).norm()
+        << "\n";
   }
   row->trail_rms_m = logtools::TrailResidualRms(map_from_world, pairs);
 }
@@ -363,7 +386,7 @@ int main(int argc, char** argv) {
     std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench",
                         site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
-    bool no_perception = false, no_sound = false, sound_log = false;
+    bool no_perception = false, no_sound = false, sound_log = false, people_log = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
         "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the "
@@ -414,6 +437,10 @@ int main(int argc, char** argv) {
     parser.AddSwitch("--sound-log", &sound_log,
                      "write the sound map's inputs (and the every-bin DOA), SIM_TRUTH and "
                      "SOUND_MAP to OUT/<site>-<mode>-sound.lcmlog (for sarmap-log sound-map)");
+    parser.AddSwitch("--people-log", &people_log,
+                     "write the people map's inputs (PEOPLE_VISUAL, POSE, PEOPLE_AUDIO, SOUND_MAP, "
+                     "SLAM_ANCHORS), SIM_TRUTH and PEOPLE_MAP to OUT/<site>-<mode>-people.lcmlog "
+                     "(for sarmap-log people-map)");
     if (!parser.Parse(argc, argv)) return 0;
     if (sites <= 0 && worlds.empty())
       throw common::ArgError("give --sites N or --worlds FILE[,FILE...]");
@@ -453,6 +480,8 @@ int main(int argc, char** argv) {
         Metrics metrics;
         if (o.perception && o.sound && sound_log)
           metrics.sound_log.Open(out_dir + "/" + target.name + "-" + mode + "-sound.lcmlog");
+        if (o.perception && people_log)
+          metrics.people_log.Open(out_dir + "/" + target.name + "-" + mode + "-people.lcmlog");
         std::fprintf(stderr, "%s %s:", target.name.c_str(), mode.c_str());
         const mission::MissionResult r = mission::RunMission(o, &metrics, [](double t) {
           if (static_cast<int>(t) % 60 == 0) std::fprintf(stderr, " %.0f", t);

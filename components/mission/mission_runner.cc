@@ -154,6 +154,11 @@ class Perception {
     result_->vision_cpu_s += cpu1 - cpu0;
     for (const auto& msg : out) intake_.OnSeen(msg);
     result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
+    if (observer_) {
+      for (const auto& msg : out)
+        if (!msg.detections.empty())
+          observer_->OnSeen(common::UtimeToSeconds(msg.header.utime) - start_s_, msg);
+    }
   }
 
   // One audio block: the speech beams take it first (its DOAs come from the localiser after
@@ -379,6 +384,7 @@ class Loop : public sim::SimSink {
   explore::ExploreController* mutable_explore() { return &explore_; }
   const explore::ExploreController& explore() const { return explore_; }
   const slam::Slam& slam() const { return slam_; }
+  double start_s() const { return start_s_; }
 
  private:
   static double Seconds(int64_t utime) { return common::UtimeToSeconds(utime); }
@@ -683,6 +689,8 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     result.simulated_s = t;
   }
   if (perception) perception->Finish();
+  for (const slam::StampedPose2& p : loop.slam().Trajectory())
+    result.final_slam_trail.emplace_back(p.time_s - loop.start_s(), p.x_m, p.y_m, p.yaw_rad);
   if (!options.explorer_map_pgm.empty()) WriteExplorerMap(loop.explore(), options.explorer_map_pgm);
   if (!options.slam_map_pgm.empty()) WriteSlamMap(loop.slam(), options.slam_map_pgm);
   result.final_state = loop.explore().status().state;

@@ -109,6 +109,9 @@ struct MissionResult {
   double home_after_s = -1;
   std::string final_state;
   std::vector<MissionSample> samples;
+  // SLAM's trail as its final graph puts it (every scan: t_s, x, y, yaw in the map frame): where
+  // the loop closures moved the poses that placed the detections.
+  std::vector<Eigen::Vector4d> final_slam_trail;
   std::vector<MissionReport> reports;  // every report_period_s
   // The simulator's warnings (people photos or voice clips not found: a mission that sees grey
   // bodies and hears silent voices).
@@ -127,6 +130,8 @@ struct MissionObserver {
   virtual void OnExploreStatus(double /*t_s*/, const sarmap::explore_status_t& /*status*/) {}
   // SLAM's POSE of every accepted scan.
   virtual void OnPose(double /*t_s*/, const sarmap::pose_t& /*pose*/) {}
+  // PEOPLE_VISUAL (perception on): each confirmed frame as the people map takes it.
+  virtual void OnSeen(double /*t_s*/, const sarmap::people_detections_t& /*seen*/) {}
   // PEOPLE_MAP (perception on): after every input that changed it, and every publish_period_s.
   virtual void OnPeopleMap(double /*t_s*/, const sarmap::people_map_t& /*people*/) {}
   // SOUND_MAP (perception and sound on), every publish_period_s of message time.

@@ -124,6 +124,56 @@ Person* PeopleMap::NearestSeen(const Eigen::Vector3d& position_m, double radius_
   return best;
 }
 
+void PeopleMap::CloseSighting(Person* p) const {
+  if (p->sighting_detections == 0) return;
+  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
+  const Eigen::Matrix3d sensor = p->sighting_information.inverse();
+  const Eigen::Vector3d x = sensor * p->sighting_information_position;
+  const Eigen::Matrix3d P = Floor(sensor + p->sighting_pose_covariance, min_var);
+  if (x.allFinite() && P.allFinite()) {
+    if (p->has_settled) {
+      Eigen::Vector3d fused_x;
+      Eigen::Matrix3d fused_P;
+      Fuse(p->settled_position_m, p->settled_covariance, x, P, &fused_x, &fused_P);
+      p->settled_position_m = fused_x;
+      p->settled_covariance = Floor(fused_P, min_var);
+    } else {
+      p->settled_position_m = x;
+      p->settled_covariance = P;
+      p->has_settled = true;
+    }
+  }
+  p->sighting_track_id = -1;
+  p->sighting_detections = 0;
+  p->sighting_information.setZero();
+  p->sighting_information_position.setZero();
+  p->sighting_pose_covariance.setZero();
+}
+
+void PeopleMap::UpdateSeen(Person* p) const {
+  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
+  if (p->sighting_detections == 0) {
+    if (!p->has_settled) return;
+    p->seen_position_m = p->settled_position_m;
+    p->seen_covariance = p->settled_covariance;
+    return;
+  }
+  const Eigen::Matrix3d sensor = p->sighting_information.inverse();
+  const Eigen::Vector3d x = sensor * p->sighting_information_position;
+  const Eigen::Matrix3d P = Floor(sensor + p->sighting_pose_covariance, min_var);
+  if (!x.allFinite() || !P.allFinite()) return;
+  if (p->has_settled) {
+    Eigen::Vector3d fused_x;
+    Eigen::Matrix3d fused_P;
+    Fuse(p->settled_position_m, p->settled_covariance, x, P, &fused_x, &fused_P);
+    p->seen_position_m = fused_x;
+    p->seen_covariance = Floor(fused_P, min_var);
+  } else {
+    p->seen_position_m = x;
+    p->seen_covariance = P;
+  }
+}
+
 void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detections,
                         const common::Rigid3d& map_from_camera, const Eigen::Matrix3d& pose_covariance,
                         const Eigen::Vector2d& robot_xy) {
@@ -138,16 +188,43 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
     J(1, 1) = 1;
     J(0, 2) = -(z.y() - robot_xy.y());
     J(1, 2) = z.x() - robot_xy.x();
-    const Eigen::Matrix3d Pz =
-        Floor(R * d.covariance_camera * R.transpose() + J * pose_covariance * J.transpose(), min_var);
+    const Eigen::Matrix3d sensor = Floor(R * d.covariance_camera * R.transpose(), min_var);
+    const Eigen::Matrix3d pose_part = J * pose_covariance * J.transpose();
+    const Eigen::Matrix3d Pz = Floor(sensor + pose_part, min_var);
 
-    Person* p = NearestSeen(z, options_.merge_radius_m);
+    // The person this detection's track is a sighting of, while the track goes on and stays
+    // within one place of it; else the nearest seen person within merge_radius_m.
+    Person* p = nullptr;
+    if (d.track_id >= 0) {
+      for (auto& [id, q] : people_) {
+        if (q.has_seen && q.sighting_track_id == d.track_id && q.sighting_detections > 0 &&
+            common::UtimeToSeconds(utime - q.sighting_last_utime) <= options_.track_gap_s &&
+            (q.seen_position_m - z).head<2>().norm() <= options_.merge_radius_m) {
+          p = &q;
+          break;
+        }
+      }
+    }
+    if (!p) p = NearestSeen(z, options_.merge_radius_m);
+    if (!p && options_.relative_pose_sigma_m > 0) {
+      // A new sighting of someone seen before, SLAM's pose error having changed in between. Not
+      // a person seen in this same frame: detections of one frame share one pose error, so
+      // their distance apart is real.
+      const Eigen::Matrix3d drift =
+          Eigen::Vector3d(1, 1, 0).asDiagonal() *
+          (options_.relative_pose_sigma_m * options_.relative_pose_sigma_m);
+      double best = options_.sighting_gate_chi2;
+      for (auto& [id, q] : people_) {
+        if (!q.has_seen || count_this_frame.count(id)) continue;
+        const double m2 = PlanarMahalanobis2(q.seen_position_m, q.seen_covariance + drift, z, Pz);
+        if (m2 <= best) {
+          best = m2;
+          p = &q;
+        }
+      }
+    }
     if (p) {
-      Eigen::Vector3d x;
-      Eigen::Matrix3d P;
-      Fuse(p->seen_position_m, p->seen_covariance, z, Pz, &x, &P);
-      p->seen_position_m = x;
-      p->seen_covariance = Floor(P, min_var);
+      if (d.track_id < 0 || d.track_id != p->sighting_track_id) CloseSighting(p);
     } else {
       // A heard-only person this seen one agrees with: one person, both cues.
       for (auto& [id, q] : people_) {
@@ -166,9 +243,21 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
         p = &people_.emplace(fresh.id, fresh).first->second;
       }
       p->has_seen = true;
-      p->seen_position_m = z;
-      p->seen_covariance = Pz;
+      p->has_settled = false;
     }
+    // The detection joins the person's current sighting: its sensor noise is independent of the
+    // sighting's other detections, its pose error is not (one viewing, one pose error).
+    const Eigen::Matrix3d information = sensor.inverse();
+    p->sighting_track_id = d.track_id;
+    p->sighting_last_utime = utime;
+    ++p->sighting_detections;
+    p->sighting_information += information;
+    p->sighting_information_position += information * z;
+    p->sighting_pose_covariance = pose_part;
+    UpdateSeen(p);
+    if (d.track_id < 0) CloseSighting(p);  // no track: a sighting of its own
+    if (seen_trace_)
+      seen_trace_({utime, z, Pz, d.position_camera_m, p->id, p->num_detections == 0});
     p->cues |= d.cue;
     AddEvidence(p, utime, d.confidence);
     p->people_count = std::max(p->people_count, ++count_this_frame[p->id]);
@@ -189,11 +278,17 @@ void PeopleMap::MergeCloseSeenPeople() {
         ++b;
         continue;
       }
+      // Both people's sightings so far are settled, then one fused with the other.
+      CloseSighting(&pa);
+      CloseSighting(&pb);
       Eigen::Vector3d x;
       Eigen::Matrix3d P;
       Fuse(pa.seen_position_m, pa.seen_covariance, pb.seen_position_m, pb.seen_covariance, &x, &P);
       pa.seen_position_m = x;
       pa.seen_covariance = Floor(P, min_var);
+      pa.settled_position_m = x;
+      pa.settled_covariance = pa.seen_covariance;
+      pa.has_settled = true;
       pa.cues |= pb.cues;
       pa.num_detections += pb.num_detections;
       pa.people_count = std::max(pa.people_count, pb.people_count);
@@ -514,6 +609,10 @@ bool PeopleMap::Load(const std::string& path) {
       p.has_heard = n["has_heard"].as<bool>();
       p.heard_position_m = ToVec(n["heard_position_m"]);
       p.heard_covariance = ToMat(n["heard_covariance"]);
+      // The sightings so far are settled: a restart ends the current one.
+      p.has_settled = p.has_seen;
+      p.settled_position_m = p.seen_position_m;
+      p.settled_covariance = p.seen_covariance;
       // A NaN or infinite value would spread to every person it is fused with.
       if (!p.position_m.allFinite() || !p.covariance.allFinite() || !std::isfinite(p.confidence) ||
           !p.seen_position_m.allFinite() || !p.seen_covariance.allFinite() ||

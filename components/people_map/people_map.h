@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -49,6 +50,15 @@ struct PeopleMapOptions {
   // One utterance often fires several keywords at once ("here", "help", "assist" within 0.3 s): the
   // hits towards one source closer than this to its previous call are that same call.
   double same_call_s = 2.0;
+  // A track id of the detector seen again after longer than this is another track (the detector
+  // restarted); its confirmation drops a track after n frames without a detection (0.33 s at
+  // 15 Hz, 0.17 s at 30 Hz).
+  double track_gap_s = 1.0;
+  // Two sightings of one person at different times differ by the change of SLAM's pose error
+  // between them, which SLAM's own covariance does not show: per axis, this std (0: none). A
+  // detection that starts a sighting joins a seen person within sighting_gate_chi2 of it.
+  double relative_pose_sigma_m = 0.27;
+  double sighting_gate_chi2 = 9.21;  // 99 % for 2 dof
   template <class V>
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
@@ -73,6 +83,15 @@ struct PeopleMapOptions {
     v("same_call_s", same_call_s,
       "keyword hits towards a source within this long of its previous call are one call (one utterance "
       "often fires several keywords); 0: every hit is a call");
+    v("track_gap_s", track_gap_s,
+      "a detector track id seen again after longer than this is another track (one sighting "
+      "ends)");
+    v("relative_pose_sigma_m", relative_pose_sigma_m,
+      "std per axis of the change of the robot pose error between two sightings of one person "
+      "(SLAM drift that its covariance does not show); a new sighting joins a seen person it is "
+      "within sighting_gate_chi2 of (0: only within merge_radius_m)");
+    v("sighting_gate_chi2", sighting_gate_chi2,
+      "Mahalanobis gate (2 dof) for a new sighting to be a seen person");
   }
   void Validate(common::Validator& check) const {
     check.Positive("merge_radius_m", merge_radius_m);
@@ -88,6 +107,9 @@ struct PeopleMapOptions {
     check.NonNegative("heard_max_source_sigma_m", heard_max_source_sigma_m);
     check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
     check.NonNegative("same_call_s", same_call_s);
+    check.Positive("track_gap_s", track_gap_s);
+    check.NonNegative("relative_pose_sigma_m", relative_pose_sigma_m);
+    check.Positive("sighting_gate_chi2", sighting_gate_chi2);
   }
 };
 
@@ -98,6 +120,7 @@ struct SeenDetection {
   Eigen::Matrix3d covariance_camera;
   double confidence = 1.0;
   Cue cue = kSeenRgbd;
+  int64_t track_id = -1;  // the detector's track (one continuous viewing); -1: none
 };
 
 struct HeardDetection {
@@ -135,11 +158,40 @@ struct Person {
   bool has_heard = false;
   Eigen::Vector3d heard_position_m = Eigen::Vector3d::Zero();
   Eigen::Matrix3d heard_covariance = Eigen::Matrix3d::Identity();
+  // The seen estimate is the fusion of sightings. A sighting is one track of the detector (one
+  // continuous viewing): its detections share one robot pose error, so their sensor noise
+  // averages down but the pose error does not. The sightings before the current one, fused:
+  bool has_settled = false;
+  Eigen::Vector3d settled_position_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d settled_covariance = Eigen::Matrix3d::Identity();
+  // The current sighting: its track, the sum of its detections' sensor information (and of
+  // information times position), and the pose part of its latest detection's covariance.
+  int64_t sighting_track_id = -1;
+  common::Utime sighting_last_utime = 0;
+  int sighting_detections = 0;
+  Eigen::Matrix3d sighting_information = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d sighting_information_position = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sighting_pose_covariance = Eigen::Matrix3d::Zero();
+};
+
+// One seen detection as the map took it (for replay tools): where it landed in the map, with
+// which covariance, and the person it updated or made.
+struct SeenTrace {
+  common::Utime utime = 0;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d position_camera_m = Eigen::Vector3d::Zero();
+  int64_t person_id = -1;
+  bool made_person = false;
 };
 
 class PeopleMap {
  public:
   explicit PeopleMap(const PeopleMapOptions& options) : options_(options) {}
+  // Called for every seen detection applied (replay tools; not saved).
+  void set_seen_trace(std::function<void(const SeenTrace&)> trace) {
+    seen_trace_ = std::move(trace);
+  }
 
   // One frame of seen people. map_from_camera: camera pose at capture time;
   // pose_covariance: (x, y, yaw) covariance of the robot pose in the map.
@@ -172,9 +224,14 @@ class PeopleMap {
   void AddEvidence(Person* p, common::Utime utime, double detection_confidence) const;
   void Refuse(Person* p) const;  // recompute the fused estimate from seen and heard
   void MergeCloseSeenPeople();
+  // The current sighting is fused into the settled estimate and closed.
+  void CloseSighting(Person* p) const;
+  // seen_position_m / seen_covariance from the settled estimate and the current sighting.
+  void UpdateSeen(Person* p) const;
   Person* NearestSeen(const Eigen::Vector3d& position_m, double radius_m);
 
   PeopleMapOptions options_;
+  std::function<void(const SeenTrace&)> seen_trace_;
   std::map<int64_t, Person> people_;
   std::map<int64_t, SoundSource> sources_;
   std::map<int64_t, common::Utime> source_heard_utime_;  // source -> last heard calling

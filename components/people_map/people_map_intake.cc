@@ -139,6 +139,7 @@ void PeopleMapIntake::OnSeen(const sarmap::people_detections_t& m) {
         Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d.position_covariance);
     s.confidence = d.confidence;
     s.cue = d.cue == sarmap::person_detection_t::CUE_SEEN_DEPTH ? kSeenDepth : kSeenRgbd;
+    s.track_id = d.track_id;
     seen.push_back(s);
   }
   if (seen.empty()) return;

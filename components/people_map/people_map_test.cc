@@ -63,6 +63,84 @@ TEST(PeopleMapTest, MergesWithin45cmAndCountsPeoplePerPlace) {
   EXPECT_EQ(map.people().rbegin()->second.people_count, 2);
 }
 
+// One person, two sightings (two tracks of the detector, 40 s apart): the second with a robot
+// pose 0.4 m off (SLAM drift, within the 45 cm of one place) and three times as many frames.
+// Every frame of a sighting shares its pose error, so the frames must not outvote the first
+// sighting: the person ends between the two, not where the last frames put them.
+TEST(PeopleMapTest, ALaterSightingWithADriftedPoseDoesNotDragThePerson) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d first_pose(0, 0, 0);
+  const Eigen::Vector2d truth_xy(3.1, 0.0);  // the camera 0.10 m ahead of the base
+  // The drifted pose: the robot believes it is 0.4 m further left (+y) than it is.
+  const Rigid2d true_second(1.0, -1.0, 0.5), believed_second(1.0, -0.6, 0.5);
+  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.0001).asDiagonal();
+  common::Utime t = 1'000'000;
+  for (int i = 0; i < 20; ++i, t += 66'000) {
+    SeenDetection d = PersonAhead(3.0, (i % 2 ? 0.02 : -0.02));  // a little sensor noise
+    d.track_id = 1;
+    map.AddSeen(t, {d}, MapFromCamera(first_pose), pose_cov, first_pose.translation());
+  }
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_LT((map.people().begin()->second.position_m.head<2>() - truth_xy).norm(), 0.05);
+  t += 40'000'000;
+  // The person as the second camera pose truly sees them.
+  const Eigen::Vector3d truth_map(truth_xy.x(), truth_xy.y(), 0.85);
+  SeenDetection second = PersonAhead(0, 0);
+  second.position_camera_m = MapFromCamera(true_second).inverse() * truth_map;
+  second.track_id = 7;
+  for (int i = 0; i < 60; ++i, t += 66'000) {
+    map.AddSeen(t, {second}, MapFromCamera(believed_second), pose_cov,
+                believed_second.translation());
+  }
+  ASSERT_EQ(map.people().size(), 1u);
+  const Person& p = map.people().begin()->second;
+  EXPECT_EQ(p.num_detections, 80);
+  const double error_m = (p.position_m.head<2>() - truth_xy).norm();
+  // Each frame fused as if independent ended at the drifted place (0.4 m off); two sightings of
+  // equal weight end half way.
+  EXPECT_LT(error_m, 0.25);
+  EXPECT_GT(error_m, 0.1);
+}
+
+// SLAM's pose error changes between two sightings by more than its covariance shows (0.22-0.27
+// m per axis on the generated sites): a person seen again 0.65 m from where the first sighting
+// put them is the same person, not a second one. Two people 0.65 m apart in one frame share the
+// frame's pose error: they stay two.
+TEST(PeopleMapTest, ANewSightingWithinThePoseDriftIsTheSamePerson) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d pose(0, 0, 0);
+  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(0.03 * 0.03, 0.03 * 0.03, 0.0001).asDiagonal();
+  common::Utime t = 1'000'000;
+  for (int i = 0; i < 10; ++i, t += 66'000) {
+    SeenDetection d = PersonAhead(3.0, 0.0);
+    d.track_id = 1;
+    map.AddSeen(t, {d}, MapFromCamera(pose), pose_cov, pose.translation());
+  }
+  // 30 s later, a new track: the same person, placed 0.65 m to the side by the drifted pose.
+  t += 30'000'000;
+  SeenDetection again = PersonAhead(3.0, 0.65);
+  again.track_id = 2;
+  map.AddSeen(t, {again}, MapFromCamera(pose), pose_cov, pose.translation());
+  EXPECT_EQ(map.people().size(), 1u);
+  // Two people 0.65 m apart in one frame.
+  t += 30'000'000;
+  const Rigid2d elsewhere(0, 10, 0);
+  SeenDetection left = PersonAhead(3.0, -0.3), right = PersonAhead(3.0, 0.35);
+  left.track_id = 3;
+  right.track_id = 4;
+  map.AddSeen(t, {left, right}, MapFromCamera(elsewhere), pose_cov, elsewhere.translation());
+  EXPECT_EQ(map.people().size(), 3u);
+  // Without the drift model the 0.65 m sighting is a second person.
+  PeopleMapOptions no_drift;
+  no_drift.relative_pose_sigma_m = 0;
+  PeopleMap strict{no_drift};
+  SeenDetection first = PersonAhead(3.0, 0.0);
+  first.track_id = 1;
+  strict.AddSeen(1'000'000, {first}, MapFromCamera(pose), pose_cov, pose.translation());
+  strict.AddSeen(31'000'000, {again}, MapFromCamera(pose), pose_cov, pose.translation());
+  EXPECT_EQ(strict.people().size(), 2u);
+}
+
 TEST(PeopleMapTest, PoseUncertaintyGrowsTheCovarianceAcrossTheBearing) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0, 0, 0);
