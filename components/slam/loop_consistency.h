@@ -28,7 +28,7 @@ namespace slam {
 using common::Rigid2d;
 
 struct DriftModel {
-  double translation_m_per_sqrt_m = 0.05;   // s_t
+  double translation_m_per_sqrt_m = 0.1;    // s_t
   double rotation_rad_per_sqrt_rad = 0.02;  // s_r
   double rotation_rad_per_sqrt_m = 0.0087;  // s_rm
 };

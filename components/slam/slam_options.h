@@ -166,7 +166,7 @@ struct LoopClosureOptions {
   // sqrt(rad) turned), plus two scan-to-submap matches' noise (the closure's and the
   // submap node's own).
   bool consistency_gate = false;
-  double consistency_drift_m_per_sqrt_m = 0.05;
+  double consistency_drift_m_per_sqrt_m = 0.1;
   double consistency_drift_deg_per_sqrt_rad = 1.15;
   double consistency_drift_deg_per_sqrt_m = 0.5;
   double consistency_match_sigma_m = 0.05;
