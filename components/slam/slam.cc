@@ -31,7 +31,18 @@ Rigid2d Interpolate(const Rigid2d& a, const Rigid2d& b, double f) {
 
 }  // namespace
 
-Slam::Slam(const SlamOptions& options) : options_(options) {}
+namespace {
+DriftModel DriftModelOf(const LoopClosureOptions& lo) {
+  DriftModel m;
+  m.translation_m_per_sqrt_m = lo.consistency_drift_m_per_sqrt_m;
+  m.rotation_rad_per_sqrt_rad = lo.consistency_drift_deg_per_sqrt_rad * kDegToRad;
+  m.rotation_rad_per_sqrt_m = lo.consistency_drift_deg_per_sqrt_m * kDegToRad;
+  return m;
+}
+}  // namespace
+
+Slam::Slam(const SlamOptions& options)
+    : options_(options), chain_drift_(DriftModelOf(options.loop)) {}
 Slam::~Slam() = default;
 
 bool Slam::AddOdometry(double time_s, const Rigid2d& pose, std::string* why) {
@@ -653,6 +664,11 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   m.rotation_weight = lo.ceres_rotation_weight;
   m.max_iterations = 10;
   const Rigid2d refined = CeresMatch(*s.grid, n.loop_points, found, found, m);
+  if (lo.consistency_gate &&
+      !ConsistentWithGraph(node_id, submap_id, s.local_pose.inverse() * refined)) {
+    ++stats_.loop_closures_inconsistent;
+    return false;
+  }
   Constraint c{
       Constraint::LOOP_CLOSURE, submap_id,         node_id, s.local_pose.inverse() * refined,
       lo.translation_weight,    lo.rotation_weight};
@@ -671,6 +687,35 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   constraints_.push_back(c);
   ++stats_.loop_closures;
   return true;
+}
+
+bool Slam::ConsistentWithGraph(int node_id, int submap_id, const Rigid2d& measured) {
+  const Submap& s = submaps_[submap_id];
+  if (s.nodes.empty()) return true;
+  while (chain_drift_.size() < num_nodes()) {
+    chain_drift_.Add(nodes_[static_cast<size_t>(chain_drift_.size())].local_pose);
+  }
+  // The submap's part the scan matched was drawn by its nodes near the match: the drift that
+  // matters is along the path between one of them and this node. Nodes within a cell of the
+  // nearest are ties; the one closest along the path is taken.
+  const Eigen::Vector2d match_local = (s.local_pose * measured).translation();
+  const double tie_m = options_.local.resolution_m;
+  int reference = -1;
+  double best_distance_m = INFINITY;
+  for (int m : s.nodes) {
+    const double d = (nodes_[m].local_pose.translation() - match_local).norm();
+    if (d < best_distance_m - tie_m ||
+        (d < best_distance_m + tie_m && std::abs(m - node_id) < std::abs(reference - node_id))) {
+      best_distance_m = std::min(best_distance_m, d);
+      reference = m;
+    }
+  }
+  // The submap's axes are the local frame's (submaps are not rotated in it).
+  const auto& lo = options_.loop;
+  const Rigid2d predicted = submap_global_[submap_id].inverse() * node_global_[node_id];
+  return LoopClosureConsistent(chain_drift_, reference, node_id, predicted, measured,
+                               lo.consistency_match_sigma_m,
+                               lo.consistency_match_sigma_deg * kDegToRad, lo.consistency_max_chi2);
 }
 
 void Slam::RunOptimisation(int max_iterations) {
@@ -1068,6 +1113,7 @@ void Slam::Load(const std::string& path) {
   submap_global_ = std::move(submap_global);
   active_submaps_ = std::move(active);
   nodes_ = std::move(nodes);
+  chain_drift_.Clear();
   node_global_ = std::move(node_global);
   constraints_ = std::move(constraints);
   precomputations_.clear();

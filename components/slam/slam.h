@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "slam/grid.h"
+#include "slam/loop_consistency.h"
 #include "slam/pose_graph.h"
 #include "slam/relations.h"
 #include "slam/scan_matcher.h"
@@ -63,7 +64,8 @@ struct SlamStats {
   int64_t stopped_scans = 0;  // matched at the stop pose (unchanged_odometry_means_stopped)
   int64_t scans_waiting_for_odometry = 0;  // after a restart, before the first odometry
   int64_t loop_searches = 0, loop_closures = 0;
-  int64_t precomputations_built = 0;  // branch-and-bound stacks built (cache misses)
+  int64_t loop_closures_inconsistent = 0;  // found, then rejected by the consistency gate
+  int64_t precomputations_built = 0;       // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
@@ -170,6 +172,9 @@ class Slam {
   void FinishSubmap(int submap_id);
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
+  // Whether a loop closure (submap_from_node `measured`) agrees with the graph's current
+  // estimate within local SLAM's drift between the node and the submap (loop.consistency_*).
+  bool ConsistentWithGraph(int node_id, int submap_id, const Rigid2d& measured);
   const PrecomputationStack& Precomputation(int submap_id);
   void RunOptimisation(int max_iterations = 0);  // 0: graph.max_iterations
 
@@ -214,6 +219,7 @@ class Slam {
   std::vector<Node> nodes_;
   std::vector<Rigid2d> node_global_, submap_global_;
   std::vector<Constraint> constraints_;
+  ChainDrift chain_drift_;  // drift prefix sums over nodes_' local poses (extended on demand)
   Rigid2d global_from_local_;
   int nodes_since_optimisation_ = 0;
   int64_t loop_closures_at_last_optimisation_ = 0;

@@ -260,9 +260,10 @@ int main(int argc, char** argv) {
         (long long)s.stopped_scans, (long long)s.rejected_odometry, (long long)s.nodes,
         (long long)s.submaps);
     std::printf(
-        "loop closures %lld of %lld searches (%lld precomputation stacks built), optimisations "
-        "%lld\n",
-        (long long)s.loop_closures, (long long)s.loop_searches, (long long)s.precomputations_built,
+        "loop closures %lld of %lld searches (%lld inconsistent with the graph rejected, %lld "
+        "precomputation stacks built), optimisations %lld\n",
+        (long long)s.loop_closures, (long long)s.loop_searches,
+        (long long)s.loop_closures_inconsistent, (long long)s.precomputations_built,
         (long long)s.optimisations);
     std::printf(
         "data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final "

@@ -159,6 +159,19 @@ struct LoopClosureOptions {
   // best, less along one it cannot tell (a scan of one wall slides along it). Off: one weight
   // for every direction.
   bool weight_by_match_information = false;
+  // Consistency gate (loop_consistency.h): a closure is kept only when its squared Mahalanobis
+  // distance to the graph's current estimate of the same relative pose is at most
+  // consistency_max_chi2, with a covariance of local SLAM's drift along the path between the
+  // node and the submap's node nearest the match (random walk per sqrt(m) driven and per
+  // sqrt(rad) turned), plus two scan-to-submap matches' noise (the closure's and the
+  // submap node's own).
+  bool consistency_gate = false;
+  double consistency_drift_m_per_sqrt_m = 0.1;
+  double consistency_drift_deg_per_sqrt_rad = 1.15;
+  double consistency_drift_deg_per_sqrt_m = 0.5;
+  double consistency_match_sigma_m = 0.05;
+  double consistency_match_sigma_deg = 1.0;
+  double consistency_max_chi2 = 16.27;  // chi-square, 3 degrees of freedom, 99.9 %
   template <class V> void Visit(V& v) {
     v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
     v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
@@ -176,6 +189,20 @@ struct LoopClosureOptions {
     v("max_old_nodes_per_submap", max_old_nodes_per_submap, "A newly finished submap is searched for at most this many older nodes");
     v("weight_by_match_information", weight_by_match_information,
       "Loop closure translation weight per direction follows the match's information (a match along a wall pulls across it, not along it)");
+    v("consistency_gate", consistency_gate,
+      "Reject a loop closure inconsistent with the graph's current estimate, given local SLAM's drift along the path between its ends");
+    v("consistency_drift_m_per_sqrt_m", consistency_drift_m_per_sqrt_m,
+      "Consistency gate: local SLAM's position drift, std per sqrt(metre driven) (random walk)");
+    v("consistency_drift_deg_per_sqrt_rad", consistency_drift_deg_per_sqrt_rad,
+      "Consistency gate: heading drift, std (deg) per sqrt(radian turned)");
+    v("consistency_drift_deg_per_sqrt_m", consistency_drift_deg_per_sqrt_m,
+      "Consistency gate: heading drift, std (deg) per sqrt(metre driven)");
+    v("consistency_match_sigma_m", consistency_match_sigma_m,
+      "Consistency gate: std of one scan-to-submap match, translation (m)");
+    v("consistency_match_sigma_deg", consistency_match_sigma_deg,
+      "Consistency gate: std of one scan-to-submap match, rotation (deg)");
+    v("consistency_max_chi2", consistency_max_chi2,
+      "Consistency gate: largest squared Mahalanobis distance kept (16.27: chi-square, 3 dof, 99.9 %)");
   }
   void Validate(Validator& c) const {
     c.InRange("sampling_ratio", sampling_ratio, 0, 1);
@@ -184,6 +211,12 @@ struct LoopClosureOptions {
     c.That(max_cached_precomputations >= 1, "max_cached_precomputations", "must be >= 1");
     c.That(max_submaps_per_node >= 0, "max_submaps_per_node", "must be >= 0");
     c.That(max_old_nodes_per_submap >= 0, "max_old_nodes_per_submap", "must be >= 0");
+    c.NonNegative("consistency_drift_m_per_sqrt_m", consistency_drift_m_per_sqrt_m);
+    c.NonNegative("consistency_drift_deg_per_sqrt_rad", consistency_drift_deg_per_sqrt_rad);
+    c.NonNegative("consistency_drift_deg_per_sqrt_m", consistency_drift_deg_per_sqrt_m);
+    c.Positive("consistency_match_sigma_m", consistency_match_sigma_m);
+    c.Positive("consistency_match_sigma_deg", consistency_match_sigma_deg);
+    c.Positive("consistency_max_chi2", consistency_max_chi2);
   }
 };
 
