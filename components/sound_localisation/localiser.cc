@@ -151,12 +151,14 @@ void Localiser::Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* sta
 }
 
 void Localiser::AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
-                                   const std::vector<char>* mask) const {
+                                   const std::vector<char>* mask, BlockStatistics* plain) const {
   // Each bin's PHAT term weighted by its share of power above the noise (Wiener-like
   // 1 - noise / power, noise = the noise covariance's trace): noise-only bins add ~nothing, so
-  // a block's map is its sounds', whatever share of its frames they fill.
+  // a block's map is its sounds', whatever share of its frames they fill. `plain` (optional)
+  // gets the same frame unweighted, as Accumulate adds it.
   const int m = geometry_.num_mics();
   Eigen::VectorXcd x(m), y(m);
+  Eigen::MatrixXcd xx(m, m), yy(m, m);
   for (int k = bin_lo_; k <= bin_hi_; ++k) {
     if (mask && !(*mask)[k - bin_lo_]) continue;
     double power = 0;
@@ -170,10 +172,19 @@ void Localiser::AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatist
       const double mag = std::abs(x(i));
       y(i) = mag > 1e-20 ? x(i) / mag : ComplexD(0, 0);
     }
-    stats->raw[k - bin_lo_].noalias() += x * x.adjoint();
-    if (w > 0) stats->phat[k - bin_lo_].noalias() += w * (y * y.adjoint());
+    xx.noalias() = x * x.adjoint();
+    stats->raw[k - bin_lo_] += xx;
+    if (plain) {
+      yy.noalias() = y * y.adjoint();
+      plain->raw[k - bin_lo_] += xx;
+      plain->phat[k - bin_lo_] += yy;
+      if (w > 0) stats->phat[k - bin_lo_] += w * yy;
+    } else if (w > 0) {
+      stats->phat[k - bin_lo_].noalias() += w * (y * y.adjoint());
+    }
   }
   ++stats->num_frames;
+  if (plain) ++plain->num_frames;
 }
 
 void Localiser::ResetStream() {
@@ -226,10 +237,10 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
   const bool cfar = correlation_ != nullptr;
   current_active_ += active;
   if (cfar) {
-    AccumulateWeighted(spectra, &current_, &mask_);
     // Band peaks keep their own statistics: the loud frames, unweighted, as with the energy
     // gate (their coherence threshold is calibrated on those).
-    if (options_.band_hz > 0 && active) Accumulate(spectra, &current_band_, &mask_);
+    AccumulateWeighted(spectra, &current_, &mask_,
+                       options_.band_hz > 0 && active ? &current_band_ : nullptr);
   } else if (active) {
     Accumulate(spectra, &current_, &mask_);
   }

@@ -275,7 +275,7 @@ class Localiser {
   void AddBandPeaks(const BandSrpPhat& bands, const std::vector<std::vector<double>>& band_values,
                     std::vector<DoaEstimate>* out) const;
   void AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
-                          const std::vector<char>* mask) const;
+                          const std::vector<char>* mask, BlockStatistics* plain = nullptr) const;
 
   ArrayGeometry geometry_;
   LocaliserOptions options_;
