@@ -65,6 +65,8 @@ Localiser::Localiser(ArrayGeometry geometry, LocaliserOptions options,
   search_.min_separation_deg = options_.min_separation_deg;
   search_.min_peak_ratio = options_.min_peak_ratio;
   current_ = MakeStatistics();
+  current_band_ = MakeStatistics();
+  band_grid_units_ = SearchGridUnits(geometry_, search_);
   if (options_.detection == "cfar") {
     if (options_.method != "srp_phat")
       throw std::invalid_argument("detection cfar needs method srp_phat");
@@ -149,12 +151,14 @@ void Localiser::Accumulate(const Eigen::MatrixXcf& spectra, BlockStatistics* sta
 }
 
 void Localiser::AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
-                                   const std::vector<char>* mask) const {
+                                   const std::vector<char>* mask, BlockStatistics* plain) const {
   // Each bin's PHAT term weighted by its share of power above the noise (Wiener-like
   // 1 - noise / power, noise = the noise covariance's trace): noise-only bins add ~nothing, so
-  // a block's map is its sounds', whatever share of its frames they fill.
+  // a block's map is its sounds', whatever share of its frames they fill. `plain` (optional)
+  // gets the same frame unweighted, as Accumulate adds it.
   const int m = geometry_.num_mics();
   Eigen::VectorXcd x(m), y(m);
+  Eigen::MatrixXcd xx(m, m), yy(m, m);
   for (int k = bin_lo_; k <= bin_hi_; ++k) {
     if (mask && !(*mask)[k - bin_lo_]) continue;
     double power = 0;
@@ -168,10 +172,19 @@ void Localiser::AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatist
       const double mag = std::abs(x(i));
       y(i) = mag > 1e-20 ? x(i) / mag : ComplexD(0, 0);
     }
-    stats->raw[k - bin_lo_].noalias() += x * x.adjoint();
-    if (w > 0) stats->phat[k - bin_lo_].noalias() += w * (y * y.adjoint());
+    xx.noalias() = x * x.adjoint();
+    stats->raw[k - bin_lo_] += xx;
+    if (plain) {
+      yy.noalias() = y * y.adjoint();
+      plain->raw[k - bin_lo_] += xx;
+      plain->phat[k - bin_lo_] += yy;
+      if (w > 0) stats->phat[k - bin_lo_] += w * yy;
+    } else if (w > 0) {
+      stats->phat[k - bin_lo_].noalias() += w * (y * y.adjoint());
+    }
   }
   ++stats->num_frames;
+  if (plain) ++plain->num_frames;
 }
 
 void Localiser::ResetStream() {
@@ -223,10 +236,14 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
   OnsetMask(spectra, &onset_level_, &mask_);
   const bool cfar = correlation_ != nullptr;
   current_active_ += active;
-  if (cfar)
-    AccumulateWeighted(spectra, &current_, &mask_);
-  else if (active)
+  if (cfar) {
+    // Band peaks keep their own statistics: the loud frames, unweighted, as with the energy
+    // gate (their coherence threshold is calibrated on those).
+    AccumulateWeighted(spectra, &current_, &mask_,
+                       options_.band_hz > 0 && active ? &current_band_ : nullptr);
+  } else if (active) {
     Accumulate(spectra, &current_, &mask_);
+  }
   if (!active) {
     const double alpha = std::max(hop_s / options_.noise_average_s, 1.0 / (noise_frames_ + 1));
     Eigen::VectorXcd x(m);
@@ -242,6 +259,11 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
   window_total_frames_.push_back(current_frames_);
   window_active_.push_back(current_active_);
   current_ = MakeStatistics();
+  if (cfar && options_.band_hz > 0) {
+    window_band_.push_back(current_band_);
+    current_band_ = MakeStatistics();
+    while (static_cast<int>(window_band_.size()) > options_.window_blocks) window_band_.pop_front();
+  }
   current_frames_ = 0;
   current_active_ = 0;
   while (static_cast<int>(window_.size()) > options_.window_blocks) {
@@ -266,6 +288,15 @@ void Localiser::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
   if (cfar) {
     if (noise_frames_ > 10) stats.noise = noise_;
     estimates = Detect(stats);
+    if (options_.band_hz > 0 && loud) {
+      // Narrowband sources beside the detected ones: band peaks of the loud frames.
+      BlockStatistics band_stats = MakeStatistics();
+      for (const BlockStatistics& b : window_band_) band_stats.Add(b);
+      if (noise_frames_ > 10) band_stats.noise = noise_;
+      if (options_.noise_subtraction > 0 && !band_stats.noise.empty())
+        band_stats = SubtractNoiseCrossSpectra(band_stats, options_.noise_subtraction);
+      if (band_stats.num_frames > 0) AddBandPeaks(band_stats, &estimates);
+    }
     o.active = !estimates.empty();
   } else {
     o.active = loud;
@@ -473,7 +504,7 @@ std::vector<DoaEstimate> Localiser::Detect(const BlockStatistics& block) {
 std::vector<DoaEstimate> Localiser::EstimateWithBands(const BlockStatistics& stats) const {
   // One steering pass over the coarse grid gives the broadband spectrum and every band's.
   const BandSrpPhat bands(geometry_, stats, options_.band_hz);
-  const std::vector<Eigen::Vector3d> units = SearchGridUnits(geometry_, search_);
+  const std::vector<Eigen::Vector3d>& units = band_grid_units_;
   const int nb = bands.num_bands();
   std::vector<double> total(units.size()), per_band;
   std::vector<std::vector<double>> band_values(nb, std::vector<double>(units.size()));
@@ -484,7 +515,28 @@ std::vector<DoaEstimate> Localiser::EstimateWithBands(const BlockStatistics& sta
   const SrpPhat srp(geometry_, stats);
   std::vector<DoaEstimate> out = FindPeaksOnGrid(geometry_, search_, total, std::cref(srp));
   for (auto& p : out) p.confidence = std::clamp(p.power, 0.0, 1.0);
+  AddBandPeaks(bands, band_values, &out);
+  return out;
+}
 
+void Localiser::AddBandPeaks(const BlockStatistics& stats, std::vector<DoaEstimate>* out) const {
+  const BandSrpPhat bands(geometry_, stats, options_.band_hz);
+  const std::vector<Eigen::Vector3d>& units = band_grid_units_;
+  const int nb = bands.num_bands();
+  std::vector<double> per_band;
+  std::vector<std::vector<double>> band_values(nb, std::vector<double>(units.size()));
+  for (size_t i = 0; i < units.size(); ++i) {
+    bands.Evaluate(units[i], &per_band);
+    for (int b = 0; b < nb; ++b) band_values[b][i] = per_band[b];
+  }
+  AddBandPeaks(bands, band_values, out);
+}
+
+void Localiser::AddBandPeaks(const BandSrpPhat& bands,
+                             const std::vector<std::vector<double>>& band_values,
+                             std::vector<DoaEstimate>* out) const {
+  const std::vector<Eigen::Vector3d>& units = band_grid_units_;
+  const int nb = bands.num_bands();
   // Bands by their best coarse value; each adds its refined peak when it is coherent enough and
   // far from every direction already reported.
   std::vector<std::pair<double, int>> order;
@@ -501,7 +553,7 @@ std::vector<DoaEstimate> Localiser::EstimateWithBands(const BlockStatistics& sta
   one.max_sources = 1;
   int added = 0;
   auto far_from_all = [&](const Direction& d) {
-    for (const auto& e : out)
+    for (const auto& e : *out)
       if (AngularDistanceRad(geometry_, kind_, e.direction, d) < min_sep) return false;
     return true;
   };
@@ -516,10 +568,9 @@ std::vector<DoaEstimate> Localiser::EstimateWithBands(const BlockStatistics& sta
     e.confidence = std::clamp(e.power, 0.0, 1.0);
     e.band = b;
     e.band_hz = bands.band_centre_hz(b);
-    out.push_back(e);
+    out->push_back(e);
     ++added;
   }
-  return out;
 }
 
 }  // namespace sound

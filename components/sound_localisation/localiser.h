@@ -69,7 +69,8 @@ struct LocaliserOptions {
   // false_alarm_probability per block (Bonferroni over the grid, Gaussian values). Among the
   // directions that pass, the strongest is taken, refined, removed from every pair's
   // correlation (suppression), and the next searched, up to max_sources; a further source must
-  // be a local maximum of the block's map (secondary_local_max).
+  // be a local maximum of the block's map (secondary_local_max). With band_hz > 0, band peaks
+  // of the block's loud frames (energy gate) follow the detected directions.
   std::string detection = "activity";
   double false_alarm_probability = 0.01;
   double noise_map_s = 10.0;
@@ -188,8 +189,8 @@ struct LocaliserOptions {
     check.InRange("band_min_tonality", band_min_tonality, 0, 1);
     check.InRange("noise_subtraction", noise_subtraction, 0, 1);
     check.OneOf("detection", detection, {"activity", "cfar"});
-    check.That(detection != "cfar" || (method == "srp_phat" && band_hz == 0), "detection",
-               "cfar needs method srp_phat without band peaks (band_hz 0)");
+    check.That(detection != "cfar" || method == "srp_phat", "detection",
+               "cfar needs method srp_phat");
     check.That(false_alarm_probability > 0 && false_alarm_probability < 1,
                "false_alarm_probability", "must be in (0, 1)");
     check.Positive("noise_map_s", noise_map_s);
@@ -269,8 +270,12 @@ class Localiser {
   // cfar detection on one window's statistics.
   std::vector<DoaEstimate> Detect(const BlockStatistics& stats);
   bool IsGridLocalMax(const std::vector<double>& values, size_t index) const;
+  // Band peaks (band_hz > 0) of `stats` appended to `out` when far from every direction in it.
+  void AddBandPeaks(const BlockStatistics& stats, std::vector<DoaEstimate>* out) const;
+  void AddBandPeaks(const BandSrpPhat& bands, const std::vector<std::vector<double>>& band_values,
+                    std::vector<DoaEstimate>* out) const;
   void AccumulateWeighted(const Eigen::MatrixXcf& spectra, BlockStatistics* stats,
-                          const std::vector<char>* mask) const;
+                          const std::vector<char>* mask, BlockStatistics* plain = nullptr) const;
 
   ArrayGeometry geometry_;
   LocaliserOptions options_;
@@ -283,6 +288,10 @@ class Localiser {
   BlockStatistics current_;
   int current_frames_ = 0;
   std::deque<BlockStatistics> window_;
+  // cfar with band peaks: the loud frames' unweighted statistics, for the band peaks.
+  BlockStatistics current_band_;
+  std::deque<BlockStatistics> window_band_;
+  std::vector<Eigen::Vector3d> band_grid_units_;
   std::deque<int> window_total_frames_;
   int current_active_ = 0;  // frames the energy gate calls active (cfar accumulates all)
   std::deque<int> window_active_;

@@ -217,12 +217,14 @@ SoundClassEstimate SoundClassifier::Decide(const SoundClassFeatures& f,
                                            const SourceClassOptions& o) {
   SoundClassEstimate e;
   e.features = f;
-  if (f.present_s < o.min_present_s) return e;
+  if (f.present_s < std::min(o.min_present_s, o.min_voice_present_s)) return e;
+  const bool long_enough = f.present_s >= o.min_present_s;
   // Each margin is the distance past its threshold, relative to the threshold, clamped to 0..1.
   auto margin = [](double value, double threshold) {
     return std::clamp(std::abs(value - threshold) / std::max(threshold, 1e-9), 0.0, 1.0);
   };
   if (f.tonality >= o.tonal_min && f.flux <= o.tonal_max_flux) {
+    if (!long_enough) return e;
     const bool alarm = f.peak_share >= o.alarm_peak_share;
     e.sound_class = alarm ? SoundClass::kAlarm : SoundClass::kMusic;
     e.confidence = std::min({margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux),
@@ -233,6 +235,7 @@ SoundClassEstimate SoundClassifier::Decide(const SoundClassFeatures& f,
         {std::max(margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux)),
          margin(f.syllabic, o.voice_syllabic_min), margin(f.level_std_db, o.steady_level_std_db)});
   } else {
+    if (!long_enough) return e;
     e.sound_class = SoundClass::kMachinery;
     e.confidence =
         std::min(std::max(margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux)),
@@ -240,7 +243,9 @@ SoundClassEstimate SoundClassifier::Decide(const SoundClassFeatures& f,
                           margin(f.level_std_db, o.steady_level_std_db)));
   }
   // Little sound heard: less sure.
-  e.confidence *= std::min(1.0, f.present_s / (2 * std::max(o.min_present_s, 1e-3)));
+  const double needed =
+      e.sound_class == SoundClass::kVoice ? o.min_voice_present_s : o.min_present_s;
+  e.confidence *= std::min(1.0, f.present_s / (2 * std::max(needed, 1e-3)));
   return e;
 }
 
@@ -293,6 +298,17 @@ void DirectionalClassifier::ResetStream() {
 }
 
 void DirectionalClassifier::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample) {
+  // The last replay_s of frames wait for a track that starts later: the block that first
+  // reports a source holds the start of its sound (a short call may be little more).
+  recent_.push_back({spectra, end_sample});
+  const int64_t keep =
+      static_cast<int64_t>(std::llround(options_.replay_s * geometry_.sample_rate_hz));
+  while (!recent_.empty() && recent_.front().end_sample <= end_sample - keep) recent_.pop_front();
+  AddFrame(spectra, end_sample, tracks_.size());
+}
+
+void DirectionalClassifier::AddFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample,
+                                     size_t only) {
   if (tracks_.empty()) return;
   const int m = geometry_.num_mics();
   const size_t n = tracks_.size();
@@ -333,12 +349,14 @@ void DirectionalClassifier::OnFrame(const Eigen::MatrixXcf& spectra, int64_t end
   }
   // Bins of other sources stay masked out (-1), not zero: the spectral shape is this track's.
   // A direction that holds most of the frame's energy sounds in it, reported or not.
-  for (size_t t = 0; t < n; ++t)
+  for (size_t t = 0; t < n; ++t) {
+    if (only < n && t != only) continue;
     tracks_[t].classifier->AddFrame(
         powers[t], end_sample,
         options_.dominant_share > 0 && owned_energy[t] >= options_.dominant_share * band_energy ? 1
                                                                                                 : 0,
         owned_energy[t]);
+  }
 }
 
 std::vector<SoundClassEstimate> DirectionalClassifier::Observe(
@@ -378,6 +396,7 @@ std::vector<SoundClassEstimate> DirectionalClassifier::Observe(
       used.push_back(0);
       best = static_cast<int>(tracks_.size()) - 1;
     }
+    const bool started = tracks_[best].classifier->frames_seen() == 0;
     ClassTrack& t = tracks_[best];
     used[best] = 1;
     t.direction = d;
@@ -390,6 +409,9 @@ std::vector<SoundClassEstimate> DirectionalClassifier::Observe(
         t.conj_steering(k - bin_lo_, i) = std::polar(1.0, w * delays(i));
     }
     t.last_sample = end_sample;
+    if (started)
+      for (const RecentFrame& f : recent_)
+        if (f.end_sample > begin_sample) AddFrame(f.spectra, f.end_sample, best);
     t.classifier->MarkPresent(begin_sample, end_sample);
     out.push_back(t.classifier->Classify());
   }

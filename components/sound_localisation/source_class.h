@@ -25,9 +25,10 @@
 // recordings (source_class_test): speech has T 0.29-0.47, syllabic 0.8-2.2, level std 6-10 dB;
 // machinery and noise T 0.15, syllabic 0.05, level std 0.4 dB; tones and sirens T > 0.9. The
 // flux keeps speech (X 0.19-0.28; T up to 0.57) out of the tonal classes (X 0.02-0.09).
-// A source heard for less than min_present_s is kUnknown. A frame sounds (is present) when
-// its energy is within present_range_db of the loudest recent frame (one recording) or when
-// the caller says so (a localiser reported the source in that block).
+// A source heard for less than min_present_s is kUnknown, except a voice, decided from
+// min_voice_present_s (a short call); a tonal or steady sound that short stays kUnknown. A frame
+// sounds (is present) when its energy is within present_range_db of the loudest recent frame (one
+// recording) or when the caller says so (a localiser reported the source in that block).
 //
 // DirectionalClassifier gives each direction reported by a localiser its own spectrum: a
 // time-frequency bin belongs to the direction whose steering vector a explains it best,
@@ -62,8 +63,11 @@ struct SourceClassOptions {
   // features use the same band.
   double min_frequency_hz = 1000;
   double max_frequency_hz = 7000;
-  double history_s = 4.0;          // features over this much of a source's recent frames
-  double min_present_s = 0.75;     // less sound than this: kUnknown
+  double history_s = 4.0;       // features over this much of a source's recent frames
+  double min_present_s = 0.75;  // less sound than this: kUnknown (voice: below)
+  // A voice is decided from this much sound: a call for help may be half a second, while
+  // alarms, music and machines sound for longer and wait for min_present_s.
+  double min_voice_present_s = 0.25;
   double present_range_db = 20.0;  // one recording: frames this far below the loudest are pauses
   double tonal_min = 0.6;
   double tonal_max_flux = 0.15;
@@ -76,6 +80,9 @@ struct SourceClassOptions {
   // A frame also sounds for a direction that owns this share of its band energy, reported or
   // not (0: only reported blocks sound).
   double dominant_share = 0.0;
+  // A new class track first takes the frames of the last replay_s that end after the start of
+  // the block that reported it (the start of its sound).
+  double replay_s = 1.0;
   double gate_deg = 20.0;  // a reported direction continues the nearest class track within this
   double forget_s = 20.0;  // a class track not reported for this long is dropped
   int max_tracks = 8;
@@ -87,7 +94,10 @@ struct SourceClassOptions {
     v("min_frequency_hz", min_frequency_hz, "lowest frequency of the features");
     v("max_frequency_hz", max_frequency_hz, "highest frequency of the features");
     v("history_s", history_s, "features over this much of a source's recent frames");
-    v("min_present_s", min_present_s, "a source heard for less than this is unknown");
+    v("min_present_s", min_present_s,
+      "a source heard for less than this is unknown (a voice: min_voice_present_s)");
+    v("min_voice_present_s", min_voice_present_s,
+      "a voice is decided from this much sound (a short call)");
     v("present_range_db", present_range_db,
       "one recording: frames this far below the loudest are pauses");
     v("tonal_min", tonal_min, "mean tonality (3 peaks' share of the power) of alarms and music");
@@ -104,6 +114,8 @@ struct SourceClassOptions {
     v("dominant_share", dominant_share,
       "a frame also sounds for a direction owning this share of its band energy, reported or not "
       "(0: off)");
+    v("replay_s", replay_s,
+      "a new class track first takes the frames of its reporting block kept this long");
     v("gate_deg", gate_deg, "a reported direction continues the nearest class track within this");
     v("forget_s", forget_s, "a class track not reported for this long is dropped");
     v("max_tracks", max_tracks, "most class tracks kept");
@@ -117,6 +129,7 @@ struct SourceClassOptions {
                "must exceed min_frequency_hz");
     check.Positive("history_s", history_s);
     check.InRange("min_present_s", min_present_s, 0, history_s);
+    check.InRange("min_voice_present_s", min_voice_present_s, 0, min_present_s);
     check.Positive("present_range_db", present_range_db);
     check.InRange("tonal_min", tonal_min, 0, 1);
     check.InRange("tonal_max_flux", tonal_max_flux, 0, 1);
@@ -126,6 +139,7 @@ struct SourceClassOptions {
     check.InRange("min_bin_coherence", min_bin_coherence, 0, 1);
     check.InRange("bin_margin", bin_margin, 0, 1);
     check.InRange("dominant_share", dominant_share, 0, 1);
+    check.NonNegative("replay_s", replay_s);
     check.Positive("gate_deg", gate_deg);
     check.Positive("forget_s", forget_s);
     check.That(max_tracks >= 1, "max_tracks", "must be >= 1");
@@ -216,6 +230,14 @@ class DirectionalClassifier {
     std::unique_ptr<SoundClassifier> classifier;
   };
   void OnFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample);
+  // One frame's bins shared out among the tracks; only the track `only` gets it when
+  // only < tracks_.size().
+  void AddFrame(const Eigen::MatrixXcf& spectra, int64_t end_sample, size_t only);
+  struct RecentFrame {
+    Eigen::MatrixXcf spectra;
+    int64_t end_sample = 0;
+  };
+  std::deque<RecentFrame> recent_;
   ArrayGeometry geometry_;
   DoaKind kind_;
   SourceClassOptions options_;

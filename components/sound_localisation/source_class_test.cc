@@ -51,6 +51,22 @@ SoundClassEstimate ClassifyMono(const std::vector<float>& x, SourceClassOptions 
   return classifier.Classify();
 }
 
+// As a localiser's reports decide it: only the frames of (begin_s, end_s] sound.
+SoundClassEstimate ClassifyReported(const std::vector<float>& x, double begin_s, double end_s,
+                                    const SourceClassOptions& options) {
+  SoundClassifier classifier(options, kRate);
+  MultichannelStft stft(1, options.fft_size, options.hop_size);
+  std::vector<std::vector<float>> channels{x};
+  std::vector<float> power(options.fft_size / 2 + 1);
+  stft.PushFloat(channels, 0, x.size(), [&](const Eigen::MatrixXcf& s, int64_t end) {
+    for (int k = 0; k < s.rows(); ++k) power[k] = std::norm(s(k, 0));
+    classifier.AddFrame(power, end, 0);
+  });
+  classifier.MarkPresent(static_cast<int64_t>(begin_s * kRate),
+                         static_cast<int64_t>(end_s * kRate));
+  return classifier.Classify();
+}
+
 std::string Describe(const SoundClassEstimate& e) {
   char buf[256];
   std::snprintf(
@@ -168,6 +184,73 @@ TEST(SourceClassTest, SynthesisedClasses) {
     const auto e = ClassifyMono(WithNoise(cases[i].signal, 25, static_cast<uint32_t>(100 + i)));
     std::printf("%s: %s\n", cases[i].name.c_str(), Describe(e).c_str());
     EXPECT_EQ(e.sound_class, cases[i].expected) << cases[i].name << ": " << Describe(e);
+  }
+}
+
+// The first `seconds` of a recording's speech (from its first frame within 20 dB of its
+// loudest), with 0.5 s of silence either side: one short call.
+std::vector<float> ShortCall(const std::vector<float>& x, double seconds) {
+  const size_t hop = 256;
+  double loudest = 0;
+  std::vector<double> energy;
+  for (size_t i = 0; i + hop <= x.size(); i += hop) {
+    double e = 0;
+    for (size_t j = i; j < i + hop; ++j) e += x[j] * x[j];
+    energy.push_back(e);
+    loudest = std::max(loudest, e);
+  }
+  size_t start = 0;
+  while (start < energy.size() && energy[start] < loudest * 0.01) ++start;
+  std::vector<float> out(kRate / 2, 0.0f);
+  const size_t first = start * hop, n = static_cast<size_t>(seconds * kRate);
+  for (size_t i = first; i < std::min(x.size(), first + n); ++i) out.push_back(x[i]);
+  out.insert(out.end(), kRate / 2, 0.0f);
+  return out;
+}
+
+// A short call is classed from the little of it there is: the first 0.5 and 1 s of each
+// recording's speech are voice; tones, noise, machinery and a siren as short are not.
+TEST(SourceClassTest, ShortCallsAreVoiceShortTonesAndNoiseAreNot) {
+  const auto files = SpeechFiles();
+  if (files.empty()) GTEST_SKIP() << "no speech recordings under " << SARMAP_DATA_DIR << "/audio";
+  const SourceClassOptions options;
+  for (double seconds : {0.5, 1.0}) {
+    int right = 0;
+    for (size_t i = 0; i < files.size(); ++i) {
+      const auto buffer = audio::ReadAudioFile(files[i]);
+      const auto call = ShortCall(Normalised(buffer.channels[0]), seconds);
+      const auto e = ClassifyReported(WithNoise(call, 25, static_cast<uint32_t>(40 + i)), 0.5,
+                                      0.5 + seconds, options);
+      std::printf("%.1f s of %s: %s\n", seconds, std::filesystem::path(files[i]).filename().c_str(),
+                  Describe(e).c_str());
+      right += e.sound_class == SoundClass::kVoice;
+    }
+    // Of half a second of speech, 0.19-0.5 s are within 20 dB of its loudest frame.
+    EXPECT_GE(right, static_cast<int>((seconds < 1 ? 0.8 : 0.9) * files.size()))
+        << right << " of " << files.size() << " calls of " << seconds << " s";
+  }
+  auto padded = [](std::vector<float> x) {
+    x = Normalised(std::move(x));
+    x.insert(x.begin(), kRate / 2, 0.0f);
+    x.insert(x.end(), kRate / 2, 0.0f);
+    return x;
+  };
+  for (double seconds : {0.5, 1.0, 2.0}) {
+    const std::vector<std::pair<std::string, std::vector<float>>> cases = {
+        {"tone 1.5 kHz", Beeper(seconds, 1500, 10, 0)},
+        {"tone 3 kHz", Beeper(seconds, 3000, 10, 0)},
+        {"beeper 2.8 kHz", Beeper(seconds, 2800, 0.15, 0.1)},
+        {"siren", TwoToneSiren(seconds, 2800, 2200)},
+        {"white noise", testing_util::WhiteNoise(static_cast<size_t>(seconds * kRate), 11)},
+        {"machinery 50 Hz", Machinery(seconds, 50, 12)},
+    };
+    for (size_t i = 0; i < cases.size(); ++i) {
+      const auto e = ClassifyReported(WithNoise(padded(cases[i].second), 25, 200 + i), 0.5,
+                                      0.5 + seconds, options);
+      std::printf("%.1f s of %s: %s\n", seconds, cases[i].first.c_str(), Describe(e).c_str());
+      EXPECT_NE(e.sound_class, SoundClass::kVoice)
+          << seconds << " s of " << cases[i].first << ": " << Describe(e);
+    }
   }
 }
 
