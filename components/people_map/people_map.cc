@@ -124,24 +124,34 @@ Person* PeopleMap::NearestSeen(const Eigen::Vector3d& position_m, double radius_
   return best;
 }
 
+bool PeopleMap::SettledWithSighting(const Person& p, Eigen::Vector3d* x_out,
+                                    Eigen::Matrix3d* P_out) const {
+  // The current sighting: its detections' information-weighted mean, with their averaged
+  // sensor noise plus the sighting's one pose error; fused with what earlier sightings settled.
+  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
+  const Eigen::Matrix3d sensor = p.sighting_information.inverse();
+  const Eigen::Vector3d x = sensor * p.sighting_information_position;
+  const Eigen::Matrix3d P = Floor(sensor + p.sighting_pose_covariance, min_var);
+  if (!x.allFinite() || !P.allFinite()) return false;
+  if (!p.has_settled) {
+    *x_out = x;
+    *P_out = P;
+    return true;
+  }
+  Eigen::Matrix3d fused_P;
+  Fuse(p.settled_position_m, p.settled_covariance, x, P, x_out, &fused_P);
+  *P_out = Floor(fused_P, min_var);
+  return true;
+}
+
 void PeopleMap::CloseSighting(Person* p) const {
   if (p->sighting_detections == 0) return;
-  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
-  const Eigen::Matrix3d sensor = p->sighting_information.inverse();
-  const Eigen::Vector3d x = sensor * p->sighting_information_position;
-  const Eigen::Matrix3d P = Floor(sensor + p->sighting_pose_covariance, min_var);
-  if (x.allFinite() && P.allFinite()) {
-    if (p->has_settled) {
-      Eigen::Vector3d fused_x;
-      Eigen::Matrix3d fused_P;
-      Fuse(p->settled_position_m, p->settled_covariance, x, P, &fused_x, &fused_P);
-      p->settled_position_m = fused_x;
-      p->settled_covariance = Floor(fused_P, min_var);
-    } else {
-      p->settled_position_m = x;
-      p->settled_covariance = P;
-      p->has_settled = true;
-    }
+  Eigen::Vector3d x;
+  Eigen::Matrix3d P;
+  if (SettledWithSighting(*p, &x, &P)) {
+    p->settled_position_m = x;
+    p->settled_covariance = P;
+    p->has_settled = true;
   }
   p->sighting_track_id = -1;
   p->sighting_detections = 0;
@@ -151,32 +161,22 @@ void PeopleMap::CloseSighting(Person* p) const {
 }
 
 void PeopleMap::UpdateSeen(Person* p) const {
-  const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
   if (p->sighting_detections == 0) {
     if (!p->has_settled) return;
     p->seen_position_m = p->settled_position_m;
     p->seen_covariance = p->settled_covariance;
     return;
   }
-  const Eigen::Matrix3d sensor = p->sighting_information.inverse();
-  const Eigen::Vector3d x = sensor * p->sighting_information_position;
-  const Eigen::Matrix3d P = Floor(sensor + p->sighting_pose_covariance, min_var);
-  if (!x.allFinite() || !P.allFinite()) return;
-  if (p->has_settled) {
-    Eigen::Vector3d fused_x;
-    Eigen::Matrix3d fused_P;
-    Fuse(p->settled_position_m, p->settled_covariance, x, P, &fused_x, &fused_P);
-    p->seen_position_m = fused_x;
-    p->seen_covariance = Floor(fused_P, min_var);
-  } else {
-    p->seen_position_m = x;
-    p->seen_covariance = P;
-  }
+  Eigen::Vector3d x;
+  Eigen::Matrix3d P;
+  if (!SettledWithSighting(*p, &x, &P)) return;
+  p->seen_position_m = x;
+  p->seen_covariance = P;
 }
 
 void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detections,
-                        const common::Rigid3d& map_from_camera, const Eigen::Matrix3d& pose_covariance,
-                        const Eigen::Vector2d& robot_xy) {
+                        const common::Rigid3d& map_from_camera,
+                        const Eigen::Matrix3d& pose_covariance, const Eigen::Vector2d& robot_xy) {
   const Eigen::Matrix3d R = map_from_camera.rotation().toRotationMatrix();
   const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
   std::map<int64_t, int> count_this_frame;
@@ -230,7 +230,8 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
       for (auto& [id, q] : people_) {
         if (q.has_seen || !q.has_heard) continue;
         if ((q.heard_position_m - z).head<2>().norm() <= options_.fuse_max_distance_m &&
-            PlanarMahalanobis2(q.heard_position_m, q.heard_covariance, z, Pz) <= options_.fuse_gate_chi2) {
+            PlanarMahalanobis2(q.heard_position_m, q.heard_covariance, z, Pz) <=
+                options_.fuse_gate_chi2) {
           p = &q;
           break;
         }
@@ -273,7 +274,8 @@ void PeopleMap::MergeCloseSeenPeople() {
     for (auto b = std::next(a); b != people_.end();) {
       Person& pa = a->second;
       Person& pb = b->second;
-      if (!pb.has_seen || (pa.seen_position_m - pb.seen_position_m).head<2>().norm() > options_.merge_radius_m ||
+      if (!pb.has_seen ||
+          (pa.seen_position_m - pb.seen_position_m).head<2>().norm() > options_.merge_radius_m ||
           (pa.has_heard && pb.has_heard && pa.sound_source_id != pb.sound_source_id)) {
         ++b;
         continue;
@@ -389,11 +391,13 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     auto& calls = source_call_utimes_[best->id];
     calls.erase(std::remove_if(calls.begin(), calls.end(),
                                [&](Utime t) {
-                                 return common::UtimeToSeconds(utime - t) > options_.heard_person_window_s;
+                                 return common::UtimeToSeconds(utime - t) >
+                                        options_.heard_person_window_s;
                                }),
                 calls.end());
     // Several keywords of one utterance are one call.
-    if (calls.empty() || std::abs(common::UtimeToSeconds(utime - calls.back())) >= options_.same_call_s)
+    if (calls.empty() ||
+        std::abs(common::UtimeToSeconds(utime - calls.back())) >= options_.same_call_s)
       calls.push_back(utime);
     // Not yet placed: one call may be a keyword false alarm, and an initialising source's
     // position is a guess; UpdateSoundSources places the person once both are settled.
@@ -402,9 +406,10 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     if (!p) {
       for (auto& [id, q] : people_) {
         if (q.has_heard || !q.has_seen) continue;
-        if ((q.seen_position_m - best->position_m).head<2>().norm() <= options_.fuse_max_distance_m &&
-            PlanarMahalanobis2(q.seen_position_m, q.seen_covariance, best->position_m, best->covariance) <=
-                options_.fuse_gate_chi2) {
+        if ((q.seen_position_m - best->position_m).head<2>().norm() <=
+                options_.fuse_max_distance_m &&
+            PlanarMahalanobis2(q.seen_position_m, q.seen_covariance, best->position_m,
+                               best->covariance) <= options_.fuse_gate_chi2) {
           p = &q;
           break;
         }
@@ -446,7 +451,8 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
     for (auto& [id, q] : people_) {
       if (q.sound_source_id == s.id) linked = &q;
     }
-    if (!linked && source_alias_.count(s.id) && people_.count(source_alias_[s.id])) continue;  // merged duplicate
+    if (!linked && source_alias_.count(s.id) && people_.count(source_alias_[s.id]))
+      continue;  // merged duplicate
     if (linked) {
       // The sound map refines the position as the robot moves.
       linked->heard_position_m = s.position_m;
@@ -476,7 +482,8 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
     if (heard.has_heard && !heard.has_seen) {
       for (auto& [id, seen] : people_) {
         if (!seen.has_seen || seen.has_heard) continue;
-        if ((seen.seen_position_m - heard.heard_position_m).head<2>().norm() <= options_.fuse_max_distance_m &&
+        if ((seen.seen_position_m - heard.heard_position_m).head<2>().norm() <=
+                options_.fuse_max_distance_m &&
             PlanarMahalanobis2(seen.seen_position_m, seen.seen_covariance, heard.heard_position_m,
                                heard.heard_covariance) <= options_.fuse_gate_chi2) {
           seen.has_heard = true;
@@ -487,7 +494,8 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
           if (!heard.keyword.empty()) seen.keyword = heard.keyword;
           seen.num_detections += heard.num_detections;
           seen.confidence = std::max(seen.confidence, heard.confidence);
-          seen.first_detected_utime = std::min(seen.first_detected_utime, heard.first_detected_utime);
+          seen.first_detected_utime =
+              std::min(seen.first_detected_utime, heard.first_detected_utime);
           seen.last_detected_utime = std::max(seen.last_detected_utime, heard.last_detected_utime);
           Refuse(&seen);
           merged = true;
@@ -500,11 +508,13 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
     if (!merged && heard.has_heard && !heard.has_seen) {
       for (auto& [id, other] : people_) {
         if (id == heard.id || !other.has_heard || (!other.has_seen && id > heard.id)) continue;
-        if ((other.position_m - heard.heard_position_m).head<2>().norm() > options_.merge_radius_m) continue;
+        if ((other.position_m - heard.heard_position_m).head<2>().norm() > options_.merge_radius_m)
+          continue;
         source_alias_[heard.sound_source_id] = id;
         other.num_detections += heard.num_detections;
         other.confidence = std::max(other.confidence, heard.confidence);
-        other.first_detected_utime = std::min(other.first_detected_utime, heard.first_detected_utime);
+        other.first_detected_utime =
+            std::min(other.first_detected_utime, heard.first_detected_utime);
         other.last_detected_utime = std::max(other.last_detected_utime, heard.last_detected_utime);
         merged = true;
         break;

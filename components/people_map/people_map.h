@@ -34,19 +34,21 @@ namespace people_map {
 
 struct PeopleMapOptions {
   double merge_radius_m = 0.45;
-  double fuse_gate_chi2 = 9.21;         // 99 % for 2 dof: heard and seen agree
-  double fuse_max_distance_m = 1.5;     // and never further apart than this
-  double heard_gate_chi2 = 6.63;        // 99 % for 1 dof: a heard direction points at a source
+  double fuse_gate_chi2 = 9.21;      // 99 % for 2 dof: heard and seen agree
+  double fuse_max_distance_m = 1.5;  // and never further apart than this
+  double heard_gate_chi2 = 6.63;     // 99 % for 1 dof: a heard direction points at a source
   double min_direction_sigma_rad = 0.05;
-  double min_position_sigma_m = 0.05;   // floor of a seen person's position std
+  double min_position_sigma_m = 0.05;  // floor of a seen person's position std
   double confidence_gain = 0.5;
   double confidence_half_life_s = 300.0;
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
-  double heard_person_window_s = 30.0;  // a source counts as a person this long after a heard detection
+  double heard_person_window_s =
+      30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
   // ... or one known to this largest planar std (m), converged or not (0: converged only).
   double heard_max_source_sigma_m = 0.0;
-  int min_heard_calls = 2;  // calls towards a source (within heard_person_window_s) to make it a person
+  int min_heard_calls =
+      2;  // calls towards a source (within heard_person_window_s) to make it a person
   // One utterance often fires several keywords at once ("here", "help", "assist" within 0.3 s): the
   // hits towards one source closer than this to its previous call are that same call.
   double same_call_s = 2.0;
@@ -62,17 +64,24 @@ struct PeopleMapOptions {
   template <class V>
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
-    v("fuse_gate_chi2", fuse_gate_chi2, "Mahalanobis gate (2 dof) for a heard and a seen person to be one");
-    v("fuse_max_distance_m", fuse_max_distance_m, "a heard and a seen person further apart are never fused");
-    v("heard_gate_chi2", heard_gate_chi2, "gate (1 dof) for a heard direction to point at a sound source");
+    v("fuse_gate_chi2", fuse_gate_chi2,
+      "Mahalanobis gate (2 dof) for a heard and a seen person to be one");
+    v("fuse_max_distance_m", fuse_max_distance_m,
+      "a heard and a seen person further apart are never fused");
+    v("heard_gate_chi2", heard_gate_chi2,
+      "gate (1 dof) for a heard direction to point at a sound source");
     v("min_direction_sigma_rad", min_direction_sigma_rad, "floor of a heard direction's std");
     v("min_position_sigma_m", min_position_sigma_m, "floor of a seen person's position std");
     v("confidence_gain", confidence_gain, "how fast confidence grows with each detection (0..1)");
-    v("confidence_half_life_s", confidence_half_life_s, "confidence halves after this long without evidence");
-    v("min_report_confidence", min_report_confidence, "people below this confidence are not reported");
-    v("heard_person_window_s", heard_person_window_s, "a sound source stays a person this long after being heard calling");
+    v("confidence_half_life_s", confidence_half_life_s,
+      "confidence halves after this long without evidence");
+    v("min_report_confidence", min_report_confidence,
+      "people below this confidence are not reported");
+    v("heard_person_window_s", heard_person_window_s,
+      "a sound source stays a person this long after being heard calling");
     v("heard_needs_converged_source", heard_needs_converged_source,
-      "a heard-only person is placed only at a converged sound source; a call towards an initialising "
+      "a heard-only person is placed only at a converged sound source; a call towards an "
+      "initialising "
       "source is remembered and places the person when the source converges");
     v("heard_max_source_sigma_m", heard_max_source_sigma_m,
       "with heard_needs_converged_source: a source whose largest planar position std is at most "
@@ -81,7 +90,8 @@ struct PeopleMapOptions {
       "a sound source becomes a heard person only after this many keyword calls towards it within "
       "heard_person_window_s: one keyword false alarm is not a person");
     v("same_call_s", same_call_s,
-      "keyword hits towards a source within this long of its previous call are one call (one utterance "
+      "keyword hits towards a source within this long of its previous call are one call (one "
+      "utterance "
       "often fires several keywords); 0: every hit is a call");
     v("track_gap_s", track_gap_s,
       "a detector track id seen again after longer than this is another track (one sighting "
@@ -143,7 +153,7 @@ struct Person {
   int64_t id = -1;
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // fused estimate, map frame
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
-  double confidence = 0;                // at last_detected_utime
+  double confidence = 0;  // at last_detected_utime
   uint8_t cues = 0;
   int num_detections = 0;
   int people_count = 1;
@@ -224,6 +234,9 @@ class PeopleMap {
   void AddEvidence(Person* p, common::Utime utime, double detection_confidence) const;
   void Refuse(Person* p) const;  // recompute the fused estimate from seen and heard
   void MergeCloseSeenPeople();
+  // What the person's settled sightings and the current one say together; false when the
+  // current one is degenerate.
+  bool SettledWithSighting(const Person& p, Eigen::Vector3d* x, Eigen::Matrix3d* P) const;
   // The current sighting is fused into the settled estimate and closed.
   void CloseSighting(Person* p) const;
   // seen_position_m / seen_covariance from the settled estimate and the current sighting.
