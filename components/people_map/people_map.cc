@@ -638,11 +638,11 @@ bool PeopleMap::Load(const std::string& path) {
       const int64_t id = n["source_id"].as<int64_t>();
       heard[id] = n["heard_utime"].as<int64_t>();
       keywords[id] = n["keyword"].as<std::string>();
-      if (n["call_utimes"])  // absent in files saved before session 6
+      if (n["call_utimes"])  // optional: older state files lack it
         for (const auto& c : n["call_utimes"]) calls[id].push_back(c.as<int64_t>());
     }
     std::map<int64_t, int64_t> aliases;
-    for (const auto& n : root["source_aliases"])  // absent in files saved before session 8
+    for (const auto& n : root["source_aliases"])  // optional: older state files lack it
       aliases[n["source_id"].as<int64_t>()] = n["person_id"].as<int64_t>();
     next_id_ = root["next_id"].as<int64_t>();
     people_ = std::move(people);

@@ -475,8 +475,8 @@ TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
 }
 
 // kill -9 of the people map between a hidden caller's two heard calls: the restarted map must
-// still count the first, or it needs two more (the session-6 kill mission missed her so, with her
-// sound source 0.16 m from her).
+// still count the first, else it needs two more calls, and a caller whose sound source lies 0.16 m
+// from her can stay unfound for the rest of a mission killed once.
 TEST(PeopleMapTest, CallsHeardBeforeARestartStillCount) {
   const SoundSource source = SourceAt(5, {3.0, 3.0, 0.5}, {0.02, 0.02, 0.1}, true);
   const HeardDetection call = HelpCallTowards(3.0, 3.0);

@@ -115,7 +115,7 @@ struct LinearSimConfig {
   // Landmarks per m^2 of floor (heights +-1.5 m): 15 gives ~195 seen per keyframe, the map points
   // an ORB-SLAM2 RGB-D tracker keeps of the 1000 ORB features per image that the thesis' own
   // settings extract (SSM_LinearArray kinect_settings.yaml: ORBextractor.nFeatures 1000).
-  // Sessions 1-9 used 2 (~25 per keyframe; 0.6 left poses 1.2-1.6 deg off).
+  // 2 gives ~25 per keyframe (the unit tests' density); 0.6 leaves the poses 1.2-1.6 deg off.
   double landmark_density_per_m2 = 15.0;
   double landmark_range_m = 4.0;
   double landmark_fov_rad = 60 * M_PI / 180;  // half angle

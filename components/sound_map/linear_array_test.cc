@@ -219,7 +219,7 @@ class Table51 : public ::testing::Test {
     c.seed = seed;
     c.doa_generator = cal_.generator;
     c.doa_quantum_rad = kQuantum;
-    // 2 landmarks per m^2 (sessions 1-9): these tests pin behaviour on given seeds and stay
+    // 2 landmarks per m^2 (~25 per keyframe): these tests pin behaviour on given seeds and stay
     // short; the default 15 (README's Table 5.1) makes each run ~7x longer.
     c.landmark_density_per_m2 = 2;
     return c;
