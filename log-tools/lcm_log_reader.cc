@@ -125,6 +125,14 @@ LogMessageFilter::LogMessageFilter(const common::StampGateOptions& options) : ga
 
 bool LogMessageFilter::Accept(const LogEvent& event) {
   const std::string type = SarmapTypeName(event.data);
+  // Only sarmap messages are checked against the bus key: nothing reads the others (liblcm's
+  // LCM_SELF_TEST).
+  size_t payload_size = 0;
+  if (!type.empty() && !bus_auth_.Verify(event.channel, event.data.data(), event.data.size(),
+                                         &payload_size, nullptr)) {
+    ++not_signed_;
+    return false;
+  }
   for (const auto& spec : common::DefaultChannels()) {
     if (event.channel == spec.channel && type != spec.type) {
       ++wrong_type_;
@@ -140,9 +148,15 @@ bool LogMessageFilter::Accept(const LogEvent& event) {
 }
 
 std::string LogMessageFilter::Summary() const {
-  if (wrong_type_ == 0 && off_clock() == 0) return "";
-  return std::to_string(wrong_type_) + " messages of another type than their channel's and " +
-         std::to_string(off_clock()) + " stamped far ahead of their channel's clock skipped";
+  if (wrong_type_ == 0 && off_clock() == 0 && not_signed_ == 0) return "";
+  std::string summary = std::to_string(wrong_type_) +
+                        " messages of another type than their channel's and " +
+                        std::to_string(off_clock()) +
+                        " stamped far ahead of their channel's clock skipped";
+  if (bus_auth_.keyed()) {
+    summary += ", and " + std::to_string(not_signed_) + " not signed with the bus key";
+  }
+  return summary;
 }
 
 }  // namespace logtools

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/bus_auth.h"
 #include "common/stamp_gate.h"
 
 namespace sarmap {
@@ -72,18 +73,25 @@ bool ReadSarmapHeader(const std::vector<uint8_t>& data, int64_t* utime, int64_t*
 // stream per channel, on the log's receive times, as the nodes gate their inputs live (default
 // options: more than 5 s ahead; behind passes; a channel's first stamp is checked against the
 // clocks of the channels before it). Another type's message on a channel and stamps far ahead
-// then never become a report's map, people or trail.
+// then never become a report's map, people or trail. With the bus key of a signed bus
+// (common/bus_auth.h), a message is also skipped unless it is signed with that key, for its
+// channel, and not heard before, as a node with the key decides live.
 class LogMessageFilter {
  public:
   explicit LogMessageFilter(const common::StampGateOptions& options = {});
+  void SetBusKey(common::AuthKey key) { bus_auth_ = common::BusAuth(std::move(key)); }
   bool Accept(const LogEvent& event);
   int64_t wrong_type() const { return wrong_type_; }
   int64_t off_clock() const { return gates_.dropped(); }
+  int64_t not_signed() const { return not_signed_; }
   // "N messages of another type than their channel's and M stamped far ahead of their
-  // channel's clock skipped", or "" when none was.
+  // channel's clock skipped" (and how many were not signed with the bus key), or "" when none
+  // was.
   std::string Summary() const;
 
  private:
+  common::BusAuth bus_auth_;
+  int64_t not_signed_ = 0;
   common::StampGates gates_;
   std::map<std::string, int> stream_of_channel_;
   int64_t wrong_type_ = 0;

@@ -15,17 +15,23 @@ int main(int argc, char** argv) {
         "and with what position error, and gives the mission metrics: coverage of the reachable\n"
         "floor (SIM_FLOOR; coverage.png, unmapped floor shaded on map.png), distance, collisions,\n"
         "stuck time and coming home (EXPLORE_STATUS). Prints a summary.");
-    std::string log, output;
+    std::string log, output, bus_key_file;
     double match_radius_m = 0.5;
     parser.AddPositional("LOG", &log, "LCM log of the mission");
     parser.AddFlag("-o", &output, "output directory (default: LOG without extension + -report)");
     parser.AddFlag("--match-radius", &match_radius_m, "a reported person within this of a true one found them (m)");
+    parser.AddFlag("--bus-key-file", &bus_key_file,
+                   "the bus key of a signed bus (common/bus_auth.h): only messages signed with it "
+                   "count (default: every well-formed message)");
     if (!parser.Parse(argc, argv)) return 0;
+    const sarmap::common::AuthKey bus_key =
+        bus_key_file.empty() ? sarmap::common::AuthKey{}
+                             : sarmap::common::LoadAuthKeyFile(bus_key_file);
     if (output.empty()) output = log.substr(0, log.rfind('.')) + "-report";
     std::vector<std::string> problems;
     sarmap::logtools::MissionMetricsOptions metrics_options;
     metrics_options.match_radius_m = match_radius_m;
-    const auto data = sarmap::logtools::LoadMission(log, &problems, metrics_options);
+    const auto data = sarmap::logtools::LoadMission(log, &problems, metrics_options, bus_key);
     for (const auto& p : problems) fprintf(stderr, "warning: %s\n", p.c_str());
     const auto summary = sarmap::logtools::Summarise(data, match_radius_m);
     sarmap::logtools::WriteReport(data, summary, output);

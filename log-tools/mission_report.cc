@@ -35,7 +35,8 @@ bool Decode(const std::vector<uint8_t>& data, T* out) {
 }  // namespace
 
 MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems,
-                        const MissionMetricsOptions& metrics_options) {
+                        const MissionMetricsOptions& metrics_options,
+                        const common::AuthKey& bus_key) {
   MissionData data;
   data.metrics = MissionMetrics(metrics_options);
   data.log_path = log_path;
@@ -46,6 +47,7 @@ MissionData LoadMission(const std::string& log_path, std::vector<std::string>* p
   // A hostile publisher's datagrams are in the log too: another type's message on a channel
   // and far-off stamps are skipped, as the nodes skip them live.
   LogMessageFilter filter;
+  if (!bus_key.empty()) filter.SetBusKey(bus_key);
   while (reader.Next(&event)) {
     ++data.messages;
     if (first_us < 0) first_us = event.timestamp_us;

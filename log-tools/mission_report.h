@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/command_auth.h"
 #include "log-tools/mission_metrics.h"
 #include "sarmap/occupancy_grid_t.hpp"
 #include "sarmap/people_map_t.hpp"
@@ -128,9 +129,10 @@ struct MissionSummary {
 
 // Reads everything the report needs from an LCM log (damaged parts are skipped; `problems`
 // gets a line per break). Occupancy grids on SIM_FLOOR are the floor, on any other channel the
-// map.
+// map. With `bus_key` (a signed bus, common/bus_auth.h), only messages signed with it count.
 MissionData LoadMission(const std::string& log_path, std::vector<std::string>* problems = nullptr,
-                        const MissionMetricsOptions& metrics_options = {});
+                        const MissionMetricsOptions& metrics_options = {},
+                        const common::AuthKey& bus_key = {});
 
 // People matched to true people by ascending distance (each used once) within match_radius_m.
 MissionSummary Summarise(const MissionData& data, double match_radius_m);

@@ -7,6 +7,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/bus_auth.h"
 #include "sarmap/doa_source_t.hpp"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
@@ -365,6 +366,52 @@ TEST(MissionReportTest, HostileMessagesInTheLogAreSkipped) {
   ASSERT_TRUE(data.sources.has_value());
   ASSERT_EQ(data.sources->sources.size(), 1u);
   EXPECT_EQ(data.sources->sources[0].id, 7);
+}
+
+// On a signed bus, a PEOPLE_MAP that another host put on the bus is in the log but, read with
+// the bus key, never becomes the report's people; without the key the report shows the last.
+TEST(MissionReportTest, WithTheBusKeyForgedMessagesDoNotCount) {
+  const std::string path = ::testing::TempDir() + "/signed_bus.lcmlog";
+  const common::AuthKey key(32, 0x5a);
+  {
+    lcm::LogFile log(path, "w");
+    common::BusAuth stack(key);
+    auto write = [&](const sarmap::people_map_t& m, int64_t utime, bool sign) {
+      std::vector<uint8_t> buf(m.getEncodedSize());
+      m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      if (sign) stack.Sign("PEOPLE_MAP", &buf);
+      lcm::LogEvent e;
+      e.eventnum = 0;
+      e.timestamp = utime;
+      e.channel = "PEOPLE_MAP";
+      e.datalen = static_cast<int32_t>(buf.size());
+      e.data = buf.data();
+      log.writeEvent(&e);
+    };
+    sarmap::people_map_t real{};
+    real.header.utime = 1'000'000;
+    real.header.frame = "map";
+    real.people.push_back(Person(1, 1.0, 1.0, 1));
+    real.num_people = 1;
+    write(real, 1'000'000, true);
+    sarmap::people_map_t forged = real;
+    forged.header.utime = 2'000'000;
+    forged.people[0] = Person(1, 9.0, 9.0, 1);
+    write(forged, 2'000'000, false);
+  }
+  const MissionData open_bus = LoadMission(path);
+  ASSERT_TRUE(open_bus.people.has_value());
+  ASSERT_EQ(open_bus.people->people.size(), 1u);
+  EXPECT_EQ(open_bus.people->people[0].position_m[0], 9.0);  // the signed people map is read too
+
+  std::vector<std::string> problems;
+  const MissionData signed_bus = LoadMission(path, &problems, {}, key);
+  ASSERT_TRUE(signed_bus.people.has_value());
+  ASSERT_EQ(signed_bus.people->people.size(), 1u);
+  EXPECT_EQ(signed_bus.people->people[0].position_m[0], 1.0);
+  ASSERT_FALSE(problems.empty());
+  EXPECT_NE(problems.back().find("1 not signed with the bus key"), std::string::npos)
+      << problems.back();
 }
 
 // The simulator's emitters against the sound map: placed sources are matched and their class

@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
       throw common::OptionsError(e.what());  // one clear line, exit code 2
     }
     const std::string channel = audio::OutputChannel(options.channel, source->device_id());
-    common::Node node("sarmap-audio-capture", args.lcm_url);
+    common::Node node("sarmap-audio-capture", args);
     auto pub = node.Advertise<sarmap::audio_frame_t>(channel);
     audio::SignalChecker checker(options, source->sample_rate_hz(), source->num_channels());
     const int frames = std::max(1, static_cast<int>(std::lround(options.block_s * source->sample_rate_hz())));

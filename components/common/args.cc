@@ -76,6 +76,9 @@ void ArgParser::AddNodeOptions(NodeArgs* args, const std::string& default_config
               "override one option: --set key=value (nested keys: a.b=value); repeatable");
   AddFlag("--lcm-url", &args->lcm_url,
           "LCM URL (default: $SARMAP_LCM_URL, else $LCM_DEFAULT_URL, else host-local udpm)");
+  AddFlag("--bus-key-file", &args->bus_key_file,
+          "key file of a signed bus (>= 16 random bytes, mode 600): sign every message published, "
+          "act only on messages signed with it (default: none, an open bus)");
   AddFlag("--log-level", &args->log_level, "debug, info, warn or error");
   AddSwitch("--print-config", &args->print_config,
             "print the effective options (with help) and exit");

@@ -21,6 +21,7 @@ struct NodeArgs {
   std::string config_path;             // --config FILE (YAML)
   std::vector<std::string> overrides;  // --set key=value, repeatable
   std::string lcm_url;                 // --lcm-url URL ("" = default)
+  std::string bus_key_file;            // --bus-key-file FILE: sign and verify (common/bus_auth.h)
   std::string log_level = "info";      // --log-level
   bool print_config = false;           // --print-config: print effective options and exit
 };

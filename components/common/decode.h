@@ -9,10 +9,16 @@
 // hand to the generated decoder: common/wire_check.h), T::decode, CheckMessage (the decoded
 // values are sane: common/message_checks.h). Nothing a sender puts in the bytes makes it
 // crash, throw or allocate more than the bytes justify.
+//
+// A message from a signed bus (common/bus_auth.h) is read as the message it carries: when the
+// whole datagram is not an acceptable T but ends with a bus trailer, the bytes before the trailer
+// are tried. Only a node that holds the bus key verifies the trailer (common::Node does, before
+// it decodes).
 
 #include <exception>
 #include <string>
 
+#include "common/bus_trailer.h"
 #include "common/message_checks.h"
 #include "common/wire_check.h"
 
@@ -23,7 +29,11 @@ namespace common {
 // *out is then unspecified.
 template <class T>
 bool DecodeMessage(const void* data, size_t size, T* out, std::string* why = nullptr) {
-  if (!CheckWire<T>(data, size, why)) return false;
+  if (!CheckWire<T>(data, size, why)) {
+    if (!HasBusTrailer(data, size) || !CheckWire<T>(data, size - kBusTrailerBytes, nullptr))
+      return false;
+    size -= kBusTrailerBytes;
+  }
   int decoded = -1;
   try {
     decoded = out->decode(data, 0, static_cast<int>(size));

@@ -61,7 +61,7 @@ Node::Node(const std::string& name, const std::string& lcm_url)
       lcm_url_(lcm_url.empty() ? DefaultLcmUrl() : lcm_url),
       lcm_(std::make_unique<lcm::LCM>(lcm_url_)),
       start_s_(SteadySeconds()),
-      status_pub_(lcm_.get(), "NODE_STATUS") {
+      status_pub_(lcm_.get(), "NODE_STATUS", bus_auth_) {
   SetLogName(name);
   if (!lcm_->good()) {
     throw std::runtime_error("cannot initialise LCM on '" +
@@ -71,7 +71,16 @@ Node::Node(const std::string& name, const std::string& lcm_url)
   InstallSignalHandlers();
 }
 
+Node::Node(const std::string& name, const NodeArgs& args) : Node(name, args.lcm_url) {
+  if (!args.bus_key_file.empty()) SetBusKey(LoadAuthKeyFile(args.bus_key_file));
+}
+
 Node::~Node() = default;
+
+void Node::SetBusKey(AuthKey key) {
+  *bus_auth_ = BusAuth(std::move(key));
+  SARMAP_LOG(INFO) << "signed bus: publishing signed, accepting only messages signed with the bus key";
+}
 
 bool Node::stopping() const { return stop_ || g_signalled; }
 

@@ -10,6 +10,10 @@
 //   pose_pub.Publish(&pose);   // fills header.seq
 //   return node.Run();         // until SIGINT/SIGTERM or Stop()
 //
+// With a bus key (SetBusKey, or `--bus-key-file` through the NodeArgs constructor) every message
+// published carries a signature and every message received must carry a valid one, else it is
+// counted and dropped before it is decoded (common/bus_auth.h).
+//
 // Every message goes through DecodeMessage (common/decode.h): a malformed, truncated or
 // wrong-type message, or one that fails CheckMessage(), is counted and dropped with a
 // (rate-limited) log line; an exception from a callback is counted and logged. Neither stops
@@ -23,6 +27,9 @@
 #include <string>
 #include <vector>
 
+#include "common/args.h"
+#include "common/bus_auth.h"
+#include "common/bus_publish.h"
 #include "common/decode.h"
 #include "common/logging.h"
 #include "common/sequence.h"
@@ -55,12 +62,20 @@ class Node {
  public:
   // Throws std::runtime_error when LCM cannot be initialised on `lcm_url`.
   Node(const std::string& name, const std::string& lcm_url = "");
+  // From a node's command line: its LCM URL and, with --bus-key-file, the bus key. Throws
+  // std::runtime_error as above, or when the key file is missing, short or readable by others.
+  Node(const std::string& name, const NodeArgs& args);
   ~Node();
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
 
   const std::string& name() const { return name_; }
   lcm::LCM& lcm() { return *lcm_; }
+
+  // Signs what this node publishes and refuses what it receives unsigned or badly signed. Applies
+  // to publishers advertised before the call too.
+  void SetBusKey(AuthKey key);
+  bool bus_keyed() const { return bus_auth_->keyed(); }
 
   template <class T>
   using Callback = std::function<void(const T&, const ReceiveInfo&)>;
@@ -73,10 +88,10 @@ class Node {
   template <class T>
   class Publisher {
    public:
-    // Sets msg->header.seq to this publisher's counter, then publishes.
+    // Sets msg->header.seq to this publisher's counter, then publishes (signed on a keyed bus).
     void Publish(T* msg) {
       msg->header.seq = seq_++;
-      lcm_->publish(channel_, msg);
+      Send(*msg);
     }
     // As Publish, with `finish(msg)` run once the sequence number is set (to sign the message:
     // common/command_auth.h).
@@ -84,20 +99,23 @@ class Node {
     void Publish(T* msg, F&& finish) {
       msg->header.seq = seq_++;
       finish(msg);
-      lcm_->publish(channel_, msg);
+      Send(*msg);
     }
     const std::string& channel() const { return channel_; }
 
    private:
     friend class Node;
-    Publisher(lcm::LCM* lcm, std::string channel) : lcm_(lcm), channel_(std::move(channel)) {}
+    Publisher(lcm::LCM* lcm, std::string channel, std::shared_ptr<BusAuth> bus_auth)
+        : lcm_(lcm), channel_(std::move(channel)), bus_auth_(std::move(bus_auth)) {}
+    void Send(const T& msg) { PublishOnBus(lcm_, bus_auth_.get(), channel_, msg); }
     lcm::LCM* lcm_;
     std::string channel_;
+    std::shared_ptr<BusAuth> bus_auth_;
     int64_t seq_ = 0;
   };
   template <class T>
   Publisher<T> Advertise(const std::string& channel) {
-    return Publisher<T>(lcm_.get(), channel);
+    return Publisher<T>(lcm_.get(), channel, bus_auth_);
   }
 
   // Calls `callback` every `period_s` of wall-clock time (scheduling only; results must use
@@ -146,6 +164,7 @@ class Node {
   std::string name_;
   std::string lcm_url_;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::shared_ptr<BusAuth> bus_auth_ = std::make_shared<BusAuth>();
   bool receive_guarded_ = false;
   std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
   std::map<std::string, ChannelStats> stats_;
@@ -176,9 +195,15 @@ class Node::TypedSubscription : public Node::SubscriptionBase {
       node_->Dropped(channel, stats_, "impossible size " + std::to_string(rbuf->data_size) + " (a short LC02 datagram)");
       return;
     }
-    T msg;
     std::string why;
-    if (!DecodeMessage(rbuf->data, rbuf->data_size, &msg, &why)) {
+    size_t size = rbuf->data_size;
+    if (!node_->bus_auth_->Verify(channel, static_cast<const uint8_t*>(rbuf->data), size, &size,
+                                  &why)) {
+      node_->Dropped(channel, stats_, why);
+      return;
+    }
+    T msg;
+    if (!DecodeMessage(rbuf->data, size, &msg, &why)) {
       node_->Dropped(channel, stats_, why);
       return;
     }

@@ -394,7 +394,7 @@ int main(int argc, char** argv) {
     const depth::DepthNodeOptions& options = *parsed;
     const common::RobotOptions robot = common::LoadRobot(options.robot_config);
     const Eigen::Isometry3d base_from_camera = robot.base_from_camera.ToRigid3d().ToIsometry();
-    common::Node node("sarmap-depth", node_args.lcm_url);
+    common::Node node("sarmap-depth", node_args);
     Publisher pub(options, &node, base_from_camera);
     if (options.source == "lcm") return RunLcm(options, &node, &pub);
     return options.source == "folder" ? RunFolder(options, &node, &pub)

@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
     const auto parsed =
         common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/explore.yaml");
     if (!parsed) return 0;
-    common::Node node("sarmap-explore", args.lcm_url);
+    common::Node node("sarmap-explore", args);
     ExploreNode explore_node(*parsed, &node);
     return node.Run();
   });

@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
         sarmap::common::ParseNodeOptions<MonitorOptions>(&parser, &node_args, argc, argv, "");
     if (!parsed) return 0;
     const MonitorOptions& options = *parsed;
-    sarmap::common::Node node("sarmap-monitor", node_args.lcm_url);
+    sarmap::common::Node node("sarmap-monitor", node_args);
     sarmap::monitor::ChannelMonitor monitor(options.window_s);
     const std::regex select(options.channels);
     for (const auto& spec : sarmap::common::DefaultChannels()) {

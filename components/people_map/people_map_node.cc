@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
       }
     }
 
-    common::Node node("sarmap-people-map", args.lcm_url);
+    common::Node node("sarmap-people-map", args);
     auto publisher = node.Advertise<people_map_t>(options.output_channel);
     // One far-future stamp must not move the pose history or the queue's clock: each input
     // stream is gated on its own clock (common/stamp_gate.h).

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdlib>
 
+#include "common/bus_publish.h"
 #include "common/decode.h"
 #include "common/logging.h"
 #include "common/time.h"
@@ -224,7 +225,7 @@ void Deputy::PublishInfo(double now_s) {
     SARMAP_LOG(ERROR) << e.what();
     return;
   }
-  lcm_->publish(options_.info_channel, &info);
+  common::PublishOnBus(lcm_, &bus_auth_, options_.info_channel, info);
   info_dirty_ = false;
   next_info_s_ = now_s + options_.info_period_s;
 }
@@ -254,7 +255,7 @@ void Deputy::PublishNodeStatus(double now_s) {
   for (const auto& c : all) running += c.state == CommandState::kRunning;
   status.message = std::to_string(running) + "/" + std::to_string(all.size()) +
                    " commands running, " + std::to_string(refused_) + " orders refused";
-  lcm_->publish("NODE_STATUS", &status);
+  common::PublishOnBus(lcm_, &bus_auth_, "NODE_STATUS", status);
 }
 
 void Deputy::PublishOutput() {
@@ -285,7 +286,7 @@ void Deputy::PublishOutput() {
     SARMAP_LOG(ERROR) << e.what();  // cannot happen: NUL bytes are replaced above
     return;
   }
-  lcm_->publish(options_.output_channel, &out);
+  common::PublishOnBus(lcm_, &bus_auth_, options_.output_channel, out);
 }
 
 }  // namespace procman

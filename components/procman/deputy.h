@@ -9,6 +9,7 @@
 #include <map>
 #include <string>
 
+#include "common/bus_auth.h"
 #include "common/logging.h"
 #include "procman/event_loop.h"
 #include "procman/order_auth.h"
@@ -41,6 +42,9 @@ class Deputy : public EventLoop::Participant {
   bool Finished() const { return shutting_down_ && supervisor_.AllStopped(); }
 
   const std::string& id() const { return id_; }
+  // With a bus key (common/bus_auth.h), PM_INFO, PM_OUTPUT and NODE_STATUS also carry the bus
+  // signature, so nodes on a signed bus (the viewer) hear the deputy.
+  void SetBusKey(common::AuthKey key) { bus_auth_ = common::BusAuth(std::move(key)); }
   int64_t session() const { return replay_.session(); }
   // Microseconds since this deputy (its session) started, on the monotonic clock: the clock
   // that order counters are checked against.
@@ -61,6 +65,7 @@ class Deputy : public EventLoop::Participant {
   std::string id_;
   std::string host_;
   Key key_;
+  common::BusAuth bus_auth_;
   ReplayGuard replay_;
   Supervisor supervisor_;
   MachineUsage machine_;

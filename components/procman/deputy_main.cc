@@ -58,6 +58,13 @@ int main(int argc, char** argv) {
     if (!lcm.good()) throw std::runtime_error("cannot initialise LCM on '" + url + "'");
     EventLoop loop(&lcm);
     Deputy deputy(&lcm, options, id, std::move(key));
+    if (!node_args.bus_key_file.empty()) {
+      try {
+        deputy.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
+      } catch (const std::runtime_error& e) {
+        throw common::ArgError(e.what());
+      }
+    }
     std::string guard_error;  // hostile LCM fragments (common/lcm_guard.h)
     if (common::GuardLcmReceiveSocket(&lcm, url, &guard_error) < 0) {
       SARMAP_LOG(WARN) << "no filter for hostile LCM fragments: " << guard_error;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "common/bus_publish.h"
 #include "common/decode.h"
 #include "common/logging.h"
 #include "common/time.h"
@@ -109,7 +110,7 @@ void Sheriff::SendProbe() {
     info_guard_.AddChallenge(probe.counter);
     SignOrders(*key_, &probe);
   }
-  lcm_->publish(options_.orders_channel, &probe);
+  common::PublishOnBus(lcm_, &bus_auth_, options_.orders_channel, probe);
   ++probes_sent_;
   last_probe_s_ = Now();
   next_probe_s_ = last_probe_s_ + 0.25;
@@ -506,7 +507,7 @@ void Sheriff::SendOrders(DeputyView* d, double now_s) {
   orders.num_commands = static_cast<int32_t>(orders.commands.size());
   std::fill(std::begin(orders.hmac_sha256), std::end(orders.hmac_sha256), 0);
   SignOrders(*key_, &orders);
-  lcm_->publish(options_.orders_channel, &orders);
+  common::PublishOnBus(lcm_, &bus_auth_, options_.orders_channel, orders);
   if (d->dirty) d->change_counter = orders.counter;
   d->dirty = false;
   d->last_sent_counter = orders.counter;

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/bus_auth.h"
 #include "common/logging.h"
 #include "procman/event_loop.h"
 #include "procman/order_auth.h"
@@ -40,6 +41,8 @@ class Sheriff : public EventLoop::Participant {
   Sheriff(lcm::LCM* lcm, const ProcmanOptions& options, Config config, const Key* key,
           std::string sheriff_id);
   ~Sheriff() override;
+  // With a bus key (common/bus_auth.h), orders also carry the bus signature.
+  void SetBusKey(common::AuthKey key) { bus_auth_ = common::BusAuth(std::move(key)); }
 
   // Changes the desired state of the target's commands. Commands of a deputy not heard yet
   // get the change once it is heard.
@@ -102,6 +105,7 @@ class Sheriff : public EventLoop::Participant {
   const CommandView* FindCommand(const std::string& id) const;
 
   lcm::LCM* lcm_;
+  common::BusAuth bus_auth_;
   ProcmanOptions options_;
   Config config_;
   const Key* key_;

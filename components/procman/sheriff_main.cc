@@ -352,6 +352,13 @@ int main(int argc, char** argv) {
     const bool one_shot = action || script || status_only;
     const bool live_after = lone_ranger || !one_shot;
     Sheriff sheriff(&lcm, options, config, watch_only ? nullptr : &key, sheriff_id);
+    if (!node_args.bus_key_file.empty()) {
+      try {
+        sheriff.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
+      } catch (const std::runtime_error& e) {
+        throw common::ArgError(e.what());
+      }
+    }
     std::string guard_error;  // hostile LCM fragments (common/lcm_guard.h)
     if (common::GuardLcmReceiveSocket(&lcm, url, &guard_error) < 0) {
       SARMAP_LOG(WARN) << "no filter for hostile LCM fragments: " << guard_error;

@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
 
     RgbdOdometry odometry(options.odometry);
     FrameAssembler assembler(odometry.needs_image(), options.max_pair_dt_s, options.color_wait_s);
-    common::Node node("sarmap-rgbd-odometry", node_args.lcm_url);
+    common::Node node("sarmap-rgbd-odometry", node_args);
     auto publisher = node.Advertise<pose_t>(options.pose_channel);
     common::RateLimiter warn_limit(2.0);
     int64_t last_warnings = 0, published = 0, last_utime = 0;

@@ -92,7 +92,7 @@ int Run(int argc, char** argv) {
   } catch (const sim::WorldError& e) {
     throw common::OptionsError(e.what());
   }
-  Node node("sarmap-sim", node_args.lcm_url);
+  Node node("sarmap-sim", node_args);
   sim::Simulator simulator(setup);
   for (const std::string& w : simulator.warnings()) SARMAP_LOG(WARN) << w;
   SARMAP_LOG(INFO) << "world '" << setup.world.name << "' (" << setup.world.source_file << "), array '"

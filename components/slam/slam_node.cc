@@ -405,7 +405,7 @@ int main(int argc, char** argv) {
     const auto parsed = common::ParseNodeOptions<slam::SlamNodeOptions>(&parser, &node_args, argc, argv, "config/slam.yaml");
     if (!parsed) return 0;
     const slam::SlamNodeOptions& options = *parsed;
-    common::Node node("sarmap-slam", node_args.lcm_url);
+    common::Node node("sarmap-slam", node_args);
     SlamNode slam_node(options, &node);
     const int rc = node.Run();
     slam_node.Finish();

@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
             std::max(needed_per_device[options.mic_devices[m]], geometry.channel_map[m] + 1);
     }
 
-    common::Node node("sarmap-sound-localisation", args.lcm_url);
+    common::Node node("sarmap-sound-localisation", args);
     auto pub = node.Advertise<sarmap::doa_t>(options.doa_channel);
     std::vector<common::Node::Publisher<sarmap::doa_t>> map_pub;
     if (stream->has_map_stream())

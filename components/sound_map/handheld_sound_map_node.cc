@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
         sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
 
     LinearArraySoundMap map(options.map);
-    sarmap::common::Node node("sarmap-handheld-sound-map", node_args.lcm_url);
+    sarmap::common::Node node("sarmap-handheld-sound-map", node_args);
     auto map_pub = node.Advertise<sarmap::sound_map_t>(options.sound_map_channel);
     sarmap::common::TimeOrderedQueue<std::function<void(Utime)>> queue(
         sarmap::common::SecondsToUtime(options.reorder_delay_s));

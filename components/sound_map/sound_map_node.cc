@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
                           << (aside.empty() ? "" : " (moved to " + aside + ")");
       }
     }
-    sarmap::common::Node node("sarmap-sound-map", node_args.lcm_url);
+    sarmap::common::Node node("sarmap-sound-map", node_args);
     auto map_pub = node.Advertise<sarmap::sound_map_t>(options.sound_map_channel);
     auto request_pub =
         node.Advertise<sarmap::slam_anchor_request_t>(options.anchor_request_channel);

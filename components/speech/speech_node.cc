@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     int needed = 0;
     for (int c : geometry.channel_map) needed = std::max(needed, c + 1);
 
-    common::Node node("sarmap-speech", args.lcm_url);
+    common::Node node("sarmap-speech", args);
     auto speech_pub = node.Advertise<sarmap::speech_event_t>(options.speech_channel);
     auto people_pub = node.Advertise<sarmap::people_detections_t>(options.people_channel);
     sound::AudioIntake intake(options.device_id, geometry.sample_rate_hz,

@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
                           "with command_key_file ignores it";
     }
 
-    common::Node node("sarmap-teleop", args.lcm_url);
+    common::Node node("sarmap-teleop", args);
     bool sending = false, confirmed = false;
     std::string last_driven_by;
     node.Subscribe<explore_status_t>(

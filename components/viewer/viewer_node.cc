@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
     limits.max_items = options.max_items;
     limits.max_text_bytes = options.max_text_bytes;
 
-    common::Node node("sarmap-viewer", args.lcm_url);
+    common::Node node("sarmap-viewer", args);
     viewer::ViewerState state(limits);
     common::Rigid2d map_from_base;
 

@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
                             MakeHogClassifier(options.detector.color));
     ConfirmationTracker tracker(options.confirmation);
     FrameAssembler assembler(options.max_pair_dt_s, options.color_wait_s, options.require_color);
-    common::Node node("sarmap-vision-people", node_args.lcm_url);
+    common::Node node("sarmap-vision-people", node_args);
     auto publisher = node.Advertise<people_detections_t>(options.output_channel);
     common::RateLimiter warn_limit(2.0);
     int64_t frames = 0, bad_frames = 0, published_people = 0, last_warnings = 0;
