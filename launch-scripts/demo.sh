@@ -264,7 +264,7 @@ echo "== the log (sarmap-log info)"
 "$bin/sarmap-log" info "$log" || true
 echo
 echo "== what the stack cost (sarmap-log perf)"
-"$bin/sarmap-log" perf "$log" --key "$SARMAP_PROCMAN_KEY" | tee "$out/perf.txt" || true
+"$bin/sarmap-log" perf "$log" --key "$SARMAP_PROCMAN_KEY" --bus-key-file "$SARMAP_BUS_KEY" | tee "$out/perf.txt" || true
 echo
 echo "== mission report"
 "$bin/sarmap-log" report "$log" -o "$out/report" --bus-key-file "$SARMAP_BUS_KEY"

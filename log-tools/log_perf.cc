@@ -50,6 +50,10 @@ int main(int argc, char** argv) {
     parser.AddFlag("--key", &key_path,
                    "the launcher's key file: only deputy reports signed with it are counted "
                    "(without: every report, unverified)");
+    std::string bus_key_path;
+    parser.AddFlag("--bus-key-file", &bus_key_path,
+                   "the bus key of a signed bus (common/bus_auth.h): only messages signed with it "
+                   "count");
     if (!parser.Parse(argc, argv)) return 0;
     std::optional<sarmap::procman::Key> key;
     if (!key_path.empty()) key = sarmap::procman::LoadKeyFile(key_path);
@@ -59,6 +63,7 @@ int main(int argc, char** argv) {
     sarmap::logtools::LogEvent event;
     // A hostile publisher's datagrams are in the log too (lcm_log_reader.h).
     sarmap::logtools::LogMessageFilter filter;
+    if (!bus_key_path.empty()) filter.SetBusKey(sarmap::common::LoadAuthKeyFile(bus_key_path));
     int64_t bad_info = 0, unsigned_info = 0, events = 0;
     int64_t next_report = 64 << 20;
     while (reader.Next(&event)) {

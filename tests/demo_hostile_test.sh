@@ -3,8 +3,9 @@
 # sends crafted datagrams to every channel of the bus and 10 % of the datagrams are lost
 # (launch-scripts/demo.sh DEMO_HOSTILE=1). Checks that no process of the stack crashed or was
 # restarted (the launcher's signed reports), that the attack and the loss happened, that the
-# simulated base refused the forged velocity commands (unsigned), and that the
-# report was written from the log (hostile datagrams included) and puts someone on the map.
+# simulated base refused the forged velocity commands (the demo's bus is signed: they carry no
+# bus signature), and that the report was written from the log (hostile datagrams included,
+# skipped with the bus key) and puts someone on the map.
 # Run by CTest inside tests/harness/sarmap-netns.
 set -euo pipefail
 BIN="${SARMAP_BIN_DIR:?SARMAP_BIN_DIR not set}"
@@ -36,9 +37,11 @@ for f in "$out"/run/output/*.txt; do
     fail "$(basename "$f" .txt) crashed: $(grep -aE "terminate called|Segmentation|Aborted|core dumped|exited with code" "$f" | head -3)"
   fi
 done
-# The launcher gives the explorer and the simulator the command key: forged CMD_VEL is refused.
-cat "$out"/run/output/*sarmap-sim.txt 2>/dev/null | grep -aq "CMD_VEL not signed with the command key" ||
+# The demo's bus is signed (every node has the bus key): forged CMD_VEL is refused before it is
+# decoded, and the report counts only signed messages.
+cat "$out"/run/output/*sarmap-sim.txt 2>/dev/null | grep -aq "dropped a message on CMD_VEL: not signed with the bus key" ||
   fail "the simulator refused no forged CMD_VEL"
+grep -q "not signed with the bus key" "$out/demo.txt" || fail "the report skipped no unsigned message"
 people="$(sed -nE 's/^mission: .*; ([0-9]+) people on the map.*/\1/p' "$out/demo.txt")"
 [ -n "$people" ] && [ "$people" -ge 1 ] || fail "nobody on the map after the attacked mission"
 grep -E "^ *sent |datagrams lost|^mission:|FOUND|MISSED|skipped" "$out/demo.txt"
