@@ -40,13 +40,8 @@ std::string ResolveConfigPath(const std::string& path) {
   if (path.empty() || path[0] == '/' || access(path.c_str(), R_OK) == 0) return path;
   std::string relative = path;
   if (relative.rfind("config/", 0) == 0) relative = relative.substr(7);
-  std::vector<std::string> roots;
-  if (const char* dir = getenv("SARMAP_CONFIG_DIR")) roots.push_back(dir);
-  roots.push_back(SARMAP_DEFAULT_CONFIG_DIR);
-  for (const auto& root : roots) {
-    const std::string candidate = root + "/" + relative;
-    if (access(candidate.c_str(), R_OK) == 0) return candidate;
-  }
+  const std::string candidate = std::string(SARMAP_DEFAULT_CONFIG_DIR) + "/" + relative;
+  if (access(candidate.c_str(), R_OK) == 0) return candidate;
   return path;
 }
 

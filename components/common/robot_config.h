@@ -94,8 +94,7 @@ struct MicArrayOptions {
 };
 
 // Finds a configuration file: `path` as given when it exists (or is absolute), else relative
-// to $SARMAP_CONFIG_DIR, else relative to the source tree's config/ (so nodes run from any
-// directory find config/robot.yaml). Returns `path` unchanged when found nowhere, so the
+// to the source tree's config/ (so nodes run from any directory find config/robot.yaml). Returns `path` unchanged when found nowhere, so the
 // loader's error names what was asked for.
 std::string ResolveConfigPath(const std::string& path);
 

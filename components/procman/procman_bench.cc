@@ -12,6 +12,7 @@
 #include <memory>
 #include <vector>
 
+#include "common/node.h"
 #include "common/options.h"
 #include "procman/event_loop.h"
 #include "procman/process_table.h"
@@ -65,7 +66,7 @@ int main() {
                 "--log-level", "warn"},
                scratch.dir() + "/deputy.log");
 
-  lcm::LCM lcm(getenv("SARMAP_LCM_URL") ? getenv("SARMAP_LCM_URL") : "");
+  lcm::LCM lcm(sarmap::common::DefaultLcmUrl());
   if (!lcm.good()) {
     fprintf(stderr, "LCM init failed\n");
     return 1;

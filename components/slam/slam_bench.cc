@@ -10,8 +10,7 @@
 #include <string>
 
 int main(int argc, char** argv) {
-  const std::string bin =
-      std::getenv("SARMAP_BIN_DIR") ? std::getenv("SARMAP_BIN_DIR") : SARMAP_BIN_DIR;
+  const std::string bin = SARMAP_BIN_DIR;
   const std::string data = std::string(SARMAP_DATA_DIR) + "/slam";
   const std::string config = std::string(SARMAP_SOURCE_DIR) + "/config/slam.yaml";
   const std::string out_dir = argc > 1 ? argv[1] : "/tmp";

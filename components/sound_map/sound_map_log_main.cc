@@ -105,6 +105,14 @@ int main(int argc, char** argv) {
                      "--truth-poses) and the final map's sources from every DOA, and score it");
     parser.AddFlag("--joint-pose-freedom", &joint_pose_freedom,
                    "with --joint: multiplies the trajectory's relative-pose sigmas (larger lets the sound bend it)");
+    bool trace_doas = false, trace_anchors = false;
+    double anchor_covariance_scale = 1.0;
+    parser.AddSwitch("--trace-doas", &trace_doas,
+                     "diagnosis: after every DOA, print each source and the current pose with its variance");
+    parser.AddSwitch("--trace-anchors", &trace_anchors,
+                     "diagnosis: print every SLAM_ANCHORS against the map's anchors, and the sources before and after it");
+    parser.AddFlag("--anchor-covariance-scale", &anchor_covariance_scale,
+                   "diagnosis: multiply SLAM_ANCHORS' covariance by this (with use_slam_covariance)");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -174,9 +182,9 @@ int main(int argc, char** argv) {
       const auto doas = sarmap::sound_map::DoasFromMessage(m);
       const std::string device = m.device_id;
       const int64_t t = m.header.utime + doa_shift_us;
-      inputs.emplace(t, [&map, t, device, doas] {
+      inputs.emplace(t, [&map, t, device, doas, trace_doas] {
         map.OnDoa(t, device, doas);
-        if (std::getenv("SOUND_MAP_DEBUG_DOA"))
+        if (trace_doas)
           for (const auto& s : map.Sources(t))
             printf("DOA t=%.2f source %ld (%.3f %.3f) cur (%.3f %.3f %.2f) ccov %.2e %.2e\n", t * 1e-6, static_cast<long>(s.id), s.position_m.x(), s.position_m.y(),
                    map.ekf().current().x, map.ekf().current().y, map.ekf().current().yaw * 180 / M_PI,
@@ -301,8 +309,9 @@ int main(int argc, char** argv) {
         const int64_t t = m.header.utime;
         anchor_log.emplace_back(t, anchors);
         const bool loop_closed = m.loop_closed;
-        inputs.emplace(t, [&map, t, current, anchors, cov, loop_closed] {
-          const bool debug = std::getenv("SOUND_MAP_DEBUG") != nullptr;
+        inputs.emplace(t, [&map, t, current, anchors, cov, loop_closed, trace_anchors,
+                           anchor_covariance_scale] {
+          const bool debug = trace_anchors;
           if (debug) {
             printf("ANCHORS t=%.2f current (%.3f %.3f %.2f) ekf current (%.3f %.3f %.2f) cov diag", t * 1e-6, current.x, current.y, current.yaw * 180 / M_PI, map.ekf().current().x, map.ekf().current().y, map.ekf().current().yaw * 180 / M_PI);
             for (int i = 0; i < std::min<int>(6, cov.rows()); ++i) printf(" %.2e", cov(i, i));
@@ -315,8 +324,8 @@ int main(int argc, char** argv) {
             }
             for (const auto& s : map.Sources(t)) printf("  before: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
           }
-          const char* scale = std::getenv("SOUND_MAP_COV_SCALE");
-          map.OnSlamAnchors(t, current, anchors, scale ? Eigen::MatrixXd(cov * std::atof(scale)) : cov, loop_closed);
+          map.OnSlamAnchors(t, current, anchors, Eigen::MatrixXd(cov * anchor_covariance_scale),
+                            loop_closed);
           if (debug)
             for (const auto& s : map.Sources(t)) printf("  after: source %ld (%.2f %.2f)\n", static_cast<long>(s.id), s.position_m.x(), s.position_m.y());
         });
