@@ -352,12 +352,14 @@ int main(int argc, char** argv) {
     const bool one_shot = action || script || status_only;
     const bool live_after = lone_ranger || !one_shot;
     Sheriff sheriff(&lcm, options, config, watch_only ? nullptr : &key, sheriff_id);
+    common::AuthKey bus_key;
     if (!node_args.bus_key_file.empty()) {
       try {
-        sheriff.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
+        bus_key = common::LoadAuthKeyFile(node_args.bus_key_file);
       } catch (const std::runtime_error& e) {
         throw common::ArgError(e.what());
       }
+      sheriff.SetBusKey(bus_key);
     }
     std::string guard_error;  // hostile LCM fragments (common/lcm_guard.h)
     if (common::GuardLcmReceiveSocket(&lcm, url, &guard_error) < 0) {
@@ -383,6 +385,7 @@ int main(int argc, char** argv) {
       }
       for (const auto& id : config.Deputies()) {
         deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key));
+        if (!bus_key.empty()) deputies.back()->SetBusKey(bus_key);
         loop.Add(deputies.back().get());
       }
     }
