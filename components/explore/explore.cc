@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
+
+#include "common/logging.h"
 
 namespace sarmap {
 namespace explore {
@@ -340,7 +343,21 @@ void ExploreController::Replan(double now_s) {
   const bool going_home = state_ == State::kReturning;
   if (!going_home && options_.goals.return_home && TimeToGoHome(now_s, field)) {
     state_ = State::kReturning;
+    returning_explored_ = false;
     goal_.reset();
+  }
+  if (state_ == State::kReturning && returning_explored_) {
+    // Exploration ended because no plan reached a frontier; frontiers reached again on the way
+    // home (SLAM re-rendered a doorway, the robot left a place the inflated map drew too
+    // narrow) mean the site is not done: explore again once two plans in a row agree.
+    frontier_plans_returning_ = frontiers.empty() ? 0 : frontier_plans_returning_ + 1;
+    if (frontier_plans_returning_ >= 2) {
+      state_ = State::kExploring;
+      returning_explored_ = false;
+      frontier_plans_returning_ = 0;
+      empty_plans_ = 0;
+      goal_.reset();
+    }
   }
   if (state_ == State::kReturning) {
     if (!options_.goals.return_home || !home_) {
@@ -452,6 +469,8 @@ void ExploreController::Replan(double now_s) {
       return;
     }
     state_ = options_.goals.return_home ? State::kReturning : State::kFinished;
+    returning_explored_ = true;
+    frontier_plans_returning_ = 0;
     path_.clear();
     if (state_ == State::kReturning) Replan(now_s);
     return;
@@ -791,6 +810,19 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   status_.blacklisted = static_cast<int>(blacklist_.size());
   status_.recoveries = recoveries_;
   status_.contacts = map_.contacts();
+  if (status_.state != logged_state_) {
+    // Each change of the mission's state, once: the live log tells why a mission ended.
+    std::ostringstream line;
+    line << "t+" << static_cast<int>(status_.elapsed_s) << " s: " << logged_state_ << " -> "
+         << status_.state << " (" << frontier_count_ << " frontiers, " << blacklist_.size()
+         << " goals given up";
+    if (goal_)
+      line << ", goal " << goal_->kind << " at (" << goal_->position_m.x() << ", "
+           << goal_->position_m.y() << ")";
+    line << ")";
+    SARMAP_LOG(INFO) << line.str();
+    logged_state_ = status_.state;
+  }
   last_scan_s_ = now_s;
   status_.stuck_s = state_ == State::kHome || state_ == State::kFinished
                         ? 0.0

@@ -18,6 +18,8 @@
 //
 // ExploreController: the mission. Tele-operation first (receive-time dead man, clamped), then:
 //   look_around -> exploring <-> seeking_sound -> returning -> home
+// (returning -> exploring when frontiers are reached again on the way home after exploration
+// ended for want of them)
 // with recovering entered from any driving state when progress stops. Goals are frontiers
 // (path cost minus a size bonus, kept until reached, gone or clearly beaten) or, in
 // sound_guided mode, people heard but not yet seen (a cell in view of them, or in range when
@@ -449,6 +451,11 @@ class ExploreController {
   std::optional<double> blocked_since_s_;
   // Contact detection: commanded forward distance against the distance actually moved.
   double contact_since_s_ = 0, commanded_m_ = 0, last_scan_s_ = 0;
+  std::string logged_state_ = "start";
+  // Returning because no frontier was reachable (not for the time budget), and how many plans in
+  // a row have reached a frontier since.
+  bool returning_explored_ = false;
+  int frontier_plans_returning_ = 0;
   Eigen::Vector2d contact_xy_ = Eigen::Vector2d::Zero();
   double last_linear_mps_ = 0;
   int goal_recoveries_ = 0;

@@ -356,6 +356,50 @@ TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
   EXPECT_EQ(c.OnScan(t + 1, MakeScan(INFINITY, INFINITY)).linear_mps, 0.0);
 }
 
+// Exploration ends when no plan reaches a frontier; if frontiers are reached again on the way
+// home (a doorway SLAM drew closed is open in the next map), the robot explores again.
+TEST(ExploreControllerTest, FrontiersReachedAgainOnTheWayHomeResumeTheExploration) {
+  ExploreController c{NoLookAround()};
+  Grid done = PartlyKnownRoom();
+  for (auto& cell : done.cells) cell = cell < 0 ? 100 : cell;
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));  // home
+  c.OnMap(done);
+  common::Rigid2d pose(2.5, 2.0, M_PI);
+  c.OnPose(pose);
+  double t = 0;
+  auto step = [&] {
+    const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
+    pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
+    c.OnPose(pose);
+    t += 0.1;
+  };
+  while (t < 10 && c.status().state != "returning") step();
+  ASSERT_EQ(c.status().state, "returning");
+  c.OnMap(PartlyKnownRoom());  // the unknown part is back
+  while (t < 20 && c.status().state == "returning") step();
+  EXPECT_EQ(c.status().state, "exploring");
+  EXPECT_EQ(c.status().goal_kind, "frontier");
+
+  // Returning for the time budget is not undone by frontiers.
+  ExploreOptions o = NoLookAround();
+  o.goals.time_budget_s = 1;
+  ExploreController budget{o};
+  budget.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  budget.OnMap(PartlyKnownRoom());
+  common::Rigid2d p2(2.5, 2.0, M_PI);
+  budget.OnPose(p2);
+  bool explored_again = false, returned = false;
+  for (double u = 0; u < 20 && budget.status().state != "home"; u += 0.1) {
+    const Velocity v = budget.OnScan(u, MakeScan(INFINITY, INFINITY));
+    p2 = p2 * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
+    budget.OnPose(p2);
+    returned |= budget.status().state == "returning";
+    explored_again |= returned && budget.status().state == "exploring";
+  }
+  EXPECT_TRUE(returned);
+  EXPECT_FALSE(explored_again);
+}
+
 // when_explored: sweep: with nothing left to explore the robot searches the site again, the
 // longest-unvisited place first, and the time budget still brings it home.
 TEST(ExploreControllerTest, SweepRevisitsTheExploredSiteUntilTheTimeBudget) {
