@@ -141,6 +141,17 @@ TEST(BusAuth, ReadersWithoutTheKeyDecodeSignedMessages) {
   EXPECT_FALSE(DecodeMessage(garbage.data(), garbage.size(), &pose, &why));
 }
 
+// liblcm 1.3.1 reports a 4-8 byte "LC02" datagram as a message of 2^32 - 5 bytes: the decoder
+// refuses the size before it looks for a trailer at the end (which would read 4 GB past the
+// datagram).
+TEST(BusAuth, AnImpossibleSizeIsRefusedBeforeLookingForATrailer) {
+  const std::vector<uint8_t> bytes = Encode(Pose(1.0));
+  sarmap::pose_t pose;
+  std::string why;
+  EXPECT_FALSE(DecodeMessage(bytes.data(), (size_t{1} << 32) - 5, &pose, &why));
+  EXPECT_NE(why.find("impossible size"), std::string::npos) << why;
+}
+
 // A node with the bus key over memq://: its own signed POSE arrives, a POSE put on the bus
 // unsigned (any host on the group could) is counted and dropped before its handler.
 TEST(BusAuthNode, AKeyedNodeHearsOnlySignedMessages) {

@@ -27,8 +27,17 @@ namespace common {
 
 // False with a one-line reason in *why (optional) when `data` is not an acceptable T;
 // *out is then unspecified.
+// No LCM message is larger than LCM's own maximum (256 MB). liblcm 1.3.1 hands on a 4-8 byte
+// "LC02" datagram as a message of 2^32 - 5 bytes made of whatever its buffer held: a size above
+// this is refused before any byte past the header is looked at (the bus trailer sits at the end).
+constexpr size_t kMaxMessageBytes = size_t{1} << 28;
+
 template <class T>
 bool DecodeMessage(const void* data, size_t size, T* out, std::string* why = nullptr) {
+  if (size > kMaxMessageBytes) {
+    if (why) *why = std::string(T::getTypeName()) + ": impossible size " + std::to_string(size);
+    return false;
+  }
   if (!CheckWire<T>(data, size, why)) {
     if (!HasBusTrailer(data, size) || !CheckWire<T>(data, size - kBusTrailerBytes, nullptr))
       return false;
