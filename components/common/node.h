@@ -190,8 +190,9 @@ class Node::TypedSubscription : public Node::SubscriptionBase {
 
   void Handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) override {
     // liblcm 1.3.1 hands on a 4-8 byte "LC02" datagram as a message of 2^32 - 5 bytes made of
-    // whatever its buffer held: no real message is larger than LCM's own maximum (256 MB).
-    if (rbuf->data_size > (1u << 28)) {
+    // whatever its buffer held (common/decode.h): refused before the bus check reads the
+    // trailer at its end.
+    if (rbuf->data_size > kMaxMessageBytes) {
       node_->Dropped(channel, stats_, "impossible size " + std::to_string(rbuf->data_size) + " (a short LC02 datagram)");
       return;
     }
