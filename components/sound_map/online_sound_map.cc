@@ -29,7 +29,8 @@ IdpEkf::Options EkfOptions(const OnlineSoundMapOptions& o, const ArrayMount& mou
 OnlineSoundMap::OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount)
     : options_(options),
       ekf_(EkfOptions(options, mount)),
-      associator_(SourceAssociator::Options{options.gate_chi2, options.max_signature_distance}) {}
+      associator_(SourceAssociator::Options{options.gate_chi2, options.max_signature_distance}),
+      evidence_(options.evidence, mount) {}
 
 void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matrix3d& cov, int64_t node_id) {
   if (!pose.vec().allFinite() || !cov.allFinite()) {
@@ -49,7 +50,7 @@ void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matri
     ekf_.Predict(delta, Eigen::Vector3d(sp * sp, sp * sp, sy * sy).asDiagonal());
     ekf_.SetCurrentMean(pose);
     const double dt = (utime - last_pose_utime_) * 1e-6;
-    if (dt > 1e-3) turn_rate_rad_per_s_ = std::abs(delta.yaw) / dt;
+    if (dt > 1e-3) yaw_rate_rad_per_s_ = delta.yaw / dt;
   }
   last_pose_utime_ = utime;
   last_pose_ = pose;
@@ -240,8 +241,9 @@ void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::
       ++counters_.doa_before_pose;
       continue;
     }
+    AddRay(utime, doa, false);
     if (options_.max_turn_rate_deg_per_s > 0 &&
-        turn_rate_rad_per_s_ > options_.max_turn_rate_deg_per_s * M_PI / 180) {
+        std::abs(yaw_rate_rad_per_s_) > options_.max_turn_rate_deg_per_s * M_PI / 180) {
       ++counters_.doa_while_turning;
       continue;
     }
@@ -307,6 +309,59 @@ void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::
     }
   }
   Prune(utime);
+  if (options_.evidence.enabled &&
+      utime - last_solve_utime_ >= static_cast<int64_t>(options_.evidence.solve_period_s * 1e6))
+    SolveEvidence(utime);
+}
+
+void OnlineSoundMap::AddRay(int64_t utime, const Doa& doa, bool heard) {
+  // Planar bearings only: a linear array's cone has two.
+  if (!options_.evidence.enabled || (doa.kind != kAzimuth && doa.kind != kAzimuthElevation)) return;
+  BearingEvidence::Ray ray;
+  ray.utime = utime;
+  ray.node = -1;
+  ray.node_from_base = last_pose_;
+  auto np = node_poses_.find(last_node_id_);
+  if (last_node_id_ >= 0 && np != node_poses_.end()) {
+    ray.node = last_node_id_;
+    ray.node_from_base = Between(np->second, last_pose_);
+  }
+  // While turning, a DOA is heard with the array's heading of turn_lag_s earlier: the bearing
+  // is turned back by the yaw rate times the lag, and its std grows by half that (the lag varies).
+  const double lag_rad = options_.evidence.turn_lag_s * yaw_rate_rad_per_s_;
+  ray.azimuth_rad = WrapAngleD(doa.azimuth_rad - lag_rad);
+  ray.sigma_rad = std::sqrt(std::max(doa.covariance(0, 0), 0.0) + 0.25 * lag_rad * lag_rad);
+  ray.sound_class = doa.sound_class;
+  ray.heard = heard;
+  ray.called = doa.called;
+  evidence_.Add(ray);
+}
+
+void OnlineSoundMap::SolveEvidence(int64_t utime) {
+  last_solve_utime_ = utime;
+  ++counters_.evidence_solves;
+  const Eigen::Vector2d margin = Eigen::Vector2d::Constant(options_.site_margin_m);
+  const Eigen::Vector2d lo = site_min_ - margin, hi = site_max_ + margin;
+  auto sources = evidence_.Solve(node_poses_, have_site_ ? &lo : nullptr, have_site_ ? &hi : nullptr);
+  // Ids: a source keeps the id of the nearest previous source within two peak radii.
+  std::vector<int64_t> ids(sources.size(), -1);
+  std::vector<bool> taken(evidence_sources_.size(), false);
+  for (size_t k = 0; k < sources.size(); ++k) {
+    double best = 2 * options_.evidence.peak_radius_m;
+    int j_best = -1;
+    for (size_t j = 0; j < evidence_sources_.size(); ++j) {
+      const double d = (evidence_sources_[j].position_m - sources[k].position_m).norm();
+      if (!taken[j] && d < best) best = d, j_best = static_cast<int>(j);
+    }
+    if (j_best >= 0) {
+      taken[j_best] = true;
+      ids[k] = evidence_ids_[j_best];
+    } else {
+      ids[k] = next_evidence_id_++;
+    }
+  }
+  evidence_sources_ = std::move(sources);
+  evidence_ids_ = std::move(ids);
 }
 
 void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa& doa, const Obs& obs) {
@@ -491,6 +546,7 @@ void OnlineSoundMap::SetSite(const Eigen::Vector2d& min_m, const Eigen::Vector2d
 int64_t OnlineSoundMap::OnHeardDirection(const Doa& doa) {
   Obs obs;
   if (!have_pose_ || !MakeObs(doa, &obs)) return -1;
+  AddRay(last_pose_utime_, doa, true);
   int64_t best = -1;
   double best_chi2 = options_.gate_chi2;
   for (int64_t id : ekf_.source_ids()) {
@@ -581,13 +637,63 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
     s.inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
                                     (xy <= site_max_.array() + options_.site_margin_m).all());
     // Only a placed voice inside the site is a person; machines and alarms never are.
-    s.is_person = m.is_person && best_class == kClassVoice && s.has_position && s.inside_site;
+    s.is_person = m.is_person && best_class == kClassVoice &&
+                  s.class_confidence >= options_.person_min_voice_share && s.has_position && s.inside_site;
     s.first_heard_utime = m.first;
     s.last_heard_utime = m.last;
     s.num_observations = m.n;
     s.hypotheses_left = (m.twin >= 0 && ekf_.HasSource(m.twin)) ? 2 : 1;
     s.state = Converged(id) ? Source::kConverged : Source::kInitialising;
     if (now - m.last > static_cast<int64_t>(options_.silent_after_s * 1e6)) s.state = Source::kSilent;
+    out.push_back(s);
+  }
+  // Sources where the bearings cross that no placed EKF source explains.
+  const size_t num_ekf = out.size();
+  const double z = ekf_.options().mount.z_m;
+  for (size_t k = 0; k < evidence_sources_.size(); ++k) {
+    const BearingEvidence::Source& e = evidence_sources_[k];
+    // Where the robot drove: the robot's own noise or a ghost, as for the EKF's sources.
+    if (options_.path_clearance_m > 0 && OnTrail(e.position_m)) continue;
+    bool explained = false;
+    for (size_t j = 0; j < num_ekf; ++j)
+      if (out[j].has_position &&
+          (out[j].position_m.head<2>() - e.position_m).norm() < options_.evidence.merge_radius_m)
+        explained = true;
+    if (explained) continue;
+    Source s;
+    s.id = evidence_ids_[k];
+    s.position_m = Eigen::Vector3d(e.position_m.x(), e.position_m.y(), z);
+    s.covariance = Eigen::Matrix3d::Zero();
+    s.covariance.topLeftCorner<2, 2>() = e.covariance;
+    s.has_position = e.largest_sigma_m <= options_.max_position_sigma_m;
+    s.bearing_origin_m = Eigen::Vector3d(e.nearest_origin_m.x(), e.nearest_origin_m.y(), z);
+    const Eigen::Vector2d to = e.position_m - e.nearest_origin_m;
+    s.bearing_rad = std::atan2(to.y(), to.x());
+    s.bearing_variance = 0;
+    if (!s.has_position) {
+      s.position_m = s.bearing_origin_m;
+      s.covariance.setZero();
+    }
+    int best_class = kClassUnknown;
+    double votes = 0;
+    for (int c = 1; c < 5; ++c) {
+      votes += e.class_votes[c];
+      if (e.class_votes[c] > (best_class ? e.class_votes[best_class] : 0.0)) best_class = c;
+    }
+    if (votes < options_.min_class_votes) best_class = kClassUnknown;
+    s.sound_class = best_class;
+    s.class_confidence = best_class != kClassUnknown ? e.class_votes[best_class] / votes : 0.0;
+    s.priority = best_class == kClassVoice ? (e.called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
+    const Eigen::Array2d xy = s.position_m.head<2>().array();
+    s.inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
+                                    (xy <= site_max_.array() + options_.site_margin_m).all());
+    s.is_person = e.heard && best_class == kClassVoice &&
+                  s.class_confidence >= options_.person_min_voice_share && s.has_position && s.inside_site;
+    s.first_heard_utime = e.first_utime;
+    s.last_heard_utime = e.last_utime;
+    s.num_observations = static_cast<int>(std::lround(e.rays));
+    s.state = e.largest_sigma_m < options_.converged_sigma_m ? Source::kConverged : Source::kInitialising;
+    if (now - e.last_utime > static_cast<int64_t>(options_.silent_after_s * 1e6)) s.state = Source::kSilent;
     out.push_back(s);
   }
   return out;
@@ -598,7 +704,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
 
 namespace {
 constexpr char kStateMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'S', 'M'};
-constexpr int32_t kStateVersion = 2;  // 2: class votes and calls per source
+constexpr int32_t kStateVersion = 3;  // 2: class votes and calls per source; 3: bearing rays
 constexpr char kStateKind[] = "sound-map";  // the seal's kind (common/state_file.h)
 
 void WritePose(common::BinaryWriter* w, const Pose2& p) { w->Pod(p.x), w->Pod(p.y), w->Pod(p.yaw); }
@@ -626,7 +732,7 @@ void OnlineSoundMap::Save(const std::string& path) const {
     w->Pod(next_tentative_);
     w->Pod<int8_t>(have_pose_);
     WritePose(w, last_pose_);
-    w->Pod(last_pose_utime_), w->Pod(turn_rate_rad_per_s_), w->Pod(last_node_id_);
+    w->Pod(last_pose_utime_), w->Pod(yaw_rate_rad_per_s_), w->Pod(last_node_id_);
     w->Pod(next_local_anchor_), w->Pod(next_source_id_), w->Pod(next_anchor_id_);
     w->Pod<int64_t>(static_cast<int64_t>(meta_.size()));
     for (const auto& [id, m] : meta_) {
@@ -647,6 +753,8 @@ void OnlineSoundMap::Save(const std::string& path) const {
       for (const auto& p : points) w->Pod(p.x()), w->Pod(p.y());
     }
     w->Pod(last_trail_point_.x()), w->Pod(last_trail_point_.y());
+    evidence_.Save(w);
+    w->Pod(next_evidence_id_);
     for (char c : kStateMagic) w->Pod(c);  // trailer: a complete file
   };
   write(&writer);
@@ -685,7 +793,7 @@ bool OnlineSoundMap::Load(const std::string& path) {
   m.next_tentative_ = r.Pod<int64_t>();
   m.have_pose_ = r.Pod<int8_t>() != 0;
   m.last_pose_ = ReadPose(&r);
-  m.last_pose_utime_ = r.Pod<int64_t>(), m.turn_rate_rad_per_s_ = r.Pod<double>();
+  m.last_pose_utime_ = r.Pod<int64_t>(), m.yaw_rate_rad_per_s_ = r.Pod<double>();
   m.last_node_id_ = r.Pod<int64_t>();
   m.next_local_anchor_ = r.Pod<int64_t>(), m.next_source_id_ = r.Pod<int64_t>();
   m.next_anchor_id_ = r.Pod<int64_t>();
@@ -717,6 +825,8 @@ bool OnlineSoundMap::Load(const std::string& path) {
     for (auto& p : points) p.x() = r.Pod<double>(), p.y() = r.Pod<double>();
   }
   m.last_trail_point_.x() = r.Pod<double>(), m.last_trail_point_.y() = r.Pod<double>();
+  m.evidence_.Load(&r);
+  m.next_evidence_id_ = r.Pod<int64_t>();
   magic();
   for (const auto& [id, meta] : m.meta_)
     if (!m.ekf_.HasSource(id)) r.Corrupt("source " + std::to_string(id) + " not in the EKF");

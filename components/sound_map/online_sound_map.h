@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "common/options.h"
+#include "sound_map/bearing_evidence.h"
 #include "sound_map/data_association.h"
 #include "sound_map/idp_ekf.h"
 
@@ -59,6 +60,9 @@ struct OnlineSoundMapOptions {
   double max_position_sigma_m = 2.0;
   double site_margin_m = 1.0;       // a person must lie this close to the mapped site
   int min_class_votes = 3;          // DOAs with a class needed before a source has one
+  // A person's source is a voice by a clear majority: a source's DOAs are classed one by one,
+  // and a machine or an alarm heard together with voices gets many DOAs classed voice.
+  double person_min_voice_share = 0.8;
   double silent_after_s = 30.0;     // not heard for this long: STATE_SILENT
   // Births: a DOA that fits no source starts a tentative track in the map frame; it becomes a
   // source after birth_min_observations DOAs whose map-frame bearings agree (chi-square
@@ -118,6 +122,9 @@ struct OnlineSoundMapOptions {
   // (true), or only rigidly with their anchors, keeping their anchor-relative IDP parameters
   // (false). See IdpEkf::Options::back_propagate_sources.
   bool back_propagate_sources = true;
+  // Sources where the bearings cross (bearing_evidence.h): every DOA, also those heard while
+  // turning, solved as a batch; a source there that no EKF source explains is published too.
+  BearingEvidenceOptions evidence;
   template <class V>
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
@@ -141,6 +148,8 @@ struct OnlineSoundMapOptions {
     v("site_margin_m", site_margin_m,
       "a person must lie within this distance of the mapped site's known cells' box");
     v("min_class_votes", min_class_votes, "classified DOAs a source needs before it has a class (unknown until then)");
+    v("person_min_voice_share", person_min_voice_share,
+      "a source is a person only when at least this share of its classified DOAs are voice");
     v("birth_min_observations", birth_min_observations, "consistent DOAs needed before a new source is born");
     v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time");
     v("birth_gate_chi2", birth_gate_chi2, "chi-square gate between map-frame bearings of a tentative source");
@@ -170,6 +179,7 @@ struct OnlineSoundMapOptions {
       "sources move rigidly with their anchors)");
     v("mirror_prune_misses", mirror_prune_misses,
       "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
+    v("evidence", evidence, "sources where the bearings cross (every DOA, a batch solve)");
   }
   void Validate(common::Validator& check) const {
     check.Positive("initial_range_m", initial_range_m);
@@ -188,6 +198,7 @@ struct OnlineSoundMapOptions {
     check.Positive("max_position_sigma_m", max_position_sigma_m);
     check.NonNegative("site_margin_m", site_margin_m);
     check.That(min_class_votes >= 1, "min_class_votes", "must be at least 1");
+    check.InRange("person_min_voice_share", person_min_voice_share, 0, 1);
     check.That(birth_min_observations >= 1, "birth_min_observations", "must be at least 1");
     check.Positive("birth_window_s", birth_window_s);
     check.Positive("birth_gate_chi2", birth_gate_chi2);
@@ -250,6 +261,7 @@ class OnlineSoundMap {
     int64_t doa_tentative = 0, tentatives_expired = 0, sources_pruned = 0, mirrors_pruned = 0;
     int64_t doa_angle_1d = 0, doa_while_turning = 0, sources_behind = 0, doa_too_steep = 0;
     int64_t sources_on_path = 0;
+    int64_t evidence_solves = 0;
   };
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
@@ -287,6 +299,10 @@ class OnlineSoundMap {
   }
   const Counters& counters() const { return counters_; }
   const IdpEkf& ekf() const { return ekf_; }
+  // The sources where the bearings cross, as of the latest solve (all of them, also those an
+  // EKF source explains), and the number of rays kept.
+  const std::vector<BearingEvidence::Source>& evidence_sources() const { return evidence_sources_; }
+  size_t evidence_rays() const { return evidence_.size(); }
 
   // The whole state (not the options), crash-safe (written beside and renamed over path) and
   // sealed with a checksum (common/state_file.h), so a restarted node continues where it was.
@@ -336,7 +352,7 @@ class OnlineSoundMap {
   bool have_pose_ = false;
   Pose2 last_pose_;
   int64_t last_pose_utime_ = 0;
-  double turn_rate_rad_per_s_ = 0;  // between the last two poses
+  double yaw_rate_rad_per_s_ = 0;  // between the last two poses (signed, left positive)
   int64_t last_node_id_ = -1;
   int64_t next_local_anchor_ = -2;  // anchors without a SLAM node: negative ids
   int64_t next_source_id_ = 1;
@@ -367,6 +383,16 @@ class OnlineSoundMap {
   bool OnTrail(const Eigen::Vector2d& p) const;
   int64_t next_anchor_id_ = 0;
   int64_t AnchorForBirth();
+  // Where the bearings cross: the rays, the latest solve and its sources' ids (kept across
+  // solves for a source within twice peak_radius_m of where it was).
+  BearingEvidence evidence_;
+  std::vector<BearingEvidence::Source> evidence_sources_;
+  std::vector<int64_t> evidence_ids_;
+  int64_t next_evidence_id_ = kFirstEvidenceId;
+  int64_t last_solve_utime_ = 0;
+  static constexpr int64_t kFirstEvidenceId = 1000000000;
+  void AddRay(int64_t utime, const Doa& doa, bool heard);
+  void SolveEvidence(int64_t utime);
 };
 
 }  // namespace sound_map

@@ -113,6 +113,10 @@ int main(int argc, char** argv) {
                      "diagnosis: print every SLAM_ANCHORS against the map's anchors, and the sources before and after it");
     parser.AddFlag("--anchor-covariance-scale", &anchor_covariance_scale,
                    "diagnosis: multiply SLAM_ANCHORS' covariance by this (with use_slam_covariance)");
+    bool trace_evidence = false;
+    parser.AddSwitch("--trace-evidence", &trace_evidence,
+                     "diagnosis: at the end, print every source where the bearings cross (map.evidence) with its "
+                     "support and the nearest true source");
     parser.AddFlag("--report-every", &report_every_s, "also print the errors every this many seconds (0: end only)");
     const auto parsed = sarmap::common::ParseNodeOptions<sarmap::sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
@@ -571,6 +575,24 @@ int main(int argc, char** argv) {
               s.num_observations, ClassName(s.sound_class), 100 * s.class_confidence,
               s.has_position ? "" : ", bearing only (position = where heard from)",
               s.is_person ? ", person" : "");
+        }
+      }
+      if (final_report && trace_evidence) {
+        printf("  where the bearings cross (%zu rays kept, %ld solves):\n", map.evidence_rays(),
+               static_cast<long>(c.evidence_solves));
+        for (const auto& e : map.evidence_sources()) {
+          const Eigen::Vector2d w = to_world(Eigen::Vector3d(e.position_m.x(), e.position_m.y(), 0));
+          std::string nearest = "-";
+          double nearest_m = std::numeric_limits<double>::infinity();
+          for (const auto& ts : truth.sources) {
+            const double d = (w - Eigen::Vector2d(ts.position_m[0], ts.position_m[1])).norm();
+            if (d < nearest_m) nearest_m = d, nearest = ts.name;
+          }
+          printf("    (%6.2f, %6.2f) world (%6.2f, %6.2f): %5.1f rays, %3d strong, std %.2f m, parallax %3.0f deg, "
+                 "votes v%.0f a%.0f m%.0f u%.0f%s%s; nearest true %s %.2f m\n",
+                 e.position_m.x(), e.position_m.y(), w.x(), w.y(), e.rays, e.strong_rays, e.largest_sigma_m,
+                 e.parallax_rad * 180 / M_PI, e.class_votes[1], e.class_votes[2], e.class_votes[3], e.class_votes[4],
+                 e.heard ? ", heard" : "", e.called ? ", called" : "", nearest.c_str(), nearest_m);
         }
       }
       if (!have_truth) return;

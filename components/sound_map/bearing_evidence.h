@@ -1,0 +1,169 @@
+#pragma once
+// Sound sources found where many bearings cross (no LCM): every DOA is kept as a ray on the
+// floor, and sources are the points the rays agree on.
+//
+// The IDP EKF (online_sound_map.h) starts a source from a run of agreeing DOAs and takes DOAs
+// only while the robot turns slowly. A person calling every few seconds from behind furniture
+// gives it a few bearings at a time, each run from one place, and is never placed. This map
+// keeps every bearing (also those heard while turning, with a wider spread) and solves for all
+// sources at once:
+//
+//   Each ray r (origin o_r, map bearing theta_r, std sigma_r) comes from a source in one cell c
+//   or from clutter (reflections, the robot's own noise, a moving talker):
+//     p(r) = sum_c pi_c a_rc + pi_0 a_0,
+//     a_rc = N(theta_r - bearing(o_r -> c); 0, sigma_r^2)  for min_range_m <= |c - o_r| <=
+//     max_range_m, a_0  = 1 / (2 pi)   (a bearing anywhere).
+//   The weights are the maximum-likelihood mixture, found by EM (as ML-EM in emission
+//   tomography):  pi_c <- (1/N) sum_r pi_c a_rc / p(r).
+//   Mass gathers where rays from different places cross; a cell crossed only by rays from one
+//   place keeps no more than its share of a line.
+//
+// Sources: the greatest mass within peak_radius_m of a cell, greedily, 2 peak_radius_m apart,
+// each with at least min_rays rays more than half explained by it. A source's position is the
+// centroid of that mass; its covariance is the inverse of the triangulation's information
+//     I = sum_r w_r n_r n_r^T / (sigma_r d_r)^2 + I_cell
+// (w_r the ray's responsibility for the source, d_r its range, n_r its unit normal), so a source
+// seen from one direction only has an unbounded range. Rays are stored in the frame of the SLAM
+// node they were heard from and placed with the node's latest pose at every solve, so loop
+// closures move them.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/binary_io.h"
+#include "common/options.h"
+#include "sound_map/sound_geometry.h"
+
+namespace sarmap {
+namespace sound_map {
+
+struct BearingEvidenceOptions {
+  bool enabled = true;
+  double cell_m = 0.2;           // grid resolution (positions are centroids: finer than this)
+  double min_range_m = 0.3;      // the robot itself
+  double max_range_m = 8.0;      // a ray counts up to this range
+  double sigma_floor_deg = 3.0;  // lower bound on a DOA's std
+  double window_sigmas = 3.0;    // a ray covers cells within this many stds of its bearing
+  // While the robot turns, a DOA (a window of a few hundred ms, smoothed by the localiser's
+  // tracker) lags its heading; the lag widens the ray: sigma^2 += (turn_lag_s * turn rate)^2.
+  double turn_lag_s = 0.3;
+  int iterations = 30;          // EM iterations per solve
+  double peak_radius_m = 0.5;   // mass summed within this radius; sources 2x this apart
+  double min_rays = 15;         // rays more than half explained by a source
+  double solve_period_s = 5.0;  // message time between solves
+  int max_rays = 10000;         // the oldest rays go first beyond this (memory and solve time)
+  // A source this close to a source of the IDP EKF is that source (published once, by the EKF).
+  double merge_radius_m = 1.0;
+  template <class V>
+  void Visit(V& v) {
+    v("enabled", enabled, "also find sources where the bearings cross (all DOAs, a batch solve)");
+    v("cell_m", cell_m, "grid cell, m");
+    v("min_range_m", min_range_m, "a ray starts this far from the array, m");
+    v("max_range_m", max_range_m, "a ray counts up to this range, m");
+    v("sigma_floor_deg", sigma_floor_deg, "lower bound on a DOA's std, deg");
+    v("window_sigmas", window_sigmas, "a ray covers cells within this many stds of its bearing");
+    v("turn_lag_s", turn_lag_s,
+      "a DOA's lag behind the heading while turning: its std grows by this times the turn rate");
+    v("iterations", iterations, "EM iterations per solve");
+    v("peak_radius_m", peak_radius_m,
+      "a source's mass is summed within this radius; sources lie twice this apart");
+    v("min_rays", min_rays, "a source explains more than half of each of at least this many rays");
+    v("solve_period_s", solve_period_s, "message time between solves, s");
+    v("max_rays", max_rays, "rays kept (the oldest go first)");
+    v("merge_radius_m", merge_radius_m, "a source this close to an EKF source is that source, m");
+  }
+  void Validate(common::Validator& check) const {
+    check.Positive("cell_m", cell_m);
+    check.NonNegative("min_range_m", min_range_m);
+    check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
+    check.Positive("sigma_floor_deg", sigma_floor_deg);
+    check.Positive("window_sigmas", window_sigmas);
+    check.NonNegative("turn_lag_s", turn_lag_s);
+    check.That(iterations >= 1, "iterations", "must be at least 1");
+    check.Positive("peak_radius_m", peak_radius_m);
+    check.Positive("min_rays", min_rays);
+    check.Positive("solve_period_s", solve_period_s);
+    check.That(max_rays >= 100, "max_rays", "must be at least 100");
+    check.NonNegative("merge_radius_m", merge_radius_m);
+  }
+};
+
+class BearingEvidence {
+ public:
+  // One bearing heard from the array at base pose node_pose ∘ node_from_base (node -1: the map
+  // frame itself, node_from_base = map_from_base).
+  struct Ray {
+    int64_t utime = 0;
+    int64_t node = -1;
+    Pose2 node_from_base;
+    double azimuth_rad = 0;  // array frame, planar
+    double sigma_rad = 0;
+    int sound_class = 0;  // OnlineSoundMap::SoundClass
+    bool heard = false;   // a heard person's direction (PEOPLE_AUDIO), not a DOA
+    bool called = false;  // ... and a keyword came with it
+  };
+  struct Source {
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+    double rays = 0;          // rays' worth of mass
+    int strong_rays = 0;      // rays at least half explained by this source
+    double parallax_rad = 0;  // angle between the farthest-apart directions it was heard from
+    std::array<double, 5> class_votes{};
+    bool heard = false, called = false;
+    int64_t first_utime = 0, last_utime = 0;
+    Eigen::Vector2d nearest_origin_m =
+        Eigen::Vector2d::Zero();  // array origin of the ray that saw it closest
+    double largest_sigma_m = 0;
+  };
+
+  BearingEvidence(const BearingEvidenceOptions& options, const ArrayMount& mount)
+      : options_(options), mount_(mount) {}
+
+  void Add(const Ray& ray);
+  // Solves with the nodes' latest poses; with a box (the site), only the sources inside it.
+  // Heard rays mark the sources they point at (within their window) as heard.
+  // Each ray's cells are kept while its node moves it less than a quarter cell.
+  std::vector<Source> Solve(const std::map<int64_t, Pose2>& node_poses,
+                            const Eigen::Vector2d* min_m, const Eigen::Vector2d* max_m);
+  size_t size() const { return rays_.size() + heard_.size(); }
+
+  void Save(common::BinaryWriter* w) const;
+  void Load(common::BinaryReader* r);  // throws on a malformed state
+
+ private:
+  // A ray placed in the map: array origin and map-frame bearing, with its std.
+  struct Placed {
+    Eigen::Vector2d origin{NAN, NAN};
+    double bearing = 0, sigma = 0;
+  };
+  // A cell (floor(x / cell_m), floor(y / cell_m)) a ray covers and the bearing likelihood of a
+  // source at its centre.
+  struct Cell {
+    int32_t ix, iy;
+    float a;
+  };
+  struct Cache {
+    Placed placed;
+    std::vector<Cell> cells;
+  };
+  static int64_t Key(int32_t ix, int32_t iy) {
+    return (static_cast<int64_t>(ix) << 32) | static_cast<uint32_t>(iy);
+  }
+  static int32_t KeyX(int64_t key) { return static_cast<int32_t>(key >> 32); }
+  static int32_t KeyY(int64_t key) { return static_cast<int32_t>(key & 0xffffffff); }
+  bool Place(const Ray& r, const std::map<int64_t, Pose2>& node_poses, Placed* p) const;
+  void Cover(const Placed& p, std::vector<Cell>* cells) const;
+
+  BearingEvidenceOptions options_;
+  ArrayMount mount_;
+  std::vector<Ray> rays_;     // DOAs, oldest first
+  std::vector<Ray> heard_;    // heard directions, oldest first
+  std::vector<Cache> cache_;  // per ray of rays_ (the tail may be missing until the next solve)
+};
+
+}  // namespace sound_map
+}  // namespace sarmap
