@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace sarmap {
 namespace sound_map {
@@ -11,19 +13,51 @@ void BearingEvidence::Add(const Ray& ray) {
   if (!std::isfinite(ray.azimuth_rad) || !std::isfinite(ray.sigma_rad) || !(ray.sigma_rad > 0) ||
       !ray.node_from_base.vec().allFinite())
     return;
-  std::vector<Ray>& rays = ray.heard ? heard_ : rays_;
-  rays.push_back(ray);
-  const size_t cap = static_cast<size_t>(options_.max_rays);
-  if (rays.size() > cap + cap / 10) {
-    const size_t drop = rays.size() - cap;
-    rays.erase(rays.begin(), rays.begin() + drop);
-    if (!ray.heard) {
-      if (cache_.size() >= drop)
-        cache_.erase(cache_.begin(), cache_.begin() + drop);
-      else
-        cache_.clear();
-    }
+  if (ray.heard) {  // heard directions: the oldest go first
+    heard_.push_back(ray);
+    const size_t cap = static_cast<size_t>(options_.max_rays);
+    if (heard_.size() > cap + cap / 10)
+      heard_.erase(heard_.begin(), heard_.begin() + (heard_.size() - cap));
+    return;
   }
+  rays_.push_back(ray);
+  rays_.back().weight = 1;
+  if (rays_.size() <= static_cast<size_t>(options_.max_rays)) return;
+  // Over the limit: rays heard from within half a metre of each other in the same direction
+  // (bins of half the DOA std floor) and of the same class are merged into the oldest of them,
+  // which then stands for all (its weight): a source heard long ago keeps its evidence. If that
+  // is not enough, the oldest rays go.
+  std::vector<Ray> rays;
+  std::vector<Cache> cache;
+  const size_t cached = std::min(cache_.size(), rays_.size());  // placed at the last solve
+  const double bearing_bin = 0.5 * options_.sigma_floor_deg * M_PI / 180;
+  std::map<std::tuple<int64_t, int64_t, int64_t, int>, size_t> bins;  // -> index in rays
+  rays.reserve(rays_.size());
+  for (size_t i = 0; i < rays_.size(); ++i) {
+    if (i < cached && !cache_[i].cells.empty()) {
+      const Placed& p = cache_[i].placed;
+      const auto key = std::make_tuple(static_cast<int64_t>(std::floor(p.origin.x() / 0.5)),
+                                       static_cast<int64_t>(std::floor(p.origin.y() / 0.5)),
+                                       static_cast<int64_t>(std::floor(p.bearing / bearing_bin)),
+                                       rays_[i].sound_class);
+      auto it = bins.find(key);
+      if (it != bins.end()) {
+        rays[it->second].weight += rays_[i].weight;
+        continue;
+      }
+      bins[key] = rays.size();
+    }
+    rays.push_back(rays_[i]);
+    if (i < cached) cache.push_back(std::move(cache_[i]));
+  }
+  const size_t cap = static_cast<size_t>(options_.max_rays);
+  if (rays.size() > cap) {
+    const size_t drop = rays.size() - cap * 9 / 10;
+    rays.erase(rays.begin(), rays.begin() + drop);
+    cache.erase(cache.begin(), cache.begin() + std::min(drop, cache.size()));
+  }
+  rays_ = std::move(rays);
+  cache_ = std::move(cache);
 }
 
 bool BearingEvidence::Place(const Ray& r, const std::map<int64_t, Pose2>& node_poses,
@@ -145,6 +179,8 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
   for (int32_t c : cells) weight[c] = 0.5 / static_cast<double>(cells.size());
   const double clutter_a = 1.0 / (2 * M_PI);
   std::vector<double> evidence(n, 0.0);  // p(r)
+  double total_weight = 0;               // rays' worth
+  for (size_t k = 0; k < n; ++k) total_weight += rays_[use[k]].weight;
   const auto likelihoods = [&] {
     for (size_t k = 0; k < n; ++k) {
       double p = clutter * clutter_a;
@@ -156,11 +192,11 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     likelihoods();
     double next_clutter = 0;
     for (size_t k = 0; k < n; ++k) {
-      const double inv = 1.0 / evidence[k];
+      const double inv = rays_[use[k]].weight / evidence[k];
       for (size_t j = offset[k]; j < offset[k + 1]; ++j) next[flat_cell[j]] += flat_a[j] * inv;
       next_clutter += clutter * clutter_a * inv;
     }
-    const double inv_n = 1.0 / static_cast<double>(n);
+    const double inv_n = 1.0 / total_weight;
     for (int32_t c : cells) {
       weight[c] *= next[c] * inv_n;
       next[c] = 0;
@@ -177,14 +213,14 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
       if (std::hypot(dx, dy) * cell <= options_.peak_radius_m) disk.emplace_back(dx, dy);
   std::vector<std::pair<double, int32_t>> mass;
   for (int32_t c : cells) {
-    if (weight[c] * n < 1e-3) continue;
+    if (weight[c] * total_weight < 1e-3) continue;
     double m = 0;
     const int cx = c % nx, cy = c / nx;
     for (const auto& [dx, dy] : disk) {
       const int x = cx + dx, y = cy + dy;
       if (x >= 0 && y >= 0 && x < nx && y < ny) m += weight[y * nx + x];
     }
-    mass.emplace_back(m * static_cast<double>(n), c);
+    mass.emplace_back(m * total_weight, c);
   }
   std::sort(mass.begin(), mass.end(),
             [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -215,7 +251,7 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
   }
   for (size_t k = 0; k < out.size(); ++k) {
     out[k].position_m = total[k] > 0 ? Eigen::Vector2d(sum[k] / total[k]) : centre(peak_cells[k]);
-    out[k].rays = total[k] * static_cast<double>(n);
+    out[k].rays = total[k] * total_weight;
   }
   // Each ray's responsibility for each source: class votes, times, and the information.
   std::vector<Eigen::Matrix2d> info(out.size(), Eigen::Matrix2d::Zero());
@@ -239,9 +275,9 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     const Placed& p = cache_[use[i]].placed;
     for (const auto& [k, w] : resp) {
       Source& s = out[k];
-      if (r.sound_class > 0 && r.sound_class < 5) s.class_votes[r.sound_class] += w;
+      if (r.sound_class > 0 && r.sound_class < 5) s.class_votes[r.sound_class] += w * r.weight;
       if (w < 0.5) continue;
-      ++s.strong_rays;
+      s.strong_rays += r.weight;
       heard_from[k].push_back(
           std::atan2(p.origin.y() - s.position_m.y(), p.origin.x() - s.position_m.x()));
       if (s.first_utime == 0 || r.utime < s.first_utime) s.first_utime = r.utime;
@@ -253,7 +289,7 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
         s.nearest_origin_m = p.origin;
       }
       const Eigen::Vector2d normal(-to.y() / d, to.x() / d);
-      info[k] += w * normal * normal.transpose() / (p.sigma * p.sigma * d * d);
+      info[k] += w * r.weight * normal * normal.transpose() / (p.sigma * p.sigma * d * d);
     }
   }
   for (size_t k = 0; k < out.size(); ++k) {
@@ -309,6 +345,7 @@ void WriteRay(common::BinaryWriter* w, const BearingEvidence::Ray& r) {
   w->Pod(r.node_from_base.x), w->Pod(r.node_from_base.y), w->Pod(r.node_from_base.yaw);
   w->Pod(r.azimuth_rad), w->Pod(r.sigma_rad), w->Pod<int32_t>(r.sound_class);
   w->Pod<int8_t>(r.heard), w->Pod<int8_t>(r.called);
+  w->Pod(r.weight);
 }
 BearingEvidence::Ray ReadRay(common::BinaryReader* r) {
   BearingEvidence::Ray ray;
@@ -318,6 +355,8 @@ BearingEvidence::Ray ReadRay(common::BinaryReader* r) {
   ray.azimuth_rad = r->Pod<double>(), ray.sigma_rad = r->Pod<double>();
   ray.sound_class = r->Pod<int32_t>();
   ray.heard = r->Pod<int8_t>() != 0, ray.called = r->Pod<int8_t>() != 0;
+  ray.weight = r->Pod<double>();
+  if (!(ray.weight >= 1)) r->Corrupt("a ray's weight below 1");
   return ray;
 }
 }  // namespace

@@ -55,7 +55,10 @@ struct BearingEvidenceOptions {
   double peak_radius_m = 0.5;   // mass summed within this radius; sources 2x this apart
   double min_rays = 15;         // rays more than half explained by a source
   double solve_period_s = 5.0;  // message time between solves
-  int max_rays = 10000;         // the oldest rays go first beyond this (memory and solve time)
+  // Beyond this many rays, rays heard from the same place in the same direction are merged
+  // into one that stands for all; if that is not enough the oldest go (memory and solve time
+  // stay bounded; a source heard long ago keeps its evidence).
+  int max_rays = 10000;
   // A source this close to a source of the IDP EKF is that source (published once, by the EKF).
   double merge_radius_m = 1.0;
   template <class V>
@@ -73,7 +76,9 @@ struct BearingEvidenceOptions {
       "a source's mass is summed within this radius; sources lie twice this apart");
     v("min_rays", min_rays, "a source explains more than half of each of at least this many rays");
     v("solve_period_s", solve_period_s, "message time between solves, s");
-    v("max_rays", max_rays, "rays kept (the oldest go first)");
+    v("max_rays", max_rays,
+      "rays kept; beyond this rays from the same place in the same direction are merged, then the "
+      "oldest go");
     v("merge_radius_m", merge_radius_m, "a source this close to an EKF source is that source, m");
   }
   void Validate(common::Validator& check) const {
@@ -105,12 +110,13 @@ class BearingEvidence {
     int sound_class = 0;  // OnlineSoundMap::SoundClass
     bool heard = false;   // a heard person's direction (PEOPLE_AUDIO), not a DOA
     bool called = false;  // ... and a keyword came with it
+    double weight = 1;    // rays it stands for (rays are merged beyond max_rays)
   };
   struct Source {
     Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
     Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
     double rays = 0;          // rays' worth of mass
-    int strong_rays = 0;      // rays at least half explained by this source
+    double strong_rays = 0;   // rays' worth at least half explained by this source
     double parallax_rad = 0;  // angle between the farthest-apart directions it was heard from
     std::array<double, 5> class_votes{};
     bool heard = false, called = false;

@@ -147,18 +147,43 @@ TEST(BearingEvidence, SaveAndLoadGiveTheSameSources) {
     EXPECT_LT((sa[k].position_m - sb[k].position_m).norm(), 1e-9);
 }
 
-TEST(BearingEvidence, TheOldestRaysGoBeyondTheLimit) {
+TEST(BearingEvidence, ASourceHeardLongAgoSurvivesTheRayLimit) {
+  // The calls of Calls (both sources), then 3000 DOAs of a third source only, solved every 40
+  // rays as the node does; at most 500 rays are kept: rays from one place in one direction
+  // are merged, and the old calls still place the first two sources.
   BearingEvidenceOptions options;
-  options.max_rays = 100;
+  options.max_rays = 500;
   BearingEvidence evidence(options, ArrayMount{});
-  BearingEvidence::Ray r;
-  r.sigma_rad = 0.05;
-  for (int k = 0; k < 1000; ++k) evidence.Add(r);
-  EXPECT_LE(evidence.size(), 110u);
-  EXPECT_GE(evidence.size(), 100u);
-  r.azimuth_rad = NAN;  // a non-finite DOA is not kept
+  Calls calls;
+  for (const auto& r : calls.rays) evidence.Add(r);
+  const Eigen::Vector2d third(1.0, -3.0);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 3 * M_PI / 180);
+  for (int k = 0; k < 3000; ++k) {
+    BearingEvidence::Ray r;
+    r.utime = 60000000 + k * 250000;
+    r.node_from_base = Pose2(4.0 - 4.0 * (k % 400) / 400.0, 2.0, M_PI);
+    r.azimuth_rad = WrapAngleD(Bearing(r.node_from_base, third) + noise(rng));
+    r.sigma_rad = 3 * M_PI / 180;
+    evidence.Add(r);
+    if (k % 40 == 0) evidence.Solve({}, nullptr, nullptr);
+  }
+  EXPECT_LE(evidence.size(), 500u);
+  const auto found = evidence.Solve({}, nullptr, nullptr);
+  ASSERT_EQ(found.size(), 3u);
+  double worth = 0;
+  for (const auto& s : found) worth += s.rays;
+  EXPECT_GT(worth, 0.7 * (calls.rays.size() + 3000));  // the kept rays stand for all (less clutter)
+  for (const Eigen::Vector2d& truth : {calls.sources[0], calls.sources[1], third}) {
+    double nearest = INFINITY;
+    for (const auto& s : found) nearest = std::min(nearest, (s.position_m - truth).norm());
+    EXPECT_LT(nearest, 0.3);
+  }
+  BearingEvidence::Ray bad;
+  bad.sigma_rad = 0.05;
+  bad.azimuth_rad = NAN;  // a non-finite DOA is not kept
   const size_t n = evidence.size();
-  evidence.Add(r);
+  evidence.Add(bad);
   EXPECT_EQ(evidence.size(), n);
 }
 

@@ -3,13 +3,16 @@
 //     from the localisation map + one bearing update per source heard (thesis: 14.2 ms per
 //     step at 185 m; goal < 1 ms);
 //   * joint optimisation (Ceres, SPARSE_NORMAL_CHOLESKY) of the 185 m trajectory with
-//     landmarks and sources (thesis: 99.4 s; goal < 1 s).
+//     landmarks and sources (thesis: 99.4 s; goal < 1 s);
+//   * one solve of the map of where the bearings cross (BearingEvidence) with N rays from a
+//     robot driving a 20 x 10 m loop among 8 sources (the node solves every 5 s).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
 #include <random>
 
+#include "sound_map/bearing_evidence.h"
 #include "sound_map/experiments.h"
 #include "sound_map/idp_ekf.h"
 #include "sound_map/joint_optimizer.h"
@@ -38,7 +41,8 @@ struct CiFixture {
     const int m = three_d ? 2 : 1;
     r = Eigen::MatrixXd::Identity(m, m) * std::pow(10 * M_PI / 180, 2);
     for (int i = 0; i < n; ++i) {
-      for (int k = 0; k < 5; ++k) loc.Predict(sm::Pose2(0.2, 0, 0.05), Eigen::Vector3d(4e-4, 4e-4, 7e-3).asDiagonal());
+      for (int k = 0; k < 5; ++k)
+        loc.Predict(sm::Pose2(0.2, 0, 0.05), Eigen::Vector3d(4e-4, 4e-4, 7e-3).asDiagonal());
       loc.AddAnchor(i);
       sarmap::sound_map::Pose2 c;
       std::vector<std::pair<int64_t, sm::Pose2>> a;
@@ -72,10 +76,15 @@ void BM_CiSoundMapStep(benchmark::State& state) {
     for (int i = 0; i < heard; ++i) sound.UpdateSource(i, f.z[i], f.r);
     benchmark::DoNotOptimize(sound.mean().data());
   }
-  state.SetLabel(std::string(three_d ? "3D" : "2D") + ", " + std::to_string(n) + " sources, state dim " +
-                 std::to_string(f.sound.dim()) + ", " + std::to_string(heard) + " heard");
+  state.SetLabel(std::string(three_d ? "3D" : "2D") + ", " + std::to_string(n) +
+                 " sources, state dim " + std::to_string(f.sound.dim()) + ", " +
+                 std::to_string(heard) + " heard");
 }
-BENCHMARK(BM_CiSoundMapStep)->Args({20, 0, 1})->Args({20, 0, 20})->Args({20, 1, 20})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CiSoundMapStep)
+    ->Args({20, 0, 1})
+    ->Args({20, 0, 20})
+    ->Args({20, 1, 20})
+    ->Unit(benchmark::kMicrosecond);
 
 // The copy of the fixture state is part of BM_CiSoundMapStep's time: measure it alone.
 void BM_CopyOnly(benchmark::State& state) {
@@ -113,10 +122,13 @@ void BM_JointOptimisation185m(benchmark::State& state) {
     solve_s = r.solve_seconds;
     iterations = r.iterations;
   }
-  state.SetLabel(std::to_string(d.length_m()) + " m, " + std::to_string(init.poses.size()) + " poses, " +
-                 std::to_string(init.landmarks.size()) + " landmarks, " + std::to_string(init.sources.size()) +
-                 " sources, " + std::to_string(init.odometry.size() + init.landmark_edges.size() + init.sound_edges.size()) +
-                 " edges; " + std::to_string(iterations) + " LM iterations, Ceres " + std::to_string(solve_s) + " s");
+  state.SetLabel(
+      std::to_string(d.length_m()) + " m, " + std::to_string(init.poses.size()) + " poses, " +
+      std::to_string(init.landmarks.size()) + " landmarks, " + std::to_string(init.sources.size()) +
+      " sources, " +
+      std::to_string(init.odometry.size() + init.landmark_edges.size() + init.sound_edges.size()) +
+      " edges; " + std::to_string(iterations) + " LM iterations, Ceres " + std::to_string(solve_s) +
+      " s");
 }
 BENCHMARK(BM_JointOptimisation185m)->Unit(benchmark::kMillisecond)->Iterations(3);
 
@@ -136,7 +148,8 @@ void BM_CiSubmaps185mRun(benchmark::State& state) {
   sm::RunResult r;
   for (auto _ : state) r = sm::RunMethod(d, sm::Method::kCiSubmaps);
   state.SetLabel("sound-map step mean " + std::to_string(r.sound_step_ms_mean) + " ms, max " +
-                 std::to_string(r.sound_step_ms_max) + " ms; RMS " + std::to_string(r.score.rms_m) + " m");
+                 std::to_string(r.sound_step_ms_max) + " ms; RMS " + std::to_string(r.score.rms_m) +
+                 " m");
 }
 BENCHMARK(BM_CiSubmaps185mRun)->Unit(benchmark::kMillisecond)->Iterations(1);
 
@@ -172,7 +185,8 @@ void BM_LinearArrayMapRun(benchmark::State& state) {
       }
       const auto t0 = std::chrono::steady_clock::now();
       map.OnDoa(t, doas);
-      block_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      block_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     }
     map.Finish();
     benchmark::DoNotOptimize(map.num_keyframes());
@@ -180,9 +194,50 @@ void BM_LinearArrayMapRun(benchmark::State& state) {
   double mean = 0;
   for (double v : block_ms) mean += v;
   mean /= std::max<size_t>(1, block_ms.size());
-  state.SetLabel(std::to_string(block_ms.size()) + " blocks: mean " + std::to_string(mean) + " ms, max " +
-                 std::to_string(*std::max_element(block_ms.begin(), block_ms.end())) + " ms per block");
+  state.SetLabel(std::to_string(block_ms.size()) + " blocks: mean " + std::to_string(mean) +
+                 " ms, max " + std::to_string(*std::max_element(block_ms.begin(), block_ms.end())) +
+                 " ms per block");
 }
 BENCHMARK(BM_LinearArrayMapRun)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace
+
+// BearingEvidence::Solve with N rays, each ray's cells cached from the first solve (as in the
+// node, where only the rays since the last solve, or those a loop closure moved, are new).
+void BM_BearingEvidenceSolve(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::mt19937 rng(2);
+  std::normal_distribution<double> noise(0, 3 * M_PI / 180);
+  std::vector<Eigen::Vector2d> sources;
+  for (int k = 0; k < 8; ++k) sources.emplace_back(2.5 * k - 1.0, k % 2 ? 8.0 : 2.0);
+  sm::BearingEvidence evidence(sm::BearingEvidenceOptions{}, sm::ArrayMount{});
+  for (int i = 0; i < n; ++i) {
+    const double s = std::fmod(0.05 * i, 60.0);  // along the 60 m loop
+    sm::Pose2 pose = s < 20   ? sm::Pose2(s, 0, 0)
+                     : s < 30 ? sm::Pose2(20, s - 20, M_PI / 2)
+                     : s < 50 ? sm::Pose2(50 - s, 10, M_PI)
+                              : sm::Pose2(0, 60 - s, -M_PI / 2);
+    // One of the sources within 7 m (a DOA every 0.25 s, heard sources in turn).
+    std::vector<const Eigen::Vector2d*> near;
+    for (const auto& q : sources)
+      if (std::hypot(q.x() - pose.x, q.y() - pose.y) < 7.0) near.push_back(&q);
+    if (near.empty()) continue;
+    const Eigen::Vector2d& src = *near[static_cast<size_t>(i) % near.size()];
+    sm::BearingEvidence::Ray r;
+    r.utime = i * 250000;
+    r.node_from_base = pose;
+    r.azimuth_rad = std::remainder(
+        std::atan2(src.y() - pose.y, src.x() - pose.x) - pose.yaw + noise(rng), 2 * M_PI);
+    r.sigma_rad = 3 * M_PI / 180;
+    r.sound_class = 1;
+    evidence.Add(r);
+  }
+  size_t found = evidence.Solve({}, nullptr, nullptr).size();
+  for (auto _ : state) found = evidence.Solve({}, nullptr, nullptr).size();
+  state.counters["sources"] = static_cast<double>(found);
+}
+BENCHMARK(BM_BearingEvidenceSolve)
+    ->Arg(3000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);

@@ -588,7 +588,7 @@ int main(int argc, char** argv) {
             const double d = (w - Eigen::Vector2d(ts.position_m[0], ts.position_m[1])).norm();
             if (d < nearest_m) nearest_m = d, nearest = ts.name;
           }
-          printf("    (%6.2f, %6.2f) world (%6.2f, %6.2f): %5.1f rays, %3d strong, std %.2f m, parallax %3.0f deg, "
+          printf("    (%6.2f, %6.2f) world (%6.2f, %6.2f): %5.1f rays, %3.0f strong, std %.2f m, parallax %3.0f deg, "
                  "votes v%.0f a%.0f m%.0f u%.0f%s%s; nearest true %s %.2f m\n",
                  e.position_m.x(), e.position_m.y(), w.x(), w.y(), e.rays, e.strong_rays, e.largest_sigma_m,
                  e.parallax_rad * 180 / M_PI, e.class_votes[1], e.class_votes[2], e.class_votes[3], e.class_votes[4],
