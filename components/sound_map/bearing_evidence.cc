@@ -253,6 +253,14 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     out[k].position_m = total[k] > 0 ? Eigen::Vector2d(sum[k] / total[k]) : centre(peak_cells[k]);
     out[k].rays = total[k] * total_weight;
   }
+  // The spread of each source's mass: how well its rays actually meet (their pose errors and
+  // biases are shared, which the information below, taking them as independent, does not see).
+  std::vector<Eigen::Matrix2d> spread(out.size(), Eigen::Matrix2d::Zero());
+  for (size_t c = 0; c < owner.size(); ++c) {
+    if (owner[c] < 0 || total[owner[c]] <= 0) continue;
+    const Eigen::Vector2d d = centre(static_cast<int>(c)) - out[owner[c]].position_m;
+    spread[owner[c]] += weight[c] / total[owner[c]] * d * d.transpose();
+  }
   // Each ray's responsibility for each source: class votes, times, and the information.
   std::vector<Eigen::Matrix2d> info(out.size(), Eigen::Matrix2d::Zero());
   std::vector<double> nearest(out.size(), INFINITY);
@@ -296,7 +304,7 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     // A cell's own extent bounds the information: a cell is the finest a position gets.
     info[k] += Eigen::Matrix2d::Identity() * 1e-6;
     Source& s = out[k];
-    s.covariance = info[k].inverse() + Eigen::Matrix2d::Identity() * (cell * cell / 12);
+    s.covariance = info[k].inverse() + spread[k] + Eigen::Matrix2d::Identity() * (cell * cell / 12);
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.covariance);
     s.largest_sigma_m = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
     // Parallax: 2 pi less the widest gap between the sorted directions.

@@ -23,9 +23,10 @@
 // centroid of that mass; its covariance is the inverse of the triangulation's information
 //     I = sum_r w_r n_r n_r^T / (sigma_r d_r)^2 + I_cell
 // (w_r the ray's responsibility for the source, d_r its range, n_r its unit normal), so a source
-// seen from one direction only has an unbounded range. Rays are stored in the frame of the SLAM
-// node they were heard from and placed with the node's latest pose at every solve, so loop
-// closures move them.
+// seen from one direction only has an unbounded range, plus the spread of the mass (the rays
+// share pose errors and biases, which the information takes as independent). Rays are stored in the
+// frame of the SLAM node they were heard from and placed with the node's latest pose at every
+// solve, so loop closures move them.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
