@@ -32,7 +32,8 @@ OnlineSoundMap::OnlineSoundMap(const OnlineSoundMapOptions& options, const Array
       associator_(SourceAssociator::Options{options.gate_chi2, options.max_signature_distance}),
       evidence_(options.evidence, mount) {}
 
-void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matrix3d& cov, int64_t node_id) {
+void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matrix3d& cov,
+                            int64_t node_id) {
   if (!pose.vec().allFinite() || !cov.allFinite()) {
     ++counters_.bad_poses;
     return;
@@ -46,7 +47,8 @@ void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matri
     const Pose2 delta = Between(last_pose_, pose);
     const double dist = std::hypot(delta.x, delta.y);
     const double sp = options_.motion_noise_m_per_m * dist + 1e-4;
-    const double sy = options_.motion_noise_rad_per_m * dist + options_.motion_noise_rad_per_rad * std::abs(delta.yaw) + 1e-5;
+    const double sy = options_.motion_noise_rad_per_m * dist +
+                      options_.motion_noise_rad_per_rad * std::abs(delta.yaw) + 1e-5;
     ekf_.Predict(delta, Eigen::Vector3d(sp * sp, sp * sp, sy * sy).asDiagonal());
     ekf_.SetCurrentMean(pose);
     const double dt = (utime - last_pose_utime_) * 1e-6;
@@ -106,7 +108,8 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
   bool ok = covariance.rows() == m && covariance.cols() == m && covariance.allFinite() &&
             current.vec().allFinite();
   std::set<int64_t> seen;
-  for (const auto& a : anchors) ok = ok && a.second.vec().allFinite() && seen.insert(a.first).second;
+  for (const auto& a : anchors)
+    ok = ok && a.second.vec().allFinite() && seen.insert(a.first).second;
   if (!ok) {  // wrong size, non-finite values or a node listed twice
     ++counters_.bad_anchors;
     return false;
@@ -141,9 +144,11 @@ bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
       rows.emplace_back(1 + it->second, ComposeJacobian(node, link.node_from_anchor));
     }
     Eigen::MatrixXd j = Eigen::MatrixXd::Zero(3 * static_cast<int>(rows.size()), m);
-    for (size_t r = 0; r < rows.size(); ++r) j.block<3, 3>(3 * r, 3 * rows[r].first) = rows[r].second;
+    for (size_t r = 0; r < rows.size(); ++r)
+      j.block<3, 3>(3 * r, 3 * rows[r].first) = rows[r].second;
     Eigen::MatrixXd cov = j * covariance * j.transpose();
-    const double fp = options_.anchor_sigma_floor_m, fy = options_.anchor_sigma_floor_deg * M_PI / 180;
+    const double fp = options_.anchor_sigma_floor_m,
+                 fy = options_.anchor_sigma_floor_deg * M_PI / 180;
     for (int i = 0; i < cov.rows(); i += 3) {
       cov(i, i) += fp * fp;
       cov(i + 1, i + 1) += fp * fp;
@@ -174,7 +179,8 @@ int64_t OnlineSoundMap::AnchorForBirth() {
   const auto before = AnchorNodeIds();
   const int64_t id = next_anchor_id_++;
   anchor_links_[id] = AnchorLink{last_node_id_, node_from_anchor};
-  if (std::find(before.begin(), before.end(), last_node_id_) == before.end()) anchors_changed_ = true;
+  if (std::find(before.begin(), before.end(), last_node_id_) == before.end())
+    anchors_changed_ = true;
   return id;
 }
 
@@ -224,8 +230,9 @@ double OnlineSoundMap::Chi2(int64_t source, const Obs& obs, Eigen::VectorXd* z_u
 
 void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::vector<Doa>& doas) {
   std::set<int64_t> used;  // one DOA of a block per source
-  const double update_gate = options_.update_gate_chi2 > 0 ? options_.update_gate_chi2
-                                                            : std::numeric_limits<double>::infinity();
+  const double update_gate = options_.update_gate_chi2 > 0
+                                 ? options_.update_gate_chi2
+                                 : std::numeric_limits<double>::infinity();
   for (const Doa& doa : doas) {
     Obs obs;
     if (!MakeObs(doa, &obs)) {
@@ -253,7 +260,8 @@ void OnlineSoundMap::OnDoa(int64_t utime, const std::string& device, const std::
     bool by_track = false;
     Eigen::VectorXd z;
     const int64_t hinted = doa.track_id >= 0 ? associator_.SourceOfTrack(device, doa.track_id) : -1;
-    if (hinted >= 0 && ekf_.HasSource(hinted) && !used.count(hinted) && Chi2(hinted, obs, &z) <= update_gate) {
+    if (hinted >= 0 && ekf_.HasSource(hinted) && !used.count(hinted) &&
+        Chi2(hinted, obs, &z) <= update_gate) {
       source = hinted;
       by_track = true;
     }
@@ -342,7 +350,8 @@ void OnlineSoundMap::SolveEvidence(int64_t utime) {
   ++counters_.evidence_solves;
   const Eigen::Vector2d margin = Eigen::Vector2d::Constant(options_.site_margin_m);
   const Eigen::Vector2d lo = site_min_ - margin, hi = site_max_ + margin;
-  auto sources = evidence_.Solve(node_poses_, have_site_ ? &lo : nullptr, have_site_ ? &hi : nullptr);
+  auto sources =
+      evidence_.Solve(node_poses_, have_site_ ? &lo : nullptr, have_site_ ? &hi : nullptr);
   // Ids: a source keeps the id of the nearest previous source within two peak radii.
   std::vector<int64_t> ids(sources.size(), -1);
   std::vector<bool> taken(evidence_sources_.size(), false);
@@ -364,7 +373,8 @@ void OnlineSoundMap::SolveEvidence(int64_t utime) {
   evidence_ids_ = std::move(ids);
 }
 
-void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa& doa, const Obs& obs) {
+void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa& doa,
+                             const Obs& obs) {
   ++counters_.doa_tentative;
   const int64_t window = static_cast<int64_t>(options_.birth_window_s * 1e6);
   for (auto it = tentatives_.begin(); it != tentatives_.end();) {
@@ -391,7 +401,8 @@ void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa
     for (int m = 0; m < (obs.mirrored ? 2 : 1); ++m) {
       const double d = WrapAngleD((m ? mirror : bearing) - t.bearing_map_rad);
       double c = d * d / s;
-      if (doa.track_id >= 0 && t.track_id == doa.track_id && t.device == device) c *= 0.5;  // the hint
+      if (doa.track_id >= 0 && t.track_id == doa.track_id && t.device == device)
+        c *= 0.5;  // the hint
       if (c <= best) {
         best = c;
         best_key = kv.first;
@@ -502,7 +513,8 @@ void OnlineSoundMap::Prune(int64_t utime) {
     }
     double rho = 0, var = 0;
     ekf_.SourceInverseDepth(id, &rho, &var);
-    if (options_.prune_behind_sigmas > 0 && rho < -options_.prune_behind_sigmas * std::sqrt(std::max(0.0, var))) {
+    if (options_.prune_behind_sigmas > 0 &&
+        rho < -options_.prune_behind_sigmas * std::sqrt(std::max(0.0, var))) {
       drop.push_back(id);
       ++counters_.sources_behind;
       continue;
@@ -638,28 +650,52 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
                                     (xy <= site_max_.array() + options_.site_margin_m).all());
     // Only a placed voice inside the site is a person; machines and alarms never are.
     s.is_person = m.is_person && best_class == kClassVoice &&
-                  s.class_confidence >= options_.person_min_voice_share && s.has_position && s.inside_site;
+                  s.class_confidence >= options_.person_min_voice_share && s.has_position &&
+                  s.inside_site;
     s.first_heard_utime = m.first;
     s.last_heard_utime = m.last;
     s.num_observations = m.n;
     s.hypotheses_left = (m.twin >= 0 && ekf_.HasSource(m.twin)) ? 2 : 1;
     s.state = Converged(id) ? Source::kConverged : Source::kInitialising;
-    if (now - m.last > static_cast<int64_t>(options_.silent_after_s * 1e6)) s.state = Source::kSilent;
+    if (now - m.last > static_cast<int64_t>(options_.silent_after_s * 1e6))
+      s.state = Source::kSilent;
     out.push_back(s);
   }
   // Sources where the bearings cross that no placed EKF source explains.
   const size_t num_ekf = out.size();
+  std::vector<bool> superseded(num_ekf, false);
   const double z = ekf_.options().mount.z_m;
   for (size_t k = 0; k < evidence_sources_.size(); ++k) {
     const BearingEvidence::Source& e = evidence_sources_[k];
     // Where the robot drove: the robot's own noise or a ghost, as for the EKF's sources.
     if (options_.path_clearance_m > 0 && OnTrail(e.position_m)) continue;
+    // Explained by an EKF source placed at least as well. A looser EKF source nearby is the
+    // same emitter placed worse: this one replaces it (one source per emitter, taking over
+    // whether it was heard calling).
     bool explained = false;
-    for (size_t j = 0; j < num_ekf; ++j)
-      if (out[j].has_position &&
-          (out[j].position_m.head<2>() - e.position_m).norm() < options_.evidence.merge_radius_m)
+    std::vector<size_t> looser;
+    for (size_t j = 0; j < num_ekf; ++j) {
+      if (!out[j].has_position ||
+          (out[j].position_m.head<2>() - e.position_m).norm() >= options_.evidence.merge_radius_m)
+        continue;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(
+          out[j].covariance.topLeftCorner<2, 2>());
+      if (std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) <=
+          std::max(e.largest_sigma_m, options_.converged_sigma_m))
         explained = true;
+      else
+        looser.push_back(j);
+    }
     if (explained) continue;
+    bool heard = e.heard, called = e.called;
+    if (e.largest_sigma_m <= options_.max_position_sigma_m) {
+      for (size_t j : looser) {
+        superseded[j] = true;
+        const Meta& m = meta_.at(out[j].id);
+        heard |= m.is_person;
+        called |= m.called;
+      }
+    }
     Source s;
     s.id = evidence_ids_[k];
     s.position_m = Eigen::Vector3d(e.position_m.x(), e.position_m.y(), z);
@@ -683,20 +719,28 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
     if (votes < options_.min_class_votes) best_class = kClassUnknown;
     s.sound_class = best_class;
     s.class_confidence = best_class != kClassUnknown ? e.class_votes[best_class] / votes : 0.0;
-    s.priority = best_class == kClassVoice ? (e.called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
+    s.priority =
+        best_class == kClassVoice ? (called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
     const Eigen::Array2d xy = s.position_m.head<2>().array();
     s.inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
                                     (xy <= site_max_.array() + options_.site_margin_m).all());
-    s.is_person = e.heard && best_class == kClassVoice &&
-                  s.class_confidence >= options_.person_min_voice_share && s.has_position && s.inside_site;
+    s.is_person = heard && best_class == kClassVoice &&
+                  s.class_confidence >= options_.person_min_voice_share && s.has_position &&
+                  s.inside_site;
     s.first_heard_utime = e.first_utime;
     s.last_heard_utime = e.last_utime;
     s.num_observations = static_cast<int>(std::lround(e.rays));
-    s.state = e.largest_sigma_m < options_.converged_sigma_m ? Source::kConverged : Source::kInitialising;
-    if (now - e.last_utime > static_cast<int64_t>(options_.silent_after_s * 1e6)) s.state = Source::kSilent;
+    s.state =
+        e.largest_sigma_m < options_.converged_sigma_m ? Source::kConverged : Source::kInitialising;
+    if (now - e.last_utime > static_cast<int64_t>(options_.silent_after_s * 1e6))
+      s.state = Source::kSilent;
     out.push_back(s);
   }
-  return out;
+  std::vector<Source> kept;
+  kept.reserve(out.size());
+  for (size_t j = 0; j < out.size(); ++j)
+    if (j >= num_ekf || !superseded[j]) kept.push_back(std::move(out[j]));
+  return kept;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -704,7 +748,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
 
 namespace {
 constexpr char kStateMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'S', 'M'};
-constexpr int32_t kStateVersion = 3;  // 2: class votes and calls per source; 3: bearing rays
+constexpr int32_t kStateVersion = 3;        // 2: class votes and calls per source; 3: bearing rays
 constexpr char kStateKind[] = "sound-map";  // the seal's kind (common/state_file.h)
 
 void WritePose(common::BinaryWriter* w, const Pose2& p) { w->Pod(p.x), w->Pod(p.y), w->Pod(p.yaw); }
