@@ -234,6 +234,32 @@ TEST(BearingEvidence, TheSoundMapPlacesACallerHeardWhileTurning) {
   EXPECT_TRUE(run(false, &dropped).empty());  // the EKF alone never hears the caller
 }
 
+// A caller heard all along (the EKF places her too): one placed source for her, whichever of
+// the two maps places her better.
+TEST(BearingEvidence, OneSourcePerCallerWithTheEkf) {
+  const Eigen::Vector2d caller(3.0, 2.0);
+  OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
+  std::mt19937 rng(13);
+  std::normal_distribution<double> noise(0.0, 3 * M_PI / 180);
+  int64_t t = 0;
+  for (int k = 0; k < 300; ++k, t += 100000) {  // 7.5 m along x at 0.25 m/s
+    const Pose2 pose(0.025 * k, 0.0, 0.0);
+    map.OnPose(t, pose, Eigen::Matrix3d::Identity() * 1e-6, k);
+    if (k % 2) continue;
+    OnlineSoundMap::Doa d;
+    d.track_id = 1;
+    d.azimuth_rad = WrapAngleD(Bearing(pose, caller) + noise(rng));
+    d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
+    d.sound_class = OnlineSoundMap::kClassVoice;
+    map.OnDoa(t, "respeaker", {d});
+  }
+  ASSERT_FALSE(map.evidence_sources().empty());
+  int near = 0;
+  for (const auto& s : map.Sources(t))
+    if (s.has_position && (s.position_m.head<2>() - caller).norm() < 1.0) ++near;
+  EXPECT_EQ(near, 1);
+}
+
 }  // namespace
 }  // namespace sound_map
 }  // namespace sarmap
