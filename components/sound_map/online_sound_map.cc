@@ -602,6 +602,28 @@ bool OnlineSoundMap::Converged(int64_t id) const {
   return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) < options_.converged_sigma_m;
 }
 
+void OnlineSoundMap::Classify(const std::array<double, 5>& class_votes, bool heard, bool called,
+                              Source* s) const {
+  int best_class = kClassUnknown;
+  double votes = 0;
+  for (int k = 1; k < 5; ++k) {
+    votes += class_votes[k];
+    if (class_votes[k] > (best_class ? class_votes[best_class] : 0.0)) best_class = k;
+  }
+  if (votes < options_.min_class_votes) best_class = kClassUnknown;
+  s->sound_class = best_class;
+  s->class_confidence = best_class != kClassUnknown ? class_votes[best_class] / votes : 0.0;
+  s->priority =
+      best_class == kClassVoice ? (called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
+  const Eigen::Array2d xy = s->position_m.head<2>().array();
+  s->inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
+                                   (xy <= site_max_.array() + options_.site_margin_m).all());
+  // Only a placed voice inside the site is a person; machines and alarms never are.
+  s->is_person = heard && best_class == kClassVoice &&
+                 s->class_confidence >= options_.person_min_voice_share && s->has_position &&
+                 s->inside_site;
+}
+
 std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
   std::vector<Source> out;
   for (int64_t id : ekf_.source_ids()) {
@@ -634,24 +656,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
       s.covariance.topLeftCorner<2, 2>() =
           ekf_.anchor_covariance(ekf_.source_anchor(id)).topLeftCorner<2, 2>();
     }
-    int best_class = kClassUnknown;
-    double votes = 0;
-    for (int k = 1; k < 5; ++k) {
-      votes += m.class_votes[k];
-      if (m.class_votes[k] > (best_class ? m.class_votes[best_class] : 0.0)) best_class = k;
-    }
-    if (votes < options_.min_class_votes) best_class = kClassUnknown;
-    s.sound_class = best_class;
-    s.class_confidence = best_class != kClassUnknown ? m.class_votes[best_class] / votes : 0.0;
-    s.priority =
-        best_class == kClassVoice ? (m.called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
-    const Eigen::Array2d xy = s.position_m.head<2>().array();
-    s.inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
-                                    (xy <= site_max_.array() + options_.site_margin_m).all());
-    // Only a placed voice inside the site is a person; machines and alarms never are.
-    s.is_person = m.is_person && best_class == kClassVoice &&
-                  s.class_confidence >= options_.person_min_voice_share && s.has_position &&
-                  s.inside_site;
+    Classify(m.class_votes, m.is_person, m.called, &s);
     s.first_heard_utime = m.first;
     s.last_heard_utime = m.last;
     s.num_observations = m.n;
@@ -710,23 +715,7 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
       s.position_m = s.bearing_origin_m;
       s.covariance.setZero();
     }
-    int best_class = kClassUnknown;
-    double votes = 0;
-    for (int c = 1; c < 5; ++c) {
-      votes += e.class_votes[c];
-      if (e.class_votes[c] > (best_class ? e.class_votes[best_class] : 0.0)) best_class = c;
-    }
-    if (votes < options_.min_class_votes) best_class = kClassUnknown;
-    s.sound_class = best_class;
-    s.class_confidence = best_class != kClassUnknown ? e.class_votes[best_class] / votes : 0.0;
-    s.priority =
-        best_class == kClassVoice ? (called ? kPriorityCall : kPriorityVoice) : kPriorityNone;
-    const Eigen::Array2d xy = s.position_m.head<2>().array();
-    s.inside_site = !have_site_ || ((xy >= site_min_.array() - options_.site_margin_m).all() &&
-                                    (xy <= site_max_.array() + options_.site_margin_m).all());
-    s.is_person = heard && best_class == kClassVoice &&
-                  s.class_confidence >= options_.person_min_voice_share && s.has_position &&
-                  s.inside_site;
+    Classify(e.class_votes, heard, called, &s);
     s.first_heard_utime = e.first_utime;
     s.last_heard_utime = e.last_utime;
     s.num_observations = static_cast<int>(std::lround(e.rays));

@@ -43,27 +43,27 @@ namespace sarmap {
 namespace sound_map {
 
 struct OnlineSoundMapOptions {
-  bool three_d = false;             // azimuth + elevation sources (3D arrays)
-  double initial_range_m = 4.0;     // 1 / rho_0 at first observation
+  bool three_d = false;               // azimuth + elevation sources (3D arrays)
+  double initial_range_m = 4.0;       // 1 / rho_0 at first observation
   double inverse_depth_sigma = 0.25;  // sigma_rho at first observation, 1/m
   double doa_sigma_floor_deg = 3.0;   // lower bound on the DOA std from the message
   double elevation_sigma_deg = 60.0;  // 3D map fed azimuth-only DOA: elevation prior
   double gate_chi2 = 9.0;             // association gate (unknown tracks)
   double update_gate_chi2 = 25.0;     // outlier gate on updates of an associated source (0: none)
   double max_signature_distance = 0.2;
-  double motion_noise_m_per_m = 0.05;    // current-pose growth between SLAM updates
+  double motion_noise_m_per_m = 0.05;  // current-pose growth between SLAM updates
   double motion_noise_rad_per_m = 0.02;
   double motion_noise_rad_per_rad = 0.05;
-  double converged_sigma_m = 0.5;   // converged when the largest position std is below
+  double converged_sigma_m = 0.5;  // converged when the largest position std is below
   // Range observability (published position vs bearing only).
   double observable_sigmas = 3.0;
   double max_position_sigma_m = 2.0;
-  double site_margin_m = 1.0;       // a person must lie this close to the mapped site
-  int min_class_votes = 3;          // DOAs with a class needed before a source has one
+  double site_margin_m = 1.0;  // a person must lie this close to the mapped site
+  int min_class_votes = 3;     // DOAs with a class needed before a source has one
   // A person's source is a voice by a clear majority: a source's DOAs are classed one by one,
   // and a machine or an alarm heard together with voices gets many DOAs classed voice.
   double person_min_voice_share = 0.8;
-  double silent_after_s = 30.0;     // not heard for this long: STATE_SILENT
+  double silent_after_s = 30.0;  // not heard for this long: STATE_SILENT
   // Births: a DOA that fits no source starts a tentative track in the map frame; it becomes a
   // source after birth_min_observations DOAs whose map-frame bearings agree (chi-square
   // birth_gate_chi2 with a drift allowance) within birth_window_s. Single spurious DOAs
@@ -129,16 +129,22 @@ struct OnlineSoundMapOptions {
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
     v("initial_range_m", initial_range_m, "range assumed at first observation (1/rho_0)");
-    v("inverse_depth_sigma", inverse_depth_sigma, "std of the inverse depth at first observation, 1/m");
-    v("doa_sigma_floor_deg", doa_sigma_floor_deg, "lower bound on the DOA std taken from DOA messages");
-    v("elevation_sigma_deg", elevation_sigma_deg, "3D map, azimuth-only DOA: std of the 0-elevation prior");
+    v("inverse_depth_sigma", inverse_depth_sigma,
+      "std of the inverse depth at first observation, 1/m");
+    v("doa_sigma_floor_deg", doa_sigma_floor_deg,
+      "lower bound on the DOA std taken from DOA messages");
+    v("elevation_sigma_deg", elevation_sigma_deg,
+      "3D map, azimuth-only DOA: std of the 0-elevation prior");
     v("gate_chi2", gate_chi2, "chi-square gate for associating an unknown DOA track to a source");
     v("update_gate_chi2", update_gate_chi2, "chi-square outlier gate on source updates (0: none)");
     v("max_signature_distance", max_signature_distance, "spectral signature cosine distance gate");
-    v("motion_noise_m_per_m", motion_noise_m_per_m, "current-pose position noise per metre between SLAM updates");
+    v("motion_noise_m_per_m", motion_noise_m_per_m,
+      "current-pose position noise per metre between SLAM updates");
     v("motion_noise_rad_per_m", motion_noise_rad_per_m, "current-pose heading noise per metre");
-    v("motion_noise_rad_per_rad", motion_noise_rad_per_rad, "current-pose heading noise per radian turned");
-    v("converged_sigma_m", converged_sigma_m, "a source is converged when its largest position std is below this");
+    v("motion_noise_rad_per_rad", motion_noise_rad_per_rad,
+      "current-pose heading noise per radian turned");
+    v("converged_sigma_m", converged_sigma_m,
+      "a source is converged when its largest position std is below this");
     v("silent_after_s", silent_after_s, "a source not heard for this long is reported silent");
     v("observable_sigmas", observable_sigmas,
       "a source has a position once its inverse depth exceeds this many of its standard "
@@ -147,33 +153,46 @@ struct OnlineSoundMapOptions {
       "... and its largest planar position std is below this");
     v("site_margin_m", site_margin_m,
       "a person must lie within this distance of the mapped site's known cells' box");
-    v("min_class_votes", min_class_votes, "classified DOAs a source needs before it has a class (unknown until then)");
+    v("min_class_votes", min_class_votes,
+      "classified DOAs a source needs before it has a class (unknown until then)");
     v("person_min_voice_share", person_min_voice_share,
       "a source is a person only when at least this share of its classified DOAs are voice");
-    v("birth_min_observations", birth_min_observations, "consistent DOAs needed before a new source is born");
+    v("birth_min_observations", birth_min_observations,
+      "consistent DOAs needed before a new source is born");
     v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time");
-    v("birth_gate_chi2", birth_gate_chi2, "chi-square gate between map-frame bearings of a tentative source");
-    v("birth_drift_deg_per_s", birth_drift_deg_per_s, "bearing drift allowed between DOAs of a tentative source");
-    v("prune_after_s", prune_after_s, "an unconverged source with little support is removed after this silence");
-    v("prune_min_observations", prune_min_observations, "sources with at least this many DOAs are never pruned");
+    v("birth_gate_chi2", birth_gate_chi2,
+      "chi-square gate between map-frame bearings of a tentative source");
+    v("birth_drift_deg_per_s", birth_drift_deg_per_s,
+      "bearing drift allowed between DOAs of a tentative source");
+    v("prune_after_s", prune_after_s,
+      "an unconverged source with little support is removed after this silence");
+    v("prune_min_observations", prune_min_observations,
+      "sources with at least this many DOAs are never pruned");
     v("prune_behind_sigmas", prune_behind_sigmas,
-      "remove a source whose inverse depth is below zero by this many standard deviations (0: never)");
+      "remove a source whose inverse depth is below zero by this many standard deviations (0: "
+      "never)");
     v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
       "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
     v("max_abs_elevation_deg", max_abs_elevation_deg,
-      "DOAs steeper than this above or below the array plane are dropped (robot's own motors; 0: keep all)");
+      "DOAs steeper than this above or below the array plane are dropped (robot's own motors; 0: "
+      "keep all)");
     v("path_clearance_m", path_clearance_m,
-      "a converged source within this distance of where the robot drove is removed as a ghost (0: never)");
+      "a converged source within this distance of where the robot drove is removed as a ghost (0: "
+      "never)");
     v("doa_moves_poses", doa_moves_poses,
-      "DOA updates also correct the current pose and anchors (false: only the sources; the poses are SLAM's)");
+      "DOA updates also correct the current pose and anchors (false: only the sources; the poses "
+      "are SLAM's)");
     v("anchor_sigma_floor_m", anchor_sigma_floor_m,
-      "position std added to every pose of SLAM_ANCHORS (SLAM's covariance is overconfident; 0: as is)");
+      "position std added to every pose of SLAM_ANCHORS (SLAM's covariance is overconfident; 0: as "
+      "is)");
     v("anchor_sigma_floor_deg", anchor_sigma_floor_deg,
       "heading std added to every pose of SLAM_ANCHORS (0: as is)");
     v("use_slam_covariance", use_slam_covariance,
-      "take SLAM_ANCHORS' joint covariance (true) or only its means, keeping this map's pose covariance (false)");
+      "take SLAM_ANCHORS' joint covariance (true) or only its means, keeping this map's pose "
+      "covariance (false)");
     v("anchors_after_loop_closure_only", anchors_after_loop_closure_only,
-      "apply SLAM_ANCHORS only when SLAM found new loop closures (false: after every optimisation, as the thesis)");
+      "apply SLAM_ANCHORS only when SLAM found new loop closures (false: after every optimisation, "
+      "as the thesis)");
     v("back_propagate_sources", back_propagate_sources,
       "SLAM_ANCHORS also regresses the sources on the anchors' correction (eq. 4.25; false: "
       "sources move rigidly with their anchors)");
@@ -266,12 +285,14 @@ class OnlineSoundMap {
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
 
-  void OnPose(int64_t utime, const Pose2& map_from_base, const Eigen::Matrix3d& covariance, int64_t node_id);
+  void OnPose(int64_t utime, const Pose2& map_from_base, const Eigen::Matrix3d& covariance,
+              int64_t node_id);
   // SLAM_ANCHORS: current pose, the kept anchors and the joint covariance (3(1+n) square).
   // Returns false (and counts) for an inconsistent message.
   // loop_closed: the optimisation found new loop closures (slam_anchors_t::loop_closed); with
   // anchors_after_loop_closure_only a message without is skipped (counted, returns true).
-  bool OnSlamAnchors(int64_t utime, const Pose2& current, const std::vector<std::pair<int64_t, Pose2>>& anchors,
+  bool OnSlamAnchors(int64_t utime, const Pose2& current,
+                     const std::vector<std::pair<int64_t, Pose2>>& anchors,
                      const Eigen::MatrixXd& covariance, bool loop_closed = true);
   void OnDoa(int64_t utime, const std::string& device, const std::vector<Doa>& doas);
   void OnHeardPerson(const std::string& device, int64_t track_id, bool called = false);
@@ -372,7 +393,7 @@ class OnlineSoundMap {
     Pose2 node_from_anchor;
   };
   std::map<int64_t, AnchorLink> anchor_links_;  // EKF anchor id -> node (+ offset)
-  std::map<int64_t, Pose2> node_poses_;          // latest estimate of each SLAM node seen
+  std::map<int64_t, Pose2> node_poses_;         // latest estimate of each SLAM node seen
   // Where the base has been (map frame, POSE as received, a point every trail_step_m_),
   // hashed in square cells of path_clearance_m so a lookup reads the 3x3 cells around it.
   std::unordered_map<int64_t, std::vector<Eigen::Vector2d>> trail_cells_;
@@ -392,6 +413,9 @@ class OnlineSoundMap {
   int64_t last_solve_utime_ = 0;
   static constexpr int64_t kFirstEvidenceId = 1000000000;
   void AddRay(int64_t utime, const Doa& doa, bool heard);
+  // A source's class from its class votes, its priority, whether it lies inside the site and
+  // whether it is a person (needs position_m and has_position set).
+  void Classify(const std::array<double, 5>& class_votes, bool heard, bool called, Source* s) const;
   void SolveEvidence(int64_t utime);
 };
 
