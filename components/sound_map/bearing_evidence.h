@@ -54,7 +54,7 @@ struct BearingEvidenceOptions {
   double turn_lag_s = 0.3;
   int iterations = 30;          // EM iterations per solve
   double peak_radius_m = 0.5;   // mass summed within this radius; sources 2x this apart
-  double min_rays = 15;         // rays more than half explained by a source
+  double min_rays = 30;         // rays more than half explained by a source
   double solve_period_s = 5.0;  // message time between solves
   // Beyond this many rays, rays heard from the same place in the same direction are merged
   // into one that stands for all; if that is not enough the oldest go (memory and solve time
