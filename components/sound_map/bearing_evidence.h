@@ -10,23 +10,23 @@
 //
 //   Each ray r (origin o_r, map bearing theta_r, std sigma_r) comes from a source in one cell c
 //   or from clutter (reflections, the robot's own noise, a moving talker):
-//     p(r) = sum_c pi_c a_rc + pi_0 a_0,
-//     a_rc = N(theta_r - bearing(o_r -> c); 0, sigma_r^2)  for min_range_m <= |c - o_r| <=
-//     max_range_m, a_0  = 1 / (2 pi)   (a bearing anywhere).
-//   The weights are the maximum-likelihood mixture, found by EM (as ML-EM in emission
-//   tomography):  pi_c <- (1/N) sum_r pi_c a_rc / p(r).
+//     p(r) = sum_c pi_c a_rc + pi_0 a_0,   a_0 = 1 / (2 pi) (a bearing anywhere),
+//     a_rc = N(theta_r - bearing(o_r -> c); 0, sigma_r^2) for cells min_range_m-max_range_m away.
+//   EM on the mixture weights (as ML-EM in emission tomography), from uniform weights:
+//     pi_c <- (1/N) sum_r pi_c a_rc / p(r).
 //   Mass gathers where rays from different places cross; a cell crossed only by rays from one
-//   place keeps no more than its share of a line.
+//   place keeps no more than its share of a line. EM stops after `iterations` steps: run to
+//   convergence it would put a spike wherever two rays cross.
 //
 // Sources: the greatest mass within peak_radius_m of a cell, greedily, 2 peak_radius_m apart,
 // each with at least min_rays rays more than half explained by it. A source's position is the
-// centroid of that mass; its covariance is the inverse of the triangulation's information
-//     I = sum_r w_r n_r n_r^T / (sigma_r d_r)^2 + I_cell
+// centroid of that mass. Its covariance is the inverse of the triangulation's information
+//     I = sum_r w_r n_r n_r^T / (sigma_r d_r)^2
 // (w_r the ray's responsibility for the source, d_r its range, n_r its unit normal), so a source
 // seen from one direction only has an unbounded range, plus the spread of the mass (the rays
-// share pose errors and biases, which the information takes as independent). Rays are stored in the
-// frame of the SLAM node they were heard from and placed with the node's latest pose at every
-// solve, so loop closures move them.
+// share pose errors and biases, which the information takes as independent). Rays are stored
+// in the frame of the SLAM node they were heard from and placed with the node's latest pose at
+// every solve, so loop closures move them.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -50,7 +50,8 @@ struct BearingEvidenceOptions {
   double sigma_floor_deg = 3.0;  // lower bound on a DOA's std
   double window_sigmas = 3.0;    // a ray covers cells within this many stds of its bearing
   // While the robot turns, a DOA (a window of a few hundred ms, smoothed by the localiser's
-  // tracker) lags its heading; the lag widens the ray: sigma^2 += (turn_lag_s * turn rate)^2.
+  // tracker) is heard with the heading of about turn_lag_s earlier: the sound map turns it back
+  // by the yaw rate times turn_lag_s and widens it by half that (OnlineSoundMap::AddRay).
   double turn_lag_s = 0.3;
   int iterations = 30;          // EM iterations per solve
   double peak_radius_m = 0.5;   // mass summed within this radius; sources 2x this apart
@@ -60,7 +61,8 @@ struct BearingEvidenceOptions {
   // into one that stands for all; if that is not enough the oldest go (memory and solve time
   // stay bounded; a source heard long ago keeps its evidence).
   int max_rays = 10000;
-  // A source this close to a source of the IDP EKF is that source (published once, by the EKF).
+  // A source this close to a placed source of the IDP EKF is that emitter, published once: by
+  // the EKF when it is placed at least as well, else by this map.
   double merge_radius_m = 1.0;
   template <class V>
   void Visit(V& v) {
@@ -71,7 +73,8 @@ struct BearingEvidenceOptions {
     v("sigma_floor_deg", sigma_floor_deg, "lower bound on a DOA's std, deg");
     v("window_sigmas", window_sigmas, "a ray covers cells within this many stds of its bearing");
     v("turn_lag_s", turn_lag_s,
-      "a DOA's lag behind the heading while turning: its std grows by this times the turn rate");
+      "a DOA's lag behind the heading while turning, s: it is turned back by the yaw rate times "
+      "this, and its std grows by half that");
     v("iterations", iterations, "EM iterations per solve");
     v("peak_radius_m", peak_radius_m,
       "a source's mass is summed within this radius; sources lie twice this apart");
@@ -80,7 +83,9 @@ struct BearingEvidenceOptions {
     v("max_rays", max_rays,
       "rays kept; beyond this rays from the same place in the same direction are merged, then the "
       "oldest go");
-    v("merge_radius_m", merge_radius_m, "a source this close to an EKF source is that source, m");
+    v("merge_radius_m", merge_radius_m,
+      "a source this close to a placed EKF source is that emitter (published once, by the better "
+      "placed), m");
   }
   void Validate(common::Validator& check) const {
     check.Positive("cell_m", cell_m);
