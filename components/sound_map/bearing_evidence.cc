@@ -25,8 +25,8 @@ void BearingEvidence::Add(const Ray& ray) {
   if (rays_.size() <= static_cast<size_t>(options_.max_rays)) return;
   // Over the limit: rays heard from within half a metre of each other in the same direction
   // (bins of half the DOA std floor) and of the same class are merged into the oldest of them,
-  // which then stands for all (its weight): a source heard long ago keeps its evidence. If that
-  // is not enough, the oldest rays go.
+  // which then stands for all (its weight): a source heard long ago keeps its evidence. Beyond
+  // 90 % of the limit after that, the oldest rays go (so this runs once per tenth of the limit).
   std::vector<Ray> rays;
   std::vector<Cache> cache;
   const size_t cached = std::min(cache_.size(), rays_.size());  // placed at the last solve
@@ -50,9 +50,9 @@ void BearingEvidence::Add(const Ray& ray) {
     rays.push_back(rays_[i]);
     if (i < cached) cache.push_back(std::move(cache_[i]));
   }
-  const size_t cap = static_cast<size_t>(options_.max_rays);
-  if (rays.size() > cap) {
-    const size_t drop = rays.size() - cap * 9 / 10;
+  const size_t keep = static_cast<size_t>(options_.max_rays) * 9 / 10;
+  if (rays.size() > keep) {
+    const size_t drop = rays.size() - keep;
     rays.erase(rays.begin(), rays.begin() + drop);
     cache.erase(cache.begin(), cache.begin() + std::min(drop, cache.size()));
   }
