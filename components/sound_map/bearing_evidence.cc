@@ -301,7 +301,8 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     }
   }
   for (size_t k = 0; k < out.size(); ++k) {
-    // A cell's own extent bounds the information: a cell is the finest a position gets.
+    // 1e-6 keeps the information invertible (a source heard from one direction); the cell's
+    // own extent, cell^2 / 12, is the finest a position gets.
     info[k] += Eigen::Matrix2d::Identity() * 1e-6;
     Source& s = out[k];
     s.covariance = info[k].inverse() + spread[k] + Eigen::Matrix2d::Identity() * (cell * cell / 12);
