@@ -73,6 +73,13 @@ Grid PartlyKnownRoom() {
   return g;
 }
 
+// PartlyKnownRoom with its unknown part walled off: nothing left to explore.
+Grid ClosedRoom() {
+  Grid g = PartlyKnownRoom();
+  for (auto& cell : g.cells) cell = cell < 0 ? 100 : cell;
+  return g;
+}
+
 ExploreOptions NoLookAround() {
   ExploreOptions o;
   o.goals.look_around = false;
@@ -98,9 +105,7 @@ TEST(ExploreMapTest, FrontierOfTheKnownPartAndAPathThatKeepsItsDistanceFromWalls
   for (const auto& p : path) max_y = std::max(max_y, p.y());
   EXPECT_GT(max_y, 0.6);
   // Everything known: no frontier left.
-  Grid done = PartlyKnownRoom();
-  for (auto& c : done.cells) c = c < 0 ? 100 : c;
-  m.SetMap(done);
+  m.SetMap(ClosedRoom());
   m.UpdateCostMap();
   EXPECT_TRUE(m.Frontiers(m.Plan(Eigen::Vector2d(1.0, 2.0))).empty());
 }
@@ -338,8 +343,7 @@ TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
 
 TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
   ExploreController c{NoLookAround()};
-  Grid done = PartlyKnownRoom();
-  for (auto& cell : done.cells) cell = cell < 0 ? 100 : cell;
+  const Grid done = ClosedRoom();
   c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));  // home
   c.OnMap(done);
   c.OnPose(common::Rigid2d(2.0, 2.0, M_PI));
@@ -360,8 +364,7 @@ TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
 // home (a doorway SLAM drew closed is open in the next map), the robot explores again.
 TEST(ExploreControllerTest, FrontiersReachedAgainOnTheWayHomeResumeTheExploration) {
   ExploreController c{NoLookAround()};
-  Grid done = PartlyKnownRoom();
-  for (auto& cell : done.cells) cell = cell < 0 ? 100 : cell;
+  const Grid done = ClosedRoom();
   c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));  // home
   c.OnMap(done);
   common::Rigid2d pose(2.5, 2.0, M_PI);
@@ -407,8 +410,7 @@ TEST(ExploreControllerTest, SweepRevisitsTheExploredSiteUntilTheTimeBudget) {
   o.goals.when_explored = "sweep";
   o.goals.sweep_cell_m = 1.0;
   o.goals.sweep_min_age_s = 20;
-  Grid done = PartlyKnownRoom();  // a closed 2.5 x 4 m room
-  for (auto& cell : done.cells) cell = cell < 0 ? 100 : cell;
+  const Grid done = ClosedRoom();  // a closed 2.5 x 4 m room
   auto run = [&](const ExploreOptions& options, double seconds,
                  std::set<std::pair<int, int>>* cells) {
     ExploreController c{options};
