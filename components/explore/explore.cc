@@ -124,7 +124,8 @@ void ExploreController::OnMap(const Grid& grid) {
   map_changed_ = true;
 }
 
-void ExploreController::OnPose(const common::Rigid2d& map_from_base) {
+void ExploreController::OnPose(const common::Rigid2d& map_from_base, double stamp_s) {
+  pose_stamp_s_ = stamp_s;
   if (pose_ && state_ == State::kLookAround) {
     look_turned_rad_ +=
         std::abs(common::NormalizeAngle(map_from_base.yaw_rad() - pose_->yaw_rad()));
@@ -630,6 +631,39 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
   return v;
 }
 
+Velocity ExploreController::WaitForPose(double now_s) {
+  if (!pose_wait_since_s_) {
+    pose_wait_since_s_ = now_s;
+    pose_wait_warned_ = false;
+    ++pose_waits_;
+  }
+  if (!pose_wait_warned_ && now_s - *pose_wait_since_s_ > 5.0) {
+    pose_wait_warned_ = true;
+    SARMAP_LOG(WARN) << "no POSE within " << options_.safety.max_pose_age_s
+                     << " s of the SCAN for 5 s: standing still until SLAM catches up (is SLAM "
+                        "running, and are POSE and SCAN stamped on one clock?)";
+  }
+  Velocity v;
+  v.source = "pose_wait";
+  return v;
+}
+
+void ExploreController::ResumeAfterPoseWait(double now_s) {
+  const double waited_s = now_s - *pose_wait_since_s_;
+  pose_wait_since_s_.reset();
+  if (waited_s > 1.0) {
+    SARMAP_LOG(INFO) << "stood " << waited_s << " s waiting for POSE (" << pose_waits_
+                     << " waits so far)";
+  }
+  progress_s_ += waited_s;
+  contact_since_s_ = now_s;
+  contact_xy_ = pose_->translation();
+  commanded_m_ = 0;
+  if (blocked_since_s_) *blocked_since_s_ += waited_s;
+  recovery_phase_start_s_ += waited_s;
+  if (dwell_until_s_) *dwell_until_s_ += waited_s;
+}
+
 Velocity ExploreController::Drive(double now_s, const Scan& scan) {
   Velocity stop;
   stop.source = "stop";
@@ -792,7 +826,14 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
     out.source = "look";
     out.angular_radps = 0.5;
     status_.state = StateName(state_);
+  } else if (options_.safety.max_pose_age_s > 0 &&
+             scan.stamp_s - pose_stamp_s_ > options_.safety.max_pose_age_s) {
+    // Where the robot is now is not known well enough to place the scan or to drive.
+    out = WaitForPose(now_s);
+    last_linear_mps_ = 0;
+    status_.state = StateName(state_);
   } else {
+    if (pose_wait_since_s_) ResumeAfterPoseWait(now_s);
     map_.IntegrateScan(*pose_, scan);
     out = Drive(now_s, scan);
     last_linear_mps_ = out.linear_mps;

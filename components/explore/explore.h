@@ -105,6 +105,7 @@ struct SafetyOptions {
   double blind_fraction = 0.5;       // of the corridor's beams without information: blocked
   double footprint_radius_m = 0.28;  // the base's radius and a margin, for the swept check
   double sweep_horizon_s = 0.6;      // how far ahead the commanded arc is checked
+  double max_pose_age_s = 0.5;       // an older POSE (against the SCAN's stamp): stand still
   template <class V>
   void Visit(V& v) {
     v("stop_distance_m", stop_distance_m,
@@ -113,6 +114,9 @@ struct SafetyOptions {
       "no forward motion when the commanded arc brings the base this close to a map obstacle (a "
       "corner cut while turning)");
     v("sweep_horizon_s", sweep_horizon_s, "the commanded arc is checked this far ahead in time");
+    v("max_pose_age_s", max_pose_age_s,
+      "when the newest POSE is older than this against the SCAN's stamp (SLAM lags or is down), "
+      "the robot stands still and the scan stays out of the explorer's map (0: no check)");
     v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
     v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
     v("blind_fraction", blind_fraction,
@@ -125,6 +129,7 @@ struct SafetyOptions {
     check.InRange("blind_fraction", blind_fraction, 0.0, 1.0);
     check.Positive("footprint_radius_m", footprint_radius_m);
     check.NonNegative("sweep_horizon_s", sweep_horizon_s);
+    check.NonNegative("max_pose_age_s", max_pose_age_s);
   }
 };
 
@@ -368,7 +373,9 @@ class ExploreController {
   }
   bool emergency_stop() const { return emergency_stop_; }
   void OnMap(const Grid& grid);
-  void OnPose(const common::Rigid2d& map_from_base);
+  // `stamp_s` is the sensor time the pose is for (the SCAN stamp SLAM placed), on the clock of
+  // Scan::stamp_s.
+  void OnPose(const common::Rigid2d& map_from_base, double stamp_s);
   void OnHeardPeople(std::vector<HeardPerson> people) { heard_ = std::move(people); }
   // One command per scan. `now_s` is this process's clock (the scan's receive time live, its
   // log time offline): every duration in the controller is measured on it.
@@ -402,6 +409,11 @@ class ExploreController {
   };
 
   Velocity Drive(double now_s, const Scan& scan);
+  // While the pose lags the scan by more than max_pose_age_s: no motion, and every timer of
+  // the mission (progress, contact, blocked, recovery, dwell) is held, so that waiting for SLAM
+  // is neither being stuck nor a contact.
+  Velocity WaitForPose(double now_s);
+  void ResumeAfterPoseWait(double now_s);
   void Replan(double now_s);
   std::optional<Goal> ChooseFrontier(const CostField& field,
                                      const std::vector<Frontier>& frontiers) const;
@@ -426,6 +438,10 @@ class ExploreController {
   std::optional<TeleopCommand> teleop_;
   bool emergency_stop_ = false;
   std::optional<common::Rigid2d> pose_;
+  double pose_stamp_s_ = 0;
+  std::optional<double> pose_wait_since_s_;
+  int pose_waits_ = 0;
+  bool pose_wait_warned_ = false;
   std::optional<Eigen::Vector2d> home_;
   std::vector<HeardPerson> heard_;
   State state_ = State::kLookAround;

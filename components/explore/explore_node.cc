@@ -72,7 +72,8 @@ class ExploreNode {
   }
 
   void OnPose(const pose_t& m) {
-    controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
+    controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d(),
+                       common::UtimeToSeconds(m.header.utime));
   }
 
   void OnMap(const occupancy_grid_t& m) {
@@ -121,6 +122,7 @@ class ExploreNode {
       return;
     }
     explore::Scan scan;
+    scan.stamp_s = common::UtimeToSeconds(m.header.utime);
     scan.angle_min_rad = m.angle_min_rad;
     scan.angle_increment_rad = m.angle_increment_rad;
     scan.range_min_m = m.range_min_m;

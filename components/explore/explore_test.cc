@@ -281,7 +281,7 @@ TEST(SafetyLayerTest, NoReturnIsFreeBlindCorridorIsBlockedAndOnlyForwardSpeedIsL
 TEST(ExploreControllerTest, ExploresTowardsTheFrontierAndTheSafetyLayerNeverTurnsTheRobot) {
   ExploreController c{NoLookAround()};
   c.OnMap(PartlyKnownRoom());
-  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   Velocity v = c.OnScan(0.0, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(v.source, "planner");
   EXPECT_GT(v.linear_mps, 0.1);
@@ -296,7 +296,7 @@ TEST(ExploreControllerTest, ExploresTowardsTheFrontierAndTheSafetyLayerNeverTurn
   EXPECT_EQ(held.linear_mps, 0.0);
   EXPECT_NEAR(held.angular_radps, v.angular_radps, 0.2);
   // Facing away from the goal: turn on the spot.
-  c.OnPose(common::Rigid2d(1.0, 2.0, M_PI));
+  c.OnPose(common::Rigid2d(1.0, 2.0, M_PI), 0.0);
   const Velocity turn = c.OnScan(0.2, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(turn.linear_mps, 0.0);
   EXPECT_NE(turn.angular_radps, 0.0);
@@ -308,7 +308,7 @@ TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
   ExploreController c{o};
   c.OnMap(PartlyKnownRoom());
   const common::Rigid2d pose(1.0, 2.0, 0.0);
-  c.OnPose(pose);
+  c.OnPose(pose, 0.0);
   double t = 0;
   // The robot never moves (wheels spinning against something the sensors miss).
   bool backed_off = false, turned = false;
@@ -327,7 +327,7 @@ TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
   o.recovery.contact_ratio = 0;
   ExploreController fresh{o};
   fresh.OnMap(PartlyKnownRoom());
-  fresh.OnPose(pose);
+  fresh.OnPose(pose, 0.0);
   for (double u = 0; u < o.recovery.stuck_timeout_s - 0.5; u += 0.1)
     fresh.OnScan(u, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(fresh.status().recoveries, 0);
@@ -341,19 +341,64 @@ TEST(ExploreControllerTest, StuckRobotBacksOffTurnsAndGivesUpTheGoal) {
   EXPECT_GE(c.status().blacklisted, 1);
 }
 
+TEST(ExploreControllerTest, APoseThatLagsTheScanStopsTheRobotWithoutCountingAsStuck) {
+  const ExploreOptions o = NoLookAround();
+  ExploreController c{o};
+  c.OnMap(PartlyKnownRoom());
+  const common::Rigid2d pose(1.0, 2.0, 0.0);
+  c.OnPose(pose, 0.0);
+  Scan scan = MakeScan(INFINITY, INFINITY);
+  EXPECT_GT(c.OnScan(0.0, scan).linear_mps, 0.1);
+  // SLAM stalls: the scans go on, the pose stays at stamp 0 for longer than any stuck timeout.
+  // They see a wall 1.25 m ahead that the stale pose would put in the wrong place: it stays out
+  // of the explorer's map.
+  const Scan wall = MakeScan(1.25, 1.25);
+  const Eigen::Vector2d wall_m = pose * Eigen::Vector2d(1.25, 0.0);
+  const double stall_s = 2 * o.recovery.stuck_timeout_s;
+  for (double t = 0.1; t < stall_s; t += 0.1) {
+    scan = t <= o.safety.max_pose_age_s ? MakeScan(INFINITY, INFINITY) : wall;
+    scan.stamp_s = t;
+    const Velocity v = c.OnScan(t, scan);
+    if (t <= o.safety.max_pose_age_s) continue;
+    ASSERT_EQ(v.source, "pose_wait") << "t " << t;
+    EXPECT_EQ(v.linear_mps, 0.0);
+    EXPECT_EQ(v.angular_radps, 0.0);
+  }
+  EXPECT_FALSE(c.map().Occupied(wall_m));
+  // SLAM is back: the robot drives on, neither stuck nor in contact with anything.
+  scan = MakeScan(INFINITY, INFINITY);
+  for (double t = stall_s; t < stall_s + 1.0; t += 0.1) {
+    scan.stamp_s = t;
+    c.OnPose(pose * common::Rigid2d(0.3 * (t - stall_s), 0.0, 0.0), t);
+    EXPECT_EQ(c.OnScan(t, scan).source, "planner") << "t " << t;
+  }
+  EXPECT_EQ(c.status().recoveries, 0);
+  EXPECT_EQ(c.status().contacts, 0);
+  // With the check off, a lagging pose drives as before.
+  ExploreOptions off = o;
+  off.safety.max_pose_age_s = 0;
+  ExploreController unchecked{off};
+  unchecked.OnMap(PartlyKnownRoom());
+  unchecked.OnPose(pose, 0.0);
+  scan = wall;
+  scan.stamp_s = 10.0;
+  EXPECT_NE(unchecked.OnScan(10.0, scan).source, "pose_wait");
+  EXPECT_TRUE(unchecked.map().Occupied(wall_m));
+}
+
 TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
   ExploreController c{NoLookAround()};
   const Grid done = ClosedRoom();
-  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));  // home
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);  // home
   c.OnMap(done);
-  c.OnPose(common::Rigid2d(2.0, 2.0, M_PI));
+  c.OnPose(common::Rigid2d(2.0, 2.0, M_PI), 0.0);
   double t = 0;
   common::Rigid2d pose(2.0, 2.0, M_PI);
   for (; t < 30 && c.status().state != "home"; t += 0.1) {
     const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
     // Integrate the command: the robot does what it is told.
     pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
-    c.OnPose(pose);
+    c.OnPose(pose, 0.0);
   }
   EXPECT_EQ(c.status().state, "home");
   EXPECT_LT((pose.translation() - Eigen::Vector2d(1.0, 2.0)).norm(), 0.35);
@@ -365,15 +410,15 @@ TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
 TEST(ExploreControllerTest, FrontiersReachedAgainOnTheWayHomeResumeTheExploration) {
   ExploreController c{NoLookAround()};
   const Grid done = ClosedRoom();
-  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));  // home
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);  // home
   c.OnMap(done);
   common::Rigid2d pose(2.5, 2.0, M_PI);
-  c.OnPose(pose);
+  c.OnPose(pose, 0.0);
   double t = 0;
   auto step = [&] {
     const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
     pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
-    c.OnPose(pose);
+    c.OnPose(pose, 0.0);
     t += 0.1;
   };
   while (t < 10 && c.status().state != "returning") step();
@@ -387,15 +432,15 @@ TEST(ExploreControllerTest, FrontiersReachedAgainOnTheWayHomeResumeTheExploratio
   ExploreOptions o = NoLookAround();
   o.goals.time_budget_s = 1;
   ExploreController budget{o};
-  budget.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  budget.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   budget.OnMap(PartlyKnownRoom());
   common::Rigid2d p2(2.5, 2.0, M_PI);
-  budget.OnPose(p2);
+  budget.OnPose(p2, 0.0);
   bool explored_again = false, returned = false;
   for (double u = 0; u < 20 && budget.status().state != "home"; u += 0.1) {
     const Velocity v = budget.OnScan(u, MakeScan(INFINITY, INFINITY));
     p2 = p2 * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
-    budget.OnPose(p2);
+    budget.OnPose(p2, 0.0);
     returned |= budget.status().state == "returning";
     explored_again |= returned && budget.status().state == "exploring";
   }
@@ -415,12 +460,12 @@ TEST(ExploreControllerTest, SweepRevisitsTheExploredSiteUntilTheTimeBudget) {
                  std::set<std::pair<int, int>>* cells) {
     ExploreController c{options};
     common::Rigid2d pose(1.0, 1.0, 0.0);
-    c.OnPose(pose);
+    c.OnPose(pose, 0.0);
     c.OnMap(done);
     for (double t = 0; t < seconds && c.status().state != "home"; t += 0.1) {
       const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
       pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
-      c.OnPose(pose);
+      c.OnPose(pose, 0.0);
       if (cells)
         cells->insert({static_cast<int>(std::floor(pose.translation().x())),
                        static_cast<int>(std::floor(pose.translation().y()))});
@@ -448,7 +493,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
     for (int x = 25; x < g.width - 1; ++x) g.cells[y * g.width + x] = 0;  // known now
   }
   c.OnMap(g);
-  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   HeardPerson p;
   p.id = 7;
   p.position_m = Eigen::Vector2d(5.0, 1.0);
@@ -466,7 +511,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
     walled.cells[y * walled.width + 44] = 100;  // x = 4.4 m
   ExploreController cover{o};
   cover.OnMap(walled);
-  cover.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  cover.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   cover.OnHeardPeople({p});
   cover.OnScan(0.0, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(cover.status().goal_kind, "sound");
@@ -476,7 +521,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   // Placed too uncertainly: not a goal (frontier exploration instead).
   ExploreController vague{o};
   vague.OnMap(PartlyKnownRoom());
-  vague.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  vague.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   p.position_std_m = 5.0;
   vague.OnHeardPeople({p});
   vague.OnScan(0.0, MakeScan(INFINITY, INFINITY));
@@ -486,7 +531,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
 TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergencyStopHolds) {
   ExploreController c{NoLookAround()};
   c.OnMap(PartlyKnownRoom());
-  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   TeleopCommand t;
   t.receive_time_s = 1.0;
   t.override_active = true;
@@ -507,7 +552,7 @@ TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergency
 TEST(ExploreControllerTest, ADriveDuringAnEmergencyStopDoesNotReleaseIt) {
   ExploreController c{NoLookAround()};
   c.OnMap(PartlyKnownRoom());
-  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0));
+  c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   TeleopCommand stop;
   stop.receive_time_s = 1.0;
   stop.emergency_stop = true;

@@ -26,6 +26,7 @@ namespace explore {
 // A planar laser scan in the base frame. Ranges: finite in [range_min, range_max] a return;
 // +inf no return (free up to range_max); 0 or NaN no information.
 struct Scan {
+  double stamp_s = 0;  // sensor time, on the clock of the POSE stamps
   double angle_min_rad = 0;
   double angle_increment_rad = 0;
   double range_min_m = 0;

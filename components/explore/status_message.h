@@ -11,7 +11,8 @@ namespace sarmap {
 namespace explore {
 
 // `path_stride`: every n-th path point (the last always), so the message stays small.
-inline sarmap::explore_status_t ToStatusMessage(const ExploreStatus& s, int64_t utime, size_t path_stride = 1) {
+inline sarmap::explore_status_t ToStatusMessage(const ExploreStatus& s, int64_t utime,
+                                                size_t path_stride = 1) {
   sarmap::explore_status_t out;
   out.header.utime = utime;
   out.header.seq = 0;

@@ -315,7 +315,7 @@ class Loop : public sim::SimSink {
     const slam::ScanResult r = slam_.AddScan(scan);
     const double t = scan.time_s - start_s_;
     if (r.accepted) {
-      explore_.OnPose(r.map_from_base);
+      explore_.OnPose(r.map_from_base, scan.time_s);
       PublishPose(m.header.utime, t, r);
     }
     if (r.accepted && t - last_map_s_ >= options_.map_period_s) {
@@ -324,6 +324,7 @@ class Loop : public sim::SimSink {
     }
     result_->slam_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - slam0;
     explore::Scan es;
+    es.stamp_s = scan.time_s;
     es.angle_min_rad = scan.angle_min_rad;
     es.angle_increment_rad = scan.angle_increment_rad;
     es.range_min_m = scan.range_min_m;
