@@ -100,6 +100,7 @@ class PeopleMapProcessTest : public ::testing::Test {
         s.state = sarmap::sound_source_t::STATE_CONVERGED;
         s.has_position = true;
         s.sound_class = sarmap::doa_source_t::SOUND_CLASS_VOICE;
+        s.is_person = true;  // the sound map: a voice, heard calling, inside the site
         sound.sources.push_back(s);
         sound.num_sources = 1;
         lcm_->publish("SOUND_MAP", &sound);

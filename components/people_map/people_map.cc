@@ -99,8 +99,10 @@ void PeopleMap::AddEvidence(Person* p, Utime utime, double detection_confidence)
 
 void PeopleMap::Refuse(Person* p) const {
   if (p->has_seen && p->has_heard) {
-    Fuse(p->seen_position_m, p->seen_covariance, p->heard_position_m, p->heard_covariance,
-         &p->position_m, &p->covariance);
+    // The heard estimate comes with the change of SLAM's pose error since the sighting (see
+    // HeardSeenMahalanobis2), as the gate that joined them took it.
+    Fuse(p->seen_position_m, p->seen_covariance, p->heard_position_m,
+         p->heard_covariance + RelativePoseCovariance(), &p->position_m, &p->covariance);
   } else if (p->has_seen) {
     p->position_m = p->seen_position_m;
     p->covariance = p->seen_covariance;
@@ -230,7 +232,7 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
       for (auto& [id, q] : people_) {
         if (q.has_seen || !q.has_heard) continue;
         if ((q.heard_position_m - z).head<2>().norm() <= options_.fuse_max_distance_m &&
-            PlanarMahalanobis2(q.heard_position_m, q.heard_covariance, z, Pz) <=
+            HeardSeenMahalanobis2(z, Pz, q.heard_position_m, q.heard_covariance) <=
                 options_.fuse_gate_chi2) {
           p = &q;
           break;
@@ -308,6 +310,22 @@ void PeopleMap::MergeCloseSeenPeople() {
       b = people_.erase(b);
     }
   }
+}
+
+double PeopleMap::HeardSeenMahalanobis2(const Eigen::Vector3d& seen_m,
+                                        const Eigen::Matrix3d& seen_covariance,
+                                        const Eigen::Vector3d& heard_m,
+                                        const Eigen::Matrix3d& heard_covariance) const {
+  // The sound map places a voice from bearings along a stretch of the path, the camera from
+  // another: the change of SLAM's pose error between them separates the two estimates as it
+  // separates two sightings.
+  return PlanarMahalanobis2(seen_m, seen_covariance + RelativePoseCovariance(), heard_m,
+                            heard_covariance);
+}
+
+Eigen::Matrix3d PeopleMap::RelativePoseCovariance() const {
+  return Eigen::Vector3d(1, 1, 0).asDiagonal() *
+         (options_.relative_pose_sigma_m * options_.relative_pose_sigma_m);
 }
 
 int PeopleMap::RecentCalls(int64_t source_id, Utime utime) const {
@@ -408,13 +426,16 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
         if (q.has_heard || !q.has_seen) continue;
         if ((q.seen_position_m - best->position_m).head<2>().norm() <=
                 options_.fuse_max_distance_m &&
-            PlanarMahalanobis2(q.seen_position_m, q.seen_covariance, best->position_m,
-                               best->covariance) <= options_.fuse_gate_chi2) {
+            HeardSeenMahalanobis2(q.seen_position_m, q.seen_covariance, best->position_m,
+                                  best->covariance) <= options_.fuse_gate_chi2) {
           p = &q;
           break;
         }
       }
     }
+    // Only voices become people: a keyword false alarm on a machine or an alarm makes nobody
+    // (the call is counted; the source becomes a person if the sound map later calls it a voice).
+    if (!p && !best->is_person) continue;
     if (!p) {
       Person fresh;
       fresh.id = next_id_++;
@@ -458,7 +479,7 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
       linked->heard_position_m = s.position_m;
       linked->heard_covariance = s.covariance;
       Refuse(linked);
-    } else if ((s.is_person || recently_heard) && Placed(s) &&
+    } else if (s.is_person && recently_heard && Placed(s) &&
                RecentCalls(s.id, utime) >= options_.min_heard_calls) {
       Person fresh;
       fresh.id = next_id_++;
@@ -484,8 +505,9 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
         if (!seen.has_seen || seen.has_heard) continue;
         if ((seen.seen_position_m - heard.heard_position_m).head<2>().norm() <=
                 options_.fuse_max_distance_m &&
-            PlanarMahalanobis2(seen.seen_position_m, seen.seen_covariance, heard.heard_position_m,
-                               heard.heard_covariance) <= options_.fuse_gate_chi2) {
+            HeardSeenMahalanobis2(seen.seen_position_m, seen.seen_covariance,
+                                  heard.heard_position_m,
+                                  heard.heard_covariance) <= options_.fuse_gate_chi2) {
           seen.has_heard = true;
           seen.heard_position_m = heard.heard_position_m;
           seen.heard_covariance = heard.heard_covariance;

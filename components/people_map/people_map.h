@@ -99,7 +99,8 @@ struct PeopleMapOptions {
     v("relative_pose_sigma_m", relative_pose_sigma_m,
       "std per axis of the change of the robot pose error between two sightings of one person "
       "(SLAM drift that its covariance does not show); a new sighting joins a seen person it is "
-      "within sighting_gate_chi2 of (0: only within merge_radius_m)");
+      "within sighting_gate_chi2 of (0: only within merge_radius_m); a seen and a heard estimate "
+      "are gated and fused with it too");
     v("sighting_gate_chi2", sighting_gate_chi2,
       "Mahalanobis gate (2 dof) for a new sighting to be a seen person");
   }
@@ -255,6 +256,14 @@ class PeopleMap {
   // person it was merged into (not saved: a restart merges again).
   std::map<int64_t, int64_t> source_alias_;
   int RecentCalls(int64_t source_id, common::Utime utime) const;
+  // Planar Mahalanobis distance^2 of a seen and a heard estimate, with the change of the pose
+  // error between sighting and hearing (relative_pose_sigma_m) in the covariance.
+  double HeardSeenMahalanobis2(const Eigen::Vector3d& seen_m,
+                               const Eigen::Matrix3d& seen_covariance,
+                               const Eigen::Vector3d& heard_m,
+                               const Eigen::Matrix3d& heard_covariance) const;
+  // relative_pose_sigma_m^2 on x and y.
+  Eigen::Matrix3d RelativePoseCovariance() const;
   // The source's position is settled enough to place a heard-only person there.
   bool Placed(const SoundSource& s) const;
   int64_t next_id_ = 1;

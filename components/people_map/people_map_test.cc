@@ -32,8 +32,8 @@ SeenDetection PersonAhead(double forward_m, double right_m) {
 TEST(PeopleMapTest, SeenPersonLandsInTheMapFrame) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d map_from_base(2.0, 1.0, M_PI / 2);  // facing +y
-  map.AddSeen(1'000'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(map_from_base), Eigen::Matrix3d::Zero(),
-              map_from_base.translation());
+  map.AddSeen(1'000'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(map_from_base),
+              Eigen::Matrix3d::Zero(), map_from_base.translation());
   ASSERT_EQ(map.people().size(), 1u);
   const Person& p = map.people().begin()->second;
   EXPECT_NEAR(p.position_m.x(), 2.0, 1e-9);
@@ -46,16 +46,19 @@ TEST(PeopleMapTest, MergesWithin45cmAndCountsPeoplePerPlace) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d a(0, 0, 0), b(1.0, 0.5, 0.2);
   // The same person seen from two poses, 20 cm of error between them.
-  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(a), Eigen::Matrix3d::Zero(), a.translation());
+  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(a), Eigen::Matrix3d::Zero(),
+              a.translation());
   const Eigen::Vector3d first = map.people().begin()->second.position_m;
-  const Eigen::Vector3d target_in_b = (MapFromCamera(b).inverse() * (first + Eigen::Vector3d(0.2, 0, 0)));
+  const Eigen::Vector3d target_in_b =
+      (MapFromCamera(b).inverse() * (first + Eigen::Vector3d(0.2, 0, 0)));
   SeenDetection again = PersonAhead(0, 0);
   again.position_camera_m = target_in_b;
   map.AddSeen(2'000'000, {again}, MapFromCamera(b), Eigen::Matrix3d::Zero(), b.translation());
   ASSERT_EQ(map.people().size(), 1u);
   EXPECT_EQ(map.people().begin()->second.num_detections, 2);
   // Two people 1 m apart are two; two within 30 cm in one frame are one place with a count of 2.
-  map.AddSeen(3'000'000, {PersonAhead(3.0, 1.2)}, MapFromCamera(a), Eigen::Matrix3d::Zero(), a.translation());
+  map.AddSeen(3'000'000, {PersonAhead(3.0, 1.2)}, MapFromCamera(a), Eigen::Matrix3d::Zero(),
+              a.translation());
   EXPECT_EQ(map.people().size(), 2u);
   map.AddSeen(4'000'000, {PersonAhead(2.0, -2.0), PersonAhead(2.0, -2.3)}, MapFromCamera(a),
               Eigen::Matrix3d::Zero(), a.translation());
@@ -166,6 +169,7 @@ TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne)
   visible.position_m = Eigen::Vector3d(3.1, -0.1, 1.0);
   visible.covariance = Eigen::Vector3d(0.09, 0.09, 0.2).asDiagonal();
   hidden.converged = visible.converged = true;
+  hidden.is_person = visible.is_person = true;  // voices
   map.UpdateSoundSources(1'000'000, {hidden, visible});
   EXPECT_TRUE(map.people().empty());  // sources are not people until heard calling
 
@@ -189,7 +193,8 @@ TEST(PeopleMapTest, HeardPersonTakesItsRangeFromTheSoundMapAndFusesWithASeenOne)
 
   // Seen and heard agree about the visible one: one person with both cues, fused in between.
   const Rigid2d pose(0, 0, 0);
-  map.AddSeen(3'000'000, {PersonAhead(2.9, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+  map.AddSeen(3'000'000, {PersonAhead(2.9, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+              pose.translation());
   HeardDetection talk;
   talk.azimuth_rad = std::atan2(-0.1, 3.1);
   talk.confidence = 0.7;
@@ -210,11 +215,13 @@ PeopleMapOptions OneCallIsAPerson() {
   return options;
 }
 
-// A sound source at (x, y, z) with diagonal position variances (m^2).
+// A voice (a source the sound map calls a person) at (x, y, z) with diagonal position variances
+// (m^2).
 SoundSource SourceAt(int64_t id, const Eigen::Vector3d& position_m,
                      const Eigen::Vector3d& variances_m2, bool converged) {
   SoundSource s;
   s.id = id;
+  s.is_person = true;
   s.position_m = position_m;
   s.covariance = variances_m2.asDiagonal();
   s.converged = converged;
@@ -234,6 +241,7 @@ TEST(PeopleMapTest, HeardPersonWaitsForItsSoundSourceToConverge) {
   PeopleMap map(OneCallIsAPerson());
   SoundSource caller;
   caller.id = 3;
+  caller.is_person = true;
   caller.position_m = Eigen::Vector3d(2.0, 5.0, 0.5);
   caller.covariance = Eigen::Vector3d(4.0, 4.0, 1.0).asDiagonal();
   map.UpdateSoundSources(1'000'000, {caller});
@@ -274,6 +282,7 @@ TEST(PeopleMapTest, HeardPersonIsPlacedAtASourceKnownWellEnough) {
   const HeardDetection call = HelpCallTowards(2.0, 5.0);
   SoundSource caller;
   caller.id = 3;
+  caller.is_person = true;
   caller.position_m = Eigen::Vector3d(2.0, 5.0, 0.5);
   // Largest planar std 0.65 m along a tilted axis (eigenvalues 0.4225 and 0.04): not yet.
   const double a = 0.5 * (0.4225 + 0.04), b = 0.5 * (0.4225 - 0.04);
@@ -327,6 +336,61 @@ TEST(PeopleMapTest, HeardDirectionThroughTwoSourcesMakesNoPerson) {
 }
 
 // One keyword false alarm is not a person: by default a source needs two calls within
+
+// Only voices become people: calls towards a source the sound map classes otherwise (a machine
+// the keyword spotter fires on) make nobody, until the sound map calls the source a voice.
+TEST(PeopleMapTest, CallsTowardsASourceThatIsNoVoiceMakeNoPerson) {
+  PeopleMap map(PeopleMapOptions{});
+  SoundSource machine = SourceAt(5, {3.0, 3.0, 0.5}, {0.02, 0.02, 0.1}, true);
+  machine.is_person = false;
+  map.UpdateSoundSources(1'000'000, {machine});
+  const HeardDetection call = HelpCallTowards(3.0, 3.0);
+  for (int64_t utime : {2'000'000, 8'000'000, 14'000'000}) {
+    EXPECT_EQ(map.AddHeard(utime, {call}, Rigid3d()), 1);
+    map.UpdateSoundSources(utime + 500'000, {machine});
+  }
+  EXPECT_TRUE(map.people().empty());
+  // The calls were counted: once the source is a voice, it is a person.
+  machine.is_person = true;
+  map.UpdateSoundSources(15'000'000, {machine});
+  ASSERT_EQ(map.people().size(), 1u);
+  EXPECT_EQ(map.people().begin()->second.sound_source_id, 5);
+}
+
+// The camera places a person from one stretch of the path, the sound map from bearings along
+// another; SLAM's pose error changes in between (relative_pose_sigma_m). A seen and a heard
+// estimate 0.6 m apart, each precise on its own, are one person, nearer where the camera saw
+// them.
+TEST(PeopleMapTest, SeenAndHeardApartByPoseDriftAreOnePerson) {
+  for (const double drift_sigma_m : {0.27, 0.0}) {
+    PeopleMapOptions options;
+    options.relative_pose_sigma_m = drift_sigma_m;
+    PeopleMap map(options);
+    const Rigid2d pose(0, 0, 0);
+    map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+                pose.translation());
+    ASSERT_EQ(map.people().size(), 1u);
+    const Eigen::Vector3d seen_m = map.people().begin()->second.position_m;
+    const SoundSource voice =
+        SourceAt(6, {seen_m.x() + 0.5, seen_m.y() + 0.35, 0.6}, {0.01, 0.01, 0.1}, true);
+    map.UpdateSoundSources(2'000'000, {voice});
+    for (int64_t utime : {3'000'000, 9'000'000}) {
+      map.AddHeard(utime, {HelpCallTowards(voice.position_m.x(), voice.position_m.y())}, Rigid3d());
+      map.UpdateSoundSources(utime + 500'000, {voice});
+    }
+    if (drift_sigma_m > 0) {
+      ASSERT_EQ(map.people().size(), 1u);
+      const Person& p = map.people().begin()->second;
+      EXPECT_EQ(p.cues, kSeenRgbd | kHeard);
+      const double to_seen_m = (p.position_m - seen_m).head<2>().norm();
+      EXPECT_LT(to_seen_m, 0.2);
+      EXPECT_LT(to_seen_m, (p.position_m - voice.position_m).head<2>().norm());
+    } else {
+      EXPECT_EQ(map.people().size(), 2u);  // without the drift the two are told apart
+    }
+  }
+}
+
 // heard_person_window_s.
 TEST(PeopleMapTest, OneCallIsNotAPersonTwoCallsAre) {
   PeopleMap map(PeopleMapOptions{});
@@ -355,8 +419,11 @@ TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
   map.UpdateSoundSources(1'000'000, {source});
   HeardDetection call = HelpCallTowards(3.0, 3.0);
   call.confidence = 0.99;
-  for (const auto& [utime, keyword] : std::vector<std::pair<int64_t, std::string>>{
-           {2'000'000, "assist"}, {2'070'000, "rescue"}, {2'760'000, "help"}, {2'870'000, "here"}}) {
+  for (const auto& [utime, keyword] :
+       std::vector<std::pair<int64_t, std::string>>{{2'000'000, "assist"},
+                                                    {2'070'000, "rescue"},
+                                                    {2'760'000, "help"},
+                                                    {2'870'000, "here"}}) {
     call.keyword = keyword;
     EXPECT_EQ(map.AddHeard(utime, {call}, Rigid3d()), 1);
   }
@@ -389,6 +456,7 @@ TEST(PeopleMapTest, TwoSoundSourcesOfOneCallerAreOnePerson) {
   second.position_m = Eigen::Vector3d(1.0, 0.4, 0.5);
   first.covariance = second.covariance = Eigen::Vector3d(0.002, 0.002, 0.01).asDiagonal();
   first.converged = second.converged = true;
+  first.is_person = second.is_person = true;
   map.UpdateSoundSources(1'000'000, {first, second});
   HeardDetection call;
   call.azimuth_sigma_rad = 0.05;
@@ -430,7 +498,8 @@ TEST(PeopleMapTest, TwoSoundSourcesOfOneCallerAreOnePerson) {
 TEST(PeopleMapTest, PlanarSoundSourceFusesFiniteAndGarbageSourcesAreIgnored) {
   PeopleMap map(OneCallIsAPerson());
   const Rigid2d pose(0, 0, 0);
-  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+              pose.translation());
   SoundSource planar;
   planar.id = 4;
   planar.position_m = Eigen::Vector3d(3.1, 0.05, 0.6);
@@ -463,7 +532,8 @@ TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
   const Rigid2d pose(0, 0, 0);
   double last = 0;
   for (int i = 0; i < 4; ++i) {
-    map.AddSeen(1'000'000 * (i + 1), {PersonAhead(2.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+    map.AddSeen(1'000'000 * (i + 1), {PersonAhead(2.0, 0.0)}, MapFromCamera(pose),
+                Eigen::Matrix3d::Zero(), pose.translation());
     const double c = map.people().begin()->second.confidence;
     EXPECT_GT(c, last);
     last = c;
@@ -545,7 +615,8 @@ TEST(PeopleMapTest, AMergedDuplicateSourceStaysMergedAfterARestart) {
   ASSERT_EQ(uninterrupted.people().size(), 2u);
   ASSERT_EQ(after.people().size(), 2u);
   for (const auto& [id, p] : uninterrupted.people()) {
-    ASSERT_EQ(after.people().count(id), 1u) << "person " << id << " is numbered differently after the restart";
+    ASSERT_EQ(after.people().count(id), 1u)
+        << "person " << id << " is numbered differently after the restart";
     EXPECT_EQ(after.people().at(id).num_detections, p.num_detections);
   }
 }
@@ -565,7 +636,8 @@ TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
     EXPECT_EQ(back.people().at(id).num_detections, p.num_detections);
   }
   // New people continue the id sequence.
-  back.AddSeen(6'000'000, {PersonAhead(2.0, -3.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation());
+  back.AddSeen(6'000'000, {PersonAhead(2.0, -3.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+               pose.translation());
   EXPECT_EQ(back.people().rbegin()->first, 3);
   EXPECT_FALSE(back.Load(path + ".missing"));
   std::ofstream(path + ".bad") << "people: [{id: x}]\n";
