@@ -530,8 +530,17 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
     if (!merged && heard.has_heard && !heard.has_seen) {
       for (auto& [id, other] : people_) {
         if (id == heard.id || !other.has_heard || (!other.has_seen && id > heard.id)) continue;
-        if ((other.position_m - heard.heard_position_m).head<2>().norm() > options_.merge_radius_m)
-          continue;
+        // ... or a seen person who agrees with it as a heard-only person agrees with a seen one.
+        const bool close =
+            (other.position_m - heard.heard_position_m).head<2>().norm() <= options_.merge_radius_m;
+        const bool agrees_with_seen =
+            other.has_seen &&
+            (other.seen_position_m - heard.heard_position_m).head<2>().norm() <=
+                options_.fuse_max_distance_m &&
+            HeardSeenMahalanobis2(other.seen_position_m, other.seen_covariance,
+                                  heard.heard_position_m,
+                                  heard.heard_covariance) <= options_.fuse_gate_chi2;
+        if (!close && !agrees_with_seen) continue;
         source_alias_[heard.sound_source_id] = id;
         other.num_detections += heard.num_detections;
         other.confidence = std::max(other.confidence, heard.confidence);

@@ -447,6 +447,46 @@ TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
 // The sound map can split one voice into two sources a few decimetres apart (bearings from two
 // stretches of the path; the open-area mission put frank twice, 0.40 m apart). Two heard people
 // within merge_radius_m are one caller; calls towards either stay evidence for that one person.
+// The sound map can split a voice into two sources. The second, further from a seen caller than
+// merge_radius_m but within the drift between sighting and hearing, is the same caller.
+TEST(PeopleMapTest, ASecondSourceOfASeenCallerJoinsThemWithinTheDrift) {
+  for (const double drift_sigma_m : {0.27, 0.0}) {
+    PeopleMapOptions options;
+    options.relative_pose_sigma_m = drift_sigma_m;
+    PeopleMap map(options);
+    const Rigid2d pose(0, 0, 0);
+    map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+                pose.translation());
+    const Eigen::Vector3d seen_m = map.people().begin()->second.position_m;
+    const SoundSource first =
+        SourceAt(1, {seen_m.x() + 0.1, seen_m.y(), 0.6}, {0.01, 0.01, 0.1}, true);
+    const SoundSource second =
+        SourceAt(2, {seen_m.x() + 0.5, seen_m.y() + 0.35, 0.6}, {0.01, 0.01, 0.1}, true);
+    map.UpdateSoundSources(1'500'000, {first, second});
+    // Calls towards each source from 0.6 m beyond it (so that the other is out of the gate).
+    auto call_towards = [&](const SoundSource& s, int64_t utime) {
+      const Rigid3d map_from_mic(s.position_m + Eigen::Vector3d(0.6, 0.0, 0.0),
+                                 Eigen::Quaterniond::Identity());
+      HeardDetection call = HelpCallTowards(-1.0, 0.0);
+      call.azimuth_sigma_rad = 0.02;
+      EXPECT_EQ(map.AddHeard(utime, {call}, map_from_mic), 1);
+      map.UpdateSoundSources(utime + 100'000, {first, second});
+    };
+    call_towards(first, 2'000'000);
+    call_towards(first, 6'000'000);
+    ASSERT_EQ(map.people().size(), 1u);
+    EXPECT_EQ(map.people().begin()->second.cues, kSeenRgbd | kHeard);
+    call_towards(second, 10'000'000);
+    call_towards(second, 14'000'000);
+    if (drift_sigma_m > 0) {
+      ASSERT_EQ(map.people().size(), 1u);
+      EXPECT_EQ(map.people().begin()->second.sound_source_id, 1);
+    } else {
+      EXPECT_EQ(map.people().size(), 2u);  // 0.61 m apart, beyond merge_radius_m
+    }
+  }
+}
+
 TEST(PeopleMapTest, TwoSoundSourcesOfOneCallerAreOnePerson) {
   PeopleMap map(PeopleMapOptions{});
   SoundSource first, second;
