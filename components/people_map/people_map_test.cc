@@ -357,6 +357,15 @@ TEST(PeopleMapTest, CallsTowardsASourceThatIsNoVoiceMakeNoPerson) {
   EXPECT_EQ(map.people().begin()->second.sound_source_id, 5);
 }
 
+// A person seen 3 m ahead of the robot at the origin; returns where the map put them.
+Eigen::Vector3d SeeOnePersonAhead(PeopleMap* map) {
+  const Rigid2d pose(0, 0, 0);
+  map->AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+               pose.translation());
+  EXPECT_EQ(map->people().size(), 1u);
+  return map->people().empty() ? Eigen::Vector3d::Zero() : map->people().begin()->second.position_m;
+}
+
 // The camera places a person from one stretch of the path, the sound map from bearings along
 // another; SLAM's pose error changes in between (relative_pose_sigma_m). A seen and a heard
 // estimate 0.6 m apart, each precise on its own, are one person, nearer where the camera saw
@@ -366,11 +375,7 @@ TEST(PeopleMapTest, SeenAndHeardApartByPoseDriftAreOnePerson) {
     PeopleMapOptions options;
     options.relative_pose_sigma_m = drift_sigma_m;
     PeopleMap map(options);
-    const Rigid2d pose(0, 0, 0);
-    map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
-                pose.translation());
-    ASSERT_EQ(map.people().size(), 1u);
-    const Eigen::Vector3d seen_m = map.people().begin()->second.position_m;
+    const Eigen::Vector3d seen_m = SeeOnePersonAhead(&map);
     const SoundSource voice =
         SourceAt(6, {seen_m.x() + 0.5, seen_m.y() + 0.35, 0.6}, {0.01, 0.01, 0.1}, true);
     map.UpdateSoundSources(2'000'000, {voice});
@@ -444,9 +449,6 @@ TEST(PeopleMapTest, SeveralKeywordsOfOneUtteranceAreOneCall) {
   EXPECT_EQ(old_map.people().size(), 1u);
 }
 
-// The sound map can split one voice into two sources a few decimetres apart (bearings from two
-// stretches of the path; the open-area mission put frank twice, 0.40 m apart). Two heard people
-// within merge_radius_m are one caller; calls towards either stay evidence for that one person.
 // The sound map can split a voice into two sources. The second, further from a seen caller than
 // merge_radius_m but within the drift between sighting and hearing, is the same caller.
 TEST(PeopleMapTest, ASecondSourceOfASeenCallerJoinsThemWithinTheDrift) {
@@ -454,10 +456,7 @@ TEST(PeopleMapTest, ASecondSourceOfASeenCallerJoinsThemWithinTheDrift) {
     PeopleMapOptions options;
     options.relative_pose_sigma_m = drift_sigma_m;
     PeopleMap map(options);
-    const Rigid2d pose(0, 0, 0);
-    map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
-                pose.translation());
-    const Eigen::Vector3d seen_m = map.people().begin()->second.position_m;
+    const Eigen::Vector3d seen_m = SeeOnePersonAhead(&map);
     const SoundSource first =
         SourceAt(1, {seen_m.x() + 0.1, seen_m.y(), 0.6}, {0.01, 0.01, 0.1}, true);
     const SoundSource second =
@@ -487,6 +486,9 @@ TEST(PeopleMapTest, ASecondSourceOfASeenCallerJoinsThemWithinTheDrift) {
   }
 }
 
+// The sound map can split one voice into two sources a few decimetres apart (bearings from two
+// stretches of the path; the open-area mission put frank twice, 0.40 m apart). Two heard people
+// within merge_radius_m are one caller; calls towards either stay evidence for that one person.
 TEST(PeopleMapTest, TwoSoundSourcesOfOneCallerAreOnePerson) {
   PeopleMap map(PeopleMapOptions{});
   SoundSource first, second;
