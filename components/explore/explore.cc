@@ -316,6 +316,7 @@ void ExploreController::Replan(double now_s) {
   map_changed_ = false;
   map_.UpdateCostMap();
   const CostField field = map_.Plan(pose_->translation());
+  shut_in_ = true;
   if (!field.valid) {
     // No traversable cell near the robot (pressed against an obstacle, or the map shifted
     // under it): nothing can be concluded; the stuck detector gets it out.
@@ -332,6 +333,8 @@ void ExploreController::Replan(double now_s) {
     path_.clear();
     return;
   }
+  shut_in_ = false;
+  shut_in_recoveries_ = 0;
   std::vector<Frontier> frontiers = map_.Frontiers(field);
   frontiers.erase(std::remove_if(frontiers.begin(), frontiers.end(),
                                  [&](const Frontier& f) { return IsBlacklisted(f.goal_m, now_s); }),
@@ -586,13 +589,33 @@ void ExploreController::StartRecovery(double now_s, const Scan& scan) {
   const ScanMetrics m = AnalyseScan(scan, options_.reactive);
   recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
   blocked_since_s_.reset();
+  // Shut in recovery after recovery: the map around the robot's pose has no way out, so the
+  // pose or the map is wrong. Turning and backing off on that map cannot help; driving on the
+  // scan alone moves the robot to views from which SLAM can find it again.
+  shut_in_recoveries_ = shut_in_ ? shut_in_recoveries_ + 1 : 0;
+  if (options_.recovery.escape_after > 0 && shut_in_recoveries_ > options_.recovery.escape_after) {
+    recovery_phase_ = 2;
+    shut_in_recoveries_ = 0;
+    ++escapes_;
+    SARMAP_LOG(WARN) << "no plan out of the robot's place in the map after "
+                     << options_.recovery.escape_after
+                     << " recoveries: driving on the scan alone for " << options_.recovery.escape_s
+                     << " s (escape " << escapes_ << ")";
+  }
 }
 
 Velocity ExploreController::Recover(double now_s, const Scan& scan) {
-  (void)scan;
   const RecoveryOptions& o = options_.recovery;
   Velocity v;
   v.source = "recovery";
+  if (recovery_phase_ == 2) {
+    if (now_s - recovery_phase_start_s_ < o.escape_s) {
+      v = reactive_.Step(scan);
+      v.source = "escape";
+      return v;
+    }
+    return EndRecovery(now_s);
+  }
   if (recovery_phase_ == 0) {
     // Back off while the map behind the robot is free of obstacles.
     const Eigen::Vector2d back(-std::cos(pose_->yaw_rad()), -std::sin(pose_->yaw_rad()));
@@ -619,7 +642,13 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     v.angular_radps = recovery_turn_sign_ * o.turn_speed_radps;
     return v;
   }
-  // Done: replan from here.
+  return EndRecovery(now_s);
+}
+
+Velocity ExploreController::EndRecovery(double now_s) {
+  // Replan from here.
+  Velocity v;
+  v.source = "recovery";
   state_ = resume_state_;
   contact_since_s_ = now_s;
   contact_xy_ = pose_->translation();

@@ -230,6 +230,8 @@ struct RecoveryOptions {
   int attempts_per_goal = 2;      // recoveries before a goal is given up
   double contact_window_s = 1.0;  // commanded forward this long...
   double contact_ratio = 0.3;     // ...but moved less than this share of it: an unseen obstacle
+  int escape_after = 2;           // recoveries in a row with no plan out of where the robot is...
+  double escape_s = 20.0;         // ...then drive on the scan alone (reactive) this long
   template <class V>
   void Visit(V& v) {
     v("contact_window_s", contact_window_s,
@@ -248,6 +250,11 @@ struct RecoveryOptions {
     v("turn_rad", turn_rad, "recovery: turn this much towards the open side");
     v("turn_speed_radps", turn_speed_radps, "recovery: turn rate");
     v("attempts_per_goal", attempts_per_goal, "recoveries on one goal before it is given up");
+    v("escape_after", escape_after,
+      "after this many recoveries in a row with no plan out of the robot's place in the map "
+      "(SLAM's "
+      "pose wrong, or the map closed around it), drive on the scan alone (0: never)");
+    v("escape_s", escape_s, "how long that drive on the scan alone lasts before planning again");
   }
   void Validate(common::Validator& check) const {
     check.Positive("stuck_timeout_s", stuck_timeout_s);
@@ -261,6 +268,8 @@ struct RecoveryOptions {
     check.That(attempts_per_goal >= 1, "attempts_per_goal", "must be >= 1");
     check.Positive("contact_window_s", contact_window_s);
     check.InRange("contact_ratio", contact_ratio, 0.0, 1.0);
+    check.That(escape_after >= 0, "escape_after", "must be >= 0");
+    check.Positive("escape_s", escape_s);
   }
 };
 
@@ -426,6 +435,7 @@ class ExploreController {
   Velocity Follow(const Scan& scan);
   Velocity Safe(Velocity desired, const Scan& scan) const;
   Velocity Recover(double now_s, const Scan& scan);
+  Velocity EndRecovery(double now_s);
   void StartRecovery(double now_s, const Scan& scan);
   void GiveUpGoal(double now_s);
   bool IsBlacklisted(const Eigen::Vector2d& p, double now_s) const;
@@ -477,7 +487,12 @@ class ExploreController {
   int goal_recoveries_ = 0;
   int recoveries_ = 0;
   State resume_state_ = State::kExploring;
-  int recovery_phase_ = 0;  // 0 back off, 1 turn
+  int recovery_phase_ = 0;  // 0 back off, 1 turn, 2 escape on the scan alone
+  // The last plan found no way out of the robot's place in the map (no traversable cell near
+  // it, or most of its own trail out of reach), and how many recoveries in a row started so.
+  bool shut_in_ = false;
+  int shut_in_recoveries_ = 0;
+  int escapes_ = 0;
   double recovery_phase_start_s_ = 0;
   double recovery_turn_sign_ = 1;
   double recovery_yaw0_ = 0;

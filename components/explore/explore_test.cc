@@ -386,6 +386,44 @@ TEST(ExploreControllerTest, APoseThatLagsTheScanStopsTheRobotWithoutCountingAsSt
   EXPECT_TRUE(unchecked.map().Occupied(wall_m));
 }
 
+// SLAM's pose a metre off puts the robot inside what its map calls walls: no plan leads out,
+// and turning or backing off on that map cannot help. After escape_after recoveries so, the
+// robot drives on the scan alone for escape_s, then plans again.
+TEST(ExploreControllerTest, ShutInRecoveryAfterRecoveryDrivesOnTheScanAlone) {
+  for (const int escape_after : {2, 0}) {
+    ExploreOptions o = NoLookAround();
+    o.recovery.escape_after = escape_after;
+    ExploreController c{o};
+    Grid walled = PartlyKnownRoom();
+    for (int y = 5; y < 35; ++y) {
+      for (int x = 5; x < 24; ++x) walled.cells[y * walled.width + x] = 100;
+    }
+    c.OnMap(walled);
+    const common::Rigid2d pose(1.5, 2.0, 0.0);
+    c.OnPose(pose, 0.0);
+    int recoveries_before_escape = -1;
+    double escape_start_s = -1, escape_end_s = -1;
+    for (double t = 0; t < 90; t += 0.1) {
+      const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
+      if (v.source == "escape") {
+        if (escape_start_s < 0) {
+          escape_start_s = t;
+          recoveries_before_escape = c.status().recoveries - 1;
+        }
+        if (escape_end_s < 0 || t - escape_end_s < 0.15) escape_end_s = t;  // the first escape
+        EXPECT_GT(v.linear_mps, 0.0);  // open space ahead on the scan: it drives
+      }
+    }
+    if (escape_after > 0) {
+      ASSERT_GE(escape_start_s, 0.0);
+      EXPECT_EQ(recoveries_before_escape, escape_after);
+      EXPECT_NEAR(escape_end_s - escape_start_s, o.recovery.escape_s, 0.2);
+    } else {
+      EXPECT_LT(escape_start_s, 0.0);
+    }
+  }
+}
+
 TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
   ExploreController c{NoLookAround()};
   const Grid done = ClosedRoom();
