@@ -283,6 +283,7 @@ MissionMetricsResult MissionMetrics::Result() const {
     const double home_error_m = std::hypot(truth_->robot_position_m[0] - truth_->start_pose[0],
                                            truth_->robot_position_m[1] - truth_->start_pose[1]);
     r.came_home = home_s_.has_value() && home_error_m <= options_.home_radius_m;
+    r.home_error_m = home_error_m;
     if (r.came_home) r.home_after_s = home_s_;
   }
   if (explore_) {

@@ -141,6 +141,7 @@ struct MissionMetricsResult {
   std::optional<double> longest_confined_s;        // nullopt without EXPLORE_STATUS
   bool came_home = false;
   std::optional<double> home_after_s;
+  std::optional<double> home_error_m;  // the last truth position's distance from the start pose
   std::string last_explore_state;  // "" without EXPLORE_STATUS
 };
 

@@ -267,6 +267,8 @@ TEST(MissionMetricsTest, HomeStatusFarFromTheStartIsNotHome) {
   metrics.OnExploreStatus(At(1), Status("home"));
   metrics.OnTruth(At(1), Truth(kStartX + 0.6, kStartY, kStartYaw, 0.6, 0));
   EXPECT_FALSE(metrics.Result().came_home);
+  ASSERT_TRUE(metrics.Result().home_error_m);
+  EXPECT_NEAR(*metrics.Result().home_error_m, 0.6, 1e-9);
   metrics.OnTruth(At(2), Truth(kStartX + 0.4, kStartY, kStartYaw, 0.8, 0));
   EXPECT_TRUE(metrics.Result().came_home);
   EXPECT_NEAR(*metrics.Result().home_after_s, 1.0, 1e-9);

@@ -792,10 +792,16 @@ std::string SummaryText(const MissionData& data, const MissionSummary& summary) 
     if (m.came_home) {
       snprintf(line, sizeof(line), "  came home after %.1f s\n", *m.home_after_s);
     } else {
+      std::string why;
+      if (!m.last_explore_state.empty()) why = "last state: " + m.last_explore_state;
+      if (m.home_error_m) {
+        char error[64];
+        snprintf(error, sizeof(error), "%sended %.2f m from the start", why.empty() ? "" : ", ",
+                 *m.home_error_m);
+        why += error;
+      }
       snprintf(line, sizeof(line), "  did not come home%s\n",
-               m.last_explore_state.empty()
-                   ? ""
-                   : (" (last state: " + m.last_explore_state + ")").c_str());
+               why.empty() ? "" : (" (" + why + ")").c_str());
     }
     out << line;
   }
@@ -932,6 +938,7 @@ void WriteReport(const MissionData& data, const MissionSummary& summary,
   j["longest_confined_s"] = Json(m.longest_confined_s);
   j["came_home"] = truth_or_null(m.came_home);
   j["home_after_s"] = Json(m.home_after_s);
+  j["home_error_m"] = Json(m.home_error_m);
   j["explore_state"] =
       m.last_explore_state.empty() ? nlohmann::json(nullptr) : nlohmann::json(m.last_explore_state);
   std::ofstream(directory + "/report.json") << j.dump(2) << "\n";

@@ -93,7 +93,10 @@ double ScanClearanceAhead(const Scan& scan, const SafetyOptions& options) {
 }
 
 ExploreController::ExploreController(const ExploreOptions& options)
-    : options_(options), reactive_(options.reactive), map_(options.planner) {
+    : options_(options),
+      reactive_(options.reactive),
+      map_(options.planner),
+      local_obstacles_(options.safety.memory_s, options.safety.memory_radius_m) {
   if (!options_.goals.look_around) state_ = State::kExploring;
 }
 
@@ -133,6 +136,45 @@ void ExploreController::OnPose(const common::Rigid2d& map_from_base, double stam
   pose_ = map_from_base;
   if (!home_) home_ = map_from_base.translation();
   map_.AddTrail(map_from_base.translation());
+}
+
+void ExploreController::OnOdometry(const common::Rigid2d& odom_from_base, double stamp_s) {
+  // A clock that steps back starts the history again.
+  if (!odometry_.empty() && stamp_s < odometry_.back().first) odometry_.clear();
+  odometry_.emplace_back(stamp_s, odom_from_base);
+  while (odometry_.size() > 2 && odometry_.front().first < stamp_s - 1.0) odometry_.pop_front();
+}
+
+std::optional<common::Rigid2d> ExploreController::OdometryAt(double stamp_s) const {
+  // Odometry more than this older than the scan is not the robot's motion up to the scan.
+  constexpr double kMaxAgeS = 0.5;
+  if (odometry_.empty() || odometry_.back().first < stamp_s - kMaxAgeS) return std::nullopt;
+  if (stamp_s >= odometry_.back().first) return odometry_.back().second;
+  if (stamp_s <= odometry_.front().first) return odometry_.front().second;
+  for (size_t i = 1; i < odometry_.size(); ++i) {
+    const auto& [t1, b] = odometry_[i];
+    if (t1 < stamp_s) continue;
+    const auto& [t0, a] = odometry_[i - 1];
+    const double f = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
+    return common::Rigid2d(
+        a.translation() + f * (b.translation() - a.translation()),
+        a.yaw_rad() + f * common::NormalizeAngle(b.yaw_rad() - a.yaw_rad()));
+  }
+  return odometry_.back().second;
+}
+
+bool ExploreController::ArcApproachesMemory(double linear_mps, double angular_radps) const {
+  const SafetyOptions& o = options_.safety;
+  if (local_points_.empty() || o.sweep_horizon_s <= 0) return false;
+  const double nearest_now = NearestDistance(Eigen::Vector2d::Zero(), local_points_);
+  for (int k = 1; k <= 6; ++k) {
+    const double t = o.sweep_horizon_s * k / 6;
+    const double mean_yaw = 0.5 * angular_radps * t;
+    const Eigen::Vector2d p = linear_mps * t * Eigen::Vector2d(std::cos(mean_yaw), std::sin(mean_yaw));
+    const double nearest_then = NearestDistance(p, local_points_);
+    if (nearest_then < o.footprint_radius_m && nearest_then < nearest_now - 1e-3) return true;
+  }
+  return false;
 }
 
 bool ExploreController::IsBlacklisted(const Eigen::Vector2d& p, double now_s) const {
@@ -524,16 +566,16 @@ Velocity ExploreController::Follow(const Scan& scan) {
   return v;
 }
 
-Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
-  if (desired.linear_mps <= 0) return desired;
+Velocity ExploreController::Safe(Velocity desired, const Scan& scan, bool with_map) const {
   const SafetyOptions& o = options_.safety;
   double clearance = ScanClearanceAhead(scan, o);
+  if (desired.linear_mps <= 0) return desired;
   // The map remembers what the camera can no longer see (nearer than its minimum range).
   const double half = 0.9 * options_.planner.robot_radius_m;
   const double step = 0.5 * map_.grid().resolution_m;
   const Eigen::Vector2d ahead(std::cos(pose_->yaw_rad()), std::sin(pose_->yaw_rad()));
   const Eigen::Vector2d side(-ahead.y(), ahead.x());
-  for (double x = 0.3; x < std::min(clearance, o.slow_distance_m); x += step) {
+  for (double x = 0.3; with_map && x < std::min(clearance, o.slow_distance_m); x += step) {
     bool hit = false;
     for (double y = -half; y <= half + 1e-9; y += step)
       hit |= map_.Occupied(pose_->translation() + ahead * x + side * y);
@@ -542,11 +584,20 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
       break;
     }
   }
+  // ... and the safety layer's memory (odometry frame) what the map may have misplaced.
+  for (const Eigen::Vector2d& q : local_points_) {
+    if (q.x() > 0 && std::abs(q.y()) <= o.corridor_half_width_m) clearance = std::min(clearance, q.x());
+  }
+  if (ArcApproachesMemory(desired.linear_mps, desired.angular_radps)) {
+    desired.linear_mps = 0;
+    desired.source = "safety";
+    return desired;
+  }
   // The corridor ahead does not see a corner beside the robot that a turning arc cuts: follow
   // the commanded arc for sweep_horizon_s; if it brings the base nearer than footprint_radius_m
   // to an obstacle of the map (and nearer than it is now), no forward motion: the robot turns
   // on the spot first.
-  if (map_.has_map() && o.sweep_horizon_s > 0) {
+  if (with_map && map_.has_map() && o.sweep_horizon_s > 0) {
     const Eigen::Vector2i now_cell = map_.grid().CellOf(pose_->translation());
     const double clearance_now = map_.Clearance(now_cell.x(), now_cell.y());
     for (int k = 1; k <= 6; ++k) {
@@ -612,7 +663,7 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     if (now_s - recovery_phase_start_s_ < o.escape_s) {
       v = reactive_.Step(scan);
       v.source = "escape";
-      return v;
+      return Safe(v, scan, /*with_map=*/false);
     }
     return EndRecovery(now_s);
   }
@@ -625,6 +676,7 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
       for (double y = -0.2; y <= 0.2 + 1e-9; y += 0.1)
         clear &= !map_.Occupied(pose_->translation() + back * x + side * y);
     }
+    clear &= !ArcApproachesMemory(-o.backoff_speed_mps, 0.0);
     const bool done =
         (pose_->translation() - recovery_xy0_).norm() >= o.backoff_m ||
         now_s - recovery_phase_start_s_ > 2.0 * o.backoff_m / o.backoff_speed_mps + 1.0;
@@ -864,6 +916,16 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   } else {
     if (pose_wait_since_s_) ResumeAfterPoseWait(now_s);
     map_.IntegrateScan(*pose_, scan);
+    if (options_.safety.memory_s > 0) {
+      // Odometry when it comes, else SLAM's pose; a change of frame starts the memory again.
+      std::optional<common::Rigid2d> local_from_base = OdometryAt(scan.stamp_s);
+      const bool is_odometry = local_from_base.has_value();
+      if (!is_odometry) local_from_base = pose_;
+      if (is_odometry != local_frame_is_odometry_) local_obstacles_.Clear();
+      local_frame_is_odometry_ = is_odometry;
+      local_obstacles_.Add(scan.stamp_s, *local_from_base, scan);
+      local_points_ = local_obstacles_.InBase(*local_from_base);
+    }
     out = Drive(now_s, scan);
     last_linear_mps_ = out.linear_mps;
     status_.state = StateName(state_);

@@ -30,6 +30,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -37,6 +38,7 @@
 
 #include "common/options.h"
 #include "common/transform.h"
+#include "explore/local_obstacles.h"
 #include "explore/planner.h"
 
 namespace sarmap {
@@ -106,6 +108,8 @@ struct SafetyOptions {
   double footprint_radius_m = 0.28;  // the base's radius and a margin, for the swept check
   double sweep_horizon_s = 0.6;      // how far ahead the commanded arc is checked
   double max_pose_age_s = 0.5;       // an older POSE (against the SCAN's stamp): stand still
+  double memory_s = 10;              // scan returns kept in the odometry frame this long
+  double memory_radius_m = 1.5;      // ... while within this distance of the base
   template <class V>
   void Visit(V& v) {
     v("stop_distance_m", stop_distance_m,
@@ -117,6 +121,11 @@ struct SafetyOptions {
     v("max_pose_age_s", max_pose_age_s,
       "when the newest POSE is older than this against the SCAN's stamp (SLAM lags or is down), "
       "the robot stands still and the scan stays out of the explorer's map (0: no check)");
+    v("memory_s", memory_s,
+      "the scan's returns are kept this long in the odometry frame, so that the checks above "
+      "still see an obstacle once it is beside the base or nearer than the camera's minimum "
+      "range (0: no memory, the map alone)");
+    v("memory_radius_m", memory_radius_m, "kept returns further than this from the base are dropped");
     v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
     v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
     v("blind_fraction", blind_fraction,
@@ -130,6 +139,8 @@ struct SafetyOptions {
     check.Positive("footprint_radius_m", footprint_radius_m);
     check.NonNegative("sweep_horizon_s", sweep_horizon_s);
     check.NonNegative("max_pose_age_s", max_pose_age_s);
+    check.NonNegative("memory_s", memory_s);
+    check.Positive("memory_radius_m", memory_radius_m);
   }
 };
 
@@ -385,6 +396,9 @@ class ExploreController {
   // `stamp_s` is the sensor time the pose is for (the SCAN stamp SLAM placed), on the clock of
   // Scan::stamp_s.
   void OnPose(const common::Rigid2d& map_from_base, double stamp_s);
+  // Wheel (or visual) odometry, `stamp_s` on the clock of Scan::stamp_s. Without it the safety
+  // layer's memory is kept in the map frame with SLAM's POSE.
+  void OnOdometry(const common::Rigid2d& odom_from_base, double stamp_s);
   void OnHeardPeople(std::vector<HeardPerson> people) { heard_ = std::move(people); }
   // One command per scan. `now_s` is this process's clock (the scan's receive time live, its
   // log time offline): every duration in the controller is measured on it.
@@ -433,7 +447,13 @@ class ExploreController {
   void MarkVisited(double now_s);
   std::pair<int, int> SweepCell(const Eigen::Vector2d& position_m) const;
   Velocity Follow(const Scan& scan);
-  Velocity Safe(Velocity desired, const Scan& scan) const;
+  // `with_map` false: the scan and the memory only (the escape, when the map is what is wrong).
+  Velocity Safe(Velocity desired, const Scan& scan, bool with_map = true) const;
+  // Whether driving (linear_mps, angular_radps) for sweep_horizon_s brings the base nearer than
+  // footprint_radius_m to a remembered return, and nearer than it is now.
+  bool ArcApproachesMemory(double linear_mps, double angular_radps) const;
+  // Odometry at `stamp_s` (interpolated; the newest when the scan is newer), if any is recent.
+  std::optional<common::Rigid2d> OdometryAt(double stamp_s) const;
   Velocity Recover(double now_s, const Scan& scan);
   Velocity EndRecovery(double now_s);
   void StartRecovery(double now_s, const Scan& scan);
@@ -449,6 +469,11 @@ class ExploreController {
   bool emergency_stop_ = false;
   std::optional<common::Rigid2d> pose_;
   double pose_stamp_s_ = 0;
+  // Odometry (stamp, odom_from_base), the last second of it, for the pose at a scan's stamp.
+  std::deque<std::pair<double, common::Rigid2d>> odometry_;
+  LocalObstacles local_obstacles_;
+  bool local_frame_is_odometry_ = false;
+  std::vector<Eigen::Vector2d> local_points_;  // the memory in the base frame at this scan
   std::optional<double> pose_wait_since_s_;
   int pose_waits_ = 0;
   bool pose_wait_warned_ = false;

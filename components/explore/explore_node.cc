@@ -1,4 +1,4 @@
-// sarmap-explore: SCAN, MAP, POSE, PEOPLE_MAP and TELEOP in; CMD_VEL (one per scan) and
+// sarmap-explore: SCAN, MAP, POSE, ODOM, PEOPLE_MAP and TELEOP in; CMD_VEL (one per scan) and
 // EXPLORE_STATUS out. A thin adapter around explore::ExploreController.
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -42,6 +42,11 @@ class ExploreNode {
     node->Subscribe<pose_t>(
         options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); },
         1);
+    if (!options.odometry_channel.empty()) {
+      node->Subscribe<odometry_t>(
+          options.odometry_channel,
+          [this](const odometry_t& m, const common::ReceiveInfo& info) { OnOdometry(m, info); }, 1);
+    }
     node->Subscribe<occupancy_grid_t>(
         options.map_channel,
         [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
@@ -74,6 +79,16 @@ class ExploreNode {
   void OnPose(const pose_t& m) {
     controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d(),
                        common::UtimeToSeconds(m.header.utime));
+  }
+
+  void OnOdometry(const odometry_t& m, const common::ReceiveInfo& info) {
+    const common::Rigid2d odom_from_base =
+        common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
+    if (!odom_from_base.translation().allFinite() || !std::isfinite(odom_from_base.yaw_rad())) {
+      node_->Reject(info.channel, "odometry with a non-finite pose");
+      return;
+    }
+    controller_.OnOdometry(odom_from_base, common::UtimeToSeconds(m.header.utime));
   }
 
   void OnMap(const occupancy_grid_t& m) {

@@ -15,6 +15,7 @@ struct ExploreNodeOptions {
   std::string scan_channel = "SCAN";
   std::string map_channel = "MAP";
   std::string pose_channel = "POSE";
+  std::string odometry_channel = "ODOM";
   std::string people_channel = "PEOPLE_MAP";
   std::string teleop_channel = "TELEOP";
   std::string command_channel = "CMD_VEL";
@@ -36,6 +37,9 @@ struct ExploreNodeOptions {
       "laser scan (safety layer, and the explorer's picture between maps)");
     v("map_channel", map_channel, "occupancy grid from SLAM");
     v("pose_channel", pose_channel, "robot pose in the map");
+    v("odometry_channel", odometry_channel,
+      "wheel (or visual) odometry: the frame of the safety layer's memory of recent returns; "
+      "empty or silent: SLAM's pose is used");
     v("people_channel", people_channel,
       "people map: people heard but not seen become goals (mode sound_guided)");
     v("teleop_channel", teleop_channel, "operator override");

@@ -169,6 +169,7 @@ struct Row {
   std::string site, lighting, mode;
   double reachable_m2 = 0, mapped_fraction = 0, rate_m2_per_min = 0, t90_s = -1;
   int collisions = 0;
+  double closest_gap_m = 0;  // the base's closest approach to an obstacle (m)
   double longest_stuck_s = 0;
   double longest_confined_s = 0;  // within 1 m for 60 s or more (mission_metrics.h)
   bool home = false;
@@ -512,6 +513,7 @@ int main(int argc, char** argv) {
         }
         row.rate_m2_per_min = at_t > 0 ? at / (at_t / 60) : 0;
         row.collisions = r.collisions;
+        row.closest_gap_m = r.closest_gap_m;
         for (const std::string& c : r.contacts)
           std::fprintf(stderr, "  %s %s collision %s\n", target.name.c_str(), mode.c_str(),
                        c.c_str());
@@ -538,9 +540,11 @@ int main(int argc, char** argv) {
         Row& last = rows.back();
         const std::string trail_csv = out_dir + "/" + target.name + "-" + mode + "-trail.csv";
         TrailError(r, m.world_from_map, trail_csv, &last);
-        std::fprintf(stderr, "  trail RMS %.3f m, max %.2f m, mapped %.1f %%, collisions %d\n",
+        std::fprintf(stderr,
+                     "  trail RMS %.3f m, max %.2f m, mapped %.1f %%, collisions %d, closest "
+                     "approach %.3f m (%s)\n",
                      last.trail_rms_m, last.trail_max_m, 100 * last.mapped_fraction,
-                     last.collisions);
+                     last.collisions, last.closest_gap_m, r.closest_gap_what.c_str());
       }
     }
 
@@ -559,11 +563,12 @@ int main(int argc, char** argv) {
     std::printf(
         "\nSLAM trail against the truth (aligned by the start pose, as sarmap-log report):\n");
     std::printf(
-        "| site | mode | trail RMS | trail max | mapped | collisions "
-        "|\n|---|---|---|---|---|---|\n");
+        "| site | mode | trail RMS | trail max | mapped | collisions | closest approach "
+        "|\n|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows) {
-      std::printf("| %s | %s | %.3f m | %.2f m | %.1f %% | %d |\n", r.site.c_str(), r.mode.c_str(),
-                  r.trail_rms_m, r.trail_max_m, 100 * r.mapped_fraction, r.collisions);
+      std::printf("| %s | %s | %.3f m | %.2f m | %.1f %% | %d | %.2f m |\n", r.site.c_str(),
+                  r.mode.c_str(), r.trail_rms_m, r.trail_max_m, 100 * r.mapped_fraction,
+                  r.collisions, r.closest_gap_m);
     }
     std::printf(
         "\ncoverage-rate bound: %.0f m^2/min (%.2f m/s x %.1f m, the depth view's width at %.1f "

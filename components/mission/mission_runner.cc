@@ -279,8 +279,9 @@ class Loop : public sim::SimSink {
         pose_sigma_xy_yaw_(pose_sigma_xy_yaw) {}
 
   void Publish(const std::string&, const sarmap::odometry_t& m) override {
-    slam_.AddOdometry(Seconds(m.header.utime),
-                      common::ToRigid3d(m.position_m, m.orientation).ToRigid2d());
+    const common::Rigid2d odom_from_base = common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
+    slam_.AddOdometry(Seconds(m.header.utime), odom_from_base);
+    explore_.OnOdometry(odom_from_base, Seconds(m.header.utime));
   }
 
   void Publish(const std::string& channel, const sarmap::image_t& m) override {
@@ -638,6 +639,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     perception->set_start_s(1e-6 * static_cast<double>(simulator.start_utime()));
     loop.set_perception(perception.get());
   }
+  const std::vector<sim::Obstacle> obstacles = sim::CollisionObstacles(simulator.world(), true);
   const double step_s = 0.05;
   double next_progress = 10;
   double next_report = options.report_period_s;
@@ -646,10 +648,29 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     if (simulator.collisions() > static_cast<int>(result.contacts.size())) {
       const sim::Contact& c = simulator.last_contact();
       char text[160];
-      std::snprintf(text, sizeof(text), "t=%.1f s at (%.2f, %.2f) m heading %.0f deg: %s", c.t_s,
-                    c.map_from_base.translation().x(), c.map_from_base.translation().y(),
-                    c.map_from_base.yaw_rad() * 180 / M_PI, c.what.c_str());
+      const auto& status = loop.explore().status();
+      std::snprintf(text, sizeof(text),
+                    "t=%.1f s at (%.2f, %.2f) m heading %.0f deg: %s (explorer %s, driven by %s)",
+                    c.t_s, c.map_from_base.translation().x(), c.map_from_base.translation().y(),
+                    c.map_from_base.yaw_rad() * 180 / M_PI, c.what.c_str(), status.state.c_str(),
+                    status.driven_by.c_str());
       result.contacts.resize(simulator.collisions(), text);
+    }
+    const common::Rigid2d base = simulator.map_from_base();
+    for (const sim::Obstacle& o : obstacles) {
+      const double gap = sim::SegmentDistance(base.translation(), o.a, o.b) - o.half_width -
+                         sim_options.robot_radius_m;
+      if (gap < result.closest_gap_m) {
+        result.closest_gap_m = gap;
+        char text[200];
+        const auto& status = loop.explore().status();
+        std::snprintf(text, sizeof(text),
+                      "t=%.2f s at (%.2f, %.2f) m heading %.0f deg: %s (explorer %s, driven by %s)",
+                      t, base.translation().x(), base.translation().y(),
+                      base.yaw_rad() * 180 / M_PI, o.what.c_str(), status.state.c_str(),
+                      status.driven_by.c_str());
+        result.closest_gap_what = text;
+      }
     }
     if (progress && t >= next_progress) {
       progress(t);

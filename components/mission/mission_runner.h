@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -104,6 +105,11 @@ struct MissionResult {
   double distance_m = 0;
   int collisions = 0;
   std::vector<std::string> contacts;  // each collision: when, where (world frame) and against what
+  // The base's closest approach to anything the simulator's collision model holds (walls, boxes,
+  // table legs, people), in metres between the base's edge and the obstacle: the margin that
+  // was left (0 at a contact), every simulation step.
+  double closest_gap_m = std::numeric_limits<double>::infinity();
+  std::string closest_gap_what;  // when, where and against what
   int recoveries = 0;
   bool came_home = false;
   double home_after_s = -1;
