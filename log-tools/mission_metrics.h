@@ -142,7 +142,7 @@ struct MissionMetricsResult {
   bool came_home = false;
   std::optional<double> home_after_s;
   std::optional<double> home_error_m;  // the last truth position's distance from the start pose
-  std::string last_explore_state;  // "" without EXPLORE_STATUS
+  std::string last_explore_state;      // "" without EXPLORE_STATUS
 };
 
 class MissionMetrics {

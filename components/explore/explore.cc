@@ -156,9 +156,8 @@ std::optional<common::Rigid2d> ExploreController::OdometryAt(double stamp_s) con
     if (t1 < stamp_s) continue;
     const auto& [t0, a] = odometry_[i - 1];
     const double f = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
-    return common::Rigid2d(
-        a.translation() + f * (b.translation() - a.translation()),
-        a.yaw_rad() + f * common::NormalizeAngle(b.yaw_rad() - a.yaw_rad()));
+    return common::Rigid2d(a.translation() + f * (b.translation() - a.translation()),
+                           a.yaw_rad() + f * common::NormalizeAngle(b.yaw_rad() - a.yaw_rad()));
   }
   return odometry_.back().second;
 }
@@ -170,7 +169,8 @@ bool ExploreController::ArcApproachesMemory(double linear_mps, double angular_ra
   for (int k = 1; k <= 6; ++k) {
     const double t = o.sweep_horizon_s * k / 6;
     const double mean_yaw = 0.5 * angular_radps * t;
-    const Eigen::Vector2d p = linear_mps * t * Eigen::Vector2d(std::cos(mean_yaw), std::sin(mean_yaw));
+    const Eigen::Vector2d p =
+        linear_mps * t * Eigen::Vector2d(std::cos(mean_yaw), std::sin(mean_yaw));
     const double nearest_then = NearestDistance(p, local_points_);
     if (nearest_then < o.footprint_radius_m && nearest_then < nearest_now - 1e-3) return true;
   }
@@ -567,9 +567,9 @@ Velocity ExploreController::Follow(const Scan& scan) {
 }
 
 Velocity ExploreController::Safe(Velocity desired, const Scan& scan, bool with_map) const {
+  if (desired.linear_mps <= 0) return desired;
   const SafetyOptions& o = options_.safety;
   double clearance = ScanClearanceAhead(scan, o);
-  if (desired.linear_mps <= 0) return desired;
   // The map remembers what the camera can no longer see (nearer than its minimum range).
   const double half = 0.9 * options_.planner.robot_radius_m;
   const double step = 0.5 * map_.grid().resolution_m;
@@ -586,7 +586,8 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan, bool with_m
   }
   // ... and the safety layer's memory (odometry frame) what the map may have misplaced.
   for (const Eigen::Vector2d& q : local_points_) {
-    if (q.x() > 0 && std::abs(q.y()) <= o.corridor_half_width_m) clearance = std::min(clearance, q.x());
+    if (q.x() > 0 && std::abs(q.y()) <= o.corridor_half_width_m)
+      clearance = std::min(clearance, q.x());
   }
   if (ArcApproachesMemory(desired.linear_mps, desired.angular_radps)) {
     desired.linear_mps = 0;

@@ -125,7 +125,8 @@ struct SafetyOptions {
       "the scan's returns are kept this long in the odometry frame, so that the checks above "
       "still see an obstacle once it is beside the base or nearer than the camera's minimum "
       "range (0: no memory, the map alone)");
-    v("memory_radius_m", memory_radius_m, "kept returns further than this from the base are dropped");
+    v("memory_radius_m", memory_radius_m,
+      "kept returns further than this from the base are dropped");
     v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
     v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
     v("blind_fraction", blind_fraction,

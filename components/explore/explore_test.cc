@@ -325,7 +325,8 @@ TEST(LocalObstaclesTest, ReturnsStayInTheOdometryFrameUntilOldFarOrSeenThrough) 
     ASSERT_EQ(p.size(), 1u);
     EXPECT_NEAR(p[0].x(), beam_y, 1e-9);
     EXPECT_NEAR(p[0].y(), 0.8 - beam_x, 1e-9);
-    EXPECT_NEAR(NearestDistance(Eigen::Vector2d::Zero(), p), std::hypot(0.8 - beam_x, beam_y), 1e-9);
+    EXPECT_NEAR(NearestDistance(Eigen::Vector2d::Zero(), p), std::hypot(0.8 - beam_x, beam_y),
+                1e-9);
     memory.Add(10.5, turned, nothing);  // seen 10.5 s ago: older than 10 s
     EXPECT_EQ(memory.size(), 0u);
   }

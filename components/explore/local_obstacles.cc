@@ -11,7 +11,8 @@ namespace explore {
 int64_t LocalObstacles::Key(const Eigen::Vector2d& odom_m) const {
   const int64_t x = static_cast<int64_t>(std::floor(odom_m.x() / cell_m_));
   const int64_t y = static_cast<int64_t>(std::floor(odom_m.y() / cell_m_));
-  return (x << 32) ^ (y & 0xffffffff);
+  return static_cast<int64_t>((static_cast<uint64_t>(x) << 32) ^
+                              (static_cast<uint64_t>(y) & 0xffffffffu));
 }
 
 void LocalObstacles::Add(double stamp_s, const common::Rigid2d& odom_from_base, const Scan& scan) {
@@ -34,8 +35,8 @@ void LocalObstacles::Add(double stamp_s, const common::Rigid2d& odom_from_base, 
       const double window = std::atan2(cell_m_, range);
       if (along - window >= -0.5 * scan.angle_increment_rad && along + window < span_rad) {
         const auto beam = [&](double a) {
-          return std::min(n - 1, static_cast<size_t>(
-                                     std::max(0.0, std::round(a / scan.angle_increment_rad))));
+          return std::min(
+              n - 1, static_cast<size_t>(std::max(0.0, std::round(a / scan.angle_increment_rad))));
         };
         drop = true;
         for (size_t i = beam(along - window); i <= beam(along + window) && drop; ++i) {
@@ -52,7 +53,8 @@ void LocalObstacles::Add(double stamp_s, const common::Rigid2d& odom_from_base, 
     const float r = scan.ranges_m[i];
     if (!std::isfinite(r) || r < scan.range_min_m || r > radius_m_) continue;
     const double a = scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
-    const Eigen::Vector2d odom_m = odom_from_base * Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
+    const Eigen::Vector2d odom_m =
+        odom_from_base * Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
     cells_[Key(odom_m)] = {odom_m, stamp_s};
   }
 }

@@ -279,7 +279,8 @@ class Loop : public sim::SimSink {
         pose_sigma_xy_yaw_(pose_sigma_xy_yaw) {}
 
   void Publish(const std::string&, const sarmap::odometry_t& m) override {
-    const common::Rigid2d odom_from_base = common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
+    const common::Rigid2d odom_from_base =
+        common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
     slam_.AddOdometry(Seconds(m.header.utime), odom_from_base);
     explore_.OnOdometry(odom_from_base, Seconds(m.header.utime));
   }
