@@ -566,7 +566,7 @@ Velocity ExploreController::Follow(const Scan& scan) {
   return v;
 }
 
-Velocity ExploreController::Safe(Velocity desired, const Scan& scan, bool with_map) const {
+Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
   if (desired.linear_mps <= 0) return desired;
   const SafetyOptions& o = options_.safety;
   double clearance = ScanClearanceAhead(scan, o);
@@ -575,7 +575,7 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan, bool with_m
   const double step = 0.5 * map_.grid().resolution_m;
   const Eigen::Vector2d ahead(std::cos(pose_->yaw_rad()), std::sin(pose_->yaw_rad()));
   const Eigen::Vector2d side(-ahead.y(), ahead.x());
-  for (double x = 0.3; with_map && x < std::min(clearance, o.slow_distance_m); x += step) {
+  for (double x = 0.3; x < std::min(clearance, o.slow_distance_m); x += step) {
     bool hit = false;
     for (double y = -half; y <= half + 1e-9; y += step)
       hit |= map_.Occupied(pose_->translation() + ahead * x + side * y);
@@ -598,7 +598,7 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan, bool with_m
   // the commanded arc for sweep_horizon_s; if it brings the base nearer than footprint_radius_m
   // to an obstacle of the map (and nearer than it is now), no forward motion: the robot turns
   // on the spot first.
-  if (with_map && map_.has_map() && o.sweep_horizon_s > 0) {
+  if (map_.has_map() && o.sweep_horizon_s > 0) {
     const Eigen::Vector2i now_cell = map_.grid().CellOf(pose_->translation());
     const double clearance_now = map_.Clearance(now_cell.x(), now_cell.y());
     for (int k = 1; k <= 6; ++k) {
@@ -664,7 +664,7 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     if (now_s - recovery_phase_start_s_ < o.escape_s) {
       v = reactive_.Step(scan);
       v.source = "escape";
-      return Safe(v, scan, /*with_map=*/false);
+      return v;
     }
     return EndRecovery(now_s);
   }

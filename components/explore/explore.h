@@ -108,7 +108,7 @@ struct SafetyOptions {
   double footprint_radius_m = 0.28;  // the base's radius and a margin, for the swept check
   double sweep_horizon_s = 0.6;      // how far ahead the commanded arc is checked
   double max_pose_age_s = 0.5;       // an older POSE (against the SCAN's stamp): stand still
-  double memory_s = 10;              // scan returns kept in the odometry frame this long
+  double memory_s = 0;               // scan returns kept in the odometry frame this long (0: off)
   double memory_radius_m = 1.5;      // ... while within this distance of the base
   template <class V>
   void Visit(V& v) {
@@ -448,8 +448,7 @@ class ExploreController {
   void MarkVisited(double now_s);
   std::pair<int, int> SweepCell(const Eigen::Vector2d& position_m) const;
   Velocity Follow(const Scan& scan);
-  // `with_map` false: the scan and the memory only (the escape, when the map is what is wrong).
-  Velocity Safe(Velocity desired, const Scan& scan, bool with_map = true) const;
+  Velocity Safe(Velocity desired, const Scan& scan) const;
   // Whether driving (linear_mps, angular_radps) for sweep_horizon_s brings the base nearer than
   // footprint_radius_m to a remembered return, and nearer than it is now.
   bool ArcApproachesMemory(double linear_mps, double angular_radps) const;
