@@ -70,3 +70,75 @@ function(sarmap_finalize_bench_target)
     add_dependencies(bench ${names})
   endif()
 endfunction()
+
+# sarmap_core_library(TARGET)
+# Marks a library as an algorithm core: it must not link LCM, the message types or the node
+# runtime. sarmap_finalize_core_check() writes each core's link closure and archive, and the
+# test core_libraries_link_no_lcm checks both (tests/check_core_links.py).
+function(sarmap_core_library name)
+  set_property(GLOBAL APPEND PROPERTY SARMAP_CORE_LIBRARIES ${name})
+endfunction()
+
+# The libraries `target` links, directly or through other targets (usage requirements only:
+# what a program linking `target` ends up linking).
+function(_sarmap_link_closure target out_var)
+  set(seen "")
+  set(queue ${target})
+  while(queue)
+    list(POP_FRONT queue current)
+    if(current IN_LIST seen)
+      continue()
+    endif()
+    list(APPEND seen ${current})
+    if(NOT TARGET ${current})
+      continue()
+    endif()
+    get_target_property(type ${current} TYPE)
+    set(deps "")
+    if(NOT type STREQUAL "INTERFACE_LIBRARY")
+      get_target_property(direct ${current} LINK_LIBRARIES)
+      if(direct)
+        list(APPEND deps ${direct})
+      endif()
+    endif()
+    get_target_property(iface ${current} INTERFACE_LINK_LIBRARIES)
+    if(iface)
+      list(APPEND deps ${iface})
+    endif()
+    foreach(dep ${deps})
+      # $<LINK_ONLY:x> (a static library's private dependency) is still linked.
+      string(REGEX REPLACE "^\\$<LINK_ONLY:(.*)>$" "\\1" dep "${dep}")
+      if(NOT dep MATCHES "^\\$<")
+        list(APPEND queue ${dep})
+      endif()
+    endforeach()
+  endwhile()
+  list(REMOVE_AT seen 0)
+  set(${out_var} ${seen} PARENT_SCOPE)
+endfunction()
+
+function(sarmap_finalize_core_check)
+  get_property(names GLOBAL PROPERTY SARMAP_CORE_LIBRARIES)
+  set(lines "")
+  set(files "")
+  foreach(name ${names})
+    _sarmap_link_closure(${name} closure)
+    string(REPLACE ";" " " closure_text "${closure}")
+    string(APPEND lines "${name}\t$<TARGET_FILE:${name}>\t${closure_text}\n")
+    list(APPEND files $<TARGET_FILE:${name}>)
+  endforeach()
+  file(GENERATE OUTPUT ${CMAKE_BINARY_DIR}/core_libraries.tsv CONTENT "${lines}")
+  add_test(NAME core_libraries_link_no_lcm
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tests/check_core_links.py
+            ${CMAKE_BINARY_DIR}/core_libraries.tsv)
+  set_tests_properties(core_libraries_link_no_lcm PROPERTIES LABELS unit)
+  # The check itself: the LCM runtime, listed as if it were a core, must fail it.
+  _sarmap_link_closure(sarmap_runtime closure)
+  string(REPLACE ";" " " closure_text "${closure}")
+  file(GENERATE OUTPUT ${CMAKE_BINARY_DIR}/core_libraries_selftest.tsv
+    CONTENT "sarmap_runtime\t$<TARGET_FILE:sarmap_runtime>\t${closure_text}\n")
+  add_test(NAME core_libraries_check_catches_lcm
+    COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tests/check_core_links.py
+            ${CMAKE_BINARY_DIR}/core_libraries_selftest.tsv)
+  set_tests_properties(core_libraries_check_catches_lcm PROPERTIES LABELS unit WILL_FAIL TRUE)
+endfunction()

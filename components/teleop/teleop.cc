@@ -97,18 +97,6 @@ std::vector<Step> PlanRequest(const Request& request, const TeleopOptions& optio
   return steps;
 }
 
-teleop_t MakeTeleop(const Step& step, const std::string& operator_id, int64_t utime) {
-  teleop_t m{};
-  m.header.utime = utime;
-  m.header.frame = "base";
-  m.operator_id = operator_id;
-  m.override_active = step.override_active;
-  m.emergency_stop = step.emergency_stop;
-  m.linear_mps = step.linear_mps;
-  m.angular_radps = step.angular_radps;
-  return m;
-}
-
 bool StatusConfirms(Action action, const std::string& driven_by) {
   switch (action) {
     case Action::kStop:

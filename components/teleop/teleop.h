@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "common/options.h"
-#include "sarmap/teleop_t.hpp"
 
 namespace sarmap {
 namespace teleop {
@@ -74,9 +73,6 @@ struct Step {
 // emergency stop).
 // Every step comes 1/rate_hz after the one before.
 std::vector<Step> PlanRequest(const Request& request, const TeleopOptions& options);
-
-// The message for `step`, stamped `utime`, unsigned.
-teleop_t MakeTeleop(const Step& step, const std::string& operator_id, int64_t utime);
 
 // Stamps that always increase: the receiver's CommandGate acts only on a stamp above the last
 // one it accepted, so two messages within one microsecond (or a clock stepped back while the

@@ -7,6 +7,18 @@
 namespace sarmap {
 namespace teleop {
 
+teleop_t MakeTeleop(const Step& step, const std::string& operator_id, int64_t utime) {
+  teleop_t m{};
+  m.header.utime = utime;
+  m.header.frame = "base";
+  m.operator_id = operator_id;
+  m.override_active = step.override_active;
+  m.emergency_stop = step.emergency_stop;
+  m.linear_mps = step.linear_mps;
+  m.angular_radps = step.angular_radps;
+  return m;
+}
+
 TeleopSender::TeleopSender(common::Node* node, const TeleopOptions& options, common::AuthKey key)
     : pub_(node->Advertise<teleop_t>(options.channel)),
       key_(std::move(key)),

@@ -7,10 +7,14 @@
 
 #include "common/command_auth.h"
 #include "common/node.h"
+#include "sarmap/teleop_t.hpp"
 #include "teleop/teleop.h"
 
 namespace sarmap {
 namespace teleop {
+
+// The message for `step`, stamped `utime`, unsigned.
+teleop_t MakeTeleop(const Step& step, const std::string& operator_id, int64_t utime);
 
 class TeleopSender {
  public:
