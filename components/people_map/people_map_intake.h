@@ -3,7 +3,7 @@
 // PEOPLE_AUDIO, SOUND_MAP and POSE messages go through a time-ordered queue and are applied to
 // the PeopleMap in capture-time order, each detection with the robot pose interpolated at its
 // capture time (a detection newer than the latest pose waits for a later pose, at most
-// pose_wait_s). The node (people_map_node.cc) gates the stamps, saves the state and publishes;
+// pose_wait_s). The node (PeopleMapNode, people_map_node.h) gates the stamps, saves the state and publishes;
 // the in-process mission (components/mission) feeds the same class directly.
 
 #include <deque>

@@ -1,0 +1,162 @@
+// PeopleMapNode in-process over memq://: what it publishes for what it receives, its stamp
+// gates, and its state across a restart.
+#include "people_map/people_map_node.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/robot_config.h"
+
+namespace sarmap {
+namespace people_map {
+namespace {
+
+using common::Utime;
+
+pose_t Pose(Utime utime, double x_m) {
+  pose_t m{};
+  m.header.utime = utime;
+  m.header.frame = "map";
+  m.position_m[0] = x_m;
+  m.orientation[0] = 1;
+  for (int i = 0; i < 6; ++i) m.covariance[7 * i] = 1e-4;
+  return m;
+}
+
+// One person straight ahead of the camera, forward_m along its optical axis.
+people_detections_t Seen(Utime utime, double forward_m) {
+  people_detections_t m{};
+  m.header.utime = utime;
+  m.header.frame = "camera";
+  person_detection_t d{};
+  d.cue = person_detection_t::CUE_SEEN_DEPTH;
+  d.has_range = true;
+  d.position_m[1] = 0.55 - 0.85;
+  d.position_m[2] = forward_m;
+  d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
+  d.confidence = 0.9f;
+  m.detections.push_back(d);
+  m.num_detections = 1;
+  return m;
+}
+
+struct Bus {
+  common::Node node{"people_map_node_test", "memq://"};
+  std::vector<people_map_t> maps;
+  common::Node::Publisher<pose_t> pose_pub = node.Advertise<pose_t>("POSE");
+  common::Node::Publisher<people_detections_t> seen_pub =
+      node.Advertise<people_detections_t>("PEOPLE_VISUAL");
+  Bus() {
+    node.Subscribe<people_map_t>("PEOPLE_MAP",
+                                 [this](const people_map_t& m, const auto&) { maps.push_back(m); });
+  }
+  // Handles what is queued and runs due timers for `seconds`.
+  void Spin(double seconds) {
+    for (int i = 0; i < static_cast<int>(seconds / 0.01); ++i) node.SpinOnce(0.01);
+  }
+};
+
+PeopleMapNodeOptions FastOptions() {
+  PeopleMapNodeOptions options;
+  options.publish_period_s = 0.02;
+  options.save_period_s = 0.02;
+  return options;
+}
+
+double CameraAheadM() {
+  return common::LoadRobot(PeopleMapNodeOptions().robot_config)
+      .base_from_camera.ToRigid3d()
+      .translation()
+      .x();
+}
+
+TEST(PeopleMapNodeTest, PublishesThePersonSeenWithThePoseAtItsTime) {
+  Bus bus;
+  PeopleMapNode adapter(FastOptions(), &bus.node);
+  auto first = Pose(1'000'000, 0.0);
+  bus.pose_pub.Publish(&first);
+  bus.Spin(0.05);
+  // Seen at 1.05 s, before the pose of 1.1 s: it waits for that pose, then is placed halfway.
+  auto seen = Seen(1'050'000, 2.0);
+  bus.seen_pub.Publish(&seen);
+  for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000) {
+    auto pose = Pose(u, 0.1 * (u - 1'000'000) / 100'000);
+    bus.pose_pub.Publish(&pose);
+  }
+  bus.Spin(0.2);
+  ASSERT_FALSE(bus.maps.empty());
+  const people_map_t& last = bus.maps.back();
+  ASSERT_EQ(last.num_people, 1);
+  EXPECT_NEAR(last.people[0].position_m[0], 0.05 + CameraAheadM() + 2.0, 1e-6);
+  EXPECT_NEAR(last.people[0].position_m[1], 0.0, 1e-6);
+  EXPECT_EQ(last.header.utime, 1'050'000);
+  EXPECT_EQ(bus.node.stats().at("POSE").received, 11);
+}
+
+TEST(PeopleMapNodeTest, AStampFarAheadIsRejectedAndMovesNothing) {
+  Bus bus;
+  PeopleMapNode adapter(FastOptions(), &bus.node);
+  auto pose = Pose(1'000'000, 0.0);
+  bus.pose_pub.Publish(&pose);
+  bus.Spin(0.05);
+  // A year ahead: the gate drops it, so the detection below still finds the poses around it.
+  auto far = Pose(1'000'000 + 365LL * 86400 * 1'000'000, 50.0);
+  bus.pose_pub.Publish(&far);
+  auto seen = Seen(1'050'000, 2.0);
+  bus.seen_pub.Publish(&seen);
+  for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000) {
+    pose = Pose(u, 0.1 * (u - 1'000'000) / 100'000);
+    bus.pose_pub.Publish(&pose);
+  }
+  bus.Spin(0.2);
+  EXPECT_EQ(bus.node.stats().at("POSE").dropped_malformed, 1);
+  ASSERT_EQ(adapter.map().people().size(), 1u);
+  EXPECT_NEAR(adapter.map().people().begin()->second.position_m.x(), 0.05 + CameraAheadM() + 2.0,
+              1e-6);
+}
+
+TEST(PeopleMapNodeTest, ARestartedNodePublishesThePeopleItSavedAtOnce) {
+  char dir_template[] = "/tmp/people_map_node_test.XXXXXX";
+  ASSERT_NE(mkdtemp(dir_template), nullptr);
+  PeopleMapNodeOptions options = FastOptions();
+  options.state_file = std::string(dir_template) + "/people.state";
+  {
+    Bus bus;
+    PeopleMapNode adapter(options, &bus.node);
+    auto pose = Pose(1'000'000, 0.0);
+    bus.pose_pub.Publish(&pose);
+    auto seen = Seen(1'050'000, 2.0);
+    bus.seen_pub.Publish(&seen);
+    pose = Pose(1'100'000, 0.1);
+    bus.pose_pub.Publish(&pose);
+    bus.Spin(0.1);
+    adapter.Finish();
+    ASSERT_EQ(adapter.map().people().size(), 1u);
+  }
+  Bus bus;
+  PeopleMapNode restarted(options, &bus.node);
+  EXPECT_EQ(restarted.map().people().size(), 1u);
+  bus.Spin(0.1);  // no input at all: the saved person is on the bus
+  ASSERT_FALSE(bus.maps.empty());
+  EXPECT_EQ(bus.maps.back().num_people, 1);
+  EXPECT_EQ(bus.maps.back().header.utime, 1'050'000);
+
+  // A corrupt state file: set aside, an empty map, no crash.
+  FILE* f = fopen(options.state_file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  fputs("not a state file\n", f);
+  fclose(f);
+  Bus bus2;
+  PeopleMapNode clean(options, &bus2.node);
+  EXPECT_TRUE(clean.map().people().empty());
+  std::filesystem::remove_all(dir_template);
+}
+
+}  // namespace
+}  // namespace people_map
+}  // namespace sarmap
