@@ -2,11 +2,11 @@
 // synthetic dark DEPTH + RGB in, confirmed depth-only people out; mismatched and empty frames
 // are counted, not fatal; SIGINT stops it cleanly.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
+#include <lcm/lcm-cpp.hpp>
 #include <regex>
 
 #include "common/image_codec.h"
@@ -25,7 +25,9 @@ struct Sink {
   std::vector<people_detections_t> people;
   std::string status;
   int64_t dropped = 0;
-  void OnPeople(const lcm::ReceiveBuffer*, const std::string&, const people_detections_t* m) { people.push_back(*m); }
+  void OnPeople(const lcm::ReceiveBuffer*, const std::string&, const people_detections_t* m) {
+    people.push_back(*m);
+  }
   void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const node_status_t* s) {
     if (s->node_name != "sarmap-vision-people") return;
     status = s->message;
@@ -45,12 +47,14 @@ camera_intrinsics_t Intrinsics(int w, int h) {
 }
 
 TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
-  if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "runs through tests/harness/sarmap-netns (ctest does)";
+  if (!getenv("SARMAP_NETNS"))
+    GTEST_SKIP() << "runs through tests/harness/sarmap-netns (ctest does)";
   const std::string src = SARMAP_SOURCE_DIR;
-  const std::string log = ::testing::TempDir() + "/vision_people_node_" + std::to_string(getpid()) + ".log";
-  testing::Process node({"sarmap-vision-people", "--config", src + "/config/vision_people.yaml", "--set",
-                         "robot_config=" + src + "/config/robot.yaml", "--set", "confirmation.k=2", "--set",
-                         "confirmation.n=3"},
+  const std::string log =
+      ::testing::TempDir() + "/vision_people_node_" + std::to_string(getpid()) + ".log";
+  testing::Process node({"sarmap-vision-people", "--config", src + "/config/vision_people.yaml",
+                         "--set", "robot_config=" + src + "/config/robot.yaml", "--set",
+                         "confirmation.k=2", "--set", "confirmation.n=3"},
                         log);
   lcm::LCM lcm(common::DefaultLcmUrl());
   ASSERT_TRUE(lcm.good());
@@ -75,7 +79,8 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
     h.seq = i;
     h.frame = "camera";
     std::vector<uint8_t> rgb(color_w * color_h * 3, 4);
-    image_t color = common::MakeColorImage(h, Intrinsics(color_w, color_h), rgb.data(), color_w, color_h, 90);
+    image_t color =
+        common::MakeColorImage(h, Intrinsics(color_w, color_h), rgb.data(), color_w, color_h, 90);
     lcm.publish("RGB", &color);
     const std::vector<uint16_t> depth_mm = scene.RenderDepth(i);
     image_t depth = common::MakeDepthImage(h, Intrinsics(640, 480), depth_mm.data(), 640, 480);
@@ -98,7 +103,7 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
     EXPECT_TRUE(d.has_range);
     EXPECT_NEAR(d.position_m[0], -0.4, 0.15);  // 0.4 m to the left: camera x = -0.4
     EXPECT_NEAR(d.position_m[2], 3.0, 0.25);
-    EXPECT_GT(d.azimuth_rad, 0.0);             // left is positive
+    EXPECT_GT(d.azimuth_rad, 0.0);  // left is positive
     EXPECT_NEAR(d.height_m, 1.75, 0.1);
     EXPECT_GT(d.position_covariance[8], 0.0);
     if (track < 0) track = d.track_id;
@@ -112,11 +117,14 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
   send(6, 640, 480, false);
   ASSERT_TRUE(spin_until([&] { return sink.people.size() >= 6; }, 10)) << node.Output();
   EXPECT_EQ(sink.people.back().num_detections, 1);
-  ASSERT_TRUE(spin_until([&] {
-    std::smatch m;
-    return std::regex_search(sink.status, m, std::regex("input_warnings (\\d+)")) &&
-           std::stoi(m[1]) + sink.dropped >= 2;
-  }, 5)) << sink.status << "; dropped " << sink.dropped;
+  ASSERT_TRUE(spin_until(
+      [&] {
+        std::smatch m;
+        return std::regex_search(sink.status, m, std::regex("input_warnings (\\d+)")) &&
+               std::stoi(m[1]) + sink.dropped >= 2;
+      },
+      5))
+      << sink.status << "; dropped " << sink.dropped;
   ASSERT_TRUE(node.Running()) << node.Output();
   node.Signal(SIGINT);
   EXPECT_EQ(node.Wait(10), 0) << node.Output();
