@@ -8,6 +8,26 @@
 namespace sarmap {
 namespace sound {
 
+std::string CheckAudioBlock(const AudioBlockFormat& block, int array_rate_hz, int needed_channels,
+                            const std::string& array_name) {
+  const std::string device = "device '" + common::EscapeForLog(block.device_id, 64) + "'";
+  if (block.sample_rate_hz != array_rate_hz) {
+    return "sample-rate mismatch: " + device + " is " + std::to_string(block.sample_rate_hz) +
+           " Hz, array '" + array_name + "' expects " + std::to_string(array_rate_hz) +
+           " Hz; block dropped";
+  }
+  if (block.num_channels < needed_channels) {
+    return device + " has " + std::to_string(block.num_channels) + " channels, array '" +
+           array_name + "' needs " + std::to_string(needed_channels) +
+           " (channel_map); block dropped";
+  }
+  if (!block.int16 || block.num_samples < 0 ||
+      block.num_values != static_cast<int64_t>(block.num_channels) * block.num_samples) {
+    return "malformed audio block of " + device + " (format or size); dropped";
+  }
+  return "";
+}
+
 AudioIntake::AudioIntake(std::string device_id, int sample_rate_hz, double max_bridged_gap_s)
     : device_(std::move(device_id)), configured_(!device_.empty()) {
   if (sample_rate_hz <= 0) throw std::invalid_argument("audio intake: sample rate must be > 0");

@@ -21,6 +21,22 @@
 namespace sarmap {
 namespace sound {
 
+// The format fields of one audio block (audio_frame_t), as a node checks them.
+struct AudioBlockFormat {
+  std::string device_id;
+  int sample_rate_hz = 0;
+  int num_channels = 0;
+  int64_t num_samples = 0;  // per channel
+  int64_t num_values = 0;   // must be num_channels * num_samples
+  bool int16 = true;        // SAMPLE_INT16, the only format on the wire
+};
+
+// "" when `block` is what an array of `array_name` needs (its sample rate, at least
+// `needed_channels` device channels, 16-bit samples, as many values as channels x samples);
+// else one line saying why the block is dropped.
+std::string CheckAudioBlock(const AudioBlockFormat& block, int array_rate_hz, int needed_channels,
+                            const std::string& array_name);
+
 class AudioIntake {
  public:
   // Other device ids remembered to report each once; beyond this they are only counted.

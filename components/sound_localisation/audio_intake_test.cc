@@ -182,6 +182,29 @@ TEST(AudioIntake, TenPercentBlockLossIsBridgedAndDirectionsGoOn) {
               static_cast<double>(clean.last_end_sample), kBlock * 2);
 }
 
+TEST(AudioIntake, CheckAudioBlockNamesWhatIsWrongWithABlock) {
+  AudioBlockFormat block;
+  block.device_id = "card\n1";
+  block.sample_rate_hz = 16000;
+  block.num_channels = 6;
+  block.num_samples = 256;
+  block.num_values = 6 * 256;
+  EXPECT_EQ(CheckAudioBlock(block, 16000, 6, "respeaker"), "");
+  EXPECT_EQ(CheckAudioBlock(block, 16000, 4, "respeaker"), "");
+  const std::string rate = CheckAudioBlock(block, 48000, 6, "respeaker");
+  EXPECT_NE(rate.find("sample-rate mismatch: device 'card\\x0a1' is 16000 Hz, array 'respeaker' "
+                      "expects 48000 Hz"),
+            std::string::npos)
+      << rate;
+  const std::string channels = CheckAudioBlock(block, 16000, 8, "cube8");
+  EXPECT_NE(channels.find("has 6 channels, array 'cube8' needs 8"), std::string::npos) << channels;
+  block.num_values -= 1;
+  EXPECT_NE(CheckAudioBlock(block, 16000, 6, "respeaker").find("malformed"), std::string::npos);
+  block.num_values += 1;
+  block.int16 = false;
+  EXPECT_NE(CheckAudioBlock(block, 16000, 6, "respeaker").find("malformed"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace sound
 }  // namespace sarmap

@@ -5,6 +5,7 @@
 
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "sound_localisation/audio_messages.h"
 
 namespace sarmap {
 namespace speech {
@@ -61,17 +62,10 @@ void SpeechNode::OnAudio(const audio_frame_t& msg) {
     return;
   }
   device_ = intake_.device();
-  const int rate_hz = stream_->geometry().sample_rate_hz;
-  if (msg.sample_rate_hz != rate_hz) {
-    return Drop("sample-rate mismatch: audio " + std::to_string(msg.sample_rate_hz) +
-                " Hz, array " + std::to_string(rate_hz) + " Hz; dropped");
-  }
-  if (msg.num_channels < needed_channels_) {
-    return Drop("audio has " + std::to_string(msg.num_channels) + " channels, array needs " +
-                std::to_string(needed_channels_));
-  }
-  if (msg.num_values != static_cast<int32_t>(msg.num_channels) * msg.num_samples)
-    return Drop("malformed audio block; dropped");
+  const sound::ArrayGeometry& geometry = stream_->geometry();
+  const std::string bad = sound::CheckAudioBlock(
+      sound::AudioBlockFormatOf(msg), geometry.sample_rate_hz, needed_channels_, geometry.name);
+  if (!bad.empty()) return Drop(bad);
   // The beams and keyword spotting go on across gaps (each block's stamp anchors its samples);
   // a repeated or late block is dropped.
   const sound::AudioIntake::Decision decision =
