@@ -11,22 +11,38 @@
 // its Finish() (flush queues, publish last, save state) when it has one.
 // Errors a user can cause (bad arguments, options or files) end in one line and exit code 2
 // (RunMain).
+//
+// A node may also take shorthand flags for common overrides: {"--file", "play this file",
+// {"source=file", "file={}"}} adds `--file F`, which stands for `--set source=file --set file=F`
+// (placed before the command line's own --set, which therefore win).
 
+#include <cstdio>
+#include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "common/args.h"
+#include "common/logging.h"
 #include "common/node.h"
-#include "common/node_main.h"
+#include "common/options.h"
+#include "common/robot_config.h"
 
 namespace sarmap {
 namespace common {
+
+struct ShorthandFlag {
+  std::string flag;               // e.g. "--file"
+  std::string help;               // its line in --help
+  std::vector<std::string> sets;  // the overrides it stands for; "{}" is the flag's value
+};
 
 struct NodeInfo {
   const char* name;            // program and node name, e.g. "sarmap-people-map"
   const char* description;     // --help summary
   const char* epilog;          // --help text after the options ("" for none)
   const char* default_config;  // e.g. "config/people_map.yaml"
+  std::vector<ShorthandFlag> shorthands = {};
 };
 
 namespace internal {
@@ -42,10 +58,29 @@ int RunNode(const NodeInfo& info, int argc, char** argv) {
     ArgParser parser(info.name, info.description);
     if (info.epilog != nullptr && *info.epilog != '\0') parser.SetEpilog(info.epilog);
     NodeArgs args;
-    const auto options = ParseNodeOptions<Options>(&parser, &args, argc, argv, info.default_config);
-    if (!options) return 0;  // --help or --print-config
+    parser.AddNodeOptions(&args, info.default_config);
+    std::vector<std::string> values(info.shorthands.size());
+    for (size_t i = 0; i < info.shorthands.size(); ++i)
+      parser.AddFlag(info.shorthands[i].flag, &values[i], info.shorthands[i].help);
+    if (!parser.Parse(argc, argv)) return 0;  // --help
+    std::vector<std::string> overrides;
+    for (size_t i = 0; i < info.shorthands.size(); ++i) {
+      if (values[i].empty()) continue;
+      for (std::string set : info.shorthands[i].sets) {
+        const size_t at = set.find("{}");
+        if (at != std::string::npos) set.replace(at, 2, values[i]);
+        overrides.push_back(set);
+      }
+    }
+    overrides.insert(overrides.end(), args.overrides.begin(), args.overrides.end());
+    const Options options = LoadOptions<Options>(ResolveConfigPath(args.config_path), overrides);
+    if (args.print_config) {
+      fputs(OptionsToYaml(options, true).c_str(), stdout);
+      return 0;
+    }
+    SetLogLevel(ParseLogLevel(args.log_level));
     Node node(info.name, args);
-    Adapter adapter(*options, &node);
+    Adapter adapter(options, &node);
     const int code = node.Run();
     if constexpr (internal::HasFinish<Adapter>::value) adapter.Finish();
     return code;
