@@ -48,7 +48,7 @@ bool AudioCaptureNode::Step() {
                      << " samples lost before sample " << block_.first_sample_index;
     last_overrun_ = block_.overrun_samples;
   }
-  audio_frame_t msg;
+  audio_frame_t msg{};
   msg.header.utime = block_.utime;
   msg.header.frame = "mic_array";
   msg.device_id = source_->device_id();

@@ -147,7 +147,7 @@ int64_t Node::total_dropped() const {
 
 void Node::PublishStatus() {
   if (status_channel_.empty()) return;
-  sarmap::node_status_t status;
+  sarmap::node_status_t status{};
   status.header.utime = WallClockUtime();
   status.header.frame = "";
   status.node_name = name_;

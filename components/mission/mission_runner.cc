@@ -404,7 +404,7 @@ class Loop : public sim::SimSink {
     explore_.OnMap(grid);
     SoundChain* sound = perception_ ? perception_->sound() : nullptr;
     if (observer_ || sound) {
-      sarmap::occupancy_grid_t m;
+      sarmap::occupancy_grid_t m{};
       m.header.utime = static_cast<int64_t>((start_s_ + t) * 1e6);
       m.header.seq = map_seq_++;
       m.header.frame = "map";

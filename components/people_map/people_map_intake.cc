@@ -20,11 +20,11 @@ constexpr int kSeenStream = 0, kHeardStream = 1, kSoundMapStream = 2;
 }  // namespace
 
 sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, Utime utime) {
-  sarmap::people_map_t msg;
+  sarmap::people_map_t msg{};
   msg.header.utime = utime;
   msg.header.frame = "map";
   for (const auto& p : people) {
-    sarmap::mapped_person_t m;
+    sarmap::mapped_person_t m{};
     m.id = p.id;
     for (int i = 0; i < 3; ++i) m.position_m[i] = p.position_m[i];
     for (int i = 0; i < 9; ++i) m.covariance[i] = p.covariance(i / 3, i % 3);

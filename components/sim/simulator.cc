@@ -317,7 +317,7 @@ void Simulator::AdvanceTo(double target_s, SimSink* sink) {
       std::vector<SourceSignal*> signals;
       if (m.audio) signals = m.audio->signals();
       for (const SoundSource& s : setup_.world.sources) {
-        sarmap::sim_sound_source_t src;
+        sarmap::sim_sound_source_t src{};
         src.id = s.id;
         src.name = s.name;
         src.kind = static_cast<int8_t>(s.kind);

@@ -114,13 +114,18 @@ inline std::vector<LinearArraySoundMap::Doa> HeardLinearDirections(
 }
 
 inline sarmap::sound_map_t LinearSoundMapMessage(const LinearArraySoundMap& map, int64_t utime) {
-  sarmap::sound_map_t msg;
+  sarmap::sound_map_t msg{};  // value-initialised: every field the map does not set is 0
   msg.header.utime = utime;
   msg.header.frame = "map";
   for (const auto& s : map.sources()) {
-    sarmap::sound_source_t out;
+    sarmap::sound_source_t out{};
     out.id = s.id;
     for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
+    // A linear array hears a cone, not a bearing: a source is a position once its hypotheses
+    // have converged; before, position_m is its best hypothesis and the bearing unknown.
+    out.has_position = s.converged;
+    for (int i = 0; i < 3; ++i) out.bearing_origin_m[i] = s.position_m[i];
+    out.bearing_variance = M_PI * M_PI;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
     // (unary + : the LCM constants are declared, not defined; no reference to them may be taken)

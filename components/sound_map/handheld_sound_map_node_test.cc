@@ -12,6 +12,7 @@
 #include "sarmap/doa_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/sound_map_t.hpp"
+#include "sound_map/handheld_walk_test_util.h"
 #include "tests/process.h"
 
 namespace {
@@ -43,7 +44,7 @@ TEST(HandheldSoundMapNode, MapsASourceFromRigPosesAndLinearArrayAngles) {
   const Sink& sink = w.sink;
   ASSERT_GT(sink.maps, 0) << w.output;
   ASSERT_EQ(sink.map.num_sources, 1) << w.output;
-  const Eigen::Vector3d source(2.0, 2.5, 1.3);
+  const Eigen::Vector3d source = sarmap::sound_map::testing_util::WalkSource();
   const auto& src = sink.map.sources[0];
   const Eigen::Vector3d p(src.position_m[0], src.position_m[1], src.position_m[2]);
   printf("mapped source at (%.3f, %.3f, %.3f), %d observations, state %d, error %.3f m\n", p.x(),
@@ -81,34 +82,8 @@ Walk RunWalk(bool future_poses) {
   if (!lcm.good()) return w;
   lcm.subscribe("SOUND_MAP", &Sink::OnMap, &sink);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  // The rig walks 3 m along x and 2 m along y, raised and lowered by 0.3 m as a hand does; a
-  // source at (2, 2.5, 1.3). The Kinect's bar (the array's x axis) lies along the rig's y, 3 cm
-  // below the camera (config/handheld_sound_map.yaml).
-  const Eigen::Vector3d source(2.0, 2.5, 1.3);
-  Eigen::Isometry3d rig_from_mic = Eigen::Isometry3d::Identity();
-  rig_from_mic.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  rig_from_mic.translation() = Eigen::Vector3d(0, 0, -0.03);
-  const int steps = 125;
-  for (int k = 0; k < steps; ++k) {
-    const int64_t t = 1000000 + k * 100000;
-    const double s = 0.04 * k;  // path length
-    Eigen::Isometry3d odom_from_rig = Eigen::Isometry3d::Identity();
-    const double yaw = s < 3.0 ? 0.0 : M_PI / 2;
-    odom_from_rig.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    odom_from_rig.translation() =
-        s < 3.0 ? Eigen::Vector3d(s, 0, 0) : Eigen::Vector3d(3.0, s - 3.0, 0);
-    odom_from_rig.translation().z() = 1.2 + 0.3 * std::sin(2 * M_PI * s / 1.5);
-    sarmap::pose_t pose{};
-    pose.header.utime = t;
-    pose.header.frame = "odom";
-    pose.child_frame = "rig";
-    const Eigen::Quaterniond q(odom_from_rig.linear());
-    pose.orientation[0] = q.w();
-    pose.orientation[1] = q.x();
-    pose.orientation[2] = q.y();
-    pose.orientation[3] = q.z();
-    for (int i = 0; i < 3; ++i) pose.position_m[i] = odom_from_rig.translation()[i];
-    pose.node_id = -1;
+  for (int k = 0; k < sarmap::sound_map::testing_util::kWalkSteps; ++k) {
+    const sarmap::pose_t pose = sarmap::sound_map::testing_util::WalkPose(k);
     if (k == 10) {  // a broken pose: counted and dropped, nothing else
       sarmap::pose_t bad = pose;
       bad.orientation[0] = 3;
@@ -117,31 +92,12 @@ Walk RunWalk(bool future_poses) {
     if (future_poses && (k == 20 || k == 21)) {
       constexpr int64_t kYearUs = 365LL * 24 * 3600 * 1000000;
       sarmap::pose_t future = pose;
-      future.header.utime = t + kYearUs;
+      future.header.utime = pose.header.utime + kYearUs;
       lcm.publish("RIG_POSE", &future);
     }
-    w.last_utime = t + 1;
+    w.last_utime = pose.header.utime + 1;
     lcm.publish("RIG_POSE", &pose);
-    const Eigen::Vector3d p_mic = (odom_from_rig * rig_from_mic).inverse() * source;
-    sarmap::doa_t doa{};
-    doa.header.utime = t + 1;
-    doa.header.frame = "mic_array";
-    doa.device_id = "kinect";
-    sarmap::doa_source_t d{};
-    d.track_id = 3;
-    d.kind = sarmap::doa_source_t::KIND_ANGLE_1D;
-    d.method = sarmap::doa_source_t::METHOD_SRP_PHAT;
-    d.confidence = 1;
-    d.azimuth_rad =
-        std::acos(p_mic.x() / p_mic.norm()) + 1.5 * M_PI / 180 * std::sin(7.3 * k);  // +-1.5 deg
-    d.covariance[0] = std::pow(3 * M_PI / 180, 2);
-    d.covariance[3] = 1;
-    doa.sources.push_back(d);
-    sarmap::doa_source_t azimuth = d;  // another kind of DOA: ignored, counted
-    azimuth.kind = sarmap::doa_source_t::KIND_AZIMUTH;
-    azimuth.track_id = 4;
-    doa.sources.push_back(azimuth);
-    doa.num_sources = 2;
+    const sarmap::doa_t doa = sarmap::sound_map::testing_util::WalkDoa(k);
     lcm.publish("DOA_MAP", &doa);
     lcm.handleTimeout(10);
   }

@@ -203,11 +203,11 @@ inline bool SiteBox(const sarmap::occupancy_grid_t& grid, Eigen::Vector2d* min_m
 }
 
 inline sarmap::sound_map_t SoundMapMessage(const OnlineSoundMap& map, int64_t utime) {
-  sarmap::sound_map_t msg;
+  sarmap::sound_map_t msg{};
   msg.header.utime = utime;
   msg.header.frame = "map";
   for (const auto& s : map.Sources(utime)) {
-    sarmap::sound_source_t out;
+    sarmap::sound_source_t out{};
     out.id = s.id;
     for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
     for (int r = 0; r < 3; ++r)
