@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "common/robot_config.h"
+#include "people_map/people_map_test_util.h"
 
 namespace sarmap {
 namespace people_map {
@@ -14,33 +15,8 @@ namespace {
 
 using common::Utime;
 
-// The robot at (x_m, 0) facing +x, with a small covariance.
-sarmap::pose_t Pose(Utime utime, double x_m) {
-  sarmap::pose_t m{};
-  m.header.utime = utime;
-  m.header.frame = "map";
-  m.position_m[0] = x_m;
-  m.orientation[0] = 1;
-  for (int i = 0; i < 6; ++i) m.covariance[7 * i] = 1e-4;
-  return m;
-}
-
-// One person straight ahead of the camera, forward_m along its optical axis.
-sarmap::people_detections_t Seen(Utime utime, double forward_m) {
-  sarmap::people_detections_t m{};
-  m.header.utime = utime;
-  m.header.frame = "camera";
-  sarmap::person_detection_t d{};
-  d.cue = sarmap::person_detection_t::CUE_SEEN_DEPTH;
-  d.has_range = true;
-  d.position_m[1] = 0.55 - 0.85;  // centre 0.85 m above the floor, camera 0.55 m up
-  d.position_m[2] = forward_m;
-  d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
-  d.confidence = 0.9f;
-  m.detections.push_back(d);
-  m.num_detections = 1;
-  return m;
-}
+using testing_util::Pose;
+using testing_util::Seen;
 
 struct Fixture {
   PeopleMapNodeOptions options;

@@ -11,39 +11,15 @@
 #include <vector>
 
 #include "common/robot_config.h"
+#include "people_map/people_map_test_util.h"
 
 namespace sarmap {
 namespace people_map {
 namespace {
 
 using common::Utime;
-
-pose_t Pose(Utime utime, double x_m) {
-  pose_t m{};
-  m.header.utime = utime;
-  m.header.frame = "map";
-  m.position_m[0] = x_m;
-  m.orientation[0] = 1;
-  for (int i = 0; i < 6; ++i) m.covariance[7 * i] = 1e-4;
-  return m;
-}
-
-// One person straight ahead of the camera, forward_m along its optical axis.
-people_detections_t Seen(Utime utime, double forward_m) {
-  people_detections_t m{};
-  m.header.utime = utime;
-  m.header.frame = "camera";
-  person_detection_t d{};
-  d.cue = person_detection_t::CUE_SEEN_DEPTH;
-  d.has_range = true;
-  d.position_m[1] = 0.55 - 0.85;
-  d.position_m[2] = forward_m;
-  d.position_covariance[0] = d.position_covariance[4] = d.position_covariance[8] = 0.01;
-  d.confidence = 0.9f;
-  m.detections.push_back(d);
-  m.num_detections = 1;
-  return m;
-}
+using testing_util::Pose;
+using testing_util::Seen;
 
 struct Bus {
   common::Node node{"people_map_node_test", "memq://"};

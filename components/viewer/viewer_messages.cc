@@ -5,6 +5,16 @@
 
 namespace sarmap {
 namespace viewer {
+namespace {
+
+// The 3-sigma ellipse of the x-y block of a row-major 3x3 covariance.
+Ellipse EllipseOf(const double* covariance3) {
+  Eigen::Matrix2d cov;
+  cov << covariance3[0], covariance3[1], covariance3[3], covariance3[4];
+  return ThreeSigmaEllipse(cov);
+}
+
+}  // namespace
 
 std::vector<PersonView> PeopleViews(const people_map_t& m) {
   std::vector<PersonView> people;
@@ -13,9 +23,7 @@ std::vector<PersonView> PeopleViews(const people_map_t& m) {
     v.id = p.id;
     v.x_m = p.position_m[0];
     v.y_m = p.position_m[1];
-    Eigen::Matrix2d cov;
-    cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
-    v.ellipse = ThreeSigmaEllipse(cov);
+    v.ellipse = EllipseOf(p.covariance);
     v.confidence = p.confidence;
     v.seen = p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH);
     v.seen_depth_only =
@@ -36,9 +44,7 @@ std::vector<SourceView> SourceViews(const sound_map_t& m) {
     v.id = s.id;
     v.x_m = s.position_m[0];
     v.y_m = s.position_m[1];
-    Eigen::Matrix2d cov;
-    cov << s.covariance[0], s.covariance[1], s.covariance[3], s.covariance[4];
-    v.ellipse = ThreeSigmaEllipse(cov);
+    v.ellipse = EllipseOf(s.covariance);
     v.state = s.state == sound_source_t::STATE_CONVERGED ? "converged"
               : s.state == sound_source_t::STATE_SILENT  ? "silent"
                                                          : "initialising";

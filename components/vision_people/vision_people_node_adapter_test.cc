@@ -8,20 +8,13 @@
 #include "common/image_messages.h"
 #include "vision_people/synthetic_scene.h"
 #include "vision_people/vision_people_node.h"
+#include "vision_people/vision_test_util.h"
 
 namespace sarmap {
 namespace vision_people {
 namespace {
 
-camera_intrinsics_t Intrinsics(int w, int h) {
-  camera_intrinsics_t k{};
-  k.width = w;
-  k.height = h;
-  k.fx = k.fy = 525.0 * w / 640.0;
-  k.cx = (w - 1) / 2.0;
-  k.cy = (h - 1) / 2.0;
-  return k;
-}
+using testing_util::KinectIntrinsics;
 
 struct Bus {
   common::Node node{"vision_people_node_test", "memq://"};
@@ -43,10 +36,11 @@ struct Bus {
     h.seq = i;
     h.frame = "camera";
     std::vector<uint8_t> rgb(640 * 480 * 3, 4);
-    image_t color = common::MakeColorImage(h, Intrinsics(640, 480), rgb.data(), 640, 480, 90);
+    image_t color = common::MakeColorImage(h, KinectIntrinsics(640, 480), rgb.data(), 640, 480, 90);
     rgb_pub.Publish(&color);
     const std::vector<uint16_t> depth_mm = scene.RenderDepth(i);
-    image_t depth = common::MakeDepthImage(h, Intrinsics(640, 480), depth_mm.data(), 640, 480);
+    image_t depth =
+        common::MakeDepthImage(h, KinectIntrinsics(640, 480), depth_mm.data(), 640, 480);
     depth_pub.Publish(&depth);
     for (int k = 0; k < 4; ++k) node.SpinOnce(0.001);
   }

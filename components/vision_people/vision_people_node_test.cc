@@ -16,6 +16,7 @@
 #include "sarmap/people_detections_t.hpp"
 #include "tests/process.h"
 #include "vision_people/synthetic_scene.h"
+#include "vision_people/vision_test_util.h"
 
 namespace sarmap {
 namespace vision_people {
@@ -36,15 +37,7 @@ struct Sink {
   }
 };
 
-camera_intrinsics_t Intrinsics(int w, int h) {
-  camera_intrinsics_t k{};
-  k.width = w;
-  k.height = h;
-  k.fx = k.fy = 525.0 * w / 640.0;
-  k.cx = (w - 1) / 2.0;
-  k.cy = (h - 1) / 2.0;
-  return k;
-}
+using testing_util::KinectIntrinsics;
 
 TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
   if (!getenv("SARMAP_NETNS"))
@@ -79,11 +72,12 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
     h.seq = i;
     h.frame = "camera";
     std::vector<uint8_t> rgb(color_w * color_h * 3, 4);
-    image_t color =
-        common::MakeColorImage(h, Intrinsics(color_w, color_h), rgb.data(), color_w, color_h, 90);
+    image_t color = common::MakeColorImage(h, KinectIntrinsics(color_w, color_h), rgb.data(),
+                                           color_w, color_h, 90);
     lcm.publish("RGB", &color);
     const std::vector<uint16_t> depth_mm = scene.RenderDepth(i);
-    image_t depth = common::MakeDepthImage(h, Intrinsics(640, 480), depth_mm.data(), 640, 480);
+    image_t depth =
+        common::MakeDepthImage(h, KinectIntrinsics(640, 480), depth_mm.data(), 640, 480);
     if (empty_depth) {
       depth.width = depth.height = 0;
     }
