@@ -1,213 +1,167 @@
-// sarmap-explore: SCAN, MAP, POSE, ODOM, PEOPLE_MAP and TELEOP in; CMD_VEL (one per scan) and
-// EXPLORE_STATUS out. A thin adapter around explore::ExploreController.
+#include "explore/explore_node.h"
+
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <cstdio>
 
-#include "common/command_auth.h"
 #include "common/image_messages.h"
+#include "common/logging.h"
 #include "common/message_conversions.h"
-#include "common/node.h"
-#include "common/node_main.h"
-#include "common/stamp_gate.h"
-#include "explore/explore.h"
-#include "explore/explore_node_options.h"
 #include "explore/status_message.h"
-#include "sarmap/explore_status_t.hpp"
 
-namespace {
+namespace sarmap {
+namespace explore {
 
-using namespace sarmap;
-
-using NodeOptions = explore::ExploreNodeOptions;
-
-class ExploreNode {
- public:
-  ExploreNode(const NodeOptions& options, common::Node* node)
-      : options_(options),
-        node_(node),
-        controller_(options.explore),
-        command_pub_(node->Advertise<velocity_command_t>(options.command_channel)),
-        status_pub_(node->Advertise<explore_status_t>(options.status_channel)) {
-    if (!options.command_key_file.empty()) {
-      command_key_ = common::LoadAuthKeyFile(options.command_key_file);
-      teleop_gate_ = common::CommandGate(command_key_);
-    } else {
-      SARMAP_LOG(WARN)
-          << "no command_key_file: CMD_VEL goes out unsigned and any TELEOP on the bus is obeyed";
-    }
-    node->Subscribe<teleop_t>(
-        options.teleop_channel,
-        [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
-    node->Subscribe<pose_t>(
-        options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); },
-        1);
-    if (!options.odometry_channel.empty()) {
-      node->Subscribe<odometry_t>(
-          options.odometry_channel,
-          [this](const odometry_t& m, const common::ReceiveInfo& info) { OnOdometry(m, info); }, 1);
-    }
-    node->Subscribe<occupancy_grid_t>(
-        options.map_channel,
-        [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
-    node->Subscribe<people_map_t>(
-        options.people_channel,
-        [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
-    node->Subscribe<laser_scan_t>(
-        options.scan_channel,
-        [this](const laser_scan_t& m, const common::ReceiveInfo& info) { OnScan(m, info); }, 1);
+ExploreNode::ExploreNode(const ExploreNodeOptions& options, common::Node* node)
+    : options_(options),
+      node_(node),
+      controller_(options.explore),
+      command_pub_(node->Advertise<velocity_command_t>(options.command_channel)),
+      status_pub_(node->Advertise<explore_status_t>(options.status_channel)) {
+  if (!options.command_key_file.empty()) {
+    command_key_ = common::LoadAuthKeyFile(options.command_key_file);
+    teleop_gate_ = common::CommandGate(command_key_);
+  } else {
+    SARMAP_LOG(WARN)
+        << "no command_key_file: CMD_VEL goes out unsigned and any TELEOP on the bus is obeyed";
   }
-
- private:
-  void OnTeleop(const teleop_t& m, const common::ReceiveInfo& info) {
-    std::string why;
-    if (!teleop_gate_.Accept(m, &why)) {
-      node_->Reject(info.channel, "TELEOP " + why);
-      return;
-    }
-    explore::TeleopCommand t;
-    // The dead man runs on this process's clock: a sender's stamp ahead of ours must not
-    // keep an override alive.
-    t.receive_time_s = info.receive_time_s;
-    t.override_active = m.override_active;
-    t.emergency_stop = m.emergency_stop;
-    t.linear_mps = m.linear_mps;
-    t.angular_radps = m.angular_radps;
-    controller_.OnTeleop(t);
+  node->Subscribe<teleop_t>(
+      options.teleop_channel,
+      [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
+  node->Subscribe<pose_t>(
+      options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); }, 1);
+  if (!options.odometry_channel.empty()) {
+    node->Subscribe<odometry_t>(
+        options.odometry_channel,
+        [this](const odometry_t& m, const common::ReceiveInfo& info) { OnOdometry(m, info); }, 1);
   }
-
-  void OnPose(const pose_t& m) {
-    controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d(),
-                       common::UtimeToSeconds(m.header.utime));
-  }
-
-  void OnOdometry(const odometry_t& m, const common::ReceiveInfo& info) {
-    const common::Rigid2d odom_from_base =
-        common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
-    if (!odom_from_base.translation().allFinite() || !std::isfinite(odom_from_base.yaw_rad())) {
-      node_->Reject(info.channel, "odometry with a non-finite pose");
-      return;
-    }
-    controller_.OnOdometry(odom_from_base, common::UtimeToSeconds(m.header.utime));
-  }
-
-  void OnMap(const occupancy_grid_t& m) {
-    if (std::abs(m.origin_yaw_rad) > 1e-6) {
-      SARMAP_LOG(WARN) << "rotated grids are not supported for exploration; map ignored";
-      return;
-    }
-    explore::Grid grid;
-    grid.width = m.width;
-    grid.height = m.height;
-    grid.resolution_m = m.resolution_m;
-    grid.origin_x_m = m.origin_x_m;
-    grid.origin_y_m = m.origin_y_m;
-    std::string error;
-    if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
-      SARMAP_LOG(WARN) << "bad MAP: " << error;
-      return;
-    }
-    controller_.OnMap(grid);
-  }
-
-  void OnPeople(const people_map_t& m) {
-    std::vector<explore::HeardPerson> heard;
-    for (const mapped_person_t& p : m.people) {
-      if (!(p.cues & mapped_person_t::CUE_HEARD)) continue;
-      explore::HeardPerson h;
-      h.id = p.id;
-      h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
-      Eigen::Matrix2d cov;
-      cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
-      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
-                                 0.5 * (cov + cov.transpose()), Eigen::EigenvaluesOnly)
-                                 .eigenvalues()
-                                 .maxCoeff();
-      h.position_std_m = std::sqrt(std::max(0.0, largest));
-      h.seen = (p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH)) != 0;
-      heard.push_back(h);
-    }
-    controller_.OnHeardPeople(std::move(heard));
-  }
-
-  void OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {
-    if (!scan_gate_.Accept(0, m.header.utime, info.receive_time_s)) {
-      node_->Reject(info.channel,
-                    "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
-      return;
-    }
-    explore::Scan scan;
-    scan.stamp_s = common::UtimeToSeconds(m.header.utime);
-    scan.angle_min_rad = m.angle_min_rad;
-    scan.angle_increment_rad = m.angle_increment_rad;
-    scan.range_min_m = m.range_min_m;
-    scan.range_max_m = m.range_max_m;
-    scan.ranges_m = m.ranges_m;
-    if (options_.scan_intensities_are_visible_from && m.num_intensities == m.num_ranges) {
-      scan.visible_from_m = m.intensities;
-    }
-    const explore::Velocity v = controller_.OnScan(info.receive_time_s, scan);
-    velocity_command_t cmd;
-    cmd.header.utime = m.header.utime;
-    cmd.header.frame = "base";
-    cmd.linear_mps = v.linear_mps;
-    cmd.angular_radps = v.angular_radps;
-    cmd.source = v.source;
-    if (command_key_.empty()) {
-      command_pub_.Publish(&cmd);
-    } else {
-      command_pub_.Publish(&cmd,
-                           [this](velocity_command_t* c) { common::SignMessage(command_key_, c); });
-    }
-    const explore::ExploreStatus& s = controller_.status();
-    if (s.state != last_state_) {
-      SARMAP_LOG(INFO) << "mission state " << s.state
-                       << (s.goal_kind.empty() ? "" : ", goal " + s.goal_kind);
-      last_state_ = s.state;
-      node_->SetStatusMessage(s.state + ", driven by " + v.source);
-    }
-    if (info.receive_time_s - last_status_s_ >= options_.status_period_s) {
-      last_status_s_ = info.receive_time_s;
-      PublishStatus(m.header.utime, s);
-    }
-  }
-
-  void PublishStatus(int64_t utime, const explore::ExploreStatus& s) {
-    // Every 4th path point (20 cm) is enough to draw it.
-    explore_status_t out = explore::ToStatusMessage(s, utime, 4);
-    status_pub_.Publish(&out);  // sets the sequence number
-  }
-
-  NodeOptions options_;
-  common::Node* node_;
-  explore::ExploreController controller_;
-  common::Node::Publisher<velocity_command_t> command_pub_;
-  common::Node::Publisher<explore_status_t> status_pub_;
-  std::string last_state_;
-  double last_status_s_ = -1e9;
-  common::AuthKey command_key_;
-  common::CommandGate teleop_gate_;
-  common::StampGates scan_gate_{options_.stamp_gate};
-};
-
-}  // namespace
-
-int main(int argc, char** argv) {
-  return common::RunMain("sarmap-explore", [&]() -> int {
-    common::ArgParser parser(
-        "sarmap-explore",
-        "Drives the robot through an unknown site: frontier exploration on SLAM's map (planner on\n"
-        "the inflated grid, pure pursuit, a safety layer on the scan and the map, stuck "
-        "recovery),\n"
-        "people heard but not seen as goals (mode sound_guided), then home; or the Sales 2014\n"
-        "reactive behaviour (mode reactive). The operator's TELEOP overrides everything.\n"
-        "In: SCAN, MAP, POSE, PEOPLE_MAP, TELEOP.  Out: CMD_VEL, EXPLORE_STATUS.");
-    common::NodeArgs args;
-    const auto parsed =
-        common::ParseNodeOptions<NodeOptions>(&parser, &args, argc, argv, "config/explore.yaml");
-    if (!parsed) return 0;
-    common::Node node("sarmap-explore", args);
-    ExploreNode explore_node(*parsed, &node);
-    return node.Run();
-  });
+  node->Subscribe<occupancy_grid_t>(
+      options.map_channel,
+      [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
+  node->Subscribe<people_map_t>(
+      options.people_channel,
+      [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
+  node->Subscribe<laser_scan_t>(
+      options.scan_channel,
+      [this](const laser_scan_t& m, const common::ReceiveInfo& info) { OnScan(m, info); }, 1);
 }
+
+void ExploreNode::OnTeleop(const teleop_t& m, const common::ReceiveInfo& info) {
+  std::string why;
+  if (!teleop_gate_.Accept(m, &why)) {
+    node_->Reject(info.channel, "TELEOP " + why);
+    return;
+  }
+  TeleopCommand t;
+  // The dead man runs on this process's clock: a sender's stamp ahead of ours must not
+  // keep an override alive.
+  t.receive_time_s = info.receive_time_s;
+  t.override_active = m.override_active;
+  t.emergency_stop = m.emergency_stop;
+  t.linear_mps = m.linear_mps;
+  t.angular_radps = m.angular_radps;
+  controller_.OnTeleop(t);
+}
+
+void ExploreNode::OnPose(const pose_t& m) {
+  controller_.OnPose(common::ToRigid3d(m.position_m, m.orientation).ToRigid2d(),
+                     common::UtimeToSeconds(m.header.utime));
+}
+
+void ExploreNode::OnOdometry(const odometry_t& m, const common::ReceiveInfo& info) {
+  const common::Rigid2d odom_from_base = common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
+  if (!odom_from_base.translation().allFinite() || !std::isfinite(odom_from_base.yaw_rad())) {
+    node_->Reject(info.channel, "odometry with a non-finite pose");
+    return;
+  }
+  controller_.OnOdometry(odom_from_base, common::UtimeToSeconds(m.header.utime));
+}
+
+void ExploreNode::OnMap(const occupancy_grid_t& m) {
+  if (std::abs(m.origin_yaw_rad) > 1e-6) {
+    SARMAP_LOG(WARN) << "rotated grids are not supported for exploration; map ignored";
+    return;
+  }
+  Grid grid;
+  grid.width = m.width;
+  grid.height = m.height;
+  grid.resolution_m = m.resolution_m;
+  grid.origin_x_m = m.origin_x_m;
+  grid.origin_y_m = m.origin_y_m;
+  std::string error;
+  if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
+    SARMAP_LOG(WARN) << "bad MAP: " << error;
+    return;
+  }
+  controller_.OnMap(grid);
+}
+
+void ExploreNode::OnPeople(const people_map_t& m) {
+  std::vector<HeardPerson> heard;
+  for (const mapped_person_t& p : m.people) {
+    if (!(p.cues & mapped_person_t::CUE_HEARD)) continue;
+    HeardPerson h;
+    h.id = p.id;
+    h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
+    Eigen::Matrix2d cov;
+    cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
+    const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                               0.5 * (cov + cov.transpose()), Eigen::EigenvaluesOnly)
+                               .eigenvalues()
+                               .maxCoeff();
+    h.position_std_m = std::sqrt(std::max(0.0, largest));
+    h.seen = (p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH)) != 0;
+    heard.push_back(h);
+  }
+  controller_.OnHeardPeople(std::move(heard));
+}
+
+void ExploreNode::OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {
+  if (!scan_gate_.Accept(0, m.header.utime, info.receive_time_s)) {
+    node_->Reject(info.channel,
+                  "stamp " + std::to_string(m.header.utime) + " far from the stream's clock");
+    return;
+  }
+  Scan scan;
+  scan.stamp_s = common::UtimeToSeconds(m.header.utime);
+  scan.angle_min_rad = m.angle_min_rad;
+  scan.angle_increment_rad = m.angle_increment_rad;
+  scan.range_min_m = m.range_min_m;
+  scan.range_max_m = m.range_max_m;
+  scan.ranges_m = m.ranges_m;
+  if (options_.scan_intensities_are_visible_from && m.num_intensities == m.num_ranges) {
+    scan.visible_from_m = m.intensities;
+  }
+  const Velocity v = controller_.OnScan(info.receive_time_s, scan);
+  velocity_command_t cmd{};
+  cmd.header.utime = m.header.utime;
+  cmd.header.frame = "base";
+  cmd.linear_mps = v.linear_mps;
+  cmd.angular_radps = v.angular_radps;
+  cmd.source = v.source;
+  if (command_key_.empty()) {
+    command_pub_.Publish(&cmd);
+  } else {
+    command_pub_.Publish(&cmd,
+                         [this](velocity_command_t* c) { common::SignMessage(command_key_, c); });
+  }
+  const ExploreStatus& s = controller_.status();
+  if (s.state != last_state_) {
+    SARMAP_LOG(INFO) << "mission state " << s.state
+                     << (s.goal_kind.empty() ? "" : ", goal " + s.goal_kind);
+    last_state_ = s.state;
+    node_->SetStatusMessage(s.state + ", driven by " + v.source);
+  }
+  if (info.receive_time_s - last_status_s_ >= options_.status_period_s) {
+    last_status_s_ = info.receive_time_s;
+    PublishStatus(m.header.utime, s);
+  }
+}
+
+void ExploreNode::PublishStatus(int64_t utime, const ExploreStatus& s) {
+  // Every 4th path point (20 cm) is enough to draw it.
+  explore_status_t out = ToStatusMessage(s, utime, 4);
+  status_pub_.Publish(&out);  // sets the sequence number
+}
+
+}  // namespace explore
+}  // namespace sarmap

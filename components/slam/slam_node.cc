@@ -1,5 +1,3 @@
-// sarmap-slam: 2D graph SLAM node. SCAN + ODOM in (through a time-ordered queue), POSE, MAP
-// and SLAM_ANCHORS out; SLAM_ANCHOR_REQUEST selects the anchors. See README.md.
 
 #include <sys/stat.h>
 
@@ -26,11 +24,13 @@
 #include "slam/messages.h"
 #include "slam/slam.h"
 #include "slam/slam_node_options.h"
+#include "slam/slam_node.h"
 
-using namespace sarmap;
-using common::Utime;
-
+namespace sarmap {
+namespace slam {
 namespace {
+
+using common::Utime;
 
 // At most rate_per_min events per minute, in bursts of up to a tenth of that (at least one).
 class TokenBucket {
@@ -57,9 +57,11 @@ bool FileExists(const std::string& path) {
   return stat(path.c_str(), &st) == 0;
 }
 
-class SlamNode {
+}  // namespace
+
+class SlamNode::Impl {
  public:
-  SlamNode(const slam::SlamNodeOptions& options, common::Node* node)
+  Impl(const SlamNodeOptions& options, common::Node* node)
       : options_(options),
         node_(node),
         slam_(options.slam),
@@ -389,26 +391,14 @@ class SlamNode {
   double last_input_s_ = 0;
   double latency_sum_s_ = 0;
   int64_t latency_count_ = 0;
+  friend class SlamNode;
 };
 
-}  // namespace
+SlamNode::SlamNode(const SlamNodeOptions& options, common::Node* node)
+    : impl_(std::make_unique<Impl>(options, node)) {}
+SlamNode::~SlamNode() = default;
+void SlamNode::Finish() { impl_->Finish(); }
+const Slam& SlamNode::slam() const { return impl_->slam_; }
 
-int main(int argc, char** argv) {
-  return common::RunMain("sarmap-slam", [&]() -> int {
-    common::NodeArgs node_args;
-    common::ArgParser parser("sarmap-slam",
-                             "2D graph SLAM: SCAN + ODOM in; POSE, MAP, SLAM_ANCHORS out.");
-    parser.SetEpilog(
-        "Channels (configurable): in SCAN, ODOM, SLAM_ANCHOR_REQUEST; out POSE, MAP, SLAM_ANCHORS.\n"
-        "Resume after a crash: --set state_file=run.pg --set resume=true\n"
-        "Localisation only:   --set load_map=run.pg");
-    const auto parsed = common::ParseNodeOptions<slam::SlamNodeOptions>(&parser, &node_args, argc, argv, "config/slam.yaml");
-    if (!parsed) return 0;
-    const slam::SlamNodeOptions& options = *parsed;
-    common::Node node("sarmap-slam", node_args);
-    SlamNode slam_node(options, &node);
-    const int rc = node.Run();
-    slam_node.Finish();
-    return rc;
-  });
-}
+}  // namespace slam
+}  // namespace sarmap
