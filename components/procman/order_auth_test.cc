@@ -112,8 +112,8 @@ TEST(OrderAuth, RefusesUnsignedForgedAndReplayed) {
             Verdict::kAccepted);
 }
 
-// The deputy's counter state used to live in a file: lose it (or restart the deputy) and a
-// captured order was accepted again. Now a restarted deputy has a new session.
+// A restarted deputy has a new session, so a captured order is not accepted again (with the
+// counter state in a file, losing the file or restarting the deputy would accept it).
 TEST(OrderAuth, CapturedOrderIsRefusedByARestartedDeputy) {
   const Key key = TestKey(3);
   const sarmap::pm_orders_t captured = Signed(key, "sheriff@base/1", 2000000);
@@ -131,7 +131,7 @@ TEST(OrderAuth, CapturedOrderIsRefusedByARestartedDeputy) {
             Verdict::kAccepted);
 }
 
-// One order with a near-maximum counter used to lock its sheriff name out for good.
+// One order with a near-maximum counter must not lock its sheriff name out for good.
 TEST(OrderAuth, NearMaximumCounterIsRefusedAndLocksNobodyOut) {
   const Key key = TestKey(1);
   ReplayGuard guard(kSession);

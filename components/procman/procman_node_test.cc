@@ -24,8 +24,8 @@ namespace {
 const Key kKey(32, 0x42);
 
 // Orders for deputy `deputy_id` whose one command line holds a NUL byte ("sleep\0 1"): LCM's
-// encoders never write that, so it comes only from a hostile sender. It used to make the HMAC
-// re-encoding throw and end the process.
+// encoders never write that, so it comes only from a hostile sender. Its HMAC re-encoding
+// throws; the process must go on.
 std::vector<uint8_t> OrdersWithNul(const std::string& deputy_id, uint8_t hmac_byte) {
   sarmap::pm_orders_t orders;
   orders.header.utime = 1;
@@ -195,8 +195,8 @@ script "mission" {
 }
 )";
 
-// Five fake "simulator stopped" reports used to end the mission (the script went on to
-// sign real stop orders). Now only signed, live reports count.
+// Five fake "simulator stopped" reports must not end the mission (the script would go on to
+// sign real stop orders): only signed, live reports count.
 TEST(ProcmanNodeTest, ForgedStoppedReportsDoNotAdvanceTheScript) {
   Rig rig(kMissionPmd);
   ASSERT_TRUE(rig.Pump(
@@ -246,8 +246,8 @@ TEST(ProcmanNodeTest, ForgedStoppedReportsDoNotAdvanceTheScript) {
   EXPECT_EQ(rig.result(), ScriptRunner::kDone) << rig.runner().error();
 }
 
-// PM_OUTPUT used to be unsigned: anyone could put lines into a command's output on the
-// sheriff's screen. Now only the deputy's own signed output of its current session shows.
+// Unsigned PM_OUTPUT would let anyone put lines into a command's output on the sheriff's
+// screen: only the deputy's own signed output of its current session shows.
 TEST(ProcmanNodeTest, ForgedAndPlayedBackOutputNeverReachesTheSheriffsView) {
   Rig rig(R"(
 cmd "talker" { exec = "sh -c 'echo hello-from-talker; exec sleep 600'"; deputy = "d1"; }
@@ -298,7 +298,7 @@ script "mission" { start cmd "talker" wait "running" timeout 20; }
             std::string::npos);
 }
 
-// A killed deputy used to leave the script waiting for its whole timeout (30 min in the demo).
+// A killed deputy must not leave the script waiting for its whole timeout (30 min in the demo).
 TEST(ProcmanNodeTest, ScriptWaitingOnASilentDeputyFails) {
   ProcmanOptions options;
   options.deputy_gone_after_s = 2.0;

@@ -439,8 +439,8 @@ TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
   EXPECT_TRUE(ProcessesWithCmdline(SleepCmd(2)).empty());
 }
 
-// A killed deputy used to orphan its commands (they ran on, unsupervised) and leave the
-// sheriff's script waiting for its whole timeout.
+// A killed deputy takes its commands along (they must not run on, unsupervised), and the
+// sheriff's script fails instead of waiting for its whole timeout.
 TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
   const std::string d = deputy_id_;
   const std::string pmd =

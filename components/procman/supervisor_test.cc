@@ -87,8 +87,8 @@ TEST(Supervisor, StartsStopsAndCapturesOutput) {
 }
 
 // Several deputies in one process (--lone-ranger) each reap with waitpid(-1): an exit reaped
-// by one Supervisor reaches the one that owns the command (it used to be lost: the owner
-// never saw its command exit and a stop never ended).
+// by one Supervisor reaches the one that owns the command (lost, the owner would never see
+// its command exit and a stop would never end).
 TEST(Supervisor, TwoSupervisorsInOneProcessEachSeeTheirCommandsExit) {
   Supervisor a, b;
   a.SetDesired({Spec("a", "sh -c 'exit 3'", true)});

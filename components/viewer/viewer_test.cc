@@ -56,8 +56,8 @@ TEST(ViewerStateTest, JsonCarriesEverythingThePageDraws) {
   EXPECT_EQ(png[1], 'P');
 }
 
-// PM_INFO and NODE_STATUS from ever new names used to grow the page's lists without end
-// (/api/state reached 42 MB).
+// PM_INFO and NODE_STATUS from ever new names: without the limits the page's lists grow without
+// end (/api/state reaches 42 MB).
 TEST(ViewerStateTest, ProcessAndNodeListsShrinkAndStayBounded) {
   ViewerLimits limits;
   limits.forget_after_s = 30;
@@ -134,8 +134,8 @@ void TrickleClient(int port, double limit_s, std::atomic<int>* hung_up) {
   close(fd);
 }
 
-// Nine slow connections used to lock everyone out of the page (each held a worker thread for
-// as long as it kept sending).
+// Nine slow connections: with per-read timeouts only, each holds a worker thread for as long as
+// it keeps sending and everyone else is locked out of the page.
 TEST(ViewerServerTest, SlowClientsDoNotLockOthersOut) {
   ViewerState state;
   FillDemoScene(&state);
