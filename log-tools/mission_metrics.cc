@@ -100,7 +100,7 @@ void MissionMetrics::OnTruth(int64_t utime, const sarmap::sim_truth_t& truth) {
     const Sample& now = window_.back();
     for (const Sample& s : window_) {
       if ((s.position_m - now.position_m).norm() >= options_.stuck_distance_m ||
-          std::abs(common::NormalizeAngle(s.yaw_rad - now.yaw_rad)) >= options_.stuck_turn_rad) {
+          std::abs(common::WrapAngle(s.yaw_rad - now.yaw_rad)) >= options_.stuck_turn_rad) {
         stuck = false;
         break;
       }

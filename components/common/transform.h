@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/angles.h"
+
 namespace sarmap {
 namespace common {
 
@@ -23,17 +25,12 @@ inline Eigen::Matrix3d BodyFromOpticalRotation() {
   return r;
 }
 
-// Wraps an angle to (-pi, pi].
-inline double NormalizeAngle(double angle_rad) {
-  angle_rad = std::remainder(angle_rad, 2.0 * M_PI);
-  return angle_rad <= -M_PI ? angle_rad + 2.0 * M_PI : angle_rad;
-}
 
 class Rigid2d {
  public:
   Rigid2d() = default;
   Rigid2d(const Eigen::Vector2d& translation, double yaw_rad)
-      : translation_(translation), yaw_rad_(NormalizeAngle(yaw_rad)) {}
+      : translation_(translation), yaw_rad_(WrapAngle(yaw_rad)) {}
   Rigid2d(double x_m, double y_m, double yaw_rad) : Rigid2d(Eigen::Vector2d(x_m, y_m), yaw_rad) {}
   static Rigid2d Identity() { return Rigid2d(); }
 

@@ -14,8 +14,8 @@ TEST(Rigid2dTest, ComposeAndInverse) {
   const Rigid2d identity = map_from_base * map_from_base.inverse();
   EXPECT_NEAR(identity.translation().norm(), 0.0, 1e-12);
   EXPECT_NEAR(identity.yaw_rad(), 0.0, 1e-12);
-  EXPECT_NEAR(NormalizeAngle(3 * M_PI), M_PI, 1e-12);
-  EXPECT_NEAR(NormalizeAngle(-M_PI), M_PI, 1e-12);
+  EXPECT_NEAR(WrapAngle(3 * M_PI), M_PI, 1e-12);
+  EXPECT_NEAR(WrapAngle(-M_PI), M_PI, 1e-12);
 }
 
 TEST(Rigid3dTest, RoundTripsThroughPlanar) {

@@ -131,7 +131,7 @@ void ExploreController::OnPose(const common::Rigid2d& map_from_base, double stam
   pose_stamp_s_ = stamp_s;
   if (pose_ && state_ == State::kLookAround) {
     look_turned_rad_ +=
-        std::abs(common::NormalizeAngle(map_from_base.yaw_rad() - pose_->yaw_rad()));
+        std::abs(common::WrapAngle(map_from_base.yaw_rad() - pose_->yaw_rad()));
   }
   pose_ = map_from_base;
   if (!home_) home_ = map_from_base.translation();
@@ -157,7 +157,7 @@ std::optional<common::Rigid2d> ExploreController::OdometryAt(double stamp_s) con
     const auto& [t0, a] = odometry_[i - 1];
     const double f = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
     return common::Rigid2d(a.translation() + f * (b.translation() - a.translation()),
-                           a.yaw_rad() + f * common::NormalizeAngle(b.yaw_rad() - a.yaw_rad()));
+                           a.yaw_rad() + f * common::WrapAngle(b.yaw_rad() - a.yaw_rad()));
   }
   return odometry_.back().second;
 }
@@ -205,7 +205,7 @@ std::optional<ExploreController::Goal> ExploreController::ChooseFrontier(
   for (const Frontier& f : frontiers) {
     const Eigen::Vector2d d = f.goal_m - pose_->translation();
     const double turn =
-        d.norm() > 1e-3 ? std::abs(common::NormalizeAngle(std::atan2(d.y(), d.x()) - yaw)) : 0.0;
+        d.norm() > 1e-3 ? std::abs(common::WrapAngle(std::atan2(d.y(), d.x()) - yaw)) : 0.0;
     Goal g;
     g.position_m = f.goal_m;
     g.kind = "frontier";
@@ -689,7 +689,7 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     recovery_phase_start_s_ = now_s;
     recovery_yaw0_ = pose_->yaw_rad();
   }
-  const double turned = std::abs(common::NormalizeAngle(pose_->yaw_rad() - recovery_yaw0_));
+  const double turned = std::abs(common::WrapAngle(pose_->yaw_rad() - recovery_yaw0_));
   if (turned < o.turn_rad &&
       now_s - recovery_phase_start_s_ < 2.0 * o.turn_rad / o.turn_speed_radps + 1.0) {
     v.angular_radps = recovery_turn_sign_ * o.turn_speed_radps;
@@ -848,7 +848,7 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
   const Velocity safe = Safe(desired, scan);
   // Progress: moved or turned enough since the last mark.
   if ((robot - progress_xy_).norm() > options_.recovery.progress_m ||
-      std::abs(common::NormalizeAngle(pose_->yaw_rad() - progress_yaw_)) >
+      std::abs(common::WrapAngle(pose_->yaw_rad() - progress_yaw_)) >
           options_.recovery.progress_rad) {
     progress_xy_ = robot;
     progress_yaw_ = pose_->yaw_rad();

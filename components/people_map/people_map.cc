@@ -365,7 +365,7 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
       const Eigen::Vector3d v = mic_from_map * s.position_m;
       const double range = v.head<2>().norm();
       if (range < 1e-3) continue;
-      const double error = common::NormalizeAngle(d.azimuth_rad - std::atan2(v.y(), v.x()));
+      const double error = common::WrapAngle(d.azimuth_rad - std::atan2(v.y(), v.x()));
       // Source uncertainty across the bearing, as an angle.
       const Eigen::Vector3d across_map =
           map_from_mic.rotation() * Eigen::Vector3d(-v.y(), v.x(), 0.0).normalized();

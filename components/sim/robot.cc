@@ -101,7 +101,7 @@ void Robot::FollowPath(double* v, double* w) {
     if (path_index_ >= path_.size() && path_loop_) path_index_ = 0;
     return;
   }
-  const double error = common::NormalizeAngle(std::atan2(to.y(), to.x()) - map_from_base_.yaw_rad());
+  const double error = common::WrapAngle(std::atan2(to.y(), to.x()) - map_from_base_.yaw_rad());
   if (std::abs(error) > 0.15) {  // turn on the spot first
     *w = std::clamp(2.0 * error, -path_turn_, path_turn_);
     return;

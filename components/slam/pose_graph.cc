@@ -10,15 +10,13 @@
 #include <cmath>
 #include <memory>
 
+#include "common/angles.h"
+
 namespace sarmap {
 namespace slam {
 namespace {
 
-template <typename T>
-T WrapAngle(const T& a) {
-  const T two_pi = T(2.0 * M_PI);
-  return a - two_pi * ceres::floor((a + T(M_PI)) / two_pi);
-}
+using common::WrapAngle;  // doubles and Ceres jets
 
 // Square root of a symmetric positive semi-definite 2x2 matrix.
 Eigen::Matrix2d SqrtPsd(const Eigen::Matrix2d& m) {

@@ -11,11 +11,6 @@ namespace sound {
 
 double DegToRad(double d) { return d * M_PI / 180.0; }
 double RadToDeg(double r) { return r * 180.0 / M_PI; }
-double WrapAngle(double a) {
-  a = std::fmod(a + M_PI, 2 * M_PI);
-  if (a <= 0) a += 2 * M_PI;
-  return a - M_PI;
-}
 
 ArrayGeometry ArrayGeometry::FromOptions(const common::MicArrayOptions& options) {
   ArrayGeometry g;

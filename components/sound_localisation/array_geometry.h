@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "common/angles.h"
 #include "common/robot_config.h"
 
 namespace sarmap {
@@ -56,7 +57,7 @@ struct ArrayGeometry {
 // Angle between two directions of a kind (on the sphere; 1-D: |difference|).
 double AngularDistanceRad(const ArrayGeometry& geometry, DoaKind kind, const Direction& a,
                           const Direction& b);
-double WrapAngle(double a);  // to (-pi, pi]
+using common::WrapAngle;  // to (-pi, pi]
 double DegToRad(double d);
 double RadToDeg(double r);
 

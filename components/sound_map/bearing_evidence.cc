@@ -72,7 +72,7 @@ bool BearingEvidence::Place(const Ray& r, const std::map<int64_t, Pose2>& node_p
   double o[2];
   ArrayOrigin(pose, mount_, o);
   p->origin = Eigen::Vector2d(o[0], o[1]);
-  p->bearing = WrapAngleD(base.yaw + mount_.yaw_rad + r.azimuth_rad);
+  p->bearing = WrapAngle(base.yaw + mount_.yaw_rad + r.azimuth_rad);
   p->sigma = std::max(r.sigma_rad, options_.sigma_floor_deg * M_PI / 180);
   return true;
 }
@@ -103,7 +103,7 @@ void BearingEvidence::Cover(const Placed& p, std::vector<Cell>* cells) const {
     const Eigen::Vector2d to = Eigen::Vector2d((ix + 0.5) * cell, (iy + 0.5) * cell) - p.origin;
     const double range = to.norm();
     if (range < options_.min_range_m || range > options_.max_range_m) continue;
-    const double e = WrapAngleD(std::atan2(to.y(), to.x()) - p.bearing) / p.sigma;
+    const double e = WrapAngle(std::atan2(to.y(), to.x()) - p.bearing) / p.sigma;
     if (std::abs(e) > options_.window_sigmas) continue;
     cells->push_back(Cell{ix, iy, static_cast<float>(norm * std::exp(-0.5 * e * e))});
   }
@@ -124,7 +124,7 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     if (!Place(rays_[i], node_poses, &p)) continue;
     Cache& c = cache_[i];
     if (!((c.placed.origin - p.origin).norm() < 0.25 * cell) ||
-        !(std::abs(WrapAngleD(c.placed.bearing - p.bearing)) < 0.1 * p.sigma) ||
+        !(std::abs(WrapAngle(c.placed.bearing - p.bearing)) < 0.1 * p.sigma) ||
         c.placed.sigma != p.sigma) {
       c.placed = p;
       Cover(p, &c.cells);
@@ -337,7 +337,7 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
       const Eigen::Vector2d to = s.position_m - p.origin;
       const double d = to.norm();
       if (d < options_.min_range_m || d > options_.max_range_m) continue;
-      const double e = std::abs(WrapAngleD(std::atan2(to.y(), to.x()) - p.bearing)) / p.sigma;
+      const double e = std::abs(WrapAngle(std::atan2(to.y(), to.x()) - p.bearing)) / p.sigma;
       if (e <= best_e) best_e = e, best = &s;
     }
     if (best) {

@@ -13,7 +13,7 @@ namespace sound_map {
 namespace {
 
 double Bearing(const Pose2& p, const Eigen::Vector2d& s) {
-  return WrapAngleD(std::atan2(s.y() - p.y, s.x() - p.x) - p.yaw);
+  return WrapAngle(std::atan2(s.y() - p.y, s.x() - p.x) - p.yaw);
 }
 
 // A robot drives 4 m along x and 2 m along y; each source is heard in short calls (2 s in 8 s,
@@ -37,7 +37,7 @@ struct Calls {
         r.node = node;
         r.node_from_base = pose;
         r.azimuth_rad =
-            u(rng) < 0.1 ? any(rng) : WrapAngleD(Bearing(pose, sources[j]) + noise(rng));
+            u(rng) < 0.1 ? any(rng) : WrapAngle(Bearing(pose, sources[j]) + noise(rng));
         r.sigma_rad = 3 * M_PI / 180;
         r.sound_class = classes[j];
         rays.push_back(r);
@@ -163,7 +163,7 @@ TEST(BearingEvidence, ASourceHeardLongAgoSurvivesTheRayLimit) {
     BearingEvidence::Ray r;
     r.utime = 60000000 + k * 250000;
     r.node_from_base = Pose2(4.0 - 4.0 * (k % 400) / 400.0, 2.0, M_PI);
-    r.azimuth_rad = WrapAngleD(Bearing(r.node_from_base, third) + noise(rng));
+    r.azimuth_rad = WrapAngle(Bearing(r.node_from_base, third) + noise(rng));
     r.sigma_rad = 3 * M_PI / 180;
     evidence.Add(r);
     if (k % 40 == 0) evidence.Solve({}, nullptr, nullptr);
@@ -197,7 +197,7 @@ TEST(BearingEvidence, TheSoundMapPlacesACallerHeardWhileTurning) {
   std::vector<Pose2> poses;
   for (int leg = 0; leg < 5; ++leg) {
     for (int k = 0; k < 40; ++k) poses.emplace_back(leg + 0.025 * k, 0.0, 0.0);
-    for (int k = 0; k < 24; ++k) poses.emplace_back(leg + 1.0, 0.0, WrapAngleD(k * M_PI / 60));
+    for (int k = 0; k < 24; ++k) poses.emplace_back(leg + 1.0, 0.0, WrapAngle(k * M_PI / 60));
   }
   const auto run = [&](bool evidence, int64_t* dropped) {
     OnlineSoundMapOptions options;
@@ -210,7 +210,7 @@ TEST(BearingEvidence, TheSoundMapPlacesACallerHeardWhileTurning) {
       map.OnPose(t, poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
       if ((k % 64) < 40 || k % 2) continue;
       OnlineSoundMap::Doa d;
-      d.azimuth_rad = WrapAngleD(Bearing(poses[k - 3], caller) + noise(rng));
+      d.azimuth_rad = WrapAngle(Bearing(poses[k - 3], caller) + noise(rng));
       d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
       d.sound_class = OnlineSoundMap::kClassVoice;
       map.OnDoa(t, "respeaker", {d});
@@ -248,7 +248,7 @@ TEST(BearingEvidence, OneSourcePerCallerWithTheEkf) {
     if (k % 2) continue;
     OnlineSoundMap::Doa d;
     d.track_id = 1;
-    d.azimuth_rad = WrapAngleD(Bearing(pose, caller) + noise(rng));
+    d.azimuth_rad = WrapAngle(Bearing(pose, caller) + noise(rng));
     d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
     d.sound_class = OnlineSoundMap::kClassVoice;
     map.OnDoa(t, "respeaker", {d});

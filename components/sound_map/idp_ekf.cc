@@ -38,7 +38,7 @@ int IdpEkf::Append(int n, bool angle_first) {
 
 void IdpEkf::WrapAngles() {
   for (int i = 0; i < dim(); ++i)
-    if (is_angle_[i]) x_[i] = WrapAngleD(x_[i]);
+    if (is_angle_[i]) x_[i] = WrapAngle(x_[i]);
 }
 
 void IdpEkf::Predict(const Pose2& u, const Eigen::Matrix3d& q) {
@@ -108,7 +108,7 @@ double IdpEkf::UpdateLandmark(int64_t id, const Eigen::Vector2d& z, const Eigen:
   Eigen::VectorXd nu(2);
   for (int k = 0; k < 2; ++k) h.row(k) = out[k].v.transpose();
   nu[0] = z[0] - out[0].a;
-  nu[1] = WrapAngleD(z[1] - out[1].a);
+  nu[1] = WrapAngle(z[1] - out[1].a);
   return Correct({0, 1, 2, i, i + 1}, h, nu, r, gate);
 }
 
@@ -123,7 +123,7 @@ void IdpEkf::AddSource(int64_t id, int64_t anchor_id, const Eigen::VectorXd& z,
   const int i = Append(sd, true);
   // Ray direction in the map: theta = anchor yaw + mount yaw + azimuth, phi = elevation.
   // The anchor is the pose the ray was heard from, so theta depends on the anchor's yaw.
-  x_[i] = WrapAngleD(x_[a + 2] + options_.mount.yaw_rad + z[0]);
+  x_[i] = WrapAngle(x_[a + 2] + options_.mount.yaw_rad + z[0]);
   if (options_.three_d) x_[i + 1] = z[1];
   x_[i + sd - 1] = options_.initial_inverse_depth;
   Eigen::MatrixXd ga = Eigen::MatrixXd::Zero(sd, 3);  // d source / d anchor pose
@@ -204,7 +204,7 @@ double IdpEkf::SourceChi2(int64_t id, const Eigen::VectorXd& z, const Eigen::Mat
   std::vector<int> cols;
   SourceJacobian(sources_.at(id), &pred, &h, &cols);
   Eigen::VectorXd nu = z - pred;
-  nu[0] = WrapAngleD(nu[0]);
+  nu[0] = WrapAngle(nu[0]);
   const Eigen::MatrixXd s = h * p_(cols, cols) * h.transpose() + r;
   return nu.dot(s.ldlt().solve(nu));
 }
@@ -217,7 +217,7 @@ double IdpEkf::UpdateSource(int64_t id, const Eigen::VectorXd& z, const Eigen::M
   std::vector<int> cols;
   SourceJacobian(sources_.at(id), &pred, &h, &cols);
   Eigen::VectorXd nu = z - pred;
-  nu[0] = WrapAngleD(nu[0]);
+  nu[0] = WrapAngle(nu[0]);
   return Correct(cols, h, nu, r, gate, !options_.source_updates_move_poses);
 }
 
@@ -283,7 +283,7 @@ void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int
     // it is marginalised, and x_S is regressed on the shared anchors only.
     Eigen::VectorXd dx = xb(a_rows) - x_(a_idx);
     for (size_t k = 0; k < a_idx.size(); ++k)
-      if (is_angle_[a_idx[k]]) dx[k] = WrapAngleD(dx[k]);
+      if (is_angle_[a_idx[k]]) dx[k] = WrapAngle(dx[k]);
     const Eigen::MatrixXd p_a = p_(a_idx, a_idx);
     const Eigen::MatrixXd p_sa = p_(s_idx, a_idx);
     const Eigen::MatrixXd p_ab = covariance(a_rows, a_rows);
@@ -303,7 +303,7 @@ void IdpEkf::BackPropagate(const Pose2& current, const std::vector<std::pair<int
         if (it == anchors_.end()) continue;
         for (size_t k = 0; k < a_idx.size(); k += 3) {
           if (a_idx[k] != it->second) continue;
-          x_[src.index] += WrapAngleD(dx[k + 2]);
+          x_[src.index] += WrapAngle(dx[k + 2]);
         }
       }
     }

@@ -207,7 +207,7 @@ JointProblem2d JointProblemFromLog(const std::vector<Pose2>& poses, const std::v
       for (size_t j = 0; j < initial_sources.size(); ++j) {
         double h[2];
         PointObservation(pose, initial_sources[j].data(), three_d, mount, h);
-        double chi2 = std::pow(WrapAngleD(b.azimuth_rad - h[0]) / sigma, 2);
+        double chi2 = std::pow(WrapAngle(b.azimuth_rad - h[0]) / sigma, 2);
         if (three_d) chi2 += std::pow((b.elevation_rad - h[1]) / sigma, 2);
         if (chi2 < best_chi2) best_chi2 = chi2, best = static_cast<int>(j);
       }

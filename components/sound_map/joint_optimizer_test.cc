@@ -40,7 +40,7 @@ TEST(JointProblemFromLog, PlacesSourcesFromATrajectoryAndLeavesStrayBearingsOut)
     stray.sigma_rad = 2.0 * M_PI / 180;
     for (double a = -M_PI; a < M_PI; a += 0.1) {
       bool clear = true;
-      for (double t : true_azimuths) clear = clear && std::abs(WrapAngleD(a - t)) > 40 * M_PI / 180;
+      for (double t : true_azimuths) clear = clear && std::abs(WrapAngle(a - t)) > 40 * M_PI / 180;
       if (clear) {
         stray.azimuth_rad = a;
         break;

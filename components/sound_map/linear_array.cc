@@ -26,7 +26,7 @@ using linear_costs::BetaCost;
 using linear_costs::BetaFromKeyframe;
 using linear_costs::Odometry6Cost;
 using linear_costs::Pose6;
-using linear_costs::Wrap;
+using linear_costs::WrapAngle;
 
 // beta of s = (beta, gamma, rho) seen from `pose`, in the scaled form that stays finite
 // as rho -> 0:  d = rho (o - t) + R_axis u(beta, gamma),  d_l = R' d,
@@ -90,7 +90,7 @@ void MultiHypothesisSource::Update(const Eigen::Isometry3d& pose, double beta, d
     J3 s[3] = {J3(h.s[0], 0), J3(h.s[1], 1), J3(h.s[2], 2)};
     const J3 zh = PredictBeta(axis_, pose, s);
     const Eigen::RowVector3d hj = zh.v.transpose();
-    const double nu = Wrap(beta - zh.a);
+    const double nu = WrapAngle(beta - zh.a);
     const double hph = hj * h.p * hj.transpose();
     const double sv = hph + var;
     // (5.21-5.22): the thesis prints S = H P H'; the innovation covariance adds Q.
@@ -98,7 +98,7 @@ void MultiHypothesisSource::Update(const Eigen::Isometry3d& pose, double beta, d
     ++h.updates;
     const Eigen::Vector3d k = h.p * hj.transpose() / sv;  // (5.16)
     h.s += k * nu;                                         // (5.17)
-    h.s[1] = Wrap(h.s[1]);
+    h.s[1] = WrapAngle(h.s[1]);
     h.s[2] = std::max(h.s[2], 1e-3);
     h.p = (Eigen::Matrix3d::Identity() - k * hj) * h.p;    // (5.18)
     h.p = 0.5 * (h.p + h.p.transpose()).eval();
@@ -228,7 +228,7 @@ double MultiHypothesisSource::chi2(const Eigen::Isometry3d& pose, double beta, d
     J3 s[3] = {J3(h.s[0], 0), J3(h.s[1], 1), J3(h.s[2], 2)};
     const J3 zh = PredictBeta(axis_, pose, s);
     const Eigen::RowVector3d hj = zh.v.transpose();
-    const double nu = Wrap(beta - zh.a);
+    const double nu = WrapAngle(beta - zh.a);
     best = std::min(best, nu * nu / (hj * h.p * hj.transpose() + var));
   }
   return best;
@@ -467,7 +467,7 @@ struct Landmark3Cost {
     const Eigen::Matrix<T, 3, 1> l = q.conjugate() * (v - t);
     const T xy = sqrt(l[0] * l[0] + l[1] * l[1]);
     r[0] = (sqrt(l.squaredNorm()) - T(z[0])) * T(inv_sr);
-    r[1] = Wrap(T(atan2(l[1], l[0]) - T(z[1]))) * T(inv_sa);
+    r[1] = WrapAngle(T(atan2(l[1], l[0]) - T(z[1]))) * T(inv_sa);
     r[2] = (atan2(l[2], xy) - T(z[2])) * T(inv_sa);
     return true;
   }

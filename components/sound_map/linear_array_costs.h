@@ -7,17 +7,13 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "common/angles.h"
+
 namespace sarmap {
 namespace sound_map {
 namespace linear_costs {
 
-template <class T>
-T Wrap(const T& a) {
-  using std::atan2;
-  using std::cos;
-  using std::sin;
-  return atan2(sin(a), cos(a));
-}
+using common::WrapAngle;  // doubles and Ceres jets
 
 // A keyframe pose world_from_sensor as Ceres parameter blocks (quaternion x y z w, translation).
 struct Pose6 {

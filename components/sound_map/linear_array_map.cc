@@ -17,7 +17,7 @@ using common::Utime;
 using linear_costs::Odometry6Cost;
 using linear_costs::OffsetBetaCost;
 using linear_costs::Pose6;
-using linear_costs::Wrap;
+using linear_costs::WrapAngle;
 
 namespace {
 
@@ -143,7 +143,7 @@ struct LinearArraySoundMap::Impl {
     if (t.converged) {
       double b, pv;
       PredictConverged(t, pose, &b, &pv);
-      const double nu = Wrap(beta - b);
+      const double nu = WrapAngle(beta - b);
       return nu * nu / (var + pv);
     }
     return t.mh->chi2(pose, beta, var);
@@ -153,7 +153,7 @@ struct LinearArraySoundMap::Impl {
   double Cost(const Track& t, const Eigen::Vector3d& p) const {
     double sum = 0;
     for (const Obs& o : t.obs) {
-      const double nu = Wrap(o.beta - LinearArrayBeta(ObsPose(o), p));
+      const double nu = WrapAngle(o.beta - LinearArrayBeta(ObsPose(o), p));
       sum += nu * nu / o.var;
     }
     return sum;

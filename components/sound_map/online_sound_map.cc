@@ -174,7 +174,7 @@ int64_t OnlineSoundMap::AnchorForBirth() {
   for (const auto& [id, link] : anchor_links_) {
     if (link.node != last_node_id_ || !ekf_.HasAnchor(id)) continue;
     const Pose2 d = Between(link.node_from_anchor, node_from_anchor);
-    if (std::hypot(d.x, d.y) < 1e-3 && std::abs(WrapAngleD(d.yaw)) < 1e-3) return id;
+    if (std::hypot(d.x, d.y) < 1e-3 && std::abs(WrapAngle(d.yaw)) < 1e-3) return id;
   }
   const auto before = AnchorNodeIds();
   const int64_t id = next_anchor_id_++;
@@ -337,7 +337,7 @@ void OnlineSoundMap::AddRay(int64_t utime, const Doa& doa, bool heard) {
   // While turning, a DOA is heard with the array's heading of turn_lag_s earlier: the bearing
   // is turned back by the yaw rate times the lag, and its std grows by half that (the lag varies).
   const double lag_rad = options_.evidence.turn_lag_s * yaw_rate_rad_per_s_;
-  ray.azimuth_rad = WrapAngleD(doa.azimuth_rad - lag_rad);
+  ray.azimuth_rad = WrapAngle(doa.azimuth_rad - lag_rad);
   ray.sigma_rad = std::sqrt(std::max(doa.covariance(0, 0), 0.0) + 0.25 * lag_rad * lag_rad);
   ray.sound_class = doa.sound_class;
   ray.heard = heard;
@@ -387,8 +387,8 @@ void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa
   }
   // Map-frame bearing of the DOA (and of its mirror).
   const double base = last_pose_.yaw + ekf_.options().mount.yaw_rad;
-  const double bearing = WrapAngleD(base + obs.z[0]);
-  const double mirror = WrapAngleD(base - obs.z[0]);
+  const double bearing = WrapAngle(base + obs.z[0]);
+  const double mirror = WrapAngle(base - obs.z[0]);
   const double var = obs.r(0, 0);
   const double drift = options_.birth_drift_deg_per_s * M_PI / 180;
   int64_t best_key = -1;
@@ -399,7 +399,7 @@ void OnlineSoundMap::Tentate(int64_t utime, const std::string& device, const Doa
     const double dt = (utime - t.last) * 1e-6;
     const double s = var + t.variance + std::pow(drift * dt, 2);
     for (int m = 0; m < (obs.mirrored ? 2 : 1); ++m) {
-      const double d = WrapAngleD((m ? mirror : bearing) - t.bearing_map_rad);
+      const double d = WrapAngle((m ? mirror : bearing) - t.bearing_map_rad);
       double c = d * d / s;
       if (doa.track_id >= 0 && t.track_id == doa.track_id && t.device == device)
         c *= 0.5;  // the hint

@@ -318,7 +318,7 @@ TEST(OnlineSoundMap, TrueAnchorsAtSparseNodesDoNotMoveSources) {
       map.OnPose(utime, pose, shared + own, node);
       OnlineSoundMap::Doa doa;
       doa.track_id = 1;
-      doa.azimuth_rad = WrapAngleD(std::atan2(source.y() - pose.y, source.x() - pose.x) - pose.yaw + noise(rng));
+      doa.azimuth_rad = WrapAngle(std::atan2(source.y() - pose.y, source.x() - pose.x) - pose.yaw + noise(rng));
       doa.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
       if (k >= 5) map.OnDoa(utime, "sim", {doa});  // born at k = 7, 0.2 m and 2 deg past node 0
       if (anchors && k % 10 == 0 && k > 0) {  // an optimisation at every node: its scan's time
@@ -438,7 +438,7 @@ struct DriveBy {
     for (int k = 1; k <= 80; ++k) poses.emplace_back(6.0, 0.025 * k, M_PI / 2);
   }
   static double Bearing(const Pose2& p, const Eigen::Vector2d& s) {
-    return WrapAngleD(std::atan2(s.y() - p.y, s.x() - p.x) - p.yaw);
+    return WrapAngle(std::atan2(s.y() - p.y, s.x() - p.x) - p.yaw);
   }
 };
 
@@ -459,7 +459,7 @@ TEST(OnlineSoundMap, ChurningTrackIdsAndSpuriousDoasGiveOneSourcePerEmitter) {
       if (age[j]++ % 4 == 0) track[j] = next_track++;  // the localiser lost and re-found it
       OnlineSoundMap::Doa d;
       d.track_id = (k % 7 == 3) ? -1 : track[j];
-      d.azimuth_rad = WrapAngleD(DriveBy::Bearing(w.poses[k], w.sources[j]) + noise(rng));
+      d.azimuth_rad = WrapAngle(DriveBy::Bearing(w.poses[k], w.sources[j]) + noise(rng));
       d.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
       doas.push_back(d);
     }
@@ -535,7 +535,7 @@ TEST(OnlineSoundMap, SteepDirectionsOfTheRobotsOwnMotorsAreDropped) {
       OnlineSoundMap::Doa motor;
       motor.kind = OnlineSoundMap::kAzimuthElevation;
       motor.track_id = 1;
-      motor.azimuth_rad = WrapAngleD(M_PI + noise(rng));
+      motor.azimuth_rad = WrapAngle(M_PI + noise(rng));
       motor.elevation_rad = 77 * M_PI / 180 + noise(rng);
       motor.covariance = Eigen::Matrix2d::Identity() * std::pow(3 * M_PI / 180, 2);
       map.OnDoa(t, "respeaker", {motor});
@@ -572,7 +572,7 @@ TEST(OnlineSoundMap, ASourceWhereTheRobotDroveIsRemoved) {
       for (size_t j = 0; j < sources.size(); ++j) {
         OnlineSoundMap::Doa d;
         d.track_id = static_cast<int64_t>(j);
-        d.azimuth_rad = WrapAngleD(DriveBy::Bearing(poses[k], sources[j]) + noise(rng));
+        d.azimuth_rad = WrapAngle(DriveBy::Bearing(poses[k], sources[j]) + noise(rng));
         d.covariance = Eigen::Matrix2d::Identity() * std::pow(2 * M_PI / 180, 2);
         doas.push_back(d);
       }
@@ -603,7 +603,7 @@ std::vector<OnlineSoundMap::Source> HearClassified(OnlineSoundMap* map,
     for (size_t j = 0; j < sources.size(); ++j) {
       OnlineSoundMap::Doa d;
       d.track_id = static_cast<int64_t>(j);
-      d.azimuth_rad = WrapAngleD(DriveBy::Bearing(poses[k], sources[j]) + noise(rng));
+      d.azimuth_rad = WrapAngle(DriveBy::Bearing(poses[k], sources[j]) + noise(rng));
       d.covariance = Eigen::Matrix2d::Identity() * std::pow(2 * M_PI / 180, 2);
       d.sound_class = classes[j];
       doas.push_back(d);
@@ -637,7 +637,7 @@ Eigen::Vector2d TriangulateLeastSquares(const std::vector<Eigen::Vector2d>& orig
       const Eigen::Vector2d d = p - origins[k];
       const double r2 = d.squaredNorm();
       const Eigen::Vector2d j(-d.y() / r2, d.x() / r2);  // d atan2(d.y, d.x) / d p
-      const double e = WrapAngleD(bearings[k] - std::atan2(d.y(), d.x()));
+      const double e = WrapAngle(bearings[k] - std::atan2(d.y(), d.x()));
       info += j * j.transpose() / (sigma_rad * sigma_rad);
       gradient += j * e / (sigma_rad * sigma_rad);
     }
@@ -676,7 +676,7 @@ TEST(OnlineSoundMap, TriangulationAgreesWithLeastSquares) {
     map.OnPose(t, pose, Eigen::Matrix3d::Identity() * 1e-12, k);
     OnlineSoundMap::Doa d;
     d.track_id = 0;
-    d.azimuth_rad = WrapAngleD(DriveBy::Bearing(pose, caller) + noise(rng));
+    d.azimuth_rad = WrapAngle(DriveBy::Bearing(pose, caller) + noise(rng));
     d.covariance = Eigen::Matrix2d::Identity() * sigma * sigma;
     map.OnDoa(t, "respeaker", {d});
     if (k >= 2) {
@@ -731,7 +731,7 @@ TEST(OnlineSoundMap, ABearingOnlySourceIsNeverAPersonOrAPosition) {
   // Published as a bearing from where it was heard, not as a point along the ray.
   EXPECT_LT((s.position_m.head<2>() - Eigen::Vector2d(1.0, 1.0)).norm(), 0.1);
   EXPECT_LT((s.bearing_origin_m.head<2>() - Eigen::Vector2d(1.0, 1.0)).norm(), 0.1);
-  EXPECT_NEAR(WrapAngleD(s.bearing_rad - std::atan2(3.0, 5.0)), 0.0, 3 * M_PI / 180);
+  EXPECT_NEAR(WrapAngle(s.bearing_rad - std::atan2(3.0, 5.0)), 0.0, 3 * M_PI / 180);
   EXPECT_GT(s.bearing_variance, 0.0);
   // Once the robot drives sideways the range becomes observable: a placed person who called.
   std::vector<Pose2> more = poses;

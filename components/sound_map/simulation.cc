@@ -44,7 +44,7 @@ Sim2dData Simulate2d(const Sim2dConfig& c) {
   for (size_t k = 1; k < truth.size(); ++k) {
     const Pose2& u = increments[k];
     d.odometry[k] = Pose2(u.x + c.odo_sigma_m * n01(rng), u.y + c.odo_sigma_m * n01(rng),
-                          WrapAngleD(u.yaw + c.odo_sigma_rad * n01(rng)));
+                          WrapAngle(u.yaw + c.odo_sigma_rad * n01(rng)));
   }
 
   // Sources: one per source_spacing_m of the square's perimeter, alternately outside and
@@ -97,7 +97,7 @@ Sim2dData Simulate2d(const Sim2dConfig& c) {
       if (z[0] > c.landmark_range_m) continue;
       d.landmark_obs[k].push_back({static_cast<int64_t>(j),
                                    Eigen::Vector2d(z[0] + c.landmark_sigma_m * n01(rng),
-                                                   WrapAngleD(z[1] + c.landmark_sigma_rad * n01(rng)))});
+                                                   WrapAngle(z[1] + c.landmark_sigma_rad * n01(rng)))});
     }
     for (size_t j = 0; j < d.sources.size(); ++j) {
       const Eigen::Vector3d& p = d.sources[j];
@@ -106,7 +106,7 @@ Sim2dData Simulate2d(const Sim2dConfig& c) {
       double z[2];
       PointObservation(pose, p.data(), c.three_d, d.mount, z);
       Eigen::VectorXd zn(c.three_d ? 2 : 1);
-      zn[0] = WrapAngleD(z[0] + c.sound_sigma_rad * n01(rng));
+      zn[0] = WrapAngle(z[0] + c.sound_sigma_rad * n01(rng));
       if (c.three_d) zn[1] = z[1] + c.sound_sigma_rad * n01(rng);
       d.sound_obs[k].push_back({static_cast<int64_t>(j), zn});
     }

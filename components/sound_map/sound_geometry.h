@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 #include <cmath>
 
+#include "common/angles.h"
+
 namespace sarmap {
 namespace sound_map {
 
@@ -19,25 +21,18 @@ struct Pose2 {
   static Pose2 FromVec(const Eigen::Vector3d& v) { return Pose2(v[0], v[1], v[2]); }
 };
 
-template <class T>
-T WrapAngle(const T& a) {
-  using std::atan2;
-  using std::cos;
-  using std::sin;
-  return atan2(sin(a), cos(a));
-}
-inline double WrapAngleD(double a) { return std::remainder(a, 2.0 * M_PI); }
+using common::WrapAngle;  // doubles and Ceres jets
 
 // a ∘ b for planar poses.
 inline Pose2 Compose(const Pose2& a, const Pose2& b) {
   const double c = std::cos(a.yaw), s = std::sin(a.yaw);
-  return Pose2(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, WrapAngleD(a.yaw + b.yaw));
+  return Pose2(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, WrapAngle(a.yaw + b.yaw));
 }
 // a^-1 ∘ b: b seen from a.
 inline Pose2 Between(const Pose2& a, const Pose2& b) {
   const double c = std::cos(a.yaw), s = std::sin(a.yaw);
   const double dx = b.x - a.x, dy = b.y - a.y;
-  return Pose2(c * dx + s * dy, -s * dx + c * dy, WrapAngleD(b.yaw - a.yaw));
+  return Pose2(c * dx + s * dy, -s * dx + c * dy, WrapAngle(b.yaw - a.yaw));
 }
 
 // The array frame on a planar robot: translation (x, y, z) and yaw of mic_array in base.

@@ -410,7 +410,7 @@ int main(int argc, char** argv) {
         const double e = std::hypot(w.x - tr.x, w.y - tr.y);
         max_pos = std::max(max_pos, e);
         sum2 += e * e;
-        max_yaw = std::max(max_yaw, std::abs(sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw)));
+        max_yaw = std::max(max_yaw, std::abs(sarmap::sound_map::WrapAngle(w.yaw - tr.yaw)));
       }
       printf("POSE against SIM_TRUTH: %zu poses, RMS %.3f m, max %.3f m, max heading error %.2f deg\n",
              slam_poses.size(), std::sqrt(sum2 / std::max<size_t>(1, slam_poses.size())), max_pos,
@@ -424,7 +424,7 @@ int main(int argc, char** argv) {
           const Pose2 tr = truth_at(t);
           printf("  t %5.1f truth (%5.2f %5.2f %6.1f) err (%+.2f %+.2f %+.2f deg)\n", (t - slam_poses.begin()->first) * 1e-6,
                  tr.x, tr.y, tr.yaw * 180 / M_PI, w.x - tr.x, w.y - tr.y,
-                 sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw) * 180 / M_PI);
+                 sarmap::sound_map::WrapAngle(w.yaw - tr.yaw) * 180 / M_PI);
         }
         for (double lag = -0.6; lag <= 0.61; lag += 0.1) {
           double s2 = 0, y2 = 0;
@@ -432,7 +432,7 @@ int main(int argc, char** argv) {
             const Pose2 w = sarmap::sound_map::Compose(world_from_map, p);
             const Pose2 tr = truth_at(t + static_cast<int64_t>(lag * 1e6));
             s2 += std::pow(w.x - tr.x, 2) + std::pow(w.y - tr.y, 2);
-            y2 += std::pow(sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw), 2);
+            y2 += std::pow(sarmap::sound_map::WrapAngle(w.yaw - tr.yaw), 2);
           }
           printf("  lag %+.1f s: RMS %.3f m, heading RMS %.2f deg\n", lag, std::sqrt(s2 / slam_poses.size()),
                  std::sqrt(y2 / slam_poses.size()) * 180 / M_PI);
@@ -451,7 +451,7 @@ int main(int argc, char** argv) {
             printf("  anchors t %5.1f: node %ld (current at %5.1f s) err (%+.2f %+.2f m, %+.2f deg)\n",
                    (t - slam_poses.begin()->first) * 1e-6, static_cast<long>(id),
                    (nt->second - slam_poses.begin()->first) * 1e-6, w.x - tr.x, w.y - tr.y,
-                   sarmap::sound_map::WrapAngleD(w.yaw - tr.yaw) * 180 / M_PI);
+                   sarmap::sound_map::WrapAngle(w.yaw - tr.yaw) * 180 / M_PI);
           }
         }
       }
@@ -469,7 +469,7 @@ int main(int argc, char** argv) {
         double best = 1e9;
         for (const auto& ts : truth.sources) {
           const double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
-          const double e = sarmap::sound_map::WrapAngleD(d.azimuth_rad - b) * 180 / M_PI;
+          const double e = sarmap::sound_map::WrapAngle(d.azimuth_rad - b) * 180 / M_PI;
           if (std::abs(e) < std::abs(best)) {
             best = e;
             nearest = ts.name;
@@ -507,8 +507,8 @@ int main(int argc, char** argv) {
             const auto& ts = truth.sources[j];
             double b = std::atan2(ts.position_m[1] - arr.y, ts.position_m[0] - arr.x) - arr.yaw;
             // Linear arrays: the angle to the array's x axis (0..pi), in the plane |bearing|.
-            if (s.kind == sarmap::doa_source_t::KIND_ANGLE_1D) b = std::abs(sarmap::sound_map::WrapAngleD(b));
-            const double se = sarmap::sound_map::WrapAngleD(s.azimuth_rad - b) * 180 / M_PI;
+            if (s.kind == sarmap::doa_source_t::KIND_ANGLE_1D) b = std::abs(sarmap::sound_map::WrapAngle(b));
+            const double se = sarmap::sound_map::WrapAngle(s.azimuth_rad - b) * 180 / M_PI;
             const bool sounding = j < active.size() && active[j];
             // A sounding source takes precedence over a silent one a little nearer.
             if ((sounding && !best_active && std::abs(se) < 10) || ((sounding || !best_active) && std::abs(se) < best)) {
@@ -666,7 +666,7 @@ int main(int argc, char** argv) {
         // As the map does: DOAs heard while the robot turns lag its heading (the localiser's
         // 256 ms windows and tracker).
         if (pose_at(t - 250000, &before) && pose_at(t + 250000, &after) &&
-            std::abs(sarmap::sound_map::WrapAngleD(after.yaw - before.yaw)) / 0.5 >
+            std::abs(sarmap::sound_map::WrapAngle(after.yaw - before.yaw)) / 0.5 >
                 options.map.max_turn_rate_deg_per_s * M_PI / 180)
           continue;
         std::vector<sarmap::sound_map::LogBearing> b;
