@@ -127,8 +127,9 @@ Simulator::Simulator(const SimSetup& setup) : impl_(std::make_unique<Impl>()), s
       warnings_.push_back("array '" + setup_.array.name +
                           "' has start offsets / clock drift, used only with audio.asynchronous: true");
     }
-    const char* tmp = std::getenv("TMPDIR");
-    const std::string cache = std::string(tmp && *tmp ? tmp : "/tmp") + "/sarmap-sim-espeak-" + std::to_string(::getuid());
+    const std::string cache = (std::filesystem::temp_directory_path() /
+                               ("sarmap-sim-espeak-" + std::to_string(::getuid())))
+                                  .string();
     const int rate = setup_.array.sample_rate_hz;
     std::vector<std::unique_ptr<SourceSignal>> signals;
     for (const SoundSource& s : setup_.world.sources) {
