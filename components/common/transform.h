@@ -54,6 +54,12 @@ class Rigid2d {
   double yaw_rad_ = 0.0;
 };
 
+// The pose a fraction f of the way from a to b: translation linear, yaw along the shorter arc.
+inline Rigid2d Interpolate(const Rigid2d& a, const Rigid2d& b, double f) {
+  return Rigid2d(a.translation() + f * (b.translation() - a.translation()),
+                 a.yaw_rad() + f * WrapAngle(b.yaw_rad() - a.yaw_rad()));
+}
+
 class Rigid3d {
  public:
   Rigid3d() = default;

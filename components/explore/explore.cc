@@ -156,8 +156,7 @@ std::optional<common::Rigid2d> ExploreController::OdometryAt(double stamp_s) con
     if (t1 < stamp_s) continue;
     const auto& [t0, a] = odometry_[i - 1];
     const double f = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
-    return common::Rigid2d(a.translation() + f * (b.translation() - a.translation()),
-                           a.yaw_rad() + f * common::WrapAngle(b.yaw_rad() - a.yaw_rad()));
+    return common::Interpolate(a, b, f);
   }
   return odometry_.back().second;
 }

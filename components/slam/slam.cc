@@ -24,11 +24,6 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-Rigid2d Interpolate(const Rigid2d& a, const Rigid2d& b, double f) {
-  return Rigid2d(a.translation() + f * (b.translation() - a.translation()),
-                 a.yaw_rad() + f * std::remainder(b.yaw_rad() - a.yaw_rad(), 2 * M_PI));
-}
-
 }  // namespace
 
 namespace {
