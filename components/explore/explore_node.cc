@@ -1,12 +1,11 @@
 #include "explore/explore_node.h"
 
-#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "common/image_messages.h"
 #include "common/logging.h"
 #include "common/message_conversions.h"
-#include "explore/status_message.h"
+#include "explore/explore_messages.h"
 
 namespace sarmap {
 namespace explore {
@@ -96,23 +95,7 @@ void ExploreNode::OnMap(const occupancy_grid_t& m) {
 }
 
 void ExploreNode::OnPeople(const people_map_t& m) {
-  std::vector<HeardPerson> heard;
-  for (const mapped_person_t& p : m.people) {
-    if (!(p.cues & mapped_person_t::CUE_HEARD)) continue;
-    HeardPerson h;
-    h.id = p.id;
-    h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
-    Eigen::Matrix2d cov;
-    cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
-    const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
-                               0.5 * (cov + cov.transpose()), Eigen::EigenvaluesOnly)
-                               .eigenvalues()
-                               .maxCoeff();
-    h.position_std_m = std::sqrt(std::max(0.0, largest));
-    h.seen = (p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH)) != 0;
-    heard.push_back(h);
-  }
-  controller_.OnHeardPeople(std::move(heard));
+  controller_.OnHeardPeople(HeardPeopleFromMessage(m));
 }
 
 void ExploreNode::OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {

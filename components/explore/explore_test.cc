@@ -5,7 +5,7 @@
 #include <cmath>
 #include <set>
 
-#include "explore/status_message.h"
+#include "explore/explore_messages.h"
 
 namespace sarmap {
 namespace explore {
@@ -716,6 +716,29 @@ TEST(StatusMessageTest, EveryNthPathPointAndTheLastOne) {
   EXPECT_TRUE(m.has_goal);
   EXPECT_EQ(m.header.utime, 42);
   EXPECT_EQ(ToStatusMessage(s, 42).num_path, 10);
+}
+
+TEST(ExploreMessagesTest, HeardPeopleAreGoalsWithTheirLargestStd) {
+  sarmap::people_map_t m{};
+  sarmap::mapped_person_t heard{};
+  heard.id = 4;
+  heard.position_m[0] = 2.0;
+  heard.position_m[1] = -1.0;
+  heard.covariance[0] = 0.25;  // x std 0.5 m
+  heard.covariance[4] = 1.0;   // y std 1.0 m: the largest
+  heard.cues = sarmap::mapped_person_t::CUE_HEARD | sarmap::mapped_person_t::CUE_SEEN_DEPTH;
+  sarmap::mapped_person_t seen_only = heard;
+  seen_only.id = 5;
+  seen_only.cues = sarmap::mapped_person_t::CUE_SEEN_RGBD;
+  m.people = {heard, seen_only};
+  m.num_people = 2;
+  const std::vector<HeardPerson> goals = HeardPeopleFromMessage(m);
+  ASSERT_EQ(goals.size(), 1u);
+  EXPECT_EQ(goals[0].id, 4);
+  EXPECT_NEAR(goals[0].position_m.x(), 2.0, 1e-12);
+  EXPECT_NEAR(goals[0].position_m.y(), -1.0, 1e-12);
+  EXPECT_NEAR(goals[0].position_std_m, 1.0, 1e-9);
+  EXPECT_TRUE(goals[0].seen);
 }
 
 }  // namespace

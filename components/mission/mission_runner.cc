@@ -18,7 +18,7 @@
 #include "depth/depth_to_scan.h"
 #include "explore/explore.h"
 #include "explore/explore_node_options.h"
-#include "explore/status_message.h"
+#include "explore/explore_messages.h"
 #include "people_map/people_map.h"
 #include "people_map/people_map_intake.h"
 #include "sarmap/slam_anchor_request_t.hpp"
@@ -217,32 +217,10 @@ class Perception {
     last_publish_s_ = now_s_;
     const sarmap::people_map_t msg = people_map::PeopleMapMessage(map_.Report(utime), utime);
     people_on_map_ = static_cast<int>(msg.people.size());
-    if (explorer_) explorer_->OnHeardPeople(HeardPeople(msg));
+    if (explorer_) explorer_->OnHeardPeople(explore::HeardPeopleFromMessage(msg));
     if (observer_) observer_->OnPeopleMap(now_s_, msg);
   }
 
-  // The people heard on PEOPLE_MAP as sarmap-explore takes them (explore_node.cc OnPeople):
-  // position, the largest planar standard deviation, and whether they were also seen.
-  static std::vector<explore::HeardPerson> HeardPeople(const sarmap::people_map_t& m) {
-    std::vector<explore::HeardPerson> heard;
-    for (const sarmap::mapped_person_t& p : m.people) {
-      if (!(p.cues & sarmap::mapped_person_t::CUE_HEARD)) continue;
-      explore::HeardPerson h;
-      h.id = p.id;
-      h.position_m = Eigen::Vector2d(p.position_m[0], p.position_m[1]);
-      Eigen::Matrix2d cov;
-      cov << p.covariance[0], p.covariance[1], p.covariance[3], p.covariance[4];
-      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
-                                 0.5 * (cov + cov.transpose()), Eigen::EigenvaluesOnly)
-                                 .eigenvalues()
-                                 .maxCoeff();
-      h.position_std_m = std::sqrt(std::max(0.0, largest));
-      h.seen = (p.cues & (sarmap::mapped_person_t::CUE_SEEN_RGBD |
-                          sarmap::mapped_person_t::CUE_SEEN_DEPTH)) != 0;
-      heard.push_back(h);
-    }
-    return heard;
-  }
 
   vision_people::VisionPeopleOptions vision_;
   vision_people::PeopleDetector detector_;
