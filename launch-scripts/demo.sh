@@ -108,10 +108,10 @@ log="$out/demo.lcmlog"
 # The launcher obeys only signed orders: a key for this demo only. The bus is signed too
 # (common/bus_auth.h): every node and deputy signs what it publishes with a second key and acts
 # only on messages signed with it, so nothing another host publishes reaches the stack.
-export SARMAP_PROCMAN_KEY="$out/procman.key"
-(umask 077 && head -c 32 /dev/urandom >"$SARMAP_PROCMAN_KEY")
-export SARMAP_BUS_KEY="$out/bus.key"
-(umask 077 && head -c 32 /dev/urandom >"$SARMAP_BUS_KEY")
+export DEMO_PROCMAN_KEY="$out/procman.key"
+(umask 077 && head -c 32 /dev/urandom >"$DEMO_PROCMAN_KEY")
+export DEMO_BUS_KEY="$out/bus.key"
+(umask 077 && head -c 32 /dev/urandom >"$DEMO_BUS_KEY")
 
 pids=()
 stop_all() {
@@ -149,7 +149,7 @@ print(s.getsockname()[1])' "${DEMO_VIEWER_PORT:-8080}")"
     viewer_url="http://127.0.0.1:$DEMO_VIEWER_BIND_PORT/"
   fi
   echo "== live page while the mission runs: $viewer_url"
-  (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost --bus-key-file "$SARMAP_BUS_KEY") \
+  (cd "$root" && exec "$bin/sarmap-procman-deputy" --id localhost --key "$DEMO_PROCMAN_KEY" --bus-key-file "$DEMO_BUS_KEY") \
     >"$out/deputy.txt" 2>&1 & pids+=($!)
 else
   pmd="$root/launch-scripts/demo-two-computers.pmd"
@@ -166,7 +166,7 @@ else
     ns="demo-$id"
     netns_add_host "$ns" "$i"; namespaces+=("$ns")
     [ "$id" != compute ] || export DEMO_VIEWER_BIND_ADDRESS="10.77.0.$i"
-    (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --bus-key-file "$SARMAP_BUS_KEY") \
+    (cd "$root" && exec ip netns exec "$ns" "$bin/sarmap-procman-deputy" --id "$id" --key "$DEMO_PROCMAN_KEY" --bus-key-file "$DEMO_BUS_KEY") \
       >"$out/deputy-$id.txt" 2>&1 & pids+=($!)
     echo "   computer '$id': network namespace $ns, 10.77.0.$i"
     i=$((i + 1))
@@ -237,7 +237,7 @@ if [ "${DEMO_KILL:-}" = 1 ]; then
 fi
 
 echo "== the launcher runs the mission ($(basename "$pmd"), script \"mission\")"
-if ! (cd "$root" && "$bin/sarmap-procman" --bus-key-file "$SARMAP_BUS_KEY" "$pmd" run mission) >"$out/sheriff.txt" 2>&1; then
+if ! (cd "$root" && "$bin/sarmap-procman" --key "$DEMO_PROCMAN_KEY" --bus-key-file "$DEMO_BUS_KEY" "$pmd" run mission) >"$out/sheriff.txt" 2>&1; then
   echo "   the mission script failed: see $out/sheriff.txt"
   tail -5 "$out/sheriff.txt" | sed 's/^/   /'
 fi
@@ -252,7 +252,7 @@ fi
 stop_all
 # What each process printed (recorded from the launcher's PM_OUTPUT) into $out/output/.
 mkdir -p "$out/output"
-"$bin/sarmap-log" output "$log" -o "$out/output" --key "$SARMAP_PROCMAN_KEY" 2>/dev/null || true
+"$bin/sarmap-log" output "$log" -o "$out/output" --key "$DEMO_PROCMAN_KEY" 2>/dev/null || true
 for f in "$out"/output/*.txt; do
   [ -f "$f" ] || continue
   if grep -qE "^E |terminate called|Segmentation|Aborted|exited with code [1-9]" "$f"; then
@@ -264,9 +264,9 @@ echo "== the log (sarmap-log info)"
 "$bin/sarmap-log" info "$log" || true
 echo
 echo "== what the stack cost (sarmap-log perf)"
-"$bin/sarmap-log" perf "$log" --key "$SARMAP_PROCMAN_KEY" --bus-key-file "$SARMAP_BUS_KEY" | tee "$out/perf.txt" || true
+"$bin/sarmap-log" perf "$log" --key "$DEMO_PROCMAN_KEY" --bus-key-file "$DEMO_BUS_KEY" | tee "$out/perf.txt" || true
 echo
 echo "== mission report"
-"$bin/sarmap-log" report "$log" -o "$out/report" --bus-key-file "$SARMAP_BUS_KEY"
+"$bin/sarmap-log" report "$log" -o "$out/report" --bus-key-file "$DEMO_BUS_KEY"
 echo
 echo "demo finished: open $out/report/report.html (map.tif: the GeoTIFF; the live page stopped with the mission)"

@@ -3,18 +3,34 @@
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
+#include <pwd.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
+#include <vector>
 
 namespace sarmap {
 namespace common {
 
-AuthKey LoadAuthKeyFile(const std::string& path) {
+std::string ExpandUserHome(const std::string& path) {
+  if (path != "~" && path.rfind("~/", 0) != 0) return path;
+  passwd entry;
+  passwd* found = nullptr;
+  std::vector<char> buffer(16384);
+  if (getpwuid_r(getuid(), &entry, buffer.data(), buffer.size(), &found) != 0 || !found ||
+      !found->pw_dir || !*found->pw_dir) {
+    throw std::runtime_error(path + ": no home directory for user " + std::to_string(getuid()));
+  }
+  return std::string(found->pw_dir) + path.substr(1);
+}
+
+AuthKey LoadAuthKeyFile(const std::string& path_as_given) {
+  const std::string path = ExpandUserHome(path_as_given);
   struct stat st;
   if (stat(path.c_str(), &st) != 0) {
     const size_t slash = path.rfind('/');

@@ -22,9 +22,13 @@ namespace common {
 using AuthKey = std::vector<uint8_t>;
 using AuthDigest = std::array<uint8_t, 32>;
 
-// Reads a key file (raw bytes). Throws std::runtime_error when it is missing, shorter than 16
-// bytes, or readable by group or others.
-AuthKey LoadAuthKeyFile(const std::string& path);
+// `path` with a leading "~/" replaced by the user's home directory (from the password
+// database, so that a key's location does not depend on the environment).
+std::string ExpandUserHome(const std::string& path);
+
+// Reads a key file (raw bytes; "~/" is the user's home). Throws std::runtime_error when it is
+// missing, shorter than 16 bytes, or readable by group or others.
+AuthKey LoadAuthKeyFile(const std::string& path_as_given);
 
 AuthDigest HmacSha256(const AuthKey& key, const uint8_t* data, size_t size);
 

@@ -1,6 +1,7 @@
 #include "common/command_auth.h"
 
 #include <gtest/gtest.h>
+#include <pwd.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -136,6 +137,17 @@ TEST(CommandAuth, KeyFilesThatAreMissingShortOrOpenAreErrors) {
   unlink(short_key.c_str());
   unlink(open_key.c_str());
   rmdir(dir.c_str());
+}
+
+TEST(CommandAuth, ATildeIsTheUsersHomeFromThePasswordDatabase) {
+  const passwd* user = getpwuid(getuid());
+  ASSERT_NE(user, nullptr);
+  EXPECT_EQ(ExpandUserHome("~/.config/sarmap/procman.key"),
+            std::string(user->pw_dir) + "/.config/sarmap/procman.key");
+  EXPECT_EQ(ExpandUserHome("~"), std::string(user->pw_dir));
+  EXPECT_EQ(ExpandUserHome("/etc/sarmap/procman.key"), "/etc/sarmap/procman.key");
+  EXPECT_EQ(ExpandUserHome("keys/~/a.key"), "keys/~/a.key");
+  EXPECT_EQ(ExpandUserHome("~other/a.key"), "~other/a.key");  // another user's home: as given
 }
 
 }  // namespace

@@ -42,25 +42,16 @@ RespawnPolicy PolicyFrom(const ProcmanOptions& o) {
 
 }  // namespace
 
-void PutOwnDirectoryOnPath() {
-  char self[4096];
-  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-  if (n <= 0) return;
-  self[n] = '\0';
-  std::string dir(self);
-  dir = dir.substr(0, dir.rfind('/'));
-  const char* path = getenv("PATH");
-  setenv("PATH", (dir + ":" + (path ? path : "/usr/local/bin:/usr/bin:/bin")).c_str(), 1);
-}
-
-Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key)
+Deputy::Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key,
+               Environment environment)
     : lcm_(lcm),
       options_(options),
       id_(std::move(id)),
       host_(HostName()),
       key_(std::move(key)),
       replay_(RandomNonce(), static_cast<int64_t>(options.order_window_s * 1e6)),
-      supervisor_(PolicyFrom(options), static_cast<size_t>(options.output_buffer_bytes)) {
+      supervisor_(PolicyFrom(options), static_cast<size_t>(options.output_buffer_bytes),
+                  std::move(environment)) {
   start_s_ = Now();
   start_us_ = SteadyMicros();
   subscription_ = lcm_->subscribe("^" + options_.orders_channel + "$", &Deputy::OnOrders, this);

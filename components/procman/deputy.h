@@ -22,15 +22,14 @@
 namespace sarmap {
 namespace procman {
 
-// Puts the directory of the running program (build/bin, or the install's bin) first on PATH,
-// so .pmd files can name sarmap programs without paths.
-void PutOwnDirectoryOnPath();
-
 class Deputy : public EventLoop::Participant {
  public:
   // Starts a new session (a random number announced in every signed PM_INFO): orders
-  // signed for an earlier run of this deputy are refused.
-  Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key);
+  // signed for an earlier run of this deputy are refused. Commands start with `environment`
+  // (the launchers pass InheritedEnvironment(OwnDirectory()): .pmd files name sarmap programs
+  // without paths).
+  Deputy(lcm::LCM* lcm, const ProcmanOptions& options, std::string id, Key key,
+         Environment environment = InheritedEnvironment());
   ~Deputy() override;
 
   void AddFds(std::vector<pollfd>* fds) override;

@@ -20,9 +20,10 @@ int main(int argc, char** argv) {
         "sarmap-procman-deputy",
         "Runs and watches the commands that a verified sheriff orders for this deputy id.");
     common::NodeArgs node_args;
-    std::string id, key_path = DefaultKeyPath();
+    std::string id, key_path;
     parser.AddFlag("--id", &id, "deputy name used in the .pmd files (deputy = \"NAME\";)");
-    parser.AddFlag("--key", &key_path, "shared HMAC key file (see README: key set-up)");
+    parser.AddFlag("--key", &key_path,
+                   "shared HMAC key file (default: key_file of the options; see README: key set-up)");
     parser.AddNodeOptions(&node_args);
     parser.SetEpilog(
         "channels: PM_ORDERS in; PM_INFO (1 Hz and on change), PM_OUTPUT (rate-limited) out.\n"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
     if (!parser.Parse(argc, argv)) return 0;
     common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
     auto options = common::LoadOptions<ProcmanOptions>(node_args.config_path, node_args.overrides);
+    if (key_path.empty()) key_path = options.key_file;
     if (node_args.print_config) {
       std::cout << common::OptionsToYaml(options, true);
       return 0;
@@ -44,7 +46,6 @@ int main(int argc, char** argv) {
     } catch (const std::runtime_error& e) {
       throw common::ArgError(e.what());
     }
-    PutOwnDirectoryOnPath();
     if (!BecomeSubreaper()) {
       SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
     }
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
     lcm::LCM lcm(url);
     if (!lcm.good()) throw std::runtime_error("cannot initialise LCM on '" + url + "'");
     EventLoop loop(&lcm);
-    Deputy deputy(&lcm, options, id, std::move(key));
+    Deputy deputy(&lcm, options, id, std::move(key), InheritedEnvironment(OwnDirectory()));
     if (!node_args.bus_key_file.empty()) {
       try {
         deputy.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));

@@ -18,13 +18,6 @@
 namespace sarmap {
 namespace procman {
 
-std::string DefaultKeyPath() {
-  const char* env = getenv("SARMAP_PROCMAN_KEY");
-  if (env && *env) return env;
-  const char* home = getenv("HOME");
-  return std::string(home && *home ? home : ".") + "/.config/sarmap/procman.key";
-}
-
 // One key-file reader and one HMAC for the launcher and the signed commands.
 Key LoadKeyFile(const std::string& path) { return common::LoadAuthKeyFile(path); }
 

@@ -45,11 +45,9 @@ using Digest = std::array<uint8_t, 32>;
 
 constexpr size_t kMinKeyBytes = 16;
 
-// Reads a key file (raw bytes, e.g. 32 from /dev/urandom). Throws std::runtime_error when
+// Reads a key file (raw bytes, e.g. 32 from /dev/urandom; "~/" is the user's home). Throws std::runtime_error when
 // it is missing, shorter than kMinKeyBytes, or readable by group or others.
 Key LoadKeyFile(const std::string& path);
-// $SARMAP_PROCMAN_KEY, else ~/.config/sarmap/procman.key.
-std::string DefaultKeyPath();
 
 Digest HmacSha256(const Key& key, const uint8_t* data, size_t size);
 

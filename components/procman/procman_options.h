@@ -12,6 +12,7 @@ struct ProcmanOptions {
   std::string orders_channel = "PM_ORDERS";
   std::string info_channel = "PM_INFO";
   std::string output_channel = "PM_OUTPUT";
+  std::string key_file = "~/.config/sarmap/procman.key";
   // Deputy.
   double info_period_s = 1.0;
   double output_period_s = 0.1;
@@ -35,6 +36,9 @@ struct ProcmanOptions {
     v("info_channel", info_channel, "deputies -> sheriff: state of every command (pm_info_t)");
     v("output_channel", output_channel,
       "deputies -> sheriff: captured stdout/stderr (pm_output_t)");
+    v("key_file", key_file,
+      "shared HMAC key of orders and reports, the same file on every computer (~/ is the "
+      "user's home; --key overrides)");
     v("info_period_s", info_period_s, "deputy: PM_INFO period (also sent on every change)");
     v("output_period_s", output_period_s, "deputy: at most one PM_OUTPUT per this period");
     v("output_max_bytes", output_max_bytes, "deputy: output bytes per command per PM_OUTPUT");
@@ -77,6 +81,7 @@ struct ProcmanOptions {
     check.That(output_tail_lines >= 0, "output_tail_lines", "must be >= 0");
     check.That(!orders_channel.empty() && !info_channel.empty() && !output_channel.empty(),
                "channels", "must not be empty");
+    check.That(!key_file.empty(), "key_file", "must not be empty");
   }
 };
 

@@ -261,7 +261,7 @@ int main(int argc, char** argv) {
         "(signed) and shows their state.");
     common::NodeArgs node_args;
     std::string pmd_path, command, target;
-    std::string key_path = DefaultKeyPath();
+    std::string key_path;
     std::string sheriff_name = "sheriff@" + HostName();
     bool observer = false, lone_ranger = false;
     parser.AddPositional("CONFIG.pmd", &pmd_path, "procman launch configuration");
@@ -271,7 +271,8 @@ int main(int argc, char** argv) {
     parser.AddPositional("NAME", &target,
                          "command, group (\"group:NAME\" if ambiguous), everything; or script",
                          false);
-    parser.AddFlag("--key", &key_path, "shared HMAC key file (see README: key set-up)");
+    parser.AddFlag("--key", &key_path,
+                   "shared HMAC key file (default: key_file of the options; see README: key set-up)");
     parser.AddFlag(
         "--sheriff-id", &sheriff_name,
         "sheriff name (each run adds /PID); deputies check order counters per name, see README");
@@ -290,6 +291,7 @@ int main(int argc, char** argv) {
     common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
     common::SetLogName("sarmap-procman");
     auto options = common::LoadOptions<ProcmanOptions>(node_args.config_path, node_args.overrides);
+    if (key_path.empty()) key_path = options.key_file;
     if (node_args.print_config) {
       std::cout << common::OptionsToYaml(options, true);
       return 0;
@@ -375,7 +377,6 @@ int main(int argc, char** argv) {
 
     std::vector<std::unique_ptr<Deputy>> deputies;
     if (lone_ranger) {
-      PutOwnDirectoryOnPath();
       if (!BecomeSubreaper()) {
         SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
       }
@@ -384,7 +385,8 @@ int main(int argc, char** argv) {
                          << "): if this process is killed, what its commands forked runs on";
       }
       for (const auto& id : config.Deputies()) {
-        deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key));
+        deputies.push_back(std::make_unique<Deputy>(&lcm, options, id, key,
+                                                    InheritedEnvironment(OwnDirectory())));
         if (!bus_key.empty()) deputies.back()->SetBusKey(bus_key);
         loop.Add(deputies.back().get());
       }

@@ -54,6 +54,9 @@ bool BecomeSubreaper() { return prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0; 
 
 namespace {
 
+// PATH for commands when the environment has none.
+constexpr const char* kDefaultPath = "/usr/local/bin:/usr/bin:/bin";
+
 // This process's end of the socket to its group guardian (-1: none). Records of 5 bytes: '+' or
 // '-', then the process group id (native int32).
 int g_guardian_fd = -1;
@@ -178,8 +181,35 @@ ReapBoard& Board() {
 
 }  // namespace
 
-Supervisor::Supervisor(RespawnPolicy respawn, size_t max_buffered_output)
-    : respawn_(respawn), max_buffered_output_(max_buffered_output) {}
+Environment InheritedEnvironment(const std::string& bin_dir) {
+  Environment environment;
+  for (char** e = environ; e && *e; ++e) {
+    const std::string entry = *e;
+    const size_t equals = entry.find('=');
+    if (equals == std::string::npos || equals == 0) continue;
+    environment.emplace(entry.substr(0, equals), entry.substr(equals + 1));
+  }
+  if (!bin_dir.empty()) {
+    const auto path = environment.find("PATH");
+    environment["PATH"] =
+        bin_dir + ":" + (path != environment.end() ? path->second : kDefaultPath);
+  }
+  return environment;
+}
+
+std::string OwnDirectory() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (n <= 0) return "";
+  self[n] = '\0';
+  const std::string path(self);
+  return path.substr(0, path.rfind('/'));
+}
+
+Supervisor::Supervisor(RespawnPolicy respawn, size_t max_buffered_output, Environment environment)
+    : respawn_(respawn),
+      max_buffered_output_(max_buffered_output),
+      environment_(std::move(environment)) {}
 
 Supervisor::~Supervisor() {
   for (auto& m : commands_) {
@@ -306,26 +336,22 @@ void Supervisor::Start(Managed* m, double now_s) {
     plan.argv = {"/bin/sh", "-c", m->spec.exec};
   } else {
     try {
-      plan = PlanExec(m->spec.exec, [](const std::string& name) { return getenv(name.c_str()); });
+      plan = PlanExec(m->spec.exec, [this](const std::string& name) -> const char* {
+        const auto value = environment_.find(name);
+        return value == environment_.end() ? nullptr : value->second.c_str();
+      });
     } catch (const std::invalid_argument& e) {
       fail(e.what());
       return;
     }
   }
   // The command's environment: ours plus its NAME=VALUE prefixes.
+  Environment environment = environment_;
+  for (const auto& [name, value] : plan.env) environment[name] = value;
   std::vector<std::string> env_strings;
-  for (char** e = environ; e && *e; ++e) {
-    const std::string entry = *e;
-    const std::string name = entry.substr(0, entry.find('='));
-    bool overridden = false;
-    for (const auto& [n, v] : plan.env) overridden = overridden || n == name;
-    if (!overridden) env_strings.push_back(entry);
-  }
-  std::string path_list = getenv("PATH") ? getenv("PATH") : "/usr/local/bin:/usr/bin:/bin";
-  for (const auto& [n, v] : plan.env) {
-    env_strings.push_back(n + "=" + v);
-    if (n == "PATH") path_list = v;
-  }
+  for (const auto& [name, value] : environment) env_strings.push_back(name + "=" + value);
+  const auto path = environment.find("PATH");
+  const std::string path_list = path != environment.end() ? path->second : kDefaultPath;
   const std::string program = FindExecutable(plan.argv[0], path_list);
   if (program.empty()) {
     fail("'" + plan.argv[0] + "' not found (or not executable) in PATH");

@@ -37,6 +37,16 @@ enum class CommandState : int8_t {
 };
 const char* ToString(CommandState state);
 
+// The environment a command starts with (NAME -> value); `${NAME}` in an exec line is looked
+// up in it too.
+using Environment = std::map<std::string, std::string>;
+
+// This process's environment, to be passed on to the commands, with `bin_dir` (if not empty)
+// put first on PATH so that commands find the programs installed beside the launcher.
+Environment InheritedEnvironment(const std::string& bin_dir = "");
+// The directory of this process's executable ("" if /proc does not tell).
+std::string OwnDirectory();
+
 struct CommandSpec {
   std::string id;
   std::string group;
@@ -84,7 +94,8 @@ bool StartGroupGuardian();
 
 class Supervisor {
  public:
-  explicit Supervisor(RespawnPolicy respawn = RespawnPolicy(), size_t max_buffered_output = 65536);
+  explicit Supervisor(RespawnPolicy respawn = RespawnPolicy(), size_t max_buffered_output = 65536,
+                      Environment environment = InheritedEnvironment());
   // Kills everything still running (SIGKILL, no grace): call Shutdown() first for a clean stop.
   ~Supervisor();
   Supervisor(const Supervisor&) = delete;
@@ -130,6 +141,7 @@ class Supervisor {
 
   RespawnPolicy respawn_;
   size_t max_buffered_output_;
+  Environment environment_;
   bool shutting_down_ = false;
   double last_step_s_ = 0;
   std::vector<std::unique_ptr<Managed>> commands_;  // in the order they were first ordered

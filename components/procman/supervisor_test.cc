@@ -61,6 +61,34 @@ std::string AllOutput(Supervisor* sup, std::string* acc) {
   return *acc;
 }
 
+TEST(Supervisor, CommandsStartWithTheGivenEnvironmentNotTheLaunchers) {
+  // Only what the supervisor is given: a variable of this process's own is not passed on, and
+  // ${NAME} in the exec line and PATH lookups use the given environment.
+  setenv("SARMAP_SUPERVISOR_TEST_OWN", "leaked", 1);
+  Supervisor sup(RespawnPolicy(), 65536,
+                 Environment{{"PATH", "/usr/bin:/bin"}, {"MISSION", "site-7"}});
+  unsetenv("SARMAP_SUPERVISOR_TEST_OWN");
+  sup.SetDesired({Spec("env", "sh -c 'echo [$MISSION][$SARMAP_SUPERVISOR_TEST_OWN][$0]' ${MISSION}",
+                       true)});
+  std::string out;
+  ASSERT_TRUE(StepUntil(&sup, [&] {
+    return StateOf(&sup, "env") == CommandState::kStopped &&
+           AllOutput(&sup, &out).find('\n') != std::string::npos;
+  }));
+  EXPECT_EQ(out.substr(0, out.find('\n') + 1), "[site-7][][site-7]\n") << out;
+}
+
+TEST(Supervisor, InheritedEnvironmentPutsTheLaunchersDirectoryFirstOnPath) {
+  const Environment plain = InheritedEnvironment();
+  const Environment with_bin = InheritedEnvironment("/opt/sarmap/bin");
+  ASSERT_EQ(with_bin.count("PATH"), 1u);
+  const std::string expected_rest =
+      plain.count("PATH") ? plain.at("PATH") : std::string("/usr/local/bin:/usr/bin:/bin");
+  EXPECT_EQ(with_bin.at("PATH"), "/opt/sarmap/bin:" + expected_rest);
+  EXPECT_EQ(with_bin.size(), plain.size() + (plain.count("PATH") ? 0 : 1));
+  EXPECT_FALSE(OwnDirectory().empty());
+}
+
 TEST(Supervisor, StartsStopsAndCapturesOutput) {
   Supervisor sup;
   sup.SetDesired(
