@@ -26,7 +26,7 @@ export CCACHE_NOHASHDIR := 1
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps configure build test bench bench-missions demo demo-hostile fuzz format clean help
+.PHONY: all deps configure build test bench bench-missions demo demo-hostile fuzz format docs clean help
 
 all: build
 
@@ -40,6 +40,7 @@ help:
 	@echo "             frontier vs sound_guided (MISSION_SITES=6, MISSION_MODES=frontier,sound_guided)"
 	@echo "make fuzz    libFuzzer on the decoding of every message type (FUZZ_SECONDS=300), then the"
 	@echo "             network fuzzer against the running stack (NET_FUZZ_SECONDS=60, NET_FUZZ_RATE=2000)"
+	@echo "make docs    rewrite the READMEs' configuration tables from the options and config/*.yaml"
 	@echo "make build   just build;  make deps  just install packages;  make clean"
 
 # Installs only what is missing, so a second run installs nothing.
@@ -102,6 +103,10 @@ fuzz: configure
 	  tests/harness/sarmap-netns $(BUILD_DIR)/bin/net_fuzz_test \
 	  --gtest_filter=NetFuzzTest.EveryNodeSurvivesAHostilePublisherOnEveryChannel \
 	  --flood-seconds $(NET_FUZZ_SECONDS) --flood-rate $(NET_FUZZ_RATE)
+
+# The READMEs' configuration tables, from the options' help strings and config/*.yaml.
+docs: build
+	$(BUILD_DIR)/bin/sarmap-options-doc --root . --write
 
 format:
 	find components log-tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i

@@ -3,6 +3,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 
 namespace sarmap {
@@ -106,20 +109,59 @@ template void ParseOverride(const std::string&, const std::string&, std::vector<
 template void ParseOverride(const std::string&, const std::string&, std::vector<int>*);
 template void ParseOverride(const std::string&, const std::string&, std::vector<std::string>*);
 
+namespace {
+
+// The shortest decimal that reads back as exactly `value` (0.05, not 0.050000000000000003).
+std::string ShortestDecimal(double value) {
+  char text[32];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof(text), "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  return text;
+}
+
+}  // namespace
+
 template <class T>
 std::string Format(const T& value) {
   YAML::Emitter out;
   out << YAML::Flow << value;
   return out.c_str();
 }
+template <>
+std::string Format(const double& value) {
+  if (std::isfinite(value)) return ShortestDecimal(value);
+  YAML::Emitter out;
+  out << value;  // .inf, -.inf, .nan
+  return out.c_str();
+}
+template <>
+std::string Format(const std::vector<double>& values) {
+  std::string out = "[";
+  for (size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + Format(values[i]);
+  return out + "]";
+}
 template std::string Format(const bool&);
 template std::string Format(const int&);
 template std::string Format(const int64_t&);
-template std::string Format(const double&);
 template std::string Format(const std::string&);
-template std::string Format(const std::vector<double>&);
 template std::string Format(const std::vector<int>&);
 template std::string Format(const std::vector<std::string>&);
+
+std::string MarkdownCell(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '|') {
+      out += "\\|";
+    } else if (c == '\n') {
+      out += ' ';
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
 
 std::string TypeName(const bool*) { return "a boolean"; }
 std::string TypeName(const int*) { return "an integer"; }

@@ -111,6 +111,13 @@ template <class T>
 void ParseOverride(const std::string& text, const std::string& key, T* out);
 template <class T>
 std::string Format(const T& value);
+// Doubles as the shortest decimal that reads back exactly.
+template <>
+std::string Format(const double& value);
+template <>
+std::string Format(const std::vector<double>& values);
+// `text` safe inside a Markdown table cell (| escaped, newlines folded).
+std::string MarkdownCell(const std::string& text);
 std::string TypeName(const bool*);
 std::string TypeName(const int*);
 std::string TypeName(const int64_t*);
@@ -205,6 +212,27 @@ class Writer {
   bool with_help_;
 };
 
+// One Markdown table row per leaf key ("a.b.c"), its value and its help.
+class MarkdownWriter {
+ public:
+  MarkdownWriter(std::ostream* out, std::string prefix) : out_(out), prefix_(std::move(prefix)) {}
+  template <class T>
+  void operator()(const char* key, const T& value, const char* help) {
+    const std::string full = prefix_ + key;
+    if constexpr (IsOptionsStruct<T>::value) {
+      MarkdownWriter child(out_, full + ".");
+      const_cast<T&>(value).Visit(child);
+    } else {
+      *out_ << "| `" << full << "` | `" << MarkdownCell(Format(value)) << "` | "
+            << MarkdownCell(help ? help : "") << " |\n";
+    }
+  }
+
+ private:
+  std::ostream* out_;
+  std::string prefix_;
+};
+
 struct ValidateVisitor {
   Validator* check;
   template <class T>
@@ -236,11 +264,11 @@ void ValidateOptions(const Options& options) {
   if (!check.errors().empty()) options_internal::ThrowErrors("invalid options", check.errors());
 }
 
-// Loads options: defaults from the struct, then `yaml_path` (if not empty; `section` selects
+// Reads options: defaults from the struct, then `yaml_path` (if not empty; `section` selects
 // a top-level key of the file, "" for the whole file), then `overrides` ("a.b=value").
-// Unknown keys, type errors and failed validation throw OptionsError.
+// Unknown keys and type errors throw OptionsError; values are not validated (LoadOptions is).
 template <class Options>
-Options LoadOptions(const std::string& yaml_path, const std::vector<std::string>& overrides,
+Options ReadOptions(const std::string& yaml_path, const std::vector<std::string>& overrides,
                     const std::string& section = "") {
   using namespace options_internal;
   Options options;
@@ -260,6 +288,15 @@ Options LoadOptions(const std::string& yaml_path, const std::vector<std::string>
     for (auto& p : pending) errors.push_back("--set " + p.first + ": unknown key");
     ThrowErrors("bad overrides", errors);
   }
+  return options;
+}
+
+// ReadOptions, then validation: unknown keys, type errors and invalid values throw
+// OptionsError naming every bad key.
+template <class Options>
+Options LoadOptions(const std::string& yaml_path, const std::vector<std::string>& overrides,
+                    const std::string& section = "") {
+  Options options = ReadOptions<Options>(yaml_path, overrides, section);
   ValidateOptions(options);
   return options;
 }
@@ -269,6 +306,17 @@ template <class Options>
 std::string OptionsToYaml(const Options& options, bool with_help) {
   std::ostringstream out;
   options_internal::Writer writer(&out, 0, with_help);
+  const_cast<Options&>(options).Visit(writer);
+  return out.str();
+}
+
+// Options as a Markdown table (key | value | meaning), for the configuration section of a
+// component's README.
+template <class Options>
+std::string OptionsToMarkdown(const Options& options) {
+  std::ostringstream out;
+  out << "| key | value | meaning |\n|---|---|---|\n";
+  options_internal::MarkdownWriter writer(&out, "");
   const_cast<Options&>(options).Visit(writer);
   return out.str();
 }

@@ -120,6 +120,22 @@ TEST(OptionsTest, PrintedYamlLoadsBackToTheSameOptions) {
   EXPECT_EQ(back.mode, "exact");
 }
 
+TEST(OptionsTest, MarkdownTableHasEveryLeafKeyItsValueAndHelp) {
+  TestOptions o;
+  o.mode = "exact";
+  o.grid.width = 9;
+  EXPECT_EQ(OptionsToMarkdown(o),
+            "| key | value | meaning |\n"
+            "|---|---|---|\n"
+            "| `max_range_m` | `4.5` | max range |\n"
+            "| `enabled` | `true` | on/off |\n"
+            "| `mode` | `exact` | fast or exact |\n"
+            "| `weights` | `[1, 2]` | weights |\n"
+            "| `grid.resolution_m` | `0.05` | cell size |\n"
+            "| `grid.width` | `9` | cells |\n");
+  EXPECT_EQ(options_internal::MarkdownCell("a | b\nc"), "a \\| b c");
+}
+
 TEST(OptionsTest, SectionSelectsATopLevelKey) {
   const auto path = WriteTemp("slam:\n  max_range_m: 1.5\nother: 3\n");
   EXPECT_DOUBLE_EQ(LoadOptions<TestOptions>(path, {}, "slam").max_range_m, 1.5);

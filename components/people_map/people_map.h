@@ -65,11 +65,11 @@ struct PeopleMapOptions {
   void Visit(V& v) {
     v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
     v("fuse_gate_chi2", fuse_gate_chi2,
-      "Mahalanobis gate (2 dof) for a heard and a seen person to be one");
+      "Mahalanobis gate (2 dof; 9.21 is 99 %) for a heard and a seen person to be one");
     v("fuse_max_distance_m", fuse_max_distance_m,
       "a heard and a seen person further apart are never fused");
     v("heard_gate_chi2", heard_gate_chi2,
-      "gate (1 dof) for a heard direction to point at a sound source");
+      "gate (1 dof; 6.63 is 99 %) for a heard direction to point at a sound source");
     v("min_direction_sigma_rad", min_direction_sigma_rad, "floor of a heard direction's std");
     v("min_position_sigma_m", min_position_sigma_m, "floor of a seen person's position std");
     v("confidence_gain", confidence_gain, "how fast confidence grows with each detection (0..1)");
@@ -78,7 +78,9 @@ struct PeopleMapOptions {
     v("min_report_confidence", min_report_confidence,
       "people below this confidence are not reported");
     v("heard_person_window_s", heard_person_window_s,
-      "a sound source stays a person this long after being heard calling");
+      "a sound source stays a person this long after being heard calling; min_heard_calls are "
+      "counted within it, and a call towards a source that converges within it still places "
+      "that caller");
     v("heard_needs_converged_source", heard_needs_converged_source,
       "a heard-only person is placed only at a converged sound source; a call towards an "
       "initialising "

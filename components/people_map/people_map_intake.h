@@ -55,7 +55,7 @@ struct PeopleMapNodeOptions {
     v("publish_period_s", publish_period_s, "PEOPLE_MAP is also republished this often");
     v("reorder_delay_s", reorder_delay_s,
       "inputs wait this long to be applied in capture-time order");
-    v("max_pose_gap_s", max_pose_gap_s, "largest gap to a known pose accepted for a detection");
+    v("max_pose_gap_s", max_pose_gap_s, "largest gap to a known pose accepted for a detection (further: dropped and counted)");
     v("pose_wait_s", pose_wait_s,
       "a detection newer than the latest pose waits this long (message time) for a later pose to "
       "interpolate from, else it is dropped (never placed with an extrapolated pose)");

@@ -213,13 +213,13 @@ struct SimOptions {
   ChannelOptions channels;
   template <class V>
   void Visit(V& v) {
-    v("world", world, "world file (config/worlds/*.yaml)");
+    v("world", world, "world file (config/worlds/*.yaml; --world FILE)");
     v("robot_config", robot_config, "robot description (camera and array extrinsics)");
     v("data_dir", data_dir, "shared data (people photos, voices); relative: from the repository root");
-    v("seed", seed, "random seed: the same seed gives the same run");
-    v("speed", speed, "simulated seconds per wall-clock second; 0 = as fast as possible");
+    v("seed", seed, "random seed: the same seed gives the same run (--seed N)");
+    v("speed", speed, "simulated seconds per wall-clock second; 0 = as fast as possible (--speed X)");
     v("start_utime", start_utime, "simulated time at start (us since epoch); 0 = wall clock");
-    v("duration_s", duration_s, "stop after this many simulated seconds; 0 = until stopped");
+    v("duration_s", duration_s, "stop after this many simulated seconds; 0 = until stopped (--duration S)");
     v("drive", drive, "auto (path until CMD_VEL arrives), cmd_vel, or path");
     v("cmd_vel_timeout_s", cmd_vel_timeout_s, "stop when CMD_VEL is older than this");
     v("command_key_file", command_key_file,

@@ -30,9 +30,10 @@ struct ScanOptions {
     v("adaptive_min_points", adaptive_min_points, "Adaptive voxel filter: keep at least this many points");
     v("loop_adaptive_max_length_m", loop_adaptive_max_length_m, "Adaptive voxel filter for loop-closure points");
     v("loop_adaptive_min_points", loop_adaptive_min_points, "Minimum loop-closure points per node");
-    v("laser_x_m", laser_x_m, "base_from_laser x");
-    v("laser_y_m", laser_y_m, "base_from_laser y");
-    v("laser_yaw_rad", laser_yaw_rad, "base_from_laser yaw");
+    v("laser_x_m", laser_x_m, "base_from_laser x, for scans that carry no laser pose of their own");
+    v("laser_y_m", laser_y_m, "base_from_laser y, for scans that carry no laser pose of their own");
+    v("laser_yaw_rad", laser_yaw_rad,
+      "base_from_laser yaw, for scans that carry no laser pose of their own");
   }
   void Validate(Validator& c) const {
     c.NonNegative("min_range_m", min_range_m);

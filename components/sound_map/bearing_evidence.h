@@ -81,8 +81,8 @@ struct BearingEvidenceOptions {
     v("min_rays", min_rays, "a source explains more than half of each of at least this many rays");
     v("solve_period_s", solve_period_s, "message time between solves, s");
     v("max_rays", max_rays,
-      "rays kept; beyond this rays from the same place in the same direction are merged, then the "
-      "oldest go");
+      "rays kept; beyond this, rays within 0.5 m of one another, in bearing bins of half "
+      "sigma_floor_deg and of one class, merge into one that stands for all; then the oldest go");
     v("merge_radius_m", merge_radius_m,
       "a source this close to a placed EKF source is that emitter (published once, by the better "
       "placed), m");

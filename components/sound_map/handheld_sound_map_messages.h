@@ -38,7 +38,8 @@ struct HandheldSoundMapOptions {
     v("people_audio_channel", people_audio_channel, "heard people in (marks sources as persons)");
     v("sound_map_channel", sound_map_channel, "the sound map out");
     v("rig_from_mic_array", rig_from_mic_array,
-      "the mic_array frame (its x axis along the linear array) in the rig frame");
+      "the mic_array frame (its x axis along the linear array) in the rig frame; the default is "
+      "a level Kinect's bar along the rig's y axis, 3 cm below the camera");
     v("reorder_delay_s", reorder_delay_s,
       "inputs are processed in time order once this much newer data arrived");
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");

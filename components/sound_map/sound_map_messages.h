@@ -62,7 +62,8 @@ struct SoundMapNodeOptions {
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
     v("request_repeat_s", request_repeat_s, "re-send the anchor request this often (wall clock; 0: only on change)");
     v("state_file", state_file,
-      "where the map's state is saved (crash-safe) and resumed from (\"\": nowhere)");
+      "where the map's state is saved (written beside it, then renamed over it: crash-safe) and "
+      "resumed from (\"\": nowhere)");
     v("state_save_period_s", state_save_period_s,
       "save the state this often when it changed (wall clock)");
     v("resume", resume,

@@ -83,7 +83,8 @@ struct KeywordOptions {
     v("max_duration_s", max_duration_s, "longest accepted detection (s)");
     v("min_utterance_fraction", min_utterance_fraction,
       "detection must cover at least this fraction of its voice-activity segment (0..1)");
-    v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call");
+    v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call; 0: every utterance is "
+      "decoded (safer where other people talk near a caller)");
     v("call_join_s", call_join_s,
       "with max_utterance_s: segments closer than this (s) count as one call for the length limit (0: off)");
     v("verifier", verifier, "logistic-regression verifier over per-hit features (README)");

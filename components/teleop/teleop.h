@@ -29,10 +29,11 @@ struct TeleopOptions {
     v("operator_id", operator_id, "name carried in every message; empty: user@host");
     v("command_key_file", command_key_file,
       "key (>= 16 random bytes, mode 600) that signs every TELEOP: the explorer's "
-      "command_key_file; empty: unsigned (obeyed only by an explorer without a key)");
+      "command_key_file; empty: unsigned (obeyed only by an explorer without a key); "
+      "--key-file FILE sets it");
     v("rate_hz", rate_hz,
-      "drive messages per second (the explorer ends an override teleop_timeout_s, 0.5 s, after "
-      "the last one arrived)");
+      "drive messages per second, 2..100 (the explorer ends an override teleop_timeout_s, 0.5 s, "
+      "after the last one arrived)");
     v("repeat", repeat,
       "stop, release and the end of a drive are sent this many times, 1/rate_hz apart, "
       "against datagram loss");

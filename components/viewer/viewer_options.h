@@ -23,9 +23,10 @@ struct ViewerNodeOptions {
   int max_text_bytes = 200;
   template <class V>
   void Visit(V& v) {
-    v("bind_address", bind_address, "address to listen on (0.0.0.0 for the robot's network)");
+    v("bind_address", bind_address, "address to listen on (0.0.0.0 for the robot's network: then set a token_file)");
     v("port", port, "HTTP port");
-    v("token_file", token_file, "file holding the access token; \"\" serves without a token");
+    v("token_file", token_file, "file holding the access token (one line, at least 8 characters); \"\" serves without a "
+      "token");
     v("camera_jpeg_quality", camera_jpeg_quality,
       "quality of the re-encoded thumbnail when RGB is not JPEG");
     v("http_threads", http_threads, "connections served at once");
