@@ -18,6 +18,7 @@
 
 #include "common/decode.h"
 #include "common/node.h"
+#include "common/testing/isolated_network.h"
 #include "log-tools/lcm_log_reader.h"
 #include "sarmap/image_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -53,7 +54,7 @@ bool WaitFor(const std::function<bool()>& done, double timeout_s) {
 class RecordTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!getenv("SARMAP_NETNS"))
+    if (!sarmap::IsolatedNetwork())
       GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
     dir_ = ::testing::TempDir() + "/record-test-" + std::to_string(getpid());
     std::string ignored;

@@ -1,12 +1,12 @@
 // Cross-process tests over real LCM UDP multicast. Run by CTest inside a private network
 // namespace (tests/harness/sarmap-netns); they refuse to run outside one.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <random>
 #include <regex>
@@ -14,6 +14,7 @@
 
 #include "common/channels.h"
 #include "common/node.h"
+#include "common/testing/isolated_network.h"
 #include "sarmap/message_samples.h"
 #include "tests/fuzz/samples.h"
 #include "tests/process.h"
@@ -25,7 +26,7 @@ namespace {
 class MultiProcessTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!getenv("SARMAP_NETNS")) {
+    if (!sarmap::IsolatedNetwork()) {
       GTEST_FAIL() << "run through tests/harness/sarmap-netns (ctest does): multi-process tests "
                       "must not use a real network";
     }
@@ -50,7 +51,8 @@ class RawSink {
   // Handles messages until `done` or the timeout.
   template <class Pred>
   bool SpinUntil(Pred done, double timeout_s) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (!done()) {
       if (std::chrono::steady_clock::now() > deadline) return false;
       lcm_->handleTimeout(20);
@@ -74,28 +76,31 @@ TEST_F(MultiProcessTest, EveryMessageTypeRoundTripsBetweenTwoProcesses) {
   ping.frame = "ping";
   sarmap::pose_t probe{};
   probe.orientation[0] = 1;
-  ASSERT_TRUE(sink.SpinUntil([&] {
-    lcm.publish("RT_pose_t", &probe);
-    return sink.counts_.count("RT_ECHO_pose_t") > 0;
-  }, 10)) << echo.Output();
+  ASSERT_TRUE(sink.SpinUntil(
+      [&] {
+        lcm.publish("RT_pose_t", &probe);
+        return sink.counts_.count("RT_ECHO_pose_t") > 0;
+      },
+      10))
+      << echo.Output();
 
   std::mt19937_64 rng(42);
   int types = 0;
-#define SARMAP_ROUND_TRIP(T)                                                                 \
-  for (int i = 0; i < 3; ++i) {                                                              \
-    sarmap::T m;                                                                             \
-    sarmap::samples::Fill(m, rng);                                                           \
-    m.header.utime = std::abs(m.header.utime);                                               \
-    m.header.seq = i;                                                                        \
-    /* only messages that pass the receiver's checks are echoed; make them sane */           \
-    const auto sent = Encode(m);                                                             \
-    lcm.publish("RT_" #T, sent.data(), static_cast<unsigned>(sent.size()));                  \
-    const bool plausible = common::CheckMessage(m).empty();                                  \
-    if (plausible) {                                                                         \
-      ASSERT_TRUE(sink.SpinUntil([&] { return sink.last_["RT_ECHO_" #T] == sent; }, 5))      \
-          << #T << " did not come back intact";                                              \
-    }                                                                                        \
-  }                                                                                          \
+#define SARMAP_ROUND_TRIP(T)                                                            \
+  for (int i = 0; i < 3; ++i) {                                                         \
+    sarmap::T m;                                                                        \
+    sarmap::samples::Fill(m, rng);                                                      \
+    m.header.utime = std::abs(m.header.utime);                                          \
+    m.header.seq = i;                                                                   \
+    /* only messages that pass the receiver's checks are echoed; make them sane */      \
+    const auto sent = Encode(m);                                                        \
+    lcm.publish("RT_" #T, sent.data(), static_cast<unsigned>(sent.size()));             \
+    const bool plausible = common::CheckMessage(m).empty();                             \
+    if (plausible) {                                                                    \
+      ASSERT_TRUE(sink.SpinUntil([&] { return sink.last_["RT_ECHO_" #T] == sent; }, 5)) \
+          << #T << " did not come back intact";                                         \
+    }                                                                                   \
+  }                                                                                     \
   ++types;
   SARMAP_FOR_EACH_MESSAGE_TYPE(SARMAP_ROUND_TRIP)
 #undef SARMAP_ROUND_TRIP
@@ -110,29 +115,30 @@ TEST_F(MultiProcessTest, SaneInstancesOfEveryTypeRoundTrip) {
   RawSink sink(&lcm, "RS_ECHO_.*");
   sarmap::pose_t probe{};
   probe.orientation[0] = 1;
-  ASSERT_TRUE(sink.SpinUntil([&] {
-    lcm.publish("RS_pose_t", &probe);
-    return sink.counts_.count("RS_ECHO_pose_t") > 0;
-  }, 10));
+  ASSERT_TRUE(sink.SpinUntil(
+      [&] {
+        lcm.publish("RS_pose_t", &probe);
+        return sink.counts_.count("RS_ECHO_pose_t") > 0;
+      },
+      10));
   std::mt19937_64 rng(1);
   int sane = 0;
   // Draw samples until one passes the checks, per type, with fixes for enum/count fields.
-#define SARMAP_SANE(T)                                                                    \
-  {                                                                                       \
-    bool done = false;                                                                    \
-    for (int attempt = 0; attempt < 2000 && !done; ++attempt) {                           \
-      sarmap::T m;                                                                        \
-      sarmap::samples::Fill(m, rng);                                                      \
-      SaneUp(&m);                                                                         \
-      if (!common::CheckMessage(m).empty()) continue;                                     \
-      const auto sent = Encode(m);                                                        \
-      lcm.publish("RS_" #T, sent.data(), static_cast<unsigned>(sent.size()));             \
-      ASSERT_TRUE(sink.SpinUntil([&] { return sink.last_["RS_ECHO_" #T] == sent; }, 5))   \
-          << #T;                                                                          \
-      done = true;                                                                        \
-      ++sane;                                                                             \
-    }                                                                                     \
-    EXPECT_TRUE(done) << "no sane sample of " #T;                                         \
+#define SARMAP_SANE(T)                                                                         \
+  {                                                                                            \
+    bool done = false;                                                                         \
+    for (int attempt = 0; attempt < 2000 && !done; ++attempt) {                                \
+      sarmap::T m;                                                                             \
+      sarmap::samples::Fill(m, rng);                                                           \
+      SaneUp(&m);                                                                              \
+      if (!common::CheckMessage(m).empty()) continue;                                          \
+      const auto sent = Encode(m);                                                             \
+      lcm.publish("RS_" #T, sent.data(), static_cast<unsigned>(sent.size()));                  \
+      ASSERT_TRUE(sink.SpinUntil([&] { return sink.last_["RS_ECHO_" #T] == sent; }, 5)) << #T; \
+      done = true;                                                                             \
+      ++sane;                                                                                  \
+    }                                                                                          \
+    EXPECT_TRUE(done) << "no sane sample of " #T;                                              \
   }
   SARMAP_FOR_EACH_MESSAGE_TYPE(SARMAP_SANE)
 #undef SARMAP_SANE
@@ -149,13 +155,15 @@ TEST_F(MultiProcessTest, DepthAndRgbAt30HzFor10sArriveWithZeroLoss) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  Process stream({"sarmap-test-peer", "stream", "--seconds", "10", "--rate", "30"}, dir_ + "/stream.log");
+  Process stream({"sarmap-test-peer", "stream", "--seconds", "10", "--rate", "30"},
+                 dir_ + "/stream.log");
   ASSERT_EQ(stream.Wait(30), 0) << stream.Output();
   ASSERT_EQ(sink.Wait(30), 0) << sink.Output();
   const std::string out = sink.Output();
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(out, m, std::regex(
-      "depth (\\d+) rgb (\\d+) depth_gaps (\\d+) rgb_gaps (\\d+) decode_errors (\\d+) dropped (\\d+)")))
+  ASSERT_TRUE(std::regex_search(out, m,
+                                std::regex("depth (\\d+) rgb (\\d+) depth_gaps (\\d+) rgb_gaps "
+                                           "(\\d+) decode_errors (\\d+) dropped (\\d+)")))
       << out;
   EXPECT_EQ(std::stoi(m[1]), 300) << out;
   EXPECT_EQ(std::stoi(m[2]), 300) << out;
@@ -185,7 +193,8 @@ TEST_F(MultiProcessTest, NodeSurvivesMalformedStreamsAndCountsWhatItDropped) {
   } status_sink{&dropped, &received};
   lcm.subscribe("NODE_STATUS", &StatusSink::Handle, &status_sink);
   const auto spin_until = [&](auto pred, double timeout_s) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (!pred() && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(50);
     return pred();
   };
@@ -237,7 +246,9 @@ TEST_F(MultiProcessTest, LogInfoReportsWhatWasSentAndWhereATruncatedLogBreaks) {
 
   std::string out;
   ASSERT_EQ(RunCapture({"sarmap-log", "info", log}, &out), 0) << out;
-  EXPECT_TRUE(std::regex_search(out, std::regex("POSE\\s+pose_t\\s+40\\s+[0-9.]+\\s+[0-9.]+\\s+3\\s"))) << out;
+  EXPECT_TRUE(
+      std::regex_search(out, std::regex("POSE\\s+pose_t\\s+40\\s+[0-9.]+\\s+[0-9.]+\\s+3\\s")))
+      << out;
   EXPECT_TRUE(std::regex_search(out, std::regex("CMD_VEL\\s+velocity_command_t\\s+20\\s"))) << out;
   EXPECT_TRUE(std::regex_search(out, std::regex("events\\s+60"))) << out;
 
@@ -248,7 +259,9 @@ TEST_F(MultiProcessTest, LogInfoReportsWhatWasSentAndWhereATruncatedLogBreaks) {
   std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() * 2 / 3 + 7);
   ASSERT_EQ(RunCapture({"sarmap-log", "info", cut}, &out), 3) << out;
   EXPECT_NE(out.find("the log is damaged"), std::string::npos) << out;
-  EXPECT_TRUE(std::regex_search(out, std::regex("breaks at byte \\d+ \\(after event \\d+\\): truncated"))) << out;
+  EXPECT_TRUE(
+      std::regex_search(out, std::regex("breaks at byte \\d+ \\(after event \\d+\\): truncated")))
+      << out;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(out, m, std::regex("events\\s+(\\d+)"))) << out;
   EXPECT_GT(std::stoi(m[1]), 30);

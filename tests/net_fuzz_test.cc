@@ -26,6 +26,7 @@
 
 #include "common/decode.h"
 #include "common/node.h"
+#include "common/testing/isolated_network.h"
 #include "sarmap/node_status_t.hpp"
 #include "tests/process.h"
 
@@ -98,13 +99,11 @@ Flood g_flood;
 class NetFuzzTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!getenv("SARMAP_NETNS")) {
+    if (!sarmap::IsolatedNetwork()) {
       GTEST_FAIL() << "run through tests/harness/sarmap-netns (ctest does): the network fuzzer "
                       "must not reach a real network";
     }
-    const char* source = getenv("SARMAP_SOURCE_DIR");
-    ASSERT_TRUE(source != nullptr) << "SARMAP_SOURCE_DIR not set";
-    ASSERT_EQ(chdir(source), 0) << source;  // the nodes read config/ from here
+    ASSERT_EQ(chdir(SARMAP_SOURCE_DIR), 0) << SARMAP_SOURCE_DIR;  // nodes read config/ here
     dir_ = ::testing::TempDir() + "/net-fuzz-" + std::to_string(getpid());
     std::string ignored;
     RunCapture({"mkdir", "-p", dir_}, &ignored);
@@ -196,8 +195,7 @@ TEST_F(NetFuzzTest, EveryNodeSurvivesAHostilePublisherOnEveryChannel) {
   add("sarmap-explore", {"sarmap-explore"});
   add("sarmap-monitor", {"sarmap-monitor", "--set", "print_period_s=0"});
   add("sarmap-viewer", {"sarmap-viewer"});
-  add("sarmap-procman-deputy[fuzz]",
-      {"sarmap-procman-deputy", "--id", "fuzz", "--key", key});
+  add("sarmap-procman-deputy[fuzz]", {"sarmap-procman-deputy", "--id", "fuzz", "--key", key});
   // The simulator last, as the demo starts it: its sensors feed the nodes above.
   add("sarmap-sim",
       {"sarmap-sim", "--world", "config/worlds/lab_dark.yaml", "--duration", "3600", "--speed", "1",
@@ -421,7 +419,9 @@ int main(int argc, char** argv) {
     } else if (i + 1 < argc && flag == "--flood-kinds") {
       sarmap::testing::g_flood.kinds = argv[++i];
     } else {
-      std::fprintf(stderr, "usage: net_fuzz_test [gtest flags] [--flood-seconds S] [--flood-rate N] [--flood-kinds RE]\n");
+      std::fprintf(stderr,
+                   "usage: net_fuzz_test [gtest flags] [--flood-seconds S] [--flood-rate N] "
+                   "[--flood-kinds RE]\n");
       return 2;
     }
   }

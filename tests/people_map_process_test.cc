@@ -10,6 +10,7 @@
 
 #include "common/node.h"
 #include "common/robot_config.h"
+#include "common/testing/isolated_network.h"
 #include "sarmap/doa_source_t.hpp"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/sound_map_t.hpp"
@@ -33,14 +34,18 @@ sarmap::person_detection_t SeenAt(const Eigen::Vector3d& c) {
 class PeopleMapProcessTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!getenv("SARMAP_NETNS")) GTEST_FAIL() << "run through tests/harness/sarmap-netns (ctest does)";
+    if (!sarmap::IsolatedNetwork())
+      GTEST_FAIL() << "run through tests/harness/sarmap-netns (ctest does)";
     dir_ = ::testing::TempDir() + "/pm-" + std::to_string(getpid());
     std::string ignored;
     RunCapture({"mkdir", "-p", dir_}, &ignored);
     lcm_ = std::make_unique<lcm::LCM>(common::DefaultLcmUrl());
     lcm_->subscribe("PEOPLE_MAP", &PeopleMapProcessTest::OnMap, this);
   }
-  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const sarmap::people_map_t* m) { last_ = *m; ++maps_; }
+  void OnMap(const lcm::ReceiveBuffer*, const std::string&, const sarmap::people_map_t* m) {
+    last_ = *m;
+    ++maps_;
+  }
 
   std::unique_ptr<Process> StartNode(const std::string& state_file) {
     std::vector<std::string> args = {"sarmap-people-map", "--set", "reorder_delay_s=0.2", "--set",
@@ -76,7 +81,8 @@ class PeopleMapProcessTest : public ::testing::Test {
       const int step = static_cast<int>(std::lround(t / 0.05));
       if (step % 4 == 0) {  // people seen at 5 Hz
         const common::Rigid3d map_from_camera =
-            common::Rigid3d(Eigen::Vector3d(0.5 * t, 0, 0), Eigen::Quaterniond::Identity()) * base_from_camera;
+            common::Rigid3d(Eigen::Vector3d(0.5 * t, 0, 0), Eigen::Quaterniond::Identity()) *
+            base_from_camera;
         sarmap::people_detections_t seen{};
         seen.header.utime = utime;
         seen.header.frame = "camera";
@@ -133,8 +139,9 @@ std::string Describe(const sarmap::people_map_t& m) {
   std::string out;
   char line[200];
   for (const auto& p : m.people) {
-    snprintf(line, sizeof(line), "#%lld (%.6f, %.6f) cues %d n %d conf %.6f kw '%s'\n", static_cast<long long>(p.id),
-             p.position_m[0], p.position_m[1], p.cues, p.num_detections, p.confidence, p.keyword.c_str());
+    snprintf(line, sizeof(line), "#%lld (%.6f, %.6f) cues %d n %d conf %.6f kw '%s'\n",
+             static_cast<long long>(p.id), p.position_m[0], p.position_m[1], p.cues,
+             p.num_detections, p.confidence, p.keyword.c_str());
     out += line;
   }
   return out;
@@ -162,7 +169,9 @@ TEST_F(PeopleMapProcessTest, SameInputsGiveTheSameMapAndTheHiddenCallerIsPlaced)
           EXPECT_EQ(p.keyword, "help");
         } else {
           EXPECT_LT(std::min(std::hypot(p.position_m[0] - 3.0, p.position_m[1] - 0.5),
-                             std::hypot(p.position_m[0] - 4.0, p.position_m[1] + 0.8)), 0.05) << described;
+                             std::hypot(p.position_m[0] - 4.0, p.position_m[1] + 0.8)),
+                    0.05)
+              << described;
         }
       }
       EXPECT_TRUE(hidden) << described;
@@ -190,7 +199,8 @@ TEST_F(PeopleMapProcessTest, KillNineLosesNothingAlreadyFound) {
   EXPECT_GE(last_.num_people, before) << Describe(last_) << restarted->Output();
   EXPECT_NE(restarted->Output().find("resumed"), std::string::npos) << restarted->Output();
   for (const auto& line : {std::string("#1 "), std::string("#2 ")}) {
-    EXPECT_NE(Describe(last_).find(line), std::string::npos) << "lost " << line << " of\n" << found_before;
+    EXPECT_NE(Describe(last_).find(line), std::string::npos) << "lost " << line << " of\n"
+                                                             << found_before;
   }
 }
 

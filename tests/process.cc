@@ -14,14 +14,7 @@
 namespace sarmap {
 namespace testing {
 
-std::string BinDir() {
-  const char* dir = getenv("SARMAP_BIN_DIR");
-#ifdef SARMAP_BIN_DIR
-  return dir && *dir ? dir : SARMAP_BIN_DIR;
-#else
-  return dir && *dir ? dir : ".";
-#endif
-}
+std::string BinDir() { return SARMAP_BIN_DIR; }
 
 Process::Process(std::vector<std::string> args, const std::string& output_path)
     : output_path_(output_path) {

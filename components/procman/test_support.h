@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "common/node.h"
 #include "procman/process_table.h"
 #include "sarmap/pm_info_t.hpp"
 #include "sarmap/pm_orders_t.hpp"
@@ -31,10 +32,7 @@ inline double SteadyNow() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-inline std::string BinDir() {
-  const char* env = getenv("SARMAP_BIN_DIR");
-  return env && *env ? env : SARMAP_BIN_DIR;
-}
+inline std::string BinDir() { return SARMAP_BIN_DIR; }
 
 // A scratch directory with a key file (0600); removed at the end.
 class Scratch {
@@ -149,7 +147,7 @@ inline CliResult Run(const std::vector<std::string>& argv, const std::string& lo
 // Watches PM_INFO (latest per deputy) and PM_ORDERS (raw copies, for replay tests).
 class Watcher {
  public:
-  Watcher() : lcm_(getenv("SARMAP_LCM_URL") ? getenv("SARMAP_LCM_URL") : "") {
+  Watcher() : lcm_(common::DefaultLcmUrl()) {
     if (!lcm_.good()) throw std::runtime_error("LCM init failed");
     lcm_.subscribe("^PM_INFO$", &Watcher::OnInfo, this);
     lcm_.subscribe("^PM_ORDERS$", &Watcher::OnOrders, this);

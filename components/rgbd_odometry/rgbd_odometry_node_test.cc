@@ -13,6 +13,7 @@
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/node.h"
+#include "common/testing/isolated_network.h"
 #include "rgbd_odometry/synthetic_room.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -38,7 +39,7 @@ struct Sink {
 };
 
 TEST(RgbdOdometryNode, WalkingForwardGivesRigPosesAndBadImagesAreCounted) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "runs through tests/harness/sarmap-netns (ctest does)";
   const std::string src = SARMAP_SOURCE_DIR;
   const std::string log =

@@ -2,12 +2,10 @@
 // rendered (and JPEG-coded, as published) colour frames.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
-
-#include <cstdlib>
-#include <filesystem>
 
 #include "common/image_codec.h"
 #include "sim/simulator.h"
@@ -45,8 +43,8 @@ TEST(SimHogTest, DefaultPeopleDetectorFindsVisiblePeopleInLitLab) {
     const Simulator::View view = sim.RenderView();
     sarmap::header_t header;
     sarmap::camera_intrinsics_t intrinsics{};
-    const sarmap::image_t jpeg = common::MakeColorImage(header, intrinsics, view.rgb.data(), view.width,
-                                                        view.height, options.camera.jpeg_quality);
+    const sarmap::image_t jpeg = common::MakeColorImage(
+        header, intrinsics, view.rgb.data(), view.width, view.height, options.camera.jpeg_quality);
     std::vector<uint8_t> rgb;
     std::string error;
     ASSERT_TRUE(common::DecodeColorImage(jpeg, &rgb, &error)) << error;
@@ -55,12 +53,8 @@ TEST(SimHogTest, DefaultPeopleDetectorFindsVisiblePeopleInLitLab) {
     cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
     std::vector<cv::Rect> detections;
     std::vector<double> weights;
-    hog.detectMultiScale(bgr, detections, weights, 0.0, cv::Size(8, 8), cv::Size(16, 16), 1.05, 2.0);
-    if (const char* dump = std::getenv("SARMAP_SIM_DUMP")) {
-      cv::Mat shown = bgr.clone();
-      for (const cv::Rect& r : detections) cv::rectangle(shown, r, cv::Scalar(0, 255, 0), 2);
-      cv::imwrite(std::string(dump) + "/hog_" + std::to_string(static_cast<int>(t * 10)) + ".png", shown);
-    }
+    hog.detectMultiScale(bgr, detections, weights, 0.0, cv::Size(8, 8), cv::Size(16, 16), 1.05,
+                         2.0);
     for (size_t k = 0; k < sim.world().people.size(); ++k) {
       const Person& person = sim.world().people[k];
       const auto& box = view.person_box[k];
@@ -76,9 +70,9 @@ TEST(SimHogTest, DefaultPeopleDetectorFindsVisiblePeopleInLitLab) {
         hit = hit || (r.contains(centre) && r.height > 0.8 * body_h && r.height < 2.0 * body_h);
       }
       found += hit;
-      EXPECT_TRUE(hit) << person.name << " at t=" << t << " not detected (body box " << box[0] << ","
-                       << box[1] << " - " << box[2] << "," << box[3] << ", " << detections.size()
-                       << " detections)";
+      EXPECT_TRUE(hit) << person.name << " at t=" << t << " not detected (body box " << box[0]
+                       << "," << box[1] << " - " << box[2] << "," << box[3] << ", "
+                       << detections.size() << " detections)";
     }
   }
   std::printf("HOG: %d of %d visible standing people detected\n", found, expected);
@@ -107,11 +101,13 @@ TEST(SimHogTest, NobodyIsFoundInTheDarkLab) {
     cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
     std::vector<cv::Rect> detections;
     std::vector<double> weights;
-    hog.detectMultiScale(bgr, detections, weights, 0.0, cv::Size(8, 8), cv::Size(16, 16), 1.05, 2.0);
+    hog.detectMultiScale(bgr, detections, weights, 0.0, cv::Size(8, 8), cv::Size(16, 16), 1.05,
+                         2.0);
     detections_total += static_cast<int>(detections.size());
   }
-  std::printf("dark lab: %d people in view over 3 frames, %d HOG detections\n", in_view, detections_total);
-  EXPECT_GE(in_view, 4);  // they are there (the depth camera sees them) ...
+  std::printf("dark lab: %d people in view over 3 frames, %d HOG detections\n", in_view,
+              detections_total);
+  EXPECT_GE(in_view, 4);           // they are there (the depth camera sees them) ...
   EXPECT_EQ(detections_total, 0);  // ... but not in colour
 }
 

@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "common/testing/isolated_network.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/node_status_t.hpp"
 #include "tests/process.h"
@@ -44,7 +45,7 @@ size_t Count(const std::string& text, const std::string& what) {
 }
 
 void CheckNode(const std::string& program, const std::string& config) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   ASSERT_EQ(chdir(SARMAP_SOURCE_DIR), 0);  // the configs name config/arrays/... from here
   const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
+#include "common/testing/isolated_network.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/sound_map_t.hpp"
@@ -37,7 +38,7 @@ struct Walk {
 Walk RunWalk(bool future_poses);
 
 TEST(HandheldSoundMapNode, MapsASourceFromRigPosesAndLinearArrayAngles) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const Walk w = RunWalk(false);
   EXPECT_EQ(w.exit_code, 0);
@@ -59,7 +60,7 @@ TEST(HandheldSoundMapNode, MapsASourceFromRigPosesAndLinearArrayAngles) {
 // Two RIG_POSEs a year ahead: without the stamp gate they became the node's clock, every later
 // input was late and SOUND_MAP went out a year ahead.
 TEST(HandheldSoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const Walk w = RunWalk(true);
   EXPECT_EQ(w.exit_code, 0);

@@ -22,6 +22,7 @@ struct MapRun {
   LinearArraySoundMap::Counters counters;
   double worst_error_m = 0;  // horizontal, nearest converged source
   int matched = 0;           // true sources with a converged source within match_m horizontally
+  std::string diagnosis;     // the map's counters and the sources near each truth, for failures
 };
 
 // Feeds the simulation to the map: the dead-reckoned odometry as the pose source, every
@@ -65,14 +66,16 @@ MapRun Feed(int trajectory, double doa_sigma_deg, int churn, uint64_t seed, doub
   map.Finish();
   run.sources = map.sources();
   run.counters = map.counters();
-  if (std::getenv("SARMAP_TEST_DEBUG")) {
+  {
     const auto& c = run.counters;
-    printf(
-        "  born %ld restarted %ld converged %ld merged %ld pruned %ld gated out %ld dup %ld "
-        "flipped %ld used %ld\n",
-        (long)c.sources_born, (long)c.sources_restarted, (long)c.sources_converged,
-        (long)c.sources_merged, (long)c.sources_pruned, (long)c.doas_gated_out,
-        (long)c.doas_duplicate, (long)c.mirrors_flipped, (long)c.doas_used);
+    char line[256];
+    snprintf(line, sizeof(line),
+             "born %ld restarted %ld converged %ld merged %ld pruned %ld gated out %ld dup %ld "
+             "flipped %ld used %ld\n",
+             (long)c.sources_born, (long)c.sources_restarted, (long)c.sources_converged,
+             (long)c.sources_merged, (long)c.sources_pruned, (long)c.doas_gated_out,
+             (long)c.doas_duplicate, (long)c.mirrors_flipped, (long)c.doas_used);
+    run.diagnosis += line;
   }
   for (const Eigen::Vector3d& truth : run.data.sources) {
     // Horizontal error: the height of a source rests on the up-and-down moves alone (the
@@ -80,15 +83,16 @@ MapRun Feed(int trajectory, double doa_sigma_deg, int churn, uint64_t seed, doub
     double best = 1e9;
     for (const auto& s : run.sources)
       if (s.converged) best = std::min(best, (s.position_m - truth).head<2>().norm());
-    if (std::getenv("SARMAP_TEST_DEBUG")) {
-      for (const auto& s : run.sources)
-        if ((s.position_m - truth).norm() < 3)
-          printf(
-              "  truth (%.1f %.1f %.1f): source %ld (%.2f %.2f %.2f) conv %d obs %d hyp %d track "
-              "%ld\n",
-              truth.x(), truth.y(), truth.z(), static_cast<long>(s.id), s.position_m.x(),
-              s.position_m.y(), s.position_m.z(), s.converged, s.observations, s.hypotheses_left,
-              static_cast<long>(s.track_ids.empty() ? -1 : s.track_ids[0]));
+    for (const auto& s : run.sources) {
+      if ((s.position_m - truth).norm() >= 3) continue;
+      char line[256];
+      snprintf(line, sizeof(line),
+               "truth (%.1f %.1f %.1f): source %ld (%.2f %.2f %.2f) conv %d obs %d hyp %d "
+               "track %ld\n",
+               truth.x(), truth.y(), truth.z(), static_cast<long>(s.id), s.position_m.x(),
+               s.position_m.y(), s.position_m.z(), s.converged, s.observations, s.hypotheses_left,
+               static_cast<long>(s.track_ids.empty() ? -1 : s.track_ids[0]));
+      run.diagnosis += line;
     }
     run.worst_error_m = std::max(run.worst_error_m, best);
     run.matched += best < match_m;
@@ -107,7 +111,7 @@ TEST(LinearArraySoundMap, MapsTheSecondTrajectorysSourcesFromOdometryAndTrackIds
   // every 4 m: the hard case of §5.5.1. From the odometry alone (no landmarks) the sources
   // lie 0.2-0.9 m off horizontally, and over seeds 1-14 one in 8 is sometimes lost.
   EXPECT_LE(run.sources.size(), 10u);  // about one source per track
-  EXPECT_GE(run.matched, 7);
+  EXPECT_GE(run.matched, 7) << run.diagnosis;
   EXPECT_GT(run.counters.window_optimisations, 100);
 }
 
@@ -122,7 +126,7 @@ TEST(LinearArraySoundMap, KeepsOneSourcePerEmitterWhenTrackIdsChurn) {
       "0.5 m, worst %.3f m\n",
       run.sources.size(), converged, static_cast<long>(run.counters.sources_merged), run.matched,
       run.worst_error_m);
-  EXPECT_EQ(run.matched, 8);
+  EXPECT_EQ(run.matched, 8) << run.diagnosis;
   EXPECT_LE(converged, 10);  // a few duplicates at most, not one per track id (16 here)
 }
 
@@ -131,7 +135,7 @@ TEST(LinearArraySoundMap, ResolvesHeightOnTheFirstTrajectory) {
   const MapRun run = Feed(1, 3.0, 0, 13);
   printf("trajectory 1: %d of 8 within 0.5 m, worst %.3f m, mirrors flipped %ld\n", run.matched,
          run.worst_error_m, static_cast<long>(run.counters.mirrors_flipped));
-  EXPECT_EQ(run.matched, 8);
+  EXPECT_EQ(run.matched, 8) << run.diagnosis;
   EXPECT_LT(run.worst_error_m, 0.4);
   // ... and each pair's two sources lie on either side of the array's mean height.
   int above = 0, below = 0;

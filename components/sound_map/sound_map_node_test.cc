@@ -10,6 +10,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
+#include "common/testing/isolated_network.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -30,7 +31,8 @@ struct Sink {
     ++maps;
     newest_map_utime = std::max(newest_map_utime, m->header.utime);
   }
-  void OnRequest(const lcm::ReceiveBuffer*, const std::string&, const sarmap::slam_anchor_request_t* m) {
+  void OnRequest(const lcm::ReceiveBuffer*, const std::string&,
+                 const sarmap::slam_anchor_request_t* m) {
     request = *m;
     ++requests;
   }
@@ -80,9 +82,11 @@ void PublishStep(lcm::LCM& lcm, int k, double sx, double sy) {
 }
 
 TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
-  if (!getenv("SARMAP_NETNS")) GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
+  if (!sarmap::IsolatedNetwork())
+    GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
-  const std::string log = ::testing::TempDir() + "/sound-map-node-" + std::to_string(getpid()) + ".log";
+  const std::string log =
+      ::testing::TempDir() + "/sound-map-node-" + std::to_string(getpid()) + ".log";
   sarmap::testing::Process node(
       {"sarmap-sound-map", "--lcm-url", url, "--config",
        std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
@@ -142,7 +146,7 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
 // Two POSEs stamped a year ahead (a skewed clock, a forged message) are dropped and counted:
 // the inputs after them are still used and SOUND_MAP keeps its stamps.
 TEST(SoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
   const std::string log =

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/testing/isolated_network.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/node_status_t.hpp"
@@ -50,7 +51,7 @@ struct StatusSink {
 };
 
 TEST(SpeechNode, ADoaFloodOfNewTrackIdsIsBoundedAndSigintStillStopsIt) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
   const std::string log =

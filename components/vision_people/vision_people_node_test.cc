@@ -12,6 +12,7 @@
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/node.h"
+#include "common/testing/isolated_network.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "tests/process.h"
@@ -40,7 +41,7 @@ struct Sink {
 using testing_util::KinectIntrinsics;
 
 TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
-  if (!getenv("SARMAP_NETNS"))
+  if (!sarmap::IsolatedNetwork())
     GTEST_SKIP() << "runs through tests/harness/sarmap-netns (ctest does)";
   const std::string src = SARMAP_SOURCE_DIR;
   const std::string log =
