@@ -94,12 +94,20 @@ void Node::GuardReceiveSocket() {
 }
 
 void Node::AddTimer(double period_s, std::function<void()> callback) {
-  timers_.push_back(Timer{period_s, SteadySeconds() + period_s, std::move(callback)});
+  timers_.push_back(Timer{period_s, Now() + period_s, std::move(callback)});
+}
+
+void Node::SetClock(std::function<double()> now_s) {
+  const double uptime_s = Now() - start_s_;
+  clock_ = std::move(now_s);
+  const double now = Now();
+  start_s_ = now - uptime_s;
+  for (Timer& t : timers_) t.next_s = now + t.period_s;
 }
 
 bool Node::SpinOnce(double timeout_s) {
   if (stopping()) return false;
-  double now = SteadySeconds();
+  double now = Now();
   double wait_s = timeout_s;
   for (const auto& t : timers_) wait_s = std::min(wait_s, std::max(0.0, t.next_s - now));
   pollfd fds[2] = {{lcm_->getFileno(), POLLIN, 0}, {g_signal_pipe[0], POLLIN, 0}};
@@ -114,7 +122,7 @@ bool Node::SpinOnce(double timeout_s) {
       return false;
     }
   }
-  now = SteadySeconds();
+  now = Now();
   for (auto& t : timers_) {
     if (now >= t.next_s) {
       // Skip missed periods instead of bursting after a stall.
@@ -153,7 +161,7 @@ void Node::PublishStatus() {
   status.node_name = name_;
   status.host = HostName();
   status.pid = getpid();
-  status.uptime_us = static_cast<int64_t>((SteadySeconds() - start_s_) * 1e6);
+  status.uptime_us = static_cast<int64_t>((Now() - start_s_) * 1e6);
   for (const auto& [channel, s] : stats_) {
     sarmap::channel_stats_t c;
     c.channel = channel;

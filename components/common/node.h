@@ -45,7 +45,7 @@ constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf
 
 struct ReceiveInfo {
   std::string channel;
-  double receive_time_s = 0;  // steady clock, for latency statistics only
+  double receive_time_s = 0;  // the node's clock (steady; a replay's: log time), s
   int64_t missed_before = 0;  // messages lost on this channel just before this one
 };
 
@@ -70,6 +70,7 @@ class Node {
   Node& operator=(const Node&) = delete;
 
   const std::string& name() const { return name_; }
+  const std::string& lcm_url() const { return lcm_url_; }
   lcm::LCM& lcm() { return *lcm_; }
 
   // Signs what this node publishes and refuses what it receives unsigned or badly signed. Applies
@@ -118,9 +119,16 @@ class Node {
     return Publisher<T>(lcm_.get(), channel, bus_auth_);
   }
 
-  // Calls `callback` every `period_s` of wall-clock time (scheduling only; results must use
+  // Calls `callback` every `period_s` of the node's clock (scheduling only; results must use
   // message time).
   void AddTimer(double period_s, std::function<void()> callback);
+
+  // The node's clock, in seconds: receive times (and so the stamp gates that judge a message's
+  // stamp against its arrival), timers and uptime. Steady time by default; a log replay
+  // (log-tools/log_replay.h) sets the log's receive time, so that a replayed node decides as it
+  // did live. Timers already added restart their period from the new clock's present.
+  void SetClock(std::function<double()> now_s);
+  double Now() const { return clock_ ? clock_() : SteadySeconds(); }
 
   // Handles messages and timers until Stop(), SIGINT or SIGTERM. Returns 0, or 1 if LCM
   // failed.
@@ -175,6 +183,7 @@ class Node {
     std::function<void()> callback;
   };
   std::vector<Timer> timers_;
+  std::function<double()> clock_;  // empty: steady time
   bool stop_ = false;
   double start_s_;
   std::string status_message_;
@@ -210,7 +219,7 @@ class Node::TypedSubscription : public Node::SubscriptionBase {
     }
     ReceiveInfo info;
     info.channel = channel;
-    info.receive_time_s = SteadySeconds();
+    info.receive_time_s = node_->Now();
     info.missed_before = stats_->sequence.Observe(msg.header.seq);
     ++stats_->received;
     stats_->last_utime = msg.header.utime;

@@ -82,6 +82,17 @@ void SpeechNode::OnAudio(const audio_frame_t& msg) {
   people_msgs_.clear();
   stream_->OnAudio(msg.samples.data(), msg.num_samples, msg.num_channels, msg.header.utime, device_,
                    &event_msgs_, &people_msgs_);
+  Publish();
+}
+
+void SpeechNode::Finish() {
+  event_msgs_.clear();
+  people_msgs_.clear();
+  stream_->Flush(device_, &event_msgs_, &people_msgs_);
+  Publish();
+}
+
+void SpeechNode::Publish() {
   for (const auto& r : stream_->last_results()) {
     SARMAP_LOG(INFO) << "heard" << (r.keyword.empty() ? "" : " keyword '" + r.keyword + "'")
                      << (r.text.empty() ? "" : " \"" + r.text + "\"") << " track " << r.track_id

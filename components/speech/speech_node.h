@@ -22,12 +22,19 @@ class SpeechNode {
   // Throws common::OptionsError on an unusable array or options.
   SpeechNode(const SpeechNodeOptions& options, common::Node* node);
 
+  // At the end (SIGINT/SIGTERM, or the end of a replayed log): publishes the utterances still
+  // open.
+  void Finish();
+
   int64_t dropped() const { return dropped_; }
   int64_t events() const { return events_; }
+  int64_t people() const { return people_; }
+  const SpeechStream& stream() const { return *stream_; }
 
  private:
   void OnDoa(const doa_t& msg);
   void OnAudio(const audio_frame_t& msg);
+  void Publish();
   void Drop(const std::string& why);
   void UpdateStatus();
 

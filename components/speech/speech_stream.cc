@@ -54,6 +54,18 @@ void SpeechStream::OnAudio(const int16_t* data, int frames, int block_channels, 
   anchor_utime_ = utime;
   results_.clear();
   processor_->Push(data, frames, block_channels, &results_);
+  Emit(device, events, people);
+}
+
+void SpeechStream::Flush(const std::string& device, std::vector<sarmap::speech_event_t>* events,
+                         std::vector<sarmap::people_detections_t>* people) {
+  results_.clear();
+  processor_->Flush(&results_);
+  Emit(device, events, people);
+}
+
+void SpeechStream::Emit(const std::string& device, std::vector<sarmap::speech_event_t>* events,
+                        std::vector<sarmap::people_detections_t>* people) const {
   for (const auto& r : results_) {
     const sarmap::speech_event_t e =
         ToSpeechEvent(r, ToUtime(r.start_sample), ToUtime(r.end_sample));

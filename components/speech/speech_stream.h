@@ -40,11 +40,17 @@ class SpeechStream {
   void OnAudio(const int16_t* data, int frames, int block_channels, int64_t utime,
                const std::string& device, std::vector<sarmap::speech_event_t>* events,
                std::vector<sarmap::people_detections_t>* people);
-  // The results of the last OnAudio (for logs).
+  // Ends the utterances still open (at the end of a stream), as OnAudio appends results.
+  void Flush(const std::string& device, std::vector<sarmap::speech_event_t>* events,
+             std::vector<sarmap::people_detections_t>* people);
+  // The results of the last OnAudio or Flush (for logs).
   const std::vector<SpeechResult>& last_results() const { return results_; }
 
  private:
   int64_t ToUtime(int64_t sample) const;
+  // SPEECH for every result in results_, PEOPLE_AUDIO for each keyword with a direction.
+  void Emit(const std::string& device, std::vector<sarmap::speech_event_t>* events,
+            std::vector<sarmap::people_detections_t>* people) const;
 
   SpeechNodeOptions options_;
   sound::ArrayGeometry geometry_;

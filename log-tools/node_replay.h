@@ -1,0 +1,68 @@
+#pragma once
+// Replays a log into a node adapter: the class that runs live (its subscriptions, message
+// checks, stamp gates and timers) runs offline on the recorded inputs, so a replay is the live
+// pipeline by construction. The node runs over memq://, its clock is the log's receive time
+// from the first event fed on (common::Node::SetClock), and each event fed is published on the node's bus and handled,
+// with everything it causes, before the next is read.
+//
+//   common::Node node("sarmap-log-speech", "memq://");
+//   speech::SpeechNode speech(options, &node);
+//   logtools::NodeReplay replay(&node);
+//   replay.Capture("SPEECH|PEOPLE_AUDIO", [&](const std::string& channel,
+//                                             const std::vector<uint8_t>& data) { ... });
+//   replay.Run(log_path, [&](const logtools::LogEvent& e) { return e.channel == "AUDIO"; });
+//   speech.Finish();
+//   replay.Drain();
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/node.h"
+#include "log-tools/lcm_log_reader.h"
+
+namespace sarmap {
+namespace logtools {
+
+class NodeReplay {
+ public:
+  // Throws std::invalid_argument unless `node` runs over memq://.
+  explicit NodeReplay(common::Node* node);
+  ~NodeReplay();
+  NodeReplay(const NodeReplay&) = delete;
+  NodeReplay& operator=(const NodeReplay&) = delete;
+
+  using Sink = std::function<void(const std::string& channel, const std::vector<uint8_t>& data)>;
+  // What the node publishes on channels matching `channel_regex` (anchored) goes to `sink`, in
+  // the order published, during the event that caused it (now_us() is that event's time).
+  void Capture(const std::string& channel_regex, Sink sink);
+
+  struct Stats {
+    int64_t events_read = 0;
+    int64_t events_fed = 0;
+    std::vector<LogProblem> problems;  // damage the tolerant reader read past
+  };
+  // Reads `path` (LcmLogReader: past damage) and feeds every event `feed` accepts (every event
+  // when `feed` is empty; `feed` may also copy or count it). Stops early on SIGINT/SIGTERM.
+  // With `progress`, a line per tenth of the file on stderr. Throws std::runtime_error when the
+  // file cannot be opened.
+  Stats Run(const std::string& path, const std::function<bool(const LogEvent&)>& feed,
+            bool progress = true);
+  // Handles everything pending on the bus (e.g. after the adapter's Finish()).
+  void Drain();
+
+  // Receive time of the event being fed, us (0 before the first).
+  int64_t now_us() const { return now_us_; }
+
+ private:
+  class CaptureHandler;
+
+  common::Node* node_;
+  int64_t now_us_ = 0;
+  std::vector<std::unique_ptr<CaptureHandler>> captures_;
+};
+
+}  // namespace logtools
+}  // namespace sarmap

@@ -1,0 +1,146 @@
+// NodeReplay: a node adapter fed from a log decides on the log's clock, in the log's order,
+// and what it publishes is captured during the input that caused it.
+#include "log-tools/node_replay.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <vector>
+
+#include "common/decode.h"
+#include "common/stamp_gate.h"
+#include "sarmap/pose_t.hpp"
+
+namespace sarmap {
+namespace logtools {
+namespace {
+
+constexpr int64_t kStartUs = 1700000000000000;  // receive time of the first event
+
+// `n` POSE events 0.5 s apart (receive time = stamp, except event `far` whose stamp is an hour
+// ahead of its arrival), each followed by an OTHER event; bytes of damage after event `n/2`.
+std::string WriteLog(int n, int far) {
+  const std::string path = ::testing::TempDir() + "/node_replay_test_" +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                           std::to_string(getpid()) + ".lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    int64_t number = 0;
+    for (int i = 0; i < n; ++i) {
+      sarmap::pose_t pose{};
+      const int64_t receive_us = kStartUs + i * 500000;
+      pose.header.utime = receive_us + (i == far ? 3600 * 1000000LL : 0);
+      pose.header.seq = i;
+      pose.header.frame = "map";
+      pose.position_m[0] = i;
+      pose.orientation[0] = 1;
+      std::vector<uint8_t> buf(pose.getEncodedSize());
+      pose.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      for (const char* channel : {"POSE", "OTHER"}) {
+        lcm::LogEvent event;
+        event.eventnum = number++;
+        event.timestamp = receive_us;
+        event.channel = channel;
+        event.datalen = static_cast<int32_t>(buf.size());
+        event.data = buf.data();
+        log.writeEvent(&event);
+      }
+    }
+  }
+  // Damage in the middle: what follows is still read.
+  std::vector<char> bytes;
+  {
+    FILE* f = fopen(path.c_str(), "rb");
+    fseek(f, 0, SEEK_END);
+    bytes.resize(static_cast<size_t>(ftell(f)));
+    fseek(f, 0, SEEK_SET);
+    EXPECT_EQ(fread(bytes.data(), 1, bytes.size(), f), bytes.size());
+    fclose(f);
+  }
+  const size_t middle = bytes.size() / 2;
+  for (size_t k = middle; k < middle + 40; ++k) bytes[k] = 0x5a;
+  FILE* f = fopen(path.c_str(), "wb");
+  fwrite(bytes.data(), 1, bytes.size(), f);
+  fclose(f);
+  return path;
+}
+
+// A small adapter as the nodes are written: POSE through a stamp gate on the receive time, a
+// 1 s timer that publishes how many poses it took.
+class CountingNode {
+ public:
+  explicit CountingNode(common::Node* node)
+      : node_(node), count_pub_(node->Advertise<sarmap::pose_t>("COUNT")) {
+    node->Subscribe<sarmap::pose_t>("POSE", [this](const sarmap::pose_t& m,
+                                                   const common::ReceiveInfo& info) {
+      receive_s.push_back(info.receive_time_s);
+      if (!gates_.Accept(0, m.header.utime, info.receive_time_s)) return;
+      positions.push_back(m.position_m[0]);
+    });
+    node->AddTimer(1.0, [this] {
+      sarmap::pose_t count{};
+      count.header.utime = static_cast<int64_t>(node_->Now() * 1e6);
+      count.header.frame = "map";
+      count.orientation[0] = 1;
+      count.position_m[0] = static_cast<double>(positions.size());
+      count_pub_.Publish(&count);
+    });
+  }
+  std::vector<double> receive_s, positions;
+
+ private:
+  common::Node* node_;
+  common::StampGates gates_{common::StampGateOptions{}};
+  common::Node::Publisher<sarmap::pose_t> count_pub_;
+};
+
+TEST(NodeReplay, TheAdapterDecidesOnTheLogsClockInTheLogsOrder) {
+  const int n = 40, far = 7;
+  common::Node node("node-replay-test", "memq://");
+  CountingNode counting(&node);
+  NodeReplay replay(&node);
+  std::vector<std::pair<int64_t, double>> counts;  // (log time when published, poses so far)
+  replay.Capture("COUNT", [&](const std::string& channel, const std::vector<uint8_t>& data) {
+    sarmap::pose_t count;
+    std::string why;
+    ASSERT_TRUE(common::DecodeMessage(data.data(), data.size(), &count, &why)) << channel << why;
+    counts.emplace_back(replay.now_us(), count.position_m[0]);
+  });
+  const NodeReplay::Stats stats = replay.Run(
+      WriteLog(n, far), [](const LogEvent& e) { return e.channel == "POSE"; }, false);
+
+  EXPECT_FALSE(stats.problems.empty());  // the damage was read past...
+  EXPECT_GT(stats.events_read, n);       // ... and both channels were read
+  EXPECT_EQ(stats.events_fed, static_cast<int64_t>(counting.receive_s.size()));
+  EXPECT_GE(stats.events_fed, n - 2);    // at most the damaged event or two are lost
+  // Receive times are the log's, in order.
+  for (size_t i = 0; i < counting.receive_s.size(); ++i) {
+    EXPECT_GE(counting.receive_s[i], kStartUs * 1e-6);
+    if (i > 0) {
+      EXPECT_GT(counting.receive_s[i], counting.receive_s[i - 1]);
+    }
+  }
+  // The stamp an hour ahead of its arrival is refused, as live; the others pass in order.
+  for (size_t i = 0; i < counting.positions.size(); ++i) {
+    EXPECT_NE(counting.positions[i], far);
+    if (i > 0) {
+      EXPECT_GT(counting.positions[i], counting.positions[i - 1]);
+    }
+  }
+  EXPECT_EQ(counting.positions.size() + 1, counting.receive_s.size());
+  // The timer runs on log time: one COUNT per second of the log (19.5 s), not per wall second,
+  // each captured at the input that made it due, showing the poses taken by then.
+  ASSERT_GE(counts.size(), 18u);
+  EXPECT_LE(counts.size(), 20u);
+  for (size_t k = 1; k < counts.size(); ++k) {
+    EXPECT_NEAR((counts[k].first - counts[k - 1].first) * 1e-6, 1.0, 0.5 + 1e-9);
+    EXPECT_GE(counts[k].second, counts[k - 1].second);
+  }
+  EXPECT_NEAR(counts.back().second, static_cast<double>(counting.positions.size()), 2.0);
+}
+
+}  // namespace
+}  // namespace logtools
+}  // namespace sarmap
