@@ -42,7 +42,7 @@ void NodeReplay::Drain() {
 }
 
 NodeReplay::Stats NodeReplay::Run(const std::string& path,
-                                  const std::function<bool(const LogEvent&)>& feed,
+                                  const std::function<bool(LogEvent*)>& feed,
                                   bool progress) {
   LcmLogReader reader(path);
   Stats stats;
@@ -50,7 +50,7 @@ NodeReplay::Stats NodeReplay::Run(const std::string& path,
   LogEvent event;
   while (!node_->stopping() && reader.Next(&event)) {
     ++stats.events_read;
-    if (feed && !feed(event)) continue;
+    if (feed && !feed(&event)) continue;
     ++stats.events_fed;
     if (now_us_ == 0) {
       // The node's clock starts at the first input: its timers count from there.

@@ -10,7 +10,7 @@
 //   logtools::NodeReplay replay(&node);
 //   replay.Capture("SPEECH|PEOPLE_AUDIO", [&](const std::string& channel,
 //                                             const std::vector<uint8_t>& data) { ... });
-//   replay.Run(log_path, [&](const logtools::LogEvent& e) { return e.channel == "AUDIO"; });
+//   replay.Run(log_path, [&](logtools::LogEvent* e) { return e->channel == "AUDIO"; });
 //   speech.Finish();
 //   replay.Drain();
 
@@ -45,10 +45,11 @@ class NodeReplay {
     std::vector<LogProblem> problems;  // damage the tolerant reader read past
   };
   // Reads `path` (LcmLogReader: past damage) and feeds every event `feed` accepts (every event
-  // when `feed` is empty; `feed` may also copy or count it). Stops early on SIGINT/SIGTERM.
+  // when `feed` is empty; `feed` may also copy or count it, or rewrite its data, e.g. a pose
+  // replaced by the truth). Stops early on SIGINT/SIGTERM.
   // With `progress`, a line per tenth of the file on stderr. Throws std::runtime_error when the
   // file cannot be opened.
-  Stats Run(const std::string& path, const std::function<bool(const LogEvent&)>& feed,
+  Stats Run(const std::string& path, const std::function<bool(LogEvent*)>& feed,
             bool progress = true);
   // Handles everything pending on the bus (e.g. after the adapter's Finish()).
   void Drain();

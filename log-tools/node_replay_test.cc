@@ -109,7 +109,7 @@ TEST(NodeReplay, TheAdapterDecidesOnTheLogsClockInTheLogsOrder) {
     counts.emplace_back(replay.now_us(), count.position_m[0]);
   });
   const NodeReplay::Stats stats = replay.Run(
-      WriteLog(n, far), [](const LogEvent& e) { return e.channel == "POSE"; }, false);
+      WriteLog(n, far), [](LogEvent* e) { return e->channel == "POSE"; }, false);
 
   EXPECT_FALSE(stats.problems.empty());  // the damage was read past...
   EXPECT_GT(stats.events_read, n);       // ... and both channels were read

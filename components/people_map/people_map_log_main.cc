@@ -1,8 +1,8 @@
 // sarmap-log-people-map: replays the people map's inputs from an LCM log (PEOPLE_VISUAL, POSE,
-// PEOPLE_AUDIO, SOUND_MAP, as `sarmap-mission-bench --people-log` writes them) through the same
-// PeopleMapIntake and PeopleMap as sarmap-people-map, in message order, as fast as the CPU
-// allows; with SIM_TRUTH in the log it compares each person on the map with the true people, and
-// traces, detection by detection, what moved the estimate near one true person.
+// PEOPLE_AUDIO, SOUND_MAP, as `sarmap-mission-bench --people-log` writes them) through
+// sarmap-people-map's own adapter (PeopleMapNode) on the log's clock (logtools::NodeReplay), as
+// fast as the CPU allows; with SIM_TRUTH in the log it compares each person on the map with the
+// true people, and traces, detection by detection, what moved the estimate near one true person.
 //
 //   sarmap-log people-map site-3-frontier-people.lcmlog
 //   sarmap-log people-map site-3-frontier-people.lcmlog --trace person6
@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -21,23 +20,21 @@
 #include <string>
 #include <vector>
 
+#include "common/command_auth.h"
 #include "common/decode.h"
 #include "common/message_conversions.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
+#include "log-tools/lcm_log_reader.h"
+#include "log-tools/node_replay.h"
 #include "people_map/people_map.h"
 #include "people_map/people_map_intake.h"
+#include "people_map/people_map_node.h"
 #include "sarmap/sim_truth_t.hpp"
 
 namespace {
 
 using sarmap::common::Utime;
-
-template <class T>
-bool Decode(const lcm::LogEvent& e, T* msg) {
-  return e.datalen >= 0 &&
-         sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
-}
 
 struct TruePerson {
   std::string name;
@@ -97,14 +94,14 @@ int main(int argc, char** argv) {
     std::map<std::string, TruePerson> truth;
     TruthTrail trail;
     {
-      lcm::LogFile log(log_path, "r");
-      if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
+      logtools::LcmLogReader log(log_path);
       bool have_start = false;
       common::Rigid2d map_from_world;
-      while (const lcm::LogEvent* e = log.readNextEvent()) {
-        if (e->channel != "SIM_TRUTH") continue;
+      logtools::LogEvent e;
+      while (log.Next(&e)) {
+        if (e.channel != "SIM_TRUTH") continue;
         sim_truth_t m;
-        if (!Decode(*e, &m)) continue;
+        if (!common::DecodeMessage(e.data.data(), e.data.size(), &m)) continue;
         if (!have_start) {
           map_from_world =
               common::Rigid2d(m.start_pose[0], m.start_pose[1], m.start_pose[2]).inverse();
@@ -155,9 +152,18 @@ int main(int argc, char** argv) {
             common::Rigid2d(v[8], v[9], v[10]) * common::Rigid2d(v[4], v[5], v[6]).inverse();
       }
     }
-    people_map::PeopleMap map(options.map);
-    people_map::PeopleMapIntake intake(options, base_from_camera,
-                                       robot.base_from_mic_array.ToRigid3d(), &map);
+    // The node's adapter on the log's clock, as sarmap-people-map ran: its stamp gates, its
+    // reorder queue released by its timer, its interpolation. A replay starts empty and saves
+    // nothing.
+    people_map::PeopleMapNodeOptions replay_options = options;
+    replay_options.state_file = "";
+    common::Node node("sarmap-log-people-map", "memq://");
+    if (!node_args.bus_key_file.empty()) {
+      node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
+    }
+    people_map::PeopleMapNode people_map_node(replay_options, &node);
+    people_map::PeopleMap& map = *people_map_node.mutable_map();
+    logtools::NodeReplay replay(&node);
     // Seen detections: where each landed, which person took it, and where the true pose would
     // have put it.
     std::map<int64_t, int> taken_by_person;
@@ -189,14 +195,17 @@ int main(int argc, char** argv) {
           s.made_person ? " (new)" : "", (now - t).norm(), trace.c_str(), (z_truth - t).norm());
     });
 
-    lcm::LogFile log(log_path, "r");
-    if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
     int64_t seen_msgs = 0, poses = 0;
     const Utime t0 = trail.map_from_base.empty() ? 0 : trail.map_from_base.begin()->first;
-    while (const lcm::LogEvent* e = log.readNextEvent()) {
-      if (e->channel == options.pose_channel) {
+    const auto stats = replay.Run(log_path, [&](logtools::LogEvent* e) {
+      if (e->channel == options.visual_channel) {
+        ++seen_msgs;
+      } else if (e->channel == options.pose_channel) {
+        ++poses;
+        if (!truth_poses && corrections.empty()) return true;
+        // The pose replaced: the true one, or moved by the final graph's correction.
         pose_t m;
-        if (!Decode(*e, &m)) continue;
+        if (!common::DecodeMessage(e->data.data(), e->data.size(), &m)) return true;
         common::Rigid2d truth_pose;
         if (truth_poses && trail.At(m.header.utime, &truth_pose))
           common::FromRigid3d(common::Rigid3d::FromRigid2d(truth_pose), m.position_m,
@@ -208,20 +217,20 @@ int main(int argc, char** argv) {
           common::FromRigid3d(common::Rigid3d::FromRigid2d(c->second * online), m.position_m,
                               m.orientation);
         }
-        intake.OnPose(m);
-        ++poses;
-      } else if (e->channel == options.visual_channel) {
-        people_detections_t m;
-        if (Decode(*e, &m)) intake.OnSeen(m), ++seen_msgs;
-      } else if (e->channel == options.audio_channel) {
-        people_detections_t m;
-        if (Decode(*e, &m)) intake.OnHeard(m);
-      } else if (e->channel == options.sound_map_channel) {
-        sound_map_t m;
-        if (Decode(*e, &m)) intake.OnSoundMap(m);
+        e->data.resize(m.getEncodedSize());
+        m.encode(e->data.data(), 0, static_cast<int>(e->data.size()));
       }
+      return e->channel == options.pose_channel || e->channel == options.visual_channel ||
+             e->channel == options.audio_channel || e->channel == options.sound_map_channel;
+    });
+    people_map_node.Finish();
+    replay.Drain();
+    for (const auto& problem : stats.problems) {
+      std::fprintf(stderr, "%s: damaged at byte %lld (%s); read on from the next event\n",
+                   log_path.c_str(), static_cast<long long>(problem.file_offset),
+                   problem.what.c_str());
     }
-    intake.Finish();
+    const people_map::PeopleMapIntake& intake = people_map_node.intake();
     if (!seen_msgs) throw std::runtime_error("no " + options.visual_channel + " in " + log_path);
 
     const Utime end = intake.latest_utime();

@@ -26,6 +26,9 @@ class PeopleMapNode {
   void Finish();
 
   const PeopleMap& map() const { return map_; }
+  // For replay tools: the map (to trace what each detection did) and the intake's counters.
+  PeopleMap* mutable_map() { return &map_; }
+  const PeopleMapIntake& intake() const { return *intake_; }
 
  private:
   enum Gate { kPoseGate = 0, kSeenGate = 1, kHeardGate = 2, kSoundMapGate = 3 };

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/args.h"
+#include "common/command_auth.h"
 #include "common/node.h"
 #include "common/node_main.h"
 #include "log-tools/node_replay.h"
@@ -47,6 +48,9 @@ int main(int argc, char** argv) {
     const speech::SpeechNodeOptions& options = *parsed;
 
     common::Node node("sarmap-log-speech", "memq://");
+    // A signed log (the bus key it was recorded with): inputs checked and outputs signed as live.
+    if (!node_args.bus_key_file.empty())
+      node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
     speech::SpeechNode speech_node(options, &node);
     logtools::NodeReplay replay(&node);
     lcm::LogFile out(out_path, "w");
@@ -55,12 +59,12 @@ int main(int argc, char** argv) {
                    [&](const std::string& channel, const std::vector<uint8_t>& data) {
                      Write(&out, replay.now_us(), channel, data);
                    });
-    const auto stats = replay.Run(in_path, [&](const logtools::LogEvent& e) {
-      if (e.channel == options.speech_channel || e.channel == options.people_channel) {
+    const auto stats = replay.Run(in_path, [&](logtools::LogEvent* e) {
+      if (e->channel == options.speech_channel || e->channel == options.people_channel) {
         return false;  // replaced by the new ones
       }
-      Write(&out, e.timestamp_us, e.channel, e.data);
-      return e.channel == options.audio_channel || e.channel == options.doa_channel;
+      Write(&out, e->timestamp_us, e->channel, e->data);
+      return e->channel == options.audio_channel || e->channel == options.doa_channel;
     });
     speech_node.Finish();  // utterances still open, stamped at the last input's time
     replay.Drain();
@@ -76,8 +80,8 @@ int main(int argc, char** argv) {
         "hits re-attributed to another track, %lld dropped as another beam's leak -> %s\n",
         static_cast<double>(processor.samples_seen()) /
             speech_node.stream().geometry().sample_rate_hz,
-        static_cast<long long>(speech_node.dropped()),
-        static_cast<long long>(speech_node.events()), static_cast<long long>(speech_node.people()),
+        static_cast<long long>(speech_node.dropped()), static_cast<long long>(speech_node.events()),
+        static_cast<long long>(speech_node.people()),
         static_cast<long long>(processor.hits_reattributed()),
         static_cast<long long>(processor.leaked_hits_dropped()), out_path.c_str());
     return 0;
