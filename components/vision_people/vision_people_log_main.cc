@@ -1,5 +1,6 @@
-// sarmap-log-vision-people: runs the people detector over a log's DEPTH and RGB frames with
-// the node's frame pairing, detector and k-of-n confirmation, as fast as the CPU allows. When
+// sarmap-log-vision-people: runs sarmap-vision-people's adapter (VisionPeopleNode: frame
+// pairing, detector, k-of-n confirmation) over a log's DEPTH and RGB on the log's clock
+// (logtools::NodeReplay), as fast as the CPU allows. When
 // the log holds SIM_TRUTH it scores every detection against the simulated people (where the
 // camera truly was) and lists the false ones with the features that let them through.
 //
@@ -15,15 +16,16 @@
 #include <vector>
 
 #include "common/args.h"
+#include "common/command_auth.h"
 #include "common/decode.h"
+#include "common/node.h"
 #include "common/node_main.h"
 #include "common/options.h"
 #include "common/robot_config.h"
-#include "lcm_log_reader.h"
+#include "log-tools/lcm_log_reader.h"
+#include "log-tools/node_replay.h"
 #include "sarmap/sim_truth_t.hpp"
-#include "vision_people/confirmation_tracker.h"
-#include "vision_people/frame_assembler.h"
-#include "vision_people/vision_people_options.h"
+#include "vision_people/vision_people_node.h"
 
 namespace {
 
@@ -87,8 +89,9 @@ int main(int argc, char** argv) {
   return common::RunMain("sarmap-log-vision-people", [&] {
     common::ArgParser parser(
         "sarmap-log-vision-people",
-        "Runs sarmap-vision-people's detector (same frame pairing, detector and k-of-n\n"
-        "confirmation) over a log's DEPTH and RGB frames. With SIM_TRUTH in the log, each\n"
+        "Runs sarmap-vision-people (its adapter: frame pairing, detector and k-of-n\n"
+        "confirmation, on the log's clock) over a log's DEPTH and RGB frames. With SIM_TRUTH in "
+        "the log, each\n"
         "detection is scored against the simulated people: a detection within --match-m of a\n"
         "person (on the floor plane, where the camera truly was) is true, any other is false;\n"
         "false ones are listed with their features (--list-false N).");
@@ -125,15 +128,9 @@ int main(int argc, char** argv) {
       }
     }
 
-    PeopleDetector detector(options.detector, InitialGround(options),
-                            MakeHogClassifier(options.detector.color));
-    ConfirmationTracker tracker(options.confirmation);
-    FrameAssembler assembler(options.max_pair_dt_s, options.color_wait_s, options.require_color);
     std::map<std::string, Score> raw, confirmed;
     std::map<std::string, int64_t> false_by_place;  // "kind x y" (0.5 m cells) -> count
     int64_t frames = 0, scored_frames = 0, listed = 0;
-    double detect_ms = 0;
-    std::vector<RgbdFrame> ready;
 
     auto score = [&](const PersonCandidate& c, const Eigen::Isometry3d& map_from_camera,
                      const TruthSample& sample, int64_t utime, bool is_confirmed) {
@@ -162,56 +159,43 @@ int main(int argc, char** argv) {
           c.confidence, c.supported, c.box_u_center, c.box_v_top, c.box_v_bottom);
     };
 
-    auto run = [&] {
-      for (RgbdFrame& frame : ready) {
-        const auto start = std::chrono::steady_clock::now();
-        const DetectionResult result = detector.Detect(frame);
-        detect_ms +=
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                .count();
-        const auto accepted = tracker.Update(result.people);
-        ++frames;
-        Eigen::Isometry3d map_from_base;
-        const TruthSample* sample = nullptr;
-        if (!TruthAt(truth, frame.utime, &map_from_base, &sample)) continue;
-        ++scored_frames;
-        const Eigen::Isometry3d map_from_camera = map_from_base * base_from_camera;
-        for (const auto& c : result.people) score(c, map_from_camera, *sample, frame.utime, false);
-        for (const auto& c : accepted) score(c.person, map_from_camera, *sample, frame.utime, true);
-      }
-      ready.clear();
-    };
-
-    logtools::LcmLogReader reader(log_path);
-    logtools::LogEvent e;
-    int64_t next_progress = reader.file_size() / 10;
-    while (reader.Next(&e)) {
-      const bool depth = e.channel == options.depth_channel;
-      if (!depth && e.channel != options.rgb_channel) continue;
-      image_t m;
-      if (!common::DecodeMessage(e.data.data(), e.data.size(), &m)) continue;
-      if (depth)
-        assembler.AddDepth(m, &ready);
-      else
-        assembler.AddColor(m, &ready);
-      run();
-      if (reader.offset() >= next_progress) {
-        fprintf(stderr, "  %ld%% (%ld frames) ...\r",
-                static_cast<long>(100 * reader.offset() / std::max<int64_t>(1, reader.file_size())),
-                static_cast<long>(frames));
-        next_progress += reader.file_size() / 10;
-      }
+    // sarmap-vision-people's adapter on the log's clock: its stamp gates, frame pairing,
+    // detector and confirmation, each frame scored as it is processed.
+    common::Node node("sarmap-log-vision-people", "memq://");
+    if (!node_args.bus_key_file.empty()) {
+      node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
     }
-    assembler.Flush(&ready);
-    run();
-    fprintf(stderr, "\n");
-    for (const auto& p : reader.problems())
+    VisionPeopleNode vision(options, &node);
+    vision.set_frame_observer([&](const RgbdFrame& frame, const DetectionResult& result,
+                                  const std::vector<ConfirmedPerson>& accepted) {
+      ++frames;
+      Eigen::Isometry3d map_from_base;
+      const TruthSample* sample = nullptr;
+      if (!TruthAt(truth, frame.utime, &map_from_base, &sample)) return;
+      ++scored_frames;
+      const Eigen::Isometry3d map_from_camera = map_from_base * base_from_camera;
+      for (const auto& c : result.people) score(c, map_from_camera, *sample, frame.utime, false);
+      for (const auto& c : accepted) score(c.person, map_from_camera, *sample, frame.utime, true);
+    });
+    logtools::NodeReplay replay(&node);
+    const auto start = std::chrono::steady_clock::now();
+    const auto stats = replay.Run(log_path, [&](logtools::LogEvent* e) {
+      return e->channel == options.depth_channel || e->channel == options.rgb_channel;
+    });
+    vision.Finish();
+    replay.Drain();
+    const double elapsed_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    for (const auto& p : stats.problems)
       fprintf(stderr, "log damaged at byte %ld: %s\n", static_cast<long>(p.file_offset),
               p.what.c_str());
 
-    printf("%ld frames, %.1f ms per frame (detector, this machine, one thread)\n",
-           static_cast<long>(frames), frames ? detect_ms / static_cast<double>(frames) : 0.0);
-    for (const auto& [name, n] : assembler.warnings())
+    printf(
+        "%ld frames (%ld without a usable image), %.1f ms per frame (reading, decoding, pairing, "
+        "detection, confirmation: the node's whole work, this machine, one thread)\n",
+        static_cast<long>(frames), static_cast<long>(vision.bad_frames()),
+        frames ? elapsed_ms / static_cast<double>(frames) : 0.0);
+    for (const auto& [name, n] : vision.pairing_warnings())
       printf("  pairing: %s %ld\n", name.c_str(), static_cast<long>(n));
     if (truth.empty()) {
       printf("no %s in the log: nothing to score against\n", truth_channel.c_str());

@@ -19,7 +19,7 @@ VisionPeopleNode::VisionPeopleNode(const VisionPeopleOptions& options, common::N
       publisher_(node->Advertise<people_detections_t>(options.output_channel)),
       gates_(options.stamp_gate),
       configured_(MountingFromGround(InitialGround(options))),
-      last_message_s_(common::SteadySeconds()),
+      last_message_s_(node->Now()),
       quiet_s_(std::max(1.0, 5 * options.color_wait_s)) {  // a loaded machine may lag 0.2 s
   node->AddTimer(0.1, [this] { FlushWhenQuiet(); });
   node->SetStatusMessage("frames 0 bad 0 people 0 colour none input_warnings 0 floor none");
@@ -27,7 +27,7 @@ VisionPeopleNode::VisionPeopleNode(const VisionPeopleOptions& options, common::N
       options_.depth_channel,
       [this](const image_t& m, const common::ReceiveInfo& info) {
         if (!StampOk(kDepthGate, m, info)) return;
-        last_message_s_ = common::SteadySeconds();
+        last_message_s_ = info.receive_time_s;
         assembler_.AddDepth(m, &ready_);
         Process();
       },
@@ -36,7 +36,7 @@ VisionPeopleNode::VisionPeopleNode(const VisionPeopleOptions& options, common::N
       options_.rgb_channel,
       [this](const image_t& m, const common::ReceiveInfo& info) {
         if (!StampOk(kColorGate, m, info)) return;
-        last_message_s_ = common::SteadySeconds();
+        last_message_s_ = info.receive_time_s;
         assembler_.AddColor(m, &ready_);
         Process();
       },
@@ -57,10 +57,15 @@ bool VisionPeopleNode::StampOk(Gate gate, const image_t& m, const common::Receiv
 }
 
 void VisionPeopleNode::FlushWhenQuiet() {
-  if (assembler_.has_pending() && common::SteadySeconds() - last_message_s_ > quiet_s_) {
+  if (assembler_.has_pending() && node_->Now() - last_message_s_ > quiet_s_) {
     assembler_.Flush(&ready_);
     Process();
   }
+}
+
+void VisionPeopleNode::Finish() {
+  assembler_.Flush(&ready_);
+  Process();
 }
 
 void VisionPeopleNode::Process() {
@@ -77,6 +82,7 @@ void VisionPeopleNode::Process() {
     const DetectionResult result = detector_.Detect(frame, &error);
     Report(frame, result, error);
     const auto confirmed = tracker_.Update(result.people);
+    if (observer_) observer_(frame, result, confirmed);
     people_detections_t msg = DetectionsMessage(confirmed, frame.utime, options_.sensor_id);
     published_people_ += msg.num_detections;
     publisher_.Publish(&msg);

@@ -4,6 +4,8 @@
 // people detection with a depth-only fallback in darkness and glare, confirmed over k of n
 // frames. Each image stream is gated on its own clock (common/stamp_gate.h).
 
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,8 +24,20 @@ class VisionPeopleNode {
  public:
   VisionPeopleNode(const VisionPeopleOptions& options, common::Node* node);
 
+  // At the end (SIGINT/SIGTERM, or the end of a replayed log): the frame still waiting for its
+  // pair is processed and published.
+  void Finish();
+
+  // For replay tools: called for every frame processed, with the detector's result and the
+  // people the k-of-n confirmation accepted (what PEOPLE_VISUAL then carries).
+  using FrameObserver = std::function<void(const RgbdFrame&, const DetectionResult&,
+                                           const std::vector<ConfirmedPerson>&)>;
+  void set_frame_observer(FrameObserver observer) { observer_ = std::move(observer); }
+
   int64_t frames() const { return frames_; }
   int64_t bad_frames() const { return bad_frames_; }
+  // Frame-pairing warnings by kind (FrameAssembler::warnings).
+  const std::map<std::string, int64_t>& pairing_warnings() const { return assembler_.warnings(); }
 
  private:
   enum Gate { kDepthGate = 0, kColorGate = 1 };
@@ -52,6 +66,7 @@ class VisionPeopleNode {
   std::string last_color_state_;
   bool reported_mismatch_ = false;
   std::string floor_status_ = "floor none";
+  FrameObserver observer_;
 };
 
 }  // namespace vision_people
