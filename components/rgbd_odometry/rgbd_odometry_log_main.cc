@@ -1,5 +1,6 @@
-// sarmap-log-rgbd-odometry: runs the rig odometry (the same RgbdOdometry and frame pairing as
-// sarmap-rgbd-odometry) over a log's DEPTH and RGB as fast as the CPU allows, prints its
+// sarmap-log-rgbd-odometry: runs sarmap-rgbd-odometry's adapter (RgbdOdometryNode: frame
+// pairing, RgbdOdometry, restart when time goes back) over a log's DEPTH and RGB on the log's
+// clock (logtools::NodeReplay), as fast as the CPU allows, prints its
 // tracking statistics and, when the log holds SIM_TRUTH, its drift against the simulated
 // camera; --output writes the trajectory for sarmap-log handheld-sound-map --trajectory.
 //
@@ -8,28 +9,22 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
 
 #include "common/args.h"
+#include "common/command_auth.h"
 #include "common/decode.h"
+#include "common/node.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
-#include "rgbd_odometry/frame_assembler.h"
-#include "rgbd_odometry/rgbd_odometry.h"
-#include "rgbd_odometry/rgbd_odometry_node_options.h"
+#include "log-tools/node_replay.h"
+#include "rgbd_odometry/rgbd_odometry_node.h"
 #include "sarmap/sim_truth_t.hpp"
 
 namespace {
 
 using sarmap::rgbd_odometry::RgbdOdometryResult;
-
-template <class T>
-bool Decode(const lcm::LogEvent& e, T* msg) {
-  return e.datalen >= 0 &&
-         sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
-}
 
 double Yaw(const Eigen::Isometry3d& m) {
   const Eigen::Vector3d x = m.linear().col(0);
@@ -73,11 +68,6 @@ int main(int argc, char** argv) {
     const Eigen::Isometry3d base_from_rig =
         base_from_optical * sarmap::rgbd_odometry::RigFromOptical().inverse();
 
-    lcm::LogFile log(log_path, "r");
-    if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
-    sarmap::rgbd_odometry::RgbdOdometry odometry(options.odometry);
-    sarmap::rgbd_odometry::FrameAssembler assembler(odometry.needs_image(), options.max_pair_dt_s,
-                                                    options.color_wait_s);
     std::ofstream out;
     if (!output.empty()) {
       out.open(output);
@@ -89,65 +79,63 @@ int main(int argc, char** argv) {
     std::vector<RgbdOdometryResult> results;
     std::map<std::string, int64_t> statuses;
     double compute_ms = 0;
-    std::vector<sarmap::rgbd_odometry::RgbdFrame> ready;
-    auto run = [&] {
-      for (const auto& f : ready) {
-        RgbdOdometryResult r = odometry.Process(f);
-        if (print_large_steps && r.previous_from_rig.translation().norm() > 0.03)
-          fprintf(stderr,
-                  "frame %ld: step %.3f m %.1f deg overlap %.2f valid %.2f keyframe %d %s\n",
-                  static_cast<long>(r.utime), r.previous_from_rig.translation().norm(),
-                  Eigen::AngleAxisd(r.previous_from_rig.linear()).angle() * 180 / M_PI,
-                  r.overlap_fraction, r.valid_depth_fraction, r.keyframe, r.message.c_str());
-        ++statuses[sarmap::rgbd_odometry::TrackingStatusName(r.status)];
-        compute_ms += r.compute_ms;
-        if (!r.ok()) continue;
-        results.push_back(r);
-        if (out) {
-          const Eigen::Quaterniond q(r.world_from_rig.linear());
-          const Eigen::Vector3d t = r.world_from_rig.translation();
-          out << r.utime << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.w() << ' '
-              << q.x() << ' ' << q.y() << ' ' << q.z() << '\n';
-        }
-      }
-      ready.clear();
-    };
-    int64_t frames = 0;
-    for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-      if (e->channel == options.depth_channel) {
-        sarmap::image_t m;
-        if (!Decode(*e, &m)) continue;
-        assembler.AddDepth(m, &ready);
-        run();
-        if (++frames % 300 == 0)
-          fprintf(stderr, "\r%ld depth frames ...", static_cast<long>(frames));
-      } else if (e->channel == options.rgb_channel && odometry.needs_image()) {
-        sarmap::image_t m;
-        if (!Decode(*e, &m)) continue;
-        assembler.AddColor(m, &ready);
-        run();
-      } else if (e->channel == truth_channel) {
-        sarmap::sim_truth_t m;
-        if (!Decode(*e, &m)) continue;
-        Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-        base.linear() = Eigen::Quaterniond(m.robot_orientation[0], m.robot_orientation[1],
-                                           m.robot_orientation[2], m.robot_orientation[3])
-                            .normalized()
-                            .toRotationMatrix();
-        base.translation() =
-            Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], m.robot_position_m[2]);
-        truth_rig[m.header.utime] = base * base_from_rig;
-      }
+    // sarmap-rgbd-odometry's adapter on the log's clock: its frame pairing, its restart when
+    // time goes back, every frame's result observed.
+    sarmap::common::Node node("sarmap-log-rgbd-odometry", "memq://");
+    if (!node_args.bus_key_file.empty()) {
+      node.SetBusKey(sarmap::common::LoadAuthKeyFile(node_args.bus_key_file));
     }
-    if (frames >= 300) fprintf(stderr, "\n");
-    const auto& st = odometry.stats();
+    sarmap::rgbd_odometry::RgbdOdometryNode odometry_node(options, &node);
+    odometry_node.set_result_observer([&](const RgbdOdometryResult& r) {
+      if (print_large_steps && r.previous_from_rig.translation().norm() > 0.03)
+        fprintf(stderr, "frame %ld: step %.3f m %.1f deg overlap %.2f valid %.2f keyframe %d %s\n",
+                static_cast<long>(r.utime), r.previous_from_rig.translation().norm(),
+                Eigen::AngleAxisd(r.previous_from_rig.linear()).angle() * 180 / M_PI,
+                r.overlap_fraction, r.valid_depth_fraction, r.keyframe, r.message.c_str());
+      ++statuses[sarmap::rgbd_odometry::TrackingStatusName(r.status)];
+      compute_ms += r.compute_ms;
+      if (!r.ok()) return;
+      results.push_back(r);
+      if (out) {
+        const Eigen::Quaterniond q(r.world_from_rig.linear());
+        const Eigen::Vector3d t = r.world_from_rig.translation();
+        out << r.utime << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.w() << ' '
+            << q.x() << ' ' << q.y() << ' ' << q.z() << '\n';
+      }
+    });
+    sarmap::logtools::NodeReplay replay(&node);
+    int64_t frames = 0;
+    const auto stats = replay.Run(log_path, [&](sarmap::logtools::LogEvent* e) {
+      if (e->channel == options.depth_channel) {
+        ++frames;
+        return true;
+      }
+      if (e->channel == options.rgb_channel) return true;
+      if (e->channel != truth_channel) return false;
+      sarmap::sim_truth_t m;
+      if (!sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &m)) return false;
+      Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+      base.linear() = Eigen::Quaterniond(m.robot_orientation[0], m.robot_orientation[1],
+                                         m.robot_orientation[2], m.robot_orientation[3])
+                          .normalized()
+                          .toRotationMatrix();
+      base.translation() =
+          Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], m.robot_position_m[2]);
+      truth_rig[m.header.utime] = base * base_from_rig;
+      return false;
+    });
+    replay.Drain();
+    for (const auto& p : stats.problems)
+      fprintf(stderr, "log damaged at byte %ld: %s\n", static_cast<long>(p.file_offset),
+              p.what.c_str());
+    const auto& st = odometry_node.odometry().stats();
     printf("%ld depth frames, %ld processed: ", static_cast<long>(frames),
            static_cast<long>(st.frames));
     for (const auto& [name, n] : statuses) printf("%s %ld  ", name.c_str(), static_cast<long>(n));
     printf("\n%s, image scale %.2f: %.1f ms per frame (this machine, one thread)\n",
            options.odometry.method.c_str(), options.odometry.image_scale,
            st.frames ? compute_ms / static_cast<double>(st.frames) : 0.0);
-    for (const auto& [name, n] : assembler.warnings())
+    for (const auto& [name, n] : odometry_node.pairing_warnings())
       printf("  pairing: %s %ld\n", name.c_str(), static_cast<long>(n));
     if (truth_rig.empty() || results.empty()) return 0;
     // The odometry's world is the rig at its first frame.

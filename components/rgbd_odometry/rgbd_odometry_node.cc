@@ -67,6 +67,7 @@ void RgbdOdometryNode::Process() {
     }
     last_utime_ = frame.utime;
     const RgbdOdometryResult r = odometry_.Process(frame);
+    if (observer_) observer_(r);
     total_ms_ += r.compute_ms;
     if (r.status != last_status_) {
       const bool bad =

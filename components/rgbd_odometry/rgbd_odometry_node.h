@@ -4,6 +4,8 @@
 // forward, y left, z up) out, around RgbdOdometry (rgbd_odometry.h). Time going back by more
 // than a second (a log replayed again) starts the odometry over.
 
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,6 +24,12 @@ class RgbdOdometryNode {
 
   int64_t published() const { return published_; }
   const RgbdOdometry& odometry() const { return odometry_; }
+  // Frame-pairing warnings by kind (FrameAssembler::warnings).
+  const std::map<std::string, int64_t>& pairing_warnings() const { return assembler_.warnings(); }
+
+  // For replay tools: called with every frame's odometry result (tracked, lost or invalid).
+  using ResultObserver = std::function<void(const RgbdOdometryResult&)>;
+  void set_result_observer(ResultObserver observer) { observer_ = std::move(observer); }
 
  private:
   void Process();
@@ -38,6 +46,7 @@ class RgbdOdometryNode {
   double total_ms_ = 0;
   TrackingStatus last_status_ = TrackingStatus::kInvalidInput;
   std::string last_status_name_ = "waiting";
+  ResultObserver observer_;
 };
 
 }  // namespace rgbd_odometry
