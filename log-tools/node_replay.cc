@@ -41,6 +41,11 @@ void NodeReplay::Drain() {
   }
 }
 
+void NodeReplay::Inject(const std::string& channel, const std::vector<uint8_t>& data) {
+  node_->lcm().publish(channel, data.data(), static_cast<unsigned>(data.size()));
+  Drain();
+}
+
 NodeReplay::Stats NodeReplay::Run(const std::string& path,
                                   const std::function<bool(LogEvent*)>& feed,
                                   bool progress) {

@@ -53,6 +53,9 @@ class NodeReplay {
             bool progress = true);
   // Handles everything pending on the bus (e.g. after the adapter's Finish()).
   void Drain();
+  // Publishes `data` on `channel` at the present log time and handles it, as an event fed: for
+  // inputs that are not in the log (e.g. poses from a file, from inside `feed`).
+  void Inject(const std::string& channel, const std::vector<uint8_t>& data);
 
   // Receive time of the event being fed, us (0 before the first).
   int64_t now_us() const { return now_us_; }

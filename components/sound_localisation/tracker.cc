@@ -23,19 +23,30 @@ std::vector<Track> DoaTracker::Update(double time_s,
   Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
   F(0, 2) = F(1, 3) = integral;
   F(2, 2) = F(3, 3) = decay;
+  // Kinds with one angle (1-D, azimuth only) observe the first angle alone: the second keeps
+  // the variance it was born with (the measurement's "unknown") and takes neither process
+  // noise nor a gain, so its variance never grows without bound or turns negative.
+  const bool two_angles = kind_ == DoaKind::kAzimuthElevation;
   Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
-  Q(0, 0) = Q(1, 1) = q * q * dt + qv * qv * dt * dt * dt / 3;
-  Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = qv * qv * dt * dt / 2;
-  Q(2, 2) = Q(3, 3) = qv * qv * dt;
+  Q(0, 0) = q * q * dt + qv * qv * dt * dt * dt / 3;
+  Q(0, 2) = Q(2, 0) = qv * qv * dt * dt / 2;
+  Q(2, 2) = qv * qv * dt;
+  if (two_angles) {
+    Q(1, 1) = Q(0, 0);
+    Q(1, 3) = Q(3, 1) = Q(0, 2);
+    Q(3, 3) = Q(2, 2);
+  }
   for (Track& t : tracks_) {
     if (cv) {
       t.direction.azimuth_rad += integral * t.rate(0);
       t.direction.elevation_rad += integral * t.rate(1);
       t.rate *= decay;
       t.state_covariance = F * t.state_covariance * F.transpose() + Q;
+      if (!two_angles) t.state_covariance(1, 1) = t.covariance(1, 1);
       t.covariance = t.state_covariance.topLeftCorner<2, 2>();
     } else {
-      t.covariance.diagonal().array() += q * q * dt;
+      t.covariance(0, 0) += q * q * dt;
+      if (two_angles) t.covariance(1, 1) += q * q * dt;
     }
     t.updated = false;
   }
@@ -96,15 +107,30 @@ std::vector<Track> DoaTracker::Update(double time_s,
     const TrackMeasurement& m = measurements[p.meas];
     const Eigen::Vector2d innovation = innovation_of(t, m);
     const Eigen::Matrix2d S = innovation_covariance(t, m);
-    if (cv) {
+    if (!two_angles) {
+      // The first angle alone is observed: H = e0^T, a scalar innovation.
+      const double s0 = (cv ? t.state_covariance(0, 0) : t.covariance(0, 0)) + m.covariance(0, 0);
+      if (cv) {
+        const Eigen::Vector4d k = t.state_covariance.col(0) / s0;
+        t.direction.azimuth_rad += k(0) * innovation(0);
+        t.rate(0) += k(2) * innovation(0);
+        t.rate(1) = 0;
+        const Eigen::Matrix4d reduced = k * t.state_covariance.row(0);
+        t.state_covariance -= reduced;
+        t.covariance(0, 0) = t.state_covariance(0, 0);
+      } else {
+        const double k = t.covariance(0, 0) / s0;
+        t.direction.azimuth_rad += k * innovation(0);
+        t.covariance(0, 0) *= 1 - k;
+      }
+    } else if (cv) {
       // H = [I 0]: K = P H^T S^-1.
       const Eigen::Matrix<double, 4, 2> K = t.state_covariance.leftCols<2>() * S.inverse();
       Eigen::Vector2d innov = innovation;
       const Eigen::Vector4d dx = K * innov;
       t.direction.azimuth_rad += dx(0);
-      t.direction.elevation_rad += kind_ == DoaKind::kAzimuthElevation ? dx(1) : 0.0;
+      t.direction.elevation_rad += dx(1);
       t.rate += dx.tail<2>();
-      if (kind_ != DoaKind::kAzimuthElevation) t.rate(1) = 0;
       Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
       H(0, 0) = H(1, 1) = 1;
       t.state_covariance = (Eigen::Matrix4d::Identity() - K * H) * t.state_covariance;

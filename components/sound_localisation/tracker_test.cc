@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -111,6 +112,40 @@ CrossingResult RunCrossing(const TrackerOptions& o) {
       ++r.swaps_or_losses;
   }
   return r;
+}
+
+// A linear array measures one angle; the tracker's second angle is never observed. Its
+// variance must stay what the measurements say ("unknown"), not grow with every update until
+// it turns negative and the track's direction becomes NaN (a minute of a talker at 8 Hz).
+TEST(DoaTracker, OneAngleKindsStayFiniteOverALongTrack) {
+  const ArrayGeometry g = testing_util::LoadArray("respeaker4");
+  for (const DoaKind kind : {DoaKind::kAngle1d, DoaKind::kAzimuth}) {
+    for (const double velocity_noise : {0.0, 5.0}) {
+      TrackerOptions o;
+      o.velocity_noise_deg_per_s_sqrt_s = velocity_noise;
+      DoaTracker tracker(g, kind, o);
+      std::mt19937 rng(3);
+      std::normal_distribution<double> noise(0.0, DegToRad(2.0));
+      std::vector<Track> out;
+      for (int i = 0; i < 480; ++i) {
+        TrackMeasurement m;
+        m.direction = {DegToRad(70.0) + noise(rng), 0.0};
+        m.covariance << std::pow(DegToRad(3.0), 2), 0, 0, M_PI * M_PI;  // second angle unknown
+        out = tracker.Update(i * 0.128, {m});
+        for (const Track& t : out) {
+          ASSERT_TRUE(std::isfinite(t.direction.azimuth_rad)) << "update " << i;
+          ASSERT_TRUE(t.covariance.allFinite()) << "update " << i;
+          ASSERT_GT(t.covariance(0, 0), 0) << "update " << i;
+          ASSERT_GE(t.covariance(1, 1), 0) << "update " << i;
+        }
+      }
+      ASSERT_EQ(out.size(), 1u);
+      // The random-walk model follows the last few DOAs (2 deg noise each).
+      EXPECT_NEAR(RadToDeg(out[0].direction.azimuth_rad), 70.0, 5.0);
+      EXPECT_LT(std::sqrt(out[0].covariance(0, 0)), DegToRad(3.0));  // better than one DOA
+      EXPECT_DOUBLE_EQ(out[0].direction.elevation_rad, 0.0);
+    }
+  }
 }
 
 TEST(DoaTracker, KeepsTwoCrossingTalkersApart) {
