@@ -141,6 +141,44 @@ TEST(NodeReplay, TheAdapterDecidesOnTheLogsClockInTheLogsOrder) {
   EXPECT_NEAR(counts.back().second, static_cast<double>(counting.positions.size()), 2.0);
 }
 
+// Inputs that are not in the log (poses from a file, the truth) go in at the present log time,
+// between the log's own, as `feed` sees the events.
+TEST(NodeReplay, InjectedInputsArriveAtTheirPlaceAmongTheLogs) {
+  common::Node node("node-replay-test", "memq://");
+  CountingNode counting(&node);
+  NodeReplay replay(&node);
+  int injected = 0;
+  replay.Run(
+      WriteLog(10, -1),
+      [&](LogEvent* e) {
+        if (e->channel != "OTHER") return e->channel == "POSE";
+        sarmap::pose_t pose{};
+        pose.header.utime = e->timestamp_us;
+        pose.header.frame = "map";
+        pose.orientation[0] = 1;
+        pose.position_m[0] = 100 + injected++;
+        std::vector<uint8_t> data(pose.getEncodedSize());
+        pose.encode(data.data(), 0, static_cast<int>(data.size()));
+        replay.Inject("POSE", data);
+        return false;
+      },
+      false);
+  ASSERT_GE(injected, 8);
+  ASSERT_EQ(counting.positions.size(), counting.receive_s.size());
+  // Log pose i, then the injected one made at the OTHER event after it.
+  int next_log = 0, next_injected = 100;
+  for (double x : counting.positions) {
+    if (x >= 100) {
+      EXPECT_EQ(x, next_injected++);
+    } else {
+      EXPECT_GE(x, next_log);
+      next_log = static_cast<int>(x) + 1;
+      EXPECT_EQ(next_injected - 100, static_cast<int>(x));  // before its own injected pose
+    }
+  }
+  EXPECT_EQ(next_injected, 100 + injected);
+}
+
 }  // namespace
 }  // namespace logtools
 }  // namespace sarmap

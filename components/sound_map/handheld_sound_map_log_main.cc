@@ -1,6 +1,7 @@
 // sarmap-log-handheld-sound-map: replays a hand-held rig's log (RIG_POSE from
-// sarmap-rgbd-odometry, a linear array's DOA_MAP, PEOPLE_AUDIO) through the same
-// LinearArraySoundMap as sarmap-handheld-sound-map, in message time order, and, when the log
+// sarmap-rgbd-odometry, a linear array's DOA_MAP, PEOPLE_AUDIO) through
+// sarmap-handheld-sound-map's adapter (HandheldSoundMapNode: stamp gates, reorder queue,
+// LinearArraySoundMap) on the log's clock (logtools::NodeReplay), and, when the log
 // holds SIM_TRUTH, prints each true source's error against its nearest mapped source (and the
 // logged SOUND_MAP's), and the rig odometry's drift.
 //
@@ -12,34 +13,27 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "common/args.h"
+#include "common/command_auth.h"
 #include "common/decode.h"
+#include "common/message_conversions.h"
+#include "common/node.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
-#include "common/stamp_gate.h"
 #include "common/transform.h"
+#include "log-tools/node_replay.h"
 #include "sarmap/sim_truth_t.hpp"
 #include "sound_map/handheld_sound_map_messages.h"
+#include "sound_map/handheld_sound_map_node.h"
 
 namespace {
 
-// Inputs stamped further behind their stream's clock are dropped by the replay (a keyword is
-// published a few seconds after it was heard; nothing of the stack comes later).
-constexpr double kReplayMaxBehindS = 10.0;
-
 using sarmap::sound_map::LinearArraySoundMap;
-
-template <class T>
-bool Decode(const lcm::LogEvent& e, T* msg) {
-  return e.datalen >= 0 &&
-         sarmap::common::DecodeMessage(e.data, static_cast<size_t>(e.datalen), msg);
-}
 
 Eigen::Isometry3d Iso(const sarmap::common::Rigid3d& r) {
   Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
@@ -60,7 +54,7 @@ int main(int argc, char** argv) {
     sarmap::common::ArgParser parser(
         "sarmap-log-handheld-sound-map",
         "Replays RIG_POSE, DOA_MAP and PEOPLE_AUDIO from an LCM log through the hand-held rig's\n"
-        "linear-array sound map (as sarmap-handheld-sound-map would, in message time order) and\n"
+        "linear-array sound map (sarmap-handheld-sound-map's adapter, on the log's clock) and\n"
         "compares the result with SIM_TRUTH.");
     sarmap::common::NodeArgs node_args;
     std::string log_path, truth_channel = "SIM_TRUTH", robot_config = "config/robot.yaml",
@@ -98,74 +92,8 @@ int main(int argc, char** argv) {
     const Eigen::Isometry3d rig_from_sensor =
         sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
 
-    lcm::LogFile log(log_path, "r");
-    if (!log.good()) throw std::runtime_error("cannot read log " + log_path);
-    std::multimap<int64_t, std::function<void(LinearArraySoundMap&)>> inputs;
-    std::vector<std::pair<int64_t, std::vector<LinearArraySoundMap::Doa>>> doa_log;
-    std::map<int64_t, Eigen::Isometry3d> truth_rig;  // world_from_rig by utime
-    std::map<int64_t, Eigen::Isometry3d> odom_rig;   // odom_from_rig by utime
-    sarmap::sim_truth_t truth;
-    bool have_truth = false;
-    sarmap::sound_map_t live;
-    int64_t live_msgs = 0, other_kinds = 0, bad = 0, doa_msgs = 0;
-    // Each input stream gated on its own clock, on the log's receive times, as the node gates
-    // it live: a far-future stamp (a skewed or forged message the recorder heard) is dropped.
-    // The replay orders the whole log by stamp, so a stamp far behind would be applied first
-    // (the node's queue drops it as late): those are dropped too.
-    sarmap::common::StampGateOptions gate_options = options.stamp_gate;
-    if (gate_options.max_behind_s <= 0) gate_options.max_behind_s = kReplayMaxBehindS;
-    sarmap::common::StampGates gates(gate_options);
-    const std::vector<std::string> gated = {options.pose_channel, options.doa_channel,
-                                            options.people_audio_channel};
-    for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-      const int stream =
-          static_cast<int>(std::find(gated.begin(), gated.end(), e->channel) - gated.begin());
-      sarmap::common::Utime stamp;
-      if (stream < static_cast<int>(gated.size()) &&
-          sarmap::common::EncodedHeaderUtime(e->data, e->datalen, &stamp) &&
-          !gates.Accept(stream, stamp, 1e-6 * static_cast<double>(e->timestamp)))
-        continue;
-      if (e->channel == options.pose_channel && trajectory.empty()) {
-        sarmap::pose_t msg;
-        Eigen::Isometry3d pose;
-        if (!Decode(*e, &msg) || !sarmap::sound_map::IsometryFromPose(msg, &pose)) {
-          ++bad;
-          continue;
-        }
-        odom_rig[msg.header.utime] = pose;
-      } else if (e->channel == options.doa_channel) {
-        sarmap::doa_t msg;
-        if (!Decode(*e, &msg)) {
-          ++bad;
-          continue;
-        }
-        ++doa_msgs;
-        const auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &other_kinds);
-        if (doa_check && !doas.empty()) doa_log.emplace_back(msg.header.utime, doas);
-        inputs.emplace(msg.header.utime,
-                       [doas, t = msg.header.utime](LinearArraySoundMap& m) { m.OnDoa(t, doas); });
-      } else if (e->channel == options.people_audio_channel) {
-        sarmap::people_detections_t msg;
-        if (!Decode(*e, &msg)) continue;
-        const auto heard = sarmap::sound_map::HeardLinearDirections(msg);
-        inputs.emplace(msg.header.utime, [heard, t = msg.header.utime](LinearArraySoundMap& m) {
-          for (const auto& d : heard) m.OnHeardDirection(t, d);
-        });
-      } else if (e->channel == truth_channel) {
-        if (!Decode(*e, &truth)) continue;
-        have_truth = true;
-        Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-        base.linear() = Eigen::Quaterniond(truth.robot_orientation[0], truth.robot_orientation[1],
-                                           truth.robot_orientation[2], truth.robot_orientation[3])
-                            .normalized()
-                            .toRotationMatrix();
-        base.translation() = Eigen::Vector3d(truth.robot_position_m[0], truth.robot_position_m[1],
-                                             truth.robot_position_m[2]);
-        truth_rig[truth.header.utime] = base * base_from_rig;
-      } else if (e->channel == live_channel) {
-        if (Decode(*e, &live)) ++live_msgs;
-      }
-    }
+    // Poses of --trajectory (odom_from_rig by utime), fed in time order among the log's inputs.
+    std::map<int64_t, Eigen::Isometry3d> file_rig;
     if (!trajectory.empty()) {
       std::ifstream in(trajectory);
       if (!in) throw std::runtime_error("cannot read trajectory " + trajectory);
@@ -179,32 +107,110 @@ int main(int argc, char** argv) {
         Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
         pose.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
         pose.translation() = Eigen::Vector3d(x, y, z);
-        odom_rig[t] = pose;
+        file_rig[t] = pose;
       }
-      if (odom_rig.empty()) throw std::runtime_error("no poses in " + trajectory);
+      if (file_rig.empty()) throw std::runtime_error("no poses in " + trajectory);
     }
+
+    // sarmap-handheld-sound-map's adapter on the log's clock: its stamp gates, its reorder
+    // queue, its map; the rig poses are the log's RIG_POSE, or replaced (--truth-poses,
+    // --trajectory) by poses published in their place.
+    sarmap::common::Node node("sarmap-log-handheld-sound-map", "memq://");
+    if (!node_args.bus_key_file.empty()) {
+      node.SetBusKey(sarmap::common::LoadAuthKeyFile(node_args.bus_key_file));
+    }
+    sarmap::sound_map::HandheldSoundMapNode handheld(options, &node);
+    sarmap::logtools::NodeReplay replay(&node);
+    auto publish_pose = [&](int64_t utime, const Eigen::Isometry3d& odom_from_rig) {
+      sarmap::pose_t m{};
+      m.header.utime = utime;
+      m.header.frame = "odom";
+      m.child_frame = "rig";
+      const Eigen::Quaterniond q(odom_from_rig.linear());
+      sarmap::common::FromRigid3d(sarmap::common::Rigid3d(odom_from_rig.translation(), q),
+                                  m.position_m, m.orientation);
+      m.node_id = -1;
+      std::vector<uint8_t> data(m.getEncodedSize());
+      m.encode(data.data(), 0, static_cast<int>(data.size()));
+      replay.Inject(options.pose_channel, data);
+    };
+    std::vector<std::pair<int64_t, std::vector<LinearArraySoundMap::Doa>>> doa_log;
+    std::map<int64_t, Eigen::Isometry3d> truth_rig;  // world_from_rig by utime
+    std::map<int64_t, Eigen::Isometry3d> odom_rig;   // odom_from_rig by utime, as fed
+    sarmap::sim_truth_t truth;
+    bool have_truth = false;
+    sarmap::sound_map_t live;
+    int64_t live_msgs = 0, doa_msgs = 0, ignored_kinds = 0;
+    auto next_file_pose = file_rig.begin();
+    const auto stats = replay.Run(log_path, [&](sarmap::logtools::LogEvent* e) {
+      for (; next_file_pose != file_rig.end() && next_file_pose->first <= e->timestamp_us;
+           ++next_file_pose) {
+        odom_rig[next_file_pose->first] = next_file_pose->second;
+        publish_pose(next_file_pose->first, next_file_pose->second);
+      }
+      if (e->channel == options.pose_channel) {
+        if (truth_poses || !trajectory.empty()) return false;
+        sarmap::pose_t msg;
+        Eigen::Isometry3d pose;
+        if (sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &msg) &&
+            sarmap::sound_map::IsometryFromPose(msg, &pose))
+          odom_rig[msg.header.utime] = pose;
+        return true;
+      }
+      if (e->channel == options.doa_channel) {
+        sarmap::doa_t msg;
+        if (sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &msg)) {
+          ++doa_msgs;
+          const auto doas = sarmap::sound_map::LinearDoasFromMessage(msg, &ignored_kinds);
+          if (doa_check && !doas.empty()) doa_log.emplace_back(msg.header.utime, doas);
+        }
+        return true;
+      }
+      if (e->channel == options.people_audio_channel) return true;
+      if (e->channel == truth_channel) {
+        if (!sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &truth)) return false;
+        have_truth = true;
+        Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+        base.linear() = Eigen::Quaterniond(truth.robot_orientation[0], truth.robot_orientation[1],
+                                           truth.robot_orientation[2], truth.robot_orientation[3])
+                            .normalized()
+                            .toRotationMatrix();
+        base.translation() = Eigen::Vector3d(truth.robot_position_m[0], truth.robot_position_m[1],
+                                             truth.robot_position_m[2]);
+        truth_rig[truth.header.utime] = base * base_from_rig;
+        if (truth_poses) publish_pose(truth.header.utime, truth_rig[truth.header.utime]);
+        return false;
+      }
+      if (e->channel == live_channel &&
+          sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &live))
+        ++live_msgs;
+      return false;
+    });
+    for (; next_file_pose != file_rig.end(); ++next_file_pose) {
+      odom_rig[next_file_pose->first] = next_file_pose->second;
+      publish_pose(next_file_pose->first, next_file_pose->second);
+    }
+    handheld.Finish();
+    replay.Drain();
+    for (const auto& p : stats.problems)
+      fprintf(stderr, "log damaged at byte %ld: %s\n", static_cast<long>(p.file_offset),
+              p.what.c_str());
     if (truth_poses && truth_rig.empty())
       throw std::runtime_error("--truth-poses: no " + truth_channel + " in the log");
-    const auto& poses = truth_poses ? truth_rig : odom_rig;
-    for (const auto& kv : poses) {
-      const Eigen::Isometry3d odom_from_sensor = kv.second * rig_from_sensor;
-      inputs.emplace(kv.first, [odom_from_sensor, t = kv.first](LinearArraySoundMap& m) {
-        m.OnPose(t, odom_from_sensor);
-      });
-    }
-    printf(
-        "log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld undecodable, "
-        "%ld stamped far from their stream's clock%s\n",
-        odom_rig.size(), options.pose_channel.c_str(), static_cast<long>(doa_msgs),
-        options.doa_channel.c_str(), static_cast<long>(other_kinds), static_cast<long>(bad),
-        static_cast<long>(gates.dropped()), truth_poses ? "; map from the TRUE rig poses" : "");
-    if (poses.empty())
+    if (!truth_poses && odom_rig.empty())
       throw std::runtime_error("no poses on " + options.pose_channel +
                                " (run sarmap-rgbd-odometry)");
+    int64_t refused = 0;
+    for (const auto& [channel, st] : node.stats()) refused += st.dropped_malformed;
+    printf(
+        "log: %zu %s poses, %ld %s messages (%ld DOAs of other kinds ignored), %ld inputs refused "
+        "(undecodable, bad pose or stamped far from their stream's clock)%s\n",
+        odom_rig.size(), options.pose_channel.c_str(), static_cast<long>(doa_msgs),
+        options.doa_channel.c_str(), static_cast<long>(handheld.other_kinds()),
+        static_cast<long>(refused + handheld.bad_poses()),
+        truth_poses ? "; map from the TRUE rig poses" : "");
 
-    LinearArraySoundMap map(options.map);
-    for (auto& kv : inputs) kv.second(map);
-    map.Finish();
+    const LinearArraySoundMap& map = handheld.map();
     const auto& c = map.counters();
     printf(
         "map: %ld keyframes, DOAs used %ld of %ld (no pose %ld, gated out %ld, duplicate %ld), "

@@ -27,6 +27,7 @@ class HandheldSoundMapNode {
   // everything, and the final map published.
   void Finish();
 
+  const LinearArraySoundMap& map() const { return map_; }
   int64_t bad_poses() const { return bad_poses_; }
   int64_t other_kinds() const { return other_kinds_; }
 
