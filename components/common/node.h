@@ -125,7 +125,7 @@ class Node {
 
   // The node's clock, in seconds: receive times (and so the stamp gates that judge a message's
   // stamp against its arrival), timers and uptime. Steady time by default; a log replay
-  // (log-tools/log_replay.h) sets the log's receive time, so that a replayed node decides as it
+  // (log-tools/node_replay.h) sets the log's receive time, so that a replayed node decides as it
   // did live. Timers already added restart their period from the new clock's present.
   void SetClock(std::function<double()> now_s);
   double Now() const { return clock_ ? clock_() : SteadySeconds(); }

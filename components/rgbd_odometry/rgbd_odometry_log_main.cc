@@ -15,6 +15,7 @@
 #include "common/args.h"
 #include "common/command_auth.h"
 #include "common/decode.h"
+#include "common/message_conversions.h"
 #include "common/node.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
@@ -59,12 +60,7 @@ int main(int argc, char** argv) {
     if (!parsed) return 0;
     const auto& options = *parsed;
     const auto robot = sarmap::common::LoadRobot(robot_config);
-    Eigen::Isometry3d base_from_optical = Eigen::Isometry3d::Identity();
-    {
-      const auto r = robot.base_from_camera.ToRigid3d();
-      base_from_optical.linear() = r.rotation().toRotationMatrix();
-      base_from_optical.translation() = r.translation();
-    }
+    const Eigen::Isometry3d base_from_optical = robot.base_from_camera.ToRigid3d().ToIsometry();
     const Eigen::Isometry3d base_from_rig =
         base_from_optical * sarmap::rgbd_odometry::RigFromOptical().inverse();
 
@@ -114,14 +110,9 @@ int main(int argc, char** argv) {
       if (e->channel != truth_channel) return false;
       sarmap::sim_truth_t m;
       if (!sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &m)) return false;
-      Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-      base.linear() = Eigen::Quaterniond(m.robot_orientation[0], m.robot_orientation[1],
-                                         m.robot_orientation[2], m.robot_orientation[3])
-                          .normalized()
-                          .toRotationMatrix();
-      base.translation() =
-          Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], m.robot_position_m[2]);
-      truth_rig[m.header.utime] = base * base_from_rig;
+      truth_rig[m.header.utime] =
+          sarmap::common::ToRigid3d(m.robot_position_m, m.robot_orientation).ToIsometry() *
+          base_from_rig;
       return false;
     });
     replay.Drain();

@@ -35,13 +35,6 @@ namespace {
 
 using sarmap::sound_map::LinearArraySoundMap;
 
-Eigen::Isometry3d Iso(const sarmap::common::Rigid3d& r) {
-  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
-  m.linear() = r.rotation().toRotationMatrix();
-  m.translation() = r.translation();
-  return m;
-}
-
 double Yaw(const Eigen::Isometry3d& m) {
   const Eigen::Vector3d x = m.linear().col(0);
   return std::atan2(x.y(), x.x());
@@ -87,7 +80,7 @@ int main(int argc, char** argv) {
     if (live_channel.empty()) live_channel = options.sound_map_channel;
     const auto robot = sarmap::common::LoadRobot(robot_config);
     const Eigen::Isometry3d base_from_rig =
-        Iso(robot.base_from_camera.ToRigid3d()) *
+        robot.base_from_camera.ToRigid3d().ToIsometry() *
         Eigen::Isometry3d(sarmap::common::BodyFromOpticalRotation().transpose());
     const Eigen::Isometry3d rig_from_sensor =
         sarmap::sound_map::RigFromSensor(options.rig_from_mic_array);
@@ -170,14 +163,10 @@ int main(int argc, char** argv) {
       if (e->channel == truth_channel) {
         if (!sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &truth)) return false;
         have_truth = true;
-        Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-        base.linear() = Eigen::Quaterniond(truth.robot_orientation[0], truth.robot_orientation[1],
-                                           truth.robot_orientation[2], truth.robot_orientation[3])
-                            .normalized()
-                            .toRotationMatrix();
-        base.translation() = Eigen::Vector3d(truth.robot_position_m[0], truth.robot_position_m[1],
-                                             truth.robot_position_m[2]);
-        truth_rig[truth.header.utime] = base * base_from_rig;
+        truth_rig[truth.header.utime] =
+            sarmap::common::ToRigid3d(truth.robot_position_m, truth.robot_orientation)
+                .ToIsometry() *
+            base_from_rig;
         if (truth_poses) publish_pose(truth.header.utime, truth_rig[truth.header.utime]);
         return false;
       }

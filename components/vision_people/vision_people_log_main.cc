@@ -18,6 +18,7 @@
 #include "common/args.h"
 #include "common/command_auth.h"
 #include "common/decode.h"
+#include "common/message_conversions.h"
 #include "common/node.h"
 #include "common/node_main.h"
 #include "common/options.h"
@@ -38,14 +39,7 @@ struct TruthSample {
 };
 
 Eigen::Isometry3d BaseFromTruth(const sim_truth_t& m) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = Eigen::Quaterniond(m.robot_orientation[0], m.robot_orientation[1],
-                                     m.robot_orientation[2], m.robot_orientation[3])
-                      .normalized()
-                      .toRotationMatrix();
-  pose.translation() =
-      Eigen::Vector3d(m.robot_position_m[0], m.robot_position_m[1], m.robot_position_m[2]);
-  return pose;
+  return common::ToRigid3d(m.robot_position_m, m.robot_orientation).ToIsometry();
 }
 
 // map_from_base at `utime`, interpolated between the two truth samples around it (the
@@ -108,12 +102,8 @@ int main(int argc, char** argv) {
         &parser, &node_args, argc, argv, "config/vision_people.yaml");
     if (!parsed) return 0;
     const VisionPeopleOptions& options = *parsed;
-    Eigen::Isometry3d base_from_camera = Eigen::Isometry3d::Identity();
-    {
-      const auto r = common::LoadRobot(options.robot_config).base_from_camera.ToRigid3d();
-      base_from_camera.linear() = r.rotation().toRotationMatrix();
-      base_from_camera.translation() = r.translation();
-    }
+    const Eigen::Isometry3d base_from_camera =
+        common::LoadRobot(options.robot_config).base_from_camera.ToRigid3d().ToIsometry();
 
     // The truth first (a small part of the log), so frames can be placed between samples.
     std::map<int64_t, TruthSample> truth;
