@@ -39,7 +39,14 @@ for run in 1 2; do
   "$BIN/sarmap-people-map" --set "state_file=$out/replay$run.yaml" --set save_period_s=0.2 \
     >"$out/people_map_replay$run.txt" 2>&1 &
   pm=$!
-  sleep 1
+  # The replay starts once the node has subscribed (it logs "running" when its loop starts): a
+  # replay begun earlier loses its first seconds of detections.
+  for _ in $(seq 100); do
+    grep -q "running (pid" "$out/people_map_replay$run.txt" && break
+    sleep 0.1
+  done
+  grep -q "running (pid" "$out/people_map_replay$run.txt" \
+    || fail "sarmap-people-map did not start for replay $run: $(cat "$out/people_map_replay$run.txt")"
   "$BIN/sarmap-log" replay "$out/run/demo.lcmlog" --speed 4 --channels '^(POSE|PEOPLE_VISUAL|PEOPLE_AUDIO|SOUND_MAP)$' \
     >/dev/null 2>&1 || fail "replay $run failed"
   sleep 1
