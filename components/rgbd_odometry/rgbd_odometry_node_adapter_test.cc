@@ -4,8 +4,7 @@
 
 #include <vector>
 
-#include "common/image_codec.h"
-#include "common/image_messages.h"
+#include "rgbd_odometry/frame_messages_test_util.h"
 #include "rgbd_odometry/rgbd_odometry_node.h"
 #include "rgbd_odometry/synthetic_room.h"
 
@@ -28,22 +27,9 @@ struct Bus {
   void Send(double forward_m, int64_t utime) {
     const Eigen::Isometry3d pose =
         synthetic::Moved(synthetic::StartPose(), {forward_m, 0, 0}, Eigen::Vector3d::UnitZ(), 0);
-    const RgbdFrame f = room.Render(pose, utime);
-    header_t h;
-    h.utime = f.utime;
-    h.seq = seq++;
-    h.frame = "camera";
-    camera_intrinsics_t k{};
-    k.width = f.width;
-    k.height = f.height;
-    k.fx = f.camera.fx, k.fy = f.camera.fy, k.cx = f.camera.cx, k.cy = f.camera.cy;
-    std::vector<uint8_t> rgb(static_cast<size_t>(f.width) * f.height * 3);
-    for (int i = 0; i < f.width * f.height; ++i)
-      for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = f.image[i];
-    image_t color = common::MakeColorImage(h, k, rgb.data(), f.width, f.height, 90);
-    rgb_pub.Publish(&color);
-    image_t depth = common::MakeDepthImage(h, k, f.depth.data(), f.width, f.height);
-    depth_pub.Publish(&depth);
+    testing_util::FrameMessages m = testing_util::FrameMessagesOf(room.Render(pose, utime), seq++);
+    rgb_pub.Publish(&m.color);
+    depth_pub.Publish(&m.depth);
     for (int i = 0; i < 4; ++i) node.SpinOnce(0.001);
   }
 };

@@ -14,6 +14,7 @@
 #include "common/image_messages.h"
 #include "common/node.h"
 #include "common/testing/isolated_network.h"
+#include "rgbd_odometry/frame_messages_test_util.h"
 #include "rgbd_odometry/synthetic_room.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -65,31 +66,14 @@ TEST(RgbdOdometryNode, WalkingForwardGivesRigPosesAndBadImagesAreCounted) {
     // 1 cm forward per frame (world x = the rig's forward at the start).
     const Eigen::Isometry3d pose =
         synthetic::Moved(synthetic::StartPose(), {0.01 * i, 0, 0}, Eigen::Vector3d::UnitZ(), 0);
-    const RgbdFrame f = room.Render(pose, t0 + i * 33333);
-    header_t h;
-    h.utime = f.utime;
-    h.seq = seq++;
-    h.frame = "camera";
-    camera_intrinsics_t k{};
-    k.width = f.width;
-    k.height = f.height;
-    k.fx = f.camera.fx, k.fy = f.camera.fy, k.cx = f.camera.cx, k.cy = f.camera.cy;
-    const int cw = small_color ? 320 : f.width, ch = small_color ? 240 : f.height;
-    std::vector<uint8_t> rgb(static_cast<size_t>(cw) * ch * 3);
-    for (int v = 0; v < ch; ++v)
-      for (int u = 0; u < cw; ++u)
-        for (int c = 0; c < 3; ++c) rgb[(v * cw + u) * 3 + c] = f.image[v * f.width + u];
-    camera_intrinsics_t ck = k;
-    ck.width = cw;
-    ck.height = ch;
-    image_t color = common::MakeColorImage(h, ck, rgb.data(), cw, ch, 90);
-    lcm.publish("RGB", &color);
-    image_t depth = common::MakeDepthImage(h, k, f.depth.data(), f.width, f.height);
+    testing_util::FrameMessages m = testing_util::FrameMessagesOf(
+        room.Render(pose, t0 + i * 33333), seq++, small_color ? 320 : 0, small_color ? 240 : 0);
+    lcm.publish("RGB", &m.color);
     if (bad_depth) {  // truncated compressed data: consistent sizes, undecodable
-      depth.data.resize(depth.data.size() / 2);
-      depth.size = static_cast<int32_t>(depth.data.size());
+      m.depth.data.resize(m.depth.data.size() / 2);
+      m.depth.size = static_cast<int32_t>(m.depth.data.size());
     }
-    lcm.publish("DEPTH", &depth);
+    lcm.publish("DEPTH", &m.depth);
   };
   for (int i = 0; i < 8; ++i) {
     send(i, false, false);
