@@ -251,7 +251,7 @@ std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, dou
 void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out) {
   std::fprintf(out,
                "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
-               "sound | RSS MB | SLAM nodes | submaps | loop closures | optimise s (period) | "
+               "sound | RSS MB | SLAM nodes (live) | submaps (live) | loop closures | optimise s (period) | "
                "people | sound sources | detections without pose |\n");
   const mission::MissionReport* prev = nullptr;
   for (const mission::MissionReport& r : reports) {

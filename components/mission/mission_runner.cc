@@ -407,9 +407,10 @@ class Loop : public sim::SimSink {
     std::vector<int> ids = {slam_.num_nodes() - 1};
     std::set<int64_t> wanted;
     for (int64_t id : anchor_ids_) {
-      if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
+      if (id >= 0 && id < slam_.num_nodes() && !slam_.NodeTrimmed(id)) wanted.insert(id);
     }
     for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
+    slam_.SetKeptNodes(std::vector<int>(ids.begin() + 1, ids.end()));  // not trimmed while held
     Eigen::MatrixXd cov;
     if (!slam_.JointCovariance(ids, &cov)) return false;
     covariance_ids_ = std::move(ids);
@@ -669,8 +670,8 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       report.sound_cpu_s = result.sound_cpu_s;
       report.rss_mb = ResidentMegabytes();
       const slam::SlamStats& stats = loop.slam().stats();
-      report.slam_nodes = loop.slam().num_nodes();
-      report.slam_submaps = stats.submaps;
+      report.slam_nodes = loop.slam().num_live_nodes();
+      report.slam_submaps = loop.slam().num_live_submaps();
       report.slam_optimisations = stats.optimisations;
       report.slam_loop_closures = stats.loop_closures;
       report.slam_optimise_s = stats.optimise_seconds;

@@ -85,7 +85,8 @@ struct MissionReport {
   double cpu_s = 0, slam_cpu_s = 0, explore_cpu_s = 0, vision_cpu_s = 0, people_map_cpu_s = 0,
          sound_cpu_s = 0;
   double rss_mb = 0;  // the process's resident memory
-  int64_t slam_nodes = 0, slam_submaps = 0, slam_optimisations = 0, slam_loop_closures = 0;
+  int64_t slam_nodes = 0, slam_submaps = 0;  // live (untrimmed)
+  int64_t slam_optimisations = 0, slam_loop_closures = 0;
   double slam_optimise_s = 0;  // cumulative time in the global optimisation
   int people_on_map = 0, sound_sources = 0;
   int64_t detections_without_pose = 0;

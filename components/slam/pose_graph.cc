@@ -57,32 +57,29 @@ struct Blocks {
   std::vector<std::array<double, 3>> nodes, submaps;
 };
 
+// Only the poses some constraint names enter the problem (trimmed ones are left out).
 void BuildProblem(const std::vector<Constraint>& constraints, Blocks* b, ceres::Problem* problem,
                   const PoseGraphOptions& options, const CovarianceModel* model = nullptr) {
-  for (auto& p : b->submaps) problem->AddParameterBlock(p.data(), 3);
-  for (auto& p : b->nodes) problem->AddParameterBlock(p.data(), 3);
-  if (!b->submaps.empty()) problem->SetParameterBlockConstant(b->submaps[0].data());
+  const int num_nodes = static_cast<int>(b->nodes.size());
+  const int num_submaps = static_cast<int>(b->submaps.size());
   for (const Constraint& c : constraints) {
-    double* from;
-    double* to;
-    if (c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE) {
-      if (c.from >= static_cast<int>(b->submaps.size()) || c.to >= static_cast<int>(b->nodes.size())) continue;
-      from = b->submaps[c.from].data();
-      to = b->nodes[c.to].data();
-    } else {
-      if (c.from >= static_cast<int>(b->nodes.size()) || c.to >= static_cast<int>(b->nodes.size())) continue;
-      from = b->nodes[c.from].data();
-      to = b->nodes[c.to].data();
-    }
+    const bool submap_kind = c.submap_to_node();
+    if (c.to >= num_nodes || c.from >= (submap_kind ? num_submaps : num_nodes)) continue;
+    double* from = submap_kind ? b->submaps[c.from].data() : b->nodes[c.from].data();
+    double* to = b->nodes[c.to].data();
     ceres::LossFunction* loss =
         c.kind == Constraint::LOOP_CLOSURE ? new ceres::HuberLoss(options.huber_scale) : nullptr;
-    const auto [wt, wr] = model ? model->Weights(c) : std::make_pair(c.translation_weight, c.rotation_weight);
+    const auto [wt, wr] =
+        model ? model->Weights(c) : std::make_pair(c.translation_weight, c.rotation_weight);
     const Eigen::Matrix2d sqrt_info_t = c.translation_shape == Eigen::Matrix2d::Identity()
                                             ? Eigen::Matrix2d(wt * Eigen::Matrix2d::Identity())
                                             : Eigen::Matrix2d(wt * SqrtPsd(c.translation_shape));
     problem->AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseCost, 3, 3, 3>(
                                   new RelativePoseCost(c.relative, sqrt_info_t, wr)),
                               loss, from, to);
+  }
+  if (!b->submaps.empty() && problem->HasParameterBlock(b->submaps[0].data())) {
+    problem->SetParameterBlockConstant(b->submaps[0].data());
   }
 }
 
@@ -117,8 +114,10 @@ const ConstraintNoise& CovarianceModel::For(int kind) const {
 
 std::pair<double, double> CovarianceModel::Weights(const Constraint& c) const {
   const ConstraintNoise& n = For(c.kind);
-  return {n.translation_sigma_m > 0 ? 1.0 / n.translation_sigma_m : c.translation_weight,
-          n.rotation_sigma_rad > 0 ? 1.0 / n.rotation_sigma_rad : c.rotation_weight};
+  // A trimmed chain of k steps: k local-matching constraints in series, sigma * sqrt(k).
+  const double series = c.kind == Constraint::TRIMMED_CHAIN ? std::sqrt(std::max(1, c.steps)) : 1.0;
+  return {n.translation_sigma_m > 0 ? 1.0 / (n.translation_sigma_m * series) : c.translation_weight,
+          n.rotation_sigma_rad > 0 ? 1.0 / (n.rotation_sigma_rad * series) : c.rotation_weight};
 }
 
 OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints,
@@ -168,12 +167,22 @@ bool NodeCovariance(const std::vector<Constraint>& constraints,
   }
   ceres::Problem problem;
   BuildProblem(constraints, &b, &problem, options, &model);
-  // The free blocks (submap 0 is the gauge), each at a column offset of H.
+  // The free blocks (submap 0 is the gauge; trimmed poses are not in the problem), each at a
+  // column offset of H.
+  if (b.submaps.empty() || !problem.HasParameterBlock(b.submaps[0].data())) return false;
   std::vector<double*> free_blocks;
-  for (size_t i = 1; i < b.submaps.size(); ++i) free_blocks.push_back(b.submaps[i].data());
-  const int first_node_column = 3 * static_cast<int>(free_blocks.size());
-  for (auto& p : b.nodes) free_blocks.push_back(p.data());
-  if (b.submaps.empty()) return false;  // no gauge: singular
+  for (size_t i = 1; i < b.submaps.size(); ++i) {
+    if (problem.HasParameterBlock(b.submaps[i].data())) free_blocks.push_back(b.submaps[i].data());
+  }
+  std::vector<int> node_column(b.nodes.size(), -1);
+  for (size_t i = 0; i < b.nodes.size(); ++i) {
+    if (!problem.HasParameterBlock(b.nodes[i].data())) continue;
+    node_column[i] = 3 * static_cast<int>(free_blocks.size());
+    free_blocks.push_back(b.nodes[i].data());
+  }
+  for (int id : node_ids) {
+    if (node_column[id] < 0) return false;  // trimmed, or in no constraint
+  }
   ceres::Problem::EvaluateOptions evaluate;
   evaluate.parameter_blocks = free_blocks;
   evaluate.apply_loss_function = true;
@@ -193,7 +202,7 @@ bool NodeCovariance(const std::vector<Constraint>& constraints,
   const int n = static_cast<int>(node_ids.size());
   Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(information.rows(), 3 * n);
   for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < 3; ++r) unit(first_node_column + 3 * node_ids[i] + r, 3 * i + r) = 1.0;
+    for (int r = 0; r < 3; ++r) unit(node_column[node_ids[i]] + r, 3 * i + r) = 1.0;
   }
   const Eigen::MatrixXd columns = cholesky.solve(unit);
   if (cholesky.info() != Eigen::Success || !columns.allFinite()) return false;

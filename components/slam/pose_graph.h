@@ -25,10 +25,12 @@ namespace slam {
 using common::Rigid2d;
 
 struct Constraint {
-  enum Kind { INTRA_SUBMAP = 0, LOOP_CLOSURE = 1, ODOMETRY = 2, LOCAL_SLAM = 3 };
+  // TRIMMED_CHAIN ties the nodes either side of trimmed ones: the local chain of `steps`
+  // consecutive-node constraints it replaces, as springs in series (weight / sqrt(steps)).
+  enum Kind { INTRA_SUBMAP = 0, LOOP_CLOSURE = 1, ODOMETRY = 2, LOCAL_SLAM = 3, TRIMMED_CHAIN = 4 };
   Kind kind;
   // For INTRA_SUBMAP / LOOP_CLOSURE: from = submap id, to = node id. For ODOMETRY /
-  // LOCAL_SLAM: from = node id, to = next node id.
+  // LOCAL_SLAM / TRIMMED_CHAIN: from = node id, to = a later node id.
   int from, to;
   Rigid2d relative;  // from_frame_from_to_frame
   double translation_weight, rotation_weight;
@@ -36,6 +38,8 @@ struct Constraint {
   // Symmetric, positive semi-definite, largest eigenvalue 1: how well the match tells each
   // direction of the translation, relative to its best one (TranslationShape).
   Eigen::Matrix2d translation_shape = Eigen::Matrix2d::Identity();
+  int steps = 1;  // TRIMMED_CHAIN: consecutive-node steps replaced
+  bool submap_to_node() const { return kind == INTRA_SUBMAP || kind == LOOP_CLOSURE; }
 };
 
 // The shape of a match's translation information H (2x2, Gauss-Newton J^T J of the match in the
@@ -53,7 +57,8 @@ struct PoseGraphOptions {
 // weights (a local-matching weight of 1e5 says "1e-5 m"), so the covariance they imply is ~1e5 too
 // tight in variance. Here each kind may state the standard deviation of one constraint instead:
 // the covariance's information for it is diag(1/sigma_t^2, 1/sigma_t^2, 1/sigma_r^2). 0 keeps the
-// optimiser's weight (information w^2).
+// optimiser's weight (information w^2). A TRIMMED_CHAIN of n steps has local_slam's sigma
+// times sqrt(n).
 struct ConstraintNoise {
   double translation_sigma_m = 0;
   double rotation_sigma_rad = 0;
@@ -72,6 +77,7 @@ struct OptimisationSummary {
 };
 
 // Optimises `node_poses` and `submap_poses` (indexed by id) in place. Submap 0 stays fixed.
+// Poses no constraint names (trimmed) are left as they are.
 OptimisationSummary OptimisePoseGraph(const std::vector<Constraint>& constraints,
                                       std::vector<Rigid2d>* node_poses,
                                       std::vector<Rigid2d>* submap_poses,

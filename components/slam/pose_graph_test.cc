@@ -65,6 +65,37 @@ TEST(PoseGraphCovariance, ZeroSigmaKeepsTheOptimiserWeights) {
   EXPECT_NEAR(cov2(0, 0), cov(0, 0), 1e-12);
 }
 
+// Trimmed nodes 1..n-2 of the chain: one TRIMMED_CHAIN constraint of n-1 steps between nodes 0
+// and n-1 gives the last node the covariance the whole chain gave it (springs in series), and
+// the trimmed nodes, in no constraint now, have none.
+TEST(PoseGraphCovariance, ATrimmedChainIsTheChainItReplaces) {
+  std::vector<Rigid2d> nodes, submaps;
+  const int n = 9;
+  const auto chain = Chain(n, &nodes, &submaps);
+  CovarianceModel model;
+  model.intra_submap = {0.05, 1.0 * M_PI / 180};
+  model.local_slam = {0.02, 0.3 * M_PI / 180};
+  Eigen::MatrixXd whole, trimmed;
+  ASSERT_TRUE(NodeCovariance(chain, nodes, submaps, {n - 1}, &whole, PoseGraphOptions(), model));
+  Constraint bridge{Constraint::TRIMMED_CHAIN, 0, n - 1, nodes[0].inverse() * nodes[n - 1],
+                    1e5 / std::sqrt(n - 1.0), 1e5 / std::sqrt(n - 1.0)};
+  bridge.steps = n - 1;
+  const std::vector<Constraint> bridged = {chain.front(), bridge};
+  ASSERT_TRUE(
+      NodeCovariance(bridged, nodes, submaps, {n - 1}, &trimmed, PoseGraphOptions(), model));
+  // Along-track x and yaw add linearly in both; the cross-track y of the chain also carries
+  // each step's heading error at its lever arm, which one straight constraint does not.
+  EXPECT_NEAR(trimmed(0, 0), whole(0, 0), 1e-9);
+  EXPECT_NEAR(trimmed(2, 2), whole(2, 2), 1e-12);
+  EXPECT_FALSE(NodeCovariance(bridged, nodes, submaps, {3}, &trimmed, PoseGraphOptions(), model));
+  // Optimised, the bridge holds the last node where it was.
+  std::vector<Rigid2d> moved = nodes;
+  moved[n - 1] = Rigid2d(0, 0, 0);
+  OptimisePoseGraph(bridged, &moved, &submaps, PoseGraphOptions());
+  EXPECT_NEAR((moved[n - 1].translation() - nodes[n - 1].translation()).norm(), 0, 1e-6);
+  EXPECT_NEAR(moved[3].translation().x(), 0.6, 1e-12);  // trimmed: left as it was given
+}
+
 // A node asked for twice gets the same block everywhere (the anchors may repeat the latest node).
 TEST(PoseGraphCovariance, ARepeatedNodeGetsTheSameBlockTwice) {
   std::vector<Rigid2d> nodes, submaps;
@@ -78,18 +109,21 @@ TEST(PoseGraphCovariance, ARepeatedNodeGetsTheSameBlockTwice) {
   }
 }
 
-// A node no constraint reaches has no covariance (the information is singular); so has an
-// unknown node.
+// A node no constraint reaches (trimmed) has no covariance, nor has an unknown node; the others
+// keep theirs, the same as without it. A graph in two pieces has none (singular information).
 TEST(PoseGraphCovariance, AnUnconstrainedNodeHasNone) {
   std::vector<Rigid2d> nodes, submaps;
-  const auto constraints = Chain(5, &nodes, &submaps);
+  auto constraints = Chain(5, &nodes, &submaps);
+  Eigen::MatrixXd without, cov;
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {2}, &without, PoseGraphOptions()));
   nodes.push_back(Rigid2d(3, 0, 0));  // node 5: in the graph, in no constraint
-  Eigen::MatrixXd cov;
   EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {5}, &cov, PoseGraphOptions()));
-  EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
   EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {9}, &cov, PoseGraphOptions()));
-  nodes.pop_back();
-  EXPECT_TRUE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
+  ASSERT_TRUE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
+  EXPECT_LT((cov - without).norm(), 1e-15);
+  nodes.push_back(Rigid2d(3.2, 0, 0));  // nodes 5 and 6 tied to each other only
+  constraints.push_back({Constraint::LOCAL_SLAM, 5, 6, Rigid2d(0.2, 0, 0), 1e5, 1e5});
+  EXPECT_FALSE(NodeCovariance(constraints, nodes, submaps, {2}, &cov, PoseGraphOptions()));
 }
 
 // A match's translation information, rotated 30 deg: 50 across a wall, 0.001 along it. The shape

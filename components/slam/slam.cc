@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "common/binary_io.h"
 #include "common/state_file.h"
@@ -490,6 +491,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
         const int finished = active_submaps_.front();
         active_submaps_.erase(active_submaps_.begin());
         FinishSubmap(finished);
+        if (options_.trim.enabled) TrimIfCovered(finished);
       }
       Submap s;
       s.local_pose = Rigid2d(local.translation(), 0.0);
@@ -528,6 +530,7 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
   node.odom_segment = last_scan_segment_;
   node.loop_points = loop_points;
   node.range_data = base_data;
+  node.submaps = inserted_into;
   nodes_.push_back(std::move(node));
   node_global_.push_back(global_from_local_ * local_pose);
   ++stats_.nodes;
@@ -563,7 +566,7 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
                                              : active_submaps_.front() - kRecentSubmaps;
   std::vector<std::pair<double, int>> near;
   for (size_t s = 0; s < submaps_.size(); ++s) {
-    if (!submaps_[s].finished || static_cast<int>(s) >= recent) continue;
+    if (!submaps_[s].finished || submaps_[s].trimmed || static_cast<int>(s) >= recent) continue;
     const double d = (node_global_[id].translation() - submap_global_[s].translation()).norm();
     if (d <= options_.loop.max_constraint_distance_m) near.emplace_back(d, static_cast<int>(s));
   }
@@ -603,8 +606,9 @@ void Slam::FinishSubmap(int submap_id) {
                                                              : submaps_[first_recent].nodes.front();
   std::vector<int> near;
   for (int n = 0; n < first_own; ++n) {
-    if ((node_global_[n].translation() - submap_global_[submap_id].translation()).norm() <=
-        options_.loop.max_constraint_distance_m) {
+    if (!nodes_[n].trimmed &&
+        (node_global_[n].translation() - submap_global_[submap_id].translation()).norm() <=
+            options_.loop.max_constraint_distance_m) {
       near.push_back(n);
     }
   }
@@ -766,7 +770,8 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
   int best = -1;
   double best_d = 1e300;
   for (size_t s = 0; s < submaps_.size(); ++s) {
-    if (submaps_[s].num_inserted == 0) continue;  // the saved map is frozen: all submaps count
+    // The saved map is frozen: every submap with scans counts.
+    if (submaps_[s].num_inserted == 0 || submaps_[s].trimmed) continue;
     const double d = (submap_global_[s].translation() - predicted.translation()).norm();
     if (d < best_d) best_d = d, best = static_cast<int>(s);
   }
@@ -803,6 +808,143 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
   return result;
 }
 
+void Slam::SetKeptNodes(std::vector<int> node_ids) {
+  std::sort(node_ids.begin(), node_ids.end());
+  node_ids.erase(std::unique(node_ids.begin(), node_ids.end()), node_ids.end());
+  kept_nodes_ = std::move(node_ids);
+}
+
+namespace {
+// A raster cell's key: its integer coordinates packed into one 64-bit integer.
+int64_t CellKey(const Eigen::Vector2d& p, double cell_m) {
+  const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell_m));
+  const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell_m));
+  return (ix << 32) ^ (iy & 0xffffffff);
+}
+}  // namespace
+
+void Slam::KnownCells(int submap_id, std::vector<int64_t>* keys, Eigen::Vector2d* centre_m,
+                      double* radius_m) const {
+  const Submap& sub = submaps_[submap_id];
+  const ProbabilityGrid& g = *sub.grid;
+  const double cell_m = options_.trim.cell_m;
+  const Rigid2d global_from_grid = submap_global_[submap_id] * sub.local_pose.inverse();
+  const Eigen::Vector2d size = Eigen::Vector2d(g.width(), g.height()) * g.resolution();
+  *centre_m = global_from_grid * (g.corner() + 0.5 * size);
+  *radius_m = 0.5 * size.norm();
+  if (!keys) return;
+  keys->clear();
+  const int stride = std::max(1, static_cast<int>(std::lround(cell_m / g.resolution())));
+  for (int y = stride / 2; y < g.height(); y += stride) {
+    for (int x = stride / 2; x < g.width(); x += stride) {
+      if (g.Raw(Eigen::Array2i(x, y)) == 0.f) continue;  // unknown
+      const Eigen::Vector2d cell_local =
+          g.corner() + (Eigen::Vector2d(x, y) + Eigen::Vector2d(0.5, 0.5)) * g.resolution();
+      keys->push_back(CellKey(global_from_grid * cell_local, cell_m));
+    }
+  }
+  std::sort(keys->begin(), keys->end());
+  keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
+}
+
+// The just-finished submap s against the live submaps older than s - 2 (s - 1 holds s's first
+// scans, s - 2 the scans just before: the same pass), on a raster of trim.cell_m cells in the map frame sampled at their poses
+// now: s is trimmed when the cells it knows and fewer than fresh_submaps of those know add up to
+// less than min_fresh_area_m2, i.e. when it maps nothing new. What stays is the first map of
+// each place, the one later scans were matched against.
+void Slam::TrimIfCovered(int submap_id) {
+  constexpr int kOwnChain = 2;
+  const TrimOptions& t = options_.trim;
+  if (submap_id <= kOwnChain) return;  // submap 0 holds the map frame
+  for (int n : submaps_[submap_id].nodes) {
+    if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) return;
+  }
+  std::vector<int64_t> mine;
+  Eigen::Vector2d centre;
+  double radius;
+  KnownCells(submap_id, &mine, &centre, &radius);
+  std::unordered_map<int64_t, int> known_before;
+  known_before.reserve(mine.size());
+  for (int64_t k : mine) known_before.emplace(k, 0);
+  std::vector<int64_t> theirs;
+  for (int s = 0; s < submap_id - kOwnChain; ++s) {
+    if (submaps_[s].trimmed || !submaps_[s].finished) continue;
+    Eigen::Vector2d other_centre;
+    double other_radius;
+    KnownCells(s, nullptr, &other_centre, &other_radius);
+    if ((other_centre - centre).norm() > radius + other_radius) continue;
+    KnownCells(s, &theirs, &other_centre, &other_radius);
+    for (int64_t k : theirs) {
+      auto it = known_before.find(k);
+      if (it != known_before.end()) ++it->second;
+    }
+  }
+  const double cell_area_m2 = t.cell_m * t.cell_m;
+  double new_m2 = 0;
+  for (const auto& [key, count] : known_before) {
+    if (count < t.fresh_submaps) new_m2 += cell_area_m2;
+  }
+  if (new_m2 < t.min_fresh_area_m2) TrimSubmap(submap_id);
+}
+
+// Removes submap `submap_id`, the nodes no live submap holds, and every constraint on them. A run
+// of trimmed nodes between live nodes p < q becomes one TRIMMED_CHAIN constraint p -> q at the
+// graph's current estimate (the chain it replaces, as springs in series), so the graph stays one
+// piece and its solution where it was.
+void Slam::TrimSubmap(int submap_id) {
+  Submap& sub = submaps_[submap_id];
+  sub.trimmed = true;
+  sub.grid.reset();
+  precomputations_.remove_if([submap_id](const auto& p) { return p.first == submap_id; });
+  ++stats_.submaps_trimmed;
+  std::vector<int> trimmed_nodes;
+  for (int n : sub.nodes) {
+    Node& node = nodes_[n];
+    if (node.trimmed) continue;
+    bool held = false;
+    for (int other : node.submaps) held = held || !submaps_[other].trimmed;
+    if (held) continue;
+    node.trimmed = true;
+    node.loop_points = PointCloud();
+    node.range_data = RangeData();
+    ++stats_.nodes_trimmed;
+    trimmed_nodes.push_back(n);
+  }
+  auto node_gone = [&](int n) { return nodes_[n].trimmed; };
+  constraints_.erase(
+      std::remove_if(constraints_.begin(), constraints_.end(),
+                     [&](const Constraint& c) {
+                       if (c.submap_to_node()) return c.from == submap_id || node_gone(c.to);
+                       return node_gone(c.from) || node_gone(c.to);
+                     }),
+      constraints_.end());
+  // Bridge each run of trimmed nodes.
+  const auto& g = options_.graph;
+  const bool local = g.local_slam_translation_weight > 0 && g.local_slam_rotation_weight > 0;
+  const double chain_wt = local ? g.local_slam_translation_weight : g.intra_translation_weight;
+  const double chain_wr = local ? g.local_slam_rotation_weight : g.intra_rotation_weight;
+  const int last = static_cast<int>(nodes_.size()) - 1;
+  int done_up_to = -1;  // trimmed_nodes ascend: a run is bridged once
+  for (int n : trimmed_nodes) {
+    if (n <= done_up_to) continue;
+    int p = n, q = n;
+    while (p >= 0 && nodes_[p].trimmed) --p;
+    while (q <= last && nodes_[q].trimmed) ++q;
+    done_up_to = q;
+    if (p < 0 || q > last) continue;  // nothing to tie on one side
+    const int steps = q - p;
+    const double series = std::sqrt(static_cast<double>(steps));
+    Constraint c{Constraint::TRIMMED_CHAIN,
+                 p,
+                 q,
+                 node_global_[p].inverse() * node_global_[q],
+                 chain_wt / series,
+                 chain_wr / series};
+    c.steps = steps;
+    constraints_.push_back(c);
+  }
+}
+
 bool Slam::JointCovariance(const std::vector<int>& node_ids, Eigen::MatrixXd* covariance) const {
   PoseGraphOptions p;
   p.huber_scale = options_.graph.huber_scale;
@@ -822,6 +964,7 @@ OccupancyMap Slam::RenderMap() const {
   if (nodes_.empty()) return map;
   ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
   for (size_t i = 0; i < nodes_.size(); ++i) {
+    if (nodes_[i].trimmed) continue;
     grid.Insert(TransformRangeData(nodes_[i].range_data, node_global_[i]),
                 static_cast<float>(options_.local.hit_probability),
                 static_cast<float>(options_.local.miss_probability));
@@ -882,9 +1025,10 @@ class Reader : public common::BinaryReader {
 };
 
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
-// Of the body. Version 2 adds each constraint's translation shape; version 1 bodies are still
-// read (shape: the identity).
-constexpr int32_t kVersion = 2;
+// Of the body. Version 2 adds each constraint's translation shape, version 3 the trimmed flags
+// of submaps and nodes (a trimmed submap has no grid) and each constraint's steps; version 1 and
+// 2 bodies are still read (shape: the identity; nothing trimmed).
+constexpr int32_t kVersion = 3;
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -912,10 +1056,12 @@ void Slam::Save(const std::string& path) const {
       w.Pose(submap_global_[i]);
       w.Pod<int32_t>(s.num_inserted);
       w.Pod<int32_t>(s.finished);
+      w.Pod<int32_t>(s.trimmed);
       w.Pod<int64_t>(s.pulses);
       w.Pod<int64_t>(s.samples);
       w.Pod<int64_t>(s.nodes.size());
       for (int n : s.nodes) w.Pod<int32_t>(n);
+      if (s.trimmed) continue;  // no grid
       w.Pod<int32_t>(s.grid->width());
       w.Pod<int32_t>(s.grid->height());
       w.Pod<double>(s.grid->corner().x());
@@ -934,6 +1080,7 @@ void Slam::Save(const std::string& path) const {
       w.Pose(node_global_[i]);
       w.Pod<int32_t>(n.has_odometry);
       w.Pod<int32_t>(n.odom_segment);
+      w.Pod<int32_t>(n.trimmed);
       w.Pose(n.odom_pose);
       w.Cloud(n.loop_points);
       w.Pod(n.range_data.origin.x()), w.Pod(n.range_data.origin.y());
@@ -948,6 +1095,7 @@ void Slam::Save(const std::string& path) const {
       w.Pod(c.translation_weight), w.Pod(c.rotation_weight), w.Pod(c.score);
       w.Pod(c.translation_shape(0, 0)), w.Pod(c.translation_shape(0, 1));
       w.Pod(c.translation_shape(1, 1));
+      w.Pod<int32_t>(c.steps);
     }
     // Local state to continue.
     w.Pose(global_from_local_);
@@ -982,7 +1130,7 @@ void Slam::Load(const std::string& path) {
     throw std::runtime_error("'" + path + "' is not a sarmap pose-graph file");
   }
   const int32_t body_version = r.Pod<int32_t>();
-  if (body_version != 1 && body_version != kVersion) {
+  if (body_version < 1 || body_version > kVersion) {
     throw std::runtime_error("unsupported pose-graph version");
   }
   const double resolution = r.Pod<double>();
@@ -995,10 +1143,18 @@ void Slam::Load(const std::string& path) {
     submap_global.push_back(r.Pose());
     s.num_inserted = r.Pod<int32_t>();
     s.finished = r.Pod<int32_t>() != 0;
+    if (body_version >= 3) s.trimmed = r.Pod<int32_t>() != 0;
     s.pulses = r.Pod<int64_t>();
     s.samples = r.Pod<int64_t>();
     const int64_t nn = r.Count(100000000);
     for (int64_t k = 0; k < nn; ++k) s.nodes.push_back(r.Pod<int32_t>());
+    if (s.trimmed) {
+      if (i == 0 || !s.finished) {
+        throw std::runtime_error("pose-graph file corrupt (trimmed submap)");
+      }
+      submaps.push_back(std::move(s));
+      continue;
+    }
     const int w = r.Pod<int32_t>(), h = r.Pod<int32_t>();
     const double cx = r.Pod<double>(), cy = r.Pod<double>();
     if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > 400000000) {
@@ -1025,6 +1181,7 @@ void Slam::Load(const std::string& path) {
     node_global.push_back(r.Pose());
     n.has_odometry = r.Pod<int32_t>() != 0;
     n.odom_segment = r.Pod<int32_t>();
+    if (body_version >= 3) n.trimmed = r.Pod<int32_t>() != 0;
     n.odom_pose = r.Pose();
     n.loop_points = r.Cloud();
     n.range_data.origin.x() = r.Pod<float>();
@@ -1048,10 +1205,10 @@ void Slam::Load(const std::string& path) {
       const double xx = r.Pod<double>(), xy = r.Pod<double>(), yy = r.Pod<double>();
       c.translation_shape << xx, xy, xy, yy;
     }
-    const bool submap_kind =
-        c.kind == Constraint::INTRA_SUBMAP || c.kind == Constraint::LOOP_CLOSURE;
-    if (c.kind < 0 || c.kind > 3 || c.from < 0 || c.to < 0 || c.to >= num_nodes ||
-        c.from >= (submap_kind ? num_submaps : num_nodes)) {
+    if (body_version >= 3) c.steps = r.Pod<int32_t>();
+    const bool submap_kind = c.submap_to_node();
+    if (c.kind < 0 || c.kind > Constraint::TRIMMED_CHAIN || c.from < 0 || c.to < 0 ||
+        c.to >= num_nodes || c.from >= (submap_kind ? num_submaps : num_nodes) || c.steps < 1) {
       throw std::runtime_error("pose-graph file corrupt (constraint)");
     }
     constraints.push_back(c);
@@ -1073,8 +1230,22 @@ void Slam::Load(const std::string& path) {
     throw std::runtime_error("pose-graph file '" + path + "' is incomplete");
   }
   for (int a : active) {
-    if (a < 0 || a >= num_submaps) throw std::runtime_error("pose-graph file corrupt (active)");
+    if (a < 0 || a >= num_submaps || submaps[a].trimmed) {
+      throw std::runtime_error("pose-graph file corrupt (active)");
+    }
   }
+  // Each node's submaps, from the submaps' node lists.
+  int64_t submaps_trimmed = 0, nodes_trimmed = 0;
+  for (size_t i = 0; i < submaps.size(); ++i) {
+    submaps_trimmed += submaps[i].trimmed;
+    for (int n : submaps[i].nodes) {
+      if (n < 0 || n >= num_nodes) {
+        throw std::runtime_error("pose-graph file corrupt (submap node)");
+      }
+      nodes[n].submaps.push_back(static_cast<int>(i));
+    }
+  }
+  for (const Node& n : nodes) nodes_trimmed += n.trimmed;
   // A NaN pose or weight would spread through the next optimisation to the whole graph.
   bool finite = Finite(global_from_local) && Finite(last_scan_local) && Finite(last_scan_odom) &&
                 Finite(last_node_local) && std::isfinite(last_scan_time) &&
@@ -1133,6 +1304,8 @@ void Slam::Load(const std::string& path) {
   stats_ = SlamStats();
   stats_.nodes = nodes_.size();
   stats_.submaps = submaps_.size();
+  stats_.submaps_trimmed = submaps_trimmed;
+  stats_.nodes_trimmed = nodes_trimmed;
 }
 
 }  // namespace slam

@@ -67,6 +67,7 @@ struct SlamStats {
   int64_t loop_closures_inconsistent = 0;  // found, then rejected by the consistency gate
   int64_t precomputations_built = 0;       // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
+  int64_t submaps_trimmed = 0, nodes_trimmed = 0;  // trim.enabled
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
 
@@ -107,7 +108,16 @@ class Slam {
   // Global pose of every accepted scan (time order).
   std::vector<StampedPose2> Trajectory() const;
   const SlamStats& stats() const { return stats_; }
+  // Node ids run 0..num_nodes()-1; a trimmed node keeps its id and the pose it had when it was
+  // trimmed.
   int num_nodes() const { return static_cast<int>(nodes_.size()); }
+  bool NodeTrimmed(int id) const { return nodes_[id].trimmed; }
+  int num_live_nodes() const { return num_nodes() - static_cast<int>(stats_.nodes_trimmed); }
+  int num_live_submaps() const {
+    return static_cast<int>(submaps_.size() - stats_.submaps_trimmed);
+  }
+  // Nodes a client holds (SLAM_ANCHORS): their submaps are never trimmed. Replaces the last set.
+  void SetKeptNodes(std::vector<int> node_ids);
   Rigid2d NodePose(int id) const { return node_global_[id]; }
   double NodeTime(int id) const { return nodes_[id].time_s; }
   int64_t optimisation_id() const { return stats_.optimisations; }
@@ -132,6 +142,7 @@ class Slam {
     std::unique_ptr<ProbabilityGrid> grid;
     int num_inserted = 0;
     bool finished = false;
+    bool trimmed = false;  // its grid is freed and its constraints removed
     std::vector<int> nodes;
     // Loop-closure sampler state (fixed ratio).
     int64_t pulses = 0, samples = 0;
@@ -144,6 +155,8 @@ class Slam {
     Rigid2d odom_pose;
     PointCloud loop_points;  // base frame
     RangeData range_data;    // base frame (for map rendering)
+    std::vector<int> submaps;  // the submaps it was inserted into
+    bool trimmed = false;      // every submap of it is trimmed: its data is freed
   };
   struct ScanRecord {
     double time_s;
@@ -170,6 +183,13 @@ class Slam {
   int AddNode(double time_s, const Rigid2d& local_pose, const RangeData& base_data,
               const PointCloud& loop_points, const std::vector<int>& inserted_into);
   void FinishSubmap(int submap_id);
+  // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions).
+  void TrimIfCovered(int submap_id);
+  void TrimSubmap(int submap_id);
+  // The map-frame raster cells (trim.cell_m) the submap's grid knows, sorted, and the circle
+  // around its grid.
+  void KnownCells(int submap_id, std::vector<int64_t>* keys, Eigen::Vector2d* centre_m,
+                  double* radius_m) const;
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
   // Whether a loop closure (submap_from_node `measured`) agrees with the graph's current
@@ -225,6 +245,7 @@ class Slam {
   int64_t loop_closures_at_last_optimisation_ = 0;
   std::vector<ScanRecord> scans_;
   std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
+  std::vector<int> kept_nodes_;  // sorted
 };
 
 }  // namespace slam

@@ -275,11 +275,12 @@ class SlamNode::Impl {
     std::set<int64_t> wanted;
     for (const auto& [name, client] : anchor_requests_) {
       for (int64_t id : client.node_ids) {
-        if (id >= 0 && id < slam_.num_nodes()) wanted.insert(id);
+        if (id >= 0 && id < slam_.num_nodes() && !slam_.NodeTrimmed(id)) wanted.insert(id);
       }
     }
     std::vector<int> ids = {slam_.num_nodes() - 1};
     for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
+    slam_.SetKeptNodes(std::vector<int>(ids.begin() + 1, ids.end()));  // not trimmed while held
     Eigen::MatrixXd cov;
     if (!slam_.JointCovariance(ids, &cov)) {
       if (covariance_log_.Allow(common::SteadySeconds())) {

@@ -216,9 +216,9 @@ int main(int argc, char** argv) {
         const double el =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::fprintf(stderr,
-                     "\r%3d %%  scans %lld  nodes %lld  submaps %lld  loops %lld/%lld  "
+                     "\r%3d %%  scans %lld  nodes %d  submaps %d  loops %lld/%lld  "
                      "optimisations %lld  %.1f s (%.1fx real time)   ",
-                     percent, (long long)s.scans, (long long)s.nodes, (long long)s.submaps,
+                     percent, (long long)s.scans, slam.num_live_nodes(), slam.num_live_submaps(),
                      (long long)s.loop_closures, (long long)s.loop_searches,
                      (long long)s.optimisations, el,
                      el > 0 ? (in.scan.time_s - first_t) / el : 0.0);
@@ -255,10 +255,10 @@ int main(int argc, char** argv) {
     std::printf("dataset %s\n", input.c_str());
     std::printf(
         "scans %lld (rejected %lld, out of time order %lld, standing still %lld), "
-        "odometry rejected %lld, nodes %lld, submaps %lld\n",
+        "odometry rejected %lld, nodes %lld (%d live), submaps %lld (%d live)\n",
         (long long)s.scans, (long long)s.rejected_scans, (long long)s.reordered_scans,
         (long long)s.stopped_scans, (long long)s.rejected_odometry, (long long)s.nodes,
-        (long long)s.submaps);
+        slam.num_live_nodes(), (long long)s.submaps, slam.num_live_submaps());
     std::printf(
         "loop closures %lld of %lld searches (%lld inconsistent with the graph rejected, %lld "
         "precomputation stacks built), optimisations %lld\n",

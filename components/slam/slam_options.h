@@ -281,6 +281,31 @@ struct CovarianceOptions {
   }
 };
 
+// Bounded graph: a submap that maps nothing new is trimmed when it finishes, with the nodes only
+// it holds, so that revisits cost no lasting state and the graph grows with the explored area,
+// not the mission time (Cartographer's overlapping-submaps trimmer, keeping the oldest map of a
+// place instead of the newest). A cell of the new submap s is new while fewer than
+// fresh_submaps live submaps older than s - 2 know it; s is trimmed when its new cells add up to
+// less than min_fresh_area_m2. Submaps holding a node kept for a client (SLAM_ANCHORS) stay. The
+// chain across trimmed nodes is kept by one constraint between the live nodes either side.
+struct TrimOptions {
+  bool enabled = true;
+  int fresh_submaps = 1;
+  double min_fresh_area_m2 = 1.0;
+  double cell_m = 0.2;  // the coverage raster
+  template <class V> void Visit(V& v) {
+    v("enabled", enabled, "Trim each finished submap that maps nothing new (the graph grows with the explored area, not the mission time)");
+    v("fresh_submaps", fresh_submaps, "A cell is new while fewer than this many older submaps know it");
+    v("min_fresh_area_m2", min_fresh_area_m2, "A finished submap with less new area than this is trimmed (m^2)");
+    v("cell_m", cell_m, "Cell size of the coverage raster (m)");
+  }
+  void Validate(Validator& c) const {
+    c.That(fresh_submaps >= 1, "fresh_submaps", "must be >= 1");
+    c.NonNegative("min_fresh_area_m2", min_fresh_area_m2);
+    c.Positive("cell_m", cell_m);
+  }
+};
+
 struct InputOptions {
   // Odometry steps faster than these (per second of message time) are rejected as jumps.
   double max_odometry_speed_mps = 5.0;
@@ -305,6 +330,7 @@ struct SlamOptions {
   GraphOptions graph;
   CovarianceOptions covariance;
   InputOptions input;
+  TrimOptions trim;
   template <class V> void Visit(V& v) {
     v("scan", scan, "Scan preprocessing");
     v("local", local, "Local SLAM: submaps and scan matching");
@@ -312,6 +338,7 @@ struct SlamOptions {
     v("graph", graph, "Global pose graph optimisation");
     v("covariance", covariance, "Noise per constraint assumed by the published covariances (POSE, SLAM_ANCHORS)");
     v("input", input, "Input checks");
+    v("trim", trim, "Bounded graph: trimming submaps that newer ones cover");
   }
 };
 

@@ -512,6 +512,107 @@ TEST(SlamInputTest, AfterARestartScansWaitForTheOdometryThatBridgesTheGap) {
   EXPECT_NEAR(resumed.CurrentPose().translation().y(), 0.0, 0.05);
 }
 
+// The back-and-forth drive for `cycles` cycles (160 steps each: 4 m out and back) with small
+// submaps and every loop searched; `trim` on or off.
+SlamOptions BackAndForthOptions(bool trim) {
+  SlamOptions o;
+  o.local.scans_per_submap = 10;
+  o.local.node_max_distance_m = 0.1;
+  o.graph.optimise_every_n_nodes = 10;
+  o.loop.sampling_ratio = 1.0;
+  o.loop.linear_window_m = 1.0;  // the drift here is centimetres
+  o.trim.enabled = trim;
+  return o;
+}
+
+// Largest distance of the trajectory from the drive's truth (x from -3 to 1 m on y = 0; the map
+// frame is the first scan's pose).
+double BackAndForthError(const Slam& slam) {
+  double worst = 0;
+  const auto traj = slam.Trajectory();
+  for (size_t k = 0; k < traj.size(); ++k) {
+    const double phase = std::fmod(0.05 * k, 8.0);
+    const double x = phase < 4.0 ? phase : 8.0 - phase;
+    worst = std::max(worst, std::hypot(traj[k].x_m - x, traj[k].y_m));
+  }
+  return worst;
+}
+
+TEST(SlamTrimTest, RevisitingTheSameRoomKeepsTheGraphTheSizeOfTheRoom) {
+  // Every 360-degree scan sees the whole room, so each pass covers all that the passes before
+  // it mapped. Without trimming the graph grows with every pass; with it, the live submaps and
+  // nodes after 4 and after 8 passes are the same few, the trajectory stays on the truth and
+  // the latest node's covariance (one factorisation of the trimmed graph) is still computable.
+  Slam plain{BackAndForthOptions(false)};
+  Slam trimmed{BackAndForthOptions(true)};
+  int live_nodes_at_4 = 0, live_submaps_at_4 = 0;
+  for (int k = 0; k < 8 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&trimmed, k).accepted) << k;
+    if (k < 4 * 160) {
+      ASSERT_TRUE(BackAndForthStep(&plain, k).accepted) << k;
+    }
+    if (k == 4 * 160 - 1) {
+      live_nodes_at_4 = trimmed.num_live_nodes();
+      live_submaps_at_4 = trimmed.num_live_submaps();
+    }
+  }
+  std::printf("4 passes: %d nodes, %lld submaps untrimmed; %d nodes, %d submaps live after 4 "
+              "passes, %d, %d after 8 (%lld submaps trimmed)\n",
+              plain.num_nodes(), (long long)plain.stats().submaps, live_nodes_at_4,
+              live_submaps_at_4, trimmed.num_live_nodes(), trimmed.num_live_submaps(),
+              (long long)trimmed.stats().submaps_trimmed);
+  EXPECT_EQ(plain.num_live_nodes(), plain.num_nodes());
+  EXPECT_GT(plain.num_nodes(), 200);
+  EXPECT_LT(live_nodes_at_4, plain.num_nodes() / 2);
+  EXPECT_LE(trimmed.num_live_nodes(), live_nodes_at_4 + 20);
+  EXPECT_LE(trimmed.num_live_submaps(), live_submaps_at_4 + 2);
+  EXPECT_GT(trimmed.stats().submaps_trimmed, 30);
+  EXPECT_EQ(trimmed.num_nodes() - trimmed.num_live_nodes(), trimmed.stats().nodes_trimmed);
+  trimmed.Optimise();
+  EXPECT_LT(BackAndForthError(trimmed), 0.05);
+  EXPECT_LT(BackAndForthError(plain), 0.05);
+  Eigen::MatrixXd cov;
+  ASSERT_TRUE(trimmed.JointCovariance({trimmed.num_nodes() - 1}, &cov));
+  EXPECT_GT(cov(0, 0), 0);
+  // A trimmed node has no covariance; the map is drawn from the live nodes only.
+  int gone = 1;
+  while (!trimmed.NodeTrimmed(gone)) ++gone;
+  EXPECT_FALSE(trimmed.JointCovariance({gone}, &cov));
+  EXPECT_GT(trimmed.RenderMap().width, 150);  // the 10 m room at 5 cm
+}
+
+TEST(SlamTrimTest, KeptNodesSurviveAndTheTrimmedGraphResumesFromItsStateFile) {
+  Slam slam{BackAndForthOptions(true)};
+  int k = 0;
+  for (; k < 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+  const int kept = slam.num_nodes() - 30;  // a node of a finished submap, held for a client
+  slam.SetKeptNodes({kept});
+  const Rigid2d kept_pose = slam.NodePose(kept);
+  for (; k < 4 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+  ASSERT_GT(slam.stats().nodes_trimmed, 0);
+  EXPECT_FALSE(slam.NodeTrimmed(kept));
+  EXPECT_NEAR((slam.NodePose(kept).translation() - kept_pose.translation()).norm(), 0, 0.05);
+  Eigen::MatrixXd cov;
+  EXPECT_TRUE(slam.JointCovariance({slam.num_nodes() - 1, kept}, &cov));
+
+  const std::string path = ::testing::TempDir() + "/slam_state_trimmed.pg";
+  slam.Save(path);
+  Slam resumed{BackAndForthOptions(true)};
+  resumed.Load(path);
+  EXPECT_EQ(resumed.num_live_nodes(), slam.num_live_nodes());
+  EXPECT_EQ(resumed.num_live_submaps(), slam.num_live_submaps());
+  EXPECT_EQ(resumed.stats().nodes_trimmed, slam.stats().nodes_trimmed);
+  // Both continue the drive the same way (the resumed one from its file).
+  for (; k < 5 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&resumed, k).accepted);
+  }
+  EXPECT_NEAR((resumed.CurrentPose().translation() - slam.CurrentPose().translation()).norm(), 0,
+              0.05);
+  const double phase = std::fmod(0.05 * (k - 1), 8.0);
+  EXPECT_NEAR(resumed.CurrentPose().translation().x(), phase < 4.0 ? phase : 8.0 - phase, 0.05);
+}
+
 std::string ReadBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
