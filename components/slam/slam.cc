@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "common/binary_io.h"
 #include "common/state_file.h"
@@ -815,43 +816,69 @@ void Slam::SetKeptNodes(std::vector<int> node_ids) {
 }
 
 namespace {
-// A raster cell's key: its integer coordinates packed into one 64-bit integer.
+// A raster cell's integer coordinates packed into one 64-bit key (and back).
+int64_t CellKey(int64_t ix, int64_t iy) {
+  return static_cast<int64_t>((static_cast<uint64_t>(ix) << 32) |
+                              (static_cast<uint64_t>(iy) & 0xffffffffu));
+}
 int64_t CellKey(const Eigen::Vector2d& p, double cell_m) {
-  const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell_m));
-  const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell_m));
-  return (ix << 32) ^ (iy & 0xffffffff);
+  return CellKey(static_cast<int64_t>(std::floor(p.x() / cell_m)),
+                 static_cast<int64_t>(std::floor(p.y() / cell_m)));
+}
+void SortUnique(std::vector<int64_t>* keys) {
+  std::sort(keys->begin(), keys->end());
+  keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
 }
 }  // namespace
 
-void Slam::KnownCells(int submap_id, std::vector<int64_t>* keys, Eigen::Vector2d* centre_m,
-                      double* radius_m) const {
-  const Submap& sub = submaps_[submap_id];
+void Slam::KnownCells(int submap_id, std::vector<int64_t>* known, std::vector<int64_t>* occupied,
+                      Eigen::Vector2d* centre_m, double* radius_m) {
+  Submap& sub = submaps_[submap_id];
   const ProbabilityGrid& g = *sub.grid;
   const double cell_m = options_.trim.cell_m;
   const Rigid2d global_from_grid = submap_global_[submap_id] * sub.local_pose.inverse();
   const Eigen::Vector2d size = Eigen::Vector2d(g.width(), g.height()) * g.resolution();
   *centre_m = global_from_grid * (g.corner() + 0.5 * size);
   *radius_m = 0.5 * size.norm();
-  if (!keys) return;
-  keys->clear();
-  const int stride = std::max(1, static_cast<int>(std::lround(cell_m / g.resolution())));
-  for (int y = stride / 2; y < g.height(); y += stride) {
-    for (int x = stride / 2; x < g.width(); x += stride) {
-      if (g.Raw(Eigen::Array2i(x, y)) == 0.f) continue;  // unknown
-      const Eigen::Vector2d cell_local =
-          g.corner() + (Eigen::Vector2d(x, y) + Eigen::Vector2d(0.5, 0.5)) * g.resolution();
-      keys->push_back(CellKey(global_from_grid * cell_local, cell_m));
+  if (!known) return;
+  if (!sub.samples_ready) {
+    // Once per finished grid, in its own frame: known cells every cell_m, occupied cells every
+    // cell (a thin obstacle is not missed).
+    const int stride = std::max(1, static_cast<int>(std::lround(cell_m / g.resolution())));
+    for (int y = 0; y < g.height(); ++y) {
+      for (int x = 0; x < g.width(); ++x) {
+        const bool sampled = y % stride == stride / 2 && x % stride == stride / 2;
+        const float p = g.Raw(Eigen::Array2i(x, y));
+        if (p == 0.f || (!sampled && p <= 0.5f)) continue;  // 0: unknown
+        const Eigen::Vector2f cell_local =
+            (g.corner() + (Eigen::Vector2d(x, y) + Eigen::Vector2d(0.5, 0.5)) * g.resolution())
+                .cast<float>();
+        if (sampled) sub.known_samples.push_back(cell_local);
+        if (p > 0.5f) sub.occupied_samples.push_back(cell_local);
+      }
     }
+    sub.samples_ready = true;
   }
-  std::sort(keys->begin(), keys->end());
-  keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
+  known->clear();
+  occupied->clear();
+  for (const auto& p : sub.known_samples) {
+    known->push_back(CellKey(global_from_grid * p.cast<double>(), cell_m));
+  }
+  for (const auto& p : sub.occupied_samples) {
+    occupied->push_back(CellKey(global_from_grid * p.cast<double>(), cell_m));
+  }
+  SortUnique(known);
+  SortUnique(occupied);
 }
 
 // The just-finished submap s against the live submaps older than s - 2 (s - 1 holds s's first
-// scans, s - 2 the scans just before: the same pass), on a raster of trim.cell_m cells in the map frame sampled at their poses
-// now: s is trimmed when the cells it knows and fewer than fresh_submaps of those know add up to
-// less than min_fresh_area_m2, i.e. when it maps nothing new. What stays is the first map of
-// each place, the one later scans were matched against.
+// scans, s - 2 the scans just before: the same pass), on a raster of trim.cell_m cells in the
+// map frame at their poses now. A cell of s is new when fewer than fresh_submaps of the older
+// submaps know it; it is a new obstacle when s sees it occupied and none of them sees an
+// obstacle within one raster cell of it (seen only on a revisit: debris come closer to, a door
+// closed). s is trimmed when it maps nothing new: new cells under min_fresh_area_m2 and new
+// obstacles under min_new_obstacle_m2. What stays is the first map of each place, the one later
+// scans were matched against, with what was added to it since.
 void Slam::TrimIfCovered(int submap_id) {
   constexpr int kOwnChain = 2;
   const TrimOptions& t = options_.trim;
@@ -859,32 +886,45 @@ void Slam::TrimIfCovered(int submap_id) {
   for (int n : submaps_[submap_id].nodes) {
     if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) return;
   }
-  std::vector<int64_t> mine;
+  std::vector<int64_t> mine, mine_occupied;
   Eigen::Vector2d centre;
   double radius;
-  KnownCells(submap_id, &mine, &centre, &radius);
+  KnownCells(submap_id, &mine, &mine_occupied, &centre, &radius);
   std::unordered_map<int64_t, int> known_before;
   known_before.reserve(mine.size());
   for (int64_t k : mine) known_before.emplace(k, 0);
-  std::vector<int64_t> theirs;
+  std::unordered_set<int64_t> occupied_before;
+  std::vector<int64_t> theirs, theirs_occupied;
   for (int s = 0; s < submap_id - kOwnChain; ++s) {
     if (submaps_[s].trimmed || !submaps_[s].finished) continue;
     Eigen::Vector2d other_centre;
     double other_radius;
-    KnownCells(s, nullptr, &other_centre, &other_radius);
+    KnownCells(s, nullptr, nullptr, &other_centre, &other_radius);
     if ((other_centre - centre).norm() > radius + other_radius) continue;
-    KnownCells(s, &theirs, &other_centre, &other_radius);
+    KnownCells(s, &theirs, &theirs_occupied, &other_centre, &other_radius);
     for (int64_t k : theirs) {
       auto it = known_before.find(k);
       if (it != known_before.end()) ++it->second;
     }
+    occupied_before.insert(theirs_occupied.begin(), theirs_occupied.end());
   }
-  const double cell_area_m2 = t.cell_m * t.cell_m;
-  double new_m2 = 0;
-  for (const auto& [key, count] : known_before) {
-    if (count < t.fresh_submaps) new_m2 += cell_area_m2;
+  int fresh_cells = 0, new_obstacle_cells = 0;
+  for (const auto& [key, count] : known_before) fresh_cells += count < t.fresh_submaps;
+  for (int64_t key : mine_occupied) {
+    const int64_t ix = key >> 32, iy = static_cast<int32_t>(key & 0xffffffff);
+    bool seen = false;
+    for (int dy = -1; dy <= 1 && !seen; ++dy) {
+      for (int dx = -1; dx <= 1 && !seen; ++dx) {
+        seen = occupied_before.count(CellKey(ix + dx, iy + dy)) > 0;
+      }
+    }
+    new_obstacle_cells += !seen;
   }
-  if (new_m2 < t.min_fresh_area_m2) TrimSubmap(submap_id);
+  const double cell_m2 = t.cell_m * t.cell_m;
+  if (fresh_cells * cell_m2 < t.min_fresh_area_m2 &&
+      new_obstacle_cells * cell_m2 < t.min_new_obstacle_m2) {
+    TrimSubmap(submap_id);
+  }
 }
 
 // Removes submap `submap_id`, the nodes no live submap holds, and every constraint on them. A run
@@ -895,6 +935,8 @@ void Slam::TrimSubmap(int submap_id) {
   Submap& sub = submaps_[submap_id];
   sub.trimmed = true;
   sub.grid.reset();
+  sub.known_samples = {};
+  sub.occupied_samples = {};
   precomputations_.remove_if([submap_id](const auto& p) { return p.first == submap_id; });
   ++stats_.submaps_trimmed;
   std::vector<int> trimmed_nodes;

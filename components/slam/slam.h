@@ -143,6 +143,10 @@ class Slam {
     int num_inserted = 0;
     bool finished = false;
     bool trimmed = false;  // its grid is freed and its constraints removed
+    // Finished: the grid-frame centres of its known cells every trim.cell_m and of its occupied
+    // cells (TrimIfCovered), taken once.
+    bool samples_ready = false;
+    std::vector<Eigen::Vector2f> known_samples, occupied_samples;
     std::vector<int> nodes;
     // Loop-closure sampler state (fixed ratio).
     int64_t pulses = 0, samples = 0;
@@ -186,10 +190,10 @@ class Slam {
   // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions).
   void TrimIfCovered(int submap_id);
   void TrimSubmap(int submap_id);
-  // The map-frame raster cells (trim.cell_m) the submap's grid knows, sorted, and the circle
-  // around its grid.
-  void KnownCells(int submap_id, std::vector<int64_t>* keys, Eigen::Vector2d* centre_m,
-                  double* radius_m) const;
+  // The map-frame raster cells (trim.cell_m) the submap's grid knows and those it holds an
+  // obstacle in (sorted keys; both skipped when `known` is null), and the circle around its grid.
+  void KnownCells(int submap_id, std::vector<int64_t>* known, std::vector<int64_t>* occupied,
+                  Eigen::Vector2d* centre_m, double* radius_m);
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
   // Whether a loop closure (submap_from_node `measured`) agrees with the graph's current

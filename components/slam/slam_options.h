@@ -285,23 +285,27 @@ struct CovarianceOptions {
 // it holds, so that revisits cost no lasting state and the graph grows with the explored area,
 // not the mission time (Cartographer's overlapping-submaps trimmer, keeping the oldest map of a
 // place instead of the newest). A cell of the new submap s is new while fewer than
-// fresh_submaps live submaps older than s - 2 know it; s is trimmed when its new cells add up to
-// less than min_fresh_area_m2. Submaps holding a node kept for a client (SLAM_ANCHORS) stay. The
-// chain across trimmed nodes is kept by one constraint between the live nodes either side.
+// fresh_submaps live submaps older than s - 2 know it, and a new obstacle when s sees it
+// occupied and none of them sees an obstacle within one cell; s is trimmed when both add up to
+// less than their areas. Submaps holding a node kept for a client (SLAM_ANCHORS) stay. The chain
+// across trimmed nodes is kept by one constraint between the live nodes either side.
 struct TrimOptions {
   bool enabled = true;
   int fresh_submaps = 1;
   double min_fresh_area_m2 = 1.0;
+  double min_new_obstacle_m2 = 0.08;
   double cell_m = 0.2;  // the coverage raster
   template <class V> void Visit(V& v) {
     v("enabled", enabled, "Trim each finished submap that maps nothing new (the graph grows with the explored area, not the mission time)");
     v("fresh_submaps", fresh_submaps, "A cell is new while fewer than this many older submaps know it");
     v("min_fresh_area_m2", min_fresh_area_m2, "A finished submap with less new area than this is trimmed (m^2)");
+    v("min_new_obstacle_m2", min_new_obstacle_m2, "... and with less new obstacle than this (m^2): occupied cells no older submap sees an obstacle within one raster cell of");
     v("cell_m", cell_m, "Cell size of the coverage raster (m)");
   }
   void Validate(Validator& c) const {
     c.That(fresh_submaps >= 1, "fresh_submaps", "must be >= 1");
     c.NonNegative("min_fresh_area_m2", min_fresh_area_m2);
+    c.NonNegative("min_new_obstacle_m2", min_new_obstacle_m2);
     c.Positive("cell_m", cell_m);
   }
 };
