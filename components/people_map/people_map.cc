@@ -93,6 +93,7 @@ void PeopleMap::AddEvidence(Person* p, Utime utime, double detection_confidence)
   const double c = DecayedConfidence(*p, utime);
   const double cd = std::clamp(detection_confidence, 0.0, 1.0);
   p->confidence = 1.0 - (1.0 - c) * (1.0 - options_.confidence_gain * cd);
+  p->confirmed = p->confirmed || p->confidence >= options_.keep_confidence;
   p->last_detected_utime = std::max(p->last_detected_utime, utime);
   ++p->num_detections;
 }
@@ -297,6 +298,7 @@ void PeopleMap::MergeCloseSeenPeople() {
       pa.num_detections += pb.num_detections;
       pa.people_count = std::max(pa.people_count, pb.people_count);
       pa.confidence = std::max(pa.confidence, pb.confidence);
+      pa.confirmed = pa.confirmed || pb.confirmed;
       pa.first_detected_utime = std::min(pa.first_detected_utime, pb.first_detected_utime);
       pa.last_detected_utime = std::max(pa.last_detected_utime, pb.last_detected_utime);
       if (!pa.has_heard && pb.has_heard) {
@@ -516,6 +518,7 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
           if (!heard.keyword.empty()) seen.keyword = heard.keyword;
           seen.num_detections += heard.num_detections;
           seen.confidence = std::max(seen.confidence, heard.confidence);
+          seen.confirmed = seen.confirmed || heard.confirmed;
           seen.first_detected_utime =
               std::min(seen.first_detected_utime, heard.first_detected_utime);
           seen.last_detected_utime = std::max(seen.last_detected_utime, heard.last_detected_utime);
@@ -544,6 +547,7 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
         source_alias_[heard.sound_source_id] = id;
         other.num_detections += heard.num_detections;
         other.confidence = std::max(other.confidence, heard.confidence);
+        other.confirmed = other.confirmed || heard.confirmed;
         other.first_detected_utime =
             std::min(other.first_detected_utime, heard.first_detected_utime);
         other.last_detected_utime = std::max(other.last_detected_utime, heard.last_detected_utime);
@@ -560,7 +564,7 @@ std::vector<Person> PeopleMap::Report(Utime utime) const {
   for (const auto& [id, p] : people_) {
     Person copy = p;
     copy.confidence = DecayedConfidence(p, utime);
-    if (copy.confidence >= options_.min_report_confidence) out.push_back(copy);
+    if (copy.confidence >= options_.min_report_confidence || p.confirmed) out.push_back(copy);
   }
   return out;
 }
@@ -575,6 +579,7 @@ void PeopleMap::Save(const std::string& path) const {
     n["position_m"] = Vec(p.position_m);
     n["covariance"] = Mat(p.covariance);
     n["confidence"] = p.confidence;
+    n["confirmed"] = p.confirmed;
     n["cues"] = static_cast<int>(p.cues);
     n["num_detections"] = p.num_detections;
     n["people_count"] = p.people_count;
@@ -637,6 +642,7 @@ bool PeopleMap::Load(const std::string& path) {
       p.position_m = ToVec(n["position_m"]);
       p.covariance = ToMat(n["covariance"]);
       p.confidence = n["confidence"].as<double>();
+      p.confirmed = n["confirmed"] && n["confirmed"].as<bool>();  // a file without it: false
       p.cues = static_cast<uint8_t>(n["cues"].as<int>());
       p.num_detections = n["num_detections"].as<int>();
       p.people_count = n["people_count"].as<int>();

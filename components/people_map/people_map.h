@@ -16,7 +16,9 @@
 // from the robot's motion, not from an assumed 0.95 m. A heard person and a seen person whose
 // positions agree (Mahalanobis gate in x, y) are one person with both cues.
 // Confidence: each detection of confidence c_d gives c <- 1 - (1 - c)(1 - gain c_d); without
-// evidence it halves every confidence_half_life_s.
+// evidence it halves every confidence_half_life_s. A person is reported while c is at least
+// min_report_confidence, and for good once c has reached keep_confidence: a victim found stays
+// on the map however long the robot is elsewhere.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -42,6 +44,7 @@ struct PeopleMapOptions {
   double confidence_gain = 0.5;
   double confidence_half_life_s = 300.0;
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
+  double keep_confidence = 0.75;        // ... unless it once reached this
   double heard_person_window_s =
       30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
@@ -76,7 +79,10 @@ struct PeopleMapOptions {
     v("confidence_half_life_s", confidence_half_life_s,
       "confidence halves after this long without evidence");
     v("min_report_confidence", min_report_confidence,
-      "people below this confidence are not reported");
+      "people below this confidence are not reported, unless it once reached keep_confidence");
+    v("keep_confidence", keep_confidence,
+      "a person whose confidence once reached this is reported for good, its confidence decaying "
+      "(0.75: two full-confidence detections); above 1: never");
     v("heard_person_window_s", heard_person_window_s,
       "a sound source stays a person this long after being heard calling; min_heard_calls are "
       "counted within it, and a call towards a source that converges within it still places "
@@ -116,6 +122,7 @@ struct PeopleMapOptions {
     check.InRange("confidence_gain", confidence_gain, 0.0, 1.0);
     check.Positive("confidence_half_life_s", confidence_half_life_s);
     check.InRange("min_report_confidence", min_report_confidence, 0.0, 1.0);
+    check.Positive("keep_confidence", keep_confidence);
     check.Positive("heard_person_window_s", heard_person_window_s);
     check.NonNegative("heard_max_source_sigma_m", heard_max_source_sigma_m);
     check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
@@ -157,6 +164,7 @@ struct Person {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // fused estimate, map frame
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
   double confidence = 0;  // at last_detected_utime
+  bool confirmed = false;  // confidence once reached keep_confidence: reported for good
   uint8_t cues = 0;
   int num_detections = 0;
   int people_count = 1;

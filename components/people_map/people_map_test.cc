@@ -583,7 +583,27 @@ TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
   const Person& p = map.people().begin()->second;
   EXPECT_NEAR(map.DecayedConfidence(p, p.last_detected_utime + 10'000'000), last / 2, 1e-9);
   EXPECT_EQ(map.Report(p.last_detected_utime).size(), 1u);
-  EXPECT_TRUE(map.Report(p.last_detected_utime + 100'000'000).empty());
+  // Four detections made the person sure (>= keep_confidence): reported for good, with its
+  // confidence decayed. A person seen once decays off the map; so does everyone when nothing is
+  // kept.
+  ASSERT_GE(last, options.keep_confidence);
+  const common::Utime later = p.last_detected_utime + 100'000'000;
+  map.AddSeen(p.last_detected_utime, {PersonAhead(2.0, 3.0)}, MapFromCamera(pose),
+              Eigen::Matrix3d::Zero(), pose.translation());
+  ASSERT_EQ(map.people().size(), 2u);
+  EXPECT_LT(map.people().rbegin()->second.confidence, options.keep_confidence);
+  const auto report = map.Report(later);
+  ASSERT_EQ(report.size(), 1u);
+  EXPECT_EQ(report[0].id, p.id);
+  EXPECT_NEAR(report[0].confidence, last / 1024, 1e-9);
+  options.keep_confidence = 1.1;
+  PeopleMap forgetting(options);
+  forgetting.AddSeen(1'000'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(pose),
+                     Eigen::Matrix3d::Zero(), pose.translation());
+  forgetting.AddSeen(2'000'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(pose),
+                     Eigen::Matrix3d::Zero(), pose.translation());
+  EXPECT_EQ(forgetting.Report(2'000'000).size(), 1u);
+  EXPECT_TRUE(forgetting.Report(102'000'000).empty());
 }
 
 // kill -9 of the people map between a hidden caller's two heard calls: the restarted map must
@@ -668,6 +688,12 @@ TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   const Rigid2d pose(0.5, 0.2, 0.3);
   map.AddSeen(5'000'000, {PersonAhead(2.0, 0.0), PersonAhead(3.0, 1.0)}, MapFromCamera(pose),
               Eigen::Matrix3d::Zero(), pose.translation());
+  for (int i = 1; i <= 3; ++i) {  // the first one seen until sure
+    map.AddSeen(5'000'000 + i * 100'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(pose),
+                Eigen::Matrix3d::Zero(), pose.translation());
+  }
+  ASSERT_TRUE(map.people().begin()->second.confirmed);
+  ASSERT_FALSE(map.people().rbegin()->second.confirmed);
   const std::string path = ::testing::TempDir() + "/people_state.yaml";
   map.Save(path);
   PeopleMap back{PeopleMapOptions()};
@@ -676,6 +702,7 @@ TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   for (const auto& [id, p] : map.people()) {
     EXPECT_NEAR((back.people().at(id).position_m - p.position_m).norm(), 0, 1e-9);
     EXPECT_EQ(back.people().at(id).num_detections, p.num_detections);
+    EXPECT_EQ(back.people().at(id).confirmed, p.confirmed);
   }
   // New people continue the id sequence.
   back.AddSeen(6'000'000, {PersonAhead(2.0, -3.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
