@@ -55,6 +55,11 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
   // A depth scan's "no return" is free space only up to the sensor's range limit.
   EXPECT_LT(robot.slam.scan.missing_data_ray_length_m, base.slam.scan.missing_data_ray_length_m);
 
+  // The laser logs trim submaps that map nothing new; the robot, whose camera sees low debris
+  // only from near, keeps them all.
+  EXPECT_TRUE(base.slam.trim.enabled);
+  EXPECT_FALSE(robot.slam.trim.enabled);
+
   // Everything else is inherited: the printed options differ only in those lines.
   const auto base_lines = Lines(common::OptionsToYaml(base, false));
   const auto robot_lines = Lines(common::OptionsToYaml(robot, false));
@@ -81,7 +86,8 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
                                             "unchanged_odometry_means_stopped",
                                             "odometry_extrapolation_s",
                                             "linear_window_m",
-                                            "missing_data_ray_length_m"};
+                                            "missing_data_ray_length_m",
+                                            "enabled"};
   EXPECT_GE(differing.size(), 2u);
   for (const auto& line : differing) {
     bool known = false;
