@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <set>
 #include <stdexcept>
 
 #include "common/image_messages.h"
@@ -404,13 +403,7 @@ class Loop : public sim::SimSink {
   // requested anchors (the latest node's block goes on POSE).
   bool ComputeCovariance() {
     if (slam_.num_nodes() == 0) return false;
-    std::vector<int> ids = {slam_.num_nodes() - 1};
-    std::set<int64_t> wanted;
-    for (int64_t id : anchor_ids_) {
-      if (id >= 0 && id < slam_.num_nodes() && !slam_.NodeTrimmed(id)) wanted.insert(id);
-    }
-    for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
-    slam_.SetKeptNodes(std::vector<int>(ids.begin() + 1, ids.end()));  // not trimmed while held
+    std::vector<int> ids = slam_.HoldAnchors(anchor_ids_);
     Eigen::MatrixXd cov;
     if (!slam_.JointCovariance(ids, &cov)) return false;
     covariance_ids_ = std::move(ids);

@@ -809,10 +809,18 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
   return result;
 }
 
-void Slam::SetKeptNodes(std::vector<int> node_ids) {
-  std::sort(node_ids.begin(), node_ids.end());
-  node_ids.erase(std::unique(node_ids.begin(), node_ids.end()), node_ids.end());
-  kept_nodes_ = std::move(node_ids);
+std::vector<int> Slam::HoldAnchors(const std::vector<int64_t>& requested) {
+  kept_nodes_.clear();
+  for (int64_t id : requested) {
+    if (id >= 0 && id < num_nodes() && !nodes_[id].trimmed) {
+      kept_nodes_.push_back(static_cast<int>(id));
+    }
+  }
+  std::sort(kept_nodes_.begin(), kept_nodes_.end());
+  kept_nodes_.erase(std::unique(kept_nodes_.begin(), kept_nodes_.end()), kept_nodes_.end());
+  std::vector<int> ids = {num_nodes() - 1};
+  ids.insert(ids.end(), kept_nodes_.begin(), kept_nodes_.end());
+  return ids;
 }
 
 namespace {
@@ -831,16 +839,21 @@ void SortUnique(std::vector<int64_t>* keys) {
 }
 }  // namespace
 
-void Slam::KnownCells(int submap_id, std::vector<int64_t>* known, std::vector<int64_t>* occupied,
-                      Eigen::Vector2d* centre_m, double* radius_m) {
-  Submap& sub = submaps_[submap_id];
+void Slam::SubmapCircle(int submap_id, Eigen::Vector2d* centre_m, double* radius_m) const {
+  const Submap& sub = submaps_[submap_id];
   const ProbabilityGrid& g = *sub.grid;
-  const double cell_m = options_.trim.cell_m;
   const Rigid2d global_from_grid = submap_global_[submap_id] * sub.local_pose.inverse();
   const Eigen::Vector2d size = Eigen::Vector2d(g.width(), g.height()) * g.resolution();
   *centre_m = global_from_grid * (g.corner() + 0.5 * size);
   *radius_m = 0.5 * size.norm();
-  if (!known) return;
+}
+
+void Slam::KnownCells(int submap_id, std::vector<int64_t>* known,
+                      std::vector<int64_t>* occupied) {
+  Submap& sub = submaps_[submap_id];
+  const ProbabilityGrid& g = *sub.grid;
+  const double cell_m = options_.trim.cell_m;
+  const Rigid2d global_from_grid = submap_global_[submap_id] * sub.local_pose.inverse();
   if (!sub.samples_ready) {
     // Once per finished grid, in its own frame: known cells every cell_m, occupied cells every
     // cell (a thin obstacle is not missed).
@@ -889,7 +902,8 @@ void Slam::TrimIfCovered(int submap_id) {
   std::vector<int64_t> mine, mine_occupied;
   Eigen::Vector2d centre;
   double radius;
-  KnownCells(submap_id, &mine, &mine_occupied, &centre, &radius);
+  SubmapCircle(submap_id, &centre, &radius);
+  KnownCells(submap_id, &mine, &mine_occupied);
   std::unordered_map<int64_t, int> known_before;
   known_before.reserve(mine.size());
   for (int64_t k : mine) known_before.emplace(k, 0);
@@ -899,9 +913,9 @@ void Slam::TrimIfCovered(int submap_id) {
     if (submaps_[s].trimmed || !submaps_[s].finished) continue;
     Eigen::Vector2d other_centre;
     double other_radius;
-    KnownCells(s, nullptr, nullptr, &other_centre, &other_radius);
+    SubmapCircle(s, &other_centre, &other_radius);
     if ((other_centre - centre).norm() > radius + other_radius) continue;
-    KnownCells(s, &theirs, &theirs_occupied, &other_centre, &other_radius);
+    KnownCells(s, &theirs, &theirs_occupied);
     for (int64_t k : theirs) {
       auto it = known_before.find(k);
       if (it != known_before.end()) ++it->second;

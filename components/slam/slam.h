@@ -116,8 +116,10 @@ class Slam {
   int num_live_submaps() const {
     return static_cast<int>(submaps_.size() - stats_.submaps_trimmed);
   }
-  // Nodes a client holds (SLAM_ANCHORS): their submaps are never trimmed. Replaces the last set.
-  void SetKeptNodes(std::vector<int> node_ids);
+  // SLAM_ANCHORS: of the nodes clients request, those that exist and are live are held (their
+  // submaps are not trimmed; replaces the last set). Returns the latest node followed by them:
+  // the nodes of one joint covariance. Needs at least one node.
+  std::vector<int> HoldAnchors(const std::vector<int64_t>& requested);
   Rigid2d NodePose(int id) const { return node_global_[id]; }
   double NodeTime(int id) const { return nodes_[id].time_s; }
   int64_t optimisation_id() const { return stats_.optimisations; }
@@ -190,10 +192,11 @@ class Slam {
   // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions).
   void TrimIfCovered(int submap_id);
   void TrimSubmap(int submap_id);
+  // The map-frame circle around the submap's grid.
+  void SubmapCircle(int submap_id, Eigen::Vector2d* centre_m, double* radius_m) const;
   // The map-frame raster cells (trim.cell_m) the submap's grid knows and those it holds an
-  // obstacle in (sorted keys; both skipped when `known` is null), and the circle around its grid.
-  void KnownCells(int submap_id, std::vector<int64_t>* known, std::vector<int64_t>* occupied,
-                  Eigen::Vector2d* centre_m, double* radius_m);
+  // obstacle in (sorted keys).
+  void KnownCells(int submap_id, std::vector<int64_t>* known, std::vector<int64_t>* occupied);
   bool SampleSubmap(Submap* submap);
   bool TryLoopClosure(int node_id, int submap_id);
   // Whether a loop closure (submap_from_node `measured`) agrees with the graph's current

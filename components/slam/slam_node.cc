@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <map>
-#include <set>
 #include <variant>
 
 #include "common/compression.h"
@@ -272,15 +271,11 @@ class SlamNode::Impl {
   // it cannot be computed.
   bool ComputeCovariance() {
     if (slam_.num_nodes() == 0) return false;
-    std::set<int64_t> wanted;
+    std::vector<int64_t> requested;
     for (const auto& [name, client] : anchor_requests_) {
-      for (int64_t id : client.node_ids) {
-        if (id >= 0 && id < slam_.num_nodes() && !slam_.NodeTrimmed(id)) wanted.insert(id);
-      }
+      requested.insert(requested.end(), client.node_ids.begin(), client.node_ids.end());
     }
-    std::vector<int> ids = {slam_.num_nodes() - 1};
-    for (int64_t id : wanted) ids.push_back(static_cast<int>(id));
-    slam_.SetKeptNodes(std::vector<int>(ids.begin() + 1, ids.end()));  // not trimmed while held
+    std::vector<int> ids = slam_.HoldAnchors(requested);
     Eigen::MatrixXd cov;
     if (!slam_.JointCovariance(ids, &cov)) {
       if (covariance_log_.Allow(common::SteadySeconds())) {

@@ -628,7 +628,9 @@ TEST(SlamTrimTest, KeptNodesSurviveAndTheTrimmedGraphResumesFromItsStateFile) {
   int k = 0;
   for (; k < 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
   const int kept = slam.num_nodes() - 30;  // a node of a finished submap, held for a client
-  slam.SetKeptNodes({kept});
+  // Held once, unknown ids left out; the latest node first.
+  EXPECT_EQ(slam.HoldAnchors({kept, kept, -1, 1000000}),
+            (std::vector<int>{slam.num_nodes() - 1, kept}));
   const Rigid2d kept_pose = slam.NodePose(kept);
   for (; k < 4 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
   ASSERT_GT(slam.stats().nodes_trimmed, 0);
