@@ -428,5 +428,17 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
   return true;
 }
 
+bool OnWindowBoundary(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& initial,
+                      const BranchAndBoundOptions& options, const Rigid2d& found) {
+  const double res = grid.resolution();
+  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
+  const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
+  const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
+  const Eigen::Vector2d cells = (found.translation() - initial.translation()) / res;
+  const double turn = std::remainder(found.yaw_rad() - initial.yaw_rad(), 2 * M_PI);
+  return std::lround(std::abs(cells.x())) >= w || std::lround(std::abs(cells.y())) >= w ||
+         std::lround(std::abs(turn) / angle_step) >= num_angles;
+}
+
 }  // namespace slam
 }  // namespace sarmap

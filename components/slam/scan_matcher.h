@@ -127,5 +127,10 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
                          const BranchAndBoundOptions& options, double min_score, Rigid2d* pose,
                          double* score);
 
+// Whether `found`, a BranchAndBoundMatch of `points` around `initial`, lies on the boundary of
+// the searched window: its outermost row or column of translations, or its outermost angle.
+bool OnWindowBoundary(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& initial,
+                      const BranchAndBoundOptions& options, const Rigid2d& found);
+
 }  // namespace slam
 }  // namespace sarmap

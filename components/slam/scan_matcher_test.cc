@@ -134,6 +134,31 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
   EXPECT_FALSE(BranchAndBoundMatch(*grid_, stack, points_, start, b, 0.95, &found, &score));
 }
 
+TEST_F(ScanMatcherTest, AMatchOutsideTheWindowEndsOnItsBoundary) {
+  PrecomputationStack stack(*grid_, 6);
+  BranchAndBoundOptions b;
+  b.linear_window_m = 0.5;
+  b.angular_window_rad = 0.2;
+  b.depth = 6;
+  Rigid2d found;
+  double score = 0;
+  // The truth inside the window: an interior maximum.
+  const Rigid2d near(truth_.translation() + Eigen::Vector2d(0.2, -0.1), truth_.yaw_rad() + 0.05);
+  ASSERT_TRUE(BranchAndBoundMatch(*grid_, stack, points_, near, b, 0.3, &found, &score));
+  EXPECT_LT((found.translation() - truth_.translation()).norm(), 0.08);
+  EXPECT_FALSE(OnWindowBoundary(*grid_, points_, near, b, found));
+  // The truth 0.9 m away along x: the best the window holds lies on its edge.
+  const Rigid2d far(truth_.translation() + Eigen::Vector2d(-0.9, 0.0), truth_.yaw_rad());
+  ASSERT_TRUE(BranchAndBoundMatch(*grid_, stack, points_, far, b, 0.0, &found, &score));
+  EXPECT_TRUE(OnWindowBoundary(*grid_, points_, far, b, found));
+  // So is a pose at the outermost angle.
+  const double step = AngularSearchStep(points_, grid_->resolution(), b.step_range_cap_m);
+  const Rigid2d turned(near.translation(),
+                       near.yaw_rad() + std::ceil(b.angular_window_rad / step) * step);
+  EXPECT_TRUE(OnWindowBoundary(*grid_, points_, near, b, turned));
+  EXPECT_FALSE(OnWindowBoundary(*grid_, points_, near, b, near));
+}
+
 TEST_F(ScanMatcherTest, AFinishedGridIsCroppedAndMatchesExactlyAsBefore) {
   ProbabilityGrid finished = *grid_;
   finished.Finish();

@@ -658,6 +658,10 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
                            lo.min_score, &found, &score)) {
     return false;
   }
+  if (lo.reject_window_edge && OnWindowBoundary(*s.grid, n.loop_points, initial, b, found)) {
+    ++stats_.loop_closures_at_window_edge;
+    return false;
+  }
   CeresMatcherOptions m;
   m.occupied_space_weight = lo.ceres_occupied_weight;
   m.translation_weight = lo.ceres_translation_weight;

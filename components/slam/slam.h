@@ -65,6 +65,7 @@ struct SlamStats {
   int64_t scans_waiting_for_odometry = 0;  // after a restart, before the first odometry
   int64_t loop_searches = 0, loop_closures = 0;
   int64_t loop_closures_inconsistent = 0;  // found, then rejected by the consistency gate
+  int64_t loop_closures_at_window_edge = 0;  // found on the search window's boundary, rejected
   int64_t precomputations_built = 0;       // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   int64_t submaps_trimmed = 0, nodes_trimmed = 0;  // trim.enabled

@@ -52,6 +52,12 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
   // The robot's loop-closure search stays near its own estimate (a Kinect scan is ambiguous).
   EXPECT_LT(robot.slam.loop.linear_window_m, base.slam.loop.linear_window_m);
 
+  // ... and keeps only closures that agree with its graph and lie inside that window.
+  EXPECT_FALSE(base.slam.loop.consistency_gate);
+  EXPECT_TRUE(robot.slam.loop.consistency_gate);
+  EXPECT_FALSE(base.slam.loop.reject_window_edge);
+  EXPECT_TRUE(robot.slam.loop.reject_window_edge);
+
   // A depth scan's "no return" is free space only up to the sensor's range limit.
   EXPECT_LT(robot.slam.scan.missing_data_ray_length_m, base.slam.scan.missing_data_ray_length_m);
 
@@ -86,6 +92,8 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
                                             "unchanged_odometry_means_stopped",
                                             "odometry_extrapolation_s",
                                             "linear_window_m",
+                                            "consistency_gate",
+                                            "reject_window_edge",
                                             "missing_data_ray_length_m",
                                             "enabled"};
   EXPECT_GE(differing.size(), 2u);

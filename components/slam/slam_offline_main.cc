@@ -260,11 +260,11 @@ int main(int argc, char** argv) {
         (long long)s.stopped_scans, (long long)s.rejected_odometry, (long long)s.nodes,
         slam.num_live_nodes(), (long long)s.submaps, slam.num_live_submaps());
     std::printf(
-        "loop closures %lld of %lld searches (%lld inconsistent with the graph rejected, %lld "
-        "precomputation stacks built), optimisations %lld\n",
+        "loop closures %lld of %lld searches (%lld inconsistent with the graph rejected, %lld on "
+        "the window's boundary rejected, %lld precomputation stacks built), optimisations %lld\n",
         (long long)s.loop_closures, (long long)s.loop_searches,
-        (long long)s.loop_closures_inconsistent, (long long)s.precomputations_built,
-        (long long)s.optimisations);
+        (long long)s.loop_closures_inconsistent, (long long)s.loop_closures_at_window_edge,
+        (long long)s.precomputations_built, (long long)s.optimisations);
     std::printf(
         "data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final "
         "%.2f) "

@@ -167,6 +167,10 @@ struct LoopClosureOptions {
   // sqrt(rad) turned), plus two scan-to-submap matches' noise (the closure's and the
   // submap node's own).
   bool consistency_gate = false;
+  // A match whose best pose lies on the search window's boundary (within one cell, or one
+  // angular step) is no verified maximum: the score may still rise outside the window, and in a
+  // corridor or a row of alike rooms it is where a sliding match comes to rest.
+  bool reject_window_edge = false;
   double consistency_drift_m_per_sqrt_m = 0.1;
   double consistency_drift_deg_per_sqrt_rad = 1.15;
   double consistency_drift_deg_per_sqrt_m = 0.5;
@@ -192,6 +196,8 @@ struct LoopClosureOptions {
       "Loop closure translation weight per direction follows the match's information (a match along a wall pulls across it, not along it)");
     v("consistency_gate", consistency_gate,
       "Reject a loop closure inconsistent with the graph's current estimate, given local SLAM's drift along the path between its ends");
+    v("reject_window_edge", reject_window_edge,
+      "Reject a loop closure whose best pose lies on the branch-and-bound window's boundary (not a verified maximum)");
     v("consistency_drift_m_per_sqrt_m", consistency_drift_m_per_sqrt_m,
       "Consistency gate: local SLAM's position drift, std per sqrt(metre driven) (random walk)");
     v("consistency_drift_deg_per_sqrt_rad", consistency_drift_deg_per_sqrt_rad,
