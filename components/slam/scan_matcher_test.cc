@@ -46,6 +46,15 @@ RangeData SimulateScan(const Rigid2d& pose) {
   return data;
 }
 
+// A branch-and-bound window of +-linear_m and +-angular_rad over a 6-level stack.
+BranchAndBoundOptions Window(double linear_m, double angular_rad) {
+  BranchAndBoundOptions b;
+  b.linear_window_m = linear_m;
+  b.angular_window_rad = angular_rad;
+  b.depth = 6;
+  return b;
+}
+
 class ScanMatcherTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -119,10 +128,7 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
       EXPECT_EQ(stack.Value(3, x, y), m);
     }
   }
-  BranchAndBoundOptions b;
-  b.linear_window_m = 2.0;
-  b.angular_window_rad = 0.5;
-  b.depth = 6;
+  const BranchAndBoundOptions b = Window(2.0, 0.5);
   Rigid2d found;
   double score = 0;
   ASSERT_TRUE(BranchAndBoundMatch(*grid_, stack, points_, start, b, 0.5, &found, &score));
@@ -136,10 +142,7 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
 
 TEST_F(ScanMatcherTest, AMatchOutsideTheWindowEndsOnItsBoundary) {
   PrecomputationStack stack(*grid_, 6);
-  BranchAndBoundOptions b;
-  b.linear_window_m = 0.5;
-  b.angular_window_rad = 0.2;
-  b.depth = 6;
+  const BranchAndBoundOptions b = Window(0.5, 0.2);
   Rigid2d found;
   double score = 0;
   // The truth inside the window: an interior maximum.
@@ -183,10 +186,7 @@ TEST_F(ScanMatcherTest, AFinishedGridIsCroppedAndMatchesExactlyAsBefore) {
   EXPECT_NEAR((before.translation() - after.translation()).norm(), 0, 1e-9);
   EXPECT_NEAR(before.yaw_rad(), after.yaw_rad(), 1e-12);
   EXPECT_NEAR(score_before, score_after, 1e-6);
-  BranchAndBoundOptions b;
-  b.linear_window_m = 2.0;
-  b.angular_window_rad = 0.5;
-  b.depth = 6;
+  const BranchAndBoundOptions b = Window(2.0, 0.5);
   Rigid2d found_before, found_after;
   ASSERT_TRUE(BranchAndBoundMatch(*grid_, PrecomputationStack(*grid_, 6), points_, start, b, 0.5,
                                   &found_before, &score_before));
