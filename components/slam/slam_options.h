@@ -167,9 +167,10 @@ struct LoopClosureOptions {
   // sqrt(rad) turned), plus two scan-to-submap matches' noise (the closure's and the
   // submap node's own).
   bool consistency_gate = false;
-  // A match whose best pose lies on the search window's boundary (within one cell, or one
-  // angular step) is no verified maximum: the score may still rise outside the window, and in a
-  // corridor or a row of alike rooms it is where a sliding match comes to rest.
+  // A match whose best pose lies on the search window's outermost row or column of
+  // translations, or at its outermost angle, is no verified maximum: the score may still rise
+  // outside the window, and in a corridor or a row of alike rooms it is where a sliding match
+  // comes to rest.
   bool reject_window_edge = false;
   double consistency_drift_m_per_sqrt_m = 0.1;
   double consistency_drift_deg_per_sqrt_rad = 1.15;
