@@ -88,6 +88,23 @@ void DiscretizeScan(const ProbabilityGrid& grid, const PointCloud& points, doubl
   for (const auto& p : points) cells->push_back(grid.CellIndex(r * p + tf));
 }
 
+// A search window in the steps it is searched in: angles initial + k * angle_step for
+// |k| <= num_angles, translations initial + (dx, dy) * resolution for |dx|, |dy| <= cells.
+struct DiscreteWindow {
+  double angle_step;
+  int num_angles;
+  int cells;
+};
+
+DiscreteWindow Discretize(const PointCloud& points, double resolution_m, double linear_window_m,
+                          double angular_window_rad, double step_range_cap_m) {
+  DiscreteWindow d;
+  d.angle_step = AngularSearchStep(points, resolution_m, step_range_cap_m);
+  d.num_angles = static_cast<int>(std::ceil(angular_window_rad / d.angle_step));
+  d.cells = static_cast<int>(std::ceil(linear_window_m / resolution_m));
+  return d;
+}
+
 }  // namespace
 
 Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
@@ -97,9 +114,11 @@ Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
     return initial;
   }
   const double res = grid.resolution();
-  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
-  const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
-  const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
+  const DiscreteWindow window = Discretize(points, res, options.linear_window_m,
+                                           options.angular_window_rad, options.step_range_cap_m);
+  const double angle_step = window.angle_step;
+  const int num_angles = window.num_angles;
+  const int w = window.cells;
   const int side = 2 * w + 1;
   std::vector<Eigen::Array2i> cells;
   std::vector<float> sums(static_cast<size_t>(side) * side);
@@ -345,9 +364,11 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
                          double* score) {
   if (points.empty()) return false;
   const double res = grid.resolution();
-  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
-  const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
-  const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
+  const DiscreteWindow window = Discretize(points, res, options.linear_window_m,
+                                           options.angular_window_rad, options.step_range_cap_m);
+  const double angle_step = window.angle_step;
+  const int num_angles = window.num_angles;
+  const int w = window.cells;
   std::vector<std::vector<Eigen::Array2i>> scans(2 * num_angles + 1);
   for (int k = -num_angles; k <= num_angles; ++k) {
     DiscretizeScan(grid, points, initial.yaw_rad() + k * angle_step, initial.translation(),
@@ -431,13 +452,13 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
 bool OnWindowBoundary(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& initial,
                       const BranchAndBoundOptions& options, const Rigid2d& found) {
   const double res = grid.resolution();
-  const double angle_step = AngularSearchStep(points, res, options.step_range_cap_m);
-  const int num_angles = static_cast<int>(std::ceil(options.angular_window_rad / angle_step));
-  const int w = static_cast<int>(std::ceil(options.linear_window_m / res));
+  const DiscreteWindow window = Discretize(points, res, options.linear_window_m,
+                                           options.angular_window_rad, options.step_range_cap_m);
   const Eigen::Vector2d cells = (found.translation() - initial.translation()) / res;
   const double turn = std::remainder(found.yaw_rad() - initial.yaw_rad(), 2 * M_PI);
-  return std::lround(std::abs(cells.x())) >= w || std::lround(std::abs(cells.y())) >= w ||
-         std::lround(std::abs(turn) / angle_step) >= num_angles;
+  return std::lround(std::abs(cells.x())) >= window.cells ||
+         std::lround(std::abs(cells.y())) >= window.cells ||
+         std::lround(std::abs(turn) / window.angle_step) >= window.num_angles;
 }
 
 }  // namespace slam
