@@ -176,6 +176,63 @@ bool ExploreController::ArcApproachesMemory(double linear_mps, double angular_ra
   return false;
 }
 
+std::optional<Eigen::Vector2d> ExploreController::UnseenOnArc(const Velocity& desired,
+                                                              const Scan& scan) const {
+  const SafetyOptions& o = options_.safety;
+  if (o.unseen_lookahead_m <= 0 || desired.linear_mps <= 0 || !map_.has_map() || !pose_ ||
+      scan.ranges_m.empty()) {
+    return std::nullopt;
+  }
+  const Grid& grid = map_.grid();
+  const double res = grid.resolution_m;
+  const double last_beam_rad =
+      scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(scan.ranges_m.size() - 1);
+  const double fov_min = std::min(scan.angle_min_rad, last_beam_rad);
+  const double fov_max = std::max(scan.angle_min_rad, last_beam_rad);
+  // The arc of constant curvature k = w / v: after s metres the base is at
+  // (sin(k s) / k, (1 - cos(k s)) / k), heading k s, in its present frame.
+  const double k = desired.angular_radps / desired.linear_mps;
+  std::vector<common::Rigid2d> arc;  // base poses every cell along the arc, present frame
+  for (double s = 0; s <= o.unseen_lookahead_m + 1e-9; s += res) {
+    arc.push_back(std::abs(k) < 1e-6
+                      ? common::Rigid2d(s, 0.0, 0.0)
+                      : common::Rigid2d(std::sin(k * s) / k, (1 - std::cos(k * s)) / k, k * s));
+  }
+  const auto in_view = [&](const common::Rigid2d& from, const Eigen::Vector2d& p) {
+    const Eigen::Vector2d q = from.inverse() * p;
+    const double bearing = std::atan2(q.y(), q.x());
+    return q.norm() >= scan.range_min_m && bearing >= fov_min && bearing <= fov_max;
+  };
+  const int reach = static_cast<int>(std::ceil(o.footprint_radius_m / res));
+  std::vector<int> checked;
+  std::optional<Eigen::Vector2d> nearest;
+  double nearest_m = std::numeric_limits<double>::infinity();
+  for (size_t i = 1; i < arc.size(); ++i) {
+    const Eigen::Vector2i c = grid.CellOf(*pose_ * arc[i].translation());
+    for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (!grid.Contains(x, y) || map_.Seen(x, y)) continue;
+        const int index = grid.Index(x, y);
+        if (std::find(checked.begin(), checked.end(), index) != checked.end()) continue;
+        const Eigen::Vector2d local = pose_->inverse() * grid.CentreOf(x, y);
+        if ((local - arc[i].translation()).norm() > o.footprint_radius_m) continue;
+        checked.push_back(index);  // first swept at arc[i]
+        // Under the base already, or nearer than the sensor sees: turning shows nothing.
+        const double range_m = local.norm();
+        if (range_m <= o.footprint_radius_m || range_m < scan.range_min_m) continue;
+        // The sensor sees it from the arc before the base gets there.
+        bool seen_on_the_way = false;
+        for (size_t j = 0; j < i && !seen_on_the_way; ++j) seen_on_the_way = in_view(arc[j], local);
+        if (seen_on_the_way || range_m >= nearest_m) continue;
+        nearest_m = range_m;
+        nearest = grid.CentreOf(x, y);
+      }
+    }
+  }
+  return nearest;
+}
+
 bool ExploreController::IsBlacklisted(const Eigen::Vector2d& p, double now_s) const {
   for (const auto& b : blacklist_) {
     if (b.until_s > now_s && (b.position_m - p).norm() < options_.goals.blacklist_radius_m)
@@ -746,6 +803,8 @@ void ExploreController::ResumeAfterPoseWait(double now_s) {
 }
 
 Velocity ExploreController::Drive(double now_s, const Scan& scan) {
+  const bool was_looking = looking_;
+  looking_ = false;
   Velocity stop;
   stop.source = "stop";
   switch (state_) {
@@ -843,7 +902,20 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
       return Recover(now_s, scan);
     }
   }
-  const Velocity desired = Follow(scan);
+  Velocity desired = Follow(scan);
+  // Space the base is about to sweep that the sensor has never seen (beside a doorway, inside
+  // a turn): turn on the spot to look at it first; the next plan goes around what is there.
+  if (const std::optional<Eigen::Vector2d> unseen = UnseenOnArc(desired, scan)) {
+    const Eigen::Vector2d local = pose_->inverse() * *unseen;
+    const double error = std::atan2(local.y(), local.x());
+    desired.linear_mps = 0;
+    desired.angular_radps =
+        std::clamp(options_.follower.heading_gain * error, -options_.follower.max_angular_radps,
+                   options_.follower.max_angular_radps);
+    desired.source = "look";
+    if (!was_looking) ++looks_;
+    looking_ = true;
+  }
   const Velocity safe = Safe(desired, scan);
   // Progress: moved or turned enough since the last mark.
   if ((robot - progress_xy_).norm() > options_.recovery.progress_m ||
@@ -942,6 +1014,7 @@ Velocity ExploreController::OnScan(double now_s, const Scan& scan) {
   status_.blacklisted = static_cast<int>(blacklist_.size());
   status_.recoveries = recoveries_;
   status_.contacts = map_.contacts();
+  status_.looks = looks_;
   if (status_.state != logged_state_) {
     // Each change of the mission's state, once: the live log tells why a mission ended.
     std::ostringstream line;

@@ -107,6 +107,7 @@ struct SafetyOptions {
   double blind_fraction = 0.5;       // of the corridor's beams without information: blocked
   double footprint_radius_m = 0.28;  // the base's radius and a margin, for the swept check
   double sweep_horizon_s = 0.6;      // how far ahead the commanded arc is checked
+  double unseen_lookahead_m = 0;     // unseen space the arc sweeps this far ahead: look first
   double max_pose_age_s = 0.5;       // an older POSE (against the SCAN's stamp): stand still
   double memory_s = 0;               // scan returns kept in the odometry frame this long (0: off)
   double memory_radius_m = 1.5;      // ... while within this distance of the base
@@ -118,6 +119,10 @@ struct SafetyOptions {
       "no forward motion when the commanded arc brings the base this close to a map obstacle (a "
       "corner cut while turning)");
     v("sweep_horizon_s", sweep_horizon_s, "the commanded arc is checked this far ahead in time");
+    v("unseen_lookahead_m", unseen_lookahead_m,
+      "along this much of the commanded arc, space the base would sweep (footprint_radius_m) "
+      "that the sensor has never seen, outside its view and beyond its minimum range (a corner "
+      "beside a doorway), is looked at first: the robot turns to it on the spot (0: off)");
     v("max_pose_age_s", max_pose_age_s,
       "when the newest POSE is older than this against the SCAN's stamp (SLAM lags or is down), "
       "the robot stands still and the scan stays out of the explorer's map (0: no check)");
@@ -139,6 +144,7 @@ struct SafetyOptions {
     check.InRange("blind_fraction", blind_fraction, 0.0, 1.0);
     check.Positive("footprint_radius_m", footprint_radius_m);
     check.NonNegative("sweep_horizon_s", sweep_horizon_s);
+    check.NonNegative("unseen_lookahead_m", unseen_lookahead_m);
     check.NonNegative("max_pose_age_s", max_pose_age_s);
     check.NonNegative("memory_s", memory_s);
     check.Positive("memory_radius_m", memory_radius_m);
@@ -378,6 +384,7 @@ struct ExploreStatus {
   int blacklisted = 0;
   int recoveries = 0;
   int contacts = 0;  // obstacles found by running into them
+  int looks = 0;     // turns on the spot to see space the base was about to sweep unseen
   double stuck_s = 0;
   double elapsed_s = 0;
 };
@@ -452,6 +459,10 @@ class ExploreController {
   // Whether driving (linear_mps, angular_radps) for sweep_horizon_s brings the base nearer than
   // footprint_radius_m to a remembered return, and nearer than it is now.
   bool ArcApproachesMemory(double linear_mps, double angular_radps) const;
+  // The nearest cell (map frame) the base would newly sweep along the commanded arc that the
+  // sensor has never seen, will not see from the arc before the base gets there, and could see
+  // by turning now (beyond its minimum range).
+  std::optional<Eigen::Vector2d> UnseenOnArc(const Velocity& desired, const Scan& scan) const;
   // Odometry at `stamp_s` (interpolated; the newest when the scan is newer), if any is recent.
   std::optional<common::Rigid2d> OdometryAt(double stamp_s) const;
   Velocity Recover(double now_s, const Scan& scan);
@@ -511,6 +522,8 @@ class ExploreController {
   double last_linear_mps_ = 0;
   int goal_recoveries_ = 0;
   int recoveries_ = 0;
+  int looks_ = 0;         // turns to look at unseen space on the arc (ExploreStatus::looks)
+  bool looking_ = false;  // the last Drive turned to look
   State resume_state_ = State::kExploring;
   int recovery_phase_ = 0;  // 0 back off, 1 turn, 2 escape on the scan alone
   // The last plan found no way out of the robot's place in the map (no traversable cell near

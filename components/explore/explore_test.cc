@@ -161,10 +161,42 @@ TEST(ExploreMapTest, ScansFillTheGridNoReturnIsFreeToRangeAndTheRobotsOwnPlaceIs
   EXPECT_FALSE(m.Occupied(hit));
   m.SetMap(PartlyKnownRoom());
   EXPECT_FALSE(m.Occupied(hit));
-  // The robot's own footprint is free once it has been there.
+  // The robot's own footprint is free once it has been there; only the body's radius of it
+  // counts as seen.
   EXPECT_FALSE(m.Known(Eigen::Vector2d(4.2, 3.2)));
   m.AddTrail(Eigen::Vector2d(4.0, 3.0));
   EXPECT_TRUE(m.Known(Eigen::Vector2d(4.2, 3.2)));
+}
+
+TEST(ExploreMapTest, SeenIsWhatMapKnewTheSensorLookedAtOrTheBodyStoodOn) {
+  ExploreMap m{PlannerOptions()};
+  m.SetMap(PartlyKnownRoom());
+  const auto seen = [&m](double x, double y) {
+    const Eigen::Vector2i c = m.grid().CellOf(Eigen::Vector2d(x, y));
+    return m.Seen(c.x(), c.y());
+  };
+  EXPECT_TRUE(seen(1.0, 1.0));  // MAP knows it
+  EXPECT_FALSE(seen(4.0, 3.0));
+  // The trail's free stamp (assume_free_radius_m) is seen only under the body.
+  m.AddTrail(Eigen::Vector2d(4.0, 3.0));
+  EXPECT_TRUE(seen(4.15, 3.05));   // 0.16 m from the trail
+  EXPECT_FALSE(seen(4.35, 3.05));  // 0.35 m: assumed free, not seen
+  EXPECT_TRUE(m.Known(Eigen::Vector2d(4.35, 3.05)));
+  // A beam without information was still looked along over the near field beyond the
+  // minimum range, and that stays seen through a new MAP; nearer than the minimum range, or
+  // beyond the near field, it was not.
+  m.IntegrateScan(common::Rigid2d(4.0, 1.0, 0.0), MakeScan(0.0f, 0.0f));
+  m.SetMap(PartlyKnownRoom());
+  EXPECT_TRUE(seen(4.8, 1.0));
+  EXPECT_FALSE(m.Known(Eigen::Vector2d(4.8, 1.0)));
+  EXPECT_FALSE(seen(4.35, 1.0));
+  EXPECT_FALSE(seen(6.5, 1.0));
+  // Once MAP knew a cell, it stays seen.
+  Grid known = PartlyKnownRoom();
+  for (auto& c : known.cells) c = 0;
+  m.SetMap(known);
+  m.SetMap(PartlyKnownRoom());
+  EXPECT_TRUE(seen(5.5, 3.5));
 }
 
 TEST(ExploreMapTest, ALowObjectStaysWhenRaysFromCloserThanItsVisibleRangePassOverIt) {
@@ -300,6 +332,53 @@ TEST(ExploreControllerTest, ExploresTowardsTheFrontierAndTheSafetyLayerNeverTurn
   const Velocity turn = c.OnScan(0.2, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(turn.linear_mps, 0.0);
   EXPECT_NE(turn.angular_radps, 0.0);
+}
+
+TEST(ExploreControllerTest, ATurnPastAnUnseenCornerLooksAtItFirst) {
+  // The robot heads 0.6 rad left of the frontier to its right: the follower drives a right
+  // turn. A patch the sensor has never seen (a shelf's corner beside a doorway) lies inside
+  // that turn, 0.64 m away, 0.76 rad right of the heading: outside the 0.5 rad half view, beyond
+  // the 0.45 m minimum range.
+  const common::Rigid2d pose(1.0, 2.0, 0.6);
+  const Eigen::Vector2d corner = pose * Eigen::Vector2d(0.45, -0.45);
+  Grid map = PartlyKnownRoom();
+  for (int y = 0; y < map.height; ++y) {
+    for (int x = 0; x < map.width; ++x) {
+      const Eigen::Vector2d p(map.origin_x_m + (x + 0.5) * map.resolution_m,
+                              map.origin_y_m + (y + 0.5) * map.resolution_m);
+      if ((p - corner).cwiseAbs().maxCoeff() <= 0.15) map.cells[y * map.width + x] = -1;
+    }
+  }
+  for (const double lookahead_m : {0.0, 0.5}) {
+    ExploreOptions o = NoLookAround();
+    o.safety.unseen_lookahead_m = lookahead_m;
+    ExploreController c{o};
+    c.OnMap(map);
+    c.OnPose(pose, 0.0);
+    const Velocity v = c.OnScan(0.0, MakeScan(INFINITY, INFINITY));
+    if (lookahead_m == 0) {
+      // Without the rule the turn is driven, and it sweeps the patch.
+      EXPECT_EQ(v.source, "planner");
+      EXPECT_GT(v.linear_mps, 0.1);
+      EXPECT_LT(v.angular_radps, -0.3);
+      continue;
+    }
+    EXPECT_EQ(v.source, "look");
+    EXPECT_EQ(v.linear_mps, 0.0);
+    EXPECT_LT(v.angular_radps, -0.3);  // towards the patch
+    EXPECT_EQ(c.status().looks, 1);
+    // Turned to face it, the sensor sees free floor there: the planner drives again.
+    const common::Rigid2d facing(1.0, 2.0, pose.yaw_rad() - 0.76);
+    c.OnPose(facing, 0.5);
+    Scan seen = MakeScan(INFINITY, INFINITY);
+    seen.stamp_s = 0.5;
+    c.OnScan(0.5, seen);
+    c.OnPose(pose, 1.0);
+    seen.stamp_s = 1.0;
+    const Velocity after = c.OnScan(1.0, seen);
+    EXPECT_EQ(after.source, "planner");
+    EXPECT_EQ(c.status().looks, 1);
+  }
 }
 
 // The beam of MakeScan nearest `bearing_rad`.

@@ -10,6 +10,8 @@ namespace explore {
 
 namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
+// How far past its minimum range a beam without information counts as looked along.
+constexpr double kNearFieldM = 1.0;
 }  // namespace
 
 Eigen::Vector2i Grid::CellOf(const Eigen::Vector2d& p) const {
@@ -28,6 +30,7 @@ void ExploreMap::SetMap(const Grid& map) {
   const std::vector<uint8_t> previous_crossed = std::move(crossed_);
   const std::vector<uint8_t> previous_hit = std::move(hit_);
   const std::vector<float> previous_visible_from = std::move(hit_visible_from_m_);
+  const std::vector<uint8_t> previous_viewed = std::move(viewed_);
   const int pad = static_cast<int>(std::ceil(options_.pad_m / map.resolution_m));
   grid_.resolution_m = map.resolution_m;
   grid_.width = map.width + 2 * pad;
@@ -39,6 +42,16 @@ void ExploreMap::SetMap(const Grid& map) {
     std::copy(map.cells.begin() + static_cast<size_t>(y) * map.width,
               map.cells.begin() + static_cast<size_t>(y + 1) * map.width,
               grid_.cells.begin() + static_cast<size_t>(y + pad) * grid_.width + pad);
+  }
+  // Seen: what MAP knows, and what the explorer's own view or body covered before.
+  viewed_.assign(grid_.cells.size(), 0);
+  for (size_t i = 0; i < grid_.cells.size(); ++i) viewed_[i] = grid_.cells[i] >= 0;
+  for (int y = 0; y < previous.height; ++y) {
+    for (int x = 0; x < previous.width; ++x) {
+      if (!previous_viewed[previous.Index(x, y)]) continue;
+      const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
+      if (grid_.Contains(c.x(), c.y())) viewed_[grid_.Index(c.x(), c.y())] = 1;
+    }
   }
   // The explorer's own returns since they were last crossed stay obstacles unless the new map
   // calls the cell free: SLAM renders a low object seen from afar in a few scans as uncertain,
@@ -255,9 +268,17 @@ void ExploreMap::Stamp(const Eigen::Vector2d& p) {
           options_.assume_free_radius_m * options_.assume_free_radius_m)
         continue;
       const int x = c.x() + dx, y = c.y() + dy;
-      if (grid_.Contains(x, y) && grid_.at(x, y) < 0) grid_.at(x, y) = 0;
+      if (!grid_.Contains(x, y)) continue;
+      if (grid_.at(x, y) < 0) grid_.at(x, y) = 0;
+      // Only the body's own cells are seen; the rest of the stamp is assumed.
+      if ((dx * dx + dy * dy) * res * res <= options_.robot_radius_m * options_.robot_radius_m)
+        viewed_[grid_.Index(x, y)] = 1;
     }
   }
+}
+
+bool ExploreMap::Seen(int x, int y) const {
+  return grid_.Contains(x, y) && !viewed_.empty() && viewed_[grid_.Index(x, y)] != 0;
 }
 
 void ExploreMap::AddTrail(const Eigen::Vector2d& position_m) {
@@ -281,12 +302,20 @@ void ExploreMap::IntegrateScan(const common::Rigid2d& map_from_base, const Scan&
     } else if (std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m) {
       length = r;
       hit = true;
-    } else {
-      continue;  // no information
     }
     const double angle = map_from_base.yaw_rad() + scan.angle_min_rad +
                          scan.angle_increment_rad * static_cast<double>(i);
     const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
+    // The sensor looked along the beam over the near field beyond its minimum range (up to
+    // the return), also when the beam carries no information; MAP says what is further.
+    const double near_m = scan.range_min_m + kNearFieldM;
+    const double looked_m = length > 0 ? std::min(length, near_m) : near_m;
+    for (double t = scan.range_min_m; t <= looked_m; t += 0.5 * res) {
+      const Eigen::Vector2i c = grid_.CellOf(origin + dir * t);
+      if (!grid_.Contains(c.x(), c.y())) break;
+      viewed_[grid_.Index(c.x(), c.y())] = 1;
+    }
+    if (length <= 0) continue;  // no information
     // Free up to one cell short of the return, sampled at half a cell.
     const int steps = static_cast<int>((length - (hit ? res : 0.0)) / (0.5 * res));
     for (int k = 0; k <= steps; ++k) {

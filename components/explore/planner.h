@@ -154,6 +154,10 @@ class ExploreMap {
   // Distance (m) from the cell to the nearest obstacle; large where none is near.
   double Clearance(int x, int y) const;
   bool Occupied(const Eigen::Vector2d& p) const;
+  // The cell was seen: MAP knows it, one of the explorer's own scans looked at it from beyond
+  // the sensor's minimum range, or the robot's body (robot_radius_m) stood on it. Cells
+  // assume_free_radius_m calls free around the trail are not seen.
+  bool Seen(int x, int y) const;
   bool Known(const Eigen::Vector2d& p) const;
   // No obstacle cell on the segment (unknown cells do not block).
   bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
@@ -189,6 +193,8 @@ class ExploreMap {
   std::vector<uint8_t> hit_;
   // Per own return: the nearest range from which its surface is in view (Scan::visible_from_m).
   std::vector<float> hit_visible_from_m_;
+  // 1 where the cell was seen (Seen()).
+  std::vector<uint8_t> viewed_;
   double scan_range_min_m_ = 0;    // the latest scan's
   std::vector<float> distance_m_;  // to the nearest obstacle
   std::vector<Eigen::Vector2d> trail_;

@@ -542,9 +542,10 @@ int main(int argc, char** argv) {
         TrailError(r, m.world_from_map, trail_csv, &last);
         std::fprintf(stderr,
                      "  trail RMS %.3f m, max %.2f m, mapped %.1f %%, collisions %d, closest "
-                     "approach %.3f m (%s)\n",
+                     "approach %.3f m (%s), recoveries %d, looks at unseen space %d\n",
                      last.trail_rms_m, last.trail_max_m, 100 * last.mapped_fraction,
-                     last.collisions, last.closest_gap_m, r.closest_gap_what.c_str());
+                     last.collisions, last.closest_gap_m, r.closest_gap_what.c_str(), r.recoveries,
+                     r.looks);
       }
     }
 

@@ -690,6 +690,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   if (!options.slam_map_pgm.empty()) WriteSlamMap(loop.slam(), options.slam_map_pgm);
   result.final_state = loop.explore().status().state;
   result.recoveries = loop.explore().status().recoveries;
+  result.looks = loop.explore().status().looks;
   result.came_home = result.final_state == "home";
   result.cpu_s = CpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
   return result;

@@ -112,6 +112,7 @@ struct MissionResult {
   double closest_gap_m = std::numeric_limits<double>::infinity();
   std::string closest_gap_what;  // when, where and against what
   int recoveries = 0;
+  int looks = 0;  // the explorer's turns to look at unseen space on its arc
   bool came_home = false;
   double home_after_s = -1;
   std::string final_state;
