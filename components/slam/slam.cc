@@ -895,7 +895,8 @@ void Slam::KnownCells(int submap_id, std::vector<int64_t>* known,
 // obstacle within one raster cell of it (seen only on a revisit: debris come closer to, a door
 // closed). s is trimmed when it maps nothing new: new cells under min_fresh_area_m2 and new
 // obstacles under min_new_obstacle_m2. What stays is the first map of each place, the one later
-// scans were matched against, with what was added to it since.
+// scans were matched against, with what was added to it since; the freed nodes keep their
+// returns on the new obstacles, so that MAP still draws them.
 void Slam::TrimIfCovered(int submap_id) {
   constexpr int kOwnChain = 2;
   const TrimOptions& t = options_.trim;
@@ -926,22 +927,25 @@ void Slam::TrimIfCovered(int submap_id) {
     }
     occupied_before.insert(theirs_occupied.begin(), theirs_occupied.end());
   }
-  int fresh_cells = 0, new_obstacle_cells = 0;
+  int fresh_cells = 0;
   for (const auto& [key, count] : known_before) fresh_cells += count < t.fresh_submaps;
+  // What trimmed nodes kept is held too (an obstacle seen again on a later revisit is not new).
+  std::unordered_set<int64_t> new_obstacles;
   for (int64_t key : mine_occupied) {
     const int64_t ix = key >> 32, iy = static_cast<int32_t>(key & 0xffffffff);
     bool seen = false;
     for (int dy = -1; dy <= 1 && !seen; ++dy) {
       for (int dx = -1; dx <= 1 && !seen; ++dx) {
-        seen = occupied_before.count(CellKey(ix + dx, iy + dy)) > 0;
+        const int64_t near = CellKey(ix + dx, iy + dy);
+        seen = occupied_before.count(near) > 0 || retained_obstacles_.count(near) > 0;
       }
     }
-    new_obstacle_cells += !seen;
+    if (!seen) new_obstacles.insert(key);
   }
   const double cell_m2 = t.cell_m * t.cell_m;
   if (fresh_cells * cell_m2 < t.min_fresh_area_m2 &&
-      new_obstacle_cells * cell_m2 < t.min_new_obstacle_m2) {
-    TrimSubmap(submap_id);
+      static_cast<double>(new_obstacles.size()) * cell_m2 < t.min_new_obstacle_m2) {
+    TrimSubmap(submap_id, new_obstacles);
   }
 }
 
@@ -949,7 +953,7 @@ void Slam::TrimIfCovered(int submap_id) {
 // of trimmed nodes between live nodes p < q becomes one TRIMMED_CHAIN constraint p -> q at the
 // graph's current estimate (the chain it replaces, as springs in series), so the graph stays one
 // piece and its solution where it was.
-void Slam::TrimSubmap(int submap_id) {
+void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles) {
   Submap& sub = submaps_[submap_id];
   sub.trimmed = true;
   sub.grid.reset();
@@ -966,7 +970,17 @@ void Slam::TrimSubmap(int submap_id) {
     if (held) continue;
     node.trimmed = true;
     node.loop_points = PointCloud();
-    node.range_data = RangeData();
+    // Its returns on what no older submap holds stay on MAP (a low object seen from afar,
+    // which later scans from close by look over).
+    PointCloud kept;
+    for (const Eigen::Vector2f& hit : node.range_data.hits) {
+      const int64_t key = CellKey(node_global_[n] * hit.cast<double>(), options_.trim.cell_m);
+      if (new_obstacles.count(key) == 0) continue;
+      kept.push_back(hit);
+      retained_obstacles_.insert(key);
+    }
+    node.range_data.hits = std::move(kept);
+    node.range_data.misses = PointCloud();
     ++stats_.nodes_trimmed;
     trimmed_nodes.push_back(n);
   }
@@ -1005,6 +1019,17 @@ void Slam::TrimSubmap(int submap_id) {
   }
 }
 
+void Slam::RebuildRetainedObstacles() {
+  retained_obstacles_.clear();
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    if (!nodes_[i].trimmed) continue;
+    for (const Eigen::Vector2f& hit : nodes_[i].range_data.hits) {
+      retained_obstacles_.insert(
+          CellKey(node_global_[i] * hit.cast<double>(), options_.trim.cell_m));
+    }
+  }
+}
+
 bool Slam::JointCovariance(const std::vector<int>& node_ids, Eigen::MatrixXd* covariance) const {
   PoseGraphOptions p;
   p.huber_scale = options_.graph.huber_scale;
@@ -1024,7 +1049,7 @@ OccupancyMap Slam::RenderMap() const {
   if (nodes_.empty()) return map;
   ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
   for (size_t i = 0; i < nodes_.size(); ++i) {
-    if (nodes_[i].trimmed) continue;
+    if (nodes_[i].trimmed && nodes_[i].range_data.hits.empty()) continue;
     grid.Insert(TransformRangeData(nodes_[i].range_data, node_global_[i]),
                 static_cast<float>(options_.local.hit_probability),
                 static_cast<float>(options_.local.miss_probability));
@@ -1341,6 +1366,7 @@ void Slam::Load(const std::string& path) {
   nodes_ = std::move(nodes);
   chain_drift_.Clear();
   node_global_ = std::move(node_global);
+  RebuildRetainedObstacles();
   constraints_ = std::move(constraints);
   precomputations_.clear();
   scans_.clear();

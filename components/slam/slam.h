@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "slam/grid.h"
@@ -163,7 +164,9 @@ class Slam {
     PointCloud loop_points;  // base frame
     RangeData range_data;    // base frame (for map rendering)
     std::vector<int> submaps;  // the submaps it was inserted into
-    bool trimmed = false;      // every submap of it is trimmed: its data is freed
+    // Every submap of it is trimmed: its data is freed, but for its returns on obstacles no
+    // live submap holds (range_data.hits, no misses), drawn on MAP at its last pose.
+    bool trimmed = false;
   };
   struct ScanRecord {
     double time_s;
@@ -192,7 +195,11 @@ class Slam {
   void FinishSubmap(int submap_id);
   // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions).
   void TrimIfCovered(int submap_id);
-  void TrimSubmap(int submap_id);
+  // `new_obstacles`: the raster cells (trim.cell_m, map frame) where the submap saw an obstacle
+  // no older submap holds; a freed node keeps its returns in them.
+  void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles = {});
+  // The raster cells of the returns trimmed nodes keep (RetainedObstacleKeys).
+  void RebuildRetainedObstacles();
   // The map-frame circle around the submap's grid.
   void SubmapCircle(int submap_id, Eigen::Vector2d* centre_m, double* radius_m) const;
   // The map-frame raster cells (trim.cell_m) the submap's grid knows and those it holds an
@@ -254,6 +261,8 @@ class Slam {
   std::vector<ScanRecord> scans_;
   std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
   std::vector<int> kept_nodes_;  // sorted
+  // Raster cells (trim.cell_m) of the returns trimmed nodes keep: obstacles no live submap holds.
+  std::unordered_set<int64_t> retained_obstacles_;
 };
 
 }  // namespace slam
