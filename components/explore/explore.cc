@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <unordered_set>
 
 #include "common/logging.h"
 
@@ -204,7 +205,7 @@ std::optional<Eigen::Vector2d> ExploreController::UnseenOnArc(const Velocity& de
     return q.norm() >= scan.range_min_m && bearing >= fov_min && bearing <= fov_max;
   };
   const int reach = static_cast<int>(std::ceil(o.footprint_radius_m / res));
-  std::vector<int> checked;
+  std::unordered_set<int> checked;  // cells already met nearer along the arc
   std::optional<Eigen::Vector2d> nearest;
   double nearest_m = std::numeric_limits<double>::infinity();
   for (size_t i = 1; i < arc.size(); ++i) {
@@ -214,10 +215,10 @@ std::optional<Eigen::Vector2d> ExploreController::UnseenOnArc(const Velocity& de
         const int x = c.x() + dx, y = c.y() + dy;
         if (!grid.Contains(x, y) || map_.Seen(x, y)) continue;
         const int index = grid.Index(x, y);
-        if (std::find(checked.begin(), checked.end(), index) != checked.end()) continue;
+        if (checked.count(index) > 0) continue;
         const Eigen::Vector2d local = pose_->inverse() * grid.CentreOf(x, y);
         if ((local - arc[i].translation()).norm() > o.footprint_radius_m) continue;
-        checked.push_back(index);  // first swept at arc[i]
+        checked.insert(index);  // first swept at arc[i]
         // Under the base already, or nearer than the sensor sees: turning shows nothing.
         const double range_m = local.norm();
         if (range_m <= o.footprint_radius_m || range_m < scan.range_min_m) continue;

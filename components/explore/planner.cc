@@ -43,16 +43,23 @@ void ExploreMap::SetMap(const Grid& map) {
               map.cells.begin() + static_cast<size_t>(y + 1) * map.width,
               grid_.cells.begin() + static_cast<size_t>(y + pad) * grid_.width + pad);
   }
+  // Calls f(index in the previous grid, cell in this one) for every cell of the previous grid
+  // marked in `mask` that this grid contains.
+  const auto carry_over = [&](const std::vector<uint8_t>& mask, auto&& f) {
+    for (int y = 0; y < previous.height; ++y) {
+      for (int x = 0; x < previous.width; ++x) {
+        const int i = previous.Index(x, y);
+        if (!mask[i]) continue;
+        const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
+        if (grid_.Contains(c.x(), c.y())) f(i, c);
+      }
+    }
+  };
   // Seen: what MAP knows, and what the explorer's own view or body covered before.
   viewed_.assign(grid_.cells.size(), 0);
   for (size_t i = 0; i < grid_.cells.size(); ++i) viewed_[i] = grid_.cells[i] >= 0;
-  for (int y = 0; y < previous.height; ++y) {
-    for (int x = 0; x < previous.width; ++x) {
-      if (!previous_viewed[previous.Index(x, y)]) continue;
-      const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
-      if (grid_.Contains(c.x(), c.y())) viewed_[grid_.Index(c.x(), c.y())] = 1;
-    }
-  }
+  carry_over(previous_viewed,
+             [&](int, const Eigen::Vector2i& c) { viewed_[grid_.Index(c.x(), c.y())] = 1; });
   // The explorer's own returns since they were last crossed stay obstacles unless the new map
   // calls the cell free: SLAM renders a low object seen from afar in a few scans as uncertain,
   // and the camera cannot see it again once the robot is close. A return the sensor loses from
@@ -62,36 +69,25 @@ void ExploreMap::SetMap(const Grid& map) {
   // seen edge-on) would close the door.
   hit_.assign(grid_.cells.size(), 0);
   hit_visible_from_m_.assign(grid_.cells.size(), 0.0f);
-  for (int y = 0; y < previous.height; ++y) {
-    for (int x = 0; x < previous.width; ++x) {
-      const int i = previous.Index(x, y);
-      if (!previous_hit[i]) continue;
-      const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
-      if (!grid_.Contains(c.x(), c.y())) continue;
-      int8_t& v = grid_.at(c.x(), c.y());
-      const bool lost_close_by = previous_visible_from[i] > scan_range_min_m_ + 1e-3;
-      if ((v >= 0 && v < options_.free_threshold && !lost_close_by) ||
-          v >= options_.occupied_threshold) {
-        continue;
-      }
-      v = 100;
-      hit_[grid_.Index(c.x(), c.y())] = 1;
-      hit_visible_from_m_[grid_.Index(c.x(), c.y())] = previous_visible_from[i];
+  carry_over(previous_hit, [&](int i, const Eigen::Vector2i& c) {
+    int8_t& v = grid_.at(c.x(), c.y());
+    const bool lost_close_by = previous_visible_from[i] > scan_range_min_m_ + 1e-3;
+    if ((v >= 0 && v < options_.free_threshold && !lost_close_by) ||
+        v >= options_.occupied_threshold) {
+      return;
     }
-  }
+    v = 100;
+    hit_[grid_.Index(c.x(), c.y())] = 1;
+    hit_visible_from_m_[grid_.Index(c.x(), c.y())] = previous_visible_from[i];
+  });
   // Cells the explorer's rays crossed stay free where MAP has no verdict; MAP's obstacles win.
   crossed_.assign(grid_.cells.size(), 0);
-  for (int y = 0; y < previous.height; ++y) {
-    for (int x = 0; x < previous.width; ++x) {
-      if (!previous_crossed[previous.Index(x, y)]) continue;
-      const Eigen::Vector2i c = grid_.CellOf(previous.CentreOf(x, y));
-      if (!grid_.Contains(c.x(), c.y())) continue;
-      int8_t& v = grid_.at(c.x(), c.y());
-      if (v >= options_.occupied_threshold) continue;
-      v = 0;
-      crossed_[grid_.Index(c.x(), c.y())] = 1;
-    }
-  }
+  carry_over(previous_crossed, [&](int, const Eigen::Vector2i& c) {
+    int8_t& v = grid_.at(c.x(), c.y());
+    if (v >= options_.occupied_threshold) return;
+    v = 0;
+    crossed_[grid_.Index(c.x(), c.y())] = 1;
+  });
   for (const auto& p : trail_) Stamp(p);
   for (const auto& c : contacts_) StampContact(c);
   for (auto& line : lines_) StampLine(line);

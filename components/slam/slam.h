@@ -197,7 +197,7 @@ class Slam {
   void TrimIfCovered(int submap_id);
   // `new_obstacles`: the raster cells (trim.cell_m, map frame) where the submap saw an obstacle
   // no older submap holds; a freed node keeps its returns in them.
-  void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles = {});
+  void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles);
   // retained_obstacles_ from the returns the trimmed nodes keep (after a load).
   void RebuildRetainedObstacles();
   // The map-frame circle around the submap's grid.
