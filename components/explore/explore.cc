@@ -280,7 +280,18 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(
   const SoundGoalOptions& o = options_.sound;
   const Grid& grid = map_.grid();
   std::optional<Goal> best;
-  for (const HeardPerson& person : heard_) {
+  // People heard and not seen, then the voices nobody on PEOPLE_MAP explains.
+  std::vector<std::pair<HeardPerson, bool>> candidates;  // (target, is a SOUND_MAP voice)
+  for (const HeardPerson& person : heard_) candidates.emplace_back(person, false);
+  if (o.voices) {
+    for (const HeardPerson& voice : voices_) {
+      bool explained = false;
+      for (const Eigen::Vector2d& p : people_m_)
+        explained |= (p - voice.position_m).norm() < o.seen_radius_m;
+      if (!explained) candidates.emplace_back(voice, true);
+    }
+  }
+  for (const auto& [person, is_voice] : candidates) {
     if (person.seen || person.position_std_m > o.max_position_std_m) continue;
     bool visited = false;
     for (const auto& v : visited_sound_)
@@ -324,6 +335,7 @@ std::optional<ExploreController::Goal> ExploreController::ChooseSoundGoal(
       g.kind = "sound";
       g.score = best_cost;
       g.person_id = person.id;
+      g.voice = is_voice;
       g.face_m = person.position_m;
       best = g;
     }
@@ -495,14 +507,25 @@ void ExploreController::Replan(double now_s) {
   if (options_.mode == "sound_guided") {
     const auto sound = ChooseSoundGoal(field);
     const bool seeking = goal_ && goal_->kind == "sound";
-    if (sound &&
-        (!seeking || sound->person_id != goal_->person_id || sound->score < goal_->score - 2.0)) {
+    // The sound map renumbers a source it re-places (a voice the bearings' crossing places
+    // replaces the EKF's), so a target is also the one it was when it stays where it was.
+    const auto same_target = [this](const Goal& a, const Goal& b) {
+      return (a.person_id == b.person_id && a.voice == b.voice) ||
+             (*a.face_m - *b.face_m).norm() < options_.sound.revisit_radius_m;
+    };
+    if (sound && (!seeking || !same_target(*sound, *goal_) || sound->score < goal_->score - 2.0)) {
+      if (!seeking || !same_target(*sound, *goal_)) {
+        SARMAP_LOG(INFO) << "seeking " << (sound->voice ? "voice " : "person ") << sound->person_id
+                         << " at (" << sound->face_m->x() << ", " << sound->face_m->y()
+                         << ") from (" << sound->position_m.x() << ", " << sound->position_m.y()
+                         << "), path " << sound->score << " m";
+      }
       goal_ = sound;
       goal_recoveries_ = 0;
       dwell_until_s_.reset();
     } else if (seeking && !dwell_until_s_) {
       // Keep the person, or drop them when they are no longer a goal (seen, visited).
-      if (sound && sound->person_id == goal_->person_id) {
+      if (sound && same_target(*sound, *goal_)) {
         goal_ = sound;
       } else if (!sound) {
         goal_.reset();
@@ -867,7 +890,8 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
       }
     }
     if (goal_->kind == "sound") {
-      if (!dwell_until_s_) dwell_until_s_ = now_s + options_.sound.dwell_s;
+      if (!dwell_until_s_)
+        dwell_until_s_ = now_s + (goal_->voice ? options_.sound.listen_s : options_.sound.dwell_s);
       if (now_s < *dwell_until_s_) {
         progress_s_ = now_s;
         Velocity v;

@@ -292,16 +292,22 @@ struct RecoveryOptions {
 };
 
 struct SoundGoalOptions {
-  double max_position_std_m = 1.5;  // heard people placed less certainly are not goals
+  double max_position_std_m = 1.5;  // heard people and voices placed less certainly are not goals
   double min_view_m = 0.8;          // look at them from this far...
   double max_view_m = 2.2;          // ...to this far, with a clear line of sight in the map
   double dwell_s = 4.0;             // facing them, so the camera can confirm
   double revisit_radius_m = 1.2;    // a visited place is not a goal again
   double max_detour_m = 25;         // farther (by path) heard people wait for the frontiers
+  // Voices on SOUND_MAP that no one on PEOPLE_MAP explains are goals too: the sound map places a
+  // caller behind cover from the bearings' parallax, which the robot gains by going near and
+  // standing still while they call (DOAs heard while turning fast are dropped).
+  bool voices = false;
+  double seen_radius_m = 1.5;  // a voice this near a person on PEOPLE_MAP is that person
+  double listen_s = 12.0;      // standing still near a voice: one call of a caller who repeats
   template <class V>
   void Visit(V& v) {
     v("max_position_std_m", max_position_std_m,
-      "heard people placed less certainly than this are not goals");
+      "heard people and voices placed less certainly than this are not goals");
     v("min_view_m", min_view_m, "nearest viewing distance");
     v("max_view_m", max_view_m, "farthest viewing distance");
     v("dwell_s", dwell_s, "time spent facing a heard person so the camera can confirm");
@@ -309,6 +315,14 @@ struct SoundGoalOptions {
       "a heard person near an already visited place is not a goal again");
     v("max_detour_m", max_detour_m,
       "heard people farther than this by path wait for exploration to bring the robot closer");
+    v("voices", voices,
+      "voices on SOUND_MAP (placed, classed voice) that nobody on PEOPLE_MAP explains are goals "
+      "too: the robot goes near and listens, which places a caller behind cover");
+    v("seen_radius_m", seen_radius_m,
+      "a voice this near a person on PEOPLE_MAP (seen or heard) is that person, not a goal");
+    v("listen_s", listen_s,
+      "time spent standing still facing a voice, so that its next call is heard from there "
+      "(instead of dwell_s)");
   }
   void Validate(common::Validator& check) const {
     check.Positive("max_position_std_m", max_position_std_m);
@@ -317,6 +331,8 @@ struct SoundGoalOptions {
     check.NonNegative("dwell_s", dwell_s);
     check.NonNegative("revisit_radius_m", revisit_radius_m);
     check.Positive("max_detour_m", max_detour_m);
+    check.NonNegative("seen_radius_m", seen_radius_m);
+    check.NonNegative("listen_s", listen_s);
   }
 };
 
@@ -327,12 +343,12 @@ struct TeleopCommand {
   double linear_mps = 0, angular_radps = 0;
 };
 
-// A person heard but not seen (from PEOPLE_MAP), in the map frame.
+// A person heard (from PEOPLE_MAP) or a voice (from SOUND_MAP), in the map frame.
 struct HeardPerson {
-  int64_t id = -1;
+  int64_t id = -1;  // PEOPLE_MAP's person id, or SOUND_MAP's source id for a voice
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
   double position_std_m = 0;  // sqrt of the largest eigenvalue of the xy covariance
-  bool seen = false;
+  bool seen = false;          // a person on PEOPLE_MAP who was also seen
 };
 
 struct ExploreOptions {
@@ -407,7 +423,14 @@ class ExploreController {
   // Wheel (or visual) odometry, `stamp_s` on the clock of Scan::stamp_s. Without it the safety
   // layer's memory is kept in the map frame with SLAM's POSE.
   void OnOdometry(const common::Rigid2d& odom_from_base, double stamp_s);
-  void OnHeardPeople(std::vector<HeardPerson> people) { heard_ = std::move(people); }
+  // PEOPLE_MAP: the people heard (goals in sound_guided mode unless also seen) and where everyone
+  // on it is (a voice near one of them is that person).
+  void OnPeopleMap(std::vector<HeardPerson> heard, std::vector<Eigen::Vector2d> people_m) {
+    heard_ = std::move(heard);
+    people_m_ = std::move(people_m);
+  }
+  // SOUND_MAP: the placed voices.
+  void OnVoices(std::vector<HeardPerson> voices) { voices_ = std::move(voices); }
   // One command per scan. `now_s` is this process's clock (the scan's receive time live, its
   // log time offline): every duration in the controller is measured on it.
   Velocity OnScan(double now_s, const Scan& scan);
@@ -432,6 +455,7 @@ class ExploreController {
     std::string kind;  // frontier, sound, home
     double score = 0;
     int64_t person_id = -1;
+    bool voice = false;                     // person_id is a SOUND_MAP source
     std::optional<Eigen::Vector2d> face_m;  // sound goals: turn to face this on arrival
   };
   struct BlacklistEntry {
@@ -490,6 +514,8 @@ class ExploreController {
   bool pose_wait_warned_ = false;
   std::optional<Eigen::Vector2d> home_;
   std::vector<HeardPerson> heard_;
+  std::vector<Eigen::Vector2d> people_m_;
+  std::vector<HeardPerson> voices_;
   State state_ = State::kLookAround;
   std::optional<double> start_s_;
   double look_turned_rad_ = 0;

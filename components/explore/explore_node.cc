@@ -39,6 +39,11 @@ ExploreNode::ExploreNode(const ExploreNodeOptions& options, common::Node* node)
   node->Subscribe<people_map_t>(
       options.people_channel,
       [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
+  if (!options.sound_map_channel.empty()) {
+    node->Subscribe<sound_map_t>(
+        options.sound_map_channel,
+        [this](const sound_map_t& m, const common::ReceiveInfo&) { OnSoundMap(m); }, 1);
+  }
   node->Subscribe<laser_scan_t>(
       options.scan_channel,
       [this](const laser_scan_t& m, const common::ReceiveInfo& info) { OnScan(m, info); }, 1);
@@ -95,8 +100,10 @@ void ExploreNode::OnMap(const occupancy_grid_t& m) {
 }
 
 void ExploreNode::OnPeople(const people_map_t& m) {
-  controller_.OnHeardPeople(HeardPeopleFromMessage(m));
+  controller_.OnPeopleMap(HeardPeopleFromMessage(m), PeoplePositionsFromMessage(m));
 }
+
+void ExploreNode::OnSoundMap(const sound_map_t& m) { controller_.OnVoices(VoicesFromMessage(m)); }
 
 void ExploreNode::OnScan(const laser_scan_t& m, const common::ReceiveInfo& info) {
   if (!scan_gate_.Accept(0, m.header.utime, info.receive_time_s)) {

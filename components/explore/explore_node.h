@@ -37,6 +37,7 @@ class ExploreNode {
   void OnOdometry(const odometry_t& m, const common::ReceiveInfo& info);
   void OnMap(const occupancy_grid_t& m);
   void OnPeople(const people_map_t& m);
+  void OnSoundMap(const sound_map_t& m);
   void OnScan(const laser_scan_t& m, const common::ReceiveInfo& info);
   void PublishStatus(int64_t utime, const ExploreStatus& s);
 

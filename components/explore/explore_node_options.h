@@ -17,6 +17,7 @@ struct ExploreNodeOptions {
   std::string pose_channel = "POSE";
   std::string odometry_channel = "ODOM";
   std::string people_channel = "PEOPLE_MAP";
+  std::string sound_map_channel = "SOUND_MAP";
   std::string teleop_channel = "TELEOP";
   std::string command_channel = "CMD_VEL";
   std::string status_channel = "EXPLORE_STATUS";
@@ -42,6 +43,9 @@ struct ExploreNodeOptions {
       "empty or silent: SLAM's pose is used");
     v("people_channel", people_channel,
       "people map: people heard but not seen become goals (mode sound_guided)");
+    v("sound_map_channel", sound_map_channel,
+      "sound map: voices nobody on the people map explains become goals (mode sound_guided, "
+      "explore.sound.voices); empty: none");
     v("teleop_channel", teleop_channel, "operator override");
     v("command_channel", command_channel, "velocity commands out");
     v("status_channel", status_channel, "mission state, goal and path out");

@@ -697,7 +697,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   p.id = 7;
   p.position_m = Eigen::Vector2d(5.0, 1.0);
   p.position_std_m = 0.5;
-  c.OnHeardPeople({p});
+  c.OnPeopleMap({p}, {p.position_m});
   c.OnScan(0.0, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(c.status().state, "seeking_sound");
   ASSERT_TRUE(c.status().goal_m);
@@ -711,7 +711,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   ExploreController cover{o};
   cover.OnMap(walled);
   cover.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
-  cover.OnHeardPeople({p});
+  cover.OnPeopleMap({p}, {p.position_m});
   cover.OnScan(0.0, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(cover.status().goal_kind, "sound");
   ASSERT_TRUE(cover.status().goal_m);
@@ -722,9 +722,87 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   vague.OnMap(PartlyKnownRoom());
   vague.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   p.position_std_m = 5.0;
-  vague.OnHeardPeople({p});
+  vague.OnPeopleMap({p}, {p.position_m});
   vague.OnScan(0.0, MakeScan(INFINITY, INFINITY));
   EXPECT_EQ(vague.status().goal_kind, "frontier");
+}
+
+// A voice on SOUND_MAP that nobody on PEOPLE_MAP explains is a goal (the robot goes near to
+// listen); one within seen_radius_m of a person on PEOPLE_MAP is that person.
+TEST(ExploreControllerTest, AVoiceNobodyOnThePeopleMapExplainsBecomesAGoal) {
+  ExploreOptions o = NoLookAround();
+  o.mode = "sound_guided";
+  o.sound.voices = true;
+  Grid g = PartlyKnownRoom();
+  for (int y = 1; y < g.height - 1; ++y) {
+    for (int x = 25; x < g.width - 1; ++x) g.cells[y * g.width + x] = 0;  // known now
+  }
+  HeardPerson voice;
+  voice.id = 3;
+  voice.position_m = Eigen::Vector2d(5.0, 1.0);
+  voice.position_std_m = 1.0;
+  const auto goal_kind = [&](const ExploreOptions& options, std::vector<Eigen::Vector2d> people_m) {
+    ExploreController c{options};
+    c.OnMap(g);
+    c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
+    c.OnPeopleMap({}, std::move(people_m));
+    c.OnVoices({voice});
+    c.OnScan(0.0, MakeScan(INFINITY, INFINITY));
+    if (c.status().goal_kind == "sound") {
+      const double d = (*c.status().goal_m - voice.position_m).norm();
+      EXPECT_GE(d, options.sound.min_view_m - 0.1);
+      EXPECT_LE(d, options.sound.max_view_m + 0.1);
+    }
+    return c.status().goal_kind;
+  };
+  EXPECT_EQ(goal_kind(o, {}), "sound");
+  // Someone on the people map 1 m away: the voice is theirs.
+  EXPECT_EQ(goal_kind(o, {Eigen::Vector2d(5.0, 2.0)}), "frontier");
+  // ... 2 m away: not theirs.
+  EXPECT_EQ(goal_kind(o, {Eigen::Vector2d(5.0, 3.0)}), "sound");
+  ExploreOptions off = o;
+  off.sound.voices = false;
+  EXPECT_EQ(goal_kind(off, {}), "frontier");
+  voice.position_std_m = 2.0;  // placed too uncertainly
+  EXPECT_EQ(goal_kind(o, {}), "frontier");
+}
+
+// At a voice the robot stands still for listen_s (a call heard with the robot still is kept by
+// the sound map), then the voice's place is visited and exploration goes on.
+TEST(ExploreControllerTest, AtAVoiceTheRobotStandsStillForListenS) {
+  ExploreOptions o = NoLookAround();
+  o.mode = "sound_guided";
+  o.sound.voices = true;
+  Grid room = ClosedRoom();  // a closed 2.5 x 4 m room
+  HeardPerson voice;
+  voice.id = 3;
+  voice.position_m = Eigen::Vector2d(3.5, 2.0);
+  voice.position_std_m = 1.0;
+  const auto longest_still_s = [&](double listen_s) {
+    ExploreOptions options = o;
+    options.sound.listen_s = listen_s;
+    ExploreController c{options};
+    common::Rigid2d pose(1.0, 1.0, 0.0);
+    c.OnPose(pose, 0.0);
+    c.OnMap(room);
+    c.OnVoices({voice});
+    double still_s = 0, longest = 0;
+    bool sought = false;
+    for (double t = 0; t < 60; t += 0.1) {
+      const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
+      sought |= c.status().goal_kind == "sound";
+      const bool still = v.linear_mps == 0 && v.angular_radps == 0;
+      still_s = still && c.status().goal_kind == "sound" ? still_s + 0.1 : 0;
+      longest = std::max(longest, still_s);
+      pose = pose * common::Rigid2d(v.linear_mps * 0.1, 0.0, v.angular_radps * 0.1);
+      c.OnPose(pose, 0.0);
+    }
+    EXPECT_TRUE(sought);
+    EXPECT_NE(c.status().goal_kind, "sound");  // visited: not a goal again
+    return longest;
+  };
+  EXPECT_NEAR(longest_still_s(8.0), 8.0, 0.25);
+  EXPECT_NEAR(longest_still_s(3.0), 3.0, 0.25);
 }
 
 TEST(ExploreControllerTest, TeleopOverridesOnThisProcessClockClampedAndEmergencyStopHolds) {
@@ -818,6 +896,52 @@ TEST(ExploreMessagesTest, HeardPeopleAreGoalsWithTheirLargestStd) {
   EXPECT_NEAR(goals[0].position_m.y(), -1.0, 1e-12);
   EXPECT_NEAR(goals[0].position_std_m, 1.0, 1e-9);
   EXPECT_TRUE(goals[0].seen);
+}
+
+TEST(ExploreMessagesTest, VoicesArePlacedSourcesClassedVoice) {
+  sarmap::sound_map_t m{};
+  sarmap::sound_source_t voice{};
+  voice.id = 9;
+  voice.has_position = true;
+  voice.position_m[0] = 1.0;
+  voice.position_m[1] = 2.0;
+  voice.covariance[0] = 0.04;
+  voice.covariance[4] = 0.09;  // y std 0.3 m: the largest
+  voice.covariance[8] = 1.0;   // height: not planar
+  voice.priority = sarmap::sound_source_t::PRIORITY_CALL;
+  sarmap::sound_source_t machine = voice;
+  machine.id = 10;
+  machine.priority = sarmap::sound_source_t::PRIORITY_NONE;
+  sarmap::sound_source_t bearing = voice;
+  bearing.id = 11;
+  bearing.has_position = false;
+  sarmap::sound_source_t broken = voice;
+  broken.id = 12;
+  broken.covariance[0] = NAN;
+  m.sources = {voice, machine, bearing, broken};
+  m.num_sources = 4;
+  const std::vector<HeardPerson> voices = VoicesFromMessage(m);
+  ASSERT_EQ(voices.size(), 1u);
+  EXPECT_EQ(voices[0].id, 9);
+  EXPECT_NEAR(voices[0].position_m.y(), 2.0, 1e-12);
+  EXPECT_NEAR(voices[0].position_std_m, 0.3, 1e-9);
+  EXPECT_FALSE(voices[0].seen);
+}
+
+TEST(ExploreMessagesTest, PeoplePositionsAreEveryoneOnTheMap) {
+  sarmap::people_map_t m{};
+  sarmap::mapped_person_t seen{};
+  seen.position_m[0] = 3.0;
+  seen.cues = sarmap::mapped_person_t::CUE_SEEN_RGBD;
+  sarmap::mapped_person_t heard = seen;
+  heard.position_m[1] = 4.0;
+  heard.cues = sarmap::mapped_person_t::CUE_HEARD;
+  m.people = {seen, heard};
+  m.num_people = 2;
+  const std::vector<Eigen::Vector2d> people = PeoplePositionsFromMessage(m);
+  ASSERT_EQ(people.size(), 2u);
+  EXPECT_NEAR(people[1].y(), 4.0, 1e-12);
+  EXPECT_EQ(HeardPeopleFromMessage(m).size(), 1u);
 }
 
 }  // namespace

@@ -201,6 +201,7 @@ class Perception {
     const double cpu0 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     intake_.OnSoundMap(m);
     result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0;
+    if (explorer_) explorer_->OnVoices(explore::VoicesFromMessage(m));
     if (observer_) observer_->OnSoundMap(now_s_, m);
   }
 
@@ -216,7 +217,9 @@ class Perception {
     last_publish_s_ = now_s_;
     const sarmap::people_map_t msg = people_map::PeopleMapMessage(map_.Report(utime), utime);
     people_on_map_ = static_cast<int>(msg.people.size());
-    if (explorer_) explorer_->OnHeardPeople(explore::HeardPeopleFromMessage(msg));
+    if (explorer_)
+      explorer_->OnPeopleMap(explore::HeardPeopleFromMessage(msg),
+                             explore::PeoplePositionsFromMessage(msg));
     if (observer_) observer_->OnPeopleMap(now_s_, msg);
   }
 
