@@ -508,10 +508,11 @@ void ExploreController::Replan(double now_s) {
     const auto sound = ChooseSoundGoal(field);
     const bool seeking = goal_ && goal_->kind == "sound";
     // The sound map renumbers a source it re-places (a voice the bearings' crossing places
-    // replaces the EKF's), so a target is also the one it was when it stays where it was.
+    // replaces the EKF's), so a voice is also the one it was when it stays where it was.
     const auto same_target = [this](const Goal& a, const Goal& b) {
-      return (a.person_id == b.person_id && a.voice == b.voice) ||
-             (*a.face_m - *b.face_m).norm() < options_.sound.revisit_radius_m;
+      if (a.voice != b.voice) return false;
+      return a.person_id == b.person_id ||
+             (a.voice && (*a.face_m - *b.face_m).norm() < options_.sound.revisit_radius_m);
     };
     if (sound && (!seeking || !same_target(*sound, *goal_) || sound->score < goal_->score - 2.0)) {
       if (!seeking || !same_target(*sound, *goal_)) {
