@@ -255,27 +255,6 @@ Grid FreeSpaceWithPier() {
   return g;
 }
 
-// The robot runs twice into the pier the map has (its pose is off by more than the planner's
-// clearance): the first bump is not marked, the second at the same place is; a first bump at
-// another place beside it is not.
-TEST(ExploreMapTest, ASecondContactWithAKnownObstacleAtTheSamePlaceIsMarked) {
-  ExploreMap m{PlannerOptions()};
-  m.SetMap(FreeSpaceWithPier());  // the pier: x 5.0-5.2, y 3.0-3.2
-  const double touching = m.options().robot_radius_m;
-  const double front = touching + 0.1;  // where a bump is marked
-  const common::Rigid2d bump(5.1, 3.0 - touching, M_PI / 2);
-  EXPECT_FALSE(m.AddContact(bump));
-  EXPECT_EQ(m.contacts(), 0);
-  // The pier's west side, 0.5 m from the first bump: a first bump there, not marked.
-  EXPECT_FALSE(m.AddContact(common::Rigid2d(5.1 - touching, 3.1, 0.0)));
-  EXPECT_EQ(m.contacts(), 0);
-  // The same place again, 0.1 m off: marked across the front, where the robot believes it is.
-  const common::Rigid2d again(5.0, 3.0 - touching - 0.05, M_PI / 2);
-  EXPECT_TRUE(m.AddContact(again));
-  EXPECT_EQ(m.contacts(), 1);
-  EXPECT_TRUE(m.Occupied(again * Eigen::Vector2d(front, 0.0)));
-}
-
 TEST(ExploreMapTest, ContactsInLineAreOneGlassPaneExtendedToThePierAndKnownObstaclesNeedNoMark) {
   ExploreMap m{PlannerOptions()};
   m.SetMap(FreeSpaceWithPier());

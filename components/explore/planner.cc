@@ -105,15 +105,8 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
   const Eigen::Vector2d heading(std::cos(map_from_base.yaw_rad()),
                                 std::sin(map_from_base.yaw_rad()));
   // Something the map already has at the robot's front (a door jamb brushed in passing) needs
-  // no mark; a mark beside it would narrow the doorway. A second contact there is marked: the
-  // robot keeps running into what the map has, so its place in the map is off by more than the
-  // planner's clearance (a low obstacle the camera loses from view close by), and the mark keeps
-  // the next plan off it where the robot believes it is.
-  const bool again =
-      std::any_of(known_contacts_.begin(), known_contacts_.end(), [&](const Eigen::Vector2d& p) {
-        return (p - map_from_base.translation()).norm() < options_.robot_radius_m;
-      });
-  if (has_map() && !again) {
+  // no mark; a mark beside it would narrow the doorway.
+  if (has_map()) {
     const double reach = options_.robot_radius_m + 0.1;
     const int r = static_cast<int>(std::ceil(reach / grid_.resolution_m));
     const Eigen::Vector2i c = grid_.CellOf(map_from_base.translation());
@@ -124,10 +117,7 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
             map_from_base.inverse() * grid_.CentreOf(c.x() + dx, c.y() + dy);
         if (local.x() <= 0 || local.norm() > reach) continue;
         const int i = grid_.Index(c.x() + dx, c.y() + dy);
-        if (grid_.cells[i] >= options_.occupied_threshold && !hit_[i]) {
-          known_contacts_.push_back(map_from_base.translation());
-          return false;
-        }
+        if (grid_.cells[i] >= options_.occupied_threshold && !hit_[i]) return false;
       }
     }
   }

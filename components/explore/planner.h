@@ -136,8 +136,7 @@ class ExploreMap {
   // across the robot's front, kept as occupied through every later MAP. Two contacts in line
   // make an invisible surface (a glass pane) that spans between them and beyond (GlassLine).
   // Returns false (no mark) when the map already has an obstacle at the robot's front: what
-  // it touched is known. A second such contact within robot_radius_m of the first is marked:
-  // the robot's place in the map is off by more than the clearance.
+  // it touched is known.
   bool AddContact(const common::Rigid2d& map_from_base);
   int contacts() const { return static_cast<int>(contacts_.size()); }
   int glass_lines() const { return static_cast<int>(lines_.size()); }
@@ -200,8 +199,6 @@ class ExploreMap {
   std::vector<float> distance_m_;  // to the nearest obstacle
   std::vector<Eigen::Vector2d> trail_;
   std::vector<common::Rigid2d> contacts_;
-  // Where contacts with an obstacle the map already has were left unmarked.
-  std::vector<Eigen::Vector2d> known_contacts_;
   std::vector<bool> in_line_;  // per contact: one end of a GlassLine
   // An invisible surface inferred from contacts in line, from a_m to b_m (map frame).
   struct GlassLine {
