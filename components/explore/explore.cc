@@ -709,7 +709,9 @@ Velocity ExploreController::Safe(Velocity desired, const Scan& scan) const {
   return desired;
 }
 
-void ExploreController::StartRecovery(double now_s, const Scan& scan) {
+void ExploreController::StartRecovery(double now_s, const Scan& scan, const std::string& why) {
+  SARMAP_LOG(INFO) << "recovery at (" << pose_->translation().x() << ", "
+                   << pose_->translation().y() << "): " << why;
   ++recoveries_;
   ++goal_recoveries_;
   if (goal_ && goal_recoveries_ > options_.recovery.attempts_per_goal) GiveUpGoal(now_s);
@@ -864,7 +866,8 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
   if (!goal_ || path_.empty()) {
     // No path now (e.g. the robot stands in an inflated cell): the stuck detector decides.
     stop.source = "planner";
-    if (now_s - progress_s_ > options_.recovery.stuck_timeout_s) StartRecovery(now_s, scan);
+    if (now_s - progress_s_ > options_.recovery.stuck_timeout_s)
+      StartRecovery(now_s, scan, "no plan and no progress");
     return stop;
   }
   const Eigen::Vector2d robot = pose_->translation();
@@ -923,8 +926,9 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
     contact_xy_ = robot;
     commanded_m_ = 0;
     if (contact) {
-      map_.AddContact(*pose_);  // (no mark where the map already has the obstacle)
-      StartRecovery(now_s, scan);
+      const bool marked = map_.AddContact(*pose_);
+      StartRecovery(now_s, scan,
+                    marked ? "contact, marked" : "contact with an obstacle the map has");
       return Recover(now_s, scan);
     }
   }
@@ -961,7 +965,10 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
   }
   if (now_s - progress_s_ > options_.recovery.stuck_timeout_s ||
       (blocked_since_s_ && now_s - *blocked_since_s_ > options_.recovery.blocked_timeout_s)) {
-    StartRecovery(now_s, scan);
+    StartRecovery(now_s, scan,
+                  now_s - progress_s_ > options_.recovery.stuck_timeout_s
+                      ? "no progress"
+                      : "held by the safety layer");
     return Recover(now_s, scan);
   }
   return safe;

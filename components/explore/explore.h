@@ -491,7 +491,7 @@ class ExploreController {
   std::optional<common::Rigid2d> OdometryAt(double stamp_s) const;
   Velocity Recover(double now_s, const Scan& scan);
   Velocity EndRecovery(double now_s);
-  void StartRecovery(double now_s, const Scan& scan);
+  void StartRecovery(double now_s, const Scan& scan, const std::string& why);
   void GiveUpGoal(double now_s);
   bool IsBlacklisted(const Eigen::Vector2d& p, double now_s) const;
   bool TimeToGoHome(double now_s, const CostField& field) const;
