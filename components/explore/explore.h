@@ -22,8 +22,9 @@
 // ended for want of them)
 // with recovering entered from any driving state when progress stops. Goals are frontiers
 // (path cost minus a size bonus, kept until reached, gone or clearly beaten) or, in
-// sound_guided mode, people heard but not yet seen (a cell in view of them, or in range when
-// they are behind cover). Paths come from ExploreMap's planner and are followed by pure pursuit.
+// sound_guided mode, people heard but not yet seen, and with sound.voices the voices on SOUND_MAP
+// nobody on PEOPLE_MAP explains (a cell in view of them, or in range when they are behind
+// cover). Paths come from ExploreMap's planner and are followed by pure pursuit.
 // Stuck recovery: back off (when the map behind is free), turn towards the open side, replan; a
 // goal that needs two recoveries is blacklisted for blacklist_expiry_s. A forward command that
 // does not move the robot marks an obstacle the sensors miss (glass) in the explorer's map.
