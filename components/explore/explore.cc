@@ -514,8 +514,9 @@ void ExploreController::Replan(double now_s) {
       return a.person_id == b.person_id ||
              (a.voice && (*a.face_m - *b.face_m).norm() < options_.sound.revisit_radius_m);
     };
-    if (sound && (!seeking || !same_target(*sound, *goal_) || sound->score < goal_->score - 2.0)) {
-      if (!seeking || !same_target(*sound, *goal_)) {
+    const bool new_target = sound && (!seeking || !same_target(*sound, *goal_));
+    if (new_target || (sound && sound->score < goal_->score - 2.0)) {
+      if (new_target) {
         SARMAP_LOG(INFO) << "seeking " << (sound->voice ? "voice " : "person ") << sound->person_id
                          << " at (" << sound->face_m->x() << ", " << sound->face_m->y()
                          << ") from (" << sound->position_m.x() << ", " << sound->position_m.y()

@@ -80,6 +80,16 @@ Grid ClosedRoom() {
   return g;
 }
 
+// PartlyKnownRoom with its unknown part known free inside the outer cells: a 6 x 4 m room open
+// to the east (its last column stays unknown).
+Grid KnownRoom() {
+  Grid g = PartlyKnownRoom();
+  for (int y = 1; y < g.height - 1; ++y) {
+    for (int x = 25; x < g.width - 1; ++x) g.cells[y * g.width + x] = 0;
+  }
+  return g;
+}
+
 ExploreOptions NoLookAround() {
   ExploreOptions o;
   o.goals.look_around = false;
@@ -687,10 +697,7 @@ TEST(ExploreControllerTest, HeardPersonBecomesAGoalInViewOfThem) {
   ExploreOptions o = NoLookAround();
   o.mode = "sound_guided";
   ExploreController c{o};
-  Grid g = PartlyKnownRoom();
-  for (int y = 1; y < g.height - 1; ++y) {
-    for (int x = 25; x < g.width - 1; ++x) g.cells[y * g.width + x] = 0;  // known now
-  }
+  const Grid g = KnownRoom();
   c.OnMap(g);
   c.OnPose(common::Rigid2d(1.0, 2.0, 0.0), 0.0);
   HeardPerson p;
@@ -733,10 +740,7 @@ TEST(ExploreControllerTest, AVoiceNobodyOnThePeopleMapExplainsBecomesAGoal) {
   ExploreOptions o = NoLookAround();
   o.mode = "sound_guided";
   o.sound.voices = true;
-  Grid g = PartlyKnownRoom();
-  for (int y = 1; y < g.height - 1; ++y) {
-    for (int x = 25; x < g.width - 1; ++x) g.cells[y * g.width + x] = 0;  // known now
-  }
+  const Grid g = KnownRoom();
   HeardPerson voice;
   voice.id = 3;
   voice.position_m = Eigen::Vector2d(5.0, 1.0);
