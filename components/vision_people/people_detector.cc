@@ -402,7 +402,8 @@ PersonCandidate DescribeLying(const std::vector<int>& cluster,
 
 // ---------------------------------------------------------------------------------------
 
-struct PeopleDetector::Workspace {
+// The voxel grid and the per-frame state the stages of Detect share.
+struct DetectorWorkspace {
   // Dense voxel grid over the region of interest, in the prior floor frame.
   int nx = 0, ny = 0, nz = 0;
   double x0 = 0, y0 = 0,
@@ -433,99 +434,45 @@ struct PeopleDetector::Workspace {
   }
 };
 
-PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane& mounting_ground,
-                               std::shared_ptr<const HogClassifier> hog)
-    : options_(options),
-      mounting_(mounting_ground),
-      tracker_(options.ground, mounting_ground),
-      hog_(std::move(hog)),
-      ws_(std::make_unique<Workspace>()) {
-  common::ValidateOptions(options_);
-  const double v = options_.voxel_size_m;
-  ws_->x0 = -options_.max_lateral_m;
-  ws_->y0 = -0.5;
-  ws_->z0 = -kBelowFloorM;
-  ws_->nx = static_cast<int>(std::ceil(2 * options_.max_lateral_m / v));
-  ws_->ny = static_cast<int>(std::ceil((options_.max_range_m + 0.5) / v));
-  ws_->nz = static_cast<int>(std::ceil((options_.top_cut_m + kBelowFloorM) / v));
-  const size_t cells =
-      static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) * (ws_->nz + 2 * kPad);
-  ws_->cell_voxel.assign(cells, -1);
-  // Half of the +-2 neighbourhood (lexicographically positive offsets): each pair once.
-  for (int dz = -2; dz <= 2; ++dz) {
-    for (int dy = -2; dy <= 2; ++dy) {
-      for (int dx = -2; dx <= 2; ++dx) {
-        if (std::make_tuple(dz, dy, dx) <= std::make_tuple(0, 0, 0)) continue;
-        ws_->neighbour_offsets.push_back(static_cast<int32_t>(
-            (static_cast<int64_t>(dz) * (ws_->ny + 2 * kPad) + dy) * (ws_->nx + 2 * kPad) + dx));
-      }
-    }
+namespace {
+
+using Clusters = std::vector<std::vector<int>>;
+
+// Whether the colour image can be used for this frame: its size, and with a colour classifier
+// its light, contrast and glare (stats->color_state says which failed).
+bool ColorUsable(const RgbdFrame& frame, bool have_hog, const ColorOptions& c,
+                 DetectionStats* stats, std::string* err) {
+  if (!frame.has_color()) return false;
+  const size_t pixels = static_cast<size_t>(frame.width) * frame.height;
+  if (frame.rgb.size() != 3 * pixels) {
+    *err = "colour image size does not match the depth (" + std::to_string(frame.rgb.size()) +
+           " bytes for " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+           "); using depth only";
+    return false;
   }
+  if (!have_hog) return false;
+  double mean, stddev, saturated;
+  ImageStatistics(frame.rgb.data(), frame.width, frame.height, 4, &mean, &stddev, &saturated);
+  stats->color_mean = mean;
+  stats->color_std = stddev;
+  if (mean < c.dark_mean) {
+    stats->color_state = ColorState::kDark;
+  } else if (saturated > c.max_saturated) {
+    stats->color_state = ColorState::kGlare;
+  } else if (stddev < c.min_contrast) {
+    stats->color_state = ColorState::kLowContrast;
+  } else {
+    stats->color_state = ColorState::kUsable;
+    return true;
+  }
+  return false;
 }
 
-PeopleDetector::~PeopleDetector() = default;
-
-void PeopleDetector::ResetGround() { tracker_.Reset(); }
-
-DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* error) {
-  DetectionResult result;
-  result.ground = tracker_.has_track() ? tracker_.tracked() : mounting_;
-  std::string local_error;
-  std::string& err = error ? *error : local_error;
-  err.clear();
-  const size_t pixels = static_cast<size_t>(std::max(0, frame.width)) * std::max(0, frame.height);
-  if (frame.width <= 0 || frame.height <= 0 || pixels == 0) {
-    err = "empty frame";
-    return result;
-  }
-  if (frame.xyz.size() != 3 * pixels) {
-    err = "cloud has " + std::to_string(frame.xyz.size() / 3) + " points for a " +
-          std::to_string(frame.width) + "x" + std::to_string(frame.height) + " frame";
-    return result;
-  }
-  bool color_ok = false;
-  if (frame.has_color()) {
-    if (frame.rgb.size() != 3 * pixels) {
-      err = "colour image size does not match the depth (" + std::to_string(frame.rgb.size()) +
-            " bytes for " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
-            "); using depth only";
-    } else if (hog_) {
-      double mean, stddev, saturated;
-      ImageStatistics(frame.rgb.data(), frame.width, frame.height, 4, &mean, &stddev, &saturated);
-      result.stats.color_mean = mean;
-      result.stats.color_std = stddev;
-      const ColorOptions& c = options_.color;
-      if (mean < c.dark_mean) {
-        result.stats.color_state = ColorState::kDark;
-      } else if (saturated > c.max_saturated) {
-        result.stats.color_state = ColorState::kGlare;
-      } else if (stddev < c.min_contrast) {
-        result.stats.color_state = ColorState::kLowContrast;
-      } else {
-        result.stats.color_state = ColorState::kUsable;
-        color_ok = true;
-      }
-    }
-  }
-
-  Workspace& ws = *ws_;
-  const DetectorOptions& o = options_;
-  const double vs = o.voxel_size_m;
-  const float inv_vs = static_cast<float>(1.0 / vs);
-
-  // 1. Floor from the data: RANSAC over a sample of the cloud with the tracked and the
-  // configured floor as extra hypotheses (ground_estimator.h); then the voxel grid in the
-  // frame of that floor.
-  FloorFit fit;
-  if (o.ground.refine) {
-    std::vector<GroundPlane> hypotheses;
-    if (tracker_.has_track()) hypotheses.push_back(tracker_.tracked());
-    hypotheses.push_back(mounting_);
-    fit = FitFloor(frame.xyz.data(), frame.width, frame.height, o.min_range_m, o.max_range_m,
-                   o.ground, hypotheses);
-    result.stats.num_ground_points = fit.inliers;
-  }
-  const GroundPlane grid_plane = fit.found ? fit.plane : result.ground;
+// Stage 1b: the voxel grid in the frame of `grid_plane` (the floor found in this frame, else
+// the track or the mounting), without flying pixels. Returns the number of finite points.
+int Voxelize(const RgbdFrame& frame, const DetectorOptions& o, const GroundPlane& grid_plane,
+             DetectorWorkspace& ws) {
+  const float inv_vs = static_cast<float>(1.0 / o.voxel_size_m);
   const FloorFrame prior_frame(grid_plane);
   const Eigen::Matrix3f Rf = prior_frame.R.cast<float>();
   const Eigen::Vector3f tf = prior_frame.t.cast<float>();
@@ -581,29 +528,19 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       }
     }
   }
-  result.stats.num_points = num_points;
-  const int nv = static_cast<int>(ws.voxel_cell.size());
-  result.stats.num_voxels = nv;
-  // The grid is cleared at the end of this function through this guard, whatever happens.
-  struct ClearGrid {
-    Workspace* ws;
-    ~ClearGrid() {
-      for (int32_t c : ws->voxel_cell) ws->cell_voxel[c] = -1;
-    }
-  } clear_grid{&ws};
-  if (num_points == 0) {
-    if (err.empty()) err = "no finite depth in the frame";
-    return result;
-  }
-  ws.centroid.resize(nv);
-  for (int i = 0; i < nv; ++i)
-    ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
+  return num_points;
+}
 
-  // 2. Floor polish: least-squares plane through the voxels near the RANSAC plane, twice with
-  // a shrinking band, accepted only close to it. Floor candidates must have nothing
-  // 0.18-0.30 m above them (cells iz+3, iz+4 of their column): the bottom rows of a wall, a
-  // cabinet or a leg lie in the band too and would tilt the fit.
-  GroundPlane ground = mounting_;
+// Stage 2: the floor polished and tracked; returns the floor this frame uses. The polish is a
+// least-squares plane through the voxels near the RANSAC plane, twice with a shrinking band,
+// accepted only close to it. Floor candidates must have nothing 0.18-0.30 m above them (cells
+// iz+3, iz+4 of their column): the bottom rows of a wall, a cabinet or a leg lie in the band
+// too and would tilt the fit.
+GroundPlane PolishFloor(const FloorFit& fit, const DetectorOptions& o, const GroundPlane& mounting,
+                        int64_t utime, DetectorWorkspace& ws, GroundTracker& tracker,
+                        DetectionStats* stats) {
+  const int nv = static_cast<int>(ws.voxel_cell.size());
+  GroundPlane ground = mounting;
   if (fit.found) {
     const int64_t layer = static_cast<int64_t>(ws.ny + 2 * kPad) * (ws.nx + 2 * kPad);
     const int64_t layers = ws.nz + 2 * kPad;
@@ -647,36 +584,40 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       estimate.normal = n;
       estimate.offset = -n.dot(mean);
     }
-    result.stats.num_ground_voxels = used;
+    stats->num_ground_voxels = used;
     ok = ok && AngleBetweenDeg(estimate, fit.plane) <= o.ground.max_tilt_change_deg &&
          std::abs(estimate.offset - fit.plane.offset) <= o.ground.max_offset_change_m;
     const GroundPlane this_frame = ok ? estimate : fit.plane;
-    ground = tracker_.Update(&this_frame, frame.utime);
-    result.stats.ground_refined = true;
+    ground = tracker.Update(&this_frame, utime);
+    stats->ground_refined = true;
   } else if (o.ground.refine) {
     // No floor in view (or none plausible): the track, else the mounting file.
-    ground = tracker_.Update(nullptr, frame.utime);
+    ground = tracker.Update(nullptr, utime);
   }
-  result.stats.ground_reset = o.ground.refine && tracker_.last_update_reset();
-  result.stats.mounting_mismatch = tracker_.mismatch();
-  result.camera = MountingFromGround(ground);
-  result.ground = ground;
-  const FloorFrame floor_frame(ground);
+  return ground;
+}
 
-  // 3. Remove the floor (and what is below it).
+// Stage 3: floor coordinates of every voxel; those within removal_m of the floor (or below it)
+// are dropped.
+void RemoveFloor(const FloorFrame& floor_frame, double removal_m, DetectorWorkspace& ws) {
+  const int nv = static_cast<int>(ws.voxel_cell.size());
   ws.floor.resize(nv);
   ws.kept.assign(nv, 0);
   for (int i = 0; i < nv; ++i) {
     ws.floor[i] = floor_frame.ToFloor(ws.centroid[i]);
-    ws.kept[i] = ws.floor[i].z() >= o.ground.removal_m;
+    ws.kept[i] = ws.floor[i].z() >= removal_m;
   }
+}
 
-  // 4. Euclidean clustering: union of kept voxels whose centroids are closer than the
-  // tolerance (<= 2 voxels, so the +-2 cell neighbourhood holds every such pair).
+// Euclidean clustering of `voxels` (kept ones): union of voxels whose centroids are closer than
+// `tolerance_m` (<= 2 voxels, so the +-2 cell neighbourhood holds every such pair). Clusters
+// come in the order of their first voxel in `voxels`.
+Clusters ConnectedVoxels(const std::vector<int>& voxels, double tolerance_m,
+                         DetectorWorkspace& ws) {
+  const int nv = static_cast<int>(ws.voxel_cell.size());
+  const double tol2 = tolerance_m * tolerance_m;
   ws.uf.Reset(nv);
-  const double tol2 = o.cluster_tolerance_m * o.cluster_tolerance_m;
-  for (int i = 0; i < nv; ++i) {
-    if (!ws.kept[i]) continue;
+  for (int i : voxels) {
     const int64_t cell = ws.voxel_cell[i];
     for (int32_t off : ws.neighbour_offsets) {
       const int32_t j = ws.cell_voxel[cell + off];
@@ -684,88 +625,69 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       if ((ws.centroid[i] - ws.centroid[j]).squaredNorm() < tol2) ws.uf.Union(i, j);
     }
   }
-  std::vector<int> root_cluster(nv, -1);
-  std::vector<std::vector<int>> clusters;
-  for (int i = 0; i < nv; ++i) {
-    if (!ws.kept[i]) continue;
-    const int r = ws.uf.Find(i);
-    if (root_cluster[r] < 0) {
-      root_cluster[r] = static_cast<int>(clusters.size());
+  Clusters clusters;
+  std::vector<int> cluster_of_root(nv, -1);
+  for (int i : voxels) {
+    int& c = cluster_of_root[ws.uf.Find(i)];
+    if (c < 0) {
+      c = static_cast<int>(clusters.size());
       clusters.emplace_back();
     }
-    clusters[root_cluster[r]].push_back(i);
+    clusters[c].push_back(i);
   }
-  // 4b. A cluster too large or too tall for a person is searched for walls; what is left
-  // without them is clustered again (a person in front of a wall). Only against a floor seen
-  // in this frame: a floor carried over may be tilted, and so would be the walls in its frame
-  // (their lower parts would stand in front of the band).
-  {
-    // Pieces are appended and searched too (a corner: two walls); each search removes voxels.
-    for (size_t c = 0; c < clusters.size(); ++c) {
-      double top = -std::numeric_limits<double>::infinity();
-      for (int i : clusters[c]) top = std::max(top, ws.floor[i].z());
-      if (!o.split_walls || !fit.found ||
-          (static_cast<int>(clusters[c].size()) <= o.max_cluster_voxels &&
-           top <= o.candidate_max_height_m)) {
-        continue;
+  return clusters;
+}
+
+// Stage 4b: a cluster too large or too tall for a person is searched for walls; what is left
+// without them is clustered again (a person in front of a wall). Only against a floor seen in
+// this frame: a floor carried over may be tilted, and so would be the walls in its frame (their
+// lower parts would stand in front of the band).
+void SplitWalls(const DetectorOptions& o, DetectorWorkspace& ws, Clusters* clusters_out) {
+  Clusters& clusters = *clusters_out;
+  // Pieces are appended and searched too (a corner: two walls); each search removes voxels.
+  for (size_t c = 0; c < clusters.size(); ++c) {
+    double top = -std::numeric_limits<double>::infinity();
+    for (int i : clusters[c]) top = std::max(top, ws.floor[i].z());
+    if (static_cast<int>(clusters[c].size()) <= o.max_cluster_voxels &&
+        top <= o.candidate_max_height_m) {
+      continue;
+    }
+    std::vector<WallLine> planes;
+    const std::vector<int> walls =
+        WallVoxels(clusters[c], ws.floor, ws.centroid, o.noise.depth_coeff, &planes);
+    if (walls.empty()) continue;
+    for (int i : walls) ws.kept[i] = 0;
+    std::vector<int>& rest = clusters[c];
+    rest.erase(std::remove_if(rest.begin(), rest.end(), [&](int i) { return !ws.kept[i]; }),
+               rest.end());
+    Clusters pieces = ConnectedVoxels(rest, o.cluster_tolerance_m, ws);
+    rest.clear();
+    // What stands clear in front of every wall (its centroid >= 0.15 m, about half a body's
+    // depth, in front of the wall's 2-sigma band) is kept; the rest is part of the walls or
+    // stands against them (a recess, a door frame, a chair pushed to the wall).
+    for (auto& piece : pieces) {
+      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+      double range = 0;
+      for (int i : piece) {
+        centre += ws.floor[i].head<2>();
+        range += ws.centroid[i].z();
       }
-      std::vector<WallLine> planes;
-      const std::vector<int> walls =
-          WallVoxels(clusters[c], ws.floor, ws.centroid, o.noise.depth_coeff, &planes);
-      if (walls.empty()) continue;
-      for (int i : walls) ws.kept[i] = 0;
-      std::vector<int>& rest = clusters[c];
-      rest.erase(std::remove_if(rest.begin(), rest.end(), [&](int i) { return !ws.kept[i]; }),
-                 rest.end());
-      ws.uf.Reset(nv);
-      for (int i : rest) {
-        const int64_t cell = ws.voxel_cell[i];
-        for (int32_t off : ws.neighbour_offsets) {
-          const int32_t j = ws.cell_voxel[cell + off];
-          if (j < 0 || !ws.kept[j]) continue;
-          if ((ws.centroid[i] - ws.centroid[j]).squaredNorm() < tol2) ws.uf.Union(i, j);
-        }
-      }
-      std::vector<std::vector<int>> pieces;
-      std::vector<int> piece_of_root(nv, -1);
-      for (int i : rest) {
-        const int r = ws.uf.Find(i);
-        int& p = piece_of_root[r];
-        if (p < 0) {
-          p = static_cast<int>(pieces.size());
-          pieces.emplace_back();
-        }
-        pieces[p].push_back(i);
-      }
-      rest.clear();
-      // What stands clear in front of every wall (its centroid >= 0.15 m, about half a body's
-      // depth, in front of the wall's 2-sigma band) is kept; the rest is part of the walls or
-      // stands against them (a recess, a door frame, a chair pushed to the wall).
-      for (auto& piece : pieces) {
-        Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-        double range = 0;
-        for (int i : piece) {
-          centre += ws.floor[i].head<2>();
-          range += ws.centroid[i].z();
-        }
-        centre /= static_cast<double>(piece.size());
-        range /= static_cast<double>(piece.size());
-        const double clear = WallBand(range, o.noise.depth_coeff, 2) + 0.15;
-        bool in_front = true;
-        for (const WallLine& w : planes)
-          in_front = in_front && w.normal.dot(centre - w.point) >= clear;
-        if (in_front) clusters.push_back(std::move(piece));
-      }
+      centre /= static_cast<double>(piece.size());
+      range /= static_cast<double>(piece.size());
+      const double clear = WallBand(range, o.noise.depth_coeff, 2) + 0.15;
+      bool in_front = true;
+      for (const WallLine& w : planes)
+        in_front = in_front && w.normal.dot(centre - w.point) >= clear;
+      if (in_front) clusters.push_back(std::move(piece));
     }
   }
-  clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
-                                [&](const std::vector<int>& c) {
-                                  return static_cast<int>(c.size()) < o.min_cluster_voxels ||
-                                         static_cast<int>(c.size()) > o.max_cluster_voxels;
-                                }),
-                 clusters.end());
+}
 
-  // 5. Merge clusters that are close on the floor (pieces of one person split by occlusion).
+// Stage 5: clusters whose ground-plane centroids are closer than merge_distance_m are one
+// (pieces of one person split by occlusion).
+void MergeNearClusters(double merge_distance_m, const DetectorWorkspace& ws,
+                       Clusters* clusters_out) {
+  Clusters& clusters = *clusters_out;
   {
     const int nc = static_cast<int>(clusters.size());
     std::vector<Eigen::Vector2d> centre(nc, Eigen::Vector2d::Zero());
@@ -777,7 +699,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     merge.Reset(nc);
     for (int a = 0; a < nc; ++a) {
       for (int b = a + 1; b < nc; ++b) {
-        if ((centre[a] - centre[b]).norm() < o.merge_distance_m) merge.Union(a, b);
+        if ((centre[a] - centre[b]).norm() < merge_distance_m) merge.Union(a, b);
       }
     }
     std::vector<std::vector<int>> merged(nc);
@@ -790,14 +712,16 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
       if (!m.empty()) clusters.push_back(std::move(m));
     }
   }
-  result.stats.num_clusters = static_cast<int>(clusters.size());
+}
 
-  // 5b. An arm held up above the head is no head: on the lateral height profile (highest
-  // point per 6 cm bin across the viewing ray) it is a spike at most two bins wide 0.1 m
-  // below its top, beside a lower, wider maximum (the head) within 0.5 m. The arm's bins
-  // above the head's shoulder level are removed, so the head is the top again and the
-  // other shoulder shows its prominence.
-  for (auto& cluster : clusters) {
+// Stage 5b: an arm held up above the head is no head. On the lateral height profile (highest
+// point per 6 cm bin across the viewing ray) it is a spike at most two bins wide 0.1 m below
+// its top, beside a lower, wider maximum (the head) within 0.5 m. The arm's bins above the
+// head's shoulder level are removed, so the head is the top again and the other shoulder
+// shows its prominence.
+void RemoveRaisedArms(const DetectorOptions& o, const DetectorWorkspace& ws, Clusters* clusters) {
+  const double vs = o.voxel_size_m;
+  for (auto& cluster : *clusters) {
     for (int pass = 0; pass < 2; ++pass) {  // both arms
       Eigen::Vector2d centre = Eigen::Vector2d::Zero();
       for (int i : cluster) centre += ws.floor[i].head<2>();
@@ -861,24 +785,29 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
                     cluster.end());
     }
   }
+}
 
-  // 6. Head-based sub-clustering on a height map along the axis perpendicular to the ray.
-  std::vector<std::vector<int>> subclusters;
-  std::vector<size_t> parent_of;  // cluster each sub-cluster came from
-  std::vector<int> heads_in_cluster(clusters.size(), 0);
+// Stage 6: each upright cluster split at its heads, the local maxima of a height map along
+// the axis across the viewing ray. `parent_of`: the cluster each part came from;
+// `heads_in_cluster`: how many heads each cluster has.
+struct HeadParts {
+  Clusters parts;
+  std::vector<size_t> parent_of;
+  std::vector<int> heads_in_cluster;
+};
+HeadParts SplitAtHeads(const Clusters& clusters, const DetectorOptions& o,
+                       const DetectorWorkspace& ws) {
+  const double vs = o.voxel_size_m;
+  HeadParts split;
+  split.heads_in_cluster.assign(clusters.size(), 0);
+  Clusters& subclusters = split.parts;
+  std::vector<size_t>& parent_of = split.parent_of;
+  std::vector<int>& heads_in_cluster = split.heads_in_cluster;
   const double head_d2 = o.min_head_distance_m * o.min_head_distance_m;
   for (const auto& cluster : clusters) {
-    // Low clusters are no upright person: the lying-body test instead.
     double cluster_top = -std::numeric_limits<double>::infinity();
     for (int i : cluster) cluster_top = std::max(cluster_top, ws.floor[i].z());
-    if (cluster_top < o.candidate_min_height_m) {
-      if (o.lying.enabled && cluster_top <= o.lying.max_top_m + 0.1) {
-        PersonCandidate c = DescribeLying(cluster, ws.floor, ws.centroid, floor_frame, frame, o);
-        ++result.stats.num_candidates;
-        (c.accepted ? result.people : result.rejected).push_back(c);
-      }
-      continue;
-    }
+    if (cluster_top < o.candidate_min_height_m) continue;  // lying-body test instead
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (int i : cluster) centre += ws.floor[i].head<2>();
     centre /= static_cast<double>(cluster.size());
@@ -951,310 +880,468 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
     }
   }
 
-  // 7. Describe and classify each sub-cluster.
+  return split;
+}
+
+// Stage 7: the shape of one upright part (`parent`: its whole cluster, `single_head`: the
+// cluster's only head) and its depth score. `*loose_score_out`: height, shape and support
+// alone (occlusion and truncation allowed), for the fusion with colour. False when its top
+// is outside the candidate heights.
+bool DescribeUpright(const std::vector<int>& part, const std::vector<int>& parent, bool single_head,
+                     const RgbdFrame& frame, const FloorFrame& floor_frame,
+                     const GroundPlane& ground, const DetectorOptions& o,
+                     const DetectorWorkspace& ws, PersonCandidate* out, double* loose_score_out) {
+  const double vs = o.voxel_size_m;
   const PinholeIntrinsics& K = frame.intrinsics;
   const DepthShapeOptions& so = o.shape;
+  PersonCandidate c;
+  c.num_voxels = static_cast<int>(part.size());
+  Eigen::Vector3d centroid_floor = Eigen::Vector3d::Zero();
+  int top_voxel = part.front();
+  double bottom = std::numeric_limits<double>::infinity();
+  for (int i : part) {
+    centroid_floor += ws.floor[i];
+    if (ws.floor[i].z() > ws.floor[top_voxel].z()) top_voxel = i;
+    bottom = std::min(bottom, ws.floor[i].z());
+  }
+  centroid_floor /= static_cast<double>(part.size());
+  c.height_m = ws.floor[top_voxel].z();
+  if (c.height_m < o.candidate_min_height_m || c.height_m > o.candidate_max_height_m) return false;
+  // The only head of its cluster: the whole cluster is this person, and its lowest point
+  // is the person's (a sitting person's shins are more than the head radius forward).
+  if (single_head) {
+    for (int i : parent) bottom = std::min(bottom, ws.floor[i].z());
+  }
+  c.bottom_m = bottom;
+  c.position_camera = floor_frame.ToCamera(BodyCentre(centroid_floor, o.noise));
+  const Eigen::Vector2d ground_xy = centroid_floor.head<2>();
+  const Eigen::Vector2d ray =
+      ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
+  const Eigen::Vector2d across(-ray.y(), ray.x());
+  const Eigen::Vector3d foot_floor(ground_xy.x(), ground_xy.y(), 0.0);
+  const Eigen::Vector3d foot = floor_frame.ToCamera(foot_floor);
+  c.head_camera = floor_frame.ToCamera(Eigen::Vector3d(ground_xy.x(), ground_xy.y(), c.height_m));
+
+  // Shape: torso width, extent along the ray, lateral height profile, vertical fill.
+  const double H = c.height_m;
+  double tmin = 1e9, tmax = -1e9, rmin = 1e9, rmax = -1e9, smin = 1e9, smax = -1e9;
+  for (int i : part) {
+    const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
+    const double s = across.dot(d), r = ray.dot(d), z = ws.floor[i].z();
+    smin = std::min(smin, s);
+    smax = std::max(smax, s);
+    rmin = std::min(rmin, r);
+    rmax = std::max(rmax, r);
+    if (z >= 0.5 * H && z <= 0.8 * H) {
+      tmin = std::min(tmin, s);
+      tmax = std::max(tmax, s);
+    }
+  }
+  c.width_m = tmax >= tmin ? tmax - tmin + vs : 0.0;
+  c.depth_extent_m = rmax - rmin + vs;
+  // Footprints on the floor (6 cm cells) of the head (points within head_drop of the top)
+  // and of head + shoulders (within shoulder_drop): a person's shoulders stick out beside
+  // the head from every side; the top edge of a wall, door or cupboard does not.
+  const int nslices = static_cast<int>(H / vs) + 1;
+  std::vector<uint8_t> slice(nslices, 0);
+  constexpr int kFoot = 32;
+  uint8_t head_cells[kFoot][kFoot] = {}, shoulder_cells[kFoot][kFoot] = {};
+  int head_area = 0, shoulder_area = 0;
+  for (int i : part) {
+    const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
+    const int cx = std::clamp(static_cast<int>(std::floor(d.x() / vs)) + kFoot / 2, 0, kFoot - 1);
+    const int cy = std::clamp(static_cast<int>(std::floor(d.y() / vs)) + kFoot / 2, 0, kFoot - 1);
+    const double z = ws.floor[i].z();
+    if (z >= H - so.head_drop_m && !head_cells[cx][cy]) {
+      head_cells[cx][cy] = 1;
+      ++head_area;
+    }
+    if (z >= H - so.shoulder_drop_m && !shoulder_cells[cx][cy]) {
+      shoulder_cells[cx][cy] = 1;
+      ++shoulder_area;
+    }
+    const int s = std::clamp(static_cast<int>(z / vs), 0, nslices - 1);
+    slice[s] = 1;
+  }
+  c.head_area_m2 = head_area * vs * vs;
+  c.shoulder_area_m2 = shoulder_area * vs * vs;
+  // Lateral height profile (6 cm bins across the viewing ray, highest point per bin):
+  // head bins reach within head_drop of the top, head-and-shoulder bins within
+  // shoulder_drop. Unlike the footprint it does not smear with range noise.
+  {
+    const int nbins = static_cast<int>((smax - smin) / vs) + 1;
+    std::vector<double> profile(nbins, -1.0);
+    for (int i : part) {
+      const int b =
+          std::clamp(static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs),
+                     0, nbins - 1);
+      profile[b] = std::max(profile[b], ws.floor[i].z());
+    }
+    int head_bins = 0, shoulder_bins = 0;
+    for (double h : profile) {
+      head_bins += h >= H - so.head_drop_m;
+      shoulder_bins += h >= H - so.shoulder_drop_m;
+    }
+    c.head_width_m = head_bins * vs;
+    c.shoulder_width_m = shoulder_bins * vs;
+  }
+
+  // What of the head-to-floor span is inside the image.
+  const double v_top = ProjectV(K, c.head_camera);
+  const double v_foot = ProjectV(K, foot);
+  c.box_u_center = ProjectU(K, c.head_camera);
+  c.box_v_top = v_top;
+  c.box_v_bottom = v_foot;
+  double visible_lo = 0.0, visible_hi = H;
+  if (std::isfinite(v_foot) && v_foot > frame.height - 1) {
+    const double h = HeightAtRow(K, foot, ground.normal, frame.height - 1);
+    if (std::isfinite(h)) visible_lo = std::clamp(h, 0.0, H);
+  }
+  if (std::isfinite(v_top) && v_top < 0) {
+    const double h = HeightAtRow(K, foot, ground.normal, 0);
+    if (std::isfinite(h)) visible_hi = std::clamp(h, 0.0, H);
+  }
+  if (!std::isfinite(v_foot) || !std::isfinite(v_top)) visible_hi = visible_lo;
+  c.visible_fraction = H > 0 ? std::max(0.0, visible_hi - visible_lo) / H : 0.0;
+  // Fill: occupied 6 cm slices between the lowest visible height above the floor removal
+  // band and the top.
+  const int s0 =
+      std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
+  int occupied = 0, slices = 0;
+  for (int s = s0; s < nslices; ++s) {
+    occupied += slice[s];
+    ++slices;
+  }
+  c.fill = slices > 0 ? static_cast<double>(occupied) / slices : 0.0;
+
+  // Where the sub-cluster meets the image border its outline is the image's, not the
+  // object's: the top may go on above the field of view, and a wall or cupboard whose top is
+  // cut by a side border looks like a narrow upright body with a step at its top. Only the
+  // head (points within head_drop of the top) counts at the sides: a person whose arm or
+  // shoulder leaves the image is still judged by the head. The side borders are those of the
+  // depth's field of view (fov_umin/umax); the margin adds half a voxel's image size (voxel
+  // centroids lie inside the object's outline).
+  {
+    double umin = 1e9, umax = -1e9, vmin = 1e9;
+    bool finite = true;
+    for (int i : part) {
+      const double u = ProjectU(K, ws.centroid[i]), v = ProjectV(K, ws.centroid[i]);
+      if (!std::isfinite(u) || !std::isfinite(v)) {
+        finite = false;
+        continue;
+      }
+      vmin = std::min(vmin, v);
+      if (ws.floor[i].z() < H - so.head_drop_m) continue;
+      umin = std::min(umin, u);
+      umax = std::max(umax, u);
+    }
+    const double margin =
+        std::max(2, frame.height / 48) + 0.5 * vs * K.fx / std::max(0.5, c.position_camera.z());
+    c.truncated_top = !finite || vmin < margin;
+    c.truncated_side = !finite || umin < ws.fov_umin + margin || umax > ws.fov_umax - margin;
+  }
+
+  // Depth shape score: a fuzzy AND (product) of memberships.
+  const double m_height = Trapezoid(H, so.min_height_m - so.height_margin_m, so.min_height_m,
+                                    so.max_height_m, so.max_height_m + so.height_margin_m);
+  const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m, so.max_width_m,
+                                   1.3 * so.max_width_m);
+  const double m_depth =
+      1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
+  const double area_ratio =
+      shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
+  // Head prominence: how far the top stands above everything at least head_radius away
+  // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
+  // the top edge of a box, wall or cupboard: ~0).
+  // The head centre is the mean of the points within 0.1 m of the top (robust to range
+  // noise); with nothing outside the head radius there are no shoulders: prominence 0.
+  Eigen::Vector2d top_xy = Eigen::Vector2d::Zero();
+  int top_n = 0;
+  for (int i : part) {
+    if (ws.floor[i].z() >= H - 0.1) {
+      top_xy += ws.floor[i].head<2>();
+      ++top_n;
+    }
+  }
+  top_xy /= std::max(1, top_n);
+  // With a single head in its cluster, the ring is searched in the whole cluster: the
+  // 0.3 m cut around the top can leave a box edge looking like a lone peak. With several
+  // heads (people side by side) only the sub-cluster, so a neighbour's shoulder does not
+  // count.
+  // The head region is an ellipse on the floor: head_radius_m across the viewing ray and
+  // head_radius_m + head_depth_m along it, because the visible head surface reaches back
+  // along the ray (a head seen obliquely shows its side, ~0.2 m deep) and the range noise
+  // (sigma = c z^2) spreads it further; across the ray the shoulders stick out.
+  double around = -1.0;
+  const double inv_a2 = 1.0 / (so.head_radius_m * so.head_radius_m);
+  const double inv_b2 = 1.0 / std::pow(so.head_radius_m + so.head_depth_m, 2);
+  const double outer2 = std::pow(so.head_radius_m + o.min_head_distance_m, 2);
+  for (int i : single_head ? parent : part) {
+    const Eigen::Vector2d d = ws.floor[i].head<2>() - top_xy;
+    const double s = across.dot(d), r = ray.dot(d);
+    if (s * s * inv_a2 + r * r * inv_b2 >= 1.0 && d.squaredNorm() <= outer2) {
+      around = std::max(around, ws.floor[i].z());
+    }
+  }
+  c.head_prominence_m = around < 0 ? 0.0 : H - around;
+  // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
+  // surface has the same footprint at every height).
+  const double m_head =
+      Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+      (1.0 - Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
+      (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
+      (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
+  const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
+  const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
+  const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
+  const double m_visible =
+      c.truncated_top || c.truncated_side
+          ? 0.0
+          : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
+  const double shape = m_width * m_depth * m_head;
+  c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
+  // With colour, occlusion and truncation are allowed, but a person stands on something: the
+  // feet reach the floor, or what is below the cluster is hidden by something nearer (and
+  // then the head and shoulders must be clear: a monitor on a desk has none).
+  double m_support = m_bottom;
+  if (m_support < 1.0) {
+    int low_voxel = part.front();
+    for (int i : part) {
+      if (ws.floor[i].z() < ws.floor[low_voxel].z()) low_voxel = i;
+    }
+    if (HiddenBelow(frame, ws.centroid[low_voxel])) m_support = std::max(m_support, m_head);
+  }
+  c.supported = m_support >= 0.5;
+  const double loose_score = m_height * shape * m_support;
+
+  *out = c;
+  *loose_score_out = loose_score;
+  return true;
+}
+
+// Stage 7b: the decision. With a usable colour patch, HOG fused with the loose depth score;
+// else the depth score alone.
+void Classify(double loose_score, bool color_ok, const RgbdFrame& frame, const HogClassifier* hog,
+              const DetectorOptions& o, PersonCandidate* c_out) {
+  PersonCandidate& c = *c_out;
+  const DepthShapeOptions& so = o.shape;
   const ColorOptions& co = o.color;
-  for (size_t sub = 0; sub < subclusters.size(); ++sub) {
-    const std::vector<int>& part = subclusters[sub];
-    const std::vector<int>& parent = clusters[parent_of[sub]];
-    PersonCandidate c;
-    c.num_voxels = static_cast<int>(part.size());
-    Eigen::Vector3d centroid_floor = Eigen::Vector3d::Zero();
-    int top_voxel = part.front();
-    double bottom = std::numeric_limits<double>::infinity();
-    for (int i : part) {
-      centroid_floor += ws.floor[i];
-      if (ws.floor[i].z() > ws.floor[top_voxel].z()) top_voxel = i;
-      bottom = std::min(bottom, ws.floor[i].z());
-    }
-    centroid_floor /= static_cast<double>(part.size());
-    c.height_m = ws.floor[top_voxel].z();
-    if (c.height_m < o.candidate_min_height_m || c.height_m > o.candidate_max_height_m) continue;
-    // The only head of its cluster: the whole cluster is this person, and its lowest point
-    // is the person's (a sitting person's shins are more than the head radius forward).
-    if (heads_in_cluster[parent_of[sub]] == 1) {
-      for (int i : parent) bottom = std::min(bottom, ws.floor[i].z());
-    }
-    c.bottom_m = bottom;
-    c.position_camera = floor_frame.ToCamera(BodyCentre(centroid_floor, o.noise));
-    const Eigen::Vector2d ground_xy = centroid_floor.head<2>();
-    const Eigen::Vector2d ray =
-        ground_xy.norm() > 1e-6 ? ground_xy.normalized() : Eigen::Vector2d(0, 1);
-    const Eigen::Vector2d across(-ray.y(), ray.x());
-    const Eigen::Vector3d foot_floor(ground_xy.x(), ground_xy.y(), 0.0);
-    const Eigen::Vector3d foot = floor_frame.ToCamera(foot_floor);
-    c.head_camera = floor_frame.ToCamera(Eigen::Vector3d(ground_xy.x(), ground_xy.y(), c.height_m));
-
-    // Shape: torso width, extent along the ray, lateral height profile, vertical fill.
-    const double H = c.height_m;
-    double tmin = 1e9, tmax = -1e9, rmin = 1e9, rmax = -1e9, smin = 1e9, smax = -1e9;
-    for (int i : part) {
-      const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
-      const double s = across.dot(d), r = ray.dot(d), z = ws.floor[i].z();
-      smin = std::min(smin, s);
-      smax = std::max(smax, s);
-      rmin = std::min(rmin, r);
-      rmax = std::max(rmax, r);
-      if (z >= 0.5 * H && z <= 0.8 * H) {
-        tmin = std::min(tmin, s);
-        tmax = std::max(tmax, s);
-      }
-    }
-    c.width_m = tmax >= tmin ? tmax - tmin + vs : 0.0;
-    c.depth_extent_m = rmax - rmin + vs;
-    // Footprints on the floor (6 cm cells) of the head (points within head_drop of the top)
-    // and of head + shoulders (within shoulder_drop): a person's shoulders stick out beside
-    // the head from every side; the top edge of a wall, door or cupboard does not.
-    const int nslices = static_cast<int>(H / vs) + 1;
-    std::vector<uint8_t> slice(nslices, 0);
-    constexpr int kFoot = 32;
-    uint8_t head_cells[kFoot][kFoot] = {}, shoulder_cells[kFoot][kFoot] = {};
-    int head_area = 0, shoulder_area = 0;
-    for (int i : part) {
-      const Eigen::Vector2d d = ws.floor[i].head<2>() - ground_xy;
-      const int cx = std::clamp(static_cast<int>(std::floor(d.x() / vs)) + kFoot / 2, 0, kFoot - 1);
-      const int cy = std::clamp(static_cast<int>(std::floor(d.y() / vs)) + kFoot / 2, 0, kFoot - 1);
-      const double z = ws.floor[i].z();
-      if (z >= H - so.head_drop_m && !head_cells[cx][cy]) {
-        head_cells[cx][cy] = 1;
-        ++head_area;
-      }
-      if (z >= H - so.shoulder_drop_m && !shoulder_cells[cx][cy]) {
-        shoulder_cells[cx][cy] = 1;
-        ++shoulder_area;
-      }
-      const int s = std::clamp(static_cast<int>(z / vs), 0, nslices - 1);
-      slice[s] = 1;
-    }
-    c.head_area_m2 = head_area * vs * vs;
-    c.shoulder_area_m2 = shoulder_area * vs * vs;
-    // Lateral height profile (6 cm bins across the viewing ray, highest point per bin):
-    // head bins reach within head_drop of the top, head-and-shoulder bins within
-    // shoulder_drop. Unlike the footprint it does not smear with range noise.
-    {
-      const int nbins = static_cast<int>((smax - smin) / vs) + 1;
-      std::vector<double> profile(nbins, -1.0);
-      for (int i : part) {
-        const int b = std::clamp(
-            static_cast<int>((across.dot(ws.floor[i].head<2>() - ground_xy) - smin) / vs), 0,
-            nbins - 1);
-        profile[b] = std::max(profile[b], ws.floor[i].z());
-      }
-      int head_bins = 0, shoulder_bins = 0;
-      for (double h : profile) {
-        head_bins += h >= H - so.head_drop_m;
-        shoulder_bins += h >= H - so.shoulder_drop_m;
-      }
-      c.head_width_m = head_bins * vs;
-      c.shoulder_width_m = shoulder_bins * vs;
-    }
-
-    // What of the head-to-floor span is inside the image.
-    const double v_top = ProjectV(K, c.head_camera);
-    const double v_foot = ProjectV(K, foot);
-    c.box_u_center = ProjectU(K, c.head_camera);
-    c.box_v_top = v_top;
-    c.box_v_bottom = v_foot;
-    double visible_lo = 0.0, visible_hi = H;
-    if (std::isfinite(v_foot) && v_foot > frame.height - 1) {
-      const double h = HeightAtRow(K, foot, ground.normal, frame.height - 1);
-      if (std::isfinite(h)) visible_lo = std::clamp(h, 0.0, H);
-    }
-    if (std::isfinite(v_top) && v_top < 0) {
-      const double h = HeightAtRow(K, foot, ground.normal, 0);
-      if (std::isfinite(h)) visible_hi = std::clamp(h, 0.0, H);
-    }
-    if (!std::isfinite(v_foot) || !std::isfinite(v_top)) visible_hi = visible_lo;
-    c.visible_fraction = H > 0 ? std::max(0.0, visible_hi - visible_lo) / H : 0.0;
-    // Fill: occupied 6 cm slices between the lowest visible height above the floor removal
-    // band and the top.
-    const int s0 =
-        std::clamp(static_cast<int>(std::max(visible_lo, o.ground.removal_m) / vs) + 1, 0, nslices);
-    int occupied = 0, slices = 0;
-    for (int s = s0; s < nslices; ++s) {
-      occupied += slice[s];
-      ++slices;
-    }
-    c.fill = slices > 0 ? static_cast<double>(occupied) / slices : 0.0;
-
-    // Where the sub-cluster meets the image border its outline is the image's, not the
-    // object's: the top may go on above the field of view, and a wall or cupboard whose top is
-    // cut by a side border looks like a narrow upright body with a step at its top. Only the
-    // head (points within head_drop of the top) counts at the sides: a person whose arm or
-    // shoulder leaves the image is still judged by the head. The side borders are those of the
-    // depth's field of view (fov_umin/umax); the margin adds half a voxel's image size (voxel
-    // centroids lie inside the object's outline).
-    {
-      double umin = 1e9, umax = -1e9, vmin = 1e9;
-      bool finite = true;
-      for (int i : part) {
-        const double u = ProjectU(K, ws.centroid[i]), v = ProjectV(K, ws.centroid[i]);
-        if (!std::isfinite(u) || !std::isfinite(v)) {
-          finite = false;
-          continue;
-        }
-        vmin = std::min(vmin, v);
-        if (ws.floor[i].z() < H - so.head_drop_m) continue;
-        umin = std::min(umin, u);
-        umax = std::max(umax, u);
-      }
-      const double margin =
-          std::max(2, frame.height / 48) + 0.5 * vs * K.fx / std::max(0.5, c.position_camera.z());
-      c.truncated_top = !finite || vmin < margin;
-      c.truncated_side = !finite || umin < ws.fov_umin + margin || umax > ws.fov_umax - margin;
-    }
-
-    // Depth shape score: a fuzzy AND (product) of memberships.
-    const double m_height = Trapezoid(H, so.min_height_m - so.height_margin_m, so.min_height_m,
-                                      so.max_height_m, so.max_height_m + so.height_margin_m);
-    const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m,
-                                     so.max_width_m, 1.3 * so.max_width_m);
-    const double m_depth =
-        1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
-    const double area_ratio =
-        shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
-    // Head prominence: how far the top stands above everything at least head_radius away
-    // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
-    // the top edge of a box, wall or cupboard: ~0).
-    // The head centre is the mean of the points within 0.1 m of the top (robust to range
-    // noise); with nothing outside the head radius there are no shoulders: prominence 0.
-    Eigen::Vector2d top_xy = Eigen::Vector2d::Zero();
-    int top_n = 0;
-    for (int i : part) {
-      if (ws.floor[i].z() >= H - 0.1) {
-        top_xy += ws.floor[i].head<2>();
-        ++top_n;
-      }
-    }
-    top_xy /= std::max(1, top_n);
-    // With a single head in its cluster, the ring is searched in the whole cluster: the
-    // 0.3 m cut around the top can leave a box edge looking like a lone peak. With several
-    // heads (people side by side) only the sub-cluster, so a neighbour's shoulder does not
-    // count.
-    // The head region is an ellipse on the floor: head_radius_m across the viewing ray and
-    // head_radius_m + head_depth_m along it, because the visible head surface reaches back
-    // along the ray (a head seen obliquely shows its side, ~0.2 m deep) and the range noise
-    // (sigma = c z^2) spreads it further; across the ray the shoulders stick out.
-    double around = -1.0;
-    const double inv_a2 = 1.0 / (so.head_radius_m * so.head_radius_m);
-    const double inv_b2 = 1.0 / std::pow(so.head_radius_m + so.head_depth_m, 2);
-    const double outer2 = std::pow(so.head_radius_m + o.min_head_distance_m, 2);
-    const bool single_head = heads_in_cluster[parent_of[sub]] == 1;
-    for (int i : single_head ? parent : part) {
-      const Eigen::Vector2d d = ws.floor[i].head<2>() - top_xy;
-      const double s = across.dot(d), r = ray.dot(d);
-      if (s * s * inv_a2 + r * r * inv_b2 >= 1.0 && d.squaredNorm() <= outer2) {
-        around = std::max(around, ws.floor[i].z());
-      }
-    }
-    c.head_prominence_m = around < 0 ? 0.0 : H - around;
-    // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
-    // surface has the same footprint at every height).
-    const double m_head =
-        Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
-        (1.0 -
-         Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
-        (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
-        (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
-    const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
-    const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
-    const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
-    const double m_visible =
-        c.truncated_top || c.truncated_side
-            ? 0.0
-            : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
-    const double shape = m_width * m_depth * m_head;
-    c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
-    // With colour, occlusion and truncation are allowed, but a person stands on something: the
-    // feet reach the floor, or what is below the cluster is hidden by something nearer (and
-    // then the head and shoulders must be clear: a monitor on a desk has none).
-    double m_support = m_bottom;
-    if (m_support < 1.0) {
-      int low_voxel = part.front();
-      for (int i : part) {
-        if (ws.floor[i].z() < ws.floor[low_voxel].z()) low_voxel = i;
-      }
-      if (HiddenBelow(frame, ws.centroid[low_voxel])) m_support = std::max(m_support, m_head);
-    }
-    c.supported = m_support >= 0.5;
-    const double loose_score = m_height * shape * m_support;
-
-    // Colour: HOG on the patch, unless the patch itself is too dark or flat.
-    bool patch_ok = color_ok && std::isfinite(c.box_u_center) && std::isfinite(v_top) &&
-                    std::isfinite(v_foot) && v_foot > v_top;
-    if (patch_ok) {
-      const double person_px = v_foot - v_top;
-      const int x0p =
-          std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
-      const int x1p =
-          std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
-      const int y0p = std::clamp(static_cast<int>(v_top), 0, frame.height - 1);
-      const int y1p = std::clamp(static_cast<int>(v_foot), 0, frame.height - 1);
-      if (x1p - x0p < 4 || y1p - y0p < 8) {
-        patch_ok = false;
-      } else {
-        const int sub_w = x1p - x0p + 1, sub_h = y1p - y0p + 1;
-        // Statistics over the patch (row pointer offset into the full image).
-        double s = 0, s2 = 0;
-        int64_t n = 0, nsat = 0;
-        const int step = std::max(1, std::min(sub_w, sub_h) / 32);
-        for (int vv = y0p; vv <= y1p; vv += step) {
-          const uint8_t* rowp = &frame.rgb[(static_cast<size_t>(vv) * frame.width + x0p) * 3];
-          for (int uu = 0; uu < sub_w; uu += step) {
-            const uint8_t* px = rowp + 3 * uu;
-            const int grey = (77 * px[0] + 150 * px[1] + 29 * px[2]) >> 8;
-            s += grey;
-            s2 += grey * grey;
-            nsat += grey >= 250;
-            ++n;
-          }
-        }
-        const double mean = s / n;
-        const double stddev = std::sqrt(std::max(0.0, s2 / n - mean * mean));
-        const double sat = static_cast<double>(nsat) / n;
-        patch_ok = mean >= co.dark_mean && stddev >= co.min_contrast && sat <= co.max_saturated;
-      }
-    }
-    if (patch_ok) {
-      // Fusion: confidence = w p_hog + (1 - w) loose_score, accepted at co.accept, so a
-      // candidate the depth shape supports needs only a weak colour cue (with loose_score 1:
-      // p_hog >= 1/6, an SVM margin of -1.6) and HOG vetoes only when it is sure. The HOG
-      // score that decides is p_needed's; HOG is skipped when no score could accept, and the
-      // window search around the theoretical box (scale and offset errors of the box: range
-      // noise, a person not upright) runs only when the centre window falls short. The
-      // decision equals that of a full search; the confidence of an accepted candidate is
-      // then a lower bound.
-      const double w = co.color_weight;
-      const double p_needed = w > 0 ? (co.accept - (1.0 - w) * loose_score) / w : 0.0;
-      if (loose_score < co.min_depth_score || p_needed >= 1.0) {
-        c.confidence = (1.0 - w) * loose_score;  // colour cue not evaluated: counted as 0
-        c.accepted = false;
-      } else {
-        const double hog_needed =
-            p_needed <= 0.0
-                ? -std::numeric_limits<double>::infinity()
-                : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
-        c.hog_used = true;
-        c.hog_score = hog_->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center,
-                                  v_top, v_foot, 0);
-        if (c.hog_score < hog_needed && co.search_steps > 0) {
-          c.hog_score =
-              std::max(c.hog_score, hog_->Score(frame.rgb.data(), frame.width, frame.height,
-                                                c.box_u_center, v_top, v_foot, co.search_steps));
-        }
-        const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
-        c.confidence = w * p_hog + (1.0 - w) * loose_score;
-        c.accepted = c.confidence >= co.accept;
-      }
+  const double v_top = c.box_v_top, v_foot = c.box_v_bottom;
+  // Colour: HOG on the patch, unless the patch itself is too dark or flat.
+  bool patch_ok = color_ok && std::isfinite(c.box_u_center) && std::isfinite(v_top) &&
+                  std::isfinite(v_foot) && v_foot > v_top;
+  if (patch_ok) {
+    const double person_px = v_foot - v_top;
+    const int x0p =
+        std::clamp(static_cast<int>(c.box_u_center - person_px / 3), 0, frame.width - 1);
+    const int x1p =
+        std::clamp(static_cast<int>(c.box_u_center + person_px / 3), 0, frame.width - 1);
+    const int y0p = std::clamp(static_cast<int>(v_top), 0, frame.height - 1);
+    const int y1p = std::clamp(static_cast<int>(v_foot), 0, frame.height - 1);
+    if (x1p - x0p < 4 || y1p - y0p < 8) {
+      patch_ok = false;
     } else {
-      c.depth_only = true;
-      c.confidence = c.depth_score;
-      c.accepted = c.depth_score >= so.accept;
+      const int sub_w = x1p - x0p + 1, sub_h = y1p - y0p + 1;
+      // Statistics over the patch (row pointer offset into the full image).
+      double s = 0, s2 = 0;
+      int64_t n = 0, nsat = 0;
+      const int step = std::max(1, std::min(sub_w, sub_h) / 32);
+      for (int vv = y0p; vv <= y1p; vv += step) {
+        const uint8_t* rowp = &frame.rgb[(static_cast<size_t>(vv) * frame.width + x0p) * 3];
+        for (int uu = 0; uu < sub_w; uu += step) {
+          const uint8_t* px = rowp + 3 * uu;
+          const int grey = (77 * px[0] + 150 * px[1] + 29 * px[2]) >> 8;
+          s += grey;
+          s2 += grey * grey;
+          nsat += grey >= 250;
+          ++n;
+        }
+      }
+      const double mean = s / n;
+      const double stddev = std::sqrt(std::max(0.0, s2 / n - mean * mean));
+      const double sat = static_cast<double>(nsat) / n;
+      patch_ok = mean >= co.dark_mean && stddev >= co.min_contrast && sat <= co.max_saturated;
     }
+  }
+  if (patch_ok) {
+    // Fusion: confidence = w p_hog + (1 - w) loose_score, accepted at co.accept, so a
+    // candidate the depth shape supports needs only a weak colour cue (with loose_score 1:
+    // p_hog >= 1/6, an SVM margin of -1.6) and HOG vetoes only when it is sure. The HOG
+    // score that decides is p_needed's; HOG is skipped when no score could accept, and the
+    // window search around the theoretical box (scale and offset errors of the box: range
+    // noise, a person not upright) runs only when the centre window falls short. The
+    // decision equals that of a full search; the confidence of an accepted candidate is
+    // then a lower bound.
+    const double w = co.color_weight;
+    const double p_needed = w > 0 ? (co.accept - (1.0 - w) * loose_score) / w : 0.0;
+    if (loose_score < co.min_depth_score || p_needed >= 1.0) {
+      c.confidence = (1.0 - w) * loose_score;  // colour cue not evaluated: counted as 0
+      c.accepted = false;
+    } else {
+      const double hog_needed =
+          p_needed <= 0.0 ? -std::numeric_limits<double>::infinity()
+                          : co.hog_threshold + co.hog_scale * std::log(p_needed / (1.0 - p_needed));
+      c.hog_used = true;
+      c.hog_score =
+          hog->Score(frame.rgb.data(), frame.width, frame.height, c.box_u_center, v_top, v_foot, 0);
+      if (c.hog_score < hog_needed && co.search_steps > 0) {
+        c.hog_score =
+            std::max(c.hog_score, hog->Score(frame.rgb.data(), frame.width, frame.height,
+                                             c.box_u_center, v_top, v_foot, co.search_steps));
+      }
+      const double p_hog = Logistic((c.hog_score - co.hog_threshold) / co.hog_scale);
+      c.confidence = w * p_hog + (1.0 - w) * loose_score;
+      c.accepted = c.confidence >= co.accept;
+    }
+  } else {
+    c.depth_only = true;
+    c.confidence = c.depth_score;
+    c.accepted = c.depth_score >= so.accept;
+  }
+}
 
-    // 8. Covariance of the centroid.
-    c.covariance = CentroidCovariance(c.position_camera, o.noise, K.fx);
+}  // namespace
+
+PeopleDetector::PeopleDetector(const DetectorOptions& options, const GroundPlane& mounting_ground,
+                               std::shared_ptr<const HogClassifier> hog)
+    : options_(options),
+      mounting_(mounting_ground),
+      tracker_(options.ground, mounting_ground),
+      hog_(std::move(hog)),
+      ws_(std::make_unique<DetectorWorkspace>()) {
+  common::ValidateOptions(options_);
+  const double v = options_.voxel_size_m;
+  ws_->x0 = -options_.max_lateral_m;
+  ws_->y0 = -0.5;
+  ws_->z0 = -kBelowFloorM;
+  ws_->nx = static_cast<int>(std::ceil(2 * options_.max_lateral_m / v));
+  ws_->ny = static_cast<int>(std::ceil((options_.max_range_m + 0.5) / v));
+  ws_->nz = static_cast<int>(std::ceil((options_.top_cut_m + kBelowFloorM) / v));
+  const size_t cells =
+      static_cast<size_t>(ws_->nx + 2 * kPad) * (ws_->ny + 2 * kPad) * (ws_->nz + 2 * kPad);
+  ws_->cell_voxel.assign(cells, -1);
+  // Half of the +-2 neighbourhood (lexicographically positive offsets): each pair once.
+  for (int dz = -2; dz <= 2; ++dz) {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        if (std::make_tuple(dz, dy, dx) <= std::make_tuple(0, 0, 0)) continue;
+        ws_->neighbour_offsets.push_back(static_cast<int32_t>(
+            (static_cast<int64_t>(dz) * (ws_->ny + 2 * kPad) + dy) * (ws_->nx + 2 * kPad) + dx));
+      }
+    }
+  }
+}
+
+PeopleDetector::~PeopleDetector() = default;
+
+void PeopleDetector::ResetGround() { tracker_.Reset(); }
+
+DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* error) {
+  DetectionResult result;
+  result.ground = tracker_.has_track() ? tracker_.tracked() : mounting_;
+  std::string local_error;
+  std::string& err = error ? *error : local_error;
+  err.clear();
+  const size_t pixels = static_cast<size_t>(std::max(0, frame.width)) * std::max(0, frame.height);
+  if (frame.width <= 0 || frame.height <= 0 || pixels == 0) {
+    err = "empty frame";
+    return result;
+  }
+  if (frame.xyz.size() != 3 * pixels) {
+    err = "cloud has " + std::to_string(frame.xyz.size() / 3) + " points for a " +
+          std::to_string(frame.width) + "x" + std::to_string(frame.height) + " frame";
+    return result;
+  }
+  const bool color_ok = ColorUsable(frame, hog_ != nullptr, options_.color, &result.stats, &err);
+
+  DetectorWorkspace& ws = *ws_;
+  const DetectorOptions& o = options_;
+
+  // 1. Floor from the data: RANSAC over a sample of the cloud with the tracked and the
+  // configured floor as extra hypotheses (ground_estimator.h); then the voxel grid in the
+  // frame of that floor.
+  FloorFit fit;
+  if (o.ground.refine) {
+    std::vector<GroundPlane> hypotheses;
+    if (tracker_.has_track()) hypotheses.push_back(tracker_.tracked());
+    hypotheses.push_back(mounting_);
+    fit = FitFloor(frame.xyz.data(), frame.width, frame.height, o.min_range_m, o.max_range_m,
+                   o.ground, hypotheses);
+    result.stats.num_ground_points = fit.inliers;
+  }
+  const int num_points = Voxelize(frame, o, fit.found ? fit.plane : result.ground, ws);
+  result.stats.num_points = num_points;
+  const int nv = static_cast<int>(ws.voxel_cell.size());
+  result.stats.num_voxels = nv;
+  // The grid is cleared at the end of this function through this guard, whatever happens.
+  struct ClearGrid {
+    DetectorWorkspace* ws;
+    ~ClearGrid() {
+      for (int32_t c : ws->voxel_cell) ws->cell_voxel[c] = -1;
+    }
+  } clear_grid{&ws};
+  if (num_points == 0) {
+    if (err.empty()) err = "no finite depth in the frame";
+    return result;
+  }
+  ws.centroid.resize(nv);
+  for (int i = 0; i < nv; ++i)
+    ws.centroid[i] = (ws.sum[i] / static_cast<float>(ws.count[i])).cast<double>();
+
+  // 2. Floor polish and track.
+  const GroundPlane ground =
+      PolishFloor(fit, o, mounting_, frame.utime, ws, tracker_, &result.stats);
+  result.stats.ground_reset = o.ground.refine && tracker_.last_update_reset();
+  result.stats.mounting_mismatch = tracker_.mismatch();
+  result.camera = MountingFromGround(ground);
+  result.ground = ground;
+  const FloorFrame floor_frame(ground);
+
+  // 3. Remove the floor (and what is below it).
+  RemoveFloor(floor_frame, o.ground.removal_m, ws);
+
+  // 4. Euclidean clustering of what is left; 4b. walls split off.
+  std::vector<int> kept;
+  for (int i = 0; i < nv; ++i)
+    if (ws.kept[i]) kept.push_back(i);
+  Clusters clusters = ConnectedVoxels(kept, o.cluster_tolerance_m, ws);
+  if (o.split_walls && fit.found) SplitWalls(o, ws, &clusters);
+  clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
+                                [&](const std::vector<int>& c) {
+                                  return static_cast<int>(c.size()) < o.min_cluster_voxels ||
+                                         static_cast<int>(c.size()) > o.max_cluster_voxels;
+                                }),
+                 clusters.end());
+
+  // 5. Merge clusters that are close on the floor; 5b. raised arms off.
+  MergeNearClusters(o.merge_distance_m, ws, &clusters);
+  result.stats.num_clusters = static_cast<int>(clusters.size());
+
+  RemoveRaisedArms(o, ws, &clusters);
+
+  // 6. Low clusters go to the lying-body test, the others are split at their heads.
+  for (const auto& cluster : clusters) {
+    double top = -std::numeric_limits<double>::infinity();
+    for (int i : cluster) top = std::max(top, ws.floor[i].z());
+    if (top >= o.candidate_min_height_m || !o.lying.enabled || top > o.lying.max_top_m + 0.1)
+      continue;
+    PersonCandidate c = DescribeLying(cluster, ws.floor, ws.centroid, floor_frame, frame, o);
+    ++result.stats.num_candidates;
+    (c.accepted ? result.people : result.rejected).push_back(c);
+  }
+  const HeadParts split = SplitAtHeads(clusters, o, ws);
+
+  // 7. Describe and classify each part.
+  for (size_t sub = 0; sub < split.parts.size(); ++sub) {
+    const size_t parent = split.parent_of[sub];
+    PersonCandidate c;
+    double loose_score = 0;
+    if (!DescribeUpright(split.parts[sub], clusters[parent], split.heads_in_cluster[parent] == 1,
+                         frame, floor_frame, ground, o, ws, &c, &loose_score)) {
+      continue;
+    }
+    Classify(loose_score, color_ok, frame, hog_.get(), o, &c);
+    c.covariance = CentroidCovariance(c.position_camera, o.noise, frame.intrinsics.fx);
 
     ++result.stats.num_candidates;
     (c.accepted ? result.people : result.rejected).push_back(c);

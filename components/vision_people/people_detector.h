@@ -38,6 +38,7 @@ namespace sarmap {
 namespace vision_people {
 
 class HogClassifier;
+struct DetectorWorkspace;
 
 // Pinhole intrinsics of the image the cloud is registered to.
 struct PinholeIntrinsics {
@@ -368,12 +369,11 @@ class PeopleDetector {
   const DetectorOptions& options() const { return options_; }
 
  private:
-  struct Workspace;
   DetectorOptions options_;
   GroundPlane mounting_;
   GroundTracker tracker_;
   std::shared_ptr<const HogClassifier> hog_;
-  std::unique_ptr<Workspace> ws_;
+  std::unique_ptr<DetectorWorkspace> ws_;
 };
 
 // Creates the colour classifier named by options.hog (null for "none"); throws
