@@ -9,9 +9,9 @@
 // with (l, sf, sn) chosen by maximum marginal likelihood over a grid. Because sn is one
 // constant, the angle-dependent noise is added as a kernel-weighted mean of the squared
 // training residuals around the query (a heteroscedastic term the thesis' libgp lacks).
-// Predictions are tabulated on a fine grid at fit time, so Predict() is O(1).
-// (Another engineer builds the production GP in sound_localisation; this one is small and
-// self-contained behind DoaSensorModel.)
+// Predictions are tabulated on a fine grid at fit time, so Predict() is O(1). (The live DOA
+// stream's GP, sound_localisation/sensor_model.h, corrects and weights each DOA as it is
+// estimated; this one, with its angle-dependent noise, serves the sound map's estimators.)
 
 #include <memory>
 #include <string>

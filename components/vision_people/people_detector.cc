@@ -883,14 +883,19 @@ HeadParts SplitAtHeads(const Clusters& clusters, const DetectorOptions& o,
   return split;
 }
 
+// What the depth shape score needs of an upright candidate beside its PersonCandidate fields.
+struct UprightShape {
+  double area_ratio = 1;       // head / head-and-shoulders floor footprint
+  double visible_lo_m = 0;     // lowest height above the floor inside the image
+  bool bottom_hidden = false;  // something nearer fills the image below its lowest point
+};
+
 // Stage 7: the shape of one upright part (`parent`: its whole cluster, `single_head`: the
-// cluster's only head) and its depth score. `*loose_score_out`: height, shape and support
-// alone (occlusion and truncation allowed), for the fusion with colour. False when its top
-// is outside the candidate heights.
+// cluster's only head). False when its top is outside the candidate heights.
 bool DescribeUpright(const std::vector<int>& part, const std::vector<int>& parent, bool single_head,
                      const RgbdFrame& frame, const FloorFrame& floor_frame,
                      const GroundPlane& ground, const DetectorOptions& o,
-                     const DetectorWorkspace& ws, PersonCandidate* out, double* loose_score_out) {
+                     const DetectorWorkspace& ws, PersonCandidate* out, UprightShape* shape) {
   const double vs = o.voxel_size_m;
   const PinholeIntrinsics& K = frame.intrinsics;
   const DepthShapeOptions& so = o.shape;
@@ -1041,15 +1046,6 @@ bool DescribeUpright(const std::vector<int>& part, const std::vector<int>& paren
     c.truncated_side = !finite || umin < ws.fov_umin + margin || umax > ws.fov_umax - margin;
   }
 
-  // Depth shape score: a fuzzy AND (product) of memberships.
-  const double m_height = Trapezoid(H, so.min_height_m - so.height_margin_m, so.min_height_m,
-                                    so.max_height_m, so.max_height_m + so.height_margin_m);
-  const double m_width = Trapezoid(c.width_m, 0.6 * so.min_width_m, so.min_width_m, so.max_width_m,
-                                   1.3 * so.max_width_m);
-  const double m_depth =
-      1.0 - Ramp(c.depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
-  const double area_ratio =
-      shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
   // Head prominence: how far the top stands above everything at least head_radius away
   // from it on the floor (a person's shoulders, chest or back: 0.2-0.3 m below the top;
   // the top edge of a box, wall or cupboard: ~0).
@@ -1084,39 +1080,54 @@ bool DescribeUpright(const std::vector<int>& part, const std::vector<int>& paren
     }
   }
   c.head_prominence_m = around < 0 ? 0.0 : H - around;
-  // ... and the head's floor footprint smaller than that of head and shoulders (a vertical
-  // surface has the same footprint at every height).
+  shape->area_ratio = shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
+  shape->visible_lo_m = visible_lo;
+  // What is below the lowest point, when the feet are not on the floor: hidden by something
+  // nearer (a person behind a desk), or nothing (floating).
+  int low_voxel = part.front();
+  for (int i : part) {
+    if (ws.floor[i].z() < ws.floor[low_voxel].z()) low_voxel = i;
+  }
+  shape->bottom_hidden = HiddenBelow(frame, ws.centroid[low_voxel]);
+  *out = c;
+  return true;
+}
+
+// Stage 7a: the depth shape score of an upright candidate, a fuzzy AND (product) of
+// memberships; `*loose_score`: height, shape and support alone (occlusion and truncation
+// allowed), for the fusion with colour. Sets c->depth_score and c->supported.
+void ScoreUpright(const UprightShape& shape, const DepthShapeOptions& so, PersonCandidate* c,
+                  double* loose_score) {
+  const double H = c->height_m;
+  const double m_height = Trapezoid(H, so.min_height_m - so.height_margin_m, so.min_height_m,
+                                    so.max_height_m, so.max_height_m + so.height_margin_m);
+  const double m_width = Trapezoid(c->width_m, 0.6 * so.min_width_m, so.min_width_m, so.max_width_m,
+                                   1.3 * so.max_width_m);
+  const double m_depth =
+      1.0 - Ramp(c->depth_extent_m, so.max_depth_extent_m, so.max_depth_extent_m + 0.3);
+  // The head stands above the shoulders, and its floor footprint is smaller than that of
+  // head and shoulders (a vertical surface has the same footprint at every height).
   const double m_head =
-      Ramp(c.head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
-      (1.0 - Ramp(c.head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
-      (1.0 - Ramp(area_ratio, so.max_head_to_shoulder, 1.0)) *
-      (1.0 - Ramp(c.head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
-  const double m_fill = Ramp(c.fill, so.min_fill - 0.2, so.min_fill);
-  const double bottom_limit = std::max(so.max_bottom_m, visible_lo + 0.2);
-  const double m_bottom = 1.0 - Ramp(c.bottom_m, bottom_limit, bottom_limit + 0.3);
+      Ramp(c->head_prominence_m, so.min_head_prominence_m - 0.06, so.min_head_prominence_m) *
+      (1.0 - Ramp(c->head_prominence_m, so.max_head_prominence_m, so.max_head_prominence_m + 0.1)) *
+      (1.0 - Ramp(shape.area_ratio, so.max_head_to_shoulder, 1.0)) *
+      (1.0 - Ramp(c->head_width_m, so.max_head_width_m, so.max_head_width_m + 0.15));
+  const double m_fill = Ramp(c->fill, so.min_fill - 0.2, so.min_fill);
+  const double bottom_limit = std::max(so.max_bottom_m, shape.visible_lo_m + 0.2);
+  const double m_bottom = 1.0 - Ramp(c->bottom_m, bottom_limit, bottom_limit + 0.3);
   const double m_visible =
-      c.truncated_top || c.truncated_side
+      c->truncated_top || c->truncated_side
           ? 0.0
-          : Ramp(c.visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
-  const double shape = m_width * m_depth * m_head;
-  c.depth_score = m_height * m_bottom * m_visible * m_fill * shape;
+          : Ramp(c->visible_fraction, so.min_visible_fraction - 0.2, so.min_visible_fraction);
+  const double body = m_width * m_depth * m_head;
+  c->depth_score = m_height * m_bottom * m_visible * m_fill * body;
   // With colour, occlusion and truncation are allowed, but a person stands on something: the
   // feet reach the floor, or what is below the cluster is hidden by something nearer (and
   // then the head and shoulders must be clear: a monitor on a desk has none).
   double m_support = m_bottom;
-  if (m_support < 1.0) {
-    int low_voxel = part.front();
-    for (int i : part) {
-      if (ws.floor[i].z() < ws.floor[low_voxel].z()) low_voxel = i;
-    }
-    if (HiddenBelow(frame, ws.centroid[low_voxel])) m_support = std::max(m_support, m_head);
-  }
-  c.supported = m_support >= 0.5;
-  const double loose_score = m_height * shape * m_support;
-
-  *out = c;
-  *loose_score_out = loose_score;
-  return true;
+  if (m_support < 1.0 && shape.bottom_hidden) m_support = std::max(m_support, m_head);
+  c->supported = m_support >= 0.5;
+  *loose_score = m_height * body * m_support;
 }
 
 // Stage 7b: the decision. With a usable colour patch, HOG fused with the loose depth score;
@@ -1335,11 +1346,13 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   for (size_t sub = 0; sub < split.parts.size(); ++sub) {
     const size_t parent = split.parent_of[sub];
     PersonCandidate c;
-    double loose_score = 0;
+    UprightShape shape;
     if (!DescribeUpright(split.parts[sub], clusters[parent], split.heads_in_cluster[parent] == 1,
-                         frame, floor_frame, ground, o, ws, &c, &loose_score)) {
+                         frame, floor_frame, ground, o, ws, &c, &shape)) {
       continue;
     }
+    double loose_score = 0;
+    ScoreUpright(shape, o.shape, &c, &loose_score);
     Classify(loose_score, color_ok, frame, hog_.get(), o, &c);
     c.covariance = CentroidCovariance(c.position_camera, o.noise, frame.intrinsics.fx);
 
