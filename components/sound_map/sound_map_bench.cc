@@ -16,7 +16,7 @@
 #include "sound_map/experiments.h"
 #include "sound_map/idp_ekf.h"
 #include "sound_map/joint_optimizer.h"
-#include "sound_map/linear_array_map.h"
+#include "handheld_sound_map/linear_array_map.h"
 #include "sound_map/simulation.h"
 
 namespace sm = sarmap::sound_map;

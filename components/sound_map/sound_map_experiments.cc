@@ -9,7 +9,7 @@
 
 #include "common/args.h"
 #include "sound_map/experiments.h"
-#include "sound_map/linear_array.h"
+#include "handheld_sound_map/linear_array.h"
 
 using namespace sarmap::sound_map;
 

@@ -15,7 +15,7 @@
 #include "sim/site_generator.h"
 #include "slam/slam_node_options.h"
 #include "sound_localisation/doa_stream.h"
-#include "sound_map/handheld_sound_map_messages.h"
+#include "handheld_sound_map/handheld_sound_map_messages.h"
 #include "sound_map/sound_map_messages.h"
 #include "speech/speech_messages.h"
 #include "teleop/teleop.h"

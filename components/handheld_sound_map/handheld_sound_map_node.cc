@@ -1,4 +1,4 @@
-#include "sound_map/handheld_sound_map_node.h"
+#include "handheld_sound_map/handheld_sound_map_node.h"
 
 #include <algorithm>
 #include <string>

@@ -35,7 +35,7 @@
 
 #include "common/options.h"
 #include "common/time.h"
-#include "sound_map/linear_array.h"
+#include "handheld_sound_map/linear_array.h"
 
 namespace sarmap {
 namespace sound_map {

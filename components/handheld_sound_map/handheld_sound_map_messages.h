@@ -14,7 +14,7 @@
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/sound_map_t.hpp"
-#include "sound_map/linear_array_map.h"
+#include "handheld_sound_map/linear_array_map.h"
 
 namespace sarmap {
 namespace sound_map {

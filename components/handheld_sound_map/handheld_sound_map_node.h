@@ -13,8 +13,8 @@
 #include "common/node.h"
 #include "common/stamp_gate.h"
 #include "common/time.h"
-#include "sound_map/handheld_sound_map_messages.h"
-#include "sound_map/linear_array_map.h"
+#include "handheld_sound_map/handheld_sound_map_messages.h"
+#include "handheld_sound_map/linear_array_map.h"
 
 namespace sarmap {
 namespace sound_map {

@@ -1,4 +1,4 @@
-#include "sound_map/linear_array.h"
+#include "handheld_sound_map/linear_array.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "sound_map/doa_sensor_model.h"
+#include "handheld_sound_map/doa_sensor_model.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>

@@ -5,8 +5,8 @@
 
 #include <vector>
 
-#include "sound_map/handheld_sound_map_node.h"
-#include "sound_map/handheld_walk_test_util.h"
+#include "handheld_sound_map/handheld_sound_map_node.h"
+#include "handheld_sound_map/handheld_walk_test_util.h"
 
 namespace sarmap {
 namespace sound_map {

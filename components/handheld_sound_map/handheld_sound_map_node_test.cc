@@ -13,7 +13,7 @@
 #include "sarmap/doa_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/sound_map_t.hpp"
-#include "sound_map/handheld_walk_test_util.h"
+#include "handheld_sound_map/handheld_walk_test_util.h"
 #include "tests/process.h"
 
 namespace {

@@ -28,8 +28,8 @@
 #include "common/transform.h"
 #include "log-tools/node_replay.h"
 #include "sarmap/sim_truth_t.hpp"
-#include "sound_map/handheld_sound_map_messages.h"
-#include "sound_map/handheld_sound_map_node.h"
+#include "handheld_sound_map/handheld_sound_map_messages.h"
+#include "handheld_sound_map/handheld_sound_map_node.h"
 
 namespace {
 

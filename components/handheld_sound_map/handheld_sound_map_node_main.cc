@@ -1,7 +1,7 @@
 // sarmap-handheld-sound-map: the hand-held rig's sound map (HandheldSoundMapNode,
 // handheld_sound_map_node.h).
 #include "common/node_runner.h"
-#include "sound_map/handheld_sound_map_node.h"
+#include "handheld_sound_map/handheld_sound_map_node.h"
 
 int main(int argc, char** argv) {
   using namespace sarmap;

@@ -1,4 +1,4 @@
-#include "sound_map/linear_array.h"
+#include "handheld_sound_map/linear_array.h"
 
 #include <ceres/ceres.h>
 #include <ceres/cubic_interpolation.h>
@@ -15,7 +15,7 @@
 #include <stdexcept>
 
 #include "common/logging.h"
-#include "sound_map/linear_array_costs.h"
+#include "handheld_sound_map/linear_array_costs.h"
 
 namespace sarmap {
 namespace sound_map {

@@ -1,6 +1,6 @@
 // The online linear-array map (LinearArraySoundMap) driven like the node drives it: poses
 // from a drifting odometry and DOAs with track ids, on the §5.5.1 trajectories.
-#include "sound_map/linear_array_map.h"
+#include "handheld_sound_map/linear_array_map.h"
 
 #include <gtest/gtest.h>
 

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "sound_map/doa_sensor_model.h"
+#include "handheld_sound_map/doa_sensor_model.h"
 
 namespace sarmap {
 namespace sound_map {

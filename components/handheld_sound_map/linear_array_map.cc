@@ -1,4 +1,4 @@
-#include "sound_map/linear_array_map.h"
+#include "handheld_sound_map/linear_array_map.h"
 
 #include <ceres/ceres.h>
 
@@ -8,7 +8,7 @@
 #include <set>
 #include <utility>
 
-#include "sound_map/linear_array_costs.h"
+#include "handheld_sound_map/linear_array_costs.h"
 
 namespace sarmap {
 namespace sound_map {
