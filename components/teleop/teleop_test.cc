@@ -10,6 +10,7 @@
 #include "common/args.h"
 #include "common/command_auth.h"
 #include "common/node.h"
+#include "sarmap/explore_status_t.hpp"
 #include "teleop/teleop_sender.h"
 
 namespace sarmap {
@@ -191,6 +192,54 @@ TEST(TeleopTest, AnOperatorIdThatCannotBeSignedIsNotSent) {
   TeleopSender tool(&node, options, TestKey(1));
   EXPECT_THROW(tool.Send(Step{}), std::runtime_error);
   EXPECT_EQ(node.lcm().handleTimeout(50), 0);  // nothing was published
+}
+
+// An explorer that reports on EXPLORE_STATUS what drives it once it obeyed a TELEOP.
+struct ReportingExplorer : Explorer {
+  ReportingExplorer(common::Node* node, common::AuthKey key, bool reports)
+      : Explorer(node, std::move(key)),
+        status(node->Advertise<explore_status_t>("EXPLORE_STATUS")) {
+    node->Subscribe<teleop_t>(
+        "TELEOP", [this, reports](const teleop_t& m, const common::ReceiveInfo&) {
+          if (!reports || obeyed.empty()) return;
+          explore_status_t s{};
+          s.driven_by = m.emergency_stop ? "stop" : m.override_active ? "teleop" : "frontier";
+          status.Publish(&s);
+        });
+  }
+  common::Node::Publisher<explore_status_t> status;
+};
+
+TEST(TeleopTest, SendAndConfirmWaitsForTheStatusThatShowsTheCommandObeyed) {
+  TeleopOptions options;
+  options.rate_hz = 50;
+  options.confirm_timeout_s = 0.3;
+  const Request stop = ParseRequest({"stop"}, options);
+  {
+    // The explorer obeys and says so: exit 0, every planned step sent.
+    common::Node node("teleop_test", "memq://");
+    ReportingExplorer explorer(&node, TestKey(1), true);
+    EXPECT_EQ(SendAndConfirm(&node, options, stop, TestKey(1)), 0);
+    while (node.lcm().handleTimeout(50) > 0) {
+    }
+    EXPECT_EQ(explorer.obeyed.size(), PlanRequest(stop, options).size());
+    EXPECT_TRUE(explorer.obeyed.back().emergency_stop);
+  }
+  {
+    // Another key: refused, nothing confirms it within the timeout: exit 1.
+    common::Node node("teleop_test", "memq://");
+    ReportingExplorer explorer(&node, TestKey(1), true);
+    EXPECT_EQ(SendAndConfirm(&node, options, stop, TestKey(2)), 1);
+    EXPECT_TRUE(explorer.obeyed.empty());
+    EXPECT_FALSE(explorer.refused.empty());
+  }
+  {
+    // No confirmation asked for: exit 0 once sent.
+    options.confirm_timeout_s = 0;
+    common::Node node("teleop_test", "memq://");
+    ReportingExplorer explorer(&node, TestKey(1), false);
+    EXPECT_EQ(SendAndConfirm(&node, options, ParseRequest({"release"}, options), TestKey(1)), 0);
+  }
 }
 
 }  // namespace
