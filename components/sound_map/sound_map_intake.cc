@@ -69,7 +69,7 @@ void SoundMapIntake::Finish() {
 
 void SoundMapIntake::OnPose(const sarmap::pose_t& msg) {
   const Pose2 pose = PlanarPose(msg);
-  const Eigen::Matrix3d cov = PlanarCovariance(msg.covariance);
+  const Eigen::Matrix3d cov = common::PlanarCovariance(msg.covariance);
   const int64_t node_id = msg.node_id;
   OnlineSoundMap* map = map_;
   Push(msg.header.utime,

@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
         sarmap::pose_t m;
         if (!Decode(*e, &m)) continue;
         const Pose2 pose = sarmap::sound_map::PlanarPose(m);
-        const Eigen::Matrix3d cov = sarmap::sound_map::PlanarCovariance(m.covariance);
+        const Eigen::Matrix3d cov = sarmap::common::PlanarCovariance(m.covariance);
         const int64_t t = m.header.utime, node = m.node_id;
         if (node >= 0 && !node_utime.count(node)) node_utime[node] = t;
         slam_poses[t] = pose;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/compression.h"
+#include "common/message_conversions.h"
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
@@ -90,19 +91,10 @@ inline ArrayMount MountFromRobot(const common::RobotOptions& robot) {
   return mount;
 }
 
-// (common/message_conversions.h's FromCovariance6 does not compile when instantiated, so
-// the two conversions needed here are local.)
+// The planar pose (x, y, yaw of the x axis) of a 6-DoF pose_t.
 inline Pose2 PlanarPose(const sarmap::pose_t& msg) {
-  const Eigen::Quaterniond q(msg.orientation[0], msg.orientation[1], msg.orientation[2], msg.orientation[3]);
-  const Eigen::Vector3d x = q.normalized() * Eigen::Vector3d::UnitX();
-  return Pose2(msg.position_m[0], msg.position_m[1], std::atan2(x.y(), x.x()));
-}
-inline Eigen::Matrix3d PlanarCovariance(const double (&cov)[36]) {
-  const int idx[3] = {0, 1, 5};  // x y yaw of (x y z roll pitch yaw)
-  Eigen::Matrix3d out;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(r, c) = cov[6 * idx[r] + idx[c]];
-  return out;
+  const common::Rigid2d p = common::ToRigid3d(msg.position_m, msg.orientation).ToRigid2d();
+  return Pose2(p.translation().x(), p.translation().y(), p.yaw_rad());
 }
 
 // DOAs with finite values (any kind; the map counts the kinds it cannot use).
