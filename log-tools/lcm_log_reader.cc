@@ -104,6 +104,17 @@ bool LcmLogReader::Next(LogEvent* event) {
   return false;
 }
 
+std::string DescribeProblem(const LogProblem& problem) {
+  std::string text = "the log breaks at byte " + std::to_string(problem.file_offset);
+  if (problem.after_event >= 0)
+    text += " (after event " + std::to_string(problem.after_event) + ")";
+  text += ": " + problem.what;
+  text += problem.resync_offset >= 0
+              ? "; read on from byte " + std::to_string(problem.resync_offset)
+              : "; nothing readable after it";
+  return text;
+}
+
 std::string SarmapTypeName(const std::vector<uint8_t>& data) {
   if (data.size() < 8) return "";
   const int64_t hash = static_cast<int64_t>(BigEndian(data.data(), 8));

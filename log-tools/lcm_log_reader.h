@@ -33,6 +33,10 @@ struct LogProblem {
   int64_t resync_offset = -1; // where reading continued (-1: end of file)
 };
 
+// "the log breaks at byte N (after event E): what; read on from byte M" (or "...; nothing
+// readable after it").
+std::string DescribeProblem(const LogProblem& problem);
+
 class LcmLogReader {
  public:
   // Throws std::runtime_error when the file cannot be opened.

@@ -80,6 +80,12 @@ TEST(LcmLogReaderTest, ReportsTruncationAndCorruptionAndKeepsTheRest) {
   EXPECT_NE(reader.problems()[1].what.find("truncated"), std::string::npos);
   EXPECT_EQ(reader.problems()[1].after_event, 8);
   EXPECT_EQ(reader.problems()[1].resync_offset, -1);
+  EXPECT_EQ(DescribeProblem(reader.problems()[0]),
+            "the log breaks at byte " + std::to_string(3 * event_size) +
+                " (after event 2): " + reader.problems()[0].what + "; read on from byte " +
+                std::to_string(4 * event_size));
+  EXPECT_NE(DescribeProblem(reader.problems()[1]).find("; nothing readable after it"),
+            std::string::npos);
 }
 
 TEST(LcmLogReaderTest, MissingFileIsAClearError) {

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
 
-#include <lcm/lcm-cpp.hpp>
-
 #include "common/decode.h"
+#include "log-tools/lcm_log_reader.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/odometry_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -30,15 +30,16 @@ struct Device {
 
 Recording ReadLcmAudioLog(const std::string& path, const std::string& prefix,
                           LcmAudioLogStats* stats) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open LCM log " + path);
+  logtools::LcmLogReader log(path);  // read past damage; where it breaks is a warning
   LcmAudioLogStats st;
   std::map<std::string, Device> devices;
   std::map<std::string, int> bad_by_channel;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+  logtools::LogEvent event;
+  while (log.Next(&event)) {
+    const logtools::LogEvent* ev = &event;
     if (ev->channel.rfind(prefix, 0) != 0) continue;
     sarmap::audio_frame_t msg;
-    if (!common::DecodeMessage(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
+    if (!common::DecodeMessage(ev->data.data(), ev->data.size(), &msg)) {
       ++bad_by_channel[ev->channel];
       continue;
     }
@@ -58,6 +59,7 @@ Recording ReadLcmAudioLog(const std::string& path, const std::string& prefix,
     d.blocks.push_back({msg.first_sample_index, msg.header.utime, std::move(msg.samples)});
     ++st.frames;
   }
+  for (const auto& p : log.problems()) st.warnings.push_back(logtools::DescribeProblem(p));
   for (auto& [ch, n] : bad_by_channel) {
     st.bad_frames += n;
     st.warnings.push_back(ch + ": " + std::to_string(n) + " malformed audio frames skipped");
@@ -127,8 +129,7 @@ Recording ReadLcmAudioLog(const std::string& path, const std::string& prefix,
 
 std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std::string& channel,
                                               LcmAudioLogStats* stats) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open LCM log " + path);
+  logtools::LcmLogReader log(path);
   std::vector<common::StampedPose> poses;
   int bad = 0;
   auto make = [](int64_t utime, const double* p, const double* q) {
@@ -138,20 +139,22 @@ std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std
                               Eigen::Quaterniond(q[0], q[1], q[2], q[3]));
     return sp;
   };
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+  logtools::LogEvent event;
+  while (log.Next(&event)) {
+    const logtools::LogEvent* ev = &event;
     if (ev->channel != channel) continue;
     sarmap::odometry_t odom;
     sarmap::pose_t pose;
     sarmap::sim_truth_t truth;
     const double* q = nullptr;
-    const size_t size = static_cast<size_t>(ev->datalen);
-    if (common::DecodeMessage(ev->data, size, &odom)) {
+    const size_t size = ev->data.size();
+    if (common::DecodeMessage(ev->data.data(), size, &odom)) {
       poses.push_back(make(odom.header.utime, odom.position_m, odom.orientation));
       q = odom.orientation;
-    } else if (common::DecodeMessage(ev->data, size, &pose)) {
+    } else if (common::DecodeMessage(ev->data.data(), size, &pose)) {
       poses.push_back(make(pose.header.utime, pose.position_m, pose.orientation));
       q = pose.orientation;
-    } else if (common::DecodeMessage(ev->data, size, &truth)) {
+    } else if (common::DecodeMessage(ev->data.data(), size, &truth)) {
       poses.push_back(make(truth.header.utime, truth.robot_position_m, truth.robot_orientation));
       q = truth.robot_orientation;
     } else {
@@ -163,6 +166,9 @@ std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std
       poses.pop_back();
       ++bad;
     }
+  }
+  if (stats) {
+    for (const auto& p : log.problems()) stats->warnings.push_back(logtools::DescribeProblem(p));
   }
   if (stats && bad > 0) {
     stats->warnings.push_back(channel + ": " + std::to_string(bad) +

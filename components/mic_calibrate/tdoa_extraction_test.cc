@@ -1,10 +1,12 @@
 #include "mic_calibrate/tdoa_extraction.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-
-#include <gtest/gtest.h>
+#include <fstream>
+#include <iterator>
 
 #include "common/robot_config.h"
 #include "mic_calibrate/calibration.h"
@@ -117,6 +119,23 @@ TEST(TdoaExtraction, LcmLogWithOneChannelPerCard) {
     EXPECT_NEAR(d.tdoa_s(k, 0), ModelTdoa(s.sim, k, 1, 340), 0.3 / 16000) << k;
   }
   EXPECT_THROW(ReadLcmAudioLog(path, "NO_SUCH_CHANNEL", nullptr), std::runtime_error);
+
+  // A log cut off mid-event (a recorder killed): what precedes the cut is read, and the cut is
+  // a warning rather than the end of the calibration.
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string cut = ::testing::TempDir() + "/mic_calibrate_cut.lcmlog";
+  std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() - 300);
+  LcmAudioLogStats cut_stats;
+  const Recording partial = ReadLcmAudioLog(cut, "AUDIO", &cut_stats);
+  EXPECT_EQ(cut_stats.frames, st.frames - 1);
+  EXPECT_EQ(partial.channels.size(), 6u);
+  ASSERT_FALSE(cut_stats.warnings.empty());
+  EXPECT_NE(cut_stats.warnings.front().find("the log breaks at byte"), std::string::npos)
+      << cut_stats.warnings.front();
 }
 
 // Audio to array: synthesised recording -> TDOAs -> calibration.

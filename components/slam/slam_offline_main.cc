@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <lcm/lcm-cpp.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -15,6 +14,7 @@
 #include "common/args.h"
 #include "common/decode.h"
 #include "common/logging.h"
+#include "log-tools/lcm_log_reader.h"
 #include "slam/carmen.h"
 #include "slam/map_io.h"
 #include "slam/messages.h"
@@ -87,13 +87,16 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
       return inputs;
     }
   }
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open LCM log '" + path + "'");
+  // Read past damage (a truncated or corrupt log): what is readable is used, where it breaks is
+  // a warning.
+  logtools::LcmLogReader log(path);
+  logtools::LogEvent event;
   int64_t bad = 0;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+  while (log.Next(&event)) {
+    const logtools::LogEvent* ev = &event;
     if (ev->channel == options.scan_channel) {
       laser_scan_t msg;
-      if (!common::DecodeMessage(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
+      if (!common::DecodeMessage(ev->data.data(), ev->data.size(), &msg)) {
         ++bad;
         continue;
       }
@@ -103,7 +106,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
       inputs.push_back(std::move(in));
     } else if (ev->channel == options.odom_channel) {
       odometry_t msg;
-      if (!common::DecodeMessage(ev->data, static_cast<size_t>(ev->datalen), &msg)) {
+      if (!common::DecodeMessage(ev->data.data(), ev->data.size(), &msg)) {
         ++bad;
         continue;
       }
@@ -111,6 +114,7 @@ std::vector<Input> ReadInput(const std::string& path, const slam::SlamNodeOption
           OdometryInput(common::UtimeToSeconds(msg.header.utime), slam::FromOdometryMessage(msg)));
     }
   }
+  for (const auto& p : log.problems()) SARMAP_LOG(WARN) << logtools::DescribeProblem(p);
   if (bad) {
     SARMAP_LOG(WARN) << bad << " undecodable events skipped";
   }
@@ -182,6 +186,12 @@ int main(int argc, char** argv) {
     }
     std::fprintf(stderr, "read %zu inputs (%lld scans, %.1f s of data) in %.2f s\n", inputs.size(),
                  (long long)num_scans, last_t - first_t, read_s);
+    if (num_scans == 0) {
+      throw std::runtime_error(
+          "no laser scan in '" + input + "'" +
+          (is_carmen ? std::string(" (CARMEN: FLASER, RAWLASER1 or ROBOTLASER1 lines)")
+                     : " (LCM log: laser_scan_t on " + options.scan_channel + ")"));
+    }
 
     slam::Slam slam(options.slam);
     std::vector<double> latencies;

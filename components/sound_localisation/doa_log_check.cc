@@ -1,15 +1,16 @@
 // doa_log_check LOGFILE AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES [DOA_CHANNEL]: reads an LCM log, decodes
-// every doa_t on DOA (or DOA_CHANNEL), and checks that the median direction of the strongest source is within TOL of the
-// truth. Used by the multi-process test; prints what it found.
-#include <lcm/lcm-cpp.hpp>
-
+// every doa_t on DOA (or DOA_CHANNEL), and checks that the median direction of the strongest source
+// is within TOL of the truth. Used by the multi-process test; prints what it found. The log is read
+// past damage (log-tools/lcm_log_reader.h); where it breaks is printed.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/decode.h"
+#include "log-tools/lcm_log_reader.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
 
@@ -18,9 +19,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: doa_log_check LOG AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES [DOA_CHANNEL]\n");
     return 2;
   }
-  lcm::LogFile log(argv[1], "r");
-  if (!log.good()) {
-    std::fprintf(stderr, "cannot read %s\n", argv[1]);
+  std::unique_ptr<sarmap::logtools::LcmLogReader> log;
+  try {
+    log = std::make_unique<sarmap::logtools::LcmLogReader>(argv[1]);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
     return 2;
   }
   const double az = std::stod(argv[2]), el = std::stod(argv[3]), tol = std::stod(argv[4]);
@@ -29,17 +32,19 @@ int main(int argc, char** argv) {
   std::vector<double> azs, els;
   int doa_messages = 0, audio_messages = 0, tracked = 0;
   int64_t last_audio_utime = 0;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
+  sarmap::logtools::LogEvent event;
+  while (log->Next(&event)) {
+    const sarmap::logtools::LogEvent* e = &event;
     if (e->channel.rfind("AUDIO", 0) == 0) {
       sarmap::audio_frame_t a;
-      if (sarmap::common::DecodeMessage(e->data, static_cast<size_t>(e->datalen), &a)) {
+      if (sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &a)) {
         ++audio_messages;
         last_audio_utime = a.header.utime;
       }
     }
     if (e->channel != doa_channel) continue;
     sarmap::doa_t d;
-    if (!sarmap::common::DecodeMessage(e->data, static_cast<size_t>(e->datalen), &d)) continue;
+    if (!sarmap::common::DecodeMessage(e->data.data(), e->data.size(), &d)) continue;
     ++doa_messages;
     if (d.sources.empty()) continue;
     const auto& s = d.sources.front();
@@ -47,6 +52,8 @@ int main(int argc, char** argv) {
     azs.push_back(s.azimuth_rad * 180 / M_PI);
     els.push_back(s.elevation_rad * 180 / M_PI);
   }
+  for (const auto& p : log->problems())
+    std::printf("warning: %s\n", sarmap::logtools::DescribeProblem(p).c_str());
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v.empty() ? NAN : v[v.size() / 2];
