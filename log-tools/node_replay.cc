@@ -41,8 +41,22 @@ void NodeReplay::Drain() {
   }
 }
 
+void NodeReplay::AdvanceClock(int64_t utime_us) {
+  if (now_us_ == 0) {
+    // The node's clock starts at the first input: its timers count from there.
+    now_us_ = utime_us;
+    node_->SetClock([this] { return static_cast<double>(now_us_) * 1e-6; });
+  }
+  // The clock never goes back: a log's receive times are the recorder's and rise, but a
+  // spliced or damaged log must not rewind the node's timers.
+  now_us_ = std::max(now_us_, utime_us);
+}
+
 void NodeReplay::Inject(const std::string& channel, const std::vector<uint8_t>& data) {
+  if (reading_us_ != 0) AdvanceClock(reading_us_);
   node_->lcm().publish(channel, data.data(), static_cast<unsigned>(data.size()));
+  Drain();
+  node_->SpinOnce(0);  // timers due by the log's time
   Drain();
 }
 
@@ -55,16 +69,10 @@ NodeReplay::Stats NodeReplay::Run(const std::string& path,
   LogEvent event;
   while (!node_->stopping() && reader.Next(&event)) {
     ++stats.events_read;
+    reading_us_ = event.timestamp_us;
     if (feed && !feed(&event)) continue;
     ++stats.events_fed;
-    if (now_us_ == 0) {
-      // The node's clock starts at the first input: its timers count from there.
-      now_us_ = event.timestamp_us;
-      node_->SetClock([this] { return static_cast<double>(now_us_) * 1e-6; });
-    }
-    // The clock never goes back: a log's receive times are the recorder's and rise, but a
-    // spliced or damaged log must not rewind the node's timers.
-    now_us_ = std::max(now_us_, event.timestamp_us);
+    AdvanceClock(event.timestamp_us);
     node_->lcm().publish(event.channel, event.data.data(), static_cast<unsigned>(event.data.size()));
     Drain();
     node_->SpinOnce(0);  // timers due by the log's time

@@ -53,8 +53,9 @@ class NodeReplay {
             bool progress = true);
   // Handles everything pending on the bus (e.g. after the adapter's Finish()).
   void Drain();
-  // Publishes `data` on `channel` at the present log time and handles it, as an event fed: for
-  // inputs that are not in the log (e.g. poses from a file, from inside `feed`).
+  // Publishes `data` on `channel` at the present log time (that of the event being read) and
+  // handles it, as an event fed: for inputs that are not in the log (e.g. poses from a file, or
+  // directions a localiser finds in the log's audio, from inside `feed`).
   void Inject(const std::string& channel, const std::vector<uint8_t>& data);
 
   // Receive time of the event being fed, us (0 before the first).
@@ -63,8 +64,12 @@ class NodeReplay {
  private:
   class CaptureHandler;
 
+  // Starts the node's clock at the first call; never moves it back.
+  void AdvanceClock(int64_t utime_us);
+
   common::Node* node_;
   int64_t now_us_ = 0;
+  int64_t reading_us_ = 0;  // receive time of the event being read
   std::vector<std::unique_ptr<CaptureHandler>> captures_;
 };
 

@@ -179,6 +179,30 @@ TEST(NodeReplay, InjectedInputsArriveAtTheirPlaceAmongTheLogs) {
   EXPECT_EQ(next_injected, 100 + injected);
 }
 
+// A replay that feeds none of the log's events, only inputs made from them (e.g. directions a
+// localiser finds in the log's audio), still runs on the log's clock from the first one.
+TEST(NodeReplay, InjectedInputsAloneRunOnTheLogsClock) {
+  common::Node node("node-replay-test", "memq://");
+  CountingNode counting(&node);
+  NodeReplay replay(&node);
+  int counts = 0;
+  replay.Capture("COUNT", [&](const std::string&, const std::vector<uint8_t>&) { ++counts; });
+  const auto stats = replay.Run(
+      WriteLog(10, -1),
+      [&](LogEvent* e) {
+        if (e->channel == "OTHER") replay.Inject("POSE", e->data);
+        return false;
+      },
+      false);
+  EXPECT_EQ(stats.events_fed, 0);
+  ASSERT_GE(counting.receive_s.size(), 8u);
+  EXPECT_DOUBLE_EQ(counting.receive_s.front(), kStartUs * 1e-6);
+  for (size_t k = 1; k < counting.receive_s.size(); ++k)
+    EXPECT_GE(counting.receive_s[k], counting.receive_s[k - 1]);
+  EXPECT_EQ(counting.positions.size(), counting.receive_s.size());  // none held off the clock
+  EXPECT_GE(counts, 3);  // its 1 s timer ran on the log's 4.5 s
+}
+
 }  // namespace
 }  // namespace logtools
 }  // namespace sarmap
