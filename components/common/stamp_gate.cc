@@ -9,24 +9,24 @@ namespace common {
 StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
   if (!anchored_) {
     anchored_ = true;
-    newest_utime_ = utime;
-    newest_receive_s_ = receive_s;
+    clock_utime_ = utime;
+    clock_receive_s_ = receive_s;
     return Verdict::kAccepted;
   }
   const Utime max_ahead_us = SecondsToUtime(options_.max_ahead_s);
   const Utime max_behind_us = SecondsToUtime(options_.max_behind_s);
   // Receive time never runs backwards on a steady clock; clamp in case callers mix clocks.
-  const double elapsed_us = 1e6 * std::max(0.0, receive_s - newest_receive_s_);
+  const double elapsed_us = 1e6 * std::max(0.0, receive_s - clock_receive_s_);
   // In double: stamps near the int64 limits must not overflow.
   const double offset_us =
-      static_cast<double>(utime) - (static_cast<double>(newest_utime_) + elapsed_us);
+      static_cast<double>(utime) - (static_cast<double>(clock_utime_) + elapsed_us);
   const bool ahead = offset_us > static_cast<double>(max_ahead_us);
   const bool behind = max_behind_us > 0 && offset_us < -static_cast<double>(max_behind_us);
   if (!ahead && !behind) {
     candidate_count_ = 0;
-    if (utime >= newest_utime_) {
-      newest_utime_ = utime;
-      newest_receive_s_ = receive_s;
+    if (offset_us > 0) {  // ahead of the clock: the clock moves on; behind: it stands
+      clock_utime_ = utime;
+      clock_receive_s_ = receive_s;
     }
     return Verdict::kAccepted;
   }
@@ -47,8 +47,8 @@ StampGate::Verdict StampGate::Check(Utime utime, double receive_s) {
   if (candidate_count_ >= options_.reanchor_count &&
       receive_s - candidate_first_receive_s_ >= options_.reanchor_min_s) {
     candidate_count_ = 0;
-    newest_utime_ = utime;
-    newest_receive_s_ = receive_s;
+    clock_utime_ = utime;
+    clock_receive_s_ = receive_s;
     ++reanchors_;
     return Verdict::kReanchored;
   }

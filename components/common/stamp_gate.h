@@ -1,21 +1,23 @@
 #pragma once
 // StampGate: what a single header.utime may do to a node. Each input stream keeps its own
-// clock: the newest stamp it accepted and the receive time (steady clock) of that message.
-// A new stamp is expected near
-//   expected = newest_accepted_utime + (receive_s - newest_accepted_receive_s)
+// clock: a stamp it accepted and the receive time (steady clock) of that message. A new stamp
+// is expected near
+//   expected = clock_utime + (receive_s - clock_receive_s)
 // and is dropped (and counted) when it is more than max_ahead_s ahead of that, or, when
-// max_behind_s > 0, more than max_behind_s behind it. Dropped stamps are never adopted: one
-// far-future POSE or SCAN cannot move a node's clock. The rule needs no wall clock, so it holds
-// on log replay too (a replay faster than real time only moves stamps by one message's period
-// between two receive times).
-// A genuine clock step of a whole stream is followed: after reanchor_count consecutive dropped
-// stamps that agree with each other (each later than the previous one, and within max_ahead_s
-// of it plus the receive time between them) and span at least reanchor_min_s of receive time,
-// the stream's clock is re-anchored on the last of them, which is accepted. Any accepted stamp
-// in between starts the count again, so a stray stamp mixed into a live stream is never
-// followed, and neither is a second publisher interleaved with it (the live stream's own
-// messages break every run shorter than reanchor_min_s). A stamp repeated (a replayed or forged
-// message sent again and again) is a clock that stands still, not a stream: it never
+// max_behind_s > 0, more than max_behind_s behind it. An accepted stamp ahead of `expected`
+// becomes the clock; one behind it does not, so the clock never runs back: a stream whose
+// stamps are data times (a reply stamped with the time of the data it answers, arriving
+// seconds after it) keeps its clock, and the next current stamp is not "ahead". Dropped stamps
+// are never adopted: one far-future POSE or SCAN cannot move a node's clock. The rule needs no wall
+// clock, so it holds on log replay too (a replay faster than real time only moves stamps by one
+// message's period between two receive times). A genuine clock step of a whole stream is followed:
+// after reanchor_count consecutive dropped stamps that agree with each other (each later than the
+// previous one, and within max_ahead_s of it plus the receive time between them) and span at least
+// reanchor_min_s of receive time, the stream's clock is re-anchored on the last of them, which is
+// accepted. Any accepted stamp in between starts the count again, so a stray stamp mixed into a
+// live stream is never followed, and neither is a second publisher interleaved with it (the live
+// stream's own messages break every run shorter than reanchor_min_s). A stamp repeated (a replayed
+// or forged message sent again and again) is a clock that stands still, not a stream: it never
 // re-anchors.
 // The first stamp of a stream sets its clock, unless the node already has a clock from another
 // stream (StampGates): then the new stream starts on that clock, so a far-future first message
@@ -39,8 +41,8 @@ struct StampGateOptions {
   template <class V>
   void Visit(V& v) {
     v("max_ahead_s", max_ahead_s,
-      "an input stamped further ahead of its stream's clock (newest accepted stamp + receive time "
-      "since) is dropped and counted");
+      "an input stamped further ahead of its stream's clock (the most advanced accepted stamp + "
+      "receive time since) is dropped and counted");
     v("max_behind_s", max_behind_s,
       "an input stamped further behind its stream's clock is dropped and counted (0: never)");
     v("reanchor_count", reanchor_count,
@@ -72,14 +74,15 @@ class StampGate {
   // Sets the stream's clock (for a stream that has no stamp of its own yet).
   void Anchor(Utime utime, double receive_s) {
     anchored_ = true;
-    newest_utime_ = utime;
-    newest_receive_s_ = receive_s;
+    clock_utime_ = utime;
+    clock_receive_s_ = receive_s;
   }
   // Where the stream's clock stands at receive_s (anchored streams only).
   double ExpectedUtime(double receive_s) const {
-    return static_cast<double>(newest_utime_) + 1e6 * (receive_s - newest_receive_s_);
+    return static_cast<double>(clock_utime_) + 1e6 * (receive_s - clock_receive_s_);
   }
-  Utime newest_utime() const { return newest_utime_; }
+  // The stamp the clock counts from (received at clock_receive_s).
+  Utime clock_utime() const { return clock_utime_; }
   int64_t dropped_ahead() const { return dropped_ahead_; }
   int64_t dropped_behind() const { return dropped_behind_; }
   int64_t dropped() const { return dropped_ahead_ + dropped_behind_; }
@@ -88,8 +91,8 @@ class StampGate {
  private:
   StampGateOptions options_;
   bool anchored_ = false;
-  Utime newest_utime_ = 0;
-  double newest_receive_s_ = 0;
+  Utime clock_utime_ = 0;
+  double clock_receive_s_ = 0;
   // The run of consecutive out-of-bound stamps that may re-anchor the stream.
   int candidate_count_ = 0;
   Utime candidate_utime_ = 0;

@@ -29,13 +29,13 @@ TEST(StampGateTest, OneFutureStampIsDroppedCountedAndNotAdopted) {
     EXPECT_TRUE(StampGate::Accepted(gate.Check(s.utime, s.receive_s)));
   EXPECT_EQ(gate.Check(s.utime + kYearUs, s.receive_s), StampGate::Verdict::kAhead);
   EXPECT_EQ(gate.dropped_ahead(), 1);
-  EXPECT_LT(gate.newest_utime(), s.utime + kYearUs);
+  EXPECT_LT(gate.clock_utime(), s.utime + kYearUs);
   // The stream goes on as if nothing happened.
   for (int i = 0; i < 20; ++i) {
     s.Step();
     EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
   }
-  EXPECT_EQ(gate.newest_utime(), s.utime);
+  EXPECT_NEAR(gate.ExpectedUtime(s.receive_s), static_cast<double>(s.utime), 1000.0);
   EXPECT_EQ(gate.dropped(), 1);
   EXPECT_EQ(gate.reanchors(), 0);
 }
@@ -53,7 +53,7 @@ TEST(StampGateTest, StrayFutureStampsMixedIntoAStreamNeverReanchor) {
   }
   EXPECT_EQ(gate.dropped_ahead(), 100);
   EXPECT_EQ(gate.reanchors(), 0);
-  EXPECT_LT(gate.newest_utime(), kYearUs);
+  EXPECT_LT(gate.clock_utime(), kYearUs);
 }
 
 TEST(StampGateTest, AWholeStreamThatStepsForwardIsFollowedAfterTheReanchorCount) {
@@ -68,7 +68,7 @@ TEST(StampGateTest, AWholeStreamThatStepsForwardIsFollowedAfterTheReanchorCount)
     EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAhead);
   }
   EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kReanchored);
-  EXPECT_EQ(gate.newest_utime(), s.utime);
+  EXPECT_EQ(gate.clock_utime(), s.utime);
   for (int i = 0; i < 10; ++i) {
     s.Step();
     EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
@@ -107,7 +107,7 @@ TEST(StampGateTest, AStampSentAgainAndAgainNeverReanchors) {
     EXPECT_EQ(gate.Check(forged, s.receive_s), StampGate::Verdict::kAhead);
   }
   EXPECT_EQ(gate.reanchors(), 0);
-  EXPECT_LT(gate.newest_utime(), forged);
+  EXPECT_LT(gate.clock_utime(), forged);
 }
 
 TEST(StampGateTest, ASecondPublisherInterleavedWithALiveStreamNeverReanchors) {
@@ -128,7 +128,26 @@ TEST(StampGateTest, ASecondPublisherInterleavedWithALiveStreamNeverReanchors) {
     EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
   }
   EXPECT_EQ(gate.reanchors(), 0);
-  EXPECT_EQ(gate.newest_utime(), s.utime);
+  EXPECT_NEAR(gate.ExpectedUtime(s.receive_s), static_cast<double>(s.utime), 1000.0);
+}
+
+// Replies stamped with the time of the data they answer (SLAM_ANCHORS for a request, stamped
+// with the newest SLAM node's time while the robot stands still) arrive long after their
+// stamp; they do not pull the clock back, so the next current stamp is not "ahead".
+TEST(StampGateTest, StampsBehindTheClockDoNotHoldItBack) {
+  StampGate gate;
+  Stream s;
+  EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  const Utime data_time = s.utime;
+  for (int i = 0; i < 4; ++i) {
+    s.Step(4.0);  // a reply every 4 s, all stamped with the same data time
+    EXPECT_EQ(gate.Check(data_time, s.receive_s), StampGate::Verdict::kAccepted);
+  }
+  s.Step(1.0);  // 17 s on: a current stamp
+  EXPECT_EQ(gate.Check(s.utime, s.receive_s), StampGate::Verdict::kAccepted);
+  EXPECT_EQ(gate.dropped(), 0);
+  // Ahead of the clock by more than max_ahead_s is still dropped.
+  EXPECT_EQ(gate.Check(s.utime + SecondsToUtime(6.0), s.receive_s), StampGate::Verdict::kAhead);
 }
 
 TEST(StampGateTest, APauseInTheStreamIsCoveredByTheReceiveClock) {
@@ -156,9 +175,9 @@ TEST(StampGateTest, BackwardsStampsPassUnlessBounded) {
   StampGate open;
   for (int i = 0; i < 5; ++i, s.Step()) open.Check(s.utime, s.receive_s);
   // Behind: the node's own late-input handling decides; the clock does not move back.
-  const Utime newest = open.newest_utime();
+  const Utime newest = open.clock_utime();
   EXPECT_EQ(open.Check(s.utime - kYearUs, s.receive_s), StampGate::Verdict::kAccepted);
-  EXPECT_EQ(open.newest_utime(), newest);
+  EXPECT_EQ(open.clock_utime(), newest);
 
   StampGateOptions options;
   options.max_behind_s = 10.0;
@@ -177,7 +196,7 @@ TEST(StampGateTest, BackwardsStampsPassUnlessBounded) {
   EXPECT_EQ(bounded.Check(t.utime, t.receive_s), StampGate::Verdict::kBehind);
   t.Step();
   EXPECT_EQ(bounded.Check(t.utime, t.receive_s), StampGate::Verdict::kReanchored);
-  EXPECT_EQ(bounded.newest_utime(), t.utime);
+  EXPECT_EQ(bounded.clock_utime(), t.utime);
 }
 
 TEST(StampGateTest, ExtremeStampsDoNotOverflow) {
