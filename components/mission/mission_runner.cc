@@ -178,21 +178,35 @@ class Perception {
                &s.map_doas);
     std::vector<std::string> warnings;
     for (const auto& d : s.doas) s.speech.OnDoa(d, device, &warnings);
-    for (const auto& d : s.map_doas) s.intake->OnDoa(d);
-    for (const auto& h : s.heard) s.intake->OnHeard(h);
-    result_->sound_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0;
+    if (observer_) {
+      for (const auto& d : s.doas)
+        observer_->OnDoa(common::UtimeToSeconds(d.header.utime) - start_s_, d);
+    }
+    // The observer sees each input before the sound map's intake takes it: an input can make
+    // the intake ask SLAM for anchors, whose answer reaches the intake (and the observer) at
+    // once, so a log written by the observer holds the inputs in the order the intake took them.
+    double observer_cpu_s = 0;
+    for (const auto& d : s.map_doas) {
+      if (observer_) {
+        const double c = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+        observer_->OnDoaMap(common::UtimeToSeconds(d.header.utime) - start_s_, d);
+        observer_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - c;
+      }
+      s.intake->OnDoa(d);
+    }
+    for (const auto& h : s.heard) {
+      if (observer_) {
+        const double c = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+        observer_->OnHeard(common::UtimeToSeconds(h.header.utime) - start_s_, h);
+        observer_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - c;
+      }
+      s.intake->OnHeard(h);
+    }
+    result_->sound_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0 - observer_cpu_s;
     result_->heard_calls += static_cast<int64_t>(s.heard.size());
     const double cpu1 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     for (const auto& h : s.heard) intake_.OnHeard(h);
     result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
-    if (observer_) {
-      for (const auto& d : s.map_doas)
-        observer_->OnDoaMap(common::UtimeToSeconds(d.header.utime) - start_s_, d);
-      for (const auto& d : s.doas)
-        observer_->OnDoa(common::UtimeToSeconds(d.header.utime) - start_s_, d);
-      for (const auto& h : s.heard)
-        observer_->OnHeard(common::UtimeToSeconds(h.header.utime) - start_s_, h);
-    }
   }
 
   // SOUND_MAP from the sound map's intake.
@@ -422,8 +436,8 @@ class Loop : public sim::SimSink {
     const std::vector<int>& ids = covariance_ids_;
     const sarmap::slam_anchors_t msg =
         slam::AnchorsMessage(slam_, ids, joint_covariance_, loop_closed);
-    sound->intake->OnAnchors(msg);
     if (observer_) observer_->OnSlamAnchors(Seconds(msg.header.utime) - start_s_, msg);
+    sound->intake->OnAnchors(msg);  // after the observer: see Perception::OnAudio
   }
 
   // POSE as sarmap-slam publishes it: the scan's pose, with the latest node's covariance from
@@ -445,8 +459,8 @@ class Loop : public sim::SimSink {
     cov(2, 2) += syaw * syaw;
     common::SetPlanarCovariance(cov, msg.covariance);
     msg.node_id = r.node_id;
-    if (perception_) perception_->OnPose(msg);
     if (observer_) observer_->OnPose(t, msg);
+    if (perception_) perception_->OnPose(msg);  // after the observer: see Perception::OnAudio
     if (have_covariance) PublishAnchors(r.loop_closed);
   }
 
