@@ -28,6 +28,9 @@ class SoundMapNode {
   void Finish();
 
   const OnlineSoundMap& map() const { return *map_; }
+  // Inputs dropped: stamped far from their stream's clock / older than what the queue applied.
+  int64_t off_clock() const { return gates_.dropped(); }
+  int64_t dropped_late() const { return intake_->dropped_late(); }
 
  private:
   enum Gate { kPoseGate = 0, kAnchorsGate = 1, kDoaGate = 2, kHeardGate = 3 };
