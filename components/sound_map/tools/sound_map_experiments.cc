@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "common/args.h"
-#include "sound_map/experiments.h"
 #include "handheld_sound_map/linear_array.h"
+#include "sound_map/experiments.h"
 
 using namespace sarmap::sound_map;
 
@@ -28,7 +28,8 @@ double Std(const std::vector<double>& v) {
 }
 
 void Fig45(int runs) {
-  printf("== Fig. 4.5: odometry + sound only, square %.0f m side, %d Monte Carlo runs per cell\n", 10.0, runs);
+  printf("== Fig. 4.5: odometry + sound only, square %.0f m side, %d Monte Carlo runs per cell\n",
+         10.0, runs);
   printf("noise_scale odo_sigma_m odo_sigma_deg | method            dim  rms_m(mean) conv_rate\n");
   const std::vector<double> scales = {1, 2, 4, 8, 16, 32, 64};
   for (double s : scales) {
@@ -45,16 +46,19 @@ void Fig45(int runs) {
           rms.push_back(res.score.rms_m);
           conv.push_back(res.score.convergence_rate);
         }
-        printf("%6.0f      %.4f      %.4f     | %-17s %s   %8.3f   %6.2f\n", s, 0.001 * s, 0.016 * s,
-               MethodName(m), three_d ? "3D" : "2D", Mean(rms), Mean(conv));
+        printf("%6.0f      %.4f      %.4f     | %-17s %s   %8.3f   %6.2f\n", s, 0.001 * s,
+               0.016 * s, MethodName(m), three_d ? "3D" : "2D", Mean(rms), Mean(conv));
       }
     }
   }
 }
 
 void Fig411(int runs) {
-  printf("== Fig. 4.11: odometry (0.02 m, 5 deg per 0.2 m step) + range-bearing landmarks, %d runs\n", runs);
-  printf("length_m | method      rms_mean_m rms_std_m conv_rate  time_s  sound_step_ms(mean/max)\n");
+  printf(
+      "== Fig. 4.11: odometry (0.02 m, 5 deg per 0.2 m step) + range-bearing landmarks, %d runs\n",
+      runs);
+  printf(
+      "length_m | method      rms_mean_m rms_std_m conv_rate  time_s  sound_step_ms(mean/max)\n");
   for (double side : {5.0, 10.0, 20.0, 30.0, 45.0}) {
     for (Method m : {Method::kCiSubmaps, Method::kFullEkf, Method::kJoint}) {
       std::vector<double> rms, conv, t, step, stepmax;
@@ -76,8 +80,8 @@ void Fig411(int runs) {
         step.push_back(res.sound_step_ms_mean);
         stepmax.push_back(res.sound_step_ms_max);
       }
-      printf("%7.1f  | %-11s %8.3f  %8.3f   %6.2f  %7.3f   %.4f / %.4f\n", length, MethodName(m), Mean(rms),
-             Std(rms), Mean(conv), Mean(t), Mean(step), Mean(stepmax));
+      printf("%7.1f  | %-11s %8.3f  %8.3f   %6.2f  %7.3f   %.4f / %.4f\n", length, MethodName(m),
+             Mean(rms), Std(rms), Mean(conv), Mean(t), Mean(step), Mean(stepmax));
     }
   }
 }
@@ -92,7 +96,8 @@ struct Knobs {
   double doa_quantum_rad = 0;
   double updown_m = 0.6;
   double landmark_density = -1;
-  std::vector<int> variants = {1, 3, 4, 2};  // table5.1 rows  // per m^2 (-1: the simulation's default)
+  std::vector<int> variants = {1, 3, 4,
+                               2};  // table5.1 rows  // per m^2 (-1: the simulation's default)
   Eigen::Vector3d axis_sq = Eigen::Vector3d::Zero();  // summed squared error per axis (converged)
   int axis_n = 0;
 };
@@ -118,9 +123,15 @@ LinearRunResult RunTable51(LinearSimConfig c, int r, int num_hypotheses = 0) {
 }
 
 void Table51(int runs) {
-  printf("== Table 5.1 / Figs. 5.6-5.7: linear array, 8 sources, %d runs (thesis RMS 0.1302 m, 0.2688 m)\n", runs);
-  printf("rms: sqrt(mean |error|^2) over converged sources, averaged over runs; floor: least squares from the\n"
-         "true poses started at the truth (all heard sources); per source: mean error when converged (m) / runs converged\n");
+  printf(
+      "== Table 5.1 / Figs. 5.6-5.7: linear array, 8 sources, %d runs (thesis RMS 0.1302 m, 0.2688 "
+      "m)\n",
+      runs);
+  printf(
+      "rms: sqrt(mean |error|^2) over converged sources, averaged over runs; floor: least squares "
+      "from the\n"
+      "true poses started at the truth (all heard sources); per source: mean error when converged "
+      "(m) / runs converged\n");
   // Variants of trajectory 1 (the thesis' sensor orientation cannot be read back): 1 faces
   // along the path, 3 is turned 80 deg from facing the source on the arcs, 4 keeps facing
   // along the side while side-stepping round the source.
@@ -148,19 +159,24 @@ void Table51(int runs) {
         }
       pose_t.push_back(res.pose_rms_m);
       pose_r.push_back(res.pose_rms_rad * 180 / M_PI);
-      if (g_knobs.verbose) printf("  run %d: rms %.4f conv %.3f floor %.4f\n", r, res.rms_m, res.convergence_rate, res.floor_rms_m);
+      if (g_knobs.verbose)
+        printf("  run %d: rms %.4f conv %.3f floor %.4f\n", r, res.rms_m, res.convergence_rate,
+               res.floor_rms_m);
     }
-    printf("trajectory %s: rms %.4f m (std %.4f, pooled %.4f), convergence rate %.3f (within 1 m: %.3f), floor %.4f m\n",
-           traj == 1   ? "1 (facing along the path)"
-           : traj == 3 ? "1 (arcs: 80 deg off the source)"
-           : traj == 4 ? "1 (facing along the side)"
-                       : "2",
-           Mean(rms), Std(rms), std::sqrt(Mean(pooled)), Mean(conv), Mean(ok), Mean(floor));
+    printf(
+        "trajectory %s: rms %.4f m (std %.4f, pooled %.4f), convergence rate %.3f (within 1 m: "
+        "%.3f), floor %.4f m\n",
+        traj == 1   ? "1 (facing along the path)"
+        : traj == 3 ? "1 (arcs: 80 deg off the source)"
+        : traj == 4 ? "1 (facing along the side)"
+                    : "2",
+        Mean(rms), Std(rms), std::sqrt(Mean(pooled)), Mean(conv), Mean(ok), Mean(floor));
     const Eigen::Vector3d axis_rms = (g_knobs.axis_sq / std::max(1, g_knobs.axis_n)).cwiseSqrt();
     printf("   rms per axis x %.3f y %.3f z %.3f;", axis_rms.x(), axis_rms.y(), axis_rms.z());
     printf(" poses rms %.3f m %.2f deg;", Mean(pose_t), Mean(pose_r));
     printf(" per source:");
-    for (int j = 0; j < 8; ++j) printf(" %.3f/%d", err_n[j] ? err_sum[j] / err_n[j] : NAN, err_n[j]);
+    for (int j = 0; j < 8; ++j)
+      printf(" %.3f/%d", err_n[j] ? err_sum[j] / err_n[j] : NAN, err_n[j]);
     printf("\n");
     fflush(stdout);
   }
@@ -170,7 +186,10 @@ void Table51(int runs) {
 // trajectory 1 sees its sources "mostly around 0 degree DOA" (broadside), which facing the
 // source gives; exactly facing it leaves a pair's height unobservable, so the offset is swept.
 void Table51Offsets(int runs) {
-  printf("== Table 5.1, trajectory 1, sensor facing the source on the arcs turned by an offset, %d runs\n", runs);
+  printf(
+      "== Table 5.1, trajectory 1, sensor facing the source on the arcs turned by an offset, %d "
+      "runs\n",
+      runs);
   for (double offset_deg : {10.0, 20.0, 30.0, 45.0, 60.0, 80.0}) {
     std::vector<double> rms, conv, ok;
     for (int r = 0; r < runs; ++r) {
@@ -182,8 +201,8 @@ void Table51Offsets(int runs) {
       conv.push_back(res.convergence_rate);
       ok.push_back(res.correct_convergence_rate);
     }
-    printf("offset %4.0f deg: rms %.4f m (std %.4f), convergence rate %.3f (within 1 m: %.3f)\n", offset_deg,
-           Mean(rms), Std(rms), Mean(conv), Mean(ok));
+    printf("offset %4.0f deg: rms %.4f m (std %.4f), convergence rate %.3f (within 1 m: %.3f)\n",
+           offset_deg, Mean(rms), Std(rms), Mean(conv), Mean(ok));
     fflush(stdout);
   }
 }
@@ -218,40 +237,55 @@ int main(int argc, char** argv) {
                                      "Prints the simulation tables of Su 2017 §4.4.1 and §5.5.1.");
     std::string which = "all";
     int runs = 20;
-    parser.AddFlag("--table", &which, "fig4.5 | fig4.11 | table5.1 | table5.1-offsets | fig5.8 | all");
+    parser.AddFlag("--table", &which,
+                   "fig4.5 | fig4.11 | table5.1 | table5.1-offsets | fig5.8 | all");
     parser.AddFlag("--runs", &runs, "Monte Carlo runs per cell (thesis: 20; Fig. 4.11: 10)");
     MultiHypothesisOptions& h = g_knobs.mapper.hypotheses;
-    int anchor_ld = h.linearity_from_anchor, chi2_noise = h.chi2_with_noise, oracle = 0, verbose = 0;
+    int anchor_ld = h.linearity_from_anchor, chi2_noise = h.chi2_with_noise, oracle = 0,
+        verbose = 0;
     parser.AddFlag("--nh", &g_knobs.mapper.num_hypotheses, "number of hypotheses N_h (table5.1)");
-    parser.AddFlag("--ld", &h.linearity_threshold, "linearity-index threshold of convergence (5.27)");
-    parser.AddFlag("--anchor-ld", &anchor_ld, "1: linearity index from the anchor as printed (5.23); 0: from the sensor");
-    parser.AddFlag("--chi2-noise", &chi2_noise, "1: chi-square with S = HPH' + Q; 0: S = HPH' as printed (5.21)");
-    parser.AddFlag("--prune-mean", &h.prune_mean_chi2, "prune when the mean chi-square exceeds this (5.22)");
-    parser.AddFlag("--prune-z", &h.prune_z, "also prune above the chi2(n)/n quantile at this z (0: off)");
-    parser.AddFlag("--relative-prune", &h.relative_prune_chi2, "likelihood-ratio pruning margin (0: off)");
+    parser.AddFlag("--ld", &h.linearity_threshold,
+                   "linearity-index threshold of convergence (5.27)");
+    parser.AddFlag("--anchor-ld", &anchor_ld,
+                   "1: linearity index from the anchor as printed (5.23); 0: from the sensor");
+    parser.AddFlag("--chi2-noise", &chi2_noise,
+                   "1: chi-square with S = HPH' + Q; 0: S = HPH' as printed (5.21)");
+    parser.AddFlag("--prune-mean", &h.prune_mean_chi2,
+                   "prune when the mean chi-square exceeds this (5.22)");
+    parser.AddFlag("--prune-z", &h.prune_z,
+                   "also prune above the chi2(n)/n quantile at this z (0: off)");
+    parser.AddFlag("--relative-prune", &h.relative_prune_chi2,
+                   "likelihood-ratio pruning margin (0: off)");
     parser.AddFlag("--cluster", &h.cluster_radius_m, "survivors must agree within this radius (m)");
     parser.AddFlag("--min-obs", &h.min_observations, "updates before a hypothesis may converge");
     parser.AddFlag("--dmin", &h.min_distance_m, "d_min (rho_0 = 1/(3 d_min))");
     int mirror = g_knobs.mapper.mirror_check;
     parser.AddFlag("--mirror", &mirror,
                    "1: keep a source or its mirror image through the poses' plane, the better");
-    parser.AddFlag("--window", &g_knobs.mapper.window_keyframes, "keyframes of the online joint optimisation");
+    parser.AddFlag("--window", &g_knobs.mapper.window_keyframes,
+                   "keyframes of the online joint optimisation");
     parser.AddFlag("--updown", &g_knobs.updown_m, "height of the up-and-down moves (m)");
-    parser.AddFlag("--landmark-density", &g_knobs.landmark_density, "RGB-D landmarks per m^2 of floor (-1: default)");
-    parser.AddFlag("--noise-scale", &g_knobs.noise_scale, "multiplies the simulated DOA noise (1: 10-20 deg)");
+    parser.AddFlag("--landmark-density", &g_knobs.landmark_density,
+                   "RGB-D landmarks per m^2 of floor (-1: default)");
+    parser.AddFlag("--noise-scale", &g_knobs.noise_scale,
+                   "multiplies the simulated DOA noise (1: 10-20 deg)");
     parser.AddFlag("--seed0", &g_knobs.seed0, "first seed of the Monte Carlo runs");
     parser.AddFlag("--oracle", &oracle, "1: sources start converged at the truth (diagnostic)");
     int oracle_poses = 0;
-    parser.AddFlag("--oracle-poses", &oracle_poses, "1: the mapper uses the true poses (diagnostic)");
+    parser.AddFlag("--oracle-poses", &oracle_poses,
+                   "1: the mapper uses the true poses (diagnostic)");
     parser.AddFlag("--verbose", &verbose, "1: one line per run");
     std::string doa = "calibration";
     std::string doa_file = std::string(SARMAP_DATA_DIR) + "/audio/ssm/gp_doa_calibration.csv";
     double quantum_deg = 5;
-    parser.AddFlag("--doa", &doa,
-                   "simulated DOA error (table5.1, fig5.8): calibration (a GP of the real array's error "
-                   "against the true angle, as §5.5.1) | gaussian (unbiased 10-20 deg noise)");
-    parser.AddFlag("--doa-file", &doa_file, "calibration pairs raw_deg,true_deg (--doa calibration)");
-    parser.AddFlag("--quantum-deg", &quantum_deg, "raw DOAs rounded to this grid (--doa calibration; 0: off)");
+    parser.AddFlag(
+        "--doa", &doa,
+        "simulated DOA error (table5.1, fig5.8): calibration (a GP of the real array's error "
+        "against the true angle, as §5.5.1) | gaussian (unbiased 10-20 deg noise)");
+    parser.AddFlag("--doa-file", &doa_file,
+                   "calibration pairs raw_deg,true_deg (--doa calibration)");
+    parser.AddFlag("--quantum-deg", &quantum_deg,
+                   "raw DOAs rounded to this grid (--doa calibration; 0: off)");
     std::string model = "forward";
     parser.AddFlag(
         "--sensor-model", &model,
@@ -261,9 +295,10 @@ int main(int argc, char** argv) {
         "5.5-5.6). With --doa gaussian: constant (1 deg, a diagnostic) or anything else for the "
         "GP of a simulated calibration");
     std::string variants = "1,3,4,2";
-    parser.AddFlag("--variants", &variants,
-                   "table5.1 rows: 1 (trajectory 1 facing along the path), 3 (arcs 80 deg off the source), "
-                   "4 (facing along the side), 2 (trajectory 2)");
+    parser.AddFlag(
+        "--variants", &variants,
+        "table5.1 rows: 1 (trajectory 1 facing along the path), 3 (arcs 80 deg off the source), "
+        "4 (facing along the side), 2 (trajectory 2)");
     if (!parser.Parse(argc, argv)) return 0;
     g_knobs.variants.clear();
     for (char ch : variants)

@@ -104,13 +104,17 @@ int main(int argc, char** argv) {
     mic_calibrate::LcmAudioLogStats st;
     const mic_calibrate::Recording sync = mic_calibrate::ReadLcmAudioLog(sync_log, "AUDIO", &st);
     const mic_calibrate::Recording async = mic_calibrate::ReadLcmAudioLog(async_log, "AUDIO_", &st);
-    if (static_cast<int>(sync.channels.size()) != N || static_cast<int>(async.channels.size()) != N ||
-        static_cast<int>(cal.start_offsets_s.size()) != N || static_cast<int>(cal.clock_drift.size()) != N) {
-      throw common::ArgError("need " + std::to_string(N) + " channels in both logs and the calibration");
+    if (static_cast<int>(sync.channels.size()) != N ||
+        static_cast<int>(async.channels.size()) != N ||
+        static_cast<int>(cal.start_offsets_s.size()) != N ||
+        static_cast<int>(cal.clock_drift.size()) != N) {
+      throw common::ArgError("need " + std::to_string(N) +
+                             " channels in both logs and the calibration");
     }
     const double rate = sync.sample_rate_hz;
     const size_t k0 = static_cast<size_t>(std::max(0.0, from_s) * rate);
-    const size_t len = std::min<size_t>(sync.channels[0].size(), static_cast<size_t>(to_s * rate)) - k0;
+    const size_t len =
+        std::min<size_t>(sync.channels[0].size(), static_cast<size_t>(to_s * rate)) - k0;
     std::vector<std::vector<float>> s(N), corrected(N), raw(N);
     for (int i = 0; i < N; ++i) {
       s[i].assign(sync.channels[i].begin() + k0, sync.channels[i].begin() + k0 + len);
@@ -130,12 +134,14 @@ int main(int argc, char** argv) {
     for (const auto& [k, v] : d_sync) mean_sync += v / std::max<size_t>(1, d_sync.size());
     printf("window %.1f-%.1f s: synchronous array %zu active blocks, mean angle %.2f deg\n",
            k0 / rate, (k0 + len) / rate, d_sync.size(), mean_sync);
-    for (const auto& [name, d] : {std::pair<const char*, const std::map<int64_t, double>*>{
-                                      "calibrated async", &d_cor},
-                                  {"uncorrected async", &d_raw}}) {
+    for (const auto& [name, d] :
+         {std::pair<const char*, const std::map<int64_t, double>*>{"calibrated async", &d_cor},
+          {"uncorrected async", &d_raw}}) {
       const Stats c = Compare(d_sync, *d);
-      printf("%-18s vs synchronous: %d common blocks, |difference| mean %.3f deg, median %.3f, "
-             "95%% %.3f, max %.3f\n", name, c.blocks, c.mean, c.median, c.p95, c.max);
+      printf(
+          "%-18s vs synchronous: %d common blocks, |difference| mean %.3f deg, median %.3f, "
+          "95%% %.3f, max %.3f\n",
+          name, c.blocks, c.mean, c.median, c.p95, c.max);
     }
     return 0;
   });

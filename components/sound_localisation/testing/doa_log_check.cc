@@ -16,7 +16,8 @@
 
 int main(int argc, char** argv) {
   if (argc < 6) {
-    std::fprintf(stderr, "usage: doa_log_check LOG AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES [DOA_CHANNEL]\n");
+    std::fprintf(stderr,
+                 "usage: doa_log_check LOG AZ_DEG EL_DEG TOL_DEG MIN_MESSAGES [DOA_CHANNEL]\n");
     return 2;
   }
   std::unique_ptr<sarmap::logtools::LcmLogReader> log;
@@ -61,10 +62,14 @@ int main(int argc, char** argv) {
   std::vector<double> az_err;
   for (double a : azs) az_err.push_back(std::abs(std::remainder(a - az, 360.0)));
   const double maz = median(az_err), mel = median(els);
-  std::printf("AUDIO messages %d, DOA messages %d, with sources %zu (tracked %d); median |az err| %.2f deg, median "
-              "el %.2f deg (last audio utime %lld)\n",
-              audio_messages, doa_messages, azs.size(), tracked, maz, mel, static_cast<long long>(last_audio_utime));
-  const bool ok = doa_messages >= min_messages && maz <= tol && std::abs(mel - el) <= tol && tracked > 0;
+  std::printf(
+      "AUDIO messages %d, DOA messages %d, with sources %zu (tracked %d); median |az err| %.2f "
+      "deg, median "
+      "el %.2f deg (last audio utime %lld)\n",
+      audio_messages, doa_messages, azs.size(), tracked, maz, mel,
+      static_cast<long long>(last_audio_utime));
+  const bool ok =
+      doa_messages >= min_messages && maz <= tol && std::abs(mel - el) <= tol && tracked > 0;
   std::printf("%s\n", ok ? "PASS" : "FAIL");
   return ok ? 0 : 1;
 }

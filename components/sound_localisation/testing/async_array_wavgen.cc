@@ -13,7 +13,6 @@
 // Clock model (async_alignment.h): card sample k records the synchronous signal at reference
 // sample r = (k - tau fs) / (1 + delta).
 #include <Eigen/Core>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -49,7 +48,8 @@ int main(int argc, char** argv) {
   std::vector<float> source(n, 0.0f);
   for (size_t i = lead; i < n; ++i) source[i] = 0.05f * normal(rng);
   sound::Room room;
-  const auto sync = sound::SimulateRoom(room, mics.colwise() + centre, {{centre + 1.5 * u, source}}, n, 2e-4, 3);
+  const auto sync =
+      sound::SimulateRoom(room, mics.colwise() + centre, {{centre + 1.5 * u, source}}, n, 2e-4, 3);
 
   // Per microphone: card, channel on that card; per card: channels, tau, drift.
   const int mic_card[4] = {0, 0, 1, 2}, mic_channel[4] = {0, 1, 1, 0};
@@ -62,19 +62,23 @@ int main(int argc, char** argv) {
     for (auto& ch : buf.channels)
       for (float& v : ch) v = 2e-4f * normal(rng);  // channels without a microphone: noise
     for (int m = 0; m < 4; ++m)
-      if (mic_card[m] == c) buf.channels[mic_channel[m]] = sarmap::sound::RecordAsynchronously(sync[m], card_tau_s[c], card_drift[c], fs, 48);
+      if (mic_card[m] == c)
+        buf.channels[mic_channel[m]] =
+            sarmap::sound::RecordAsynchronously(sync[m], card_tau_s[c], card_drift[c], fs, 48);
     audio::WriteWav(dir + "/card" + std::to_string(c) + ".wav", buf);
   }
   std::ofstream y(dir + "/array.yaml");
   y << "# written by async_array_wavgen: ReSpeaker-shaped array on three cards\n"
     << "name: async_respeaker\nsample_rate_hz: 16000\nspeed_of_sound_mps: 343.0\ngeometry: planar\n"
     << "channel_map: [0, 1, 1, 0]\n"
-    << "mic_positions_m: [" << h << ", " << h << ", 0.005,  " << -h << ", " << h << ", 0.005,  " << -h << ", " << -h
-    << ", 0.005,  " << h << ", " << -h << ", 0.005]\n";
+    << "mic_positions_m: [" << h << ", " << h << ", 0.005,  " << -h << ", " << h << ", 0.005,  "
+    << -h << ", " << -h << ", 0.005,  " << h << ", " << -h << ", 0.005]\n";
   y << "start_offsets_s: [0.0, 0.0, " << card_tau_s[1] << ", " << card_tau_s[2] << "]\n"
     << "clock_drift: [0.0, 0.0, " << card_drift[1] << ", " << card_drift[2] << "]\n"
     << "sensor_model: constant\ndoa_sigma_deg: 3.0\n";
-  std::printf("wrote %s/card{0,1,2}.wav and array.yaml: source azimuth 47.3 deg, elevation 20 deg, %.1f s\n",
-              dir.c_str(), seconds);
+  std::printf(
+      "wrote %s/card{0,1,2}.wav and array.yaml: source azimuth 47.3 deg, elevation 20 deg, %.1f "
+      "s\n",
+      dir.c_str(), seconds);
   return 0;
 }

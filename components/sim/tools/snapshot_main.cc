@@ -1,11 +1,10 @@
 // sarmap-sim-snapshot: renders what the simulated camera sees, to preview a world file.
 //   sarmap-sim-snapshot --world config/worlds/lab_lit.yaml --time 2.5 --out /tmp/lab
 // writes <out>_rgb.png and <out>_depth.png (depth false-coloured, black = no reading).
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <cstdio>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "common/args.h"
 #include "common/options.h"
@@ -25,7 +24,8 @@ struct NullSink : sarmap::sim::SimSink {
 int main(int argc, char** argv) {
   using namespace sarmap;
   return common::RunMain("sarmap-sim-snapshot", [&] {
-    common::ArgParser args("sarmap-sim-snapshot", "Render the simulated camera's view of a world to PNG files.");
+    common::ArgParser args("sarmap-sim-snapshot",
+                           "Render the simulated camera's view of a world to PNG files.");
     common::NodeArgs node_args;
     std::string world, out = "snapshot";
     double time_s = 0;
@@ -54,14 +54,16 @@ int main(int argc, char** argv) {
     cv::Mat rgb(view.height, view.width, CV_8UC3, const_cast<uint8_t*>(view.rgb.data())), bgr;
     cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
     cv::imwrite(out + "_rgb.png", bgr);
-    cv::Mat depth(view.height, view.width, CV_16UC1, const_cast<uint16_t*>(view.depth_mm.data())), scaled, coloured;
+    cv::Mat depth(view.height, view.width, CV_16UC1, const_cast<uint16_t*>(view.depth_mm.data())),
+        scaled, coloured;
     depth.convertTo(scaled, CV_8UC1, 255.0 / 5000.0);
     cv::applyColorMap(scaled, coloured, cv::COLORMAP_JET);
     coloured.setTo(cv::Scalar(0, 0, 0), depth == 0);
     cv::imwrite(out + "_depth.png", coloured);
     const auto pose = simulator.map_from_base();
-    std::printf("robot at x=%.2f y=%.2f yaw=%.2f; wrote %s_rgb.png, %s_depth.png\n", pose.translation().x(),
-                pose.translation().y(), pose.yaw_rad(), out.c_str(), out.c_str());
+    std::printf("robot at x=%.2f y=%.2f yaw=%.2f; wrote %s_rgb.png, %s_depth.png\n",
+                pose.translation().x(), pose.translation().y(), pose.yaw_rad(), out.c_str(),
+                out.c_str());
     return 0;
   });
 }

@@ -26,10 +26,10 @@
 #include "common/node_main.h"
 #include "common/robot_config.h"
 #include "common/transform.h"
-#include "log-tools/node_replay.h"
-#include "sarmap/sim_truth_t.hpp"
 #include "handheld_sound_map/handheld_sound_map_messages.h"
 #include "handheld_sound_map/handheld_sound_map_node.h"
+#include "log-tools/node_replay.h"
+#include "sarmap/sim_truth_t.hpp"
 
 namespace {
 

@@ -105,14 +105,18 @@ int main(int argc, char** argv) {
     double joint_pose_freedom = 1.0, anchor_covariance_scale = 1.0;
     std::string trajectory_path;
     parser.AddPositional("log", &log_path, "LCM log file");
-    parser.AddSwitch("--no-anchors", &no_anchors, "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
+    parser.AddSwitch("--no-anchors", &no_anchors,
+                     "ignore SLAM_ANCHORS (POSE alone: the robot's motion)");
     parser.AddSwitch(
         "--heard-check", &heard_check,
         "print every heard keyword direction (PEOPLE_AUDIO) against the true bearings");
-    parser.AddSwitch("--doa-check", &doa_check, "compare every DOA with the true bearings of the SIM_TRUTH sources");
-    parser.AddSwitch("--truth-poses", &truth_poses_in,
-                     "diagnosis: SIM_TRUTH robot poses instead of POSE and SLAM_ANCHORS (map = world frame)");
-    parser.AddFlag("--doa-trace", &doa_trace, "with --doa-check: print every DOA nearest this true source");
+    parser.AddSwitch("--doa-check", &doa_check,
+                     "compare every DOA with the true bearings of the SIM_TRUTH sources");
+    parser.AddSwitch(
+        "--truth-poses", &truth_poses_in,
+        "diagnosis: SIM_TRUTH robot poses instead of POSE and SLAM_ANCHORS (map = world frame)");
+    parser.AddFlag("--doa-trace", &doa_trace,
+                   "with --doa-check: print every DOA nearest this true source");
     parser.AddFlag("--truth-channel", &truth_channel, "simulator ground truth channel");
     parser.AddFlag("--relocalise", &relocalise_config,
                    "run sarmap-sound-localisation's adapter (this config file) over the log's "
@@ -125,15 +129,19 @@ int main(int argc, char** argv) {
                        "with --relocalise: override a sarmap-sound-localisation option (k=v, e.g. "
                        "map_localiser.onset_rise_db=0)");
     parser.AddFlag("--doa-shift", &doa_shift_s,
-                   "diagnosis: add this many seconds to every DOA time (does the map improve with a timing fix?)");
-    parser.AddSwitch("--pose-check", &pose_check,
-                     "print POSE against SIM_TRUTH along the path (every 3 s) and its RMS against a time lag");
-    parser.AddFlag("--trajectory", &trajectory_path,
-                   "diagnosis: poses from this file (t x y yaw per line, sarmap-slam-offline --output on the "
-                   "same log) instead of POSE, SLAM_ANCHORS ignored: try SLAM settings offline");
-    parser.AddSwitch("--joint", &joint,
-                     "also solve the joint optimisation (§4.2) of the trajectory (POSE, or the truth with "
-                     "--truth-poses) and the final map's sources from every DOA, and score it");
+                   "diagnosis: add this many seconds to every DOA time (does the map improve with "
+                   "a timing fix?)");
+    parser.AddSwitch(
+        "--pose-check", &pose_check,
+        "print POSE against SIM_TRUTH along the path (every 3 s) and its RMS against a time lag");
+    parser.AddFlag(
+        "--trajectory", &trajectory_path,
+        "diagnosis: poses from this file (t x y yaw per line, sarmap-slam-offline --output on the "
+        "same log) instead of POSE, SLAM_ANCHORS ignored: try SLAM settings offline");
+    parser.AddSwitch(
+        "--joint", &joint,
+        "also solve the joint optimisation (§4.2) of the trajectory (POSE, or the truth with "
+        "--truth-poses) and the final map's sources from every DOA, and score it");
     parser.AddFlag("--joint-pose-freedom", &joint_pose_freedom,
                    "with --joint: multiplies the trajectory's relative-pose sigmas (larger lets "
                    "the sound bend it)");
@@ -141,7 +149,8 @@ int main(int argc, char** argv) {
         "--anchor-covariance-scale", &anchor_covariance_scale,
         "diagnosis: multiply SLAM_ANCHORS' covariance by this (with use_slam_covariance)");
     parser.AddSwitch("--trace-evidence", &trace_evidence,
-                     "diagnosis: at the end, print every source where the bearings cross (map.evidence) with its "
+                     "diagnosis: at the end, print every source where the bearings cross "
+                     "(map.evidence) with its "
                      "support and the nearest true source");
     parser.AddFlag(
         "--report-every", &report_every_s,
@@ -519,9 +528,10 @@ int main(int argc, char** argv) {
         sum2 += e * e;
         max_yaw = std::max(max_yaw, std::abs(sound_map::WrapAngle(w.yaw - tr.yaw)));
       }
-      printf("POSE against SIM_TRUTH: %zu poses, RMS %.3f m, max %.3f m, max heading error %.2f deg\n",
-             slam_poses.size(), std::sqrt(sum2 / std::max<size_t>(1, slam_poses.size())), max_pos,
-             max_yaw * 180 / M_PI);
+      printf(
+          "POSE against SIM_TRUTH: %zu poses, RMS %.3f m, max %.3f m, max heading error %.2f deg\n",
+          slam_poses.size(), std::sqrt(sum2 / std::max<size_t>(1, slam_poses.size())), max_pos,
+          max_yaw * 180 / M_PI);
       if (pose_check && !slam_poses.empty()) {
         const Utime t0 = slam_poses.begin()->first;
         Utime next = t0;
@@ -542,8 +552,8 @@ int main(int argc, char** argv) {
             s2 += std::pow(w.x - tr.x, 2) + std::pow(w.y - tr.y, 2);
             y2 += std::pow(sound_map::WrapAngle(w.yaw - tr.yaw), 2);
           }
-          printf("  lag %+.1f s: RMS %.3f m, heading RMS %.2f deg\n", lag, std::sqrt(s2 / slam_poses.size()),
-                 std::sqrt(y2 / slam_poses.size()) * 180 / M_PI);
+          printf("  lag %+.1f s: RMS %.3f m, heading RMS %.2f deg\n", lag,
+                 std::sqrt(s2 / slam_poses.size()), std::sqrt(y2 / slam_poses.size()) * 180 / M_PI);
         }
         // The sound map's anchors (SLAM nodes) as SLAM_ANCHORS gives them, against the truth at
         // the time their node was current, every 5 s.
@@ -620,10 +630,13 @@ int main(int argc, char** argv) {
           errors[name].push_back(best);
           if (best < 10 && best_active) ++classes[name][s.sound_class];
           if (name == doa_trace)
-            printf("  trace t=%6.2f robot (%5.2f, %5.2f, %6.1f deg) track %3ld doa %7.1f true %7.1f err %6.1f sigma %.1f\n",
-                   (t - doa_log.front().first) * 1e-6, base.x, base.y, base.yaw * 180 / M_PI,
-                   static_cast<long>(s.track_id), s.azimuth_rad * 180 / M_PI,
-                   (s.azimuth_rad * 180 / M_PI) - signed_best, signed_best, std::sqrt(s.covariance[0]) * 180 / M_PI);
+            printf(
+                "  trace t=%6.2f robot (%5.2f, %5.2f, %6.1f deg) track %3ld doa %7.1f true %7.1f "
+                "err %6.1f sigma %.1f\n",
+                (t - doa_log.front().first) * 1e-6, base.x, base.y, base.yaw * 180 / M_PI,
+                static_cast<long>(s.track_id), s.azimuth_rad * 180 / M_PI,
+                (s.azimuth_rad * 180 / M_PI) - signed_best, signed_best,
+                std::sqrt(s.covariance[0]) * 180 / M_PI);
           if (best < 25) signed_errors[name].push_back(signed_best);
           all.push_back(best);
         }
@@ -635,12 +648,14 @@ int main(int argc, char** argv) {
       };
       int within10 = 0;
       for (double e : all) within10 += e < 10;
-      printf("DOA check: %zu DOAs, %d within 10 deg of a true source, median error %.1f deg\n", all.size(), within10,
-             median(all));
+      printf("DOA check: %zu DOAs, %d within 10 deg of a true source, median error %.1f deg\n",
+             all.size(), within10, median(all));
       for (const auto& [name, v] : errors) {
-        printf("  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg; classes within 10 deg "
-               "while it sounded:",
-               name.c_str(), v.size(), median(v), median(signed_errors[name]));
+        printf(
+            "  nearest %-18s %4zu DOAs, median %.1f deg; within 25 deg: signed median %.1f deg; "
+            "classes within 10 deg "
+            "while it sounded:",
+            name.c_str(), v.size(), median(v), median(signed_errors[name]));
         for (const auto& [c, n] : classes[name]) printf(" %s %d", ClassName(c), n);
         printf("\n");
       }
@@ -667,7 +682,8 @@ int main(int argc, char** argv) {
         if (after == slam_poses.end() || after == slam_poses.begin()) return false;
         const auto before = std::prev(after);
         if (after->first - before->first > 2000000) return false;
-        const double a = static_cast<double>(t - before->first) / static_cast<double>(after->first - before->first);
+        const double a = static_cast<double>(t - before->first) /
+                         static_cast<double>(after->first - before->first);
         const Pose2 d = sound_map::Between(before->second, after->second);
         *out = sound_map::Compose(before->second, Pose2(a * d.x, a * d.y, a * d.yaw));
         return true;
@@ -712,10 +728,12 @@ int main(int argc, char** argv) {
       sound_map::JointProblem2d problem;
       const auto rep = sound_map::SolveJointFromLog(poses, bearings, init, mount,
                                                     options.map.three_d, jo, &problem);
-      printf("joint optimisation (§4.2) on the log: %zu pose nodes, %zu bearing edges to %zu sources, solved in %.3f s "
-             "(%d iterations), cost %.1f -> %.1f\n",
-             problem.poses.size(), problem.sound_edges.size(), init.size(), rep.solve_seconds, rep.iterations,
-             rep.initial_cost, rep.final_cost);
+      printf(
+          "joint optimisation (§4.2) on the log: %zu pose nodes, %zu bearing edges to %zu sources, "
+          "solved in %.3f s "
+          "(%d iterations), cost %.1f -> %.1f\n",
+          problem.poses.size(), problem.sound_edges.size(), init.size(), rep.solve_seconds,
+          rep.iterations, rep.initial_cost, rep.final_cost);
       if (have_truth) {
         for (const auto& ts : truth.sources) {
           const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
@@ -725,7 +743,8 @@ int main(int argc, char** argv) {
             best_ci = std::min(best_ci, (to_world(init[j]) - p).norm());
             best_joint = std::min(best_joint, (to_world(problem.sources[j]) - p).norm());
           }
-          printf("  truth %-18s nearest source: CI map %.3f m, joint %.3f m\n", ts.name.c_str(), best_ci, best_joint);
+          printf("  truth %-18s nearest source: CI map %.3f m, joint %.3f m\n", ts.name.c_str(),
+                 best_ci, best_joint);
         }
       }
     }
@@ -736,9 +755,11 @@ int main(int argc, char** argv) {
         converged += s.state == sound_source_t::STATE_CONVERGED;
         max_id = std::max(max_id, s.id);
       }
-      printf("logged %s (the live node, %ld messages): last has %d sources (%d converged), largest id %ld\n",
-             options.sound_map_channel.c_str(), static_cast<long>(live_msgs), live.num_sources, converged,
-             static_cast<long>(max_id));
+      printf(
+          "logged %s (the live node, %ld messages): last has %d sources (%d converged), largest id "
+          "%ld\n",
+          options.sound_map_channel.c_str(), static_cast<long>(live_msgs), live.num_sources,
+          converged, static_cast<long>(max_id));
       // The replay against the live node at the same map times: the same sources at the same
       // places when the replay is the live pipeline.
       int compared = 0, same = 0;
@@ -765,11 +786,13 @@ int main(int argc, char** argv) {
         const Eigen::Vector2d p(ts.position_m[0], ts.position_m[1]);
         double best = std::numeric_limits<double>::infinity(), best_conv = best;
         for (const auto& s : live.sources) {
-          const double d = (to_world(Eigen::Vector3d(s.position_m[0], s.position_m[1], 0)) - p).norm();
+          const double d =
+              (to_world(Eigen::Vector3d(s.position_m[0], s.position_m[1], 0)) - p).norm();
           best = std::min(best, d);
           if (s.state == sound_source_t::STATE_CONVERGED) best_conv = std::min(best_conv, d);
         }
-        printf("  truth %-18s nearest live source %.3f m, nearest converged %.3f m\n", ts.name.c_str(), best, best_conv);
+        printf("  truth %-18s nearest live source %.3f m, nearest converged %.3f m\n",
+               ts.name.c_str(), best, best_conv);
       }
     }
     return 0;
