@@ -39,110 +39,18 @@ DriftModel DriftModelOf(const LoopClosureOptions& lo) {
 }  // namespace
 
 Slam::Slam(const SlamOptions& options)
-    : options_(options), chain_drift_(DriftModelOf(options.loop)) {}
+    : options_(options),
+      odometry_(options.input, options.local),
+      motion_filter_(options.local),
+      chain_drift_(DriftModelOf(options.loop)) {}
 Slam::~Slam() = default;
 
 bool Slam::AddOdometry(double time_s, const Rigid2d& pose, std::string* why) {
-  // (time_s may be clamped below)
-  auto reject = [&](const std::string& w) {
-    ++stats_.rejected_odometry;
-    if (why) *why = w;
-    return false;
-  };
-  if (!std::isfinite(time_s) || !pose.translation().allFinite() || !std::isfinite(pose.yaw_rad())) {
-    return reject("odometry not finite");
-  }
-  if (!odometry_.empty()) {
-    const OdomSample& last = odometry_.back();
-    // Some logs stamp messages in bursts (Intel): a sample slightly older than the previous
-    // one is kept in arrival order at the previous time rather than dropped.
-    if (time_s < last.time_s - 1.0) return reject("odometry more than 1 s out of time order");
-    if (time_s < last.time_s) {
-      ++stats_.reordered_odometry;
-      time_s = last.time_s;
-    }
-    const double dt = time_s - last.time_s;
-    const double d = (pose.translation() - last.pose.translation()).norm();
-    const double a = std::abs(std::remainder(pose.yaw_rad() - last.pose.yaw_rad(), 2 * M_PI));
-    const auto& in = options_.input;
-    const bool jump = d > in.max_odometry_jump_m ||
-                      d > in.max_odometry_speed_mps * std::max(dt, 0.05) ||
-                      a > in.max_odometry_turn_radps * std::max(dt, 0.05);
-    if (jump) {
-      // A jump that persists (the next message agrees with it) is an odometry reset: start a
-      // new segment, across which no motion is predicted. A single outlier stays rejected.
-      if (have_pending_jump_ &&
-          (pose.translation() - pending_jump_.pose.translation()).norm() <
-              in.max_odometry_speed_mps * std::max(time_s - pending_jump_.time_s, 0.05)) {
-        have_pending_jump_ = false;
-        ++odom_segment_;
-        odometry_.push_back({pending_jump_.time_s, pending_jump_.pose, odom_segment_});
-        odometry_.push_back({time_s, pose, odom_segment_});
-        return true;
-      }
-      have_pending_jump_ = true;
-      pending_jump_ = {time_s, pose, odom_segment_};
-      return reject("odometry jump of " + std::to_string(d) + " m / " +
-                    std::to_string(a / kDegToRad) + " deg in " + std::to_string(dt) + " s");
-    }
-  }
-  have_pending_jump_ = false;
-  odometry_.push_back({time_s, pose, odom_segment_});
-  while (odometry_.size() > 2 && odometry_.front().time_s < time_s - 30.0) odometry_.pop_front();
-  return true;
-}
-
-bool Slam::OdometryAt(double time_s, Rigid2d* pose, int* segment) const {
-  if (odometry_.empty()) return false;
-  auto it = std::lower_bound(odometry_.begin(), odometry_.end(), time_s,
-                             [](const OdomSample& s, double t) { return s.time_s < t; });
-  if (it == odometry_.end() || time_s >= odometry_.back().time_s) {
-    // Slightly newer than the last odometry: hold the last pose (in turns, extrapolate: below).
-    // (At the time of the last odometry, too: samples kept in arrival order share that time,
-    // the last one is newest.)
-    const double ahead_s = time_s - odometry_.back().time_s;
-    if (ahead_s > 0.5) return false;
-    *pose = odometry_.back().pose;
-    *segment = odometry_.back().segment;
-    // A scan taken between readings of slower odometry (30 Hz depth scans, 20 Hz wheels) is
-    // processed before the next reading. Held, the last reading puts the prediction of a turn
-    // at 0.5 rad/s up to 1.4 deg behind, and the rotation prior pulls the match there:
-    // extrapolate the last odometry step instead. Only in turns: driving straight, a held
-    // reading leaves the prediction to the constant-velocity model of the matched poses
-    // (PredictLocal), which kept the glass corridor's along-track drift at half of what the
-    // extrapolated odometry gave (0.24 against 0.45 m after 19 m).
-    const auto& l = options_.local;
-    if (l.odometry_extrapolation_s > 0 && ahead_s <= l.odometry_extrapolation_s &&
-        odometry_.size() >= 2) {
-      const OdomSample& a = odometry_[odometry_.size() - 2];
-      const OdomSample& b = odometry_.back();
-      const double dt = b.time_s - a.time_s;
-      if (a.segment == b.segment && dt > 1e-3 && dt <= l.odometry_extrapolation_s) {
-        const double turn_radps =
-            std::abs(std::remainder(b.pose.yaw_rad() - a.pose.yaw_rad(), 2 * M_PI)) / dt;
-        if (turn_radps >= l.odometry_extrapolation_min_turn_radps) {
-          *pose = Interpolate(a.pose, b.pose, 1.0 + ahead_s / dt);
-        }
-      }
-    }
-    return true;
-  }
-  if (it->time_s == time_s || it == odometry_.begin()) {
-    if (it == odometry_.begin() && it->time_s - time_s > 0.5) return false;
-    *pose = it->pose;
-    *segment = it->segment;
-    return true;
-  }
-  const OdomSample& a = *(it - 1);
-  const OdomSample& b = *it;
-  if (a.segment != b.segment) {
-    *pose = b.pose;
-    *segment = b.segment;
-    return true;
-  }
-  *pose = Interpolate(a.pose, b.pose, (time_s - a.time_s) / (b.time_s - a.time_s));
-  *segment = a.segment;
-  return true;
+  bool reordered = false;
+  const bool added = odometry_.Add(time_s, pose, why, &reordered);
+  stats_.reordered_odometry += reordered;
+  stats_.rejected_odometry += !added;
+  return added;
 }
 
 bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
@@ -217,7 +125,7 @@ Rigid2d Slam::PredictLocal(double time_s) {
   // counted twice.
   Rigid2d odom;
   int segment;
-  const bool have_odom = OdometryAt(time_s, &odom, &segment);
+  const bool have_odom = odometry_.At(time_s, &odom, &segment);
   const bool was_standing_still = standing_still_;
   standing_still_ = false;
   const double dt = time_s - last_scan_time_;
@@ -262,7 +170,7 @@ Rigid2d Slam::PredictLocal(double time_s) {
   // Odometry readings on both sides of the scan (not only the last one, held) that did not change
   // show a robot standing still; the held last reading alone shows nothing yet.
   // Once standing, a scan ahead of the newest reading is still standing.
-  const bool odometry_after_scan = time_s <= odometry_.back().time_s;
+  const bool odometry_after_scan = time_s <= odometry_.newest().time_s;
   standing_still_ = frozen && options_.local.unchanged_odometry_means_stopped &&
                     (odometry_after_scan || was_standing_still);
   if (standing_still_) {
@@ -353,9 +261,9 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
     ++stats_.reordered_scans;
     reordered = scan;
     reordered.time_s = last_scan_time_;
-    if (!odometry_.empty() && odometry_.back().time_s > reordered.time_s &&
-        odometry_.back().time_s - reordered.time_s < 1.0) {
-      reordered.time_s = odometry_.back().time_s;
+    if (!odometry_.empty() && odometry_.newest().time_s > reordered.time_s &&
+        odometry_.newest().time_s - reordered.time_s < 1.0) {
+      reordered.time_s = odometry_.newest().time_s;
     }
     in = &reordered;
   }
@@ -373,7 +281,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     constexpr double kMaxResumeWaitS = 1.0;
     Rigid2d odom;
     int segment;
-    if (!OdometryAt(scan.time_s, &odom, &segment)) {
+    if (!odometry_.At(scan.time_s, &odom, &segment)) {
       if (resume_wait_start_s_ < 0) resume_wait_start_s_ = scan.time_s;
       if (scan.time_s - resume_wait_start_s_ < kMaxResumeWaitS) {
         ++stats_.scans_waiting_for_odometry;
@@ -452,14 +360,9 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
 
   // Motion filter.
   const auto& l = options_.local;
-  const bool new_node =
-      nodes_.empty() || scan.time_s - last_node_time_ > l.node_max_time_s ||
-      (local.translation() - last_node_local_.translation()).norm() > l.node_max_distance_m ||
-      std::abs(std::remainder(local.yaw_rad() - last_node_local_.yaw_rad(), 2 * M_PI)) >
-          l.node_max_angle_deg * kDegToRad;
+  const bool new_node = nodes_.empty() || motion_filter_.Moved(scan.time_s, local);
   if (new_node && !data.hits.empty()) {
-    last_node_time_ = scan.time_s;
-    last_node_local_ = local;
+    motion_filter_.NodeAdded(scan.time_s, local);
     // Insert into the active submaps (a new one every scans_per_submap insertions; the older
     // one finishes at 2 * scans_per_submap).
     if (active_submaps_.empty()) {
@@ -765,7 +668,7 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
   // Track the global pose directly; odometry predicts, the nearest finished submap corrects.
   Rigid2d odom;
   int segment;
-  const bool have_odom = OdometryAt(scan.time_s, &odom, &segment);
+  const bool have_odom = odometry_.At(scan.time_s, &odom, &segment);
   Rigid2d predicted = last_scan_local_;
   if (have_scan_since_load_ && have_odom && last_scan_has_odom_ && segment == last_scan_segment_) {
     predicted = last_scan_local_ * (last_scan_odom_.inverse() * odom);
@@ -1190,10 +1093,10 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int32_t>(last_scan_has_odom_);
     w.Pose(last_scan_odom_);
     w.Pod<int32_t>(last_scan_segment_);
-    w.Pod(last_node_time_);
-    w.Pose(last_node_local_);
+    w.Pod(motion_filter_.last_time_s());
+    w.Pose(motion_filter_.last_pose());
     w.Pod<int32_t>(-1);  // unused (scans carry their own geometry); kept for the file layout
-    w.Pod<int32_t>(odom_segment_);
+    w.Pod<int32_t>(odometry_.segment());
     out.write(kMagic, 8);  // trailer: a complete file
     if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
     common::WriteSealedState(path, kStateKind, kStateVersion, out.str());
@@ -1357,21 +1260,19 @@ void Slam::Load(const std::string& path) {
   last_scan_has_odom_ = last_scan_has_odom;
   last_scan_odom_ = last_scan_odom;
   last_scan_segment_ = last_scan_segment;
-  last_node_time_ = last_node_time;
-  last_node_local_ = last_node_local;
-  odom_segment_ = odom_segment;
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);
   active_submaps_ = std::move(active);
   nodes_ = std::move(nodes);
+  motion_filter_.Restore(last_node_time, last_node_local);
   chain_drift_.Clear();
   node_global_ = std::move(node_global);
   RebuildRetainedObstacles();
   constraints_ = std::move(constraints);
   precomputations_.clear();
   scans_.clear();
-  odometry_.clear();
-  have_pending_jump_ = false;
+  // A new odometry segment: the odometry frame of a restarted robot may differ.
+  odometry_.Reset(odom_segment + 1);
   have_scan_since_load_ = false;
   nodes_since_optimisation_ = 0;
   // The odometry frame of a restarted robot may differ: the first new odometry bridges the gap
@@ -1384,7 +1285,6 @@ void Slam::Load(const std::string& path) {
   last_scan_has_odom_ = false;
   have_reference_ = false;
   have_prev_scan_ = false;
-  ++odom_segment_;
   if (localisation_only_ && !nodes_.empty())
     last_scan_local_ = global_from_local_ * last_scan_local_;
   stats_ = SlamStats();

@@ -14,7 +14,6 @@
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <deque>
 #include <list>
 #include <map>
 #include <memory>
@@ -24,6 +23,8 @@
 
 #include "slam/grid.h"
 #include "slam/loop_consistency.h"
+#include "slam/motion_filter.h"
+#include "slam/odometry_buffer.h"
 #include "slam/pose_graph.h"
 #include "slam/relations.h"
 #include "slam/scan_matcher.h"
@@ -173,18 +174,12 @@ class Slam {
     Rigid2d local_pose;  // in the local frame (or global in localisation-only mode: node -1)
     int node_id;
   };
-  struct OdomSample {
-    double time_s;
-    Rigid2d pose;
-    int segment;
-  };
 
   bool CheckScan(const LaserScan& scan, std::string* why);
   void ScanToRangeData(const LaserScan& scan, RangeData* data) const;
   // AddScan after the time-order check: `scan.time_s` is the processing time, `stamp_s` the
   // scan's own stamp (kept in the trajectory).
   ScanResult AddScanInOrder(const LaserScan& scan, double stamp_s);
-  bool OdometryAt(double time_s, Rigid2d* pose, int* segment) const;
   Rigid2d PredictLocal(double time_s);
   Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
                      const Rigid2d& predicted, double* score) const;
@@ -218,11 +213,8 @@ class Slam {
   bool have_scan_since_load_ = false;
   SlamStats stats_;
 
-  // Inputs.
-  std::deque<OdomSample> odometry_;
-  int odom_segment_ = 0;
-  bool have_pending_jump_ = false;
-  OdomSample pending_jump_;
+  OdometryBuffer odometry_;
+  MotionFilter motion_filter_;  // which scans become nodes
 
   // Local SLAM.
   std::vector<Submap> submaps_;
@@ -247,8 +239,6 @@ class Slam {
   bool have_prev_scan_ = false;
   double prev_scan_time_ = 0;
   Rigid2d prev_scan_local_;
-  double last_node_time_ = -1e300;
-  Rigid2d last_node_local_;
 
   // Global SLAM.
   std::vector<Node> nodes_;

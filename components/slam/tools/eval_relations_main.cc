@@ -1,13 +1,12 @@
 // sarmap-log-eval-relations: the Kümmerle et al. 2009 relation metric of an estimated
 // trajectory, with a trajectory plot (PNG).
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
 #include "common/args.h"
@@ -44,7 +43,8 @@ void Plot(const std::vector<slam::StampedPose2>& traj, const std::vector<slam::R
   for (size_t k = 0; k < err.used_index.size(); ++k) {
     const auto& r = rel[err.used_index[k]];
     slam::StampedPose2 a, b;
-    if (!slam::PoseAt(traj, r.t1_s, 1e-3, 0.5, &a) || !slam::PoseAt(traj, r.t2_s, 1e-3, 0.5, &b)) continue;
+    if (!slam::PoseAt(traj, r.t1_s, 1e-3, 0.5, &a) || !slam::PoseAt(traj, r.t2_s, 1e-3, 0.5, &b))
+      continue;
     const double f = std::min(1.0, err.trans_errors_m[k] / ref);
     if (f < 0.34) continue;  // only the worse relations, to keep the plot readable
     cv::line(img, px(a.x_m, a.y_m), px(b.x_m, b.y_m), cv::Scalar(0, 255 * (1 - f), 255 * f), 2,
@@ -68,7 +68,8 @@ int main(int argc, char** argv) {
         "sarmap-log-eval-relations",
         "Kümmerle et al. 2009 relation metric: mean +- std of absolute and squared translational "
         "and rotational errors of an estimated trajectory over a .relations file.");
-    args.AddPositional("TRAJECTORY", &traj_path, "estimated trajectory: 't x y yaw' lines (or TUM)");
+    args.AddPositional("TRAJECTORY", &traj_path,
+                       "estimated trajectory: 't x y yaw' lines (or TUM)");
     args.AddPositional("RELATIONS", &rel_path, "relations: 't1 t2 x y z roll pitch yaw' lines");
     args.AddFlag("--plot", &plot_path, "write a trajectory plot (PNG) here");
     args.AddFlag("--dump", &dump_path,

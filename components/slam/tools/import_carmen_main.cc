@@ -1,11 +1,10 @@
 // sarmap-log-import-carmen: CARMEN text log (ODOM, FLASER, RAWLASER1, ROBOTLASER1) -> LCM log
 // of ODOM (odometry_t) and SCAN (laser_scan_t) events with the original timestamps.
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <vector>
 
 #include "common/args.h"
@@ -74,18 +73,21 @@ int main(int argc, char** argv) {
       std::fclose(f);
     }
     reader.on_progress = [&](int64_t bytes) {
-      std::fprintf(stderr, "\rimport-carmen: %5.1f %%", file_bytes ? 100.0 * bytes / file_bytes : 0.0);
+      std::fprintf(stderr, "\rimport-carmen: %5.1f %%",
+                   file_bytes ? 100.0 * bytes / file_bytes : 0.0);
     };
     const slam::CarmenStats stats = slam::ReadCarmenFile(input, &reader);
     std::fprintf(stderr, "\rimport-carmen: 100.0 %%\n");
-    std::printf("%s -> %s: %lld odometry, %lld scans, %lld comment lines, %lld other message lines, "
-                "%lld malformed\n",
-                input.c_str(), output.c_str(), (long long)odom_seq, (long long)scan_seq,
-                (long long)stats.skipped_comments, (long long)stats.skipped_unknown,
-                (long long)stats.malformed);
+    std::printf(
+        "%s -> %s: %lld odometry, %lld scans, %lld comment lines, %lld other message lines, "
+        "%lld malformed\n",
+        input.c_str(), output.c_str(), (long long)odom_seq, (long long)scan_seq,
+        (long long)stats.skipped_comments, (long long)stats.skipped_unknown,
+        (long long)stats.malformed);
     if (laser_offsets > 0) {
-      SARMAP_LOG(WARN) << laser_offsets << " ROBOTLASER1 scans have a laser offset from the robot; "
-                       << "laser_scan_t is in the laser frame: set the SLAM base_from_laser options";
+      SARMAP_LOG(WARN)
+          << laser_offsets << " ROBOTLASER1 scans have a laser offset from the robot; "
+          << "laser_scan_t is in the laser frame: set the SLAM base_from_laser options";
     }
     return 0;
   });
