@@ -54,8 +54,8 @@ class NodeReplay {
   // Handles everything pending on the bus (e.g. after the adapter's Finish()).
   void Drain();
   // Publishes `data` on `channel` at the present log time (that of the event being read) and
-  // handles it, as an event fed: for inputs that are not in the log (e.g. poses from a file, or
-  // directions a localiser finds in the log's audio, from inside `feed`).
+  // handles it, as an event fed: for inputs that are not in the log (e.g. poses from a file), or
+  // an event handled inside `feed` (e.g. to time it), from inside `feed`.
   void Inject(const std::string& channel, const std::vector<uint8_t>& data);
 
   // Receive time of the event being fed, us (0 before the first).

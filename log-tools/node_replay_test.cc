@@ -179,8 +179,8 @@ TEST(NodeReplay, InjectedInputsArriveAtTheirPlaceAmongTheLogs) {
   EXPECT_EQ(next_injected, 100 + injected);
 }
 
-// A replay that feeds none of the log's events, only inputs made from them (e.g. directions a
-// localiser finds in the log's audio), still runs on the log's clock from the first one.
+// A replay that feeds none of the log's events itself, only injects them or inputs made from
+// them, still runs on the log's clock from the first one.
 TEST(NodeReplay, InjectedInputsAloneRunOnTheLogsClock) {
   common::Node node("node-replay-test", "memq://");
   CountingNode counting(&node);
