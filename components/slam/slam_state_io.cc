@@ -1,0 +1,336 @@
+// Slam's state file (Save, Load): everything needed to continue mapping or to localise after
+// a restart, sealed (common/state_file.h) and written crash-safe.
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/binary_io.h"
+#include "common/state_file.h"
+#include "slam/slam.h"
+
+namespace sarmap {
+namespace slam {
+
+// Pose-graph file: little-endian binary, "SARMAPPG" + version, then the state field by field.
+
+namespace {
+
+class Writer : public common::BinaryWriter {
+ public:
+  explicit Writer(std::ostream* out) : BinaryWriter(out), out_(out) {}
+  void Pose(const Rigid2d& p) {
+    Pod(p.translation().x()), Pod(p.translation().y()), Pod(p.yaw_rad());
+  }
+  void Cloud(const PointCloud& c) {
+    Pod<int64_t>(c.size());
+    out_->write(reinterpret_cast<const char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
+  }
+
+ private:
+  std::ostream* out_;
+};
+
+class Reader : public common::BinaryReader {
+ public:
+  explicit Reader(std::istream* in) : BinaryReader(in, "pose-graph file"), in_(in) {}
+  Rigid2d Pose() {
+    const double x = Pod<double>(), y = Pod<double>(), t = Pod<double>();
+    return Rigid2d(x, y, t);
+  }
+  PointCloud Cloud() {
+    PointCloud c(Count(10000000));
+    in_->read(reinterpret_cast<char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
+    if (!*in_) throw std::runtime_error("pose-graph file truncated");
+    return c;
+  }
+
+ private:
+  std::istream* in_;
+};
+
+constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
+// Of the body. Version 2 adds each constraint's translation shape, version 3 the trimmed flags
+// of submaps and nodes (a trimmed submap has no grid) and each constraint's steps; version 1 and
+// 2 bodies are still read (shape: the identity; nothing trimmed).
+constexpr int32_t kVersion = 3;
+// The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
+// an unsealed body (written before sealing).
+constexpr char kStateKind[] = "slam-pose-graph";
+constexpr int kStateVersion = 2;
+
+bool Finite(const Rigid2d& p) {
+  return std::isfinite(p.translation().x()) && std::isfinite(p.translation().y()) &&
+         std::isfinite(p.yaw_rad());
+}
+
+}  // namespace
+
+void Slam::Save(const std::string& path) const {
+  {
+    std::ostringstream out(std::ios::binary);
+    Writer w(&out);
+    out.write(kMagic, 8);
+    w.Pod(kVersion);
+    w.Pod<double>(options_.local.resolution_m);
+    // Submaps.
+    w.Pod<int64_t>(submaps_.size());
+    for (size_t i = 0; i < submaps_.size(); ++i) {
+      const Submap& s = submaps_[i];
+      w.Pose(s.local_pose);
+      w.Pose(submap_global_[i]);
+      w.Pod<int32_t>(s.num_inserted);
+      w.Pod<int32_t>(s.finished);
+      w.Pod<int32_t>(s.trimmed);
+      w.Pod<int64_t>(s.pulses);
+      w.Pod<int64_t>(s.samples);
+      w.Pod<int64_t>(s.nodes.size());
+      for (int n : s.nodes) w.Pod<int32_t>(n);
+      if (s.trimmed) continue;  // no grid
+      w.Pod<int32_t>(s.grid->width());
+      w.Pod<int32_t>(s.grid->height());
+      w.Pod<double>(s.grid->corner().x());
+      w.Pod<double>(s.grid->corner().y());
+      out.write(reinterpret_cast<const char*>(s.grid->cells().data()),
+                s.grid->cells().size() * sizeof(float));
+    }
+    w.Pod<int64_t>(active_submaps_.size());
+    for (int a : active_submaps_) w.Pod<int32_t>(a);
+    // Nodes.
+    w.Pod<int64_t>(nodes_.size());
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      const Node& n = nodes_[i];
+      w.Pod(n.time_s);
+      w.Pose(n.local_pose);
+      w.Pose(node_global_[i]);
+      w.Pod<int32_t>(n.has_odometry);
+      w.Pod<int32_t>(n.odom_segment);
+      w.Pod<int32_t>(n.trimmed);
+      w.Pose(n.odom_pose);
+      w.Cloud(n.loop_points);
+      w.Pod(n.range_data.origin.x()), w.Pod(n.range_data.origin.y());
+      w.Cloud(n.range_data.hits);
+      w.Cloud(n.range_data.misses);
+    }
+    // Constraints.
+    w.Pod<int64_t>(constraints_.size());
+    for (const Constraint& c : constraints_) {
+      w.Pod<int32_t>(c.kind), w.Pod<int32_t>(c.from), w.Pod<int32_t>(c.to);
+      w.Pose(c.relative);
+      w.Pod(c.translation_weight), w.Pod(c.rotation_weight), w.Pod(c.score);
+      w.Pod(c.translation_shape(0, 0)), w.Pod(c.translation_shape(0, 1));
+      w.Pod(c.translation_shape(1, 1));
+      w.Pod<int32_t>(c.steps);
+    }
+    // Local state to continue.
+    w.Pose(global_from_local_);
+    w.Pod<int32_t>(have_last_scan_);
+    w.Pod(last_scan_time_);
+    w.Pose(last_scan_local_);
+    w.Pod<int32_t>(last_scan_has_odom_);
+    w.Pose(last_scan_odom_);
+    w.Pod<int32_t>(last_scan_segment_);
+    w.Pod(motion_filter_.last_time_s());
+    w.Pose(motion_filter_.last_pose());
+    w.Pod<int32_t>(-1);  // unused (scans carry their own geometry); kept for the file layout
+    w.Pod<int32_t>(odometry_.segment());
+    out.write(kMagic, 8);  // trailer: a complete file
+    if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
+    common::WriteSealedState(path, kStateKind, kStateVersion, out.str());
+  }
+}
+
+void Slam::Load(const std::string& path) {
+  std::string body;
+  // Throws StateFileError (another kind or version, truncated, checksum) before any parsing.
+  if (common::ReadSealedState(path, kStateKind, kStateVersion, &body) ==
+      common::StateFileRead::kMissing) {
+    throw std::runtime_error("cannot open pose-graph file '" + path + "'");
+  }
+  std::istringstream in(body, std::ios::binary);
+  Reader r(&in);
+  char magic[8];
+  in.read(magic, 8);
+  if (!in || !std::equal(magic, magic + 8, kMagic)) {
+    throw std::runtime_error("'" + path + "' is not a sarmap pose-graph file");
+  }
+  const int32_t body_version = r.Pod<int32_t>();
+  if (body_version < 1 || body_version > kVersion) {
+    throw std::runtime_error("unsupported pose-graph version");
+  }
+  const double resolution = r.Pod<double>();
+  std::vector<Submap> submaps;
+  std::vector<Rigid2d> submap_global;
+  const int64_t num_submaps = r.Count(1000000);
+  for (int64_t i = 0; i < num_submaps; ++i) {
+    Submap s;
+    s.local_pose = r.Pose();
+    submap_global.push_back(r.Pose());
+    s.num_inserted = r.Pod<int32_t>();
+    s.finished = r.Pod<int32_t>() != 0;
+    if (body_version >= 3) s.trimmed = r.Pod<int32_t>() != 0;
+    s.pulses = r.Pod<int64_t>();
+    s.samples = r.Pod<int64_t>();
+    const int64_t nn = r.Count(100000000);
+    for (int64_t k = 0; k < nn; ++k) s.nodes.push_back(r.Pod<int32_t>());
+    if (s.trimmed) {
+      if (i == 0 || !s.finished) {
+        throw std::runtime_error("pose-graph file corrupt (trimmed submap)");
+      }
+      submaps.push_back(std::move(s));
+      continue;
+    }
+    const int w = r.Pod<int32_t>(), h = r.Pod<int32_t>();
+    const double cx = r.Pod<double>(), cy = r.Pod<double>();
+    if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > 400000000) {
+      throw std::runtime_error("pose-graph file corrupt (grid size)");
+    }
+    std::vector<float> cells(static_cast<size_t>(w) * h);
+    in.read(reinterpret_cast<char*>(cells.data()), cells.size() * sizeof(float));
+    if (!in) throw std::runtime_error("pose-graph file truncated");
+    s.grid = std::make_unique<ProbabilityGrid>(resolution, Eigen::Vector2d(cx, cy), 1);
+    s.grid->SetRaw(w, h, Eigen::Vector2d(cx, cy), std::move(cells));
+    if (s.finished) s.grid->Finish();
+    submaps.push_back(std::move(s));
+  }
+  std::vector<int> active;
+  const int64_t na = r.Count(2);
+  for (int64_t i = 0; i < na; ++i) active.push_back(r.Pod<int32_t>());
+  std::vector<Node> nodes;
+  std::vector<Rigid2d> node_global;
+  const int64_t num_nodes = r.Count(100000000);
+  for (int64_t i = 0; i < num_nodes; ++i) {
+    Node n;
+    n.time_s = r.Pod<double>();
+    n.local_pose = r.Pose();
+    node_global.push_back(r.Pose());
+    n.has_odometry = r.Pod<int32_t>() != 0;
+    n.odom_segment = r.Pod<int32_t>();
+    if (body_version >= 3) n.trimmed = r.Pod<int32_t>() != 0;
+    n.odom_pose = r.Pose();
+    n.loop_points = r.Cloud();
+    n.range_data.origin.x() = r.Pod<float>();
+    n.range_data.origin.y() = r.Pod<float>();
+    n.range_data.hits = r.Cloud();
+    n.range_data.misses = r.Cloud();
+    nodes.push_back(std::move(n));
+  }
+  std::vector<Constraint> constraints;
+  const int64_t nc = r.Count(1000000000);
+  for (int64_t i = 0; i < nc; ++i) {
+    Constraint c;
+    c.kind = static_cast<Constraint::Kind>(r.Pod<int32_t>());
+    c.from = r.Pod<int32_t>();
+    c.to = r.Pod<int32_t>();
+    c.relative = r.Pose();
+    c.translation_weight = r.Pod<double>();
+    c.rotation_weight = r.Pod<double>();
+    c.score = r.Pod<double>();
+    if (body_version >= 2) {
+      const double xx = r.Pod<double>(), xy = r.Pod<double>(), yy = r.Pod<double>();
+      c.translation_shape << xx, xy, xy, yy;
+    }
+    if (body_version >= 3) c.steps = r.Pod<int32_t>();
+    const bool submap_kind = c.submap_to_node();
+    if (c.kind < 0 || c.kind > Constraint::TRIMMED_CHAIN || c.from < 0 || c.to < 0 ||
+        c.to >= num_nodes || c.from >= (submap_kind ? num_submaps : num_nodes) || c.steps < 1) {
+      throw std::runtime_error("pose-graph file corrupt (constraint)");
+    }
+    constraints.push_back(c);
+  }
+  // Read into locals: a file refused below leaves this Slam as it was (a clean start).
+  const Rigid2d global_from_local = r.Pose();
+  const bool have_last_scan = r.Pod<int32_t>() != 0;
+  const double last_scan_time = r.Pod<double>();
+  const Rigid2d last_scan_local = r.Pose();
+  const bool last_scan_has_odom = r.Pod<int32_t>() != 0;
+  const Rigid2d last_scan_odom = r.Pose();
+  const int32_t last_scan_segment = r.Pod<int32_t>();
+  const double last_node_time = r.Pod<double>();
+  const Rigid2d last_node_local = r.Pose();
+  r.Pod<int32_t>();  // unused (a fixed beam count of version 2 files)
+  const int32_t odom_segment = r.Pod<int32_t>();
+  in.read(magic, 8);
+  if (!in || !std::equal(magic, magic + 8, kMagic)) {
+    throw std::runtime_error("pose-graph file '" + path + "' is incomplete");
+  }
+  for (int a : active) {
+    if (a < 0 || a >= num_submaps || submaps[a].trimmed) {
+      throw std::runtime_error("pose-graph file corrupt (active)");
+    }
+  }
+  // Each node's submaps, from the submaps' node lists.
+  int64_t submaps_trimmed = 0, nodes_trimmed = 0;
+  for (size_t i = 0; i < submaps.size(); ++i) {
+    submaps_trimmed += submaps[i].trimmed;
+    for (int n : submaps[i].nodes) {
+      if (n < 0 || n >= num_nodes) {
+        throw std::runtime_error("pose-graph file corrupt (submap node)");
+      }
+      nodes[n].submaps.push_back(static_cast<int>(i));
+    }
+  }
+  for (const Node& n : nodes) nodes_trimmed += n.trimmed;
+  // A NaN pose or weight would spread through the next optimisation to the whole graph.
+  bool finite = Finite(global_from_local) && Finite(last_scan_local) && Finite(last_scan_odom) &&
+                Finite(last_node_local) && std::isfinite(last_scan_time) &&
+                std::isfinite(last_node_time);
+  for (size_t i = 0; finite && i < submaps.size(); ++i) {
+    finite = Finite(submaps[i].local_pose) && Finite(submap_global[i]);
+  }
+  for (size_t i = 0; finite && i < nodes.size(); ++i) {
+    finite = std::isfinite(nodes[i].time_s) && Finite(nodes[i].local_pose) &&
+             Finite(node_global[i]) && Finite(nodes[i].odom_pose);
+  }
+  for (size_t i = 0; finite && i < constraints.size(); ++i) {
+    const Constraint& c = constraints[i];
+    finite = Finite(c.relative) && std::isfinite(c.translation_weight) &&
+             std::isfinite(c.rotation_weight) && std::isfinite(c.score) &&
+             c.translation_shape.allFinite();
+  }
+  if (!finite)
+    throw std::runtime_error("pose-graph file '" + path + "' corrupt (non-finite value)");
+  global_from_local_ = global_from_local;
+  have_last_scan_ = have_last_scan;
+  last_scan_time_ = last_scan_time;
+  last_scan_local_ = last_scan_local;
+  last_scan_has_odom_ = last_scan_has_odom;
+  last_scan_odom_ = last_scan_odom;
+  last_scan_segment_ = last_scan_segment;
+  submaps_ = std::move(submaps);
+  submap_global_ = std::move(submap_global);
+  active_submaps_ = std::move(active);
+  nodes_ = std::move(nodes);
+  motion_filter_.Restore(last_node_time, last_node_local);
+  chain_drift_.Clear();
+  node_global_ = std::move(node_global);
+  RebuildRetainedObstacles();
+  constraints_ = std::move(constraints);
+  precomputations_.clear();
+  scans_.clear();
+  // A new odometry segment: the odometry frame of a restarted robot may differ.
+  odometry_.Reset(odom_segment + 1);
+  have_scan_since_load_ = false;
+  nodes_since_optimisation_ = 0;
+  // The odometry frame of a restarted robot may differ: the first new odometry bridges the gap
+  // only when it is plausible (PredictLocal), and the scan matcher (wide search on the first
+  // scan) finds the robot.
+  resume_odom_valid_ = last_scan_has_odom_ && !localisation_only_;
+  resume_wait_start_s_ = -1;
+  resume_bridged_ = false;
+  resume_odom_ = last_scan_odom_;
+  last_scan_has_odom_ = false;
+  have_reference_ = false;
+  have_prev_scan_ = false;
+  if (localisation_only_ && !nodes_.empty())
+    last_scan_local_ = global_from_local_ * last_scan_local_;
+  stats_ = SlamStats();
+  stats_.nodes = nodes_.size();
+  stats_.submaps = submaps_.size();
+  stats_.submaps_trimmed = submaps_trimmed;
+  stats_.nodes_trimmed = nodes_trimmed;
+}
+
+}  // namespace slam
+}  // namespace sarmap
