@@ -397,7 +397,8 @@ class Loop : public sim::SimSink {
     grid.cells = map.cells;
     explore_.OnMap(grid);
     SoundChain* sound = perception_ ? perception_->sound() : nullptr;
-    if (observer_ || sound) {
+    // As sarmap-slam: no MAP before the map has a cell (a grid of no cells is malformed).
+    if ((observer_ || sound) && map.width > 0 && map.height > 0) {
       sarmap::occupancy_grid_t m{};
       m.header.utime = static_cast<int64_t>((start_s_ + t) * 1e6);
       m.header.seq = map_seq_++;

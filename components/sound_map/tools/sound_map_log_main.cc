@@ -369,6 +369,7 @@ int main(int argc, char** argv) {
     };
 
     double audio_s = 0, audio_cpu_s = 0;  // --relocalise: audio replayed, and its CPU time
+    int64_t audio_events = 0;
     auto is_audio = [&](const std::string& channel) {
       return std::find(audio_channels.begin(), audio_channels.end(), channel) !=
              audio_channels.end();
@@ -431,6 +432,7 @@ int main(int argc, char** argv) {
         const std::clock_t c0 = std::clock();
         replay.Inject(e->channel, e->data);
         audio_cpu_s += static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        ++audio_events;
         return false;
       }
       if (e->channel == replay_options.anchors_channel) {
@@ -500,7 +502,7 @@ int main(int argc, char** argv) {
     replay.Drain();
     for (const auto& p : stats.problems)
       printf("warning: %s\n", logtools::DescribeProblem(p).c_str());
-    if (stats.events_fed == 0 && slam_poses.empty() && doa_msgs == 0)
+    if (stats.events_fed + audio_events == 0 && slam_poses.empty())
       throw std::runtime_error("no sound map input in " + log_path);
     if (sound_map_node.off_clock() > 0 || sound_map_node.dropped_late() > 0)
       printf(
@@ -510,7 +512,8 @@ int main(int argc, char** argv) {
           static_cast<long long>(sound_map_node.dropped_late()));
     const Utime last = last_published;
     printf("replayed %lld of %lld events in %.2f s of CPU\n",
-           static_cast<long long>(stats.events_fed), static_cast<long long>(stats.events_read),
+           static_cast<long long>(stats.events_fed + audio_events),
+           static_cast<long long>(stats.events_read),
            static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
     if (!truth_poses.empty() && !slam_poses.empty()) {
       const Pose2 w = world_from_map();
