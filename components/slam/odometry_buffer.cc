@@ -80,8 +80,8 @@ bool OdometryBuffer::At(double time_s, Rigid2d* pose, int* segment) const {
     // at 0.5 rad/s up to 1.4 deg behind, and the rotation prior pulls the match there:
     // extrapolate the last odometry step instead. Only in turns: driving straight, a held
     // reading leaves the prediction to the constant-velocity model of the matched poses
-    // (Slam::PredictLocal), which keeps the glass corridor's along-track drift at half of what
-    // the extrapolated odometry gives (0.24 against 0.45 m after 19 m).
+    // (PoseExtrapolator::Predict), which keeps the glass corridor's along-track drift at half of
+    // what the extrapolated odometry gives (0.24 against 0.45 m after 19 m).
     if (local_.odometry_extrapolation_s > 0 && ahead_s <= local_.odometry_extrapolation_s &&
         samples_.size() >= 2) {
       const OdometrySample& a = samples_[samples_.size() - 2];

@@ -37,6 +37,7 @@ Slam::Slam(const SlamOptions& options)
     : options_(options),
       odometry_(options.input, options.local),
       motion_filter_(options.local),
+      extrapolator_(options.local),
       chain_drift_(DriftModelOf(options.loop)) {}
 Slam::~Slam() = default;
 
@@ -79,7 +80,7 @@ bool Slam::CheckScan(const LaserScan& scan, std::string* why) {
       return false;
     }
   }
-  if (have_last_scan_ && scan.time_s < last_scan_time_ - 1.0) {
+  if (extrapolator_.have_last() && scan.time_s < extrapolator_.last_time_s() - 1.0) {
     *why = "scan more than 1 s older than the previous one";
     return false;
   }
@@ -110,77 +111,6 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
       }
     }
   }
-}
-
-Rigid2d Slam::PredictLocal(double time_s) {
-  // Odometry predicts the motion since the last scan whose odometry was fresh (the reference).
-  // Odometry that did not change while the scans show motion is stale (some logs freeze it
-  // for a second and then jump): then a constant-velocity model from the last two matched
-  // poses predicts, and the jump that follows is measured from the reference, so no motion is
-  // counted twice.
-  Rigid2d odom;
-  int segment;
-  const bool have_odom = odometry_.At(time_s, &odom, &segment);
-  const bool was_standing_still = standing_still_;
-  standing_still_ = false;
-  const double dt = time_s - last_scan_time_;
-  Rigid2d constant_velocity = last_scan_local_;
-  if (have_prev_scan_ && last_scan_time_ >= prev_scan_time_ && dt >= 0 && dt < 1.0) {
-    const Rigid2d step = prev_scan_local_.inverse() * last_scan_local_;
-    // Burst-stamped logs give tiny or huge time ratios: one step ahead, at most 2.
-    const double gap = last_scan_time_ - prev_scan_time_;
-    const double f = gap < 0.02 ? 1.0 : std::min(2.0, dt / gap);
-    constant_velocity = last_scan_local_ * Rigid2d(f * step.translation(), f * step.yaw_rad());
-  }
-  this_scan_has_fresh_odom_ = false;
-  last_scan_has_odom_ = have_odom;
-  this_scan_constant_velocity_ = false;
-  if (!have_odom) {
-    this_scan_constant_velocity_ = have_last_scan_;
-    return have_last_scan_ ? constant_velocity : last_scan_local_;
-  }
-  last_scan_odom_ = odom;
-  last_scan_segment_ = segment;
-  if (resume_odom_valid_) {
-    // First odometry after a restart from saved state: if the process (not the robot) was
-    // restarted, the odometry frame is the same and bridges the motion made while we were down.
-    // A robot that rebooted restarts its odometry near the identity; a bridge longer than
-    // kMaxResumeBridgeM is then not believed and the wide search finds the robot instead.
-    constexpr double kMaxResumeBridgeM = 10.0;
-    resume_odom_valid_ = false;
-    const Rigid2d bridge = resume_odom_.inverse() * odom;
-    if (bridge.translation().norm() < kMaxResumeBridgeM) {
-      this_scan_has_fresh_odom_ = true;
-      resume_bridged_ = true;
-      return last_scan_local_ * bridge;
-    }
-  }
-  if (!have_reference_ || segment != reference_segment_) {
-    this_scan_has_fresh_odom_ = true;
-    return last_scan_local_;
-  }
-  const Rigid2d odom_delta = reference_odom_.inverse() * odom;
-  const bool frozen =
-      odom_delta.translation().norm() < 1e-9 && std::abs(odom_delta.yaw_rad()) < 1e-9;
-  // Odometry readings on both sides of the scan (not only the last one, held) that did not change
-  // show a robot standing still; the held last reading alone shows nothing yet.
-  // Once standing, a scan ahead of the newest reading is still standing.
-  const bool odometry_after_scan = time_s <= odometry_.newest().time_s;
-  standing_still_ = frozen && options_.local.unchanged_odometry_means_stopped &&
-                    (odometry_after_scan || was_standing_still);
-  if (standing_still_) {
-    // Standing still. Each scan is matched with the stop pose as its prior, not the previous
-    // match: chaining priors is a proximal-point descent that walks down any slope of a weak
-    // map (3 cm/s and 0.4 deg/s in the open-area simulation). The reference stays put.
-    ++stats_.stopped_scans;
-    return reference_local_;
-  }
-  if (frozen) {
-    this_scan_constant_velocity_ = true;
-    return constant_velocity;
-  }
-  this_scan_has_fresh_odom_ = true;
-  return reference_local_ * odom_delta;
 }
 
 Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
@@ -252,10 +182,10 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
   // scan, and it keeps its own stamp in the trajectory.
   LaserScan reordered;
   const LaserScan* in = &scan;
-  if (have_last_scan_ && scan.time_s < last_scan_time_) {
+  if (extrapolator_.have_last() && scan.time_s < extrapolator_.last_time_s()) {
     ++stats_.reordered_scans;
     reordered = scan;
-    reordered.time_s = last_scan_time_;
+    reordered.time_s = extrapolator_.last_time_s();
     if (!odometry_.empty() && odometry_.newest().time_s > reordered.time_s &&
         odometry_.newest().time_s - reordered.time_s < 1.0) {
       reordered.time_s = odometry_.newest().time_s;
@@ -267,9 +197,9 @@ ScanResult Slam::AddScan(const LaserScan& scan) {
 
 ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
   ScanResult result;
-  if (resume_odom_valid_ && !localisation_only_) {
+  if (extrapolator_.awaiting_bridge() && !localisation_only_) {
     // Restarted from saved state: the first odometry bridges the motion made while we were down
-    // (PredictLocal). A scan that arrives before it would be placed at the saved pose, and the
+    // (PoseExtrapolator). A scan that arrives before it would be placed at the saved pose, and the
     // bridge then added on top of wherever the matcher put it (0.5-1 m off in the lab when the
     // first scans beat the odometry by 0.05-0.4 s). Such scans wait, up to kMaxResumeWaitS;
     // without odometry by then the wide search finds the robot.
@@ -277,14 +207,12 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     Rigid2d odom;
     int segment;
     if (!odometry_.At(scan.time_s, &odom, &segment)) {
-      if (resume_wait_start_s_ < 0) resume_wait_start_s_ = scan.time_s;
-      if (scan.time_s - resume_wait_start_s_ < kMaxResumeWaitS) {
+      if (extrapolator_.KeepWaitingForBridge(scan.time_s, kMaxResumeWaitS)) {
         ++stats_.scans_waiting_for_odometry;
         result.waiting_for_odometry = true;
         result.reason = "restarted: waiting for the first odometry to bridge the gap";
         return result;
       }
-      resume_odom_valid_ = false;
     }
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -301,11 +229,13 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     return r;
   }
 
-  const Rigid2d predicted = PredictLocal(scan.time_s);
+  const ScanPrediction prediction = extrapolator_.Predict(scan.time_s, odometry_);
+  if (prediction.stopped) ++stats_.stopped_scans;
+  const Rigid2d& predicted = prediction.local_pose;
   Rigid2d local = predicted;
   if (!active_submaps_.empty() && submaps_[active_submaps_.front()].num_inserted > 0 &&
       !points.empty()) {
-    if (!have_scan_since_load_ && !nodes_.empty() && !resume_bridged_) {
+    if (!have_scan_since_load_ && !nodes_.empty() && !extrapolator_.bridged()) {
       // First scan after loading a saved state without odometry across the gap: the robot
       // may have moved while we were down; search widely around the last pose before tracking
       // again. (With the odometry bridge the normal matching is better: a wide search can
@@ -325,12 +255,12 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     const ProbabilityGrid& grid = *submaps_[active_submaps_.front()].grid;
     const Rigid2d extrapolated = local;
     local = MatchLocal(grid, points, extrapolated, &result.match_score);
-    if (this_scan_constant_velocity_ && have_last_scan_) {
+    if (prediction.constant_velocity && extrapolator_.have_last()) {
       // Without fresh odometry the constant-velocity extrapolation can run far ahead (a
       // mis-stamped scan in a fast turn, Intel): also track from the last pose (no motion) and
       // keep the better match.
       double still_score = 0;
-      const Rigid2d still = MatchLocal(grid, points, last_scan_local_, &still_score);
+      const Rigid2d still = MatchLocal(grid, points, extrapolator_.last_pose(), &still_score);
       if (still_score > result.match_score) {
         local = still;
         result.match_score = still_score;
@@ -340,18 +270,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
   stats_.local_seconds += Seconds(t0);
   ++stats_.scans;
   have_scan_since_load_ = true;
-  if (this_scan_has_fresh_odom_) {
-    have_reference_ = true;
-    reference_local_ = local;
-    reference_odom_ = last_scan_odom_;
-    reference_segment_ = last_scan_segment_;
-  }
-  have_prev_scan_ = have_last_scan_;
-  prev_scan_time_ = last_scan_time_;
-  prev_scan_local_ = last_scan_local_;
-  have_last_scan_ = true;
-  last_scan_time_ = scan.time_s;
-  last_scan_local_ = local;
+  extrapolator_.AddMatch(scan.time_s, local, prediction);
 
   // Motion filter.
   const auto& l = options_.local;
@@ -424,9 +343,9 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
   Node node;
   node.time_s = time_s;
   node.local_pose = local_pose;
-  node.has_odometry = last_scan_has_odom_;
-  node.odom_pose = last_scan_odom_;
-  node.odom_segment = last_scan_segment_;
+  node.has_odometry = extrapolator_.last_has_odometry();
+  node.odom_pose = extrapolator_.last_odometry();
+  node.odom_segment = extrapolator_.last_segment();
   node.loop_points = loop_points;
   node.range_data = base_data;
   node.submaps = inserted_into;
@@ -637,8 +556,8 @@ void Slam::RunOptimisation(int max_iterations) {
 void Slam::Optimise() { RunOptimisation(options_.graph.final_max_iterations); }
 
 Rigid2d Slam::CurrentPose() const {
-  if (localisation_only_) return last_scan_local_;
-  return global_from_local_ * last_scan_local_;
+  if (localisation_only_) return extrapolator_.last_pose();
+  return global_from_local_ * extrapolator_.last_pose();
 }
 
 std::vector<StampedPose2> Slam::Trajectory() const {
@@ -664,12 +583,12 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
   Rigid2d odom;
   int segment;
   const bool have_odom = odometry_.At(scan.time_s, &odom, &segment);
-  Rigid2d predicted = last_scan_local_;
-  if (have_scan_since_load_ && have_odom && last_scan_has_odom_ && segment == last_scan_segment_) {
-    predicted = last_scan_local_ * (last_scan_odom_.inverse() * odom);
+  Rigid2d predicted = extrapolator_.last_pose();
+  if (have_scan_since_load_ && have_odom && extrapolator_.last_has_odometry() &&
+      segment == extrapolator_.last_segment()) {
+    predicted = extrapolator_.last_pose() * (extrapolator_.last_odometry().inverse() * odom);
   }
-  last_scan_has_odom_ = have_odom;
-  if (have_odom) last_scan_odom_ = odom, last_scan_segment_ = segment;
+  extrapolator_.SetLastOdometry(have_odom, odom, segment);
   int best = -1;
   double best_d = 1e300;
   for (size_t s = 0; s < submaps_.size(); ++s) {
@@ -700,9 +619,7 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
     pose = grid_from_global.inverse() * in_grid;
   }
   have_scan_since_load_ = true;
-  have_last_scan_ = true;
-  last_scan_time_ = scan.time_s;
-  last_scan_local_ = pose;
+  extrapolator_.SetLast(scan.time_s, pose);
   ++stats_.scans;
   scans_.push_back({scan.time_s, pose, -1});
   result.accepted = true;

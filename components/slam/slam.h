@@ -25,6 +25,7 @@
 #include "slam/loop_consistency.h"
 #include "slam/motion_filter.h"
 #include "slam/odometry_buffer.h"
+#include "slam/pose_extrapolator.h"
 #include "slam/pose_graph.h"
 #include "slam/relations.h"
 #include "slam/scan_matcher.h"
@@ -103,9 +104,8 @@ class Slam {
   // Localisation only: where to start (the first scan is searched around it); by default the
   // last pose of the saved map.
   void SetLocalisationStart(const Rigid2d& map_from_base) {
-    last_scan_local_ = map_from_base;
+    extrapolator_.Start(map_from_base);  // a new start: no time order with the saved state
     have_scan_since_load_ = false;
-    have_last_scan_ = false;  // a new start: no time order with the saved state
   }
 
   // Global pose of every accepted scan (time order).
@@ -180,7 +180,6 @@ class Slam {
   // AddScan after the time-order check: `scan.time_s` is the processing time, `stamp_s` the
   // scan's own stamp (kept in the trajectory).
   ScanResult AddScanInOrder(const LaserScan& scan, double stamp_s);
-  Rigid2d PredictLocal(double time_s);
   Rigid2d MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
                      const Rigid2d& predicted, double* score) const;
   ScanResult AddScanLocalisation(const LaserScan& scan, const RangeData& data,
@@ -215,30 +214,11 @@ class Slam {
 
   OdometryBuffer odometry_;
   MotionFilter motion_filter_;  // which scans become nodes
+  PoseExtrapolator extrapolator_;  // the matched scans' track and the next scan's prediction
 
   // Local SLAM.
   std::vector<Submap> submaps_;
   std::vector<int> active_submaps_;
-  bool have_last_scan_ = false;
-  double last_scan_time_ = 0;
-  Rigid2d last_scan_local_;
-  bool last_scan_has_odom_ = false;
-  Rigid2d last_scan_odom_;
-  // Odometry of the last scan before a restart from saved state (Load), to bridge the gap.
-  bool resume_odom_valid_ = false;
-  double resume_wait_start_s_ = -1;  // first scan that waited for odometry after a restart
-  bool resume_bridged_ = false;      // the first scan after Load was predicted across the gap
-  Rigid2d resume_odom_;
-  int last_scan_segment_ = -1;
-  bool this_scan_has_fresh_odom_ = false;
-  bool standing_still_ = false;               // unchanged odometry on both sides of the last scan
-  bool this_scan_constant_velocity_ = false;  // the prediction is a constant-velocity extrapolation
-  bool have_reference_ = false;
-  Rigid2d reference_local_, reference_odom_;
-  int reference_segment_ = -1;
-  bool have_prev_scan_ = false;
-  double prev_scan_time_ = 0;
-  Rigid2d prev_scan_local_;
 
   // Global SLAM.
   std::vector<Node> nodes_;

@@ -125,12 +125,12 @@ void Slam::Save(const std::string& path) const {
     }
     // Local state to continue.
     w.Pose(global_from_local_);
-    w.Pod<int32_t>(have_last_scan_);
-    w.Pod(last_scan_time_);
-    w.Pose(last_scan_local_);
-    w.Pod<int32_t>(last_scan_has_odom_);
-    w.Pose(last_scan_odom_);
-    w.Pod<int32_t>(last_scan_segment_);
+    w.Pod<int32_t>(extrapolator_.have_last());
+    w.Pod(extrapolator_.last_time_s());
+    w.Pose(extrapolator_.last_pose());
+    w.Pod<int32_t>(extrapolator_.last_has_odometry());
+    w.Pose(extrapolator_.last_odometry());
+    w.Pod<int32_t>(extrapolator_.last_segment());
     w.Pod(motion_filter_.last_time_s());
     w.Pose(motion_filter_.last_pose());
     w.Pod<int32_t>(-1);  // unused (scans carry their own geometry); kept for the file layout
@@ -292,12 +292,11 @@ void Slam::Load(const std::string& path) {
   if (!finite)
     throw std::runtime_error("pose-graph file '" + path + "' corrupt (non-finite value)");
   global_from_local_ = global_from_local;
-  have_last_scan_ = have_last_scan;
-  last_scan_time_ = last_scan_time;
-  last_scan_local_ = last_scan_local;
-  last_scan_has_odom_ = last_scan_has_odom;
-  last_scan_odom_ = last_scan_odom;
-  last_scan_segment_ = last_scan_segment;
+  // The odometry frame of a restarted robot may differ: the first new odometry bridges the gap
+  // only when it is plausible (PoseExtrapolator), and the scan matcher (wide search on the first
+  // scan) finds the robot.
+  extrapolator_.Restore(have_last_scan, last_scan_time, last_scan_local, last_scan_has_odom,
+                        last_scan_odom, last_scan_segment, !localisation_only_);
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);
   active_submaps_ = std::move(active);
@@ -313,18 +312,8 @@ void Slam::Load(const std::string& path) {
   odometry_.Reset(odom_segment + 1);
   have_scan_since_load_ = false;
   nodes_since_optimisation_ = 0;
-  // The odometry frame of a restarted robot may differ: the first new odometry bridges the gap
-  // only when it is plausible (PredictLocal), and the scan matcher (wide search on the first
-  // scan) finds the robot.
-  resume_odom_valid_ = last_scan_has_odom_ && !localisation_only_;
-  resume_wait_start_s_ = -1;
-  resume_bridged_ = false;
-  resume_odom_ = last_scan_odom_;
-  last_scan_has_odom_ = false;
-  have_reference_ = false;
-  have_prev_scan_ = false;
   if (localisation_only_ && !nodes_.empty())
-    last_scan_local_ = global_from_local_ * last_scan_local_;
+    extrapolator_.set_last_pose(global_from_local_ * extrapolator_.last_pose());
   stats_ = SlamStats();
   stats_.nodes = nodes_.size();
   stats_.submaps = submaps_.size();
