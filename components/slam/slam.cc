@@ -279,15 +279,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     motion_filter_.NodeAdded(scan.time_s, local);
     // Insert into the active submaps (a new one every scans_per_submap insertions; the older
     // one finishes at 2 * scans_per_submap).
-    if (active_submaps_.empty()) {
-      Submap s;
-      s.local_pose = Rigid2d(local.translation(), 0.0);
-      s.grid = std::make_unique<ProbabilityGrid>(l.resolution_m, local.translation());
-      submaps_.push_back(std::move(s));
-      submap_global_.push_back(global_from_local_ * submaps_.back().local_pose);
-      active_submaps_.push_back(static_cast<int>(submaps_.size()) - 1);
-      ++stats_.submaps;
-    }
+    if (active_submaps_.empty()) StartSubmap(local);
     RangeData local_data;
     local_data.origin = data.origin;
     local_data.hits = voxel_hits;
@@ -311,13 +303,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
         FinishSubmap(finished);
         if (options_.trim.enabled) TrimIfCovered(finished);
       }
-      Submap s;
-      s.local_pose = Rigid2d(local.translation(), 0.0);
-      s.grid = std::make_unique<ProbabilityGrid>(l.resolution_m, local.translation());
-      submaps_.push_back(std::move(s));
-      submap_global_.push_back(global_from_local_ * submaps_.back().local_pose);
-      active_submaps_.push_back(static_cast<int>(submaps_.size()) - 1);
-      ++stats_.submaps;
+      StartSubmap(local);
     }
     ++nodes_since_optimisation_;
     if (options_.graph.optimise_every_n_nodes > 0 &&
@@ -407,6 +393,16 @@ bool Slam::SampleSubmap(Submap* s) {
     return true;
   }
   return false;
+}
+
+void Slam::StartSubmap(const Rigid2d& local_pose) {
+  Submap s;
+  s.local_pose = Rigid2d(local_pose.translation(), 0.0);
+  s.grid = std::make_unique<ProbabilityGrid>(options_.local.resolution_m, local_pose.translation());
+  submaps_.push_back(std::move(s));
+  submap_global_.push_back(global_from_local_ * submaps_.back().local_pose);
+  active_submaps_.push_back(static_cast<int>(submaps_.size()) - 1);
+  ++stats_.submaps;
 }
 
 void Slam::FinishSubmap(int submap_id) {

@@ -186,6 +186,8 @@ class Slam {
                                  const PointCloud& points);
   int AddNode(double time_s, const Rigid2d& local_pose, const RangeData& base_data,
               const PointCloud& loop_points, const std::vector<int>& inserted_into);
+  // A new active submap whose grid starts at `local_pose` (translation only).
+  void StartSubmap(const Rigid2d& local_pose);
   void FinishSubmap(int submap_id);
   // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions).
   void TrimIfCovered(int submap_id);
