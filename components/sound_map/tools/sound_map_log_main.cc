@@ -77,6 +77,17 @@ sarmap::pose_t PoseMessage(Utime utime, const Pose2& pose, const Eigen::Matrix3d
   return m;
 }
 
+// Each source's position (by id) of the SOUND_MAPs published at each map time.
+using SourcesByTime = std::map<Utime, std::map<int64_t, Eigen::Vector3d>>;
+// Keeps the first SOUND_MAP at each time: a node's final map (Finish) may repeat the time of
+// its last input.
+void KeepSources(const sarmap::sound_map_t& m, SourcesByTime* maps) {
+  const auto [at, first] = maps->try_emplace(m.header.utime);
+  if (!first) return;
+  for (const auto& src : m.sources)
+    at->second[src.id] = Eigen::Vector3d(src.position_m[0], src.position_m[1], src.position_m[2]);
+}
+
 // A heard keyword direction (PEOPLE_AUDIO), for --heard-check.
 struct Heard {
   Utime utime = 0;
@@ -232,19 +243,14 @@ int main(int argc, char** argv) {
                      doa_log.emplace_back(m.header.utime, std::move(m));
                    });
     // Each source's position in every SOUND_MAP the replay publishes, by the map's time.
-    std::map<Utime, std::map<int64_t, Eigen::Vector3d>> published;
+    SourcesByTime published;
     Utime last_published = 0;
     replay.Capture(replay_options.sound_map_channel,
                    [&](const std::string&, const std::vector<uint8_t>& data) {
                      sound_map_t m;
                      if (!common::DecodeMessage(data.data(), data.size(), &m)) return;
                      last_published = m.header.utime;
-                     // The first at each time: the final map (Finish) may repeat the last input's.
-                     const auto [at, first] = published.try_emplace(m.header.utime);
-                     if (!first) return;
-                     for (const auto& src : m.sources)
-                       at->second[src.id] =
-                           Eigen::Vector3d(src.position_m[0], src.position_m[1], src.position_m[2]);
+                     KeepSources(m, &published);
                    });
 
     // What the log says besides the inputs: the truth, and the live node's last SOUND_MAP.
@@ -256,7 +262,7 @@ int main(int argc, char** argv) {
     std::vector<std::pair<Utime, std::vector<std::pair<int64_t, Pose2>>>> anchor_log;
     std::vector<Heard> heard_log;
     sound_map_t live;  // the last SOUND_MAP the running node published, if logged
-    std::map<Utime, std::map<int64_t, Eigen::Vector3d>> live_maps;  // as `published`
+    SourcesByTime live_maps;  // the logged live node's
     int64_t live_msgs = 0;
     const Utime doa_shift_us = std::llround(doa_shift_s * 1e6);
     size_t next_file_pose = 0;
@@ -467,10 +473,7 @@ int main(int argc, char** argv) {
       if (e->channel == replay_options.sound_map_channel) {
         sound_map_t m;
         if (Decode(*e, &m)) {
-          auto& sources = live_maps.try_emplace(m.header.utime).first->second;
-          for (const auto& src : m.sources)
-            sources[src.id] =
-                Eigen::Vector3d(src.position_m[0], src.position_m[1], src.position_m[2]);
+          KeepSources(m, &live_maps);
           live = std::move(m);
           ++live_msgs;
         }
