@@ -6,8 +6,8 @@
 #include <cstdio>
 
 #include "sound_localisation/localiser.h"
-#include "sound_localisation/room_simulation.h"
 #include "sound_localisation/test_util.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 namespace sarmap {
 namespace sound {

@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <random>
 
-#include "sound_localisation/doa_evaluation.h"
 #include "sound_localisation/localiser.h"
 #include "sound_localisation/test_util.h"
+#include "sound_localisation/testing/doa_evaluation.h"
 
 namespace sarmap {
 namespace sound {

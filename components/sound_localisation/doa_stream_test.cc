@@ -8,8 +8,8 @@
 #include <cmath>
 
 #include "common/time.h"
-#include "sound_localisation/room_simulation.h"
 #include "sound_localisation/test_util.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 namespace sarmap {
 namespace sound {

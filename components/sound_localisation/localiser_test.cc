@@ -6,9 +6,9 @@
 #include <filesystem>
 
 #include "common/robot_config.h"
-#include "sound_localisation/doa_evaluation.h"
-#include "sound_localisation/room_simulation.h"
 #include "sound_localisation/test_util.h"
+#include "sound_localisation/testing/doa_evaluation.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 namespace sarmap {
 namespace sound {

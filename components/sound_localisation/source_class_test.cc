@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "audio_capture/audio_file.h"
-#include "sound_localisation/room_simulation.h"
 #include "sound_localisation/stft.h"
 #include "sound_localisation/test_util.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 namespace sarmap {
 namespace sound {

@@ -10,7 +10,7 @@
 #include "audio_capture/audio_source.h"
 #include "common/robot_config.h"
 #include "sound_localisation/localiser.h"
-#include "sound_localisation/room_simulation.h"
+#include "sound_localisation/testing/room_simulation.h"
 #include "speech/speech_processor.h"
 
 using namespace sarmap;

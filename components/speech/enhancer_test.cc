@@ -7,8 +7,8 @@
 #include <random>
 
 #include "audio_capture/audio_file.h"
-#include "sound_localisation/room_simulation.h"
 #include "sound_localisation/test_util.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 namespace sarmap {
 namespace speech {

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "audio_capture/audio_file.h"
-#include "speech/kws_evaluation.h"
+#include "speech/testing/kws_evaluation.h"
 
 namespace sarmap {
 namespace speech {

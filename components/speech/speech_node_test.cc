@@ -18,7 +18,7 @@
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/node_status_t.hpp"
-#include "speech/kws_evaluation.h"
+#include "speech/testing/kws_evaluation.h"
 #include "tests/process.h"
 
 namespace {

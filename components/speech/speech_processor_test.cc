@@ -6,9 +6,9 @@
 #include <cstdio>
 
 #include "audio_capture/audio_file.h"
-#include "sound_localisation/room_simulation.h"
 #include "sound_localisation/test_util.h"
-#include "speech/kws_evaluation.h"
+#include "sound_localisation/testing/room_simulation.h"
+#include "speech/testing/kws_evaluation.h"
 
 namespace sarmap {
 namespace speech {

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "audio_capture/audio_file.h"
-#include "sound_localisation/room_simulation.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 int main(int argc, char** argv) {
   using namespace sarmap;

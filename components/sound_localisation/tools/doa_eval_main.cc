@@ -13,7 +13,7 @@
 #include "common/args.h"
 #include "common/options.h"
 #include "common/robot_config.h"
-#include "sound_localisation/doa_evaluation.h"
+#include "sound_localisation/testing/doa_evaluation.h"
 
 using namespace sarmap;
 

@@ -5,7 +5,7 @@
 #include "common/args.h"
 #include "common/logging.h"
 #include "common/robot_config.h"
-#include "speech/kws_evaluation.h"
+#include "speech/testing/kws_evaluation.h"
 
 using namespace sarmap;
 

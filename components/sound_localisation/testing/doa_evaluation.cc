@@ -1,4 +1,4 @@
-#include "sound_localisation/doa_evaluation.h"
+#include "sound_localisation/testing/doa_evaluation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "audio_capture/audio_file.h"
-#include "sound_localisation/room_simulation.h"
+#include "sound_localisation/testing/room_simulation.h"
 
 namespace sarmap {
 namespace sound {

@@ -17,21 +17,23 @@ namespace sarmap {
 namespace speech {
 
 // Renders `text` with espeak-ng at 16 kHz (empty if espeak-ng is unavailable).
-std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int words_per_minute, int pitch);
+std::vector<float> RenderEspeak(const std::string& text, const std::string& voice,
+                                int words_per_minute, int pitch);
 bool EspeakAvailable();
 // Renders `text` with flite (voice kal16, awb, rms or slt; duration_stretch > 1 is slower) at
 // 16 kHz (empty if flite is unavailable). flite's voices are built from recorded speech, and the
 // en-us acoustic model recognises them, unlike espeak-ng's formant synthesis (README).
-std::vector<float> RenderFlite(const std::string& text, const std::string& voice, double duration_stretch);
+std::vector<float> RenderFlite(const std::string& text, const std::string& voice,
+                               double duration_stretch);
 bool FliteAvailable();
 
 struct KwsEvalOptions {
   int num_calls = 40;
   double negative_minutes = 10.0;
-  double call_snr_db = 10.0;        // call vs background (noise + babble)
-  double babble_db = -6.0;          // other talkers relative to the call, positives
+  double call_snr_db = 10.0;  // call vs background (noise + babble)
+  double babble_db = -6.0;    // other talkers relative to the call, positives
   uint32_t seed = 1;
-  std::string data_dir;             // shared data (real negative speech)
+  std::string data_dir;  // shared data (real negative speech)
   std::string target = "help";
   // Fit the keyword verifier (keyword_verifier.h) on the TUNING half's hits with these features
   // (empty: use keywords.verifier as given): calls = "help" hits inside the call window of tuning
@@ -62,15 +64,15 @@ struct KwsEvalOptions {
 struct KwsEvalResult {
   double threshold = 0;
   double min_confidence = 0;
-  double max_utterance_s = 0;       // post-filter: hits in longer utterances dropped (0: none)
-  double call_join_s = 0;           // utterances closer than this are one call for max_utterance_s
+  double max_utterance_s = 0;  // post-filter: hits in longer utterances dropped (0: none)
+  double call_join_s = 0;      // utterances closer than this are one call for max_utterance_s
   int calls = 0, hits = 0;
   double recall = 0;
-  int target_false_alarms = 0;      // target keyword in the negative stream
-  int other_false_alarms = 0;       // any other keyword in the negative stream
+  int target_false_alarms = 0;  // target keyword in the negative stream
+  int other_false_alarms = 0;   // any other keyword in the negative stream
   double negative_minutes = 0;
   double false_alarms_per_10_min = 0;
-  double decode_seconds = 0;        // CPU time spent (for the curve's cost)
+  double decode_seconds = 0;  // CPU time spent (for the curve's cost)
   // The same on two disjoint halves: "tune" (calls 0-7, 16-23, ...: every phrasing; first half
   // of the negative stream) to choose an operating point, "held" (calls 8-15, 24-31, ...;
   // second half) to report it.
@@ -103,7 +105,8 @@ struct KwsEvalData {
   std::vector<NegativeSource> negative_sources;
   // Label of the negative source at stream time t (s): "real:<file>" / "espeak:<n>", "gap" between.
   std::string NegativeSourceAt(double t_s, bool* synthetic = nullptr) const;
-  // The parts of each positive scene (summed in `positives`): the call (placed), other talker, noise.
+  // The parts of each positive scene (summed in `positives`): the call (placed), other talker,
+  // noise.
   std::vector<std::vector<float>> positive_call, positive_babble, positive_noise;
 };
 
@@ -127,15 +130,15 @@ KwsArrayResult KwsArrayRecall(const KwsEvalData& data, const std::string& array_
                               bool post_filter = true);
 
 KwsEvalData MakeKwsEvalData(const KwsEvalOptions& options);
-KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
-                          const KwsEvalOptions& options);
+KwsEvalResult EvaluateKws(const KwsEvalData& data, const KeywordOptions& keywords,
+                          const VadOptions& vad, const KwsEvalOptions& options);
 // One decoding pass, results for each confidence cut (the cut is a pure post-filter).
-std::vector<KwsEvalResult> EvaluateKwsSweep(const KwsEvalData& data, const KeywordOptions& keywords,
-                                            const VadOptions& vad, const KwsEvalOptions& options,
-                                            const std::vector<double>& min_confidences,
-                                            const std::vector<double>& max_utterances_s = {0.0},
-                                            const std::vector<double>& call_joins_s = {0.0},
-                                            const std::vector<double>& verifier_min_probabilities = {});
+std::vector<KwsEvalResult> EvaluateKwsSweep(
+    const KwsEvalData& data, const KeywordOptions& keywords, const VadOptions& vad,
+    const KwsEvalOptions& options, const std::vector<double>& min_confidences,
+    const std::vector<double>& max_utterances_s = {0.0},
+    const std::vector<double>& call_joins_s = {0.0},
+    const std::vector<double>& verifier_min_probabilities = {});
 
 }  // namespace speech
 }  // namespace sarmap
