@@ -9,28 +9,15 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/mission_report.h"
 #include "sarmap/pose_t.hpp"
 
 namespace sarmap {
 namespace logtools {
 namespace {
-
-template <class T>
-void WriteEvent(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t utime) {
-  std::vector<uint8_t> buf(msg.getEncodedSize());
-  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent e;
-  e.eventnum = 0;
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(buf.size());
-  e.data = buf.data();
-  log->writeEvent(&e);
-}
 
 mapped_person_t MakePerson(int64_t id, double x, double y, int cues, double variance) {
   mapped_person_t p{};
@@ -61,7 +48,7 @@ sound_source_t MakeSource(int64_t id, double x, double y, double variance, int8_
 // (773, 638) m with variance 4e9 m^2), and one heard person inside the map but with a 40 m std.
 std::string WriteMission(const std::string& name) {
   const std::string path = ::testing::TempDir() + "/" + name + ".lcmlog";
-  lcm::LogFile log(path, "w");
+  logtools::LcmLogWriter log(path);
   occupancy_grid_t grid{};
   grid.header.frame = "map";
   grid.resolution_m = 0.05;
@@ -75,7 +62,7 @@ std::string WriteMission(const std::string& name) {
     for (int x = 100; x < 120; ++x) grid.data[y * 120 + x] = static_cast<uint8_t>(-1);
   }
   grid.size = static_cast<int32_t>(grid.data.size());
-  WriteEvent(&log, "MAP", grid, 1'000'000);
+  log.Write("MAP", grid, 1'000'000);
   for (int i = 0; i < 40; ++i) {
     pose_t pose{};
     pose.header.utime = 1'000'000 + i * 100'000;
@@ -83,7 +70,7 @@ std::string WriteMission(const std::string& name) {
     pose.position_m[1] = 0.05 * i + 0.021;
     pose.orientation[0] = std::cos(0.2);
     pose.orientation[3] = std::sin(0.2);
-    WriteEvent(&log, "POSE", pose, pose.header.utime);
+    log.Write("POSE", pose, pose.header.utime);
   }
   people_map_t people{};
   people.header.frame = "map";
@@ -94,13 +81,13 @@ std::string WriteMission(const std::string& name) {
       MakePerson(4, 773.0, 638.0, mapped_person_t::CUE_HEARD, 4e9),
       MakePerson(5, 2.0, 1.0, mapped_person_t::CUE_HEARD, 1600.0)};
   people.num_people = 5;
-  WriteEvent(&log, "PEOPLE_MAP", people, 4'000'000);
+  log.Write("PEOPLE_MAP", people, 4'000'000);
   sound_map_t sounds{};
   sounds.header.frame = "map";
   sounds.sources = {MakeSource(1, 3.2, 0.45, 0.04, sound_source_t::STATE_CONVERGED),
                     MakeSource(2, 773.0, 638.0, 4e9, sound_source_t::STATE_INITIALISING)};
   sounds.num_sources = 2;
-  WriteEvent(&log, "SOUND_MAP", sounds, 4'000'000);
+  log.Write("SOUND_MAP", sounds, 4'000'000);
   return path;
 }
 

@@ -1,4 +1,4 @@
-// sarmap-log echo end to end: a log written with lcm::LogFile, printed by the tool through the
+// sarmap-log echo end to end: a log written with LcmLogWriter, printed by the tool through the
 // sarmap-log front end.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/lcm_schema.h"
 #include "sarmap/image_t.hpp"
 #include "sarmap/people_detections_t.hpp"
@@ -43,19 +43,14 @@ ToolRun RunTool(const std::string& args) {
   return run;
 }
 
+// The message encoded, its last `cut` bytes left out (a message cut short).
 template <class T>
-void Write(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t utime,
-           int cut = 0) {
+void Write(sarmap::logtools::LcmLogWriter* log, const std::string& channel, const T& msg,
+           int64_t utime, int cut = 0) {
   std::vector<uint8_t> buf(msg.getEncodedSize());
   msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
   buf.resize(buf.size() - cut);
-  lcm::LogEvent e;
-  e.eventnum = 0;
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(buf.size());
-  e.data = buf.data();
-  log->writeEvent(&e);
+  log->WriteBytes(channel, buf, utime);
 }
 
 // 0 s: PEOPLE_VISUAL (one person), DEPTH (a VGA image), 1 s: JUNK (no sarmap type),
@@ -64,7 +59,7 @@ std::string WriteLog() {
   const std::string path = ::testing::TempDir() + "/echo_test_" +
                            ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
                            std::to_string(getpid()) + ".lcmlog";
-  lcm::LogFile log(path, "w");
+  sarmap::logtools::LcmLogWriter log(path);
   const int64_t t0 = 1700000000000000;
   sarmap::people_detections_t people{};
   people.header.utime = t0 - 30000;
@@ -87,13 +82,7 @@ std::string WriteLog() {
   depth.data.assign(depth.size, 7);
   Write(&log, "DEPTH", depth, t0 + 10000);
   const uint8_t junk[] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
-  lcm::LogEvent e;
-  e.eventnum = 0;
-  e.timestamp = t0 + 1000000;
-  e.channel = "JUNK";
-  e.datalen = sizeof(junk);
-  e.data = const_cast<uint8_t*>(junk);
-  log.writeEvent(&e);
+  log.WriteBytes("JUNK", junk, sizeof(junk), t0 + 1000000);
   sarmap::pose_t pose{};
   pose.header.frame = "map";
   Write(&log, "POSE", pose, t0 + 2000000, 20);
@@ -170,7 +159,7 @@ TEST(LogEchoTest, SaysWhyANodeWouldRefuseAMessage) {
   const std::string path =
       ::testing::TempDir() + "/echo_refused_" + std::to_string(getpid()) + ".lcmlog";
   {
-    lcm::LogFile log(path, "w");
+    sarmap::logtools::LcmLogWriter log(path);
     sarmap::people_detections_t people{};
     people.header.frame = "camera";
     people.num_detections = 1;
@@ -222,14 +211,8 @@ TEST(LogEchoTest, ReadsTypesOfAnotherPackageFromTypesDir) {
     bytes.push_back(static_cast<uint8_t>(b));
   const std::string log = dir + "/ping.lcmlog";
   {
-    lcm::LogFile file(log, "w");
-    lcm::LogEvent e;
-    e.eventnum = 0;
-    e.timestamp = 1;
-    e.channel = "PING";
-    e.datalen = static_cast<int32_t>(bytes.size());
-    e.data = bytes.data();
-    file.writeEvent(&e);
+    sarmap::logtools::LcmLogWriter file(log);
+    file.WriteBytes("PING", bytes, 1);
   }
   ToolRun run = RunTool("echo " + log + " --types " + dir);
   ASSERT_EQ(run.lines.size(), 1u);

@@ -7,31 +7,18 @@
 
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "log-tools/lcm_log_writer.h"
 #include "procman/order_auth.h"
 #include "sarmap/pm_info_t.hpp"
 #include "sarmap/pm_output_t.hpp"
 #include "tests/process.h"
 
 namespace {
-
-template <class T>
-void Write(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t utime) {
-  std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent e;
-  e.eventnum = 0;
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(buf.size());
-  e.data = buf.data();
-  log->writeEvent(&e);
-}
 
 sarmap::pm_output_t Output(const std::string& deputy, const std::string& command,
                            const std::string& text) {
@@ -71,7 +58,7 @@ TEST(LogOutput, ForgedOutputIsSkippedWithTheKeyAndNamedPlainlyWithout) {
   const sarmap::procman::Key key = sarmap::procman::LoadKeyFile(key_path);
   const std::string log_path = dir + "/attacked.lcmlog";
   {
-    lcm::LogFile log(log_path, "w");
+    sarmap::logtools::LcmLogWriter log(log_path);
     sarmap::pm_info_t info{};
     info.header.frame = "procman";
     info.deputy_id = "robot";
@@ -83,16 +70,15 @@ TEST(LogOutput, ForgedOutputIsSkippedWithTheKeyAndNamedPlainlyWithout) {
     sarmap::procman::SignInfo(key, &info);
     sarmap::pm_output_t genuine = Output("robot", "sarmap-slam", "mapping\n");
     sarmap::procman::SignOutput(key, &genuine);
-    Write(&log, "PM_OUTPUT", genuine, 1000000);
-    Write(&log, "PM_INFO", info, 1100000);
+    log.Write("PM_OUTPUT", genuine, 1000000);
+    log.Write("PM_INFO", info, 1100000);
     // Forged lines of a real command, unsigned and signed with another key.
-    Write(&log, "PM_OUTPUT", Output("robot", "sarmap-slam", "forged: diverged\n"), 1150000);
+    log.Write("PM_OUTPUT", Output("robot", "sarmap-slam", "forged: diverged\n"), 1150000);
     sarmap::pm_output_t other_key = Output("robot", "sarmap-slam", "forged: stopping\n");
     sarmap::procman::SignOutput(sarmap::procman::Key(32, 'x'), &other_key);
-    Write(&log, "PM_OUTPUT", other_key, 1160000);
-    Write(&log, "PM_OUTPUT", Output("../../evil", "<script>alert(1)</script>", "forged\n"),
-          1200000);
-    Write(&log, "PM_OUTPUT", Output(std::string(60000, 'C'), "x", "forged\n"), 1300000);
+    log.Write("PM_OUTPUT", other_key, 1160000);
+    log.Write("PM_OUTPUT", Output("../../evil", "<script>alert(1)</script>", "forged\n"), 1200000);
+    log.Write("PM_OUTPUT", Output(std::string(60000, 'C'), "x", "forged\n"), 1300000);
   }
   const std::string signed_dir = dir + "/signed", all_dir = dir + "/all";
   sarmap::testing::Process with_key(

@@ -4,7 +4,6 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,6 +12,7 @@
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "log-tools/lcm_log_reader.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/record_profile.h"
 
 namespace {
@@ -44,21 +44,12 @@ int Thin(int argc, char** argv) {
 
   sarmap::logtools::LcmLogReader reader(log);
   sarmap::logtools::RecordThinner thinner(options);
-  lcm::LogFile out(output, "w");
-  if (!out.good()) throw std::runtime_error("cannot write " + output + ": " + std::strerror(errno));
+  sarmap::logtools::LcmLogWriter out(output);
   int64_t written = 0, bytes_in = 0, bytes_out = 0, first_us = -1, last_us = -1;
   std::vector<sarmap::logtools::LogEvent> released;
   auto write = [&] {
     for (auto& e : released) {
-      lcm::LogEvent event;
-      event.eventnum = written;
-      event.timestamp = e.timestamp_us;
-      event.channel = e.channel;
-      event.datalen = static_cast<int32_t>(e.data.size());
-      event.data = e.data.data();
-      if (out.writeEvent(&event) != 0) {
-        throw std::runtime_error(output + ": write failed: " + std::strerror(errno));
-      }
+      out.WriteBytes(e.channel, e.data, e.timestamp_us);
       ++written;
       bytes_out += 28 + static_cast<int64_t>(e.channel.size() + e.data.size());
     }
@@ -83,9 +74,7 @@ int Thin(int argc, char** argv) {
   }
   thinner.Finish(&released);
   write();
-  if (fflush(out.getFilePtr()) != 0) {
-    throw std::runtime_error(output + ": write failed: " + std::strerror(errno));
-  }
+  out.Flush();
   fprintf(stderr, "\n");
   for (const auto& p : reader.problems()) {
     fprintf(stderr, "thin: %s: damaged at byte %lld (%s); read on from the next event\n",

@@ -4,10 +4,10 @@
 #include <sys/stat.h>
 
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
 #include "common/bus_auth.h"
+#include "log-tools/lcm_log_writer.h"
 #include "sarmap/doa_source_t.hpp"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
@@ -17,19 +17,6 @@
 namespace sarmap {
 namespace logtools {
 namespace {
-
-template <class T>
-void Write(lcm::LogFile* log, const std::string& channel, const T& msg, int64_t utime) {
-  std::vector<uint8_t> buf(msg.getEncodedSize());
-  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent e;
-  e.eventnum = 0;
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(buf.size());
-  e.data = buf.data();
-  log->writeEvent(&e);
-}
 
 void SetStart(sarmap::sim_truth_t* t, double x, double y, double yaw) {
   t->start_pose[0] = x;
@@ -53,7 +40,7 @@ sarmap::mapped_person_t Person(int64_t id, double x, double y, int cues, const s
 TEST(MissionReportTest, FoundVersusTruthFromALog) {
   const std::string path = ::testing::TempDir() + "/mission.lcmlog";
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     sarmap::occupancy_grid_t grid{};
     grid.resolution_m = 0.1;
     grid.width = 80;
@@ -61,21 +48,21 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     grid.data.assign(80 * 60, 0);
     for (int x = 0; x < 80; ++x) grid.data[x] = grid.data[59 * 80 + x] = 100;
     grid.size = static_cast<int32_t>(grid.data.size());
-    Write(&log, "MAP", grid, 1'000'000);
+    log.Write("MAP", grid, 1'000'000);
     for (int i = 0; i < 20; ++i) {
       sarmap::pose_t pose{};
       pose.orientation[0] = 1;
       pose.header.utime = 1'000'000 + i * 100'000;
       pose.position_m[0] = 1 + 0.2 * i;
       pose.position_m[1] = 3;
-      Write(&log, "POSE", pose, pose.header.utime);
+      log.Write("POSE", pose, pose.header.utime);
     }
     sarmap::people_map_t people{};
     people.people = {Person(1, 2.0, 1.0, sarmap::mapped_person_t::CUE_SEEN_RGBD),
                      Person(2, 6.1, 4.9, sarmap::mapped_person_t::CUE_HEARD, "help"),
                      Person(3, 7.5, 1.0, sarmap::mapped_person_t::CUE_SEEN_DEPTH)};  // nobody there
     people.num_people = 3;
-    Write(&log, "PEOPLE_MAP", people, 3'000'000);
+    log.Write("PEOPLE_MAP", people, 3'000'000);
     // A sound source near the map and one that has not converged, hundreds of metres away
     // with a huge covariance: the PNG must still show the map at a readable scale.
     sarmap::sound_map_t sounds{};
@@ -94,7 +81,7 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
     near.has_position = far.has_position = true;
     sounds.sources = {near, far};
     sounds.num_sources = 2;
-    Write(&log, "SOUND_MAP", sounds, 3'000'000);
+    log.Write("SOUND_MAP", sounds, 3'000'000);
     // The simulator's frame is the map frame shifted by (10, -2) and turned by 90 degrees:
     // truth = R(90) * map + (10, -2), i.e. the robot started at (10, -2, 90 deg) in the world.
     const auto to_truth = [](double x, double y) { return std::make_pair(-y + 10.0, x - 2.0); };
@@ -106,7 +93,7 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
       t.robot_position_m[0] = p.first;
       t.robot_position_m[1] = p.second;
       SetStart(&t, 10, -2, M_PI / 2);
-      Write(&log, "SIM_TRUTH", t, t.header.utime);
+      log.Write("SIM_TRUTH", t, t.header.utime);
     }
     sarmap::sim_truth_t truth{};
     truth.header.utime = 3'000'000;
@@ -123,7 +110,7 @@ TEST(MissionReportTest, FoundVersusTruthFromALog) {
       truth.people.push_back(p);
     }
     truth.num_people = 3;
-    Write(&log, "SIM_TRUTH", truth, 3'000'000);
+    log.Write("SIM_TRUTH", truth, 3'000'000);
   }
   const MissionData data = LoadMission(path);
   EXPECT_TRUE(data.map);
@@ -193,7 +180,7 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
   };
   const double people[2][2] = {{5.0, 2.0}, {1.0, -1.0}};  // world
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     sarmap::explore_status_t status{};
     status.state = "exploring";
     status.has_goal = true;
@@ -202,7 +189,7 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
     status.num_path = 2;
     status.path_x_m = {0.0f, 1.5f};
     status.path_y_m = {0.0f, 0.0f};
-    Write(&log, "EXPLORE_STATUS", status, 1'000'000);
+    log.Write("EXPLORE_STATUS", status, 1'000'000);
     // The reachable floor: 2 x 2 m around the start, at 0.1 m.
     sarmap::occupancy_grid_t floor{};
     floor.resolution_m = 0.1;
@@ -211,13 +198,13 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
     floor.origin_y_m = sy - 1;
     floor.data.assign(400, 0);
     floor.size = 400;
-    Write(&log, "SIM_FLOOR", floor, 1'000'000);
+    log.Write("SIM_FLOOR", floor, 1'000'000);
     for (int i = 0; i <= 50; ++i) {
       const int64_t utime = 1'000'000 + i * 100'000;
       sarmap::pose_t pose{};
       pose.header.utime = utime;
       pose.orientation[0] = 1;
-      Write(&log, "POSE", pose, utime);
+      log.Write("POSE", pose, utime);
       sarmap::sim_truth_t t{};
       t.header.utime = utime;
       t.robot_position_m[0] = sx;
@@ -234,7 +221,7 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
         t.people.push_back(p);
       }
       t.num_people = 2;
-      Write(&log, "SIM_TRUTH", t, utime);
+      log.Write("SIM_TRUTH", t, utime);
       if (i == 20) {
         // SLAM's map: 6 x 6 m around its origin, all observed.
         sarmap::occupancy_grid_t grid{};
@@ -243,7 +230,7 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
         grid.origin_x_m = grid.origin_y_m = -3;
         grid.data.assign(120 * 120, 0);
         grid.size = static_cast<int32_t>(grid.data.size());
-        Write(&log, "MAP", grid, utime);
+        log.Write("MAP", grid, utime);
       }
       if (i == 30) {
         sarmap::people_map_t found{};
@@ -252,7 +239,7 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
             Person(1, a.first + 0.1, a.second, sarmap::mapped_person_t::CUE_SEEN_RGBD),
             Person(2, b.first, b.second - 0.2, sarmap::mapped_person_t::CUE_HEARD, "help")};
         found.num_people = 2;
-        Write(&log, "PEOPLE_MAP", found, utime);
+        log.Write("PEOPLE_MAP", found, utime);
       }
     }
   }
@@ -310,9 +297,9 @@ TEST(MissionReportTest, ARobotThatDoesNotMove) {
 TEST(MissionReportTest, NoTruthMissionKeysAreNull) {
   const std::string path = ::testing::TempDir() + "/no-truth.lcmlog";
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     sarmap::people_map_t people{};
-    Write(&log, "PEOPLE_MAP", people, 1'000'000);
+    log.Write("PEOPLE_MAP", people, 1'000'000);
   }
   const MissionData data = LoadMission(path);
   const MissionSummary s = Summarise(data, 0.5);
@@ -334,14 +321,14 @@ TEST(MissionReportTest, NoTruthMissionKeysAreNull) {
 TEST(MissionReportTest, HostileMessagesInTheLogAreSkipped) {
   const std::string path = ::testing::TempDir() + "/hostile.lcmlog";
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     sarmap::sound_map_t sounds{};
     sounds.header.frame = "map";
     sounds.num_sources = 1;
     sounds.sources.resize(1);
     sounds.sources[0].id = 7;
     sounds.sources[0].state = sarmap::sound_source_t::STATE_CONVERGED;
-    Write(&log, "SOUND_MAP", sounds, 1'000'000);
+    log.Write("SOUND_MAP", sounds, 1'000'000);
     sarmap::sound_map_t empty{};
     empty.header.frame = "map";
     std::vector<uint8_t> wire(empty.getEncodedSize());
@@ -352,13 +339,7 @@ TEST(MissionReportTest, HostileMessagesInTheLogAreSkipped) {
     std::copy(int32_min, int32_min + 4, frame_attack.begin() + 24);
     std::copy(ten_million, ten_million + 4, count_attack.begin() + 32);
     for (std::vector<uint8_t>* attack : {&frame_attack, &count_attack}) {
-      lcm::LogEvent e;
-      e.eventnum = 0;
-      e.timestamp = 2'000'000;
-      e.channel = "SOUND_MAP";
-      e.datalen = static_cast<int32_t>(attack->size());
-      e.data = attack->data();
-      log.writeEvent(&e);
+      log.WriteBytes("SOUND_MAP", *attack, 2'000'000);
     }
   }
   const MissionData data = LoadMission(path);
@@ -374,19 +355,13 @@ TEST(MissionReportTest, WithTheBusKeyForgedMessagesDoNotCount) {
   const std::string path = ::testing::TempDir() + "/signed_bus.lcmlog";
   const common::AuthKey key(32, 0x5a);
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     common::BusAuth stack(key);
     auto write = [&](const sarmap::people_map_t& m, int64_t utime, bool sign) {
       std::vector<uint8_t> buf(m.getEncodedSize());
       m.encode(buf.data(), 0, static_cast<int>(buf.size()));
       if (sign) stack.Sign("PEOPLE_MAP", &buf);
-      lcm::LogEvent e;
-      e.eventnum = 0;
-      e.timestamp = utime;
-      e.channel = "PEOPLE_MAP";
-      e.datalen = static_cast<int32_t>(buf.size());
-      e.data = buf.data();
-      log.writeEvent(&e);
+      log.WriteBytes("PEOPLE_MAP", buf, utime);
     };
     sarmap::people_map_t real{};
     real.header.utime = 1'000'000;
@@ -420,19 +395,19 @@ TEST(MissionReportTest, WithTheBusKeyForgedMessagesDoNotCount) {
 TEST(MissionReportTest, SoundSourcesAreScoredAgainstTheEmitters) {
   const std::string path = ::testing::TempDir() + "/sources.lcmlog";
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     for (int i = 0; i < 10; ++i) {  // the robot drives from (0, 0) to (4.5, 0); truth = map
       sarmap::pose_t pose{};
       pose.header.utime = 1'000'000 + i * 100'000;
       pose.header.frame = "map";
       pose.position_m[0] = 0.5 * i;
       pose.orientation[0] = 1;
-      Write(&log, "POSE", pose, pose.header.utime);
+      log.Write("POSE", pose, pose.header.utime);
       sarmap::sim_truth_t t{};
       t.header.utime = pose.header.utime;
       t.robot_position_m[0] = 0.5 * i;
       t.robot_orientation[0] = 1;
-      Write(&log, "SIM_TRUTH", t, t.header.utime);
+      log.Write("SIM_TRUTH", t, t.header.utime);
     }
     sarmap::sim_truth_t truth{};
     truth.header.utime = 2'000'000;
@@ -455,7 +430,7 @@ TEST(MissionReportTest, SoundSourcesAreScoredAgainstTheEmitters) {
       truth.sources.push_back(src);
     }
     truth.num_sources = 3;
-    Write(&log, "SIM_TRUTH", truth, 2'000'000);
+    log.Write("SIM_TRUTH", truth, 2'000'000);
     sarmap::sound_map_t sounds{};
     sounds.header.utime = 2'000'000;
     sounds.header.frame = "map";
@@ -479,7 +454,7 @@ TEST(MissionReportTest, SoundSourcesAreScoredAgainstTheEmitters) {
         source(3, 0.5, 0.0, sarmap::doa_source_t::SOUND_CLASS_MACHINERY, false, false)};
     sounds.sources[2].bearing_rad = std::atan2(-1.5, 0.5);
     sounds.num_sources = 3;
-    Write(&log, "SOUND_MAP", sounds, 2'000'000);
+    log.Write("SOUND_MAP", sounds, 2'000'000);
   }
   const MissionSummary s = Summarise(LoadMission(path), 0.5);
   EXPECT_EQ(s.sources_mapped, 2);
@@ -520,17 +495,17 @@ TEST(MissionReportTest, AnAttackedBusStillGivesTheStacksReport) {
   sarmap::people_map_t far_people = people;
   far_people.people[0].position_m[0] = 50;
   {
-    lcm::LogFile log(path, "w");
+    logtools::LcmLogWriter log(path);
     for (int i = 0; i < 10; ++i) {
       const int64_t utime = 1'000'000 + i * 100'000;
       map.header.utime = people.header.utime = utime;
-      Write(&log, "MAP", map, utime);
-      Write(&log, "PEOPLE_MAP", people, utime);
+      log.Write("MAP", map, utime);
+      log.Write("PEOPLE_MAP", people, utime);
       huge.header.utime = far_people.header.utime = utime + kYearUs;
-      Write(&log, "MAP", huge, utime);               // a year ahead
-      Write(&log, "PEOPLE_MAP", far_people, utime);  // a year ahead
+      log.Write("MAP", huge, utime);               // a year ahead
+      log.Write("PEOPLE_MAP", far_people, utime);  // a year ahead
       huge.header.utime = utime;
-      Write(&log, "CMD_VEL", huge, utime);  // a map where velocity commands go
+      log.Write("CMD_VEL", huge, utime);  // a map where velocity commands go
     }
   }
   std::vector<std::string> problems;

@@ -5,12 +5,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <vector>
 
 #include "common/decode.h"
 #include "common/stamp_gate.h"
+#include "log-tools/lcm_log_writer.h"
 #include "sarmap/pose_t.hpp"
 
 namespace sarmap {
@@ -26,8 +26,7 @@ std::string WriteLog(int n, int far) {
                            ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
                            std::to_string(getpid()) + ".lcmlog";
   {
-    lcm::LogFile log(path, "w");
-    int64_t number = 0;
+    logtools::LcmLogWriter log(path);
     for (int i = 0; i < n; ++i) {
       sarmap::pose_t pose{};
       const int64_t receive_us = kStartUs + i * 500000;
@@ -36,17 +35,7 @@ std::string WriteLog(int n, int far) {
       pose.header.frame = "map";
       pose.position_m[0] = i;
       pose.orientation[0] = 1;
-      std::vector<uint8_t> buf(pose.getEncodedSize());
-      pose.encode(buf.data(), 0, static_cast<int>(buf.size()));
-      for (const char* channel : {"POSE", "OTHER"}) {
-        lcm::LogEvent event;
-        event.eventnum = number++;
-        event.timestamp = receive_us;
-        event.channel = channel;
-        event.datalen = static_cast<int32_t>(buf.size());
-        event.data = buf.data();
-        log.writeEvent(&event);
-      }
+      for (const char* channel : {"POSE", "OTHER"}) log.Write(channel, pose, receive_us);
     }
   }
   // Damage in the middle: what follows is still read.

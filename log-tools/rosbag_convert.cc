@@ -26,6 +26,7 @@
 #include "common/image_messages.h"
 #include "common/transform.h"
 #include "log-tools/lcm_log_reader.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/ros_audio_msgs.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/image_t.hpp"
@@ -136,34 +137,20 @@ bool CompressedSize(const std::vector<uint8_t>& d, int* width, int* height) {
 }
 
 // Writes sarmap messages to an LCM log, numbering header.seq per channel.
-class LcmLogWriter {
+class SequencedLogWriter {
  public:
-  explicit LcmLogWriter(const std::string& path) : log_(path, "w"), path_(path) {
-    if (!log_.good()) throw std::runtime_error("cannot write LCM log '" + path + "'");
-  }
+  explicit SequencedLogWriter(const std::string& path) : log_(path) {}
   template <class Msg>
   void Write(const std::string& channel, int64_t event_utime, Msg* msg) {
     msg->header.seq = seq_[channel]++;
-    const int size = msg->getEncodedSize();
-    buffer_.resize(size);
-    msg->encode(buffer_.data(), 0, size);
-    lcm::LogEvent ev;
-    ev.eventnum = eventnum_++;
-    ev.timestamp = event_utime;
-    ev.channel = channel;
-    ev.datalen = size;
-    ev.data = buffer_.data();
-    if (log_.writeEvent(&ev) != 0) throw std::runtime_error("write failed: '" + path_ + "'");
+    log_.Write(channel, *msg, event_utime);
     ++counts_[channel];
   }
   const std::map<std::string, int64_t>& counts() const { return counts_; }
 
  private:
-  lcm::LogFile log_;
-  std::string path_;
+  LcmLogWriter log_;
   std::map<std::string, int64_t> seq_, counts_;
-  std::vector<uint8_t> buffer_;
-  int64_t eventnum_ = 0;
 };
 
 common::Rigid3d ToRigid(const geometry_msgs::Transform& t) {
@@ -407,7 +394,7 @@ RosbagImportResult ImportRosbag(const std::string& bag_path, const std::string& 
   std::map<std::string, int64_t> audio_next_sample;
   std::string first_laser_frame;
 
-  LcmLogWriter out(log_path);
+  SequencedLogWriter out(log_path);
   rosbag::View view(bag);
   const double total = std::max<double>(1, view.size());
   int64_t done = 0;

@@ -34,6 +34,7 @@
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/robot_config.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/ros_audio_msgs.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/image_t.hpp"
@@ -506,19 +507,6 @@ TEST(RosbagConvertTest, UndecodableMessagesAreSkippedAndCounted) {
   EXPECT_EQ(Decode<laser_scan_t>(events.at("SCAN")[1]).header.utime, 1'200'000);
 }
 
-template <class Msg>
-void WriteEvent(lcm::LogFile* log, const std::string& channel, int64_t utime, Msg& msg) {
-  std::vector<uint8_t> buf(msg.getEncodedSize());
-  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent ev;
-  ev.eventnum = 0;
-  ev.timestamp = utime;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(buf.size());
-  ev.data = buf.data();
-  ASSERT_EQ(log->writeEvent(&ev), 0);
-}
-
 mapped_person_t Person(int64_t id, double x, double y, int8_t cues) {
   mapped_person_t p{};
   p.id = id;
@@ -541,7 +529,7 @@ TEST(RosbagConvertTest, ExportWritesStandardMessagesThatImportBack) {
   const std::string log = dir + "/rosbag_export.lcmlog", bag = dir + "/rosbag_export.bag",
                     back = dir + "/rosbag_export_back.lcmlog";
   {
-    lcm::LogFile f(log, "w");
+    logtools::LcmLogWriter f(log);
     for (int i = 0; i < 3; ++i) {
       pose_t p{};
       p.header.utime = 5'000'000 + 100'000 * i;
@@ -552,7 +540,7 @@ TEST(RosbagConvertTest, ExportWritesStandardMessagesThatImportBack) {
       p.orientation[0] = std::cos(0.1 * i);
       p.orientation[3] = std::sin(0.1 * i);
       p.node_id = -1;
-      WriteEvent(&f, "POSE", p.header.utime + 1000, p);
+      f.Write("POSE", p, p.header.utime + 1000);
     }
     for (int i = 0; i < 2; ++i) {
       occupancy_grid_t g{};
@@ -568,7 +556,7 @@ TEST(RosbagConvertTest, ExportWritesStandardMessagesThatImportBack) {
       for (int k = 0; k < 200; ++k)
         g.data.push_back(static_cast<uint8_t>(k % 3 == 0 ? -1 : k % 3 == 1 ? 0 : 100));
       g.size = 200;
-      WriteEvent(&f, "MAP", g.header.utime + 2000, g);
+      f.Write("MAP", g, g.header.utime + 2000);
     }
     for (int i = 0; i < 2; ++i) {
       people_map_t pm{};
@@ -578,7 +566,7 @@ TEST(RosbagConvertTest, ExportWritesStandardMessagesThatImportBack) {
           Person(1, 1.0, 2.0, mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_HEARD));
       if (i == 0) pm.people.push_back(Person(2, -1.0, 0.5, mapped_person_t::CUE_HEARD));
       pm.num_people = static_cast<int32_t>(pm.people.size());
-      WriteEvent(&f, "PEOPLE_MAP", pm.header.utime + 3000, pm);
+      f.Write("PEOPLE_MAP", pm, pm.header.utime + 3000);
     }
   }
   std::string out;

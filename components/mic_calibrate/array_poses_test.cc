@@ -1,15 +1,15 @@
 // Known array motion, static source (CalibrateWithArrayPoses): a Kinect-like line of four
 // separate sound cards on a robot that turns in place near one source.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
 #include <string>
 
-#include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
-
 #include "common/robot_config.h"
+#include "log-tools/lcm_log_writer.h"
 #include "mic_calibrate/calibration.h"
 #include "mic_calibrate/calibration_io.h"
 #include "sarmap/odometry_t.hpp"
@@ -222,8 +222,7 @@ TEST(ArrayPoses, CliWithOdomFromAnLcmLog) {
                     yaml = dir + "/array_poses_cli.yaml";
   WriteTdoaCsv(csv, syn.data);
   {
-    lcm::LogFile out(log, "w");
-    ASSERT_TRUE(out.good());
+    logtools::LcmLogWriter out(log);
     const double dyaw = sc.turn_rad / (sc.emissions - 1);
     for (int i = 0; i * 0.05 <= syn.data.times_s.back() + 1; ++i) {
       const double t = i * 0.05, yaw = 0.4 + (t - 0.2) / sc.step_s * dyaw;
@@ -235,15 +234,7 @@ TEST(ArrayPoses, CliWithOdomFromAnLcmLog) {
       odom.position_m[1] = sc.base.y();
       odom.orientation[0] = std::cos(yaw / 2);
       odom.orientation[3] = std::sin(yaw / 2);
-      std::vector<uint8_t> buf(odom.getEncodedSize());
-      odom.encode(buf.data(), 0, static_cast<int>(buf.size()));
-      lcm::LogEvent ev;
-      ev.eventnum = i;
-      ev.timestamp = odom.header.utime;
-      ev.channel = "ODOM";
-      ev.datalen = static_cast<int32_t>(buf.size());
-      ev.data = buf.data();
-      ASSERT_EQ(out.writeEvent(&ev), 0);
+      out.Write("ODOM", odom, odom.header.utime);
     }
   }
   const std::string src = SARMAP_SOURCE_DIR;

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
 
 #include "common/decode.h"
 #include "log-tools/lcm_log_reader.h"
+#include "log-tools/lcm_log_writer.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/odometry_t.hpp"
 #include "sarmap/pose_t.hpp"
@@ -185,8 +185,7 @@ std::vector<common::StampedPose> ReadLcmPoses(const std::string& path, const std
 void WriteLcmAudioLog(const std::string& path, const Recording& rec,
                       const std::vector<std::vector<int>>& devices, int64_t start_utime,
                       int block) {
-  lcm::LogFile log(path, "w");
-  if (!log.good()) throw std::runtime_error("cannot write LCM log " + path);
+  logtools::LcmLogWriter log(path);
   struct Pending {
     int64_t utime;
     std::string channel;
@@ -226,15 +225,7 @@ void WriteLcmAudioLog(const std::string& path, const Recording& rec,
   }
   std::stable_sort(events.begin(), events.end(),
                    [](const Pending& a, const Pending& b) { return a.utime < b.utime; });
-  for (auto& p : events) {
-    lcm::LogEvent ev;
-    ev.eventnum = 0;
-    ev.timestamp = p.utime;
-    ev.channel = p.channel;
-    ev.datalen = static_cast<int32_t>(p.bytes.size());
-    ev.data = p.bytes.data();
-    if (log.writeEvent(&ev) != 0) throw std::runtime_error("error writing " + path);
-  }
+  for (const auto& p : events) log.WriteBytes(p.channel, p.bytes, p.utime);
 }
 
 }  // namespace mic_calibrate

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -16,6 +15,7 @@
 
 #include "common/args.h"
 #include "common/node_main.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/mission_metrics.h"
 #include "log-tools/mission_report.h"
 #include "mission/mission_runner.h"
@@ -86,26 +86,14 @@ class PeopleFound {
 // `sarmap-log people-map`. Not opened: writes nothing.
 class MissionLog {
  public:
-  void Open(const std::string& path) {
-    log_ = std::make_unique<lcm::LogFile>(path, "w");
-    if (!log_->good()) throw std::runtime_error("cannot write " + path);
-  }
+  void Open(const std::string& path) { log_ = std::make_unique<logtools::LcmLogWriter>(path); }
   template <class T>
   void Write(const std::string& channel, const T& msg) {
-    if (!log_) return;
-    std::vector<uint8_t> buffer(msg.getEncodedSize());
-    msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-    lcm::LogEvent e;
-    e.eventnum = 0;
-    e.timestamp = msg.header.utime;
-    e.channel = channel;
-    e.datalen = static_cast<int32_t>(buffer.size());
-    e.data = buffer.data();
-    if (log_->writeEvent(&e) != 0) throw std::runtime_error("error writing a mission log");
+    if (log_) log_->Write(channel, msg, msg.header.utime);
   }
 
  private:
-  std::unique_ptr<lcm::LogFile> log_;
+  std::unique_ptr<logtools::LcmLogWriter> log_;
 };
 
 // Feeds the mission's messages to the same metrics as `sarmap-log report`, and notes when each

@@ -32,6 +32,7 @@
 #include "common/channels.h"
 #include "common/node.h"
 #include "common/time.h"
+#include "log-tools/lcm_log_writer.h"
 #include "tests/fuzz/wire_mutations.h"
 
 namespace sarmap {
@@ -222,10 +223,9 @@ int Main(int argc, char** argv) {
   std::unique_ptr<RawLcmSender> raw;
   std::vector<std::string> raw_kinds;
   if (raw_lcm) raw = std::make_unique<RawLcmSender>(url);
-  std::unique_ptr<lcm::LogFile> record;
+  std::unique_ptr<logtools::LcmLogWriter> record;
   if (!record_path.empty()) {
-    record = std::make_unique<lcm::LogFile>(record_path, "w");
-    if (!record->good()) throw std::runtime_error("cannot write " + record_path);
+    record = std::make_unique<logtools::LcmLogWriter>(record_path);
   }
   std::ofstream log;
   if (!log_path.empty()) {
@@ -277,14 +277,7 @@ int Main(int argc, char** argv) {
       wire = hostile.Next(t.type, &kind, &what);
       if (lcm.publish(t.channel, wire.data(), static_cast<unsigned>(wire.size())) != 0) ++failed;
     }
-    if (record) {
-      lcm::LogEvent event{};
-      event.timestamp = common::WallClockUtime();
-      event.channel = t.channel;
-      event.datalen = static_cast<int32_t>(wire.size());
-      event.data = const_cast<uint8_t*>(wire.data());
-      record->writeEvent(&event);
-    }
+    if (record) record->WriteBytes(t.channel, wire.data(), wire.size(), common::WallClockUtime());
     if (log.is_open()) {
       log << sent << ' ' << t.channel << ' ' << kind << ' ' << wire.size() << " bytes: " << what
           << '\n';

@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <vector>
 
 #include "common/args.h"
 #include "common/logging.h"
 #include "common/time.h"
+#include "log-tools/lcm_log_writer.h"
 #include "sarmap/laser_scan_t.hpp"
 #include "sarmap/odometry_t.hpp"
 #include "slam/carmen.h"
@@ -29,21 +29,10 @@ int main(int argc, char** argv) {
     args.AddFlag("--scan-channel", &scan_channel, "channel for laser scans");
     if (!args.Parse(argc, argv)) return 0;
 
-    lcm::LogFile log(output, "w");
-    if (!log.good()) throw std::runtime_error("cannot write LCM log '" + output + "'");
-    int64_t eventnum = 0, odom_seq = 0, scan_seq = 0, laser_offsets = 0;
-    std::vector<uint8_t> buffer;
+    logtools::LcmLogWriter log(output);
+    int64_t odom_seq = 0, scan_seq = 0, laser_offsets = 0;
     auto write = [&](const std::string& channel, auto& msg) {
-      const int size = msg.getEncodedSize();
-      buffer.resize(size);
-      msg.encode(buffer.data(), 0, size);
-      lcm::LogEvent ev;
-      ev.eventnum = eventnum++;
-      ev.timestamp = msg.header.utime;
-      ev.channel = channel;
-      ev.datalen = size;
-      ev.data = buffer.data();
-      if (log.writeEvent(&ev) != 0) throw std::runtime_error("write failed: '" + output + "'");
+      log.Write(channel, msg, msg.header.utime);
     };
     slam::CarmenReader reader;
     reader.warn = [](const std::string& w) { SARMAP_LOG(WARN) << "skipping malformed " << w; };

@@ -3,7 +3,6 @@
 // PEOPLE_AUDIO are the new ones: speech settings tried on a mission without running it again
 // (then e.g. `sarmap-log sound-map OUT --heard-check`).
 #include <cstdio>
-#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,23 +11,9 @@
 #include "common/command_auth.h"
 #include "common/node.h"
 #include "common/node_main.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/node_replay.h"
 #include "speech/speech_node.h"
-
-namespace {
-
-void Write(lcm::LogFile* out, int64_t timestamp_us, const std::string& channel,
-           const std::vector<uint8_t>& data) {
-  lcm::LogEvent e;
-  e.eventnum = 0;
-  e.timestamp = timestamp_us;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(data.size());
-  e.data = const_cast<uint8_t*>(data.data());
-  if (out->writeEvent(&e) != 0) throw std::runtime_error("error writing the output log");
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace sarmap;
@@ -53,17 +38,16 @@ int main(int argc, char** argv) {
       node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
     speech::SpeechNode speech_node(options, &node);
     logtools::NodeReplay replay(&node);
-    lcm::LogFile out(out_path, "w");
-    if (!out.good()) throw std::runtime_error("cannot write log " + out_path);
+    logtools::LcmLogWriter out(out_path);
     replay.Capture(options.speech_channel + "|" + options.people_channel,
                    [&](const std::string& channel, const std::vector<uint8_t>& data) {
-                     Write(&out, replay.now_us(), channel, data);
+                     out.WriteBytes(channel, data, replay.now_us());
                    });
     const auto stats = replay.Run(in_path, [&](logtools::LogEvent* e) {
       if (e->channel == options.speech_channel || e->channel == options.people_channel) {
         return false;  // replaced by the new ones
       }
-      Write(&out, e->timestamp_us, e->channel, e->data);
+      out.WriteBytes(e->channel, e->data, e->timestamp_us);
       return e->channel == options.audio_channel || e->channel == options.doa_channel;
     });
     speech_node.Finish();  // utterances still open, stamped at the last input's time
