@@ -323,6 +323,22 @@ struct LinearArraySoundMap::Impl {
     return sid;
   }
 
+  // Whether `obs` were heard from places far enough apart to tell a converged source from
+  // another emitter on its cone from the first of them: the parallax, the largest angle the
+  // array positions subtend at the source, must reach the gate in DOA standard deviations
+  // (sqrt(gate_chi2) sigma), the largest change of beta such a second emitter could hide in.
+  bool Discriminates(const Track& t, const std::vector<Obs>& obs) const {
+    if (obs.empty()) return false;
+    const Eigen::Vector3d first = ObsPose(obs.front()).translation() - t.point;
+    double parallax = 0, var = 0;
+    for (const Obs& ob : obs) {
+      const Eigen::Vector3d here = ObsPose(ob).translation() - t.point;
+      parallax = std::max(parallax, std::atan2(first.cross(here).norm(), first.dot(here)));
+      var += ob.var;
+    }
+    return parallax >= std::sqrt(options.gate_chi2 * var / obs.size());
+  }
+
   // One DOA to source `sid` (-1: a new source seeded by it). Returns the source's id (it
   // changes when the source converges onto a duplicate and merges into it).
   int64_t Feed(int64_t sid, const Obs& ob, Utime utime, std::set<int64_t>* taken) {
@@ -547,6 +563,10 @@ void LinearArraySoundMap::OnDoa(Utime utime, const std::vector<Doa>& doas) {
     m.pending_utime[d.track_id] = utime;
     if (static_cast<int>(pending.size()) < o.confirm_observations) continue;
     int64_t sid = m.BestForAll(pending, o.gate_chi2);
+    // Heard from nearly one place, DOAs that fit a known source fit any place on its cone as
+    // well: the track waits for more DOAs until they could have told the source from another
+    // emitter on that cone.
+    if (sid >= 0 && !m.Discriminates(m.tracks.at(sid), pending)) continue;
     for (const Impl::Obs& p : pending) {
       // One DOA per source per block: the earlier DOAs of the track belong to earlier blocks.
       std::set<int64_t> earlier_block;

@@ -16,7 +16,9 @@
 // only within `update_gate_chi2`, or of its mirror image, which flips it; a track that misses
 // `track_release_misses` times in a row is released). A new track's first
 // `confirm_observations` DOAs decide: the converged source whose gate (`gate_chi2`) every one
-// of them passes (a source heard again under a new track id), else a new source. Untracked
+// of them passes (a source heard again under a new track id), else a new source; a track that
+// fits a known source waits until its DOAs come from places far enough apart to have told that
+// source from another emitter on its cone (parallax of sqrt(gate_chi2) DOA sigmas). Untracked
 // DOAs go to the best source under the gate, else start one. Converged duplicates (one
 // emitter initialised under two track ids) merge. One DOA per source per block. A source that never
 // converged and was not heard for `prune_after_s` with fewer than `prune_min_observations` DOAs is
