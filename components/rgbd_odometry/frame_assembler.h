@@ -1,23 +1,20 @@
 #pragma once
-// Pairs DEPTH and RGB image_t messages by utime and decodes them into RgbdFrames for
-// RgbdOdometry. Only the generated message structs, no transport, so it is testable without a
-// bus.
+// DEPTH and RGB image_t messages, paired by common::DepthColorPairer, decoded into RgbdFrames
+// for RgbdOdometry. Only the generated message structs, no transport, so it is testable without
+// a bus.
 //
 // need_color false (icp, fast_icp): every depth message becomes a frame at once, colour is
-// ignored. need_color true (rgbd, rgbd_icp): a depth message is paired with the colour image
-// closest in time within max_pair_dt_s; it waits until message time (the newest utime seen on
-// either channel) has moved color_wait_s past it, then is dropped ("no_color"). At most
-// max_pending depth messages wait; older ones are dropped ("depth_backlog"). Depth older than
-// the previous depth is dropped ("depth_out_of_order"), unless it is more than 1 s older: then
-// time restarted (a log replayed again) and pairing starts over ("time_restart"). Every bad
-// input is counted under a named warning and skipped; nothing throws.
+// ignored. need_color true (rgbd, rgbd_icp): a depth message needs its colour image (a depth
+// image without one is dropped, "no_color"; beyond max_pending waiting, "depth_backlog"). The
+// pairing rules, time restarts included, are the pairer's. Every bad input is counted under a
+// named warning and skipped; nothing throws.
 
 #include <cstdint>
-#include <deque>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "common/depth_color_pairer.h"
 #include "rgbd_odometry/rgbd_odometry.h"
 #include "sarmap/image_t.hpp"
 
@@ -34,25 +31,16 @@ class FrameAssembler {
 
   // Warning name -> count ("depth_decode", "color_decode", "color_size_mismatch", "no_color",
   // "depth_backlog", "depth_out_of_order", "time_restart", "bad_intrinsics").
-  const std::map<std::string, int64_t>& warnings() const { return warnings_; }
-  int64_t total_warnings() const;
-  const std::string& last_warning() const { return last_warning_; }
+  const std::map<std::string, int64_t>& warnings() const { return pairer_.warnings(); }
+  int64_t total_warnings() const { return pairer_.total_warnings(); }
+  const std::string& last_warning() const { return pairer_.last_warning(); }
 
  private:
-  void Warn(const std::string& kind, const std::string& text);
-  void Release(std::vector<RgbdFrame>* ready);
-  bool Build(const sarmap::image_t& depth, const sarmap::image_t* color, RgbdFrame* frame);
+  void BuildAll(std::vector<RgbdFrame>* ready);
+  bool Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame);
 
-  bool need_color_;
-  int64_t max_pair_dt_us_;
-  int64_t color_wait_us_;
-  size_t max_pending_;
-  int64_t now_utime_ = 0;
-  int64_t last_depth_utime_ = 0;
-  std::deque<sarmap::image_t> pending_depth_;
-  std::deque<sarmap::image_t> recent_color_;
-  std::map<std::string, int64_t> warnings_;
-  std::string last_warning_;
+  common::DepthColorPairer pairer_;
+  std::vector<common::DepthColorPairer::Pair> pairs_;
 };
 
 }  // namespace rgbd_odometry

@@ -1,18 +1,19 @@
 #pragma once
-// Pairs DEPTH and RGB image_t messages by utime and decodes them into RgbdFrames. No LCM
-// transport here (only the generated message structs), so it is testable without a bus.
+// DEPTH and RGB image_t messages, paired by common::DepthColorPairer, decoded into RgbdFrames
+// (point clouds). No LCM transport here (only the generated message structs), so it is testable
+// without a bus.
 //
-// A depth frame is paired with the colour image closest in time within max_pair_dt_s. A
-// depth frame without colour waits until message time has moved color_wait_s past it, then
-// goes on depth-only (unless require_color). Every bad or mismatched input is counted under a
-// named warning and skipped or degraded; nothing throws.
+// A depth frame without colour goes on depth-only once its wait is over (unless
+// require_color); colour that does not match the depth image (size, decoding) is counted and
+// the frame goes on depth-only. Every bad or mismatched input is counted under a named warning
+// and skipped or degraded; nothing throws.
 
 #include <cstdint>
-#include <deque>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "common/depth_color_pairer.h"
 #include "sarmap/image_t.hpp"
 #include "vision_people/people_detector.h"
 
@@ -30,26 +31,20 @@ class FrameAssembler {
   // No more messages are coming for now (the bus went quiet): depth frames still waiting for
   // their colour go on as if the wait had timed out (the last frame of a depth-only replay).
   void Flush(std::vector<RgbdFrame>* ready);
-  bool has_pending() const { return !pending_depth_.empty(); }
+  bool has_pending() const { return pairer_.has_pending(); }
 
   // Warning name -> count (e.g. "depth_decode", "color_size_mismatch", "no_color").
-  const std::map<std::string, int64_t>& warnings() const { return warnings_; }
-  int64_t total_warnings() const;
+  const std::map<std::string, int64_t>& warnings() const { return pairer_.warnings(); }
+  int64_t total_warnings() const { return pairer_.total_warnings(); }
   // The last warning's text, for logs.
-  const std::string& last_warning() const { return last_warning_; }
+  const std::string& last_warning() const { return pairer_.last_warning(); }
 
  private:
-  void Warn(const std::string& kind, const std::string& text);
-  void Release(int64_t now_utime, std::vector<RgbdFrame>* ready);
-  bool Build(const sarmap::image_t& depth, const sarmap::image_t* color, RgbdFrame* frame);
+  void BuildAll(std::vector<RgbdFrame>* ready);
+  bool Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame);
 
-  int64_t max_pair_dt_us_;
-  int64_t color_wait_us_;
-  bool require_color_;
-  std::deque<sarmap::image_t> pending_depth_;
-  std::deque<sarmap::image_t> recent_color_;
-  std::map<std::string, int64_t> warnings_;
-  std::string last_warning_;
+  common::DepthColorPairer pairer_;
+  std::vector<common::DepthColorPairer::Pair> pairs_;
   std::vector<uint16_t> depth_buffer_;
 };
 
