@@ -38,6 +38,7 @@ Slam::Slam(const SlamOptions& options)
       odometry_(options.input, options.local),
       motion_filter_(options.local),
       extrapolator_(options.local),
+      active_submaps_(options.local.scans_per_submap),
       chain_drift_(DriftModelOf(options.loop)) {}
 Slam::~Slam() = default;
 
@@ -233,14 +234,14 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
   if (prediction.stopped) ++stats_.stopped_scans;
   const Rigid2d& predicted = prediction.local_pose;
   Rigid2d local = predicted;
-  if (!active_submaps_.empty() && submaps_[active_submaps_.front()].num_inserted > 0 &&
+  if (!active_submaps_.empty() && submaps_[active_submaps_.matching()].num_inserted > 0 &&
       !points.empty()) {
     if (!have_scan_since_load_ && !nodes_.empty() && !extrapolator_.bridged()) {
       // First scan after loading a saved state without odometry across the gap: the robot
       // may have moved while we were down; search widely around the last pose before tracking
       // again. (With the odometry bridge the normal matching is better: a wide search can
       // slide along a corridor.)
-      const int id = active_submaps_.front();
+      const int id = active_submaps_.matching();
       BranchAndBoundOptions b;
       b.linear_window_m = std::min(1.0, options_.loop.linear_window_m);
       b.angular_window_rad = options_.loop.angular_window_deg * kDegToRad;
@@ -252,7 +253,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
         local = found;
       }
     }
-    const ProbabilityGrid& grid = *submaps_[active_submaps_.front()].grid;
+    const ProbabilityGrid& grid = *submaps_[active_submaps_.matching()].grid;
     const Rigid2d extrapolated = local;
     local = MatchLocal(grid, points, extrapolated, &result.match_score);
     if (prediction.constant_velocity && extrapolator_.have_last()) {
@@ -285,8 +286,8 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     local_data.hits = voxel_hits;
     local_data.misses = data.misses;
     const RangeData in_local = TransformRangeData(local_data, local);
-    std::vector<int> inserted = active_submaps_;
-    for (int id : active_submaps_) {
+    const std::vector<int> inserted = active_submaps_.ids();
+    for (int id : inserted) {
       submaps_[id].grid->Insert(in_local, static_cast<float>(l.hit_probability),
                                 static_cast<float>(l.miss_probability));
       ++submaps_[id].num_inserted;
@@ -296,15 +297,13 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
                             so.loop_adaptive_min_points, static_cast<float>(so.max_range_m));
     const int node_id = AddNode(scan.time_s, local, local_data, loop_points, inserted);
     result.is_node = true;
-    if (submaps_[active_submaps_.back()].num_inserted == l.scans_per_submap) {
-      if (active_submaps_.size() == 2) {
-        const int finished = active_submaps_.front();
-        active_submaps_.erase(active_submaps_.begin());
-        FinishSubmap(finished);
-        if (options_.trim.enabled) TrimIfCovered(finished);
-      }
-      StartSubmap(local);
+    const ActiveSubmaps::Change change =
+        active_submaps_.AfterInsertion(submaps_[active_submaps_.ids().back()].num_inserted);
+    if (change.finished >= 0) {
+      FinishSubmap(change.finished);
+      if (options_.trim.enabled) TrimIfCovered(change.finished);
     }
+    if (change.start_new) StartSubmap(local);
     ++nodes_since_optimisation_;
     if (options_.graph.optimise_every_n_nodes > 0 &&
         nodes_since_optimisation_ >= options_.graph.optimise_every_n_nodes) {
@@ -367,7 +366,7 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
   // Submaps just before the active ones share the local chain with this node: a match there
   // closes no loop, so they are skipped.
   const int recent = active_submaps_.empty() ? static_cast<int>(submaps_.size())
-                                             : active_submaps_.front() - kRecentSubmaps;
+                                             : active_submaps_.matching() - kRecentSubmaps;
   std::vector<std::pair<double, int>> near;
   for (size_t s = 0; s < submaps_.size(); ++s) {
     if (!submaps_[s].finished || submaps_[s].trimmed || static_cast<int>(s) >= recent) continue;
@@ -401,7 +400,7 @@ void Slam::StartSubmap(const Rigid2d& local_pose) {
   s.grid = std::make_unique<ProbabilityGrid>(options_.local.resolution_m, local_pose.translation());
   submaps_.push_back(std::move(s));
   submap_global_.push_back(global_from_local_ * submaps_.back().local_pose);
-  active_submaps_.push_back(static_cast<int>(submaps_.size()) - 1);
+  active_submaps_.Add(static_cast<int>(submaps_.size()) - 1);
   ++stats_.submaps;
 }
 

@@ -21,6 +21,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "slam/active_submaps.h"
 #include "slam/grid.h"
 #include "slam/loop_consistency.h"
 #include "slam/motion_filter.h"
@@ -220,7 +221,7 @@ class Slam {
 
   // Local SLAM.
   std::vector<Submap> submaps_;
-  std::vector<int> active_submaps_;
+  ActiveSubmaps active_submaps_;  // which of submaps_ take new nodes
 
   // Global SLAM.
   std::vector<Node> nodes_;

@@ -95,8 +95,8 @@ void Slam::Save(const std::string& path) const {
       out.write(reinterpret_cast<const char*>(s.grid->cells().data()),
                 s.grid->cells().size() * sizeof(float));
     }
-    w.Pod<int64_t>(active_submaps_.size());
-    for (int a : active_submaps_) w.Pod<int32_t>(a);
+    w.Pod<int64_t>(active_submaps_.ids().size());
+    for (int a : active_submaps_.ids()) w.Pod<int32_t>(a);
     // Nodes.
     w.Pod<int64_t>(nodes_.size());
     for (size_t i = 0; i < nodes_.size(); ++i) {
@@ -299,7 +299,7 @@ void Slam::Load(const std::string& path) {
                         last_scan_odom, last_scan_segment, !localisation_only_);
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);
-  active_submaps_ = std::move(active);
+  active_submaps_.Restore(std::move(active));
   nodes_ = std::move(nodes);
   motion_filter_.Restore(last_node_time, last_node_local);
   chain_drift_.Clear();
