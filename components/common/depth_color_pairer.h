@@ -73,5 +73,17 @@ class DepthColorPairer {
   std::string last_warning_;
 };
 
+// Decodes each of `pairs` with build(pair, &frame) (false: skipped) into `ready`, in order, and
+// empties `pairs`.
+template <class Frame, class Build>
+void DecodePairs(std::vector<DepthColorPairer::Pair>* pairs, Build build,
+                 std::vector<Frame>* ready) {
+  for (const auto& pair : *pairs) {
+    Frame frame;
+    if (build(pair, &frame)) ready->push_back(std::move(frame));
+  }
+  pairs->clear();
+}
+
 }  // namespace common
 }  // namespace sarmap

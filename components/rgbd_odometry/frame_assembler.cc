@@ -38,11 +38,8 @@ void FrameAssembler::AddColor(const sarmap::image_t& color, std::vector<RgbdFram
 }
 
 void FrameAssembler::BuildAll(std::vector<RgbdFrame>* ready) {
-  for (const auto& pair : pairs_) {
-    RgbdFrame frame;
-    if (Build(pair, &frame)) ready->push_back(std::move(frame));
-  }
-  pairs_.clear();
+  common::DecodePairs(
+      &pairs_, [this](const auto& pair, RgbdFrame* frame) { return Build(pair, frame); }, ready);
 }
 
 bool FrameAssembler::Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame) {

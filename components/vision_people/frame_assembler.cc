@@ -80,11 +80,8 @@ void FrameAssembler::Flush(std::vector<RgbdFrame>* ready) {
 }
 
 void FrameAssembler::BuildAll(std::vector<RgbdFrame>* ready) {
-  for (const auto& pair : pairs_) {
-    RgbdFrame frame;
-    if (Build(pair, &frame)) ready->push_back(std::move(frame));
-  }
-  pairs_.clear();
+  common::DecodePairs(
+      &pairs_, [this](const auto& pair, RgbdFrame* frame) { return Build(pair, frame); }, ready);
 }
 
 void FrameAssembler::AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready) {
