@@ -27,6 +27,7 @@
 #include "common/node.h"
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/record_profile.h"
 
 namespace {
@@ -115,16 +116,11 @@ class Recorder {
         return;
       }
     }
-    lcm::LogEvent event;
-    event.eventnum = events_;
-    event.timestamp = timestamp_us;
-    event.channel = channel;
-    event.datalen = static_cast<int32_t>(size);
-    event.data = const_cast<void*>(data);
-    errno = 0;
-    if (log_->writeEvent(&event) != 0) {
-      error_ = path_ + ": write failed (channel " + channel + ", " + std::to_string(size) +
-               " bytes)" + (errno ? std::string(": ") + std::strerror(errno) : "");
+    try {  // not through liblcm's C dispatch: the main loop reports it
+      log_->WriteBytes(channel, data, size, timestamp_us);
+    } catch (const std::exception& e) {
+      error_ =
+          std::string(e.what()) + " (channel " + channel + ", " + std::to_string(size) + " bytes)";
       return;
     }
     ++events_;
@@ -134,8 +130,11 @@ class Recorder {
 
   // Pushes what is buffered to the file (a killed recorder loses at most one interval).
   void Flush() {
-    if (log_ && error_.empty() && fflush(log_->getFilePtr()) != 0) {
-      error_ = path_ + ": write failed: " + std::strerror(errno);
+    if (!log_ || !error_.empty()) return;
+    try {
+      log_->Flush();
+    } catch (const std::exception& e) {
+      error_ = e.what();
     }
   }
   // End of the recording: with a profile, what is still held is decided and written.
@@ -185,10 +184,7 @@ class Recorder {
                                        "a new numbered file)");
       }
     }
-    log_ = std::make_unique<lcm::LogFile>(path_, "w");
-    if (!log_->good()) {
-      throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
-    }
+    log_ = std::make_unique<sarmap::logtools::LcmLogWriter>(path_);
     file_bytes_ = 0;
   }
 
@@ -198,7 +194,7 @@ class Recorder {
   int next_suffix_ = 0;
   std::unique_ptr<sarmap::logtools::RecordThinner> thinner_;
   std::vector<sarmap::logtools::LogEvent> released_;
-  std::unique_ptr<lcm::LogFile> log_;
+  std::unique_ptr<sarmap::logtools::LcmLogWriter> log_;
   std::string path_, error_;
   int64_t events_ = 0, skipped_ = 0, file_bytes_ = 0, total_bytes_ = 0;
 };
