@@ -207,7 +207,8 @@ TEST(BearingEvidence, TheSoundMapPlacesACallerHeardWhileTurning) {
     std::normal_distribution<double> noise(0.0, 3 * M_PI / 180);
     int64_t t = 0;
     for (size_t k = 0; k < poses.size(); ++k, t += 100000) {
-      map.OnPose(t, poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+      map.OnPose(t, ToRigid2d(poses[k]), Eigen::Matrix3d::Identity() * 1e-6,
+                 static_cast<int64_t>(k));
       if ((k % 64) < 40 || k % 2) continue;
       OnlineSoundMap::Doa d;
       d.azimuth_rad = WrapAngle(Bearing(poses[k - 3], caller) + noise(rng));
@@ -244,7 +245,7 @@ TEST(BearingEvidence, OneSourcePerCallerWithTheEkf) {
   int64_t t = 0;
   for (int k = 0; k < 300; ++k, t += 100000) {  // 7.5 m along x at 0.25 m/s
     const Pose2 pose(0.025 * k, 0.0, 0.0);
-    map.OnPose(t, pose, Eigen::Matrix3d::Identity() * 1e-6, k);
+    map.OnPose(t, ToRigid2d(pose), Eigen::Matrix3d::Identity() * 1e-6, k);
     if (k % 2) continue;
     OnlineSoundMap::Doa d;
     d.track_id = 1;

@@ -32,8 +32,9 @@ OnlineSoundMap::OnlineSoundMap(const OnlineSoundMapOptions& options, const Array
       associator_(SourceAssociator::Options{options.gate_chi2, options.max_signature_distance}),
       evidence_(options.evidence, mount) {}
 
-void OnlineSoundMap::OnPose(int64_t utime, const Pose2& pose, const Eigen::Matrix3d& cov,
-                            int64_t node_id) {
+void OnlineSoundMap::OnPose(int64_t utime, const common::Rigid2d& map_from_base,
+                            const Eigen::Matrix3d& cov, int64_t node_id) {
+  const Pose2 pose = ToPose2(map_from_base);
   if (!pose.vec().allFinite() || !cov.allFinite()) {
     ++counters_.bad_poses;
     return;
@@ -101,9 +102,14 @@ Eigen::Matrix3d ComposeJacobian(const Pose2& node, const Pose2& offset) {
 }
 }  // namespace
 
-bool OnlineSoundMap::OnSlamAnchors(int64_t, const Pose2& current,
-                                   const std::vector<std::pair<int64_t, Pose2>>& anchors,
-                                   const Eigen::MatrixXd& covariance, bool loop_closed) {
+bool OnlineSoundMap::OnSlamAnchors(
+    int64_t, const common::Rigid2d& current_pose,
+    const std::vector<std::pair<int64_t, common::Rigid2d>>& anchor_poses,
+    const Eigen::MatrixXd& covariance, bool loop_closed) {
+  const Pose2 current = ToPose2(current_pose);
+  std::vector<std::pair<int64_t, Pose2>> anchors;
+  anchors.reserve(anchor_poses.size());
+  for (const auto& [id, pose] : anchor_poses) anchors.emplace_back(id, ToPose2(pose));
   const int m = 3 * (1 + static_cast<int>(anchors.size()));
   bool ok = covariance.rows() == m && covariance.cols() == m && covariance.allFinite() &&
             current.vec().allFinite();

@@ -285,14 +285,14 @@ class OnlineSoundMap {
 
   OnlineSoundMap(const OnlineSoundMapOptions& options, const ArrayMount& mount);
 
-  void OnPose(int64_t utime, const Pose2& map_from_base, const Eigen::Matrix3d& covariance,
-              int64_t node_id);
+  void OnPose(int64_t utime, const common::Rigid2d& map_from_base,
+              const Eigen::Matrix3d& covariance, int64_t node_id);
   // SLAM_ANCHORS: current pose, the kept anchors and the joint covariance (3(1+n) square).
   // Returns false (and counts) for an inconsistent message.
   // loop_closed: the optimisation found new loop closures (slam_anchors_t::loop_closed); with
   // anchors_after_loop_closure_only a message without is skipped (counted, returns true).
-  bool OnSlamAnchors(int64_t utime, const Pose2& current,
-                     const std::vector<std::pair<int64_t, Pose2>>& anchors,
+  bool OnSlamAnchors(int64_t utime, const common::Rigid2d& current,
+                     const std::vector<std::pair<int64_t, common::Rigid2d>>& anchors,
                      const Eigen::MatrixXd& covariance, bool loop_closed = true);
   void OnDoa(int64_t utime, const std::string& device, const std::vector<Doa>& doas);
   void OnHeardPerson(const std::string& device, int64_t track_id, bool called = false);

@@ -37,9 +37,9 @@ struct Harness {
       if (!loc.HasLandmark(o.id)) loc.AddLandmark(o.id, o.z, r_lm); else loc.UpdateLandmark(o.id, o.z, r_lm);
     }
     const int64_t t = static_cast<int64_t>(k) * 200000;
-    map.OnPose(t, loc.current(), loc.current_covariance(), static_cast<int64_t>(k));
+    map.OnPose(t, ToRigid2d(loc.current()), loc.current_covariance(), static_cast<int64_t>(k));
     for (auto* m : twins)
-      m->OnPose(t, loc.current(), loc.current_covariance(), static_cast<int64_t>(k));
+      m->OnPose(t, ToRigid2d(loc.current()), loc.current_covariance(), static_cast<int64_t>(k));
     std::vector<OnlineSoundMap::Doa> doas;
     for (const auto& o : d.sound_obs[k]) {
       OnlineSoundMap::Doa doa;
@@ -61,8 +61,10 @@ struct Harness {
     std::vector<std::pair<int64_t, Pose2>> anchors;
     Eigen::MatrixXd cov;
     loc.SharedState(map.AnchorNodeIds(), &cur, &anchors, &cov);
-    map.OnSlamAnchors(t, cur, anchors, cov, loop_closed);
-    for (auto* m : twins) m->OnSlamAnchors(t, cur, anchors, cov, loop_closed);
+    std::vector<std::pair<int64_t, common::Rigid2d>> anchor_poses;
+    for (const auto& [id, pose] : anchors) anchor_poses.emplace_back(id, ToRigid2d(pose));
+    map.OnSlamAnchors(t, ToRigid2d(cur), anchor_poses, cov, loop_closed);
+    for (auto* m : twins) m->OnSlamAnchors(t, ToRigid2d(cur), anchor_poses, cov, loop_closed);
   }
 };
 
@@ -315,7 +317,7 @@ TEST(OnlineSoundMap, TrueAnchorsAtSparseNodesDoNotMoveSources) {
       const Pose2 pose(0.3 * t_s * std::cos(0.5 * yaw), 0.3 * t_s * std::sin(0.5 * yaw), yaw);
       if (k % 10 == 0) nodes[++node] = pose;  // a node every 10 scans (0.3 m, 3 deg)
       const int64_t utime = static_cast<int64_t>(k) * 100000;
-      map.OnPose(utime, pose, shared + own, node);
+      map.OnPose(utime, ToRigid2d(pose), shared + own, node);
       OnlineSoundMap::Doa doa;
       doa.track_id = 1;
       doa.azimuth_rad = WrapAngle(std::atan2(source.y() - pose.y, source.x() - pose.x) - pose.yaw + noise(rng));
@@ -323,13 +325,13 @@ TEST(OnlineSoundMap, TrueAnchorsAtSparseNodesDoNotMoveSources) {
       if (k >= 5) map.OnDoa(utime, "sim", {doa});  // born at k = 7, 0.2 m and 2 deg past node 0
       if (anchors && k % 10 == 0 && k > 0) {  // an optimisation at every node: its scan's time
         const auto ids = map.AnchorNodeIds();
-        std::vector<std::pair<int64_t, Pose2>> kept;
-        for (int64_t id : ids) kept.emplace_back(id, nodes.at(id));
+        std::vector<std::pair<int64_t, common::Rigid2d>> kept;
+        for (int64_t id : ids) kept.emplace_back(id, ToRigid2d(nodes.at(id)));
         const int n = 1 + static_cast<int>(kept.size());
         Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(3 * n, 3 * n);
         for (int i = 0; i < n; ++i)
           for (int j = 0; j < n; ++j) cov.block<3, 3>(3 * i, 3 * j) = shared + (i == j ? own : Eigen::Matrix3d::Zero());
-        EXPECT_TRUE(map.OnSlamAnchors(utime, nodes.at(node), kept, cov));
+        EXPECT_TRUE(map.OnSlamAnchors(utime, ToRigid2d(nodes.at(node)), kept, cov));
       }
       // The filter's estimate (published only once its range is observable).
       const auto ids = map.ekf().source_ids();
@@ -376,20 +378,23 @@ TEST(OnlineSoundMap, TrueAnchorsAtSparseNodesDoNotMoveSources) {
 
 TEST(OnlineSoundMap, RejectsBadAnchorsAndUnsupportedKinds) {
   OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
-  EXPECT_FALSE(map.OnSlamAnchors(0, Pose2(), {{1, Pose2()}}, Eigen::MatrixXd::Identity(3, 3)));
-  EXPECT_FALSE(map.OnSlamAnchors(0, Pose2(), {{1, Pose2()}, {1, Pose2()}}, Eigen::MatrixXd::Identity(9, 9)));
-  EXPECT_FALSE(map.OnSlamAnchors(0, Pose2(NAN, 0, 0), {}, Eigen::MatrixXd::Identity(3, 3)));
-  map.OnPose(0, Pose2(0, NAN, 0), Eigen::Matrix3d::Identity(), 0);
+  const common::Rigid2d origin;
+  EXPECT_FALSE(map.OnSlamAnchors(0, origin, {{1, origin}}, Eigen::MatrixXd::Identity(3, 3)));
+  EXPECT_FALSE(
+      map.OnSlamAnchors(0, origin, {{1, origin}, {1, origin}}, Eigen::MatrixXd::Identity(9, 9)));
+  EXPECT_FALSE(
+      map.OnSlamAnchors(0, common::Rigid2d(NAN, 0, 0), {}, Eigen::MatrixXd::Identity(3, 3)));
+  map.OnPose(0, ToRigid2d(Pose2(0, NAN, 0)), Eigen::Matrix3d::Identity(), 0);
   EXPECT_EQ(map.counters().bad_poses, 1);
   OnlineSoundMap::Doa doa;
   doa.kind = 0;  // not a DOA kind
-  map.OnPose(0, Pose2(), Eigen::Matrix3d::Identity() * 1e-4, 0);
+  map.OnPose(0, ToRigid2d(Pose2()), Eigen::Matrix3d::Identity() * 1e-4, 0);
   map.OnDoa(0, "a", {doa});
   EXPECT_EQ(map.counters().doa_unsupported_kind, 1);
   OnlineSoundMapOptions o3;
   o3.three_d = true;  // cone angles only enter the planar map
   OnlineSoundMap map3(o3, ArrayMount{});
-  map3.OnPose(0, Pose2(), Eigen::Matrix3d::Identity() * 1e-4, 0);
+  map3.OnPose(0, ToRigid2d(Pose2()), Eigen::Matrix3d::Identity() * 1e-4, 0);
   doa.kind = OnlineSoundMap::kAngle1d;
   map3.OnDoa(0, "a", {doa});
   EXPECT_EQ(map3.counters().doa_unsupported_kind, 1);
@@ -405,7 +410,7 @@ TEST(OnlineSoundMap, HeardDirectionMarksThePerson) {
   for (int k = 0; k < 30; ++k) {
     const int64_t t = k * 128000;
     const Pose2 pose(0.1 * k, 0, 0);
-    map.OnPose(t, pose, Eigen::Matrix3d::Identity() * 1e-6, k);
+    map.OnPose(t, ToRigid2d(pose), Eigen::Matrix3d::Identity() * 1e-6, k);
     OnlineSoundMap::Doa doa;
     doa.track_id = 7;
     doa.azimuth_rad = std::atan2(source.y() - pose.y, source.x() - pose.x);
@@ -453,7 +458,8 @@ TEST(OnlineSoundMap, ChurningTrackIdsAndSpuriousDoasGiveOneSourcePerEmitter) {
   std::vector<int> age(w.sources.size(), 0);
   for (size_t k = 0; k < w.poses.size(); ++k) {
     const int64_t t = static_cast<int64_t>(k) * 100000;
-    map.OnPose(t, w.poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+    map.OnPose(t, ToRigid2d(w.poses[k]), Eigen::Matrix3d::Identity() * 1e-6,
+               static_cast<int64_t>(k));
     std::vector<OnlineSoundMap::Doa> doas;
     for (size_t j = 0; j < w.sources.size(); ++j) {
       if (age[j]++ % 4 == 0) track[j] = next_track++;  // the localiser lost and re-found it
@@ -473,7 +479,7 @@ TEST(OnlineSoundMap, ChurningTrackIdsAndSpuriousDoasGiveOneSourcePerEmitter) {
     map.OnDoa(t, "respeaker", doas);
   }
   const int64_t end = static_cast<int64_t>(w.poses.size()) * 100000 + 20000000;  // 20 s later: prune
-  map.OnPose(end, w.poses.back(), Eigen::Matrix3d::Identity() * 1e-6, 9999);
+  map.OnPose(end, ToRigid2d(w.poses.back()), Eigen::Matrix3d::Identity() * 1e-6, 9999);
   const auto sources = map.Sources(end);
   const auto& c = map.counters();
   printf("tracks %ld: sources %zu, born %ld, pruned %ld, tentative DOAs %ld\n", static_cast<long>(next_track),
@@ -499,7 +505,8 @@ TEST(OnlineSoundMap, LinearArrayMirrorIsResolvedByTheTurn) {
   const Eigen::Vector2d source = w.sources[0];
   for (size_t k = 0; k < w.poses.size(); ++k) {
     const int64_t t = static_cast<int64_t>(k) * 100000;
-    map.OnPose(t, w.poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+    map.OnPose(t, ToRigid2d(w.poses[k]), Eigen::Matrix3d::Identity() * 1e-6,
+               static_cast<int64_t>(k));
     OnlineSoundMap::Doa d;
     d.kind = OnlineSoundMap::kAngle1d;
     d.track_id = static_cast<int64_t>(k / 5);
@@ -531,7 +538,7 @@ TEST(OnlineSoundMap, SteepDirectionsOfTheRobotsOwnMotorsAreDropped) {
     std::normal_distribution<double> noise(0.0, 2 * M_PI / 180);
     for (int k = 0; k < 60; ++k) {
       const int64_t t = k * 128000;
-      map.OnPose(t, Pose2(0.05 * k, 0, 0), Eigen::Matrix3d::Identity() * 1e-6, k);
+      map.OnPose(t, ToRigid2d(Pose2(0.05 * k, 0, 0)), Eigen::Matrix3d::Identity() * 1e-6, k);
       OnlineSoundMap::Doa motor;
       motor.kind = OnlineSoundMap::kAzimuthElevation;
       motor.track_id = 1;
@@ -566,7 +573,8 @@ TEST(OnlineSoundMap, ASourceWhereTheRobotDroveIsRemoved) {
     std::normal_distribution<double> noise(0.0, 1 * M_PI / 180);
     for (size_t k = 0; k < poses.size(); ++k) {
       const int64_t t = static_cast<int64_t>(k) * 100000;
-      map.OnPose(t, poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+      map.OnPose(t, ToRigid2d(poses[k]), Eigen::Matrix3d::Identity() * 1e-6,
+                 static_cast<int64_t>(k));
       if (k > 100) continue;
       std::vector<OnlineSoundMap::Doa> doas;
       for (size_t j = 0; j < sources.size(); ++j) {
@@ -598,7 +606,8 @@ std::vector<OnlineSoundMap::Source> HearClassified(OnlineSoundMap* map,
   std::normal_distribution<double> noise(0.0, 1 * M_PI / 180);
   for (size_t k = 0; k < poses.size(); ++k) {
     const int64_t t = static_cast<int64_t>(k) * 100000;
-    map->OnPose(t, poses[k], Eigen::Matrix3d::Identity() * 1e-6, static_cast<int64_t>(k));
+    map->OnPose(t, ToRigid2d(poses[k]), Eigen::Matrix3d::Identity() * 1e-6,
+                static_cast<int64_t>(k));
     std::vector<OnlineSoundMap::Doa> doas;
     for (size_t j = 0; j < sources.size(); ++j) {
       OnlineSoundMap::Doa d;
@@ -673,7 +682,7 @@ TEST(OnlineSoundMap, TriangulationAgreesWithLeastSquares) {
   for (int k = 0; k <= 200; ++k) {
     const Pose2 pose(0.02 * k, 0.0, 0.0);
     const int64_t t = static_cast<int64_t>(k) * 100000;
-    map.OnPose(t, pose, Eigen::Matrix3d::Identity() * 1e-12, k);
+    map.OnPose(t, ToRigid2d(pose), Eigen::Matrix3d::Identity() * 1e-12, k);
     OnlineSoundMap::Doa d;
     d.track_id = 0;
     d.azimuth_rad = WrapAngle(DriveBy::Bearing(pose, caller) + noise(rng));

@@ -8,11 +8,14 @@
 #include <cmath>
 
 #include "common/angles.h"
+#include "common/transform.h"
 
 namespace sarmap {
 namespace sound_map {
 
-// A planar pose map_from_base: position (x, y) in metres, yaw in radians.
+// A planar pose map_from_base: position (x, y) in metres, yaw in radians, as the estimators'
+// state (the EKF's vector, Ceres' parameter blocks); what enters and leaves the map is a
+// common::Rigid2d.
 struct Pose2 {
   double x = 0, y = 0, yaw = 0;
   Pose2() = default;
@@ -22,6 +25,15 @@ struct Pose2 {
 };
 
 using common::WrapAngle;  // doubles and Ceres jets
+
+// The estimators' planar pose of a map_from_base transform (the interfaces take Rigid2d),
+// and back (yaw wrapped to (-pi, pi]).
+inline Pose2 ToPose2(const common::Rigid2d& pose) {
+  return Pose2(pose.translation().x(), pose.translation().y(), pose.yaw_rad());
+}
+inline common::Rigid2d ToRigid2d(const Pose2& pose) {
+  return common::Rigid2d(pose.x, pose.y, pose.yaw);
+}
 
 // a ∘ b for planar poses.
 inline Pose2 Compose(const Pose2& a, const Pose2& b) {

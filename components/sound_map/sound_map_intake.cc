@@ -68,7 +68,7 @@ void SoundMapIntake::Finish() {
 }
 
 void SoundMapIntake::OnPose(const sarmap::pose_t& msg) {
-  const Pose2 pose = PlanarPose(msg);
+  const common::Rigid2d pose = PlanarPose(msg);
   const Eigen::Matrix3d cov = common::PlanarCovariance(msg.covariance);
   const int64_t node_id = msg.node_id;
   OnlineSoundMap* map = map_;
@@ -77,8 +77,8 @@ void SoundMapIntake::OnPose(const sarmap::pose_t& msg) {
 }
 
 bool SoundMapIntake::OnAnchors(const sarmap::slam_anchors_t& msg) {
-  Pose2 current;
-  std::vector<std::pair<int64_t, Pose2>> anchors;
+  common::Rigid2d current;
+  std::vector<std::pair<int64_t, common::Rigid2d>> anchors;
   Eigen::MatrixXd cov;
   if (!AnchorsFromMessage(msg, &current, &anchors, &cov)) return false;
   const bool loop_closed = msg.loop_closed;

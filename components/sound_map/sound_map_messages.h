@@ -92,9 +92,8 @@ inline ArrayMount MountFromRobot(const common::RobotOptions& robot) {
 }
 
 // The planar pose (x, y, yaw of the x axis) of a 6-DoF pose_t.
-inline Pose2 PlanarPose(const sarmap::pose_t& msg) {
-  const common::Rigid2d p = common::ToRigid3d(msg.position_m, msg.orientation).ToRigid2d();
-  return Pose2(p.translation().x(), p.translation().y(), p.yaw_rad());
+inline common::Rigid2d PlanarPose(const sarmap::pose_t& msg) {
+  return common::ToRigid3d(msg.position_m, msg.orientation).ToRigid2d();
 }
 
 // DOAs with finite values (any kind; the map counts the kinds it cannot use).
@@ -115,8 +114,9 @@ inline std::vector<OnlineSoundMap::Doa> DoasFromMessage(const sarmap::doa_t& msg
 }
 
 // False when the covariance does not match the anchors (3(1+n) square).
-inline bool AnchorsFromMessage(const sarmap::slam_anchors_t& msg, Pose2* current,
-                               std::vector<std::pair<int64_t, Pose2>>* anchors, Eigen::MatrixXd* cov) {
+inline bool AnchorsFromMessage(const sarmap::slam_anchors_t& msg, common::Rigid2d* current,
+                               std::vector<std::pair<int64_t, common::Rigid2d>>* anchors,
+                               Eigen::MatrixXd* cov) {
   const int n = msg.num_anchors;
   const int dim = msg.covariance_dim;
   if (dim != 3 * (1 + n) || static_cast<int>(msg.covariance.size()) != dim ||
@@ -127,9 +127,10 @@ inline bool AnchorsFromMessage(const sarmap::slam_anchors_t& msg, Pose2* current
     if (static_cast<int>(msg.covariance[r].size()) != dim) return false;
     for (int c = 0; c < dim; ++c) (*cov)(r, c) = msg.covariance[r][c];
   }
-  *current = Pose2(msg.current.x_m, msg.current.y_m, msg.current.yaw_rad);
+  *current = common::Rigid2d(msg.current.x_m, msg.current.y_m, msg.current.yaw_rad);
   anchors->clear();
-  for (const auto& a : msg.anchors) anchors->emplace_back(a.node_id, Pose2(a.x_m, a.y_m, a.yaw_rad));
+  for (const auto& a : msg.anchors)
+    anchors->emplace_back(a.node_id, common::Rigid2d(a.x_m, a.y_m, a.yaw_rad));
   return true;
 }
 

@@ -27,10 +27,10 @@ TEST(SoundMapMessagesTest, PlanarPoseIsTheHeadingOfTheXAxis) {
   msg.orientation[1] = 2 * q.x();
   msg.orientation[2] = 2 * q.y();
   msg.orientation[3] = 2 * q.z();
-  const Pose2 p = PlanarPose(msg);
-  EXPECT_DOUBLE_EQ(p.x, 1.5);
-  EXPECT_DOUBLE_EQ(p.y, -2.0);
-  EXPECT_NEAR(p.yaw, 0.7, 1e-12);
+  const common::Rigid2d p = PlanarPose(msg);
+  EXPECT_DOUBLE_EQ(p.translation().x(), 1.5);
+  EXPECT_DOUBLE_EQ(p.translation().y(), -2.0);
+  EXPECT_NEAR(p.yaw_rad(), 0.7, 1e-12);
 }
 
 TEST(SoundMapMessagesTest, DoasKeepTheirFieldsAndNonFiniteOnesAreDropped) {
@@ -92,15 +92,15 @@ sarmap::slam_anchors_t Anchors(int n) {
 }
 
 TEST(SoundMapMessagesTest, AnchorsNeedACovarianceOfTheirSize) {
-  Pose2 current;
-  std::vector<std::pair<int64_t, Pose2>> anchors;
+  common::Rigid2d current;
+  std::vector<std::pair<int64_t, common::Rigid2d>> anchors;
   Eigen::MatrixXd cov;
   ASSERT_TRUE(AnchorsFromMessage(Anchors(2), &current, &anchors, &cov));
-  EXPECT_DOUBLE_EQ(current.x, 4);
-  EXPECT_DOUBLE_EQ(current.yaw, 0.5);
+  EXPECT_DOUBLE_EQ(current.translation().x(), 4);
+  EXPECT_DOUBLE_EQ(current.yaw_rad(), 0.5);
   ASSERT_EQ(anchors.size(), 2u);
   EXPECT_EQ(anchors[1].first, 101);
-  EXPECT_DOUBLE_EQ(anchors[1].second.y, -1);
+  EXPECT_DOUBLE_EQ(anchors[1].second.translation().y(), -1);
   ASSERT_EQ(cov.rows(), 9);
   EXPECT_DOUBLE_EQ(cov(0, 1), 0.005);
   EXPECT_DOUBLE_EQ(cov(8, 8), 0.09);

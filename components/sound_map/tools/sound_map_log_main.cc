@@ -418,7 +418,7 @@ int main(int argc, char** argv) {
         if (!Decode(*e, &m)) return true;  // the node reports it
         const Utime t = m.header.utime;
         if (m.node_id >= 0 && !node_utime.count(m.node_id)) node_utime[m.node_id] = t;
-        slam_poses[t] = sound_map::PlanarPose(m);
+        slam_poses[t] = sound_map::ToPose2(sound_map::PlanarPose(m));
         return true;
       }
       if (e->channel == replay_options.doa_channel) {
@@ -445,11 +445,14 @@ int main(int argc, char** argv) {
         if (no_anchors || truth_poses_in) return false;
         slam_anchors_t m;
         if (!Decode(*e, &m)) return true;
-        Pose2 current;
-        std::vector<std::pair<int64_t, Pose2>> anchors;
+        common::Rigid2d current;
+        std::vector<std::pair<int64_t, common::Rigid2d>> anchors;
         Eigen::MatrixXd cov;
-        if (sound_map::AnchorsFromMessage(m, &current, &anchors, &cov))
-          anchor_log.emplace_back(m.header.utime, anchors);
+        if (sound_map::AnchorsFromMessage(m, &current, &anchors, &cov)) {
+          std::vector<std::pair<int64_t, Pose2>> planar;
+          for (const auto& [id, pose] : anchors) planar.emplace_back(id, sound_map::ToPose2(pose));
+          anchor_log.emplace_back(m.header.utime, planar);
+        }
         if (anchor_covariance_scale != 1.0) {
           for (auto& row : m.covariance)
             for (double& c : row) c *= anchor_covariance_scale;
