@@ -391,7 +391,8 @@ int main(int argc, char** argv) {
     int oracle_poses = 0;
     parser.AddFlag("--oracle-poses", &oracle_poses,
                    "1: the mapper uses the true poses (diagnostic)");
-    parser.AddFlag("--verbose", &verbose, "1: one line per run");
+    parser.AddFlag("--verbose", &verbose,
+                   "1: one line per run; 2 (table5.1-online): also the map's counters and sources");
     std::string doa = "calibration";
     std::string doa_file = std::string(SARMAP_DATA_DIR) + "/audio/ssm/gp_doa_calibration.csv";
     double quantum_deg = 5;
