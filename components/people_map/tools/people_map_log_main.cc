@@ -82,6 +82,10 @@ int main(int argc, char** argv) {
                    "the bench's OUT/<site>-<mode>-trail.csv: every POSE is moved by the correction "
                    "SLAM's final graph made at its time (what people anchored to SLAM's nodes "
                    "would get)");
+    std::string sound_map_log;
+    parser.AddFlag("--sound-map", &sound_map_log,
+                   "take SOUND_MAP from this LCM log instead of the replayed log's own (e.g. "
+                   "sarmap-log sound-map --write-map: a sound-map change tried on the people map)");
     common::NodeArgs node_args;
     const auto parsed = common::ParseNodeOptions<people_map::PeopleMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/people_map.yaml");
@@ -195,11 +199,32 @@ int main(int argc, char** argv) {
           s.made_person ? " (new)" : "", (now - t).norm(), trace.c_str(), (z_truth - t).norm());
     });
 
-    int64_t seen_msgs = 0, poses = 0;
+    int64_t seen_msgs = 0, poses = 0, sound_map_msgs = 0;
     const Utime t0 = trail.map_from_base.empty() ? 0 : trail.map_from_base.begin()->first;
+    // SOUND_MAP from another log: each of its events goes in before the first event of the
+    // replayed log that is not earlier.
+    std::unique_ptr<logtools::LcmLogReader> sound_maps;
+    logtools::LogEvent next_map;
+    bool have_next_map = false;
+    if (!sound_map_log.empty()) {
+      sound_maps = std::make_unique<logtools::LcmLogReader>(sound_map_log);
+      have_next_map = sound_maps->Next(&next_map);
+    }
     const auto stats = replay.Run(log_path, [&](logtools::LogEvent* e) {
+      if (sound_maps) {
+        while (have_next_map && next_map.timestamp_us <= e->timestamp_us) {
+          if (next_map.channel == options.sound_map_channel) {
+            ++sound_map_msgs;
+            replay.Inject(next_map.channel, next_map.data);
+          }
+          have_next_map = sound_maps->Next(&next_map);
+        }
+        if (e->channel == options.sound_map_channel) return false;
+      }
       if (e->channel == options.visual_channel) {
         ++seen_msgs;
+      } else if (e->channel == options.sound_map_channel) {
+        ++sound_map_msgs;
       } else if (e->channel == options.pose_channel) {
         ++poses;
         if (!truth_poses && corrections.empty()) return true;
@@ -236,12 +261,13 @@ int main(int argc, char** argv) {
     const Utime end = intake.latest_utime();
     const std::vector<people_map::Person> report = map.Report(end);
     std::printf(
-        "%ld PEOPLE_VISUAL, %ld POSE%s; %zu people on the map, %ld detections without "
-        "a pose\n",
+        "%ld PEOPLE_VISUAL, %ld POSE%s, %ld SOUND_MAP%s; %zu people on the map, %ld detections "
+        "without a pose\n",
         static_cast<long>(seen_msgs), static_cast<long>(poses),
         truth_poses           ? " (true poses)"
         : corrections.empty() ? ""
                               : " (moved by the final graph)",
+        static_cast<long>(sound_map_msgs), sound_maps ? (" from " + sound_map_log).c_str() : "",
         report.size(), static_cast<long>(intake.without_pose()));
     // One-to-one, closest pairs first, as the mission metrics match.
     struct Pair {

@@ -32,6 +32,7 @@
 #include "common/node_main.h"
 #include "common/robot_config.h"
 #include "log-tools/lcm_log_reader.h"
+#include "log-tools/lcm_log_writer.h"
 #include "log-tools/node_replay.h"
 #include "sarmap/audio_frame_t.hpp"
 #include "sarmap/sim_truth_t.hpp"
@@ -166,6 +167,10 @@ int main(int argc, char** argv) {
     parser.AddFlag(
         "--report-every", &report_every_s,
         "also print the map and its errors every this many seconds of the log (0: end only)");
+    std::string write_map;
+    parser.AddFlag("--write-map", &write_map,
+                   "write every SOUND_MAP the replay publishes to this LCM log (at the log time "
+                   "it is published), for sarmap-log people-map --sound-map");
     const auto parsed = common::ParseNodeOptions<sound_map::SoundMapNodeOptions>(
         &parser, &node_args, argc, argv, "config/sound_map.yaml");
     if (!parsed) return 0;
@@ -245,8 +250,11 @@ int main(int argc, char** argv) {
     // Each source's position in every SOUND_MAP the replay publishes, by the map's time.
     SourcesByTime published;
     Utime last_published = 0;
+    std::unique_ptr<logtools::LcmLogWriter> map_writer;
+    if (!write_map.empty()) map_writer = std::make_unique<logtools::LcmLogWriter>(write_map);
     replay.Capture(replay_options.sound_map_channel,
-                   [&](const std::string&, const std::vector<uint8_t>& data) {
+                   [&](const std::string& channel, const std::vector<uint8_t>& data) {
+                     if (map_writer) map_writer->WriteBytes(channel, data, replay.now_us());
                      sound_map_t m;
                      if (!common::DecodeMessage(data.data(), data.size(), &m)) return;
                      last_published = m.header.utime;
