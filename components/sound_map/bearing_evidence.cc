@@ -261,7 +261,9 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     const Eigen::Vector2d d = centre(static_cast<int>(c)) - out[owner[c]].position_m;
     spread[owner[c]] += weight[c] / total[owner[c]] * d * d.transpose();
   }
-  // Each ray's responsibility for each source: class votes, times, and the information.
+  // Each ray's responsibility for each source. The rays a source explains (responsibility >= 0.5)
+  // give its class votes, times and information: another source's rays that pass near it vote
+  // where they belong.
   std::vector<Eigen::Matrix2d> info(out.size(), Eigen::Matrix2d::Zero());
   std::vector<double> nearest(out.size(), INFINITY);
   std::vector<std::vector<double>> heard_from(out.size());  // directions source -> origin
@@ -283,8 +285,8 @@ std::vector<BearingEvidence::Source> BearingEvidence::Solve(
     const Placed& p = cache_[use[i]].placed;
     for (const auto& [k, w] : resp) {
       Source& s = out[k];
-      if (r.sound_class > 0 && r.sound_class < 5) s.class_votes[r.sound_class] += w * r.weight;
       if (w < 0.5) continue;
+      if (r.sound_class > 0 && r.sound_class < 5) s.class_votes[r.sound_class] += w * r.weight;
       s.strong_rays += r.weight;
       heard_from[k].push_back(
           std::atan2(p.origin.y() - s.position_m.y(), p.origin.x() - s.position_m.x()));

@@ -68,6 +68,41 @@ TEST(BearingEvidence, IntermittentCallsAreTriangulated) {
   }
 }
 
+// A source's class is voted by the rays it explains (responsibility >= 0.5), as its support and
+// its covariance are: another source's rays that pass near it, mostly explained there, do not
+// dilute it (a caller beside a machine stays a voice).
+TEST(BearingEvidence, OnlyTheRaysASourceExplainsVoteForItsClass) {
+  Calls calls;
+  // The machine sounds without pause, heard from every pose, its bearing passing 0.4 m from the
+  // caller at the start of the drive.
+  calls.sources[1] = Eigen::Vector2d(3.0, 4.5);
+  std::vector<BearingEvidence::Ray> machine;
+  for (int k = 0; k < 240; ++k) {
+    const double t = 0.25 * k;
+    const Pose2 pose(std::min(0.025 * k, 4.0), std::max(0.0, 0.025 * k - 4.0),
+                     k < 160 ? 0.0 : M_PI / 2);
+    BearingEvidence::Ray r;
+    r.utime = static_cast<int64_t>(t * 1e6);
+    r.node_from_base = pose;
+    r.azimuth_rad = Bearing(pose, calls.sources[1]);
+    r.sigma_rad = 3 * M_PI / 180;
+    r.sound_class = OnlineSoundMap::kClassMachinery;
+    machine.push_back(r);
+  }
+  BearingEvidence evidence(BearingEvidenceOptions{}, ArrayMount{});
+  for (const auto& r : calls.rays)
+    if (r.sound_class == OnlineSoundMap::kClassVoice) evidence.Add(r);
+  for (const auto& r : machine) evidence.Add(r);
+  const auto found = evidence.Solve({}, nullptr, nullptr);
+  const BearingEvidence::Source* caller = nullptr;
+  for (const auto& s : found)
+    if ((s.position_m - calls.sources[0]).norm() < 0.3) caller = &s;
+  ASSERT_NE(caller, nullptr);
+  const auto& v = caller->class_votes;
+  const double share = v[OnlineSoundMap::kClassVoice] / (v[1] + v[2] + v[3] + v[4]);
+  EXPECT_GT(share, 0.97) << "machinery votes " << v[OnlineSoundMap::kClassMachinery];
+}
+
 TEST(BearingEvidence, BearingsFromOnePlaceGiveNoPosition) {
   // 40 DOAs towards (3, 2) from the origin: a line, no crossing.
   BearingEvidence evidence(BearingEvidenceOptions{}, ArrayMount{});
