@@ -1068,17 +1068,25 @@ bool DescribeUpright(const std::vector<int>& part, const std::vector<int>& paren
   // head_radius_m + head_depth_m along it, because the visible head surface reaches back
   // along the ray (a head seen obliquely shows its side, ~0.2 m deep) and the range noise
   // (sigma = c z^2) spreads it further; across the ray the shoulders stick out.
-  double around = -1.0;
+  // Seen side-on, a sitting person's shoulders lie along the ray, inside the ellipse, and the
+  // highest point outside it is the lap, in the lower half of the body: for a top at sitting
+  // height with such a point, the shoulders are looked for beyond head_radius_m in every
+  // direction. Anything else beside the head more than max_head_prominence_m below it is
+  // neither lap nor shoulders.
+  double around = -1.0, around_circle = -1.0;
   const double inv_a2 = 1.0 / (so.head_radius_m * so.head_radius_m);
   const double inv_b2 = 1.0 / std::pow(so.head_radius_m + so.head_depth_m, 2);
   const double outer2 = std::pow(so.head_radius_m + o.min_head_distance_m, 2);
   for (int i : single_head ? parent : part) {
     const Eigen::Vector2d d = ws.floor[i].head<2>() - top_xy;
+    if (d.squaredNorm() > outer2) continue;
     const double s = across.dot(d), r = ray.dot(d);
-    if (s * s * inv_a2 + r * r * inv_b2 >= 1.0 && d.squaredNorm() <= outer2) {
-      around = std::max(around, ws.floor[i].z());
-    }
+    if (s * s * inv_a2 + r * r * inv_b2 >= 1.0) around = std::max(around, ws.floor[i].z());
+    if (d.squaredNorm() * inv_a2 >= 1.0) around_circle = std::max(around_circle, ws.floor[i].z());
   }
+  if (around >= 0 && H <= so.max_sitting_height_m && around < 0.5 * H &&
+      H - around > so.max_head_prominence_m)
+    around = around_circle;
   c.head_prominence_m = around < 0 ? 0.0 : H - around;
   shape->area_ratio = shoulder_area > 0 ? static_cast<double>(head_area) / shoulder_area : 1.0;
   shape->visible_lo_m = visible_lo;

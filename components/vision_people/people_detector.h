@@ -78,6 +78,7 @@ struct DepthShapeOptions {
   double head_depth_m = 0.12;           // (plus this along the viewing ray) ...
   double min_head_prominence_m = 0.15;  // ... everything is at least this much lower
   double max_head_prominence_m = 0.5;   // ... but not this much: shoulders are near
+  double max_sitting_height_m = 1.5;    // a top this low with a lap beside the head: sitting
   double min_fill = 0.6;                // occupied fraction of the height column
   double accept = 0.5;                  // depth-only decision threshold on the shape score
   template <class V>
@@ -106,6 +107,10 @@ struct DepthShapeOptions {
     v("max_head_prominence_m", max_head_prominence_m,
       "... and at most this far: a person's shoulders are there (+0.1 m: zero; a pole or a sliver "
       "of furniture has none)");
+    v("max_sitting_height_m", max_sitting_height_m,
+      "tallest sitting person: below this top, when the highest non-head point is in the lower "
+      "half (a lap), the shoulders are looked for beyond head_radius_m in every direction (seen "
+      "side-on they lie along the viewing ray)");
     v("max_head_width_m", max_head_width_m, "widest head across the viewing ray (+0.15 m: zero)");
     v("min_fill", min_fill, "smallest occupied fraction of the 6 cm height slices");
     v("accept", accept, "depth-only: accept when the shape score reaches this");
