@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
           s.made_person ? " (new)" : "", (now - t).norm(), trace.c_str(), (z_truth - t).norm());
     });
 
-    int64_t seen_msgs = 0, poses = 0, sound_map_msgs = 0;
+    int64_t seen_msgs = 0, heard_msgs = 0, poses = 0, sound_map_msgs = 0;
     const Utime t0 = trail.map_from_base.empty() ? 0 : trail.map_from_base.begin()->first;
     // SOUND_MAP from another log: each of its events goes in before the first event of the
     // replayed log that is not earlier.
@@ -225,6 +225,8 @@ int main(int argc, char** argv) {
         ++seen_msgs;
       } else if (e->channel == options.sound_map_channel) {
         ++sound_map_msgs;
+      } else if (e->channel == options.audio_channel) {
+        ++heard_msgs;
       } else if (e->channel == options.pose_channel) {
         ++poses;
         if (!truth_poses && corrections.empty()) return true;
@@ -256,7 +258,10 @@ int main(int argc, char** argv) {
                    problem.what.c_str());
     }
     const people_map::PeopleMapIntake& intake = people_map_node.intake();
-    if (!seen_msgs) throw std::runtime_error("no " + options.visual_channel + " in " + log_path);
+    // A log of people heard only (a mission without vision) is a people-map input too.
+    if (!seen_msgs && !heard_msgs && !sound_map_msgs)
+      throw std::runtime_error("no " + options.visual_channel + ", " + options.audio_channel +
+                               " or " + options.sound_map_channel + " in " + log_path);
 
     const Utime end = intake.latest_utime();
     const std::vector<people_map::Person> report = map.Report(end);
