@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <sstream>
 
@@ -20,20 +21,23 @@ namespace speech {
 
 namespace fs = std::filesystem;
 
-bool EspeakAvailable() { return std::system("espeak-ng --version > /dev/null 2>&1") == 0; }
+namespace {
 
-std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int wpm,
-                                int pitch) {
+// Runs a text-to-speech command line that writes a WAV file and returns its first channel at
+// 16 kHz (empty when the command fails). `command` gets the text, kept to characters the shell
+// quotes safely, and the WAV path.
+std::vector<float> RenderWithCommand(
+    const std::string& tool, const std::string& text,
+    const std::function<std::string(const std::string& safe_text, const std::string& wav)>&
+        command) {
   const std::string path =
-      (fs::temp_directory_path() / ("sarmap_espeak_" + std::to_string(::getpid()) + ".wav"))
+      (fs::temp_directory_path() / ("sarmap_" + tool + "_" + std::to_string(::getpid()) + ".wav"))
           .string();
   std::string safe;
   for (char c : text)
     if (std::isalnum(static_cast<unsigned char>(c)) || c == ' ' || c == ',' || c == '.' || c == '!')
       safe += c;
-  const std::string cmd = "espeak-ng -v " + voice + " -s " + std::to_string(wpm) + " -p " +
-                          std::to_string(pitch) + " -w " + path + " \"" + safe +
-                          "\" > /dev/null 2>&1";
+  const std::string cmd = command(safe, path) + " > /dev/null 2>&1";
   if (std::system(cmd.c_str()) != 0) return {};
   auto buf = audio::ReadAudioFile(path);
   fs::remove(path);
@@ -41,25 +45,27 @@ std::vector<float> RenderEspeak(const std::string& text, const std::string& voic
   return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
 }
 
+}  // namespace
+
+bool EspeakAvailable() { return std::system("espeak-ng --version > /dev/null 2>&1") == 0; }
+
+std::vector<float> RenderEspeak(const std::string& text, const std::string& voice, int wpm,
+                                int pitch) {
+  return RenderWithCommand("espeak", text, [&](const std::string& safe, const std::string& wav) {
+    return "espeak-ng -v " + voice + " -s " + std::to_string(wpm) + " -p " + std::to_string(pitch) +
+           " -w " + wav + " \"" + safe + "\"";
+  });
+}
+
 bool FliteAvailable() { return std::system("flite -lv > /dev/null 2>&1") == 0; }
 
 std::vector<float> RenderFlite(const std::string& text, const std::string& voice, double stretch) {
-  const std::string path =
-      (fs::temp_directory_path() / ("sarmap_flite_" + std::to_string(::getpid()) + ".wav"))
-          .string();
-  std::string safe;
-  for (char c : text)
-    if (std::isalnum(static_cast<unsigned char>(c)) || c == ' ' || c == ',' || c == '.' || c == '!')
-      safe += c;
   char stretch_text[32];
   std::snprintf(stretch_text, sizeof(stretch_text), "%.3f", stretch);
-  const std::string cmd = "flite -voice " + voice + " --setf duration_stretch=" + stretch_text +
-                          " -t \"" + safe + "\" -o " + path + " > /dev/null 2>&1";
-  if (std::system(cmd.c_str()) != 0) return {};
-  auto buf = audio::ReadAudioFile(path);
-  fs::remove(path);
-  if (buf.channels.empty()) return {};
-  return Resample(buf.channels[0], buf.sample_rate_hz, 16000);
+  return RenderWithCommand("flite", text, [&](const std::string& safe, const std::string& wav) {
+    return "flite -voice " + voice + " --setf duration_stretch=" + stretch_text + " -t \"" + safe +
+           "\" -o " + wav;
+  });
 }
 
 namespace {
