@@ -96,15 +96,17 @@ class Perception {
              const people_map::PeopleMapNodeOptions& people,
              const common::Rigid3d& base_from_camera, const common::Rigid3d& base_from_mic,
              std::unique_ptr<SoundChain> sound, explore::ExploreController* explorer,
-             MissionObserver* observer, MissionResult* result)
+             MissionObserver* observer, MissionResult* result,
+             people_map::PeopleMapIntake::Request anchor_request)
       : vision_(vision),
         detector_(vision.detector, vision_people::InitialGround(vision),
                   vision_people::MakeHogClassifier(vision.detector.color)),
         tracker_(vision.confirmation),
         assembler_(vision.max_pair_dt_s, vision.color_wait_s, vision.require_color),
         map_(people.map),
-        intake_(people, base_from_camera, base_from_mic, &map_,
-                [this](common::Utime utime) { Publish(utime); }),
+        intake_(
+            people, base_from_camera, base_from_mic, &map_,
+            [this](common::Utime utime) { Publish(utime); }, std::move(anchor_request)),
         publish_period_s_(people.publish_period_s),
         sound_(std::move(sound)),
         explorer_(explorer),
@@ -207,6 +209,12 @@ class Perception {
     const double cpu1 = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     for (const auto& h : s.heard) intake_.OnHeard(h);
     result_->people_map_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu1;
+  }
+
+  // SLAM_ANCHORS: to the sound map and the people map.
+  void OnAnchors(const sarmap::slam_anchors_t& m) {
+    if (sound_) sound_->intake->OnAnchors(m);
+    intake_.OnAnchors(m);
   }
 
   // SOUND_MAP from the sound map's intake.
@@ -342,11 +350,13 @@ class Loop : public sim::SimSink {
     if (perception_) perception_->OnAudio(m);
   }
 
-  // SLAM_ANCHOR_REQUEST from the sound map: sarmap-slam keeps the client's node ids and answers
-  // with SLAM_ANCHORS at once and after every optimisation.
+  // SLAM_ANCHOR_REQUEST from the sound map or the people map: sarmap-slam keeps each client's
+  // node ids and answers with SLAM_ANCHORS (every client's anchors) at once and after every
+  // optimisation.
   void OnAnchorRequest(const sarmap::slam_anchor_request_t& m) {
-    if (anchor_ids_ == m.node_ids) return;
-    anchor_ids_ = m.node_ids;
+    std::vector<int64_t>& ids = anchor_requests_[m.client_id];
+    if (ids == m.node_ids) return;
+    ids = m.node_ids;
     if (ComputeCovariance()) PublishAnchors(false);
   }
 
@@ -421,7 +431,10 @@ class Loop : public sim::SimSink {
   // requested anchors (the latest node's block goes on POSE).
   bool ComputeCovariance() {
     if (slam_.num_nodes() == 0) return false;
-    std::vector<int> ids = slam_.HoldAnchors(anchor_ids_);
+    std::vector<int64_t> requested;
+    for (const auto& [client, ids] : anchor_requests_)
+      requested.insert(requested.end(), ids.begin(), ids.end());
+    std::vector<int> ids = slam_.HoldAnchors(requested);
     Eigen::MatrixXd cov;
     if (!slam_.JointCovariance(ids, &cov)) return false;
     covariance_ids_ = std::move(ids);
@@ -432,13 +445,12 @@ class Loop : public sim::SimSink {
 
   // As sarmap-slam's PublishAnchors: SLAM_ANCHORS from the last ComputeCovariance().
   void PublishAnchors(bool loop_closed) {
-    SoundChain* sound = perception_ ? perception_->sound() : nullptr;
-    if (!sound || covariance_ids_.empty()) return;
+    if (!perception_ || covariance_ids_.empty()) return;
     const std::vector<int>& ids = covariance_ids_;
     const sarmap::slam_anchors_t msg =
         slam::AnchorsMessage(slam_, ids, joint_covariance_, loop_closed);
     if (observer_) observer_->OnSlamAnchors(Seconds(msg.header.utime) - start_s_, msg);
-    sound->intake->OnAnchors(msg);  // after the observer: see Perception::OnAudio
+    perception_->OnAnchors(msg);  // after the observer: see Perception::OnAudio
   }
 
   // POSE as sarmap-slam publishes it: the scan's pose, with the latest node's covariance from
@@ -486,7 +498,7 @@ class Loop : public sim::SimSink {
   Perception* perception_;
   Eigen::Vector2d pose_sigma_xy_yaw_;
   Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
-  std::vector<int64_t> anchor_ids_;
+  std::map<std::string, std::vector<int64_t>> anchor_requests_;  // client id -> node ids
   std::vector<int> covariance_ids_;
   Eigen::MatrixXd joint_covariance_;
   double start_s_ = 0;
@@ -626,7 +638,8 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     }
     perception = std::make_unique<Perception>(
         vision, people, robot.base_from_camera.ToRigid3d(), robot.base_from_mic_array.ToRigid3d(),
-        std::move(sound), loop.mutable_explore(), observer, &result);
+        std::move(sound), loop.mutable_explore(), observer, &result,
+        [&loop](sarmap::slam_anchor_request_t& r) { loop.OnAnchorRequest(r); });
     perception->set_start_s(1e-6 * static_cast<double>(simulator.start_utime()));
     loop.set_perception(perception.get());
   }

@@ -179,7 +179,8 @@ void PeopleMap::UpdateSeen(Person* p) const {
 
 void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detections,
                         const common::Rigid3d& map_from_camera,
-                        const Eigen::Matrix3d& pose_covariance, const Eigen::Vector2d& robot_xy) {
+                        const Eigen::Matrix3d& pose_covariance, const Eigen::Vector2d& robot_xy,
+                        const PoseNode& node) {
   const Eigen::Matrix3d R = map_from_camera.rotation().toRotationMatrix();
   const double min_var = options_.min_position_sigma_m * options_.min_position_sigma_m;
   std::map<int64_t, int> count_this_frame;
@@ -263,6 +264,10 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
     if (seen_trace_)
       seen_trace_({utime, z, Pz, d.position_camera_m, p->id, p->num_detections == 0});
     p->cues |= d.cue;
+    if (p->anchor_node_id < 0 && node.node_id >= 0) {
+      p->anchor_node_id = node.node_id;
+      p->map_from_anchor_node = node.map_from_node;
+    }
     AddEvidence(p, utime, d.confidence);
     p->people_count = std::max(p->people_count, ++count_this_frame[p->id]);
     Refuse(p);
@@ -299,6 +304,10 @@ void PeopleMap::MergeCloseSeenPeople() {
       pa.people_count = std::max(pa.people_count, pb.people_count);
       pa.confidence = std::max(pa.confidence, pb.confidence);
       pa.confirmed = pa.confirmed || pb.confirmed;
+      if (pa.anchor_node_id < 0) {
+        pa.anchor_node_id = pb.anchor_node_id;
+        pa.map_from_anchor_node = pb.map_from_anchor_node;
+      }
       pa.first_detected_utime = std::min(pa.first_detected_utime, pb.first_detected_utime);
       pa.last_detected_utime = std::max(pa.last_detected_utime, pb.last_detected_utime);
       if (!pa.has_heard && pb.has_heard) {
@@ -312,6 +321,45 @@ void PeopleMap::MergeCloseSeenPeople() {
       b = people_.erase(b);
     }
   }
+}
+
+int PeopleMap::MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_node) {
+  int moved = 0;
+  for (auto& [id, p] : people_) {
+    if (!p.has_seen || p.anchor_node_id < 0) continue;
+    const auto node = map_from_node.find(p.anchor_node_id);
+    if (node == map_from_node.end()) continue;
+    // The node's correction C = T_new T_old^-1 carries what was placed from it: x' = R x + t,
+    // P' = R P R^T; a sighting's information sums go as I' = R I R^T, (I x)' = R (I x) + I' t.
+    const common::Rigid2d correction = node->second * p.map_from_anchor_node.inverse();
+    const Eigen::Vector3d t(correction.translation().x(), correction.translation().y(), 0.0);
+    if (!t.allFinite() || !std::isfinite(correction.yaw_rad())) continue;
+    p.map_from_anchor_node = node->second;
+    if (t.norm() < 1e-9 && std::abs(correction.yaw_rad()) < 1e-12) continue;
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(correction.yaw_rad(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    p.seen_position_m = R * p.seen_position_m + t;
+    p.seen_covariance = R * p.seen_covariance * R.transpose();
+    p.settled_position_m = R * p.settled_position_m + t;
+    p.settled_covariance = R * p.settled_covariance * R.transpose();
+    p.sighting_information = R * p.sighting_information * R.transpose();
+    p.sighting_information_position =
+        R * p.sighting_information_position + p.sighting_information * t;
+    p.sighting_pose_covariance = R * p.sighting_pose_covariance * R.transpose();
+    Refuse(&p);
+    ++moved;
+  }
+  if (moved > 0) MergeCloseSeenPeople();
+  return moved;
+}
+
+std::vector<int64_t> PeopleMap::AnchorNodeIds() const {
+  std::vector<int64_t> ids;
+  for (const auto& [id, p] : people_)
+    if (p.has_seen && p.anchor_node_id >= 0) ids.push_back(p.anchor_node_id);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
 }
 
 double PeopleMap::HeardSeenMahalanobis2(const Eigen::Vector3d& seen_m,
@@ -593,6 +641,13 @@ void PeopleMap::Save(const std::string& path) const {
     n["has_heard"] = p.has_heard;
     n["heard_position_m"] = Vec(p.heard_position_m);
     n["heard_covariance"] = Mat(p.heard_covariance);
+    n["anchor_node_id"] = p.anchor_node_id;
+    YAML::Node anchor;
+    anchor.push_back(p.map_from_anchor_node.translation().x());
+    anchor.push_back(p.map_from_anchor_node.translation().y());
+    anchor.push_back(p.map_from_anchor_node.yaw_rad());
+    anchor.SetStyle(YAML::EmitterStyle::Flow);
+    n["map_from_anchor_node"] = anchor;
     root["people"].push_back(n);
   }
   for (const auto& [id, t] : source_heard_utime_) {
@@ -656,6 +711,12 @@ bool PeopleMap::Load(const std::string& path) {
       p.has_heard = n["has_heard"].as<bool>();
       p.heard_position_m = ToVec(n["heard_position_m"]);
       p.heard_covariance = ToMat(n["heard_covariance"]);
+      if (n["anchor_node_id"]) {  // optional: older state files lack it (no anchor)
+        const Eigen::Vector3d a = ToVec(n["map_from_anchor_node"]);
+        if (!a.allFinite()) throw std::runtime_error("non-finite anchor node pose");
+        p.anchor_node_id = n["anchor_node_id"].as<int64_t>();
+        p.map_from_anchor_node = common::Rigid2d(a.x(), a.y(), a.z());
+      }
       // The sightings so far are settled: a restart ends the current one.
       p.has_settled = p.has_seen;
       p.settled_position_m = p.seen_position_m;

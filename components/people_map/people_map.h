@@ -15,6 +15,10 @@
 // sound map) becomes a heard person at the source's position and covariance — the range comes
 // from the robot's motion, not from an assumed 0.95 m. A heard person and a seen person whose
 // positions agree (Mahalanobis gate in x, y) are one person with both cues.
+// SLAM corrections: a seen person hangs from the SLAM graph node of the robot pose it was first
+// seen from (the node's map pose then, T_old). When SLAM reports that node at T_new (its loop
+// closures move old nodes), the person's seen estimate moves rigidly by T_new T_old^-1, as the
+// map under it did; a heard estimate follows its sound source, which the sound map moves.
 // Confidence: each detection of confidence c_d gives c <- 1 - (1 - c)(1 - gain c_d); without
 // evidence it halves every confidence_half_life_s. A person is reported while c is at least
 // min_report_confidence, and for good once c has reached keep_confidence: a victim found stays
@@ -172,6 +176,10 @@ struct Person {
   common::Utime last_detected_utime = 0;
   std::string keyword;
   int64_t sound_source_id = -1;
+  // The SLAM node the seen estimate hangs from (-1: none, e.g. poses without a graph) and that
+  // node's map pose when the estimate was last moved with it.
+  int64_t anchor_node_id = -1;
+  common::Rigid2d map_from_anchor_node;
   // The two estimates behind the fused one.
   bool has_seen = false;
   Eigen::Vector3d seen_position_m = Eigen::Vector3d::Zero();
@@ -206,6 +214,13 @@ struct SeenTrace {
   bool made_person = false;
 };
 
+// The SLAM graph node a robot pose hangs from (pose_t::node_id) and the node's map pose as known
+// at that pose's time.
+struct PoseNode {
+  int64_t node_id = -1;  // -1: none
+  common::Rigid2d map_from_node;
+};
+
 class PeopleMap {
  public:
   explicit PeopleMap(const PeopleMapOptions& options) : options_(options) {}
@@ -216,9 +231,15 @@ class PeopleMap {
 
   // One frame of seen people. map_from_camera: camera pose at capture time;
   // pose_covariance: (x, y, yaw) covariance of the robot pose in the map.
+  // node: the SLAM node of the robot pose (a new seen person is anchored to it).
   void AddSeen(common::Utime utime, const std::vector<SeenDetection>& detections,
                const common::Rigid3d& map_from_camera, const Eigen::Matrix3d& pose_covariance,
-               const Eigen::Vector2d& robot_xy);
+               const Eigen::Vector2d& robot_xy, const PoseNode& node = {});
+  // SLAM's latest map poses of graph nodes: every seen person anchored at one of them moves by
+  // its node's correction. Returns how many people moved.
+  int MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_node);
+  // The SLAM nodes the seen people hang from, sorted (what to ask SLAM to keep and report).
+  std::vector<int64_t> AnchorNodeIds() const;
   // Heard people from one analysis block; map_from_mic: array pose at capture time.
   // Returns how many were associated with a sound source.
   int AddHeard(common::Utime utime, const std::vector<HeardDetection>& detections,

@@ -16,7 +16,9 @@ namespace {
 // Each input is ordered within its own stream: a keyword is published only after its
 // utterance has been decoded (0.1-2 s after it was said), later than the visual detections
 // of the same instant, and must not be dropped as late.
-constexpr int kSeenStream = 0, kHeardStream = 1, kSoundMapStream = 2;
+constexpr int kSeenStream = 0, kHeardStream = 1, kSoundMapStream = 2, kAnchorsStream = 3;
+// How long node ids of past poses are kept (as the pose history).
+constexpr double kPoseNodeWindowS = 60.0;
 }  // namespace
 
 sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, Utime utime) {
@@ -45,19 +47,52 @@ sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, Utime u
 PeopleMapIntake::PeopleMapIntake(const PeopleMapNodeOptions& options,
                                  const common::Rigid3d& base_from_camera,
                                  const common::Rigid3d& base_from_mic, PeopleMap* map,
-                                 std::function<void(Utime)> on_applied)
+                                 std::function<void(Utime)> on_applied, Request request)
     : options_(options),
       base_from_camera_(base_from_camera),
       base_from_mic_(base_from_mic),
       map_(map),
       on_applied_(std::move(on_applied)),
-      poses_(common::SecondsToUtime(60.0), common::SecondsToUtime(options.max_pose_gap_s)),
+      request_(std::move(request)),
+      poses_(common::SecondsToUtime(kPoseNodeWindowS),
+             common::SecondsToUtime(options.max_pose_gap_s)),
       queue_(common::SecondsToUtime(options.reorder_delay_s)) {}
 
 void PeopleMapIntake::Applied(Utime utime) {
   latest_utime_ = std::max(latest_utime_, utime);
   dirty_ = true;
+  RequestIfAnchorsChanged();
   if (on_applied_) on_applied_(latest_utime_);
+}
+
+void PeopleMapIntake::SendRequest(Utime utime) {
+  sarmap::slam_anchor_request_t req{};
+  req.header.utime = utime;
+  req.header.frame = "map";
+  req.client_id = options_.client_id;
+  req.node_ids = map_->AnchorNodeIds();
+  req.num_node_ids = static_cast<int32_t>(req.node_ids.size());
+  requested_anchors_ = req.node_ids;
+  if (request_) request_(req);
+}
+
+void PeopleMapIntake::RequestIfAnchorsChanged() {
+  if (map_->AnchorNodeIds() != requested_anchors_) SendRequest(latest_utime_);
+}
+
+PoseNode PeopleMapIntake::NodeAt(Utime utime) const {
+  // The last node change at or before `utime`.
+  auto it =
+      std::upper_bound(pose_nodes_.begin(), pose_nodes_.end(), utime,
+                       [](Utime t, const std::pair<Utime, int64_t>& e) { return t < e.first; });
+  PoseNode node;
+  if (it == pose_nodes_.begin()) return node;
+  const int64_t id = std::prev(it)->second;
+  const auto pose = node_poses_.find(id);
+  if (id < 0 || pose == node_poses_.end()) return node;
+  node.node_id = id;
+  node.map_from_node = pose->second;
+  return node;
 }
 
 std::optional<common::StampedPose> PeopleMapIntake::PoseAt(Utime utime) {
@@ -121,6 +156,28 @@ void PeopleMapIntake::OnPose(const sarmap::pose_t& m) {
   p.pose = common::ToRigid3d(m.position_m, m.orientation);
   p.covariance = common::ToCovariance6(m.covariance);
   poses_.Add(p);
+  if (m.node_id >= 0 && (pose_nodes_.empty() || pose_nodes_.back().second != m.node_id) &&
+      (pose_nodes_.empty() || p.utime > pose_nodes_.back().first)) {
+    pose_nodes_.emplace_back(p.utime, m.node_id);
+    // A node's own scan gives its pose until SLAM reports it.
+    node_poses_.emplace(m.node_id, p.pose.ToRigid2d());
+    const Utime keep_after = p.utime - common::SecondsToUtime(kPoseNodeWindowS);
+    while (pose_nodes_.size() > 1 && pose_nodes_[1].first <= keep_after) pose_nodes_.pop_front();
+    // Node poses still needed: the recent poses' nodes and the people's anchors.
+    if (node_poses_.size() > 2 * pose_nodes_.size() + 64) {
+      const std::vector<int64_t> anchors = map_->AnchorNodeIds();
+      for (auto it = node_poses_.begin(); it != node_poses_.end();) {
+        const int64_t id = it->first;
+        const bool recent = std::any_of(pose_nodes_.begin(), pose_nodes_.end(),
+                                        [id](const auto& e) { return e.second == id; });
+        if (recent || std::binary_search(anchors.begin(), anchors.end(), id)) {
+          ++it;
+        } else {
+          it = node_poses_.erase(it);
+        }
+      }
+    }
+  }
   newest_input_utime_ = std::max(newest_input_utime_, p.utime);
   // POSE is the one input that never stops (detections do when nobody is in view; the sound
   // map publishes 3 s late): it moves the queue's clock.
@@ -151,7 +208,7 @@ void PeopleMapIntake::OnSeen(const sarmap::people_detections_t& m) {
           if (auto pose = PoseAt(utime)) {
             const Eigen::Matrix3d planar = common::PlanarCovariance(pose->covariance);
             map_->AddSeen(utime, seen, pose->pose * base_from_camera_, planar,
-                          pose->pose.translation().head<2>());
+                          pose->pose.translation().head<2>(), NodeAt(utime));
           }
         });
       },
@@ -202,6 +259,33 @@ void PeopleMapIntake::OnSoundMap(const sarmap::sound_map_t& m) {
   queue_.Push(
       utime, [this, utime, sources] { map_->UpdateSoundSources(utime, sources); }, kSoundMapStream);
   Release();
+}
+
+bool PeopleMapIntake::OnAnchors(const sarmap::slam_anchors_t& m) {
+  std::map<int64_t, common::Rigid2d> nodes;
+  auto add = [&nodes](const sarmap::slam_anchor_t& a) {
+    if (a.node_id < 0) return true;
+    if (!std::isfinite(a.x_m) || !std::isfinite(a.y_m) || !std::isfinite(a.yaw_rad)) return false;
+    nodes[a.node_id] = common::Rigid2d(a.x_m, a.y_m, a.yaw_rad);
+    return true;
+  };
+  if (!add(m.current)) return false;
+  for (const auto& a : m.anchors)
+    if (!add(a)) return false;
+  if (nodes.empty()) return true;
+  const Utime utime = m.header.utime;
+  queue_.Push(
+      utime,
+      [this, nodes] {
+        for (const auto& [id, pose] : nodes) {
+          auto known = node_poses_.find(id);
+          if (known != node_poses_.end()) known->second = pose;
+        }
+        map_->MoveWithNodes(nodes);
+      },
+      kAnchorsStream);
+  Release();
+  return true;
 }
 
 }  // namespace people_map

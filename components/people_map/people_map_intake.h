@@ -1,10 +1,13 @@
 #pragma once
 // What sarmap-people-map does with its inputs, without the transport: PEOPLE_VISUAL,
-// PEOPLE_AUDIO, SOUND_MAP and POSE messages go through a time-ordered queue and are applied to
-// the PeopleMap in capture-time order, each detection with the robot pose interpolated at its
-// capture time (a detection newer than the latest pose waits for a later pose, at most
-// pose_wait_s). The node (PeopleMapNode, people_map_node.h) gates the stamps, saves the state and publishes;
-// the in-process mission (components/mission) feeds the same class directly.
+// PEOPLE_AUDIO, SOUND_MAP, SLAM_ANCHORS and POSE messages go through a time-ordered queue and
+// are applied to the PeopleMap in capture-time order, each detection with the robot pose
+// interpolated at its capture time (a detection newer than the latest pose waits for a later
+// pose, at most pose_wait_s). Seen people hang from the SLAM node of the pose they were first
+// seen from: the intake asks SLAM to keep those nodes (SLAM_ANCHOR_REQUEST) and moves the people
+// with the node poses SLAM_ANCHORS reports. The node (PeopleMapNode, people_map_node.h) gates the
+// stamps, saves the state and publishes; the in-process mission (components/mission) feeds the same
+// class directly.
 
 #include <deque>
 #include <functional>
@@ -22,6 +25,8 @@
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/people_map_t.hpp"
 #include "sarmap/pose_t.hpp"
+#include "sarmap/slam_anchor_request_t.hpp"
+#include "sarmap/slam_anchors_t.hpp"
 #include "sarmap/sound_map_t.hpp"
 
 namespace sarmap {
@@ -44,6 +49,10 @@ struct PeopleMapNodeOptions {
   std::string audio_channel = "PEOPLE_AUDIO";
   std::string sound_map_channel = "SOUND_MAP";
   std::string pose_channel = "POSE";
+  std::string anchors_channel = "SLAM_ANCHORS";
+  std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
+  std::string client_id = "sarmap-people-map";
+  double request_repeat_s = 5.0;
   std::string output_channel = "PEOPLE_MAP";
   common::StampGateOptions stamp_gate;
   PeopleMapOptions map;
@@ -63,6 +72,13 @@ struct PeopleMapNodeOptions {
     v("audio_channel", audio_channel, "people heard");
     v("sound_map_channel", sound_map_channel, "sound-source map");
     v("pose_channel", pose_channel, "robot pose in the map");
+    v("anchors_channel", anchors_channel,
+      "SLAM's node poses after each optimisation: seen people move with their node");
+    v("anchor_request_channel", anchor_request_channel,
+      "the SLAM nodes seen people hang from are asked for here");
+    v("client_id", client_id, "client id in SLAM_ANCHOR_REQUEST");
+    v("request_repeat_s", request_repeat_s,
+      "re-send the anchor request this often (wall clock; 0: only on change)");
     v("output_channel", output_channel, "the people map");
     v("stamp_gate", stamp_gate,
       "inputs stamped far from their stream's clock are dropped and counted, never adopted");
@@ -74,6 +90,7 @@ struct PeopleMapNodeOptions {
     check.NonNegative("reorder_delay_s", reorder_delay_s);
     check.Positive("max_pose_gap_s", max_pose_gap_s);
     check.NonNegative("pose_wait_s", pose_wait_s);
+    check.NonNegative("request_repeat_s", request_repeat_s);
   }
 };
 
@@ -82,16 +99,23 @@ sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, common:
 
 class PeopleMapIntake {
  public:
+  using Request = std::function<void(sarmap::slam_anchor_request_t&)>;
   // `map` must outlive the intake. `on_applied(utime)` is called after each input that changed
-  // the map (the node publishes PEOPLE_MAP there), with the newest applied input's utime.
+  // the map (the node publishes PEOPLE_MAP there), with the newest applied input's utime;
+  // `request` whenever the SLAM nodes the seen people hang from change.
   PeopleMapIntake(const PeopleMapNodeOptions& options, const common::Rigid3d& base_from_camera,
                   const common::Rigid3d& base_from_mic, PeopleMap* map,
-                  std::function<void(common::Utime latest_utime)> on_applied = nullptr);
+                  std::function<void(common::Utime latest_utime)> on_applied = nullptr,
+                  Request request = nullptr);
 
   void OnPose(const sarmap::pose_t& m);
   void OnSeen(const sarmap::people_detections_t& m);   // PEOPLE_VISUAL
   void OnHeard(const sarmap::people_detections_t& m);  // PEOPLE_AUDIO
   void OnSoundMap(const sarmap::sound_map_t& m);
+  // False (dropped) when a node pose is not finite.
+  bool OnAnchors(const sarmap::slam_anchors_t& m);
+  // The anchor request for the map's current anchor nodes, stamped `utime`.
+  void SendRequest(common::Utime utime);
   // Applies what is due (the node's timer calls it between inputs).
   void Release();
   // No more inputs: everything queued is applied (without on_applied), detections still waiting
@@ -113,12 +137,23 @@ class PeopleMapIntake {
   std::optional<common::StampedPose> PoseAt(common::Utime utime);
   void PlaceWaiting(bool final);
   void WhenPosed(common::Utime utime, std::function<void()> place);
+  // The SLAM node of the pose at `utime` and that node's latest known map pose (node -1 when
+  // unknown).
+  PoseNode NodeAt(common::Utime utime) const;
+  void RequestIfAnchorsChanged();
 
   PeopleMapNodeOptions options_;
   common::Rigid3d base_from_camera_, base_from_mic_;
   PeopleMap* map_;
   std::function<void(common::Utime)> on_applied_;
+  Request request_;
   common::PoseHistory poses_;
+  // The node id of each POSE where it changed (the last pose_history window), and the latest
+  // known map pose of the nodes in it and of the anchors: a node's first pose (the scan that
+  // made it) until SLAM_ANCHORS reports it.
+  std::deque<std::pair<common::Utime, int64_t>> pose_nodes_;
+  std::map<int64_t, common::Rigid2d> node_poses_;
+  std::vector<int64_t> requested_anchors_;
   common::TimeOrderedQueue<std::function<void()>> queue_;
   // Detections released from the queue before a pose at or after their time arrived, oldest
   // first: placed as soon as POSE catches up, or after pose_wait_s.

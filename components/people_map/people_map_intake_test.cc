@@ -23,15 +23,17 @@ struct Fixture {
   PeopleMap map{PeopleMapOptions()};
   int applied = 0;
   Utime last_applied = 0;
+  std::vector<sarmap::slam_anchor_request_t> requests;
   std::unique_ptr<PeopleMapIntake> intake;
   Fixture() {
     const common::RobotOptions robot;
-    intake = std::make_unique<PeopleMapIntake>(options, robot.base_from_camera.ToRigid3d(),
-                                               robot.base_from_mic_array.ToRigid3d(), &map,
-                                               [this](Utime u) {
-                                                 ++applied;
-                                                 last_applied = u;
-                                               });
+    intake = std::make_unique<PeopleMapIntake>(
+        options, robot.base_from_camera.ToRigid3d(), robot.base_from_mic_array.ToRigid3d(), &map,
+        [this](Utime u) {
+          ++applied;
+          last_applied = u;
+        },
+        [this](sarmap::slam_anchor_request_t& r) { requests.push_back(r); });
   }
   double camera_ahead_m() const {
     return common::RobotOptions().base_from_camera.ToRigid3d().translation().x();
@@ -75,6 +77,46 @@ TEST(PeopleMapIntakeTest, FinishDropsWhatStillWaitsForAPose) {
   f.intake->Finish();
   EXPECT_TRUE(f.map.people().empty());
   EXPECT_EQ(f.intake->without_pose(), 1);
+}
+
+TEST(PeopleMapIntakeTest, ASeenPersonHangsFromItsSlamNodeAndFollowsItsCorrection) {
+  Fixture f;
+  // Node 3 is made by the scan at 1 s (x = 0); node 4 by the scan at 2 s (x = 1).
+  for (Utime u = 1'000'000; u <= 3'000'000; u += 100'000) {
+    pose_t m = Pose(u, 1e-6 * static_cast<double>(u - 1'000'000));
+    m.node_id = u < 2'000'000 ? 3 : 4;
+    f.intake->OnPose(m);
+    if (u == 1'500'000) f.intake->OnSeen(Seen(u, 2.0));  // seen from x = 0.5, node 3
+  }
+  ASSERT_EQ(f.map.people().size(), 1u);
+  const Person& p = f.map.people().begin()->second;
+  EXPECT_EQ(p.anchor_node_id, 3);
+  // SLAM is asked to keep node 3, with the client id.
+  ASSERT_FALSE(f.requests.empty());
+  EXPECT_EQ(f.requests.back().node_ids, std::vector<int64_t>{3});
+  EXPECT_EQ(f.requests.back().num_node_ids, 1);
+  EXPECT_EQ(f.requests.back().client_id, f.options.client_id);
+  const Eigen::Vector3d before = p.position_m;
+  // An optimisation moves node 3 by +0.4 m in y (its first pose was (0, 0, 0)).
+  sarmap::slam_anchors_t a{};
+  a.header.utime = 3'000'000;
+  a.current.node_id = 4;
+  a.current.x_m = 1.0;
+  sarmap::slam_anchor_t n3{};
+  n3.node_id = 3;
+  n3.y_m = 0.4;
+  a.anchors.push_back(n3);
+  a.num_anchors = 1;
+  ASSERT_TRUE(f.intake->OnAnchors(a));
+  f.intake->Finish();
+  EXPECT_NEAR(p.position_m.x(), before.x(), 1e-9);
+  EXPECT_NEAR(p.position_m.y(), before.y() + 0.4, 1e-9);
+  // A node pose that is not finite is refused and moves nobody.
+  n3.y_m = NAN;
+  a.anchors[0] = n3;
+  EXPECT_FALSE(f.intake->OnAnchors(a));
+  f.intake->Finish();
+  EXPECT_NEAR(p.position_m.y(), before.y() + 0.4, 1e-9);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@ PeopleMapNode::PeopleMapNode(const PeopleMapNodeOptions& options, common::Node* 
       node_(node),
       map_(options.map),
       publisher_(node->Advertise<people_map_t>(options.output_channel)),
+      request_pub_(node->Advertise<slam_anchor_request_t>(options.anchor_request_channel)),
       gates_(options.stamp_gate) {
   const common::RobotOptions robot = common::LoadRobot(options_.robot_config);
   if (!options_.state_file.empty()) {
@@ -31,9 +32,10 @@ PeopleMapNode::PeopleMapNode(const PeopleMapNodeOptions& options, common::Node* 
                         << (aside.empty() ? "" : " (moved to " + aside + ")");
     }
   }
-  intake_ = std::make_unique<PeopleMapIntake>(options_, robot.base_from_camera.ToRigid3d(),
-                                              robot.base_from_mic_array.ToRigid3d(), &map_,
-                                              [this](common::Utime utime) { Publish(utime); });
+  intake_ = std::make_unique<PeopleMapIntake>(
+      options_, robot.base_from_camera.ToRigid3d(), robot.base_from_mic_array.ToRigid3d(), &map_,
+      [this](common::Utime utime) { Publish(utime); },
+      [this](slam_anchor_request_t& r) { request_pub_.Publish(&r); });
   // After a restart from saved state, the people already found are published at once (at the
   // time of their last detection), not only after the next detection: the operator and the
   // recorder never see the map lose them.
@@ -60,6 +62,18 @@ PeopleMapNode::PeopleMapNode(const PeopleMapNodeOptions& options, common::Node* 
                                  if (StampOk(kSoundMapGate, m.header.utime, info))
                                    intake_->OnSoundMap(m);
                                });
+  node->Subscribe<slam_anchors_t>(options_.anchors_channel,
+                                  [this](const slam_anchors_t& m, const auto& info) {
+                                    if (!StampOk(kAnchorsGate, m.header.utime, info)) return;
+                                    if (!intake_->OnAnchors(m))
+                                      node_->Reject(info.channel, "a node pose is not finite");
+                                  });
+  // SLAM forgets a client that stays silent (anchor_client_timeout_s): the request is repeated.
+  if (options_.request_repeat_s > 0) {
+    node->AddTimer(options_.request_repeat_s, [this] {
+      if (!map_.AnchorNodeIds().empty()) intake_->SendRequest(intake_->latest_utime());
+    });
+  }
   node->AddTimer(options_.publish_period_s, [this] { OnTimer(); });
   node->AddTimer(options_.save_period_s, [this] { Save(); });
 }

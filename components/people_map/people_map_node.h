@@ -1,9 +1,9 @@
 #pragma once
-// PeopleMapNode: the LCM adapter of the people map. PEOPLE_VISUAL, PEOPLE_AUDIO, SOUND_MAP and
-// POSE in; PEOPLE_MAP out. Each input stream is gated on its own clock (common/stamp_gate.h),
-// then PeopleMapIntake applies the inputs in capture-time order with the robot pose
-// interpolated at each detection's capture time, so replaying a log gives the same people map
-// every time. The state is saved crash-safe and resumed after a restart.
+// PeopleMapNode: the LCM adapter of the people map. PEOPLE_VISUAL, PEOPLE_AUDIO, SOUND_MAP,
+// SLAM_ANCHORS and POSE in; PEOPLE_MAP and SLAM_ANCHOR_REQUEST out. Each input stream is gated on
+// its own clock (common/stamp_gate.h), then PeopleMapIntake applies the inputs in capture-time
+// order with the robot pose interpolated at each detection's capture time, so replaying a log gives
+// the same people map every time. The state is saved crash-safe and resumed after a restart.
 
 #include <memory>
 
@@ -31,7 +31,7 @@ class PeopleMapNode {
   const PeopleMapIntake& intake() const { return *intake_; }
 
  private:
-  enum Gate { kPoseGate = 0, kSeenGate = 1, kHeardGate = 2, kSoundMapGate = 3 };
+  enum Gate { kPoseGate = 0, kSeenGate = 1, kHeardGate = 2, kSoundMapGate = 3, kAnchorsGate = 4 };
 
   bool StampOk(Gate gate, common::Utime utime, const common::ReceiveInfo& info);
   void Publish(common::Utime utime);
@@ -42,6 +42,7 @@ class PeopleMapNode {
   common::Node* node_;
   PeopleMap map_;
   common::Node::Publisher<people_map_t> publisher_;
+  common::Node::Publisher<slam_anchor_request_t> request_pub_;
   common::StampGates gates_;
   std::unique_ptr<PeopleMapIntake> intake_;
 };

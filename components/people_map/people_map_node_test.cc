@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -103,6 +104,48 @@ TEST(PeopleMapNodeTest, AStampFarAheadIsRejectedAndMovesNothing) {
   ASSERT_EQ(adapter.map().people().size(), 1u);
   EXPECT_NEAR(adapter.map().people().begin()->second.position_m.x(), 0.05 + CameraAheadM() + 2.0,
               1e-6);
+}
+
+TEST(PeopleMapNodeTest, AsksSlamForTheNodeOfASeenPersonAndMovesThemWithIt) {
+  Bus bus;
+  std::vector<slam_anchor_request_t> requests;
+  bus.node.Subscribe<slam_anchor_request_t>(
+      "SLAM_ANCHOR_REQUEST",
+      [&requests](const slam_anchor_request_t& m, const auto&) { requests.push_back(m); });
+  auto anchors_pub = bus.node.Advertise<slam_anchors_t>("SLAM_ANCHORS");
+  PeopleMapNode adapter(FastOptions(), &bus.node);
+  for (Utime u = 1'000'000; u <= 2'000'000; u += 100'000) {
+    auto pose = Pose(u, 0.0);
+    pose.node_id = 11;
+    bus.pose_pub.Publish(&pose);
+    if (u == 1'200'000) {
+      auto seen = Seen(u, 2.0);
+      bus.seen_pub.Publish(&seen);
+    }
+  }
+  ASSERT_TRUE(bus.SpinUntil([&] { return !requests.empty(); }, 5.0));
+  EXPECT_EQ(requests.back().client_id, "sarmap-people-map");
+  EXPECT_EQ(requests.back().node_ids, std::vector<int64_t>{11});
+  // SLAM moves node 11 by 0.3 m along x: so does the person.
+  slam_anchors_t a{};
+  a.header.utime = 2'000'000;
+  a.current.node_id = 11;
+  a.current.x_m = 0.3;
+  a.covariance_dim = 3;  // [current] only
+  a.covariance.assign(3, std::vector<double>(3, 0.0));
+  for (int i = 0; i < 3; ++i) a.covariance[i][i] = 1e-4;
+  anchors_pub.Publish(&a);
+  auto later = Pose(3'000'000, 0.3);
+  later.node_id = 12;
+  bus.pose_pub.Publish(&later);
+  ASSERT_TRUE(bus.SpinUntil(
+      [&] {
+        return !bus.maps.empty() && bus.maps.back().num_people == 1 &&
+               std::abs(bus.maps.back().people[0].position_m[0] - (0.3 + CameraAheadM() + 2.0)) <
+                   1e-6;
+      },
+      5.0));
+  EXPECT_EQ(bus.node.stats().at("SLAM_ANCHORS").dropped_malformed, 0);
 }
 
 TEST(PeopleMapNodeTest, ARestartedNodePublishesThePeopleItSavedAtOnce) {

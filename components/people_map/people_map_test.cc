@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <fstream>
 #include <sstream>
 
@@ -683,11 +684,51 @@ TEST(PeopleMapTest, AMergedDuplicateSourceStaysMergedAfterARestart) {
   }
 }
 
+TEST(PeopleMapTest, ASeenPersonMovesWithTheSlamNodeItWasSeenFrom) {
+  PeopleMap map{PeopleMapOptions()};
+  // Seen from node 7 (at the robot's pose then), 3 m ahead; a second person from no node.
+  const Rigid2d pose(1.0, 2.0, 0.0);
+  const PoseNode node7{7, pose};
+  map.AddSeen(1'000'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+              pose.translation(), node7);
+  map.AddSeen(1'000'000, {PersonAhead(3.0, 3.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+              pose.translation());
+  ASSERT_EQ(map.people().size(), 2u);
+  EXPECT_EQ(map.AnchorNodeIds(), std::vector<int64_t>{7});
+  const Eigen::Vector3d before = map.people().at(1).position_m;
+  const Eigen::Vector3d other = map.people().at(2).position_m;
+  // A loop closure moves node 7 by 0.5 m and 10 deg: the person stays where the node sees them,
+  // node_new * node_old^-1 * before; nodes the map does not hang from change nothing.
+  const Rigid2d moved(1.3, 1.6, 10.0 * M_PI / 180);
+  EXPECT_EQ(map.MoveWithNodes({{7, moved}, {8, Rigid2d(5, 5, 1)}}), 1);
+  const Eigen::Vector2d expected = moved * (pose.inverse() * Eigen::Vector2d(before.head<2>()));
+  const Person& p = map.people().at(1);
+  EXPECT_NEAR((p.position_m.head<2>() - expected).norm(), 0, 1e-9);
+  EXPECT_NEAR(p.position_m.z(), before.z(), 1e-12);
+  EXPECT_NEAR((map.people().at(2).position_m - other).norm(), 0, 1e-12);
+  // The covariance turns with the node: the long axis (along the camera's view, +x) by 10 deg.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(p.covariance.topLeftCorner<2, 2>());
+  const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+  EXPECT_NEAR(std::abs(std::atan2(axis.y(), axis.x())), 10.0 * M_PI / 180, 1e-6);
+  // The same node reported again does not move the person twice.
+  EXPECT_EQ(map.MoveWithNodes({{7, moved}}), 0);
+  EXPECT_NEAR((map.people().at(1).position_m.head<2>() - expected).norm(), 0, 1e-9);
+  // A detection of the same track after the correction lands in the corrected frame and
+  // joins the person there.
+  SeenDetection again = PersonAhead(0, 0);
+  again.position_camera_m = MapFromCamera(moved).inverse() * p.position_m;
+  map.AddSeen(2'000'000, {again}, MapFromCamera(moved), Eigen::Matrix3d::Zero(),
+              moved.translation(), PoseNode{9, moved});
+  EXPECT_EQ(map.people().at(1).num_detections, 2);
+  EXPECT_NEAR((map.people().at(1).position_m.head<2>() - expected).norm(), 0, 1e-6);
+  EXPECT_EQ(map.people().at(1).anchor_node_id, 7);  // the first sighting's node stays
+}
+
 TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0.5, 0.2, 0.3);
   map.AddSeen(5'000'000, {PersonAhead(2.0, 0.0), PersonAhead(3.0, 1.0)}, MapFromCamera(pose),
-              Eigen::Matrix3d::Zero(), pose.translation());
+              Eigen::Matrix3d::Zero(), pose.translation(), PoseNode{42, Rigid2d(0.4, 0.1, 0.2)});
   for (int i = 1; i <= 3; ++i) {  // the first one seen until sure
     map.AddSeen(5'000'000 + i * 100'000, {PersonAhead(2.0, 0.0)}, MapFromCamera(pose),
                 Eigen::Matrix3d::Zero(), pose.translation());
@@ -703,7 +744,11 @@ TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
     EXPECT_NEAR((back.people().at(id).position_m - p.position_m).norm(), 0, 1e-9);
     EXPECT_EQ(back.people().at(id).num_detections, p.num_detections);
     EXPECT_EQ(back.people().at(id).confirmed, p.confirmed);
+    EXPECT_EQ(back.people().at(id).anchor_node_id, 42);
   }
+  // The anchor node's pose came back too: the node reported where it was moves nobody.
+  EXPECT_EQ(back.MoveWithNodes({{42, Rigid2d(0.4, 0.1, 0.2)}}), 0);
+  EXPECT_EQ(back.MoveWithNodes({{42, Rigid2d(0.5, 0.1, 0.2)}}), 2);
   // New people continue the id sequence.
   back.AddSeen(6'000'000, {PersonAhead(2.0, -3.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
                pose.translation());

@@ -1,8 +1,9 @@
 // sarmap-log-people-map: replays the people map's inputs from an LCM log (PEOPLE_VISUAL, POSE,
-// PEOPLE_AUDIO, SOUND_MAP, as `sarmap-mission-bench --people-log` writes them) through
-// sarmap-people-map's own adapter (PeopleMapNode) on the log's clock (logtools::NodeReplay), as
-// fast as the CPU allows; with SIM_TRUTH in the log it compares each person on the map with the
-// true people, and traces, detection by detection, what moved the estimate near one true person.
+// PEOPLE_AUDIO, SOUND_MAP, SLAM_ANCHORS, as `sarmap-mission-bench --people-log` writes them)
+// through sarmap-people-map's own adapter (PeopleMapNode) on the log's clock
+// (logtools::NodeReplay), as fast as the CPU allows; with SIM_TRUTH in the log it compares each
+// person on the map with the true people, and traces, detection by detection, what moved the
+// estimate near one true person.
 //
 //   sarmap-log people-map site-3-frontier-people.lcmlog
 //   sarmap-log people-map site-3-frontier-people.lcmlog --trace person6
@@ -65,8 +66,9 @@ int main(int argc, char** argv) {
     using namespace sarmap;
     common::ArgParser parser(
         "sarmap-log-people-map",
-        "Replays PEOPLE_VISUAL, POSE, PEOPLE_AUDIO and SOUND_MAP from an LCM log through the\n"
-        "people map (as sarmap-people-map would) and compares the result with SIM_TRUTH.");
+        "Replays PEOPLE_VISUAL, POSE, PEOPLE_AUDIO, SOUND_MAP and SLAM_ANCHORS from an LCM log\n"
+        "through the people map (as sarmap-people-map would) and compares the result with "
+        "SIM_TRUTH.");
     std::string log_path, trace;
     bool truth_poses = false;
     double match_m = 0.5;
@@ -75,13 +77,13 @@ int main(int argc, char** argv) {
                    "a true person's name: every detection placed within 1.5 m of them (where "
                    "POSE and the true pose put it, and the person it updated)");
     parser.AddSwitch("--truth-poses", &truth_poses,
-                     "place every detection with the simulator's true pose instead of POSE");
+                     "place every detection with the simulator's true pose instead of POSE "
+                     "(SLAM_ANCHORS then ignored)");
     parser.AddFlag("--match-m", &match_m, "a map person this close to a true person is found");
     std::string final_trail;
     parser.AddFlag("--final-trail", &final_trail,
                    "the bench's OUT/<site>-<mode>-trail.csv: every POSE is moved by the correction "
-                   "SLAM's final graph made at its time (what people anchored to SLAM's nodes "
-                   "would get)");
+                   "SLAM's final graph made at its time (SLAM_ANCHORS then ignored)");
     std::string sound_map_log;
     parser.AddFlag("--sound-map", &sound_map_log,
                    "take SOUND_MAP from this LCM log instead of the replayed log's own (e.g. "
@@ -199,7 +201,9 @@ int main(int argc, char** argv) {
           s.made_person ? " (new)" : "", (now - t).norm(), trace.c_str(), (z_truth - t).norm());
     });
 
-    int64_t seen_msgs = 0, heard_msgs = 0, poses = 0, sound_map_msgs = 0;
+    int64_t seen_msgs = 0, heard_msgs = 0, poses = 0, sound_map_msgs = 0, anchor_msgs = 0;
+    // With poses replaced, SLAM's node poses would move people placed from other poses.
+    const bool use_anchors = !truth_poses && corrections.empty();
     const Utime t0 = trail.map_from_base.empty() ? 0 : trail.map_from_base.begin()->first;
     // SOUND_MAP from another log: each of its events goes in before the first event of the
     // replayed log that is not earlier.
@@ -227,6 +231,9 @@ int main(int argc, char** argv) {
         ++sound_map_msgs;
       } else if (e->channel == options.audio_channel) {
         ++heard_msgs;
+      } else if (e->channel == options.anchors_channel) {
+        if (!use_anchors) return false;
+        ++anchor_msgs;
       } else if (e->channel == options.pose_channel) {
         ++poses;
         if (!truth_poses && corrections.empty()) return true;
@@ -248,7 +255,8 @@ int main(int argc, char** argv) {
         m.encode(e->data.data(), 0, static_cast<int>(e->data.size()));
       }
       return e->channel == options.pose_channel || e->channel == options.visual_channel ||
-             e->channel == options.audio_channel || e->channel == options.sound_map_channel;
+             e->channel == options.audio_channel || e->channel == options.sound_map_channel ||
+             e->channel == options.anchors_channel;
     });
     people_map_node.Finish();
     replay.Drain();
@@ -266,14 +274,14 @@ int main(int argc, char** argv) {
     const Utime end = intake.latest_utime();
     const std::vector<people_map::Person> report = map.Report(end);
     std::printf(
-        "%ld PEOPLE_VISUAL, %ld POSE%s, %ld SOUND_MAP%s; %zu people on the map, %ld detections "
-        "without a pose\n",
+        "%ld PEOPLE_VISUAL, %ld POSE%s, %ld SOUND_MAP%s, %ld SLAM_ANCHORS; %zu people on the "
+        "map, %ld detections without a pose\n",
         static_cast<long>(seen_msgs), static_cast<long>(poses),
         truth_poses           ? " (true poses)"
         : corrections.empty() ? ""
                               : " (moved by the final graph)",
         static_cast<long>(sound_map_msgs), sound_maps ? (" from " + sound_map_log).c_str() : "",
-        report.size(), static_cast<long>(intake.without_pose()));
+        static_cast<long>(anchor_msgs), report.size(), static_cast<long>(intake.without_pose()));
     // One-to-one, closest pairs first, as the mission metrics match.
     struct Pair {
       double d;
