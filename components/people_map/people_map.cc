@@ -362,6 +362,10 @@ std::vector<int64_t> PeopleMap::AnchorNodeIds() const {
   return ids;
 }
 
+void PeopleMap::ForgetAnchors() {
+  for (auto& [id, p] : people_) p.anchor_node_id = -1;
+}
+
 double PeopleMap::HeardSeenMahalanobis2(const Eigen::Vector3d& seen_m,
                                         const Eigen::Matrix3d& seen_covariance,
                                         const Eigen::Vector3d& heard_m,

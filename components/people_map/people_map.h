@@ -240,6 +240,9 @@ class PeopleMap {
   int MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_node);
   // The SLAM nodes the seen people hang from, sorted (what to ask SLAM to keep and report).
   std::vector<int64_t> AnchorNodeIds() const;
+  // SLAM started a new graph (its node ids began again): the people stay where they are and
+  // hang from no node until seen again.
+  void ForgetAnchors();
   // Heard people from one analysis block; map_from_mic: array pose at capture time.
   // Returns how many were associated with a sound source.
   int AddHeard(common::Utime utime, const std::vector<HeardDetection>& detections,

@@ -156,6 +156,26 @@ void PeopleMapIntake::OnPose(const sarmap::pose_t& m) {
   p.pose = common::ToRigid3d(m.position_m, m.orientation);
   p.covariance = common::ToCovariance6(m.covariance);
   poses_.Add(p);
+  if (m.node_id >= 0 && p.utime > newest_pose_utime_ && m.node_id < newest_node_id_) {
+    // A SLAM restarted without its state numbers its nodes from 0 again: the ids the people
+    // hang from now name other nodes. People stay where they are, anchored afresh when seen.
+    ++slam_restarts_;
+    SARMAP_LOG(WARN) << "POSE node id went back from " << newest_node_id_ << " to " << m.node_id
+                     << " (SLAM restarted with a new graph): people no longer move with SLAM "
+                        "nodes seen before";
+    // The node bookkeeping starts again now (the new graph's nodes come from here on); the map
+    // forgets its anchors in time order, after the detections and SLAM_ANCHORS of the old graph.
+    pose_nodes_.clear();
+    node_poses_.clear();
+    ++graph_epoch_;
+    queue_.Push(
+        p.utime, [this] { map_->ForgetAnchors(); }, kAnchorsStream);
+    newest_node_id_ = m.node_id;
+  }
+  if (p.utime > newest_pose_utime_) {
+    newest_pose_utime_ = p.utime;
+    if (m.node_id >= 0) newest_node_id_ = std::max(newest_node_id_, m.node_id);
+  }
   if (m.node_id >= 0 && (pose_nodes_.empty() || pose_nodes_.back().second != m.node_id) &&
       (pose_nodes_.empty() || p.utime > pose_nodes_.back().first)) {
     pose_nodes_.emplace_back(p.utime, m.node_id);
@@ -274,12 +294,16 @@ bool PeopleMapIntake::OnAnchors(const sarmap::slam_anchors_t& m) {
     if (!add(a)) return false;
   if (nodes.empty()) return true;
   const Utime utime = m.header.utime;
+  const int64_t epoch = graph_epoch_;
   queue_.Push(
       utime,
-      [this, nodes] {
-        for (const auto& [id, pose] : nodes) {
-          auto known = node_poses_.find(id);
-          if (known != node_poses_.end()) known->second = pose;
+      [this, nodes, epoch] {
+        // The node poses of a graph SLAM has since restarted from would name the new graph's.
+        if (epoch == graph_epoch_) {
+          for (const auto& [id, pose] : nodes) {
+            auto known = node_poses_.find(id);
+            if (known != node_poses_.end()) known->second = pose;
+          }
         }
         map_->MoveWithNodes(nodes);
       },

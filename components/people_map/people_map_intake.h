@@ -131,6 +131,8 @@ class PeopleMapIntake {
   void clear_dirty() { dirty_ = false; }
   int64_t without_pose() const { return without_pose_; }
   int64_t dropped_late() const { return queue_.dropped_late(); }
+  // POSEs whose node ids began again (SLAM restarted without its state): anchors forgotten.
+  int64_t slam_restarts() const { return slam_restarts_; }
 
  private:
   void Applied(common::Utime utime);
@@ -154,6 +156,11 @@ class PeopleMapIntake {
   std::deque<std::pair<common::Utime, int64_t>> pose_nodes_;
   std::map<int64_t, common::Rigid2d> node_poses_;
   std::vector<int64_t> requested_anchors_;
+  // The newest POSE's time and node id: a newer POSE with a smaller node id is a new SLAM graph.
+  common::Utime newest_pose_utime_ = INT64_MIN;
+  int64_t newest_node_id_ = -1;
+  int64_t slam_restarts_ = 0;
+  int64_t graph_epoch_ = 0;  // counts SLAM restarts; node ids are only compared within one
   common::TimeOrderedQueue<std::function<void()>> queue_;
   // Detections released from the queue before a pose at or after their time arrived, oldest
   // first: placed as soon as POSE catches up, or after pose_wait_s.

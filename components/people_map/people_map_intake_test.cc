@@ -119,6 +119,37 @@ TEST(PeopleMapIntakeTest, ASeenPersonHangsFromItsSlamNodeAndFollowsItsCorrection
   EXPECT_NEAR(p.position_m.y(), before.y() + 0.4, 1e-9);
 }
 
+TEST(PeopleMapIntakeTest, ASlamRestartedWithANewGraphMovesNobody) {
+  Fixture f;
+  // Seen from node 40 of the first graph.
+  for (Utime u = 1'000'000; u <= 2'000'000; u += 100'000) {
+    pose_t m = Pose(u, 0.0);
+    m.node_id = 40;
+    f.intake->OnPose(m);
+    if (u == 1'200'000) f.intake->OnSeen(Seen(u, 2.0));
+  }
+  // SLAM restarts without its state: its nodes are numbered from 0 again, node 40 comes later
+  // somewhere else.
+  for (Utime u = 2'100'000; u <= 3'000'000; u += 100'000) {
+    pose_t m = Pose(u, 0.0);
+    m.node_id = 0;
+    f.intake->OnPose(m);
+  }
+  EXPECT_EQ(f.intake->slam_restarts(), 1);
+  ASSERT_EQ(f.map.people().size(), 1u);
+  const Person& p = f.map.people().begin()->second;
+  const Eigen::Vector3d before = p.position_m;
+  EXPECT_EQ(p.anchor_node_id, -1);
+  EXPECT_TRUE(f.requests.back().node_ids.empty());  // SLAM is asked to keep nothing
+  sarmap::slam_anchors_t a{};
+  a.header.utime = 3'000'000;
+  a.current.node_id = 40;
+  a.current.x_m = 5.0;
+  ASSERT_TRUE(f.intake->OnAnchors(a));
+  f.intake->Finish();
+  EXPECT_NEAR((p.position_m - before).norm(), 0.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace people_map
 }  // namespace sarmap

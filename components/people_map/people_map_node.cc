@@ -97,7 +97,8 @@ void PeopleMapNode::OnTimer() {
                           std::to_string(intake_->without_pose()) + " detections without pose, " +
                           std::to_string(intake_->dropped_late()) + " late, " +
                           std::to_string(gates_.dropped()) + " off-clock stamps (" +
-                          std::to_string(gates_.reanchors()) + " re-anchors)");
+                          std::to_string(gates_.reanchors()) + " re-anchors), " +
+                          std::to_string(intake_->slam_restarts()) + " SLAM restarts");
 }
 
 void PeopleMapNode::Save() {
