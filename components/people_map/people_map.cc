@@ -353,12 +353,24 @@ int PeopleMap::MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_
   return moved;
 }
 
-std::vector<int64_t> PeopleMap::AnchorNodeIds() const {
-  std::vector<int64_t> ids;
+std::vector<int64_t> PeopleMap::AnchorNodeIds(size_t max_nodes) const {
+  std::vector<const Person*> anchored;
   for (const auto& [id, p] : people_)
-    if (p.has_seen && p.anchor_node_id >= 0) ids.push_back(p.anchor_node_id);
+    if (p.has_seen && p.anchor_node_id >= 0) anchored.push_back(&p);
+  if (max_nodes > 0 && anchored.size() > max_nodes) {
+    // Every kept anchor costs SLAM three rows of the joint covariance it publishes.
+    std::sort(anchored.begin(), anchored.end(), [](const Person* a, const Person* b) {
+      if (a->confirmed != b->confirmed) return a->confirmed;
+      return a->last_detected_utime > b->last_detected_utime;
+    });
+  }
+  std::vector<int64_t> ids;
+  for (const Person* p : anchored) {
+    if (max_nodes > 0 && ids.size() >= max_nodes) break;
+    if (std::find(ids.begin(), ids.end(), p->anchor_node_id) == ids.end())
+      ids.push_back(p->anchor_node_id);
+  }
   std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   return ids;
 }
 

@@ -238,8 +238,9 @@ class PeopleMap {
   // SLAM's latest map poses of graph nodes: every seen person anchored at one of them moves by
   // its node's correction. Returns how many people moved.
   int MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_node);
-  // The SLAM nodes the seen people hang from, sorted (what to ask SLAM to keep and report).
-  std::vector<int64_t> AnchorNodeIds() const;
+  // The SLAM nodes the seen people hang from, sorted (what to ask SLAM to keep and report): at
+  // most max_nodes (0: all), those of confirmed people first, then of the people seen last.
+  std::vector<int64_t> AnchorNodeIds(size_t max_nodes = 0) const;
   // SLAM started a new graph (its node ids began again): the people stay where they are and
   // hang from no node until seen again.
   void ForgetAnchors();

@@ -53,6 +53,7 @@ struct PeopleMapNodeOptions {
   std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
   std::string client_id = "sarmap-people-map";
   double request_repeat_s = 5.0;
+  int max_anchor_nodes = 32;
   std::string output_channel = "PEOPLE_MAP";
   common::StampGateOptions stamp_gate;
   PeopleMapOptions map;
@@ -79,6 +80,10 @@ struct PeopleMapNodeOptions {
     v("client_id", client_id, "client id in SLAM_ANCHOR_REQUEST");
     v("request_repeat_s", request_repeat_s,
       "re-send the anchor request this often (wall clock; 0: only on change)");
+    v("max_anchor_nodes", max_anchor_nodes,
+      "at most this many SLAM nodes are asked for (confirmed people's first, then the people "
+      "seen last; each costs SLAM_ANCHORS three covariance rows); people beyond stay where they "
+      "are. At most sarmap-slam's max_anchor_ids_per_request");
     v("output_channel", output_channel, "the people map");
     v("stamp_gate", stamp_gate,
       "inputs stamped far from their stream's clock are dropped and counted, never adopted");
@@ -91,6 +96,7 @@ struct PeopleMapNodeOptions {
     check.Positive("max_pose_gap_s", max_pose_gap_s);
     check.NonNegative("pose_wait_s", pose_wait_s);
     check.NonNegative("request_repeat_s", request_repeat_s);
+    check.That(max_anchor_nodes >= 1, "max_anchor_nodes", "must be at least 1");
   }
 };
 

@@ -724,6 +724,26 @@ TEST(PeopleMapTest, ASeenPersonMovesWithTheSlamNodeItWasSeenFrom) {
   EXPECT_EQ(map.people().at(1).anchor_node_id, 7);  // the first sighting's node stays
 }
 
+TEST(PeopleMapTest, AtMostSoManyAnchorNodesConfirmedPeopleFirst) {
+  PeopleMap map{PeopleMapOptions()};
+  const Rigid2d pose(0, 0, 0);
+  // Three people 2 m apart from nodes 1, 2 and 3; the one of node 1 seen until sure, the one of
+  // node 3 seen last.
+  for (int k = 0; k < 3; ++k) {
+    map.AddSeen(1'000'000 * (k + 1), {PersonAhead(3.0, 2.0 * k)}, MapFromCamera(pose),
+                Eigen::Matrix3d::Zero(), pose.translation(), PoseNode{k + 1, pose});
+  }
+  for (int i = 1; i <= 3; ++i) {
+    map.AddSeen(1'000'000 + i * 100'000, {PersonAhead(3.0, 0.0)}, MapFromCamera(pose),
+                Eigen::Matrix3d::Zero(), pose.translation(), PoseNode{9, pose});
+  }
+  ASSERT_EQ(map.people().size(), 3u);
+  ASSERT_TRUE(map.people().at(1).confirmed);
+  EXPECT_EQ(map.AnchorNodeIds(), (std::vector<int64_t>{1, 2, 3}));
+  EXPECT_EQ(map.AnchorNodeIds(2), (std::vector<int64_t>{1, 3}));
+  EXPECT_EQ(map.AnchorNodeIds(1), std::vector<int64_t>{1});
+}
+
 TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0.5, 0.2, 0.3);
