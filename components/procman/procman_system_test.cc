@@ -103,6 +103,8 @@ TEST_F(ProcmanSystem, GroupStartStopRestart) {
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
   EXPECT_TRUE(watch_.IsStopped(d, "c"));
   const int a1 = watch_.Pid(d, "a"), b1 = watch_.Pid(d, "b");
+  const std::vector<ProcInfo> first = Snapshot({a1, b1});
+  ASSERT_EQ(first.size(), 2u);
   EXPECT_EQ(ProcessesWithCmdline(SleepCmd(1)), std::vector<int>{a1});
   EXPECT_TRUE(ProcessesWithCmdline(SleepCmd(3)).empty());
 
@@ -111,8 +113,7 @@ TEST_F(ProcmanSystem, GroupStartStopRestart) {
     return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b") && watch_.Pid(d, "a") != a1 &&
            watch_.Pid(d, "b") != b1;
   }));
-  EXPECT_FALSE(Alive(a1));
-  EXPECT_FALSE(Alive(b1));
+  for (const ProcInfo& p : first) EXPECT_FALSE(StillRunning(p)) << p.pid;
   EXPECT_EQ(watch_.Command(d, "a")->actual_runid, 2);
 
   ASSERT_EQ(Sheriff(pmd, {"stop", "g"}).exit_code, 0);
@@ -235,10 +236,10 @@ TEST_F(ProcmanSystem, NoDescendantSurvivesAStop) {
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "family"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).size() == 4; }, 5));
-  const std::vector<int> before = ProcessesWithCmdline(s);
+  const std::vector<ProcInfo> before = Snapshot(ProcessesWithCmdline(s));
   ASSERT_EQ(Sheriff(pmd, {"stop", "family"}).exit_code, 0);
   EXPECT_TRUE(ProcessesWithCmdline(s).empty());
-  for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
+  for (const ProcInfo& p : before) EXPECT_FALSE(StillRunning(p)) << p.pid;
 }
 
 TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
@@ -461,7 +462,7 @@ TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
                  "deputy_gone_after_s=3", "run", "mission"},
                 scratch_.dir() + "/sheriff-mission.log");
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
-  const std::vector<int> before = {watch_.Pid(d, "a"), watch_.Pid(d, "b")};
+  const std::vector<ProcInfo> before = Snapshot({watch_.Pid(d, "a"), watch_.Pid(d, "b")});
   deputy->Signal(SIGKILL);
   ASSERT_NE(deputy->Wait(10), -1);
   // Its commands die with it...
@@ -471,7 +472,7 @@ TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
                ProcessesWithCmdline(SleepCmd(2)).empty();
       },
       10));
-  for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
+  for (const ProcInfo& p : before) EXPECT_FALSE(StillRunning(p)) << p.pid;
   // ...and the script ends at once with a clear reason, not after 1800 s.
   const int status = sheriff.Wait(60);
   ASSERT_NE(status, -1) << sheriff.Log();
@@ -492,12 +493,12 @@ TEST_F(ProcmanSystem, KilledDeputyTakesWhatItsCommandsForkedAlong) {
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "family"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).size() == 3; }, 5));
-  const std::vector<int> before = ProcessesWithCmdline(s);
+  const std::vector<ProcInfo> before = Snapshot(ProcessesWithCmdline(s));
   deputy->Signal(SIGKILL);
   ASSERT_NE(deputy->Wait(10), -1);
   EXPECT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).empty(); }, 10))
       << ProcessesWithCmdline(s).size() << " still running";
-  for (int pid : before) EXPECT_FALSE(Alive(pid)) << pid;
+  for (const ProcInfo& p : before) EXPECT_FALSE(StillRunning(p)) << p.pid;
 }
 
 TEST_F(ProcmanSystem, ScriptWaitTimesOutWithLocation) {

@@ -269,6 +269,24 @@ inline bool Alive(int pid) {
   return pid > 0 && ReadProcInfo(pid, &info) && info.state != 'Z';
 }
 
+// The processes `pids` name now (pid and start time), to ask later whether those very processes
+// still run: with pid_max 32768 a busy machine hands a freed pid to another process within
+// seconds.
+inline std::vector<ProcInfo> Snapshot(const std::vector<int>& pids) {
+  std::vector<ProcInfo> out;
+  for (int pid : pids) {
+    ProcInfo info;
+    if (pid > 0 && ReadProcInfo(pid, &info)) out.push_back(info);
+  }
+  return out;
+}
+
+// The process `then` describes still runs (the same pid and start time, not a zombie).
+inline bool StillRunning(const ProcInfo& then) {
+  ProcInfo now;
+  return ReadProcInfo(then.pid, &now) && now.start_time == then.start_time && now.state != 'Z';
+}
+
 }  // namespace testing
 }  // namespace procman
 }  // namespace sarmap
