@@ -66,6 +66,11 @@ bool ReadProcInfo(int pid, ProcInfo* info) {
   return true;
 }
 
+bool Running(int pid, uint64_t start_time) {
+  ProcInfo info;
+  return ReadProcInfo(pid, &info) && info.start_time == start_time && info.state != 'Z';
+}
+
 ProcessTable ProcessTable::Snapshot() {
   ProcessTable table;
   DIR* dir = opendir("/proc");

@@ -24,6 +24,10 @@ struct ProcInfo {
 // Reads /proc/<pid>/stat; false when the process is gone or unreadable.
 bool ReadProcInfo(int pid, ProcInfo* info);
 
+// The process with this pid and start time still runs (not a zombie); a pid reused by another
+// process is not it.
+bool Running(int pid, uint64_t start_time);
+
 class ProcessTable {
  public:
   // Reads all of /proc.

@@ -293,18 +293,14 @@ void Supervisor::SignalTree(Managed* m, int sig) {
     if (!known) m->tree.emplace_back(pid, start);
   }
   if (m->pgid > 0) kill(-m->pgid, sig);
-  for (const auto& [pid, start] : m->tree) {
-    ProcInfo info;
-    if (ReadProcInfo(pid, &info) && info.start_time == start && info.state != 'Z') kill(pid, sig);
-  }
+  for (const auto& [pid, start] : m->tree)
+    if (Running(pid, start)) kill(pid, sig);
 }
 
 bool Supervisor::TreeAlive(Managed* m) {
   if (m->pgid > 0 && kill(-m->pgid, 0) == 0) return true;
-  for (const auto& [pid, start] : m->tree) {
-    ProcInfo info;
-    if (ReadProcInfo(pid, &info) && info.start_time == start && info.state != 'Z') return true;
-  }
+  for (const auto& [pid, start] : m->tree)
+    if (Running(pid, start)) return true;
   return false;
 }
 

@@ -282,10 +282,7 @@ inline std::vector<ProcInfo> Snapshot(const std::vector<int>& pids) {
 }
 
 // The process `then` describes still runs (the same pid and start time, not a zombie).
-inline bool StillRunning(const ProcInfo& then) {
-  ProcInfo now;
-  return ReadProcInfo(then.pid, &now) && now.start_time == then.start_time && now.state != 'Z';
-}
+inline bool StillRunning(const ProcInfo& then) { return Running(then.pid, then.start_time); }
 
 }  // namespace testing
 }  // namespace procman
