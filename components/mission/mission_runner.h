@@ -86,6 +86,7 @@ struct MissionReport {
          sound_cpu_s = 0;
   double rss_mb = 0;  // the process's resident memory
   int64_t slam_nodes = 0, slam_submaps = 0;  // live (untrimmed)
+  int64_t slam_submaps_held = 0;             // live only because they hold a node a client keeps
   int64_t slam_optimisations = 0, slam_loop_closures = 0;
   double slam_optimise_s = 0;  // cumulative time in the global optimisation
   int people_on_map = 0, sound_sources = 0;

@@ -632,6 +632,12 @@ std::vector<int> Slam::HoldAnchors(const std::vector<int64_t>& requested) {
   }
   std::sort(kept_nodes_.begin(), kept_nodes_.end());
   kept_nodes_.erase(std::unique(kept_nodes_.begin(), kept_nodes_.end()), kept_nodes_.end());
+  if (options_.trim.enabled && !trims_waiting_.empty()) {
+    // Those still held go back on the list, in order.
+    std::vector<int> waiting;
+    waiting.swap(trims_waiting_);
+    for (int submap_id : waiting) TrimIfCovered(submap_id);
+  }
   std::vector<int> ids = {num_nodes() - 1};
   ids.insert(ids.end(), kept_nodes_.begin(), kept_nodes_.end());
   return ids;
@@ -711,8 +717,13 @@ void Slam::TrimIfCovered(int submap_id) {
   constexpr int kOwnChain = 2;
   const TrimOptions& t = options_.trim;
   if (submap_id <= kOwnChain) return;  // submap 0 holds the map frame
+  if (submaps_[submap_id].trimmed) return;
   for (int n : submaps_[submap_id].nodes) {
-    if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) return;
+    if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) {
+      // A client keeps the node: the trim waits until it is released (HoldAnchors).
+      trims_waiting_.push_back(submap_id);
+      return;
+    }
   }
   std::vector<int64_t> mine, mine_occupied;
   Eigen::Vector2d centre;

@@ -120,9 +120,12 @@ class Slam {
   int num_live_submaps() const {
     return static_cast<int>(submaps_.size() - stats_.submaps_trimmed);
   }
+  // Finished submaps left untrimmed only because they hold a node a client keeps.
+  int num_submaps_held_for_anchors() const { return static_cast<int>(trims_waiting_.size()); }
   // SLAM_ANCHORS: of the nodes clients request, those that exist and are live are held (their
-  // submaps are not trimmed; replaces the last set). Returns the latest node followed by them:
-  // the nodes of one joint covariance. Needs at least one node.
+  // submaps are not trimmed; replaces the last set). A finished submap whose trim waited for a
+  // node no longer held is considered for trimming again now. Returns the latest node followed
+  // by the held ones: the nodes of one joint covariance. Needs at least one node.
   std::vector<int> HoldAnchors(const std::vector<int64_t>& requested);
   Rigid2d NodePose(int id) const { return node_global_[id]; }
   double NodeTime(int id) const { return nodes_[id].time_s; }
@@ -234,6 +237,9 @@ class Slam {
   std::vector<ScanRecord> scans_;
   std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
   std::vector<int> kept_nodes_;  // sorted
+  // Finished submaps whose trim waits for their kept nodes to be released (ascending). Not in
+  // the state file: after a load they stay.
+  std::vector<int> trims_waiting_;
   // Raster cells (trim.cell_m) of the returns trimmed nodes keep: obstacles no live submap holds.
   std::unordered_set<int64_t> retained_obstacles_;
 };

@@ -349,12 +349,13 @@ class SlamNode::Impl {
     const auto& s = slam_.stats();
     char text[384];
     std::snprintf(text, sizeof(text),
-                  "nodes %lld (live %d) submaps %lld (live %d) loops %lld opt %lld (%.1f s) "
+                  "nodes %lld (live %d) submaps %lld (live %d, %d held for anchors) loops %lld "
+                  "opt %lld (%.1f s) "
                   "rejected scans %lld odom %lld late %lld off-clock stamps %lld (re-anchors "
                   "%lld) anchor requests refused %lld mean latency %.1f ms",
                   (long long)s.nodes, slam_.num_live_nodes(), (long long)s.submaps,
-                  slam_.num_live_submaps(), (long long)s.loop_closures,
-                  (long long)s.optimisations, s.optimise_seconds,
+                  slam_.num_live_submaps(), slam_.num_submaps_held_for_anchors(),
+                  (long long)s.loop_closures, (long long)s.optimisations, s.optimise_seconds,
                   (long long)s.rejected_scans, (long long)s.rejected_odometry,
                   (long long)queue_.dropped_late(), (long long)gates_.dropped(),
                   (long long)gates_.reanchors(), (long long)anchor_requests_refused_,

@@ -305,6 +305,7 @@ void Slam::Load(const std::string& path) {
   chain_drift_.Clear();
   node_global_ = std::move(node_global);
   RebuildRetainedObstacles();
+  trims_waiting_.clear();
   constraints_ = std::move(constraints);
   precomputations_.clear();
   scans_.clear();

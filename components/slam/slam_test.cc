@@ -722,6 +722,40 @@ TEST(SlamTrimTest, KeptNodesSurviveAndTheTrimmedGraphResumesFromItsStateFile) {
   EXPECT_NEAR(resumed.CurrentPose().translation().x(), phase < 4.0 ? phase : 8.0 - phase, 0.05);
 }
 
+TEST(SlamTrimTest, ASubmapHeldForAClientIsTrimmedOnceTheClientReleasesIt) {
+  // In the third pass every submap maps nothing new. A node of that pass is held while its
+  // submaps finish, so they stay; released, they go at the next request, with the node, and
+  // the graph is again the size the room needs.
+  Slam slam{BackAndForthOptions(true)};
+  int k = 0;
+  for (; k < 2 * 160 + 40; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+  const int held = slam.num_nodes() - 1;
+  slam.HoldAnchors({held});
+  for (; k < 3 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+  const int live_while_held = slam.num_live_submaps();
+  std::printf("held node %d: %d submaps held, %d live\n", held, slam.num_submaps_held_for_anchors(),
+              live_while_held);
+  EXPECT_GE(slam.num_submaps_held_for_anchors(), 1);
+  EXPECT_FALSE(slam.NodeTrimmed(held));
+  // Still requested: still held.
+  slam.HoldAnchors({held});
+  EXPECT_GE(slam.num_submaps_held_for_anchors(), 1);
+  EXPECT_FALSE(slam.NodeTrimmed(held));
+  // Released.
+  EXPECT_EQ(slam.HoldAnchors({}), (std::vector<int>{slam.num_nodes() - 1}));
+  EXPECT_EQ(slam.num_submaps_held_for_anchors(), 0);
+  EXPECT_TRUE(slam.NodeTrimmed(held));
+  EXPECT_LT(slam.num_live_submaps(), live_while_held);
+  EXPECT_EQ(slam.num_nodes() - slam.num_live_nodes(), slam.stats().nodes_trimmed);
+  // The graph stays one piece: the latest node's covariance is computable and the drive goes on
+  // on the truth.
+  Eigen::MatrixXd cov;
+  EXPECT_TRUE(slam.JointCovariance({slam.num_nodes() - 1}, &cov));
+  for (; k < 4 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+  slam.Optimise();
+  EXPECT_LT(BackAndForthError(slam), 0.05);
+}
+
 std::string ReadBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
