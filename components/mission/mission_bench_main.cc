@@ -146,7 +146,11 @@ class Metrics : public mission::MissionObserver {
     sound_log.Write("SLAM_ANCHORS", m);
     people_log.Write("SLAM_ANCHORS", m);
   }
+  void OnAudio(double, const audio_frame_t& m) override {
+    if (with_audio) sound_log.Write("AUDIO", m);
+  }
   MissionLog sound_log, people_log;
+  bool with_audio = false;  // AUDIO into the sound log
   logtools::MissionMetrics metrics;
   std::map<int64_t, double> in_view_s;
   int people = 0;
@@ -379,7 +383,8 @@ int main(int argc, char** argv) {
     std::string worlds, modes = "frontier,reactive", out_dir = "out/mission-bench",
                         site_config = "config/site.yaml";
     int sites = 0, first_site = 1;
-    bool no_perception = false, no_sound = false, sound_log = false, people_log = false;
+    bool no_perception = false, no_sound = false, sound_log = false, audio_log = false,
+         people_log = false;
     common::ArgParser parser(
         "sarmap-mission-bench",
         "Autonomous missions in simulated time: the simulator, depth-to-scan, SLAM and the "
@@ -430,6 +435,9 @@ int main(int argc, char** argv) {
     parser.AddSwitch("--sound-log", &sound_log,
                      "write the sound map's inputs (and the every-bin DOA), SIM_TRUTH and "
                      "SOUND_MAP to OUT/<site>-<mode>-sound.lcmlog (for sarmap-log sound-map)");
+    parser.AddSwitch("--audio-log", &audio_log,
+                     "with --sound-log: the simulated AUDIO too (about 0.13 MB per second), so "
+                     "that sarmap-log sound-map --relocalise runs the localiser again");
     parser.AddSwitch("--people-log", &people_log,
                      "write the people map's inputs (PEOPLE_VISUAL, POSE, PEOPLE_AUDIO, SOUND_MAP, "
                      "SLAM_ANCHORS), SIM_TRUTH and PEOPLE_MAP to OUT/<site>-<mode>-people.lcmlog "
@@ -473,6 +481,7 @@ int main(int argc, char** argv) {
         Metrics metrics;
         if (o.perception && o.sound && sound_log)
           metrics.sound_log.Open(out_dir + "/" + target.name + "-" + mode + "-sound.lcmlog");
+        metrics.with_audio = sound_log && audio_log;
         if (o.perception && people_log)
           metrics.people_log.Open(out_dir + "/" + target.name + "-" + mode + "-people.lcmlog");
         std::fprintf(stderr, "%s %s:", target.name.c_str(), mode.c_str());

@@ -347,7 +347,9 @@ class Loop : public sim::SimSink {
   }
 
   void Publish(const std::string&, const sarmap::audio_frame_t& m) override {
-    if (perception_) perception_->OnAudio(m);
+    if (!perception_) return;
+    if (observer_) observer_->OnAudio(Seconds(m.header.utime) - start_s_, m);
+    perception_->OnAudio(m);
   }
 
   // SLAM_ANCHOR_REQUEST from the sound map or the people map: sarmap-slam keeps each client's

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "common/options.h"
+#include "sarmap/audio_frame_t.hpp"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/explore_status_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
@@ -152,6 +153,8 @@ struct MissionObserver {
   // PEOPLE_AUDIO (keywords with a direction) and SLAM_ANCHORS, as the sound map takes them.
   virtual void OnHeard(double /*t_s*/, const sarmap::people_detections_t& /*heard*/) {}
   virtual void OnSlamAnchors(double /*t_s*/, const sarmap::slam_anchors_t& /*anchors*/) {}
+  // AUDIO (perception and sound on): each block of the simulated array, before the sound chain.
+  virtual void OnAudio(double /*t_s*/, const sarmap::audio_frame_t& /*audio*/) {}
 };
 
 // Runs one mission. Throws on bad configuration (OptionsError, WorldError).

@@ -24,9 +24,17 @@ class Collect : public MissionObserver {
   }
   void OnPeopleMap(double, const people_map_t& m) override { people = m; }
   void OnSoundMap(double, const sound_map_t&) override { ++sound_maps; }
+  void OnAudio(double t_s, const audio_frame_t& m) override {
+    ++audio_blocks;
+    audio_in_order = audio_in_order && t_s >= last_audio_s;
+    last_audio_s = t_s;
+    audio_channels = m.num_channels;
+  }
   logtools::MissionMetrics metrics;
   std::optional<people_map_t> people;
-  int sound_maps = 0;
+  int sound_maps = 0, audio_blocks = 0, audio_channels = 0;
+  double last_audio_s = -1;
+  bool audio_in_order = true;
 };
 
 MissionRunOptions Lab(const std::string& mode) {
@@ -113,6 +121,10 @@ TEST(MissionRunnerTest, PeopleSeenInTheLabAreOnThePeopleMapAndNobodyElse) {
   EXPECT_EQ(false_people, 0);
   EXPECT_GT(r.vision_frames, 0);
   EXPECT_GT(collect.sound_maps, 0);
+  // The array's audio reaches the observer (sarmap-mission-bench --audio-log), in time order.
+  EXPECT_GT(collect.audio_blocks, 0);
+  EXPECT_TRUE(collect.audio_in_order);
+  EXPECT_EQ(collect.audio_channels, 4);  // the ReSpeaker of MissionRunOptions::sim_mic_array
 }
 
 }  // namespace
