@@ -264,7 +264,11 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
     if (seen_trace_)
       seen_trace_({utime, z, Pz, d.position_camera_m, p->id, p->num_detections == 0});
     p->cues |= d.cue;
-    if (p->anchor_node_id < 0 && node.node_id >= 0) {
+    // A person nobody reports (a candidate, or one whose confidence has decayed) holds no SLAM
+    // node (AnchorNodeIds): it hangs from the node of its latest sighting until it is reported.
+    const bool reported =
+        p->confirmed || DecayedConfidence(*p, utime) >= options_.min_report_confidence;
+    if ((p->anchor_node_id < 0 || !reported) && node.node_id >= 0) {
       p->anchor_node_id = node.node_id;
       p->map_from_anchor_node = node.map_from_node;
     }
@@ -353,10 +357,14 @@ int PeopleMap::MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_
   return moved;
 }
 
-std::vector<int64_t> PeopleMap::AnchorNodeIds(size_t max_nodes) const {
+std::vector<int64_t> PeopleMap::AnchorNodeIds(size_t max_nodes, common::Utime now) const {
   std::vector<const Person*> anchored;
-  for (const auto& [id, p] : people_)
-    if (p.has_seen && p.anchor_node_id >= 0) anchored.push_back(&p);
+  for (const auto& [id, p] : people_) {
+    if (!p.has_seen || p.anchor_node_id < 0) continue;
+    if (now >= 0 && !p.confirmed && DecayedConfidence(p, now) < options_.min_report_confidence)
+      continue;
+    anchored.push_back(&p);
+  }
   if (max_nodes > 0 && anchored.size() > max_nodes) {
     // Every kept anchor costs SLAM three rows of the joint covariance it publishes.
     std::sort(anchored.begin(), anchored.end(), [](const Person* a, const Person* b) {

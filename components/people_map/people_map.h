@@ -240,7 +240,9 @@ class PeopleMap {
   int MoveWithNodes(const std::map<int64_t, common::Rigid2d>& map_from_node);
   // The SLAM nodes the seen people hang from, sorted (what to ask SLAM to keep and report): at
   // most max_nodes (0: all), those of confirmed people first, then of the people seen last.
-  std::vector<int64_t> AnchorNodeIds(size_t max_nodes = 0) const;
+  // With now >= 0 only the people reported at `now`: a candidate that is never reported keeps
+  // no SLAM submap alive over a long mission.
+  std::vector<int64_t> AnchorNodeIds(size_t max_nodes = 0, common::Utime now = -1) const;
   // SLAM started a new graph (its node ids began again): the people stay where they are and
   // hang from no node until seen again.
   void ForgetAnchors();

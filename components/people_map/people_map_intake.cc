@@ -70,14 +70,15 @@ void PeopleMapIntake::SendRequest(Utime utime) {
   req.header.utime = utime;
   req.header.frame = "map";
   req.client_id = options_.client_id;
-  req.node_ids = map_->AnchorNodeIds(static_cast<size_t>(options_.max_anchor_nodes));
+  req.node_ids = map_->AnchorNodeIds(static_cast<size_t>(options_.max_anchor_nodes), utime);
   req.num_node_ids = static_cast<int32_t>(req.node_ids.size());
   requested_anchors_ = req.node_ids;
   if (request_) request_(req);
 }
 
 void PeopleMapIntake::RequestIfAnchorsChanged() {
-  if (map_->AnchorNodeIds(static_cast<size_t>(options_.max_anchor_nodes)) != requested_anchors_)
+  if (map_->AnchorNodeIds(static_cast<size_t>(options_.max_anchor_nodes), latest_utime_) !=
+      requested_anchors_)
     SendRequest(latest_utime_);
 }
 

@@ -744,6 +744,41 @@ TEST(PeopleMapTest, AtMostSoManyAnchorNodesConfirmedPeopleFirst) {
   EXPECT_EQ(map.AnchorNodeIds(1), std::vector<int64_t>{1});
 }
 
+// Only people the map reports hold a SLAM node: a candidate hangs from the node of its latest
+// sighting and is not requested; once reported it keeps that node; once its confidence has
+// decayed below reporting it is released again.
+TEST(PeopleMapTest, OnlyReportedPeopleHoldSlamNodes) {
+  PeopleMapOptions o;
+  PeopleMap map{o};
+  const Rigid2d pose(0, 0, 0);
+  SeenDetection weak = PersonAhead(3.0, 0.0);
+  weak.confidence = 0.2;
+  auto see = [&](common::Utime t, const SeenDetection& d, int64_t node) {
+    map.AddSeen(t, {d}, MapFromCamera(pose), Eigen::Matrix3d::Zero(), pose.translation(),
+                PoseNode{node, pose});
+  };
+  see(1'000'000, weak, 1);
+  ASSERT_EQ(map.people().size(), 1u);
+  const int id = map.people().begin()->first;
+  EXPECT_LT(map.people().at(id).confidence, o.min_report_confidence);
+  EXPECT_TRUE(map.AnchorNodeIds(0, 1'000'000).empty());
+  EXPECT_EQ(map.AnchorNodeIds(), std::vector<int64_t>{1});  // without a time: every anchor
+  see(2'000'000, weak, 2);
+  EXPECT_EQ(map.people().at(id).anchor_node_id, 2);  // still a candidate: the latest node
+  EXPECT_TRUE(map.AnchorNodeIds(0, 2'000'000).empty());
+  see(3'000'000, PersonAhead(3.0, 0.0), 3);  // reported from this sighting on
+  ASSERT_GE(map.people().at(id).confidence, o.min_report_confidence);
+  ASSERT_FALSE(map.people().at(id).confirmed);
+  EXPECT_EQ(map.AnchorNodeIds(0, 3'000'000), std::vector<int64_t>{3});
+  see(4'000'000, weak, 4);
+  ASSERT_FALSE(map.people().at(id).confirmed);
+  EXPECT_EQ(map.people().at(id).anchor_node_id, 3);  // reported: the node stays
+  EXPECT_EQ(map.AnchorNodeIds(0, 4'000'000), std::vector<int64_t>{3});
+  // Ten half-lives later nobody reports it: released.
+  const common::Utime later = 4'000'000 + common::SecondsToUtime(10 * o.confidence_half_life_s);
+  EXPECT_TRUE(map.AnchorNodeIds(0, later).empty());
+}
+
 TEST(PeopleMapTest, StateSurvivesSaveAndLoadAndCorruptionIsAnError) {
   PeopleMap map{PeopleMapOptions()};
   const Rigid2d pose(0.5, 0.2, 0.3);
