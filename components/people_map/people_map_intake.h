@@ -81,9 +81,10 @@ struct PeopleMapNodeOptions {
     v("request_repeat_s", request_repeat_s,
       "re-send the anchor request this often (wall clock; 0: only on change)");
     v("max_anchor_nodes", max_anchor_nodes,
-      "at most this many SLAM nodes are asked for (confirmed people's first, then the people "
-      "seen last; each costs SLAM_ANCHORS three covariance rows); people beyond stay where they "
-      "are. At most sarmap-slam's max_anchor_ids_per_request");
+      "at most this many SLAM nodes are asked for, those of the people reported (confirmed "
+      "people's first, then the people seen last; each costs SLAM_ANCHORS three covariance "
+      "rows); people beyond stay where they are. At most sarmap-slam's "
+      "max_anchor_ids_per_request");
     v("output_channel", output_channel, "the people map");
     v("stamp_gate", stamp_gate,
       "inputs stamped far from their stream's clock are dropped and counted, never adopted");

@@ -347,7 +347,7 @@ class SlamNode::Impl {
 
   void UpdateStatus() {
     const auto& s = slam_.stats();
-    char text[384];
+    char text[512];
     std::snprintf(text, sizeof(text),
                   "nodes %lld (live %d) submaps %lld (live %d, %d held for anchors) loops %lld "
                   "opt %lld (%.1f s) "
