@@ -15,14 +15,15 @@
 // sound map) becomes a heard person at the source's position and covariance — the range comes
 // from the robot's motion, not from an assumed 0.95 m. A heard person and a seen person whose
 // positions agree (Mahalanobis gate in x, y) are one person with both cues.
-// SLAM corrections: a seen person hangs from the SLAM graph node of the robot pose it was first
-// seen from once reported (a candidate: its latest sighting; the node's map pose then, T_old). When
-// SLAM reports that node at T_new (its loop closures move old nodes), the person's seen estimate
-// moves rigidly by T_new T_old^-1, as the map under it did; a heard estimate follows its sound
-// source, which the sound map moves. Confidence: each detection of confidence c_d gives c <- 1 - (1
-// - c)(1 - gain c_d); without evidence it halves every confidence_half_life_s. A person is reported
-// while c is at least min_report_confidence, and for good once c has reached keep_confidence: a
-// victim found stays on the map however long the robot is elsewhere.
+// SLAM corrections: a seen person hangs from the SLAM graph node of the robot pose it was
+// first seen from once reported (a candidate: its latest sighting), with that node's map pose
+// then, T_old. When SLAM reports the node at T_new (its loop closures move old nodes), the
+// person's seen estimate moves rigidly by T_new T_old^-1, as the map under it did; a heard
+// estimate follows its sound source, which the sound map moves.
+// Confidence: each detection of confidence c_d gives c <- 1 - (1 - c)(1 - gain c_d); without
+// evidence it halves every confidence_half_life_s. A person is reported while c is at least
+// min_report_confidence, and for good once c has reached keep_confidence: a victim found stays
+// on the map however long the robot is elsewhere.
 
 #include <Eigen/Core>
 #include <cstdint>
