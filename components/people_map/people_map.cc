@@ -89,6 +89,10 @@ double PeopleMap::DecayedConfidence(const Person& p, Utime utime) const {
   return p.confidence * std::pow(0.5, age_s / options_.confidence_half_life_s);
 }
 
+bool PeopleMap::Reported(const Person& p, Utime utime) const {
+  return p.confirmed || DecayedConfidence(p, utime) >= options_.min_report_confidence;
+}
+
 void PeopleMap::AddEvidence(Person* p, Utime utime, double detection_confidence) const {
   const double c = DecayedConfidence(*p, utime);
   const double cd = std::clamp(detection_confidence, 0.0, 1.0);
@@ -266,9 +270,7 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
     p->cues |= d.cue;
     // A person nobody reports (a candidate, or one whose confidence has decayed) holds no SLAM
     // node (AnchorNodeIds): it hangs from the node of its latest sighting until it is reported.
-    const bool reported =
-        p->confirmed || DecayedConfidence(*p, utime) >= options_.min_report_confidence;
-    if ((p->anchor_node_id < 0 || !reported) && node.node_id >= 0) {
+    if ((p->anchor_node_id < 0 || !Reported(*p, utime)) && node.node_id >= 0) {
       p->anchor_node_id = node.node_id;
       p->map_from_anchor_node = node.map_from_node;
     }
@@ -361,8 +363,7 @@ std::vector<int64_t> PeopleMap::AnchorNodeIds(size_t max_nodes, common::Utime no
   std::vector<const Person*> anchored;
   for (const auto& [id, p] : people_) {
     if (!p.has_seen || p.anchor_node_id < 0) continue;
-    if (now >= 0 && !p.confirmed && DecayedConfidence(p, now) < options_.min_report_confidence)
-      continue;
+    if (now >= 0 && !Reported(p, now)) continue;
     anchored.push_back(&p);
   }
   if (max_nodes > 0 && anchored.size() > max_nodes) {
@@ -634,9 +635,10 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
 std::vector<Person> PeopleMap::Report(Utime utime) const {
   std::vector<Person> out;
   for (const auto& [id, p] : people_) {
+    if (!Reported(p, utime)) continue;
     Person copy = p;
     copy.confidence = DecayedConfidence(p, utime);
-    if (copy.confidence >= options_.min_report_confidence || p.confirmed) out.push_back(copy);
+    out.push_back(copy);
   }
   return out;
 }

@@ -258,6 +258,8 @@ class PeopleMap {
   std::vector<Person> Report(common::Utime utime) const;
   const std::map<int64_t, Person>& people() const { return people_; }
   double DecayedConfidence(const Person& p, common::Utime utime) const;
+  // On the map at `utime`: confirmed, or confidence at least min_report_confidence.
+  bool Reported(const Person& p, common::Utime utime) const;
 
   // Crash-safe state: a sealed YAML file (common/state_file.h: kind "people-map", version and
   // CRC-32), written to a temporary file, then renamed over `path`.
