@@ -238,33 +238,37 @@ std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, dou
   return "in view, not detected";
 }
 
+double Megabytes(size_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); }
+
 // The long-mission figures: per period, each component's share of one core over that period,
 // the memory, SLAM's graph, and what is on the maps.
 void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out) {
-  std::fprintf(
-      out,
-      "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
-      "sound | RSS MB | SLAM nodes (live) | submaps (live) | held for anchors | loop closures | "
-      "optimise s (period) | "
-      "people | sound sources | detections without pose |\n");
+  std::fprintf(out,
+               "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
+               "sound | RSS MB | heap MB | SLAM MB | SLAM nodes (live) | submaps (live) | held for "
+               "anchors | loop closures | "
+               "optimise s (period) | "
+               "people | sound sources | detections without pose |\n");
   const mission::MissionReport* prev = nullptr;
   for (const mission::MissionReport& r : reports) {
     const double dt = prev ? r.t_s - prev->t_s : r.t_s;
     auto pct = [&](double now, double before) { return dt > 0 ? 100 * (now - before) / dt : 0.0; };
-    std::fprintf(
-        out,
-        "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %lld | %lld "
-        "| %lld | %lld | %.2f | %d | %d | %lld |\n",
-        r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
-        pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
-        pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
-        pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
-        pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
-        pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb,
-        static_cast<long long>(r.slam_nodes), static_cast<long long>(r.slam_submaps),
-        static_cast<long long>(r.slam_submaps_held), static_cast<long long>(r.slam_loop_closures),
-        r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0), r.people_on_map, r.sound_sources,
-        static_cast<long long>(r.detections_without_pose));
+    std::fprintf(out,
+                 "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %.0f | "
+                 "%.1f | %lld | %lld "
+                 "| %lld | %lld | %.2f | %d | %d | %lld |\n",
+                 r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
+                 pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
+                 pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
+                 pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
+                 pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
+                 pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb, r.heap_mb,
+                 Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
+                 static_cast<long long>(r.slam_submaps),
+                 static_cast<long long>(r.slam_submaps_held),
+                 static_cast<long long>(r.slam_loop_closures),
+                 r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0), r.people_on_map,
+                 r.sound_sources, static_cast<long long>(r.detections_without_pose));
     prev = &r;
   }
 }
@@ -272,16 +276,22 @@ void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out)
 void WriteReports(const std::vector<mission::MissionReport>& reports, const std::string& path) {
   std::ofstream csv(path);
   csv << "time_s,state,distance_m,cpu_s,slam_cpu_s,explore_cpu_s,vision_cpu_s,people_map_cpu_s,"
-         "sound_cpu_s,rss_mb,slam_nodes,slam_submaps,slam_submaps_held,slam_optimisations,"
+         "sound_cpu_s,rss_mb,heap_mb,slam_mb,slam_grids_mb,slam_precomputations_mb,"
+         "slam_live_nodes_mb,slam_trimmed_nodes_mb,slam_graph_mb,slam_trajectory_mb,slam_nodes,"
+         "slam_submaps,slam_submaps_held,slam_optimisations,"
          "slam_loop_closures,"
          "slam_optimise_s,people_on_map,sound_sources,detections_without_pose\n";
   for (const mission::MissionReport& r : reports) {
     csv << r.t_s << "," << r.state << "," << r.distance_m << "," << r.cpu_s << "," << r.slam_cpu_s
         << "," << r.explore_cpu_s << "," << r.vision_cpu_s << "," << r.people_map_cpu_s << ","
-        << r.sound_cpu_s << "," << r.rss_mb << "," << r.slam_nodes << "," << r.slam_submaps << ","
-        << r.slam_submaps_held << "," << r.slam_optimisations << "," << r.slam_loop_closures << ","
-        << r.slam_optimise_s << "," << r.people_on_map << "," << r.sound_sources << ","
-        << r.detections_without_pose << "\n";
+        << r.sound_cpu_s << "," << r.rss_mb << "," << r.heap_mb << ","
+        << Megabytes(r.slam_memory.Total()) << "," << Megabytes(r.slam_memory.submap_grids) << ","
+        << Megabytes(r.slam_memory.precomputations) << "," << Megabytes(r.slam_memory.live_nodes)
+        << "," << Megabytes(r.slam_memory.trimmed_nodes) << "," << Megabytes(r.slam_memory.graph)
+        << "," << Megabytes(r.slam_memory.trajectory) << "," << r.slam_nodes << ","
+        << r.slam_submaps << "," << r.slam_submaps_held << "," << r.slam_optimisations << ","
+        << r.slam_loop_closures << "," << r.slam_optimise_s << "," << r.people_on_map << ","
+        << r.sound_sources << "," << r.detections_without_pose << "\n";
   }
 }
 

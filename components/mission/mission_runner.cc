@@ -10,14 +10,15 @@
 #include <stdexcept>
 
 #include "common/image_messages.h"
+#include "common/memory.h"
 #include "common/message_conversions.h"
 #include "common/robot_config.h"
 #include "common/time.h"
 #include "depth/depth_node_options.h"
 #include "depth/depth_to_scan.h"
 #include "explore/explore.h"
-#include "explore/explore_node_options.h"
 #include "explore/explore_messages.h"
+#include "explore/explore_node_options.h"
 #include "people_map/people_map.h"
 #include "people_map/people_map_intake.h"
 #include "sarmap/slam_anchor_request_t.hpp"
@@ -46,16 +47,6 @@ double CpuSeconds(clockid_t clock) {
   timespec ts{};
   clock_gettime(clock, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-// VmRSS of /proc/self/status, in MB (0 when unreadable).
-double ResidentMegabytes() {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
-  }
-  return 0.0;
 }
 
 // A path from a configuration file, relative to the repository root when not absolute (the
@@ -694,7 +685,9 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       report.vision_cpu_s = result.vision_cpu_s;
       report.people_map_cpu_s = result.people_map_cpu_s;
       report.sound_cpu_s = result.sound_cpu_s;
-      report.rss_mb = ResidentMegabytes();
+      report.rss_mb = common::ResidentMegabytes();
+      report.heap_mb = common::HeapInUseMegabytes();
+      report.slam_memory = loop.slam().Memory();
       const slam::SlamStats& stats = loop.slam().stats();
       report.slam_nodes = loop.slam().num_live_nodes();
       report.slam_submaps = loop.slam().num_live_submaps();

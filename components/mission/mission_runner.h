@@ -32,6 +32,7 @@
 #include "sarmap/sim_truth_t.hpp"
 #include "sarmap/slam_anchors_t.hpp"
 #include "sarmap/sound_map_t.hpp"
+#include "slam/slam.h"
 
 namespace sarmap {
 namespace mission {
@@ -85,7 +86,9 @@ struct MissionReport {
   double distance_m = 0;
   double cpu_s = 0, slam_cpu_s = 0, explore_cpu_s = 0, vision_cpu_s = 0, people_map_cpu_s = 0,
          sound_cpu_s = 0;
-  double rss_mb = 0;  // the process's resident memory
+  double rss_mb = 0;   // the process's resident memory
+  double heap_mb = 0;  // of which the allocator hands out (in use, every arena and mmap)
+  slam::Slam::MemoryUsage slam_memory;       // of which SLAM's data, by part
   int64_t slam_nodes = 0, slam_submaps = 0;  // live (untrimmed)
   int64_t slam_submaps_held = 0;             // live only because they hold a node a client keeps
   int64_t slam_optimisations = 0, slam_loop_closures = 0;

@@ -77,6 +77,11 @@ class ProbabilityGrid {
   // and unknown read alike). Inserting again works, at the cost of re-allocating the marks.
   void Finish();
 
+  // Bytes of its cells and update marks (capacity).
+  size_t MemoryBytes() const {
+    return cells_.capacity() * sizeof(float) + update_mark_.capacity() * sizeof(uint32_t);
+  }
+
   // Raw access for loading.
   void SetRaw(int width, int height, const Eigen::Vector2d& corner, std::vector<float> cells);
 

@@ -47,6 +47,9 @@ class ChainDrift {
   const Rigid2d& pose(int i) const { return poses_[static_cast<size_t>(i)]; }
   // Covariance of node b's (x, y, yaw), in the local frame's axes, while node a is held fixed.
   Eigen::Matrix3d RelativeCovariance(int a, int b) const;
+  size_t MemoryBytes() const {
+    return poses_.capacity() * sizeof(Rigid2d) + prefix_.capacity() * sizeof(Eigen::Matrix3d);
+  }
 
  private:
   DriftModel model_;

@@ -555,6 +555,28 @@ Rigid2d Slam::CurrentPose() const {
   return global_from_local_ * extrapolator_.last_pose();
 }
 
+Slam::MemoryUsage Slam::Memory() const {
+  MemoryUsage m;
+  auto cloud = [](const PointCloud& c) { return c.capacity() * sizeof(Eigen::Vector2f); };
+  for (const Submap& sm : submaps_) {
+    m.submap_grids += sizeof(Submap) + sm.nodes.capacity() * sizeof(int);
+    if (sm.grid) m.submap_grids += sizeof(ProbabilityGrid) + sm.grid->MemoryBytes();
+    m.submap_grids += cloud(sm.known_samples) + cloud(sm.occupied_samples);
+  }
+  for (const auto& [id, stack] : precomputations_) m.precomputations += stack->MemoryBytes();
+  for (const Node& n : nodes_) {
+    const size_t bytes = sizeof(Node) + cloud(n.loop_points) + cloud(n.range_data.hits) +
+                         cloud(n.range_data.misses) + n.submaps.capacity() * sizeof(int);
+    (n.trimmed ? m.trimmed_nodes : m.live_nodes) += bytes;
+  }
+  m.graph = constraints_.capacity() * sizeof(Constraint) +
+            (node_global_.capacity() + submap_global_.capacity()) * sizeof(Rigid2d) +
+            chain_drift_.MemoryBytes() + kept_nodes_.capacity() * sizeof(int) +
+            retained_obstacles_.size() * (sizeof(int64_t) + 2 * sizeof(void*));
+  m.trajectory = scans_.capacity() * sizeof(ScanRecord);
+  return m;
+}
+
 std::vector<StampedPose2> Slam::Trajectory() const {
   std::vector<StampedPose2> out;
   out.reserve(scans_.size());

@@ -111,6 +111,21 @@ class Slam {
 
   // Global pose of every accepted scan (time order).
   std::vector<StampedPose2> Trajectory() const;
+  // What SLAM's data takes, by part (container capacities; the allocator's own overhead and
+  // the optimiser's transient problem not counted): what grows with mission time and what
+  // with the mapped area.
+  struct MemoryUsage {
+    size_t submap_grids = 0;     // live submaps' grids and their trimming samples
+    size_t precomputations = 0;  // cached loop-closure precomputation stacks
+    size_t live_nodes = 0;       // live nodes: record, loop points and range data
+    size_t trimmed_nodes = 0;    // trimmed nodes: record and the returns they keep
+    size_t graph = 0;            // constraints and the nodes' and submaps' global poses
+    size_t trajectory = 0;       // every accepted scan's pose
+    size_t Total() const {
+      return submap_grids + precomputations + live_nodes + trimmed_nodes + graph + trajectory;
+    }
+  };
+  MemoryUsage Memory() const;
   const SlamStats& stats() const { return stats_; }
   // Node ids run 0..num_nodes()-1; a trimmed node keeps its id and the pose it had when it was
   // trimmed.

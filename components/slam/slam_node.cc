@@ -352,14 +352,15 @@ class SlamNode::Impl {
                   "nodes %lld (live %d) submaps %lld (live %d, %d held for anchors) loops %lld "
                   "opt %lld (%.1f s) "
                   "rejected scans %lld odom %lld late %lld off-clock stamps %lld (re-anchors "
-                  "%lld) anchor requests refused %lld mean latency %.1f ms",
+                  "%lld) anchor requests refused %lld mean latency %.1f ms data %.1f MB",
                   (long long)s.nodes, slam_.num_live_nodes(), (long long)s.submaps,
                   slam_.num_live_submaps(), slam_.num_submaps_held_for_anchors(),
                   (long long)s.loop_closures, (long long)s.optimisations, s.optimise_seconds,
                   (long long)s.rejected_scans, (long long)s.rejected_odometry,
                   (long long)queue_.dropped_late(), (long long)gates_.dropped(),
                   (long long)gates_.reanchors(), (long long)anchor_requests_refused_,
-                  latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0);
+                  latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0,
+                  static_cast<double>(slam_.Memory().Total()) / (1024.0 * 1024.0));
     node_->SetStatusMessage(text);
   }
 

@@ -586,6 +586,7 @@ TEST(SlamTrimTest, RevisitingTheSameRoomKeepsTheGraphTheSizeOfTheRoom) {
   Slam plain{BackAndForthOptions(false)};
   Slam trimmed{BackAndForthOptions(true)};
   int live_nodes_at_4 = 0, live_submaps_at_4 = 0;
+  Slam::MemoryUsage memory_at_4;
   for (int k = 0; k < 8 * 160; ++k) {
     ASSERT_TRUE(BackAndForthStep(&trimmed, k).accepted) << k;
     if (k < 4 * 160) {
@@ -594,8 +595,30 @@ TEST(SlamTrimTest, RevisitingTheSameRoomKeepsTheGraphTheSizeOfTheRoom) {
     if (k == 4 * 160 - 1) {
       live_nodes_at_4 = trimmed.num_live_nodes();
       live_submaps_at_4 = trimmed.num_live_submaps();
+      memory_at_4 = trimmed.Memory();
     }
   }
+  // What SLAM holds: the grids and the live nodes' scans stay the room's, below what the
+  // untrimmed graph holds after half the passes; what grows with the passes is the trimmed
+  // nodes' records (and the trajectory), a small part of a live node's.
+  const Slam::MemoryUsage memory = trimmed.Memory(), plain_memory = plain.Memory();
+  std::printf(
+      "SLAM data after 4 / 8 passes: grids %zu / %zu kB, live nodes %zu / %zu kB, trimmed "
+      "nodes %zu / %zu kB; untrimmed after 4: grids %zu kB, nodes %zu kB\n",
+      memory_at_4.submap_grids / 1024, memory.submap_grids / 1024, memory_at_4.live_nodes / 1024,
+      memory.live_nodes / 1024, memory_at_4.trimmed_nodes / 1024, memory.trimmed_nodes / 1024,
+      plain_memory.submap_grids / 1024, plain_memory.live_nodes / 1024);
+  EXPECT_LT(memory.submap_grids, plain_memory.submap_grids);
+  EXPECT_LT(memory.live_nodes + memory.trimmed_nodes, plain_memory.live_nodes / 2);
+  EXPECT_LT(memory.submap_grids, memory_at_4.submap_grids * 3 / 2);
+  EXPECT_LT(memory.live_nodes, memory_at_4.live_nodes * 3 / 2);
+  EXPECT_GT(memory.trimmed_nodes, memory_at_4.trimmed_nodes);
+  const double per_live = static_cast<double>(memory.live_nodes) / trimmed.num_live_nodes();
+  const double per_trimmed =
+      static_cast<double>(memory.trimmed_nodes) / (trimmed.num_nodes() - trimmed.num_live_nodes());
+  EXPECT_LT(per_trimmed, per_live / 5) << per_trimmed << " against " << per_live << " bytes";
+  EXPECT_EQ(memory.Total(), memory.submap_grids + memory.precomputations + memory.live_nodes +
+                                memory.trimmed_nodes + memory.graph + memory.trajectory);
   std::printf("4 passes: %d nodes, %lld submaps untrimmed; %d nodes, %d submaps live after 4 "
               "passes, %d, %d after 8 (%lld submaps trimmed)\n",
               plain.num_nodes(), (long long)plain.stats().submaps, live_nodes_at_4,

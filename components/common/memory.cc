@@ -1,0 +1,26 @@
+#include "common/memory.h"
+
+#include <malloc.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+namespace sarmap {
+namespace common {
+
+double ResidentMegabytes() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
+  return 0.0;
+}
+
+double HeapInUseMegabytes() {
+  const struct mallinfo2 info = mallinfo2();
+  return static_cast<double>(info.uordblks + info.hblkhd) / (1024.0 * 1024.0);
+}
+
+}  // namespace common
+}  // namespace sarmap
