@@ -19,7 +19,7 @@ double ResidentMegabytes() {
 
 double HeapInUseMegabytes() {
   const struct mallinfo2 info = mallinfo2();
-  return static_cast<double>(info.uordblks + info.hblkhd) / (1024.0 * 1024.0);
+  return Megabytes(info.uordblks + info.hblkhd);
 }
 
 }  // namespace common

@@ -6,8 +6,12 @@
 // out and not yet freed. Over a long mission the two tell growth of the data from memory the
 // allocator keeps.
 
+#include <cstddef>
+
 namespace sarmap {
 namespace common {
+
+constexpr double Megabytes(size_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); }
 
 // The process's resident set (VmRSS of /proc/self/status), MB; 0 when unreadable.
 double ResidentMegabytes();

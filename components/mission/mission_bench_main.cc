@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/args.h"
+#include "common/memory.h"
 #include "common/node_main.h"
 #include "log-tools/lcm_log_writer.h"
 #include "log-tools/mission_metrics.h"
@@ -238,8 +239,6 @@ std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, dou
   return "in view, not detected";
 }
 
-double Megabytes(size_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); }
-
 // The long-mission figures: per period, each component's share of one core over that period,
 // the memory, SLAM's graph, and what is on the maps.
 void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out) {
@@ -263,7 +262,7 @@ void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out)
                  pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
                  pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
                  pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb, r.heap_mb,
-                 Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
+                 common::Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
                  static_cast<long long>(r.slam_submaps),
                  static_cast<long long>(r.slam_submaps_held),
                  static_cast<long long>(r.slam_loop_closures),
@@ -285,10 +284,13 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
     csv << r.t_s << "," << r.state << "," << r.distance_m << "," << r.cpu_s << "," << r.slam_cpu_s
         << "," << r.explore_cpu_s << "," << r.vision_cpu_s << "," << r.people_map_cpu_s << ","
         << r.sound_cpu_s << "," << r.rss_mb << "," << r.heap_mb << ","
-        << Megabytes(r.slam_memory.Total()) << "," << Megabytes(r.slam_memory.submap_grids) << ","
-        << Megabytes(r.slam_memory.precomputations) << "," << Megabytes(r.slam_memory.live_nodes)
-        << "," << Megabytes(r.slam_memory.trimmed_nodes) << "," << Megabytes(r.slam_memory.graph)
-        << "," << Megabytes(r.slam_memory.trajectory) << "," << r.slam_nodes << ","
+        << common::Megabytes(r.slam_memory.Total()) << ","
+        << common::Megabytes(r.slam_memory.submap_grids) << ","
+        << common::Megabytes(r.slam_memory.precomputations) << ","
+        << common::Megabytes(r.slam_memory.live_nodes) << ","
+        << common::Megabytes(r.slam_memory.trimmed_nodes) << ","
+        << common::Megabytes(r.slam_memory.graph) << ","
+        << common::Megabytes(r.slam_memory.trajectory) << "," << r.slam_nodes << ","
         << r.slam_submaps << "," << r.slam_submaps_held << "," << r.slam_optimisations << ","
         << r.slam_loop_closures << "," << r.slam_optimise_s << "," << r.people_on_map << ","
         << r.sound_sources << "," << r.detections_without_pose << "\n";

@@ -1,4 +1,6 @@
 
+#include "slam/slam_node.h"
+
 #include <sys/stat.h>
 
 #include <cmath>
@@ -7,6 +9,7 @@
 
 #include "common/compression.h"
 #include "common/logging.h"
+#include "common/memory.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
 #include "common/node_main.h"
@@ -23,7 +26,6 @@
 #include "slam/messages.h"
 #include "slam/slam.h"
 #include "slam/slam_node_options.h"
-#include "slam/slam_node.h"
 
 namespace sarmap {
 namespace slam {
@@ -360,7 +362,7 @@ class SlamNode::Impl {
                   (long long)queue_.dropped_late(), (long long)gates_.dropped(),
                   (long long)gates_.reanchors(), (long long)anchor_requests_refused_,
                   latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0,
-                  static_cast<double>(slam_.Memory().Total()) / (1024.0 * 1024.0));
+                  common::Megabytes(slam_.Memory().Total()));
     node_->SetStatusMessage(text);
   }
 
