@@ -7,12 +7,12 @@ namespace sarmap {
 namespace slam {
 
 void ChainDrift::Add(const Rigid2d& local_pose) {
-  if (poses_.empty()) {
-    poses_.push_back(local_pose);
-    prefix_.push_back(Eigen::Matrix3d::Zero());
+  if (size_ == 0) {
+    last_ = {local_pose, Eigen::Matrix3d::Zero()};
+    entries_[size_++] = last_;
     return;
   }
-  const Rigid2d& prev = poses_.back();
+  const Rigid2d& prev = last_.pose;
   const double d_m = (local_pose.translation() - prev.translation()).norm();
   const double a_rad = std::abs(std::remainder(local_pose.yaw_rad() - prev.yaw_rad(), 2 * M_PI));
   const double q_t = model_.translation_m_per_sqrt_m * model_.translation_m_per_sqrt_m * d_m;
@@ -25,15 +25,17 @@ void ChainDrift::Add(const Rigid2d& local_pose) {
   m.topRightCorner<2, 1>() = q_r * v;
   m.bottomLeftCorner<1, 2>() = q_r * v.transpose();
   m(2, 2) = q_r;
-  poses_.push_back(local_pose);
-  prefix_.push_back(prefix_.back() + m);
+  last_ = {local_pose, Eigen::Matrix3d(last_.prefix + m)};
+  entries_[size_++] = last_;
 }
 
 Eigen::Matrix3d ChainDrift::RelativeCovariance(int a, int b) const {
-  const Eigen::Matrix3d s =
-      a < b ? Eigen::Matrix3d(prefix_[static_cast<size_t>(b)] - prefix_[static_cast<size_t>(a)])
-            : Eigen::Matrix3d(prefix_[static_cast<size_t>(a)] - prefix_[static_cast<size_t>(b)]);
-  const Eigen::Vector2d& t = poses_[static_cast<size_t>(b)].translation();
+  const auto ia = entries_.find(a), ib = entries_.find(b);
+  if (ia == entries_.end() || ib == entries_.end()) return Eigen::Matrix3d::Constant(INFINITY);
+  const Eigen::Matrix3d& pa = ia->second.prefix;
+  const Eigen::Matrix3d& pb = ib->second.prefix;
+  const Eigen::Matrix3d s = a < b ? Eigen::Matrix3d(pb - pa) : Eigen::Matrix3d(pa - pb);
+  const Eigen::Vector2d& t = ib->second.pose.translation();
   Eigen::Matrix3d lever = Eigen::Matrix3d::Identity();
   lever(0, 2) = -t.y();
   lever(1, 2) = t.x();

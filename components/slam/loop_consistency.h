@@ -18,7 +18,7 @@
 // uncertainty, and one that drove 100 m accumulates both.
 
 #include <Eigen/Core>
-#include <vector>
+#include <map>
 
 #include "common/transform.h"
 
@@ -33,28 +33,39 @@ struct DriftModel {
   double rotation_rad_per_sqrt_m = 0.0087;  // s_rm
 };
 
-// Prefix sums of the drift model over the chain of node poses in local SLAM's frame.
+// Prefix sums of the drift model over the chain of node poses in local SLAM's frame. Nodes
+// that can no longer end a loop closure (trimmed) are released: P_m is a running sum, so the
+// nodes kept stay exact and the chain holds only as many entries as there are live nodes.
 class ChainDrift {
  public:
   explicit ChainDrift(const DriftModel& model = DriftModel()) : model_(model) {}
   void Clear() {
-    poses_.clear();
-    prefix_.clear();
+    entries_.clear();
+    size_ = 0;
   }
-  // Appends the next node's local pose.
+  // Appends the next node's local pose (node id size()).
   void Add(const Rigid2d& local_pose);
-  int size() const { return static_cast<int>(poses_.size()); }
-  const Rigid2d& pose(int i) const { return poses_[static_cast<size_t>(i)]; }
+  // Forgets node i (no-op if it was not added or is already released).
+  void Release(int i) { entries_.erase(i); }
+  int size() const { return size_; }  // nodes added, released or not
+  bool Holds(int i) const { return entries_.count(i) > 0; }
+  const Rigid2d& pose(int i) const { return entries_.at(i).pose; }
   // Covariance of node b's (x, y, yaw), in the local frame's axes, while node a is held fixed.
+  // A released end has no drift bound: every element is +infinity (no closure passes).
   Eigen::Matrix3d RelativeCovariance(int a, int b) const;
   size_t MemoryBytes() const {
-    return poses_.capacity() * sizeof(Rigid2d) + prefix_.capacity() * sizeof(Eigen::Matrix3d);
+    return entries_.size() * (sizeof(Entry) + sizeof(int) + 4 * sizeof(void*));  // map nodes
   }
 
  private:
+  struct Entry {
+    Rigid2d pose;
+    Eigen::Matrix3d prefix;  // P_m
+  };
   DriftModel model_;
-  std::vector<Rigid2d> poses_;
-  std::vector<Eigen::Matrix3d> prefix_;  // P_m
+  std::map<int, Entry> entries_;
+  int size_ = 0;
+  Entry last_;  // the last node added (its successor's increment starts from it)
 };
 
 // Squared Mahalanobis distance of a loop closure: `measured` and `predicted` are both

@@ -76,6 +76,28 @@ TEST(LoopConsistencyTest, ATurnOnTheSpotCannotBeHalfAMetreFromItselfALongLoopCan
   EXPECT_FALSE(Gate(turn, 350, 10, turn.pose(10), Rigid2d(0.5, 0.0, 10 * kDeg), nullptr));
 }
 
+TEST(LoopConsistencyTest, ReleasingTheNodesBetweenTwoEndsKeepsTheirDriftExact) {
+  // A 20 m zig-zag, a node every 0.2 m; nodes 10..89 released (trimmed) as they are added.
+  ChainDrift full = DefaultChain(), sparse = DefaultChain();
+  for (int i = 0; i < 100; ++i) {
+    const Rigid2d pose(0.2 * i, (i / 10) % 2 ? 0.5 : 0.0, 0.01 * i);
+    full.Add(pose);
+    sparse.Add(pose);
+    if (i >= 10 && i < 90) sparse.Release(i);
+  }
+  EXPECT_EQ(sparse.size(), 100);
+  EXPECT_FALSE(sparse.Holds(50));
+  EXPECT_TRUE(sparse.Holds(95));
+  const Eigen::Matrix3d expected = full.RelativeCovariance(5, 95);
+  EXPECT_GT(expected(0, 0), 0.0);
+  EXPECT_TRUE(sparse.RelativeCovariance(5, 95).isApprox(expected, 1e-12));
+  EXPECT_TRUE(sparse.RelativeCovariance(95, 5).isApprox(full.RelativeCovariance(95, 5), 1e-12));
+  EXPECT_LT(sparse.MemoryBytes(), full.MemoryBytes() / 4);
+  // A released end bounds nothing: the gate refuses the closure rather than guess.
+  EXPECT_TRUE(Gate(full, 50, 95, full.pose(95), full.pose(95), nullptr));
+  EXPECT_FALSE(Gate(sparse, 50, 95, sparse.pose(95), sparse.pose(95), nullptr));
+}
+
 TEST(LoopConsistencyTest, HeadingDriftSwingsTheFarEndOfALeg) {
   // Turning 180 degrees and then driving 10 m: the heading uncertainty of the turn moves the
   // far end sideways (the lever arm), not along the leg.

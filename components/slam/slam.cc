@@ -328,12 +328,13 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
   Node node;
   node.time_s = time_s;
   node.local_pose = local_pose;
-  node.has_odometry = extrapolator_.last_has_odometry();
-  node.odom_pose = extrapolator_.last_odometry();
-  node.odom_segment = extrapolator_.last_segment();
-  node.loop_points = loop_points;
-  node.range_data = base_data;
-  node.submaps = inserted_into;
+  node.data = std::make_unique<NodeData>();
+  node.data->has_odometry = extrapolator_.last_has_odometry();
+  node.data->odom_pose = extrapolator_.last_odometry();
+  node.data->odom_segment = extrapolator_.last_segment();
+  node.data->loop_points = loop_points;
+  node.data->range_data = base_data;
+  node.data->submaps = inserted_into;
   nodes_.push_back(std::move(node));
   node_global_.push_back(global_from_local_ * local_pose);
   ++stats_.nodes;
@@ -352,10 +353,11 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
                               prev.local_pose.inverse() * cur.local_pose,
                               g.local_slam_translation_weight, g.local_slam_rotation_weight});
     }
-    if (prev.has_odometry && cur.has_odometry && prev.odom_segment == cur.odom_segment &&
+    if (prev.data && prev.data->has_odometry && cur.data->has_odometry &&
+        prev.data->odom_segment == cur.data->odom_segment &&
         (g.odometry_translation_weight > 0 || g.odometry_rotation_weight > 0)) {
       constraints_.push_back({Constraint::ODOMETRY, id - 1, id,
-                              prev.odom_pose.inverse() * cur.odom_pose,
+                              prev.data->odom_pose.inverse() * cur.data->odom_pose,
                               g.odometry_translation_weight, g.odometry_rotation_weight});
     }
   }
@@ -454,7 +456,8 @@ const PrecomputationStack& Slam::Precomputation(int submap_id) {
 bool Slam::TryLoopClosure(int node_id, int submap_id) {
   const Submap& s = submaps_[submap_id];
   const Node& n = nodes_[node_id];
-  if (n.loop_points.empty()) return false;
+  if (!n.data || n.data->loop_points.empty()) return false;
+  const PointCloud& loop_points = n.data->loop_points;
   ++stats_.loop_searches;
   // Initial guess of the node in the submap's grid (local) frame from the global estimate.
   const Rigid2d grid_from_global = s.local_pose * submap_global_[submap_id].inverse();
@@ -466,11 +469,11 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   b.depth = lo.branch_and_bound_depth;
   Rigid2d found;
   double score = 0;
-  if (!BranchAndBoundMatch(*s.grid, Precomputation(submap_id), n.loop_points, initial, b,
+  if (!BranchAndBoundMatch(*s.grid, Precomputation(submap_id), loop_points, initial, b,
                            lo.min_score, &found, &score)) {
     return false;
   }
-  if (lo.reject_window_edge && OnWindowBoundary(*s.grid, n.loop_points, initial, b, found)) {
+  if (lo.reject_window_edge && OnWindowBoundary(*s.grid, loop_points, initial, b, found)) {
     ++stats_.loop_closures_at_window_edge;
     return false;
   }
@@ -479,7 +482,7 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
   m.translation_weight = lo.ceres_translation_weight;
   m.rotation_weight = lo.ceres_rotation_weight;
   m.max_iterations = 10;
-  const Rigid2d refined = CeresMatch(*s.grid, n.loop_points, found, found, m);
+  const Rigid2d refined = CeresMatch(*s.grid, loop_points, found, found, m);
   if (lo.consistency_gate &&
       !ConsistentWithGraph(node_id, submap_id, s.local_pose.inverse() * refined)) {
     ++stats_.loop_closures_inconsistent;
@@ -494,7 +497,7 @@ bool Slam::TryLoopClosure(int node_id, int submap_id) {
     // submap frame the constraint is expressed in.
     const Eigen::Matrix2d grid_from_submap = s.local_pose.rotation().toRotationMatrix();
     const Eigen::Matrix2d information_grid =
-        MapTermHessian(*s.grid, n.loop_points, refined, 1.0).topLeftCorner<2, 2>();
+        MapTermHessian(*s.grid, loop_points, refined, 1.0).topLeftCorner<2, 2>();
     if (!TranslationShape(grid_from_submap.transpose() * information_grid * grid_from_submap,
                           &c.translation_shape)) {
       return false;
@@ -509,7 +512,9 @@ bool Slam::ConsistentWithGraph(int node_id, int submap_id, const Rigid2d& measur
   const Submap& s = submaps_[submap_id];
   if (s.nodes.empty()) return true;
   while (chain_drift_.size() < num_nodes()) {
-    chain_drift_.Add(nodes_[static_cast<size_t>(chain_drift_.size())].local_pose);
+    const int id = chain_drift_.size();
+    chain_drift_.Add(nodes_[static_cast<size_t>(id)].local_pose);
+    if (nodes_[static_cast<size_t>(id)].trimmed) chain_drift_.Release(id);
   }
   // The submap's part the scan matched was drawn by its nodes near the match: the drift that
   // matters is along the path between one of them and this node. Nodes within a cell of the
@@ -565,15 +570,19 @@ Slam::MemoryUsage Slam::Memory() const {
   }
   for (const auto& [id, stack] : precomputations_) m.precomputations += stack->MemoryBytes();
   for (const Node& n : nodes_) {
-    const size_t bytes = sizeof(Node) + cloud(n.loop_points) + cloud(n.range_data.hits) +
-                         cloud(n.range_data.misses) + n.submaps.capacity() * sizeof(int);
+    size_t bytes = sizeof(Node);
+    if (n.data) {
+      const NodeData& d = *n.data;
+      bytes += sizeof(NodeData) + cloud(d.loop_points) + cloud(d.range_data.hits) +
+               cloud(d.range_data.misses) + d.submaps.capacity() * sizeof(int);
+    }
     (n.trimmed ? m.trimmed_nodes : m.live_nodes) += bytes;
   }
   m.graph = constraints_.capacity() * sizeof(Constraint) +
             (node_global_.capacity() + submap_global_.capacity()) * sizeof(Rigid2d) +
             chain_drift_.MemoryBytes() + kept_nodes_.capacity() * sizeof(int) +
             retained_obstacles_.size() * (sizeof(int64_t) + 2 * sizeof(void*));
-  m.trajectory = scans_.capacity() * sizeof(ScanRecord);
+  m.trajectory = scans_.size() * sizeof(ScanRecord);
   return m;
 }
 
@@ -809,21 +818,20 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
     Node& node = nodes_[n];
     if (node.trimmed) continue;
     bool held = false;
-    for (int other : node.submaps) held = held || !submaps_[other].trimmed;
+    for (int other : node.data->submaps) held = held || !submaps_[other].trimmed;
     if (held) continue;
     node.trimmed = true;
-    node.loop_points = PointCloud();
     // Its returns on what no older submap holds stay on MAP (a low object seen from afar,
     // which later scans from close by look over).
     PointCloud kept;
-    for (const Eigen::Vector2f& hit : node.range_data.hits) {
+    for (const Eigen::Vector2f& hit : node.data->range_data.hits) {
       const int64_t key = CellKey(node_global_[n] * hit.cast<double>(), options_.trim.cell_m);
       if (new_obstacles.count(key) == 0) continue;
       kept.push_back(hit);
       retained_obstacles_.insert(key);
     }
-    node.range_data.hits = std::move(kept);
-    node.range_data.misses = PointCloud();
+    ReleaseTrimmedData(&node, std::move(kept));
+    chain_drift_.Release(n);
     ++stats_.nodes_trimmed;
     trimmed_nodes.push_back(n);
   }
@@ -862,11 +870,23 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
   }
 }
 
+void Slam::ReleaseTrimmedData(Node* node, PointCloud kept_hits) {
+  if (kept_hits.empty()) {
+    node->data.reset();
+    return;
+  }
+  auto data = std::make_unique<NodeData>();
+  data->range_data.origin = node->data->range_data.origin;
+  data->range_data.hits = std::move(kept_hits);
+  data->range_data.hits.shrink_to_fit();
+  node->data = std::move(data);
+}
+
 void Slam::RebuildRetainedObstacles() {
   retained_obstacles_.clear();
   for (size_t i = 0; i < nodes_.size(); ++i) {
-    if (!nodes_[i].trimmed) continue;
-    for (const Eigen::Vector2f& hit : nodes_[i].range_data.hits) {
+    if (!nodes_[i].trimmed || !nodes_[i].data) continue;
+    for (const Eigen::Vector2f& hit : nodes_[i].data->range_data.hits) {
       retained_obstacles_.insert(
           CellKey(node_global_[i] * hit.cast<double>(), options_.trim.cell_m));
     }
@@ -892,8 +912,8 @@ OccupancyMap Slam::RenderMap() const {
   if (nodes_.empty()) return map;
   ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
   for (size_t i = 0; i < nodes_.size(); ++i) {
-    if (nodes_[i].trimmed && nodes_[i].range_data.hits.empty()) continue;
-    grid.Insert(TransformRangeData(nodes_[i].range_data, node_global_[i]),
+    if (!nodes_[i].data) continue;
+    grid.Insert(TransformRangeData(nodes_[i].data->range_data, node_global_[i]),
                 static_cast<float>(options_.local.hit_probability),
                 static_cast<float>(options_.local.miss_probability));
   }

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <deque>
 #include <list>
 #include <map>
 #include <memory>
@@ -175,18 +176,23 @@ class Slam {
     // Loop-closure sampler state (fixed ratio).
     int64_t pulses = 0, samples = 0;
   };
-  struct Node {
-    double time_s = 0;
-    Rigid2d local_pose;
+  struct NodeData {
     bool has_odometry = false;
     int odom_segment = -1;
     Rigid2d odom_pose;
     PointCloud loop_points;  // base frame
     RangeData range_data;    // base frame (for map rendering)
     std::vector<int> submaps;  // the submaps it was inserted into
-    // Every submap of it is trimmed: its data is freed, but for its returns on obstacles no
-    // live submap holds (range_data.hits, no misses), drawn on MAP at its last pose.
+  };
+  // A live node holds its scan in `data`. A trimmed node (every submap of it trimmed) keeps its
+  // time and poses, and `data` only for its returns on obstacles no live submap holds
+  // (range_data.hits, no misses; drawn on MAP at its last pose), null when there are none: a
+  // long mission leaves tens of thousands of trimmed nodes, each a few dozen bytes.
+  struct Node {
+    double time_s = 0;
+    Rigid2d local_pose;
     bool trimmed = false;
+    std::unique_ptr<NodeData> data;
   };
   struct ScanRecord {
     double time_s;
@@ -215,6 +221,8 @@ class Slam {
   void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles);
   // retained_obstacles_ from the returns the trimmed nodes keep (after a load).
   void RebuildRetainedObstacles();
+  // A just-trimmed node keeps only `kept_hits` (none: no data at all).
+  static void ReleaseTrimmedData(Node* node, PointCloud kept_hits);
   // The map-frame circle around the submap's grid.
   void SubmapCircle(int submap_id, Eigen::Vector2d* centre_m, double* radius_m) const;
   // The map-frame raster cells (trim.cell_m) the submap's grid knows and those it holds an
@@ -242,14 +250,14 @@ class Slam {
   ActiveSubmaps active_submaps_;  // which of submaps_ take new nodes
 
   // Global SLAM.
-  std::vector<Node> nodes_;
+  std::deque<Node> nodes_;  // a deque: no doubling copy of tens of thousands of nodes
   std::vector<Rigid2d> node_global_, submap_global_;
   std::vector<Constraint> constraints_;
   ChainDrift chain_drift_;  // drift prefix sums over nodes_' local poses (extended on demand)
   Rigid2d global_from_local_;
   int nodes_since_optimisation_ = 0;
   int64_t loop_closures_at_last_optimisation_ = 0;
-  std::vector<ScanRecord> scans_;
+  std::deque<ScanRecord> scans_;
   std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
   std::vector<int> kept_nodes_;  // sorted
   // Finished submaps whose trim waits for their kept nodes to be released (ascending). Not in

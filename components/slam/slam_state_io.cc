@@ -101,17 +101,19 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int64_t>(nodes_.size());
     for (size_t i = 0; i < nodes_.size(); ++i) {
       const Node& n = nodes_[i];
+      const NodeData none;  // a trimmed node that keeps no returns
+      const NodeData& d = n.data ? *n.data : none;
       w.Pod(n.time_s);
       w.Pose(n.local_pose);
       w.Pose(node_global_[i]);
-      w.Pod<int32_t>(n.has_odometry);
-      w.Pod<int32_t>(n.odom_segment);
+      w.Pod<int32_t>(d.has_odometry);
+      w.Pod<int32_t>(d.odom_segment);
       w.Pod<int32_t>(n.trimmed);
-      w.Pose(n.odom_pose);
-      w.Cloud(n.loop_points);
-      w.Pod(n.range_data.origin.x()), w.Pod(n.range_data.origin.y());
-      w.Cloud(n.range_data.hits);
-      w.Cloud(n.range_data.misses);
+      w.Pose(d.odom_pose);
+      w.Cloud(d.loop_points);
+      w.Pod(d.range_data.origin.x()), w.Pod(d.range_data.origin.y());
+      w.Cloud(d.range_data.hits);
+      w.Cloud(d.range_data.misses);
     }
     // Constraints.
     w.Pod<int64_t>(constraints_.size());
@@ -197,23 +199,25 @@ void Slam::Load(const std::string& path) {
   std::vector<int> active;
   const int64_t na = r.Count(2);
   for (int64_t i = 0; i < na; ++i) active.push_back(r.Pod<int32_t>());
-  std::vector<Node> nodes;
+  std::deque<Node> nodes;
   std::vector<Rigid2d> node_global;
   const int64_t num_nodes = r.Count(100000000);
   for (int64_t i = 0; i < num_nodes; ++i) {
     Node n;
+    n.data = std::make_unique<NodeData>();
+    NodeData& d = *n.data;
     n.time_s = r.Pod<double>();
     n.local_pose = r.Pose();
     node_global.push_back(r.Pose());
-    n.has_odometry = r.Pod<int32_t>() != 0;
-    n.odom_segment = r.Pod<int32_t>();
+    d.has_odometry = r.Pod<int32_t>() != 0;
+    d.odom_segment = r.Pod<int32_t>();
     if (body_version >= 3) n.trimmed = r.Pod<int32_t>() != 0;
-    n.odom_pose = r.Pose();
-    n.loop_points = r.Cloud();
-    n.range_data.origin.x() = r.Pod<float>();
-    n.range_data.origin.y() = r.Pod<float>();
-    n.range_data.hits = r.Cloud();
-    n.range_data.misses = r.Cloud();
+    d.odom_pose = r.Pose();
+    d.loop_points = r.Cloud();
+    d.range_data.origin.x() = r.Pod<float>();
+    d.range_data.origin.y() = r.Pod<float>();
+    d.range_data.hits = r.Cloud();
+    d.range_data.misses = r.Cloud();
     nodes.push_back(std::move(n));
   }
   std::vector<Constraint> constraints;
@@ -268,7 +272,7 @@ void Slam::Load(const std::string& path) {
       if (n < 0 || n >= num_nodes) {
         throw std::runtime_error("pose-graph file corrupt (submap node)");
       }
-      nodes[n].submaps.push_back(static_cast<int>(i));
+      nodes[n].data->submaps.push_back(static_cast<int>(i));
     }
   }
   for (const Node& n : nodes) nodes_trimmed += n.trimmed;
@@ -281,7 +285,7 @@ void Slam::Load(const std::string& path) {
   }
   for (size_t i = 0; finite && i < nodes.size(); ++i) {
     finite = std::isfinite(nodes[i].time_s) && Finite(nodes[i].local_pose) &&
-             Finite(node_global[i]) && Finite(nodes[i].odom_pose);
+             Finite(node_global[i]) && Finite(nodes[i].data->odom_pose);
   }
   for (size_t i = 0; finite && i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
@@ -300,6 +304,9 @@ void Slam::Load(const std::string& path) {
   submaps_ = std::move(submaps);
   submap_global_ = std::move(submap_global);
   active_submaps_.Restore(std::move(active));
+  for (Node& n : nodes) {
+    if (n.trimmed) ReleaseTrimmedData(&n, std::move(n.data->range_data.hits));
+  }
   nodes_ = std::move(nodes);
   motion_filter_.Restore(last_node_time, last_node_local);
   chain_drift_.Clear();
