@@ -223,13 +223,16 @@ SoundClassEstimate SoundClassifier::Decide(const SoundClassFeatures& f,
   auto margin = [](double value, double threshold) {
     return std::clamp(std::abs(value - threshold) / std::max(threshold, 1e-9), 0.0, 1.0);
   };
+  bool early = false;  // decided before min_present_s (a voice or a clear alarm)
   if (f.tonality >= o.tonal_min && f.flux <= o.tonal_max_flux) {
-    if (!long_enough) return e;
     const bool alarm = f.peak_share >= o.alarm_peak_share;
+    early = alarm && f.tonality >= o.clear_alarm_tonal_min;
+    if (!long_enough && !early) return e;
     e.sound_class = alarm ? SoundClass::kAlarm : SoundClass::kMusic;
     e.confidence = std::min({margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux),
                              margin(f.peak_share, o.alarm_peak_share)});
   } else if (f.syllabic >= o.voice_syllabic_min && f.level_std_db >= o.steady_level_std_db) {
+    early = true;
     e.sound_class = SoundClass::kVoice;
     e.confidence = std::min(
         {std::max(margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux)),
@@ -243,8 +246,7 @@ SoundClassEstimate SoundClassifier::Decide(const SoundClassFeatures& f,
                           margin(f.level_std_db, o.steady_level_std_db)));
   }
   // Little sound heard: less sure.
-  const double needed =
-      e.sound_class == SoundClass::kVoice ? o.min_voice_present_s : o.min_present_s;
+  const double needed = early ? o.min_voice_present_s : o.min_present_s;
   e.confidence *= std::min(1.0, f.present_s / (2 * std::max(needed, 1e-3)));
   return e;
 }

@@ -26,7 +26,9 @@
 // machinery and noise T 0.15, syllabic 0.05, level std 0.4 dB; tones and sirens T > 0.9. The
 // flux keeps speech (X 0.19-0.28; T up to 0.57) out of the tonal classes (X 0.02-0.09).
 // A source heard for less than min_present_s is kUnknown, except a voice, decided from
-// min_voice_present_s (a short call); a tonal or steady sound that short stays kUnknown. A frame
+// min_voice_present_s (a short call), and a clear alarm (T >= clear_alarm_tonal_min, peak share
+// >= alarm_peak_share), decided as early; any other tonal or steady sound that short stays
+// kUnknown. A frame
 // sounds (is present) when its energy is within present_range_db of the loudest recent frame (one
 // recording) or when the caller says so (a localiser reported the source in that block).
 //
@@ -68,6 +70,11 @@ struct SourceClassOptions {
   // A voice is decided from this much sound: a call for help may be half a second, while
   // alarms, music and machines sound for longer and wait for min_present_s.
   double min_voice_present_s = 0.25;
+  // ... and so is a clear alarm: a tone or siren this tonal (speech stays below 0.6, the first
+  // voiced 0.3 s of a vowel too; a pure tone or siren is above 0.9) on one or two pitches. A
+  // robot hears an alarm in short pieces (bursts, other sources in between), and the tone
+  // heard while driving through its standing waves rises and falls like speech.
+  double clear_alarm_tonal_min = 0.9;
   double present_range_db = 20.0;  // one recording: frames this far below the loudest are pauses
   double tonal_min = 0.6;
   double tonal_max_flux = 0.15;
@@ -98,6 +105,8 @@ struct SourceClassOptions {
       "a source heard for less than this is unknown (a voice: min_voice_present_s)");
     v("min_voice_present_s", min_voice_present_s,
       "a voice is decided from this much sound (a short call)");
+    v("clear_alarm_tonal_min", clear_alarm_tonal_min,
+      "an alarm this tonal is decided from min_voice_present_s of sound (> 1: never)");
     v("present_range_db", present_range_db,
       "one recording: frames this far below the loudest are pauses");
     v("tonal_min", tonal_min, "mean tonality (3 peaks' share of the power) of alarms and music");
@@ -130,6 +139,7 @@ struct SourceClassOptions {
     check.Positive("history_s", history_s);
     check.InRange("min_present_s", min_present_s, 0, history_s);
     check.InRange("min_voice_present_s", min_voice_present_s, 0, min_present_s);
+    check.NonNegative("clear_alarm_tonal_min", clear_alarm_tonal_min);
     check.Positive("present_range_db", present_range_db);
     check.InRange("tonal_min", tonal_min, 0, 1);
     check.InRange("tonal_max_flux", tonal_max_flux, 0, 1);

@@ -250,13 +250,34 @@ TEST(SourceClassTest, ShortCallsAreVoiceShortTonesAndNoiseAreNot) {
       std::printf("%.1f s of %s: %s\n", seconds, cases[i].first.c_str(), Describe(e).c_str());
       EXPECT_NE(e.sound_class, SoundClass::kVoice)
           << seconds << " s of " << cases[i].first << ": " << Describe(e);
+      // The tones, the beeper and the siren are clear alarms, decided as early as a voice;
+      // noise and machinery wait for min_present_s.
+      const bool tonal = i < 4;
+      if (tonal || seconds >= options.min_present_s) {
+        EXPECT_EQ(e.sound_class, tonal ? SoundClass::kAlarm : SoundClass::kMachinery)
+            << seconds << " s of " << cases[i].first << ": " << Describe(e);
+      } else {
+        EXPECT_EQ(e.sound_class, SoundClass::kUnknown)
+            << seconds << " s of " << cases[i].first << ": " << Describe(e);
+      }
     }
   }
 }
 
 TEST(SourceClassTest, TooLittleSoundIsUnknown) {
-  const auto e = ClassifyMono(WithNoise(Beeper(0.3, 2800, 10, 0), 25, 5));
-  EXPECT_EQ(e.sound_class, SoundClass::kUnknown) << Describe(e);
+  // 0.15 s of a beep: less than min_voice_present_s.
+  const auto beep = ClassifyMono(WithNoise(Beeper(0.15, 2800, 10, 0), 25, 5));
+  EXPECT_EQ(beep.sound_class, SoundClass::kUnknown) << Describe(beep);
+  // 0.5 s of a tune is not a voice (on its first few notes it looks like an alarm).
+  const auto tune = ClassifyMono(WithNoise(Tune(0.5, 0.1), 25, 6));
+  EXPECT_NE(tune.sound_class, SoundClass::kVoice) << Describe(tune);
+  // The same beep for 0.3 s is a clear alarm.
+  const auto alarm = ClassifyMono(WithNoise(Beeper(0.3, 2800, 10, 0), 25, 5));
+  EXPECT_EQ(alarm.sound_class, SoundClass::kAlarm) << Describe(alarm);
+  SourceClassOptions never;
+  never.clear_alarm_tonal_min = 1.5;
+  const auto late = ClassifyMono(WithNoise(Beeper(0.3, 2800, 10, 0), 25, 5), never);
+  EXPECT_EQ(late.sound_class, SoundClass::kUnknown) << Describe(late);
 }
 
 // Three sources at once in a reverberant room (image sources), heard by the ReSpeaker array:
