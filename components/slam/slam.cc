@@ -315,7 +315,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     }
     (void)node_id;
   }
-  scans_.push_back({stamp_s, local, static_cast<int>(nodes_.size()) - 1});
+  scans_.push_back(MakeScanRecord(stamp_s, local, static_cast<int>(nodes_.size()) - 1));
   result.accepted = true;
   result.node_id = static_cast<int>(nodes_.size()) - 1;
   result.map_from_base = CurrentPose();
@@ -586,13 +586,21 @@ Slam::MemoryUsage Slam::Memory() const {
   return m;
 }
 
+Slam::ScanRecord Slam::MakeScanRecord(double time_s, const Rigid2d& pose, int node_id) const {
+  const Rigid2d stored =
+      node_id >= 0 ? nodes_[static_cast<size_t>(node_id)].local_pose.inverse() * pose : pose;
+  return {time_s, static_cast<float>(stored.translation().x()),
+          static_cast<float>(stored.translation().y()), static_cast<float>(stored.yaw_rad()),
+          node_id};
+}
+
 std::vector<StampedPose2> Slam::Trajectory() const {
   std::vector<StampedPose2> out;
   out.reserve(scans_.size());
   for (const auto& s : scans_) {
-    Rigid2d g = s.local_pose;
+    Rigid2d g = s.pose();
     if (s.node_id >= 0 && s.node_id < static_cast<int>(nodes_.size())) {
-      g = node_global_[s.node_id] * nodes_[s.node_id].local_pose.inverse() * s.local_pose;
+      g = node_global_[s.node_id] * s.pose();
     }
     out.push_back({s.time_s, g.translation().x(), g.translation().y(), g.yaw_rad()});
   }
@@ -647,7 +655,7 @@ ScanResult Slam::AddScanLocalisation(const LaserScan& scan, const RangeData&,
   have_scan_since_load_ = true;
   extrapolator_.SetLast(scan.time_s, pose);
   ++stats_.scans;
-  scans_.push_back({scan.time_s, pose, -1});
+  scans_.push_back(MakeScanRecord(scan.time_s, pose, -1));
   result.accepted = true;
   result.node_id = -1;
   result.map_from_base = pose;
