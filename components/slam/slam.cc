@@ -513,8 +513,9 @@ bool Slam::ConsistentWithGraph(int node_id, int submap_id, const Rigid2d& measur
   if (s.nodes.empty()) return true;
   while (chain_drift_.size() < num_nodes()) {
     const int id = chain_drift_.size();
-    chain_drift_.Add(nodes_[static_cast<size_t>(id)].local_pose);
-    if (nodes_[static_cast<size_t>(id)].trimmed) chain_drift_.Release(id);
+    const Node& node = nodes_[static_cast<size_t>(id)];
+    chain_drift_.Add(node.local_pose);
+    if (node.trimmed) chain_drift_.Release(id);
   }
   // The submap's part the scan matched was drawn by its nodes near the match: the drift that
   // matters is along the path between one of them and this node. Nodes within a cell of the

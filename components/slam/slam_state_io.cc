@@ -99,9 +99,9 @@ void Slam::Save(const std::string& path) const {
     for (int a : active_submaps_.ids()) w.Pod<int32_t>(a);
     // Nodes.
     w.Pod<int64_t>(nodes_.size());
+    const NodeData none;  // what a trimmed node that keeps no returns writes
     for (size_t i = 0; i < nodes_.size(); ++i) {
       const Node& n = nodes_[i];
-      const NodeData none;  // a trimmed node that keeps no returns
       const NodeData& d = n.data ? *n.data : none;
       w.Pod(n.time_s);
       w.Pose(n.local_pose);
