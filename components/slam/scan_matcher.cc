@@ -390,13 +390,23 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
     }
     boxes[a] = b;
   }
+  // Each rotated scan's cells as offsets into a level's storage: inside the stack a candidate's
+  // score is a sum of bytes at (candidate's index + offset), with no per-point index arithmetic.
+  std::vector<std::vector<ptrdiff_t>> offsets(scans.size());
+  const ptrdiff_t origin = stack.Index(0, 0);
+  for (size_t a = 0; a < scans.size(); ++a) {
+    offsets[a].reserve(scans[a].size());
+    for (const auto& cell : scans[a])
+      offsets[a].push_back(stack.Index(cell.x(), cell.y()) - origin);
+  }
   auto score_of = [&](int level, const Candidate& c) {
     int64_t sum = 0;
     const auto& cells = scans[c.angle_index];
     const Eigen::Array4i& b = boxes[c.angle_index];
     if (stack.Contains(b[0] + c.x, b[1] + c.y) && stack.Contains(b[2] + c.x, b[3] + c.y)) {
-      for (const auto& cell : cells)
-        sum += stack.ValueInside(level, cell.x() + c.x, cell.y() + c.y);
+      const uint8_t* level_cells = stack.Level(level);
+      const ptrdiff_t base = stack.Index(c.x, c.y);
+      for (const ptrdiff_t offset : offsets[c.angle_index]) sum += level_cells[base + offset];
     } else {
       for (const auto& cell : cells) sum += stack.Value(level, cell.x() + c.x, cell.y() + c.y);
     }
@@ -405,8 +415,27 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
   const int top = stack.depth() - 1;
   const int top_step = 1 << top;
   std::vector<Candidate> candidates;
+  const int row_candidates = 2 * w / top_step + 1;  // x = -w, -w + top_step, ... <= w
+  std::vector<int64_t> row_sums(row_candidates);
   for (size_t a = 0; a < scans.size(); ++a) {
+    const Eigen::Array4i& b = boxes[a];
     for (int y = -w; y <= w; y += top_step) {
+      if (stack.Contains(b[0] - w, b[1] + y) &&
+          stack.Contains(b[2] - w + (row_candidates - 1) * top_step, b[3] + y)) {
+        // The row of candidates lies inside the stack: their sums in one pass over the cells.
+        std::fill(row_sums.begin(), row_sums.end(), 0);
+        const uint8_t* level_cells = stack.Level(top);
+        const ptrdiff_t base = stack.Index(-w, y);
+        for (const ptrdiff_t offset : offsets[a]) {
+          const uint8_t* cell = level_cells + base + offset;
+          for (int i = 0; i < row_candidates; ++i) row_sums[i] += cell[i * top_step];
+        }
+        for (int i = 0; i < row_candidates; ++i) {
+          candidates.push_back(Candidate{static_cast<int>(a), -w + i * top_step, y,
+                                         to_probability(static_cast<double>(row_sums[i]))});
+        }
+        continue;
+      }
       for (int x = -w; x <= w; x += top_step) {
         Candidate c{static_cast<int>(a), x, y, 0};
         c.score = score_of(top, c);
@@ -429,6 +458,29 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
       const int half = 1 << (level - 1);
       std::array<Candidate, 4> children;
       int num_children = 0;
+      const Eigen::Array4i& b = boxes[c->angle_index];
+      if (c->x + half <= w && c->y + half <= w && stack.Contains(b[0] + c->x, b[1] + c->y) &&
+          stack.Contains(b[2] + c->x + half, b[3] + c->y + half)) {
+        // All four children lie inside the stack: their sums in one pass over the scan's cells
+        // (one offset read, four independent loads per cell).
+        const uint8_t* level_cells = stack.Level(level - 1);
+        const ptrdiff_t base = stack.Index(c->x, c->y);
+        const ptrdiff_t right = half, down = stack.Index(0, half) - stack.Index(0, 0);
+        int64_t sum[4] = {0, 0, 0, 0};
+        for (const ptrdiff_t offset : offsets[c->angle_index]) {
+          const uint8_t* cell = level_cells + base + offset;
+          sum[0] += cell[0];
+          sum[1] += cell[right];
+          sum[2] += cell[down];
+          sum[3] += cell[down + right];
+        }
+        for (int i = 0; i < 4; ++i) {
+          children[i] = Candidate{c->angle_index, c->x + (i & 1) * half, c->y + (i >> 1) * half,
+                                  to_probability(static_cast<double>(sum[i]))};
+        }
+        search(children.data(), children.data() + 4, level - 1);
+        continue;
+      }
       for (int dy : {0, half}) {
         if (c->y + dy > w) continue;
         for (int dx : {0, half}) {

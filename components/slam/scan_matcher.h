@@ -101,11 +101,13 @@ class PrecomputationStack {
     y += offset_;
     return x >= 0 && y >= 0 && x < width_ && y < height_;
   }
-  // Value() of a cell for which Contains() holds.
-  int ValueInside(int level, int x, int y) const {
-    return levels_[level][static_cast<size_t>(y + offset_) * width_ + x + offset_];
-  }
   size_t MemoryBytes() const { return levels_.size() * static_cast<size_t>(width_) * height_; }
+  // Row-major storage of a level: cell (x, y) with Contains() is at Level(l)[Index(x, y)], and
+  // Index(x + dx, y + dy) = Index(x, y) + Index(dx, dy) - Index(0, 0).
+  const uint8_t* Level(int level) const { return levels_[level].data(); }
+  ptrdiff_t Index(int x, int y) const {
+    return static_cast<ptrdiff_t>(y + offset_) * width_ + x + offset_;
+  }
 
  private:
   int offset_, width_, height_;

@@ -140,6 +140,63 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
   EXPECT_FALSE(BranchAndBoundMatch(*grid_, stack, points_, start, b, 0.95, &found, &score));
 }
 
+TEST_F(ScanMatcherTest, BranchAndBoundScoreIsTheExhaustiveSearchsBest) {
+  // A 2 m window around a scan that spans the room: most candidates put some points outside
+  // the stack (scored point by point), the rest lie inside (scored in rows and groups of four).
+  // Either way the search returns the best of every candidate scored one by one, and the
+  // candidate it returns has that score.
+  PrecomputationStack stack(*grid_, 5);
+  const BranchAndBoundOptions b = Window(2.0, 0.1);
+  const double res = grid_->resolution();
+  const double step = AngularSearchStep(points_, res, b.step_range_cap_m);
+  const int num_angles = static_cast<int>(std::ceil(b.angular_window_rad / step));
+  const int w = static_cast<int>(std::ceil(b.linear_window_m / res));
+  const double n = static_cast<double>(points_.size());
+  const auto probability = [&](int64_t sum) {
+    return kMinProbability +
+           (kMaxProbability - kMinProbability) * static_cast<double>(sum) / (255.0 * n);
+  };
+  int partly_outside = 0, inside = 0;
+  for (const Eigen::Vector3d& offset :
+       {Eigen::Vector3d(0.6, -0.4, 0.05), Eigen::Vector3d(-0.35, 0.25, -0.08),
+        Eigen::Vector3d(0.05, 0.9, 0.02), Eigen::Vector3d(-1.1, -0.2, 0.0)}) {
+    const Rigid2d start(truth_.translation() + offset.head<2>(), truth_.yaw_rad() + offset.z());
+    Rigid2d found;
+    double score = 0;
+    ASSERT_TRUE(BranchAndBoundMatch(*grid_, stack, points_, start, b, 0.0, &found, &score));
+    const int found_k = static_cast<int>(std::lround((found.yaw_rad() - start.yaw_rad()) / step));
+    const Eigen::Vector2d found_cells = (found.translation() - start.translation()) / res;
+    int64_t best = -1, found_sum = -1;
+    for (int k = -num_angles; k <= num_angles; ++k) {
+      const Eigen::Matrix2f r =
+          Eigen::Rotation2Df(static_cast<float>(start.yaw_rad() + k * step)).toRotationMatrix();
+      const Eigen::Vector2f t = start.translation().cast<float>();
+      std::vector<Eigen::Array2i> cells;
+      for (const auto& p : points_) cells.push_back(grid_->CellIndex(r * p + t));
+      for (int dy = -w; dy <= w; ++dy) {
+        for (int dx = -w; dx <= w; ++dx) {
+          int64_t sum = 0;
+          bool all_inside = true;
+          for (const auto& c : cells) {
+            sum += stack.Value(0, c.x() + dx, c.y() + dy);
+            all_inside = all_inside && stack.Contains(c.x() + dx, c.y() + dy);
+          }
+          ++(all_inside ? inside : partly_outside);
+          best = std::max(best, sum);
+          if (k == found_k && dx == std::lround(found_cells.x()) &&
+              dy == std::lround(found_cells.y())) {
+            found_sum = sum;
+          }
+        }
+      }
+    }
+    EXPECT_DOUBLE_EQ(score, probability(best));
+    EXPECT_DOUBLE_EQ(score, probability(found_sum));
+  }
+  EXPECT_GT(inside, 1000);
+  EXPECT_GT(partly_outside, 1000);
+}
+
 TEST_F(ScanMatcherTest, AMatchOutsideTheWindowEndsOnItsBoundary) {
   PrecomputationStack stack(*grid_, 6);
   const BranchAndBoundOptions b = Window(0.5, 0.2);
