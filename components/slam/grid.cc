@@ -30,6 +30,7 @@ ProbabilityGrid::ProbabilityGrid(double resolution_m, const Eigen::Vector2d& cen
 void ProbabilityGrid::GrowToInclude(const Eigen::Vector2f& point) {
   const Eigen::Array2i c = CellIndex(point);
   if (Contains(c)) return;
+  Unfinish();
   int grow_left = 0, grow_right = 0, grow_down = 0, grow_up = 0;
   // Grow by at least half the current size so growth is amortised.
   if (c.x() < 0) grow_left = std::max(-c.x() + 20, width_ / 2);
@@ -60,7 +61,23 @@ void ProbabilityGrid::ApplyOdds(int index, float odds_factor) {
   cells_[index] = std::min(kMaxProbability, std::max(kMinProbability, p));
 }
 
+uint16_t ProbabilityGrid::Encode(float p) {
+  if (p == 0.f) return 0;
+  const float f = (std::min(kMaxProbability, std::max(kMinProbability, p)) - kMinProbability) /
+                  (kMaxProbability - kMinProbability);
+  return static_cast<uint16_t>(1 + std::lround(f * 32766.f));
+}
+
+void ProbabilityGrid::Unfinish() {
+  if (!finished_) return;
+  cells_.resize(finished_cells_.size());
+  for (size_t i = 0; i < cells_.size(); ++i) cells_[i] = Decode(finished_cells_[i]);
+  std::vector<uint16_t>().swap(finished_cells_);
+  finished_ = false;
+}
+
 void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float miss_probability) {
+  Unfinish();
   if (update_mark_.size() != cells_.size()) {  // released by Finish()
     update_mark_.assign(cells_.size(), 0);
     current_mark_ = 1;
@@ -128,7 +145,7 @@ bool ProbabilityGrid::KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) cons
   *max = Eigen::Array2i(-1, -1);
   for (int y = 0; y < height_; ++y) {
     for (int x = 0; x < width_; ++x) {
-      if (cells_[y * width_ + x] == 0.f) continue;
+      if (RawAt(static_cast<size_t>(y) * width_ + x) == 0.f) continue;
       *min = min->min(Eigen::Array2i(x, y));
       *max = max->max(Eigen::Array2i(x, y));
     }
@@ -137,17 +154,22 @@ bool ProbabilityGrid::KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) cons
 }
 
 void ProbabilityGrid::Finish() {
+  if (finished_) return;
   std::vector<uint32_t>().swap(update_mark_);
   Eigen::Array2i min, max;
-  if (!KnownBounds(&min, &max)) return;
-  const int new_w = max.x() - min.x() + 1, new_h = max.y() - min.y() + 1;
-  if (new_w == width_ && new_h == height_) return;
-  std::vector<float> cells(static_cast<size_t>(new_w) * new_h);
-  for (int y = 0; y < new_h; ++y) {
-    const auto row = cells_.begin() + static_cast<size_t>(y + min.y()) * width_ + min.x();
-    std::copy(row, row + new_w, cells.begin() + static_cast<size_t>(y) * new_w);
+  if (!KnownBounds(&min, &max)) {  // nothing known: keep the extent
+    min = Eigen::Array2i(0, 0);
+    max = Eigen::Array2i(width_ - 1, height_ - 1);
   }
-  cells_.swap(cells);
+  const int new_w = max.x() - min.x() + 1, new_h = max.y() - min.y() + 1;
+  finished_cells_.assign(static_cast<size_t>(new_w) * new_h, 0);
+  for (int y = 0; y < new_h; ++y) {
+    const float* row = &cells_[static_cast<size_t>(y + min.y()) * width_ + min.x()];
+    uint16_t* out = &finished_cells_[static_cast<size_t>(y) * new_w];
+    for (int x = 0; x < new_w; ++x) out[x] = Encode(row[x]);
+  }
+  std::vector<float>().swap(cells_);
+  finished_ = true;
   width_ = new_w;
   height_ = new_h;
   corner_ += Eigen::Vector2d(min.x() * resolution_, min.y() * resolution_);
@@ -158,6 +180,8 @@ void ProbabilityGrid::SetRaw(int width, int height, const Eigen::Vector2d& corne
   width_ = width;
   height_ = height;
   corner_ = corner;
+  finished_ = false;
+  std::vector<uint16_t>().swap(finished_cells_);
   cells_ = std::move(cells);
   update_mark_.assign(cells_.size(), 0);
   current_mark_ = 1;

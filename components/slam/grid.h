@@ -7,6 +7,11 @@
 //     odds(p') = odds(p) * odds(p_miss)     for a miss (p_miss < 0.5)
 // starting from p = 0.5 for a new cell, clamped to [p_min, p_max]. Within one scan a cell is
 // updated at most once, a hit winning over a miss (so dense rays do not over-count).
+//
+// A finished grid (Finish(), only read from then on) stores each cell in 16 bits, as
+// Cartographer does: 0 for unknown, else v in 1..32767 with
+//     p = p_min + (v - 1) * (p_max - p_min) / 32766,
+// a step of 2.4e-5 in probability, half the bytes of a float.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -53,15 +58,21 @@ class ProbabilityGrid {
   }
   // Probability, 0 when unknown or outside.
   float Raw(const Eigen::Array2i& cell) const {
-    return Contains(cell) ? cells_[cell.y() * width_ + cell.x()] : 0.f;
+    return Contains(cell) ? RawAt(static_cast<size_t>(cell.y()) * width_ + cell.x()) : 0.f;
+  }
+  // Probability of the cell at row-major index y * width() + x, 0 when unknown.
+  float RawAt(size_t index) const {
+    return finished_ ? Decode(finished_cells_[index]) : cells_[index];
   }
   // Probability with unknown/outside as kMinProbability (what matchers use).
   float Probability(int x, int y) const {
     if (x < 0 || y < 0 || x >= width_ || y >= height_) return kMinProbability;
-    const float p = cells_[y * width_ + x];
+    const float p = RawAt(static_cast<size_t>(y) * width_ + x);
     return p == 0.f ? kMinProbability : p;
   }
-  const std::vector<float>& cells() const { return cells_; }
+  // The cells as floats in row-major order while the grid is not finished; nullptr after.
+  const float* LiveCells() const { return finished_ ? nullptr : cells_.data(); }
+  bool finished() const { return finished_; }
 
   // Inserts range data given in the map frame (hits update to occupied, rays to free).
   void Insert(const RangeData& data, float hit_probability, float miss_probability);
@@ -73,13 +84,22 @@ class ProbabilityGrid {
   bool KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) const;
 
   // For a grid that is only read from now on: crops it to its known cells (growth leaves up to
-  // half the grid unknown) and frees the per-scan update marks; reads are unchanged (outside
-  // and unknown read alike). Inserting again works, at the cost of re-allocating the marks.
+  // half the grid unknown), stores them in 16 bits and frees the per-scan update marks; reads
+  // change by at most half a 16-bit step (outside and unknown read alike). Inserting again
+  // works, at the cost of going back to floats and re-allocating the marks.
   void Finish();
 
   // Bytes of its cells and update marks (capacity).
   size_t MemoryBytes() const {
-    return cells_.capacity() * sizeof(float) + update_mark_.capacity() * sizeof(uint32_t);
+    return cells_.capacity() * sizeof(float) + finished_cells_.capacity() * sizeof(uint16_t) +
+           update_mark_.capacity() * sizeof(uint32_t);
+  }
+
+  // The 16-bit code of a probability (0 for unknown) and back.
+  static uint16_t Encode(float p);
+  static float Decode(uint16_t v) {
+    return v == 0 ? 0.f
+                  : kMinProbability + (v - 1) * ((kMaxProbability - kMinProbability) / 32766.f);
   }
 
   // Raw access for loading.
@@ -87,11 +107,14 @@ class ProbabilityGrid {
 
  private:
   void ApplyOdds(int index, float odds_factor);
+  void Unfinish();  // back to float cells, for inserting into a finished grid
 
   double resolution_, inv_resolution_;
   Eigen::Vector2d corner_;
   int width_ = 0, height_ = 0;
-  std::vector<float> cells_;
+  bool finished_ = false;
+  std::vector<float> cells_;              // while not finished
+  std::vector<uint16_t> finished_cells_;  // once finished (Encode)
   std::vector<uint32_t> update_mark_;
   uint32_t current_mark_ = 1;
 };

@@ -125,14 +125,15 @@ Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
   double best = -1, best_raw = 0;
   Rigid2d best_pose = initial;
   const float inv_n = 1.f / points.size();
-  const float* grid_cells = grid.cells().data();
+  // nullptr for a finished grid (localisation in a saved map): read cell by cell.
+  const float* grid_cells = grid.LiveCells();
   const int grid_w = grid.width(), grid_h = grid.height();
   for (int k = -num_angles; k <= num_angles; ++k) {
     const double dtheta = k * angle_step;
     DiscretizeScan(grid, points, initial.yaw_rad() + dtheta, initial.translation(), &cells);
     std::fill(sums.begin(), sums.end(), 0.f);
     for (const auto& c : cells) {
-      const bool columns_inside = c.x() - w >= 0 && c.x() + w < grid_w;
+      const bool columns_inside = grid_cells && c.x() - w >= 0 && c.x() + w < grid_w;
       for (int dy = -w; dy <= w; ++dy) {
         float* row = &sums[static_cast<size_t>(dy + w) * side];
         const int y = c.y() + dy;
@@ -309,10 +310,9 @@ PrecomputationStack::PrecomputationStack(const ProbabilityGrid& grid, int depth)
   // Level 0: the grid itself (shifted by offset_).
   auto& l0 = levels_[0];
   l0.assign(static_cast<size_t>(width_) * height_, 0);
-  const auto& cells = grid.cells();
   for (int y = 0; y < grid.height(); ++y) {
     for (int x = 0; x < grid.width(); ++x) {
-      const float p = cells[static_cast<size_t>(y) * grid.width() + x];
+      const float p = grid.RawAt(static_cast<size_t>(y) * grid.width() + x);
       if (p == 0.f) continue;
       const float v = (p - kMinProbability) / (kMaxProbability - kMinProbability) * 255.f;
       l0[static_cast<size_t>(y + offset_) * width_ + x + offset_] =

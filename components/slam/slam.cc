@@ -567,7 +567,8 @@ Slam::MemoryUsage Slam::Memory() const {
   for (const Submap& sm : submaps_) {
     m.submap_grids += sizeof(Submap) + sm.nodes.capacity() * sizeof(int);
     if (sm.grid) m.submap_grids += sizeof(ProbabilityGrid) + sm.grid->MemoryBytes();
-    m.submap_grids += cloud(sm.known_samples) + cloud(sm.occupied_samples);
+    m.submap_grids +=
+        (sm.known_samples.capacity() + sm.occupied_samples.capacity()) * sizeof(uint32_t);
   }
   for (const auto& [id, stack] : precomputations_) m.precomputations += stack->MemoryBytes();
   for (const Node& n : nodes_) {
@@ -723,22 +724,25 @@ void Slam::KnownCells(int submap_id, std::vector<int64_t>* known,
         const bool sampled = y % stride == stride / 2 && x % stride == stride / 2;
         const float p = g.Raw(Eigen::Array2i(x, y));
         if (p == 0.f || (!sampled && p <= 0.5f)) continue;  // 0: unknown
-        const Eigen::Vector2f cell_local =
-            (g.corner() + (Eigen::Vector2d(x, y) + Eigen::Vector2d(0.5, 0.5)) * g.resolution())
-                .cast<float>();
-        if (sampled) sub.known_samples.push_back(cell_local);
-        if (p > 0.5f) sub.occupied_samples.push_back(cell_local);
+        const uint32_t index = static_cast<uint32_t>(y) * g.width() + x;
+        if (sampled) sub.known_samples.push_back(index);
+        if (p > 0.5f) sub.occupied_samples.push_back(index);
       }
     }
+    sub.known_samples.shrink_to_fit();
+    sub.occupied_samples.shrink_to_fit();
     sub.samples_ready = true;
   }
+  // A cell index's centre in the grid frame, then in the global frame.
+  const auto centre = [&](uint32_t index) {
+    const Eigen::Vector2d cell(index % g.width() + 0.5, index / g.width() + 0.5);
+    return global_from_grid * (g.corner() + cell * g.resolution());
+  };
   known->clear();
   occupied->clear();
-  for (const auto& p : sub.known_samples) {
-    known->push_back(CellKey(global_from_grid * p.cast<double>(), cell_m));
-  }
-  for (const auto& p : sub.occupied_samples) {
-    occupied->push_back(CellKey(global_from_grid * p.cast<double>(), cell_m));
+  for (const uint32_t index : sub.known_samples) known->push_back(CellKey(centre(index), cell_m));
+  for (const uint32_t index : sub.occupied_samples) {
+    occupied->push_back(CellKey(centre(index), cell_m));
   }
   SortUnique(known);
   SortUnique(occupied);

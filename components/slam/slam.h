@@ -168,10 +168,10 @@ class Slam {
     int num_inserted = 0;
     bool finished = false;
     bool trimmed = false;  // its grid is freed and its constraints removed
-    // Finished: the grid-frame centres of its known cells every trim.cell_m and of its occupied
-    // cells (TrimIfCovered), taken once.
+    // Finished: its known cells every trim.cell_m and its occupied cells (TrimIfCovered), as
+    // grid cell indices y * width + x, taken once.
     bool samples_ready = false;
-    std::vector<Eigen::Vector2f> known_samples, occupied_samples;
+    std::vector<uint32_t> known_samples, occupied_samples;
     std::vector<int> nodes;
     // Loop-closure sampler state (fixed ratio).
     int64_t pulses = 0, samples = 0;

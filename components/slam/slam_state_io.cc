@@ -92,8 +92,10 @@ void Slam::Save(const std::string& path) const {
       w.Pod<int32_t>(s.grid->height());
       w.Pod<double>(s.grid->corner().x());
       w.Pod<double>(s.grid->corner().y());
-      out.write(reinterpret_cast<const char*>(s.grid->cells().data()),
-                s.grid->cells().size() * sizeof(float));
+      // As floats, whether the grid is live or finished (16-bit codes round-trip exactly).
+      std::vector<float> cells(static_cast<size_t>(s.grid->width()) * s.grid->height());
+      for (size_t c = 0; c < cells.size(); ++c) cells[c] = s.grid->RawAt(c);
+      out.write(reinterpret_cast<const char*>(cells.data()), cells.size() * sizeof(float));
     }
     w.Pod<int64_t>(active_submaps_.ids().size());
     for (int a : active_submaps_.ids()) w.Pod<int32_t>(a);

@@ -284,6 +284,13 @@ int main(int argc, char** argv) {
     std::printf("per-scan latency: median %.2f ms, p99 %.2f ms, max %.2f ms\n", 1e3 * pct(0.5),
                 1e3 * pct(0.99), 1e3 * latencies.back());
     std::printf("peak memory (max RSS) %.1f MB\n", ru.ru_maxrss / 1024.0);
+    const slam::Slam::MemoryUsage m = slam.Memory();
+    std::printf(
+        "SLAM data at the end %.1f MB: submap grids %.1f, precomputations %.1f, live nodes %.1f, "
+        "trimmed nodes %.1f, graph %.1f, trajectory %.1f\n",
+        m.Total() / 1048576.0, m.submap_grids / 1048576.0, m.precomputations / 1048576.0,
+        m.live_nodes / 1048576.0, m.trimmed_nodes / 1048576.0, m.graph / 1048576.0,
+        m.trajectory / 1048576.0);
     const double cpu_s = ru.ru_utime.tv_sec + 1e-6 * ru.ru_utime.tv_usec + ru.ru_stime.tv_sec +
                          1e-6 * ru.ru_stime.tv_usec;
     std::printf("CPU time (one thread, incl. reading) %.2f s = %.1fx real time\n", cpu_s,
