@@ -415,27 +415,8 @@ bool BranchAndBoundMatch(const ProbabilityGrid& grid, const PrecomputationStack&
   const int top = stack.depth() - 1;
   const int top_step = 1 << top;
   std::vector<Candidate> candidates;
-  const int row_candidates = 2 * w / top_step + 1;  // x = -w, -w + top_step, ... <= w
-  std::vector<int64_t> row_sums(row_candidates);
   for (size_t a = 0; a < scans.size(); ++a) {
-    const Eigen::Array4i& b = boxes[a];
     for (int y = -w; y <= w; y += top_step) {
-      if (stack.Contains(b[0] - w, b[1] + y) &&
-          stack.Contains(b[2] - w + (row_candidates - 1) * top_step, b[3] + y)) {
-        // The row of candidates lies inside the stack: their sums in one pass over the cells.
-        std::fill(row_sums.begin(), row_sums.end(), 0);
-        const uint8_t* level_cells = stack.Level(top);
-        const ptrdiff_t base = stack.Index(-w, y);
-        for (const ptrdiff_t offset : offsets[a]) {
-          const uint8_t* cell = level_cells + base + offset;
-          for (int i = 0; i < row_candidates; ++i) row_sums[i] += cell[i * top_step];
-        }
-        for (int i = 0; i < row_candidates; ++i) {
-          candidates.push_back(Candidate{static_cast<int>(a), -w + i * top_step, y,
-                                         to_probability(static_cast<double>(row_sums[i]))});
-        }
-        continue;
-      }
       for (int x = -w; x <= w; x += top_step) {
         Candidate c{static_cast<int>(a), x, y, 0};
         c.score = score_of(top, c);

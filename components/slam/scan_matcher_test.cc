@@ -142,7 +142,7 @@ TEST_F(ScanMatcherTest, BranchAndBoundFindsPoseInLargeWindow) {
 
 TEST_F(ScanMatcherTest, BranchAndBoundScoreIsTheExhaustiveSearchsBest) {
   // A 2 m window around a scan that spans the room: most candidates put some points outside
-  // the stack (scored point by point), the rest lie inside (scored in rows and groups of four).
+  // the stack (scored point by point), the rest lie inside (children scored in groups of four).
   // Either way the search returns the best of every candidate scored one by one, and the
   // candidate it returns has that score.
   PrecomputationStack stack(*grid_, 5);

@@ -600,10 +600,9 @@ std::vector<StampedPose2> Slam::Trajectory() const {
   std::vector<StampedPose2> out;
   out.reserve(scans_.size());
   for (const auto& s : scans_) {
-    Rigid2d g = s.pose();
-    if (s.node_id >= 0 && s.node_id < static_cast<int>(nodes_.size())) {
-      g = node_global_[s.node_id] * s.pose();
-    }
+    const Rigid2d pose = s.pose();
+    const bool on_node = s.node_id >= 0 && s.node_id < static_cast<int>(nodes_.size());
+    const Rigid2d g = on_node ? node_global_[s.node_id] * pose : pose;
     out.push_back({s.time_s, g.translation().x(), g.translation().y(), g.yaw_rad()});
   }
   std::stable_sort(out.begin(), out.end(), [](const StampedPose2& a, const StampedPose2& b) {
