@@ -245,7 +245,7 @@ void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out)
   std::fprintf(out,
                "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
                "sound | RSS MB | heap MB | SLAM MB | SLAM nodes (live) | submaps (live) | held for "
-               "anchors | loop closures | "
+               "anchors | kept: new area / obstacles | loop closures | "
                "optimise s (period) | "
                "people | sound sources | detections without pose |\n");
   const mission::MissionReport* prev = nullptr;
@@ -255,7 +255,7 @@ void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out)
     std::fprintf(out,
                  "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %.0f | "
                  "%.1f | %lld | %lld "
-                 "| %lld | %lld | %.2f | %d | %d | %lld |\n",
+                 "| %lld | %lld / %lld | %lld | %.2f | %d | %d | %lld |\n",
                  r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
                  pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
                  pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
@@ -265,6 +265,8 @@ void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out)
                  common::Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
                  static_cast<long long>(r.slam_submaps),
                  static_cast<long long>(r.slam_submaps_held),
+                 static_cast<long long>(r.slam_submaps_kept_area),
+                 static_cast<long long>(r.slam_submaps_kept_obstacles),
                  static_cast<long long>(r.slam_loop_closures),
                  r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0), r.people_on_map,
                  r.sound_sources, static_cast<long long>(r.detections_without_pose));
@@ -277,7 +279,8 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
   csv << "time_s,state,distance_m,cpu_s,slam_cpu_s,explore_cpu_s,vision_cpu_s,people_map_cpu_s,"
          "sound_cpu_s,rss_mb,heap_mb,slam_mb,slam_grids_mb,slam_precomputations_mb,"
          "slam_live_nodes_mb,slam_trimmed_nodes_mb,slam_graph_mb,slam_trajectory_mb,slam_nodes,"
-         "slam_submaps,slam_submaps_held,slam_optimisations,"
+         "slam_submaps,slam_submaps_held,slam_submaps_kept_area,slam_submaps_kept_obstacles,"
+         "slam_optimisations,"
          "slam_loop_closures,"
          "slam_optimise_s,people_on_map,sound_sources,detections_without_pose\n";
   for (const mission::MissionReport& r : reports) {
@@ -291,7 +294,8 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
         << common::Megabytes(r.slam_memory.trimmed_nodes) << ","
         << common::Megabytes(r.slam_memory.graph) << ","
         << common::Megabytes(r.slam_memory.trajectory) << "," << r.slam_nodes << ","
-        << r.slam_submaps << "," << r.slam_submaps_held << "," << r.slam_optimisations << ","
+        << r.slam_submaps << "," << r.slam_submaps_held << "," << r.slam_submaps_kept_area << ","
+        << r.slam_submaps_kept_obstacles << "," << r.slam_optimisations << ","
         << r.slam_loop_closures << "," << r.slam_optimise_s << "," << r.people_on_map << ","
         << r.sound_sources << "," << r.detections_without_pose << "\n";
   }

@@ -692,6 +692,8 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       report.slam_nodes = loop.slam().num_live_nodes();
       report.slam_submaps = loop.slam().num_live_submaps();
       report.slam_submaps_held = loop.slam().num_submaps_held_for_anchors();
+      report.slam_submaps_kept_area = stats.submaps_kept_new_area;
+      report.slam_submaps_kept_obstacles = stats.submaps_kept_new_obstacles;
       report.slam_optimisations = stats.optimisations;
       report.slam_loop_closures = stats.loop_closures;
       report.slam_optimise_s = stats.optimise_seconds;

@@ -91,6 +91,8 @@ struct MissionReport {
   slam::Slam::MemoryUsage slam_memory;       // of which SLAM's data, by part
   int64_t slam_nodes = 0, slam_submaps = 0;  // live (untrimmed)
   int64_t slam_submaps_held = 0;             // live only because they hold a node a client keeps
+  // Finished submaps kept by trimming for their new area / for new obstacles only (cumulative).
+  int64_t slam_submaps_kept_area = 0, slam_submaps_kept_obstacles = 0;
   int64_t slam_optimisations = 0, slam_loop_closures = 0;
   double slam_optimise_s = 0;  // cumulative time in the global optimisation
   int people_on_map = 0, sound_sources = 0;

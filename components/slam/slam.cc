@@ -580,10 +580,11 @@ Slam::MemoryUsage Slam::Memory() const {
     }
     (n.trimmed ? m.trimmed_nodes : m.live_nodes) += bytes;
   }
-  m.graph = constraints_.capacity() * sizeof(Constraint) +
-            (node_global_.capacity() + submap_global_.capacity()) * sizeof(Rigid2d) +
-            chain_drift_.MemoryBytes() + kept_nodes_.capacity() * sizeof(int) +
-            retained_obstacles_.size() * (sizeof(int64_t) + 2 * sizeof(void*));
+  m.graph =
+      constraints_.capacity() * sizeof(Constraint) +
+      (node_global_.capacity() + submap_global_.capacity()) * sizeof(Rigid2d) +
+      chain_drift_.MemoryBytes() + kept_nodes_.capacity() * sizeof(int) +
+      (retained_obstacles_.size() + retained_known_.size()) * (sizeof(int64_t) + 2 * sizeof(void*));
   m.trajectory = scans_.size() * sizeof(ScanRecord);
   return m;
 }
@@ -791,8 +792,12 @@ void Slam::TrimIfCovered(int submap_id) {
     }
     occupied_before.insert(theirs_occupied.begin(), theirs_occupied.end());
   }
+  // A cell only trimmed submaps knew counts as known by one.
   int fresh_cells = 0;
-  for (const auto& [key, count] : known_before) fresh_cells += count < t.fresh_submaps;
+  for (auto& [key, count] : known_before) {
+    count += retained_known_.count(key) > 0;
+    fresh_cells += count < t.fresh_submaps;
+  }
   // What trimmed nodes kept is held too (an obstacle seen again on a later revisit is not new).
   std::unordered_set<int64_t> new_obstacles;
   for (int64_t key : mine_occupied) {
@@ -809,7 +814,14 @@ void Slam::TrimIfCovered(int submap_id) {
   const double cell_m2 = t.cell_m * t.cell_m;
   if (fresh_cells * cell_m2 < t.min_fresh_area_m2 &&
       static_cast<double>(new_obstacles.size()) * cell_m2 < t.min_new_obstacle_m2) {
+    for (const auto& [key, count] : known_before) {
+      if (count < t.fresh_submaps) retained_known_.insert(key);
+    }
     TrimSubmap(submap_id, new_obstacles);
+  } else if (fresh_cells * cell_m2 >= t.min_fresh_area_m2) {
+    ++stats_.submaps_kept_new_area;
+  } else {
+    ++stats_.submaps_kept_new_obstacles;
   }
 }
 

@@ -74,6 +74,8 @@ struct SlamStats {
   int64_t precomputations_built = 0;       // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   int64_t submaps_trimmed = 0, nodes_trimmed = 0;  // trim.enabled
+  // trim.enabled: finished submaps judged and kept, for their new area (first) or new obstacles.
+  int64_t submaps_kept_new_area = 0, submaps_kept_new_obstacles = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
 
@@ -271,6 +273,10 @@ class Slam {
   std::vector<int> trims_waiting_;
   // Raster cells (trim.cell_m) of the returns trimmed nodes keep: obstacles no live submap holds.
   std::unordered_set<int64_t> retained_obstacles_;
+  // Raster cells (trim.cell_m) trimmed submaps knew and no older live submap did (each under
+  // min_fresh_area_m2): they count as known by one submap, so that a later pass over them does
+  // not find them new again.
+  std::unordered_set<int64_t> retained_known_;
 };
 
 }  // namespace slam

@@ -52,9 +52,10 @@ class Reader : public common::BinaryReader {
 
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
 // Of the body. Version 2 adds each constraint's translation shape, version 3 the trimmed flags
-// of submaps and nodes (a trimmed submap has no grid) and each constraint's steps; version 1 and
-// 2 bodies are still read (shape: the identity; nothing trimmed).
-constexpr int32_t kVersion = 3;
+// of submaps and nodes (a trimmed submap has no grid) and each constraint's steps, version 4 the
+// raster cells only trimmed submaps knew; version 1-3 bodies are still read (shape: the
+// identity; nothing trimmed; no such cells).
+constexpr int32_t kVersion = 4;
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -127,6 +128,11 @@ void Slam::Save(const std::string& path) const {
       w.Pod(c.translation_shape(1, 1));
       w.Pod<int32_t>(c.steps);
     }
+    // Raster cells only trimmed submaps knew, ascending (the file is the same for the same state).
+    std::vector<int64_t> known(retained_known_.begin(), retained_known_.end());
+    std::sort(known.begin(), known.end());
+    w.Pod<int64_t>(known.size());
+    for (int64_t key : known) w.Pod(key);
     // Local state to continue.
     w.Pose(global_from_local_);
     w.Pod<int32_t>(extrapolator_.have_last());
@@ -245,6 +251,11 @@ void Slam::Load(const std::string& path) {
     }
     constraints.push_back(c);
   }
+  std::unordered_set<int64_t> retained_known;
+  if (body_version >= 4) {
+    const int64_t nk = r.Count(1000000000);
+    for (int64_t i = 0; i < nk; ++i) retained_known.insert(r.Pod<int64_t>());
+  }
   // Read into locals: a file refused below leaves this Slam as it was (a clean start).
   const Rigid2d global_from_local = r.Pose();
   const bool have_last_scan = r.Pod<int32_t>() != 0;
@@ -314,6 +325,7 @@ void Slam::Load(const std::string& path) {
   chain_drift_.Clear();
   node_global_ = std::move(node_global);
   RebuildRetainedObstacles();
+  retained_known_ = std::move(retained_known);
   trims_waiting_.clear();
   constraints_ = std::move(constraints);
   precomputations_.clear();

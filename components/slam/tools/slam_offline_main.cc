@@ -275,6 +275,13 @@ int main(int argc, char** argv) {
         (long long)s.loop_closures, (long long)s.loop_searches,
         (long long)s.loop_closures_inconsistent, (long long)s.loop_closures_at_window_edge,
         (long long)s.precomputations_built, (long long)s.optimisations);
+    if (s.submaps_trimmed + s.submaps_kept_new_area + s.submaps_kept_new_obstacles > 0) {
+      std::printf(
+          "trimming: %lld submaps trimmed, %lld kept for their new area, %lld for new obstacles "
+          "only; %lld nodes trimmed\n",
+          (long long)s.submaps_trimmed, (long long)s.submaps_kept_new_area,
+          (long long)s.submaps_kept_new_obstacles, (long long)s.nodes_trimmed);
+    }
     std::printf(
         "data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final "
         "%.2f) "
