@@ -333,7 +333,7 @@ int Slam::AddNode(double time_s, const Rigid2d& local_pose, const RangeData& bas
   node.data->odom_pose = extrapolator_.last_odometry();
   node.data->odom_segment = extrapolator_.last_segment();
   node.data->loop_points = loop_points;
-  node.data->range_data = base_data;
+  node.data->range_data = PackedRangeData(base_data);
   node.data->submaps = inserted_into;
   nodes_.push_back(std::move(node));
   node_global_.push_back(global_from_local_ * local_pose);
@@ -575,8 +575,8 @@ Slam::MemoryUsage Slam::Memory() const {
     size_t bytes = sizeof(Node);
     if (n.data) {
       const NodeData& d = *n.data;
-      bytes += sizeof(NodeData) + cloud(d.loop_points) + cloud(d.range_data.hits) +
-               cloud(d.range_data.misses) + d.submaps.capacity() * sizeof(int);
+      bytes += sizeof(NodeData) + cloud(d.loop_points) + d.range_data.MemoryBytes() +
+               d.submaps.capacity() * sizeof(int);
     }
     (n.trimmed ? m.trimmed_nodes : m.live_nodes) += bytes;
   }
@@ -848,7 +848,7 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
     // Its returns on what no older submap holds stay on MAP (a low object seen from afar,
     // which later scans from close by look over).
     PointCloud kept;
-    for (const Eigen::Vector2f& hit : node.data->range_data.hits) {
+    for (const Eigen::Vector2f& hit : node.data->range_data.hits.Unpack()) {
       const int64_t key = CellKey(node_global_[n] * hit.cast<double>(), options_.trim.cell_m);
       if (new_obstacles.count(key) == 0) continue;
       kept.push_back(hit);
@@ -901,8 +901,7 @@ void Slam::ReleaseTrimmedData(Node* node, PointCloud kept_hits) {
   }
   auto data = std::make_unique<NodeData>();
   data->range_data.origin = node->data->range_data.origin;
-  data->range_data.hits = std::move(kept_hits);
-  data->range_data.hits.shrink_to_fit();
+  data->range_data.hits = PackedPoints(kept_hits);
   node->data = std::move(data);
 }
 
@@ -910,7 +909,7 @@ void Slam::RebuildRetainedObstacles() {
   retained_obstacles_.clear();
   for (size_t i = 0; i < nodes_.size(); ++i) {
     if (!nodes_[i].trimmed || !nodes_[i].data) continue;
-    for (const Eigen::Vector2f& hit : nodes_[i].data->range_data.hits) {
+    for (const Eigen::Vector2f& hit : nodes_[i].data->range_data.hits.Unpack()) {
       retained_obstacles_.insert(
           CellKey(node_global_[i] * hit.cast<double>(), options_.trim.cell_m));
     }
@@ -937,7 +936,7 @@ OccupancyMap Slam::RenderMap() const {
   ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
   for (size_t i = 0; i < nodes_.size(); ++i) {
     if (!nodes_[i].data) continue;
-    grid.Insert(TransformRangeData(nodes_[i].data->range_data, node_global_[i]),
+    grid.Insert(TransformRangeData(nodes_[i].data->range_data.Unpack(), node_global_[i]),
                 static_cast<float>(options_.local.hit_probability),
                 static_cast<float>(options_.local.miss_probability));
   }

@@ -27,6 +27,7 @@
 #include "slam/loop_consistency.h"
 #include "slam/motion_filter.h"
 #include "slam/odometry_buffer.h"
+#include "slam/packed_points.h"
 #include "slam/pose_extrapolator.h"
 #include "slam/pose_graph.h"
 #include "slam/relations.h"
@@ -183,7 +184,7 @@ class Slam {
     int odom_segment = -1;
     Rigid2d odom_pose;
     PointCloud loop_points;  // base frame
-    RangeData range_data;    // base frame (for map rendering)
+    PackedRangeData range_data;  // base frame (for map rendering), 16-bit
     std::vector<int> submaps;  // the submaps it was inserted into
   };
   // A live node holds its scan in `data`. A trimmed node (every submap of it trimmed) keeps its

@@ -115,8 +115,8 @@ void Slam::Save(const std::string& path) const {
       w.Pose(d.odom_pose);
       w.Cloud(d.loop_points);
       w.Pod(d.range_data.origin.x()), w.Pod(d.range_data.origin.y());
-      w.Cloud(d.range_data.hits);
-      w.Cloud(d.range_data.misses);
+      w.Cloud(d.range_data.hits.Unpack());
+      w.Cloud(d.range_data.misses.Unpack());
     }
     // Constraints.
     w.Pod<int64_t>(constraints_.size());
@@ -222,10 +222,12 @@ void Slam::Load(const std::string& path) {
     if (body_version >= 3) n.trimmed = r.Pod<int32_t>() != 0;
     d.odom_pose = r.Pose();
     d.loop_points = r.Cloud();
-    d.range_data.origin.x() = r.Pod<float>();
-    d.range_data.origin.y() = r.Pod<float>();
-    d.range_data.hits = r.Cloud();
-    d.range_data.misses = r.Cloud();
+    RangeData range_data;
+    range_data.origin.x() = r.Pod<float>();
+    range_data.origin.y() = r.Pod<float>();
+    range_data.hits = r.Cloud();
+    range_data.misses = r.Cloud();
+    d.range_data = PackedRangeData(range_data);
     nodes.push_back(std::move(n));
   }
   std::vector<Constraint> constraints;
@@ -318,7 +320,7 @@ void Slam::Load(const std::string& path) {
   submap_global_ = std::move(submap_global);
   active_submaps_.Restore(std::move(active));
   for (Node& n : nodes) {
-    if (n.trimmed) ReleaseTrimmedData(&n, std::move(n.data->range_data.hits));
+    if (n.trimmed) ReleaseTrimmedData(&n, n.data->range_data.hits.Unpack());
   }
   nodes_ = std::move(nodes);
   motion_filter_.Restore(last_node_time, last_node_local);
