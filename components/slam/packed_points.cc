@@ -1,5 +1,6 @@
 #include "slam/packed_points.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace sarmap {
