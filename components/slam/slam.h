@@ -75,7 +75,8 @@ struct SlamStats {
   int64_t precomputations_built = 0;       // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   int64_t submaps_trimmed = 0, nodes_trimmed = 0;  // trim.enabled
-  // trim.enabled: finished submaps judged and kept, for their new area (first) or new obstacles.
+  // trim.enabled: finished submaps judged and kept for their new area (new obstacles or not), or
+  // for new obstacles only.
   int64_t submaps_kept_new_area = 0, submaps_kept_new_obstacles = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
