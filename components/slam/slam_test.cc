@@ -417,7 +417,7 @@ struct Pillar {
   bool present = false;
   double x_m = -1, half_m = 0.2;
   double seen_below_x = INFINITY;
-  // Open windows in the wall y = 3: 0.2 m wide, centred at these x, with nothing behind them in
+  // Open windows in the wall y = 3: 0.4 m wide, centred at these x, with nothing behind them in
   // range (the beams through them return nothing: free-space rays).
   std::vector<double> windows_x;
 };
@@ -726,8 +726,8 @@ TEST(SlamTrimTest, APlaceOnlyTrimmedSubmapsSawIsNotNewToALaterPass) {
   // more (62-66 cells when the first window's cells count as new). Pass 2 opens the window at
   // x = -1; passes 4-6 open it and one at x = 0.6. The area the trimmed submaps of pass 2 saw
   // still counts as known, so pass 4 keeps no submap for its area; a Slam resumed from the state
-  // file after it maps nothing new in passes 5-6 even when a tenth of the area would keep a
-  // submap. The reference drive, with only the second window in pass 4, ends pass 4 with as
+  // file written after pass 4 maps nothing new in passes 5-6 even when a tenth of the area would
+  // keep a submap. The reference drive, with only the second window in pass 4, ends pass 4 with as
   // many live submaps.
   SlamOptions o = BackAndForthOptions(true);
   o.scan.missing_data_ray_length_m = 4.5;
@@ -769,7 +769,7 @@ TEST(SlamTrimTest, APlaceOnlyTrimmedSubmapsSawIsNotNewToALaterPass) {
   std::printf("resumed, passes 5-6: %lld submaps kept for their area, %lld trimmed, %d live\n",
               (long long)resumed.stats().submaps_kept_new_area,
               (long long)resumed.stats().submaps_trimmed, resumed.num_live_submaps());
-  EXPECT_GT(resumed.stats().submaps_trimmed, 4);
+  EXPECT_GE(resumed.stats().submaps_trimmed, slam.stats().submaps_trimmed + 10);
   EXPECT_EQ(resumed.stats().submaps_kept_new_area, 0);
   EXPECT_EQ(resumed.num_live_submaps(), slam.num_live_submaps());
 }
