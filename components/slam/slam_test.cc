@@ -436,7 +436,7 @@ ScanResult BackAndForthStep(Slam* slam, int k, const Pillar& pillar) {
     const double angle = scan.angle_min_rad + i * scan.angle_increment_rad;
     scan.ranges_m[i] = RoomRange(x, 0, angle);
     const double at_wall_x = x + scan.ranges_m[i] * std::cos(angle);
-    const bool on_top_wall = std::abs(scan.ranges_m[i] * std::sin(angle) - 3.0) < 1e-6;
+    const bool on_top_wall = std::abs(scan.ranges_m[i] * std::sin(angle) - 3.0) < 1e-4;
     for (double window_x : pillar.windows_x) {
       if (on_top_wall && std::abs(at_wall_x - window_x) < 0.2) scan.ranges_m[i] = INFINITY;
     }
