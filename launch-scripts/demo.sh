@@ -15,6 +15,10 @@
 #        DEMO_DRIVE   explore (default: the robot searches on its own) or path (the world's
 #                     scripted path)
 #        DEMO_EXPLORE_MODE  sound_guided (default), frontier or reactive
+#        DEMO_WHEN_EXPLORED  home (default: the robot comes back and waits) or sweep (it
+#                     searches the explored site again until the mission ends: long missions)
+#        DEMO_RECORD_PROFILE  a recording profile for sarmap-log record (e.g.
+#                     config/record_long.yaml: camera frames thinned, for missions of hours)
 #        DEMO_KILL=1  kill -9 each process of the stack once, in turn, mid-mission: the launcher
 #                     respawns it and the report must not lose anyone
 #        DEMO_OUT     output folder (default out/demo-DATE)
