@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "common/args.h"
 #include "common/decode.h"
@@ -50,16 +51,33 @@ int main(int argc, char** argv) {
     parser.AddFlag("--key", &key_path,
                    "the launcher's key file: only deputy reports signed with it are counted "
                    "(without: every report, unverified)");
+    double period_s = 0.0, compare_from_s = 3600.0;
+    std::string period_csv;
+    parser.AddFlag("--period", &period_s,
+                   "long missions: also each process's CPU (mean, p95) and memory at the end of "
+                   "every this many seconds, and the stack's CPU per window (0: off)");
+    parser.AddFlag("--compare-from", &compare_from_s,
+                   "with --period: each process's memory this many seconds after the first report "
+                   "against its memory at the end");
+    parser.AddFlag("--period-csv", &period_csv,
+                   "with --period: write the windows to this CSV file (window start and end in s, "
+                   "process, samples, CPU mean and p95 in percent of one core, memory at the "
+                   "window's end in MB)");
     std::string bus_key_path;
     parser.AddFlag("--bus-key-file", &bus_key_path,
                    "the bus key of a signed bus (common/bus_auth.h): only messages signed with it "
                    "count");
     if (!parser.Parse(argc, argv)) return 0;
+    if (!(period_s >= 0) || !(compare_from_s >= 0))
+      throw std::invalid_argument("--period and --compare-from must be >= 0 seconds");
+    if (!period_csv.empty() && period_s <= 0)
+      throw std::invalid_argument("--period-csv needs --period");
     std::optional<sarmap::procman::Key> key;
     if (!key_path.empty()) key = sarmap::procman::LoadKeyFile(key_path);
 
     sarmap::logtools::LcmLogReader reader(log);
     sarmap::logtools::StackPerf perf(SplitComma(exclude));
+    perf.SetPeriod(period_s, compare_from_s);
     sarmap::logtools::LogEvent event;
     // A hostile publisher's datagrams are in the log too (lcm_log_reader.h).
     sarmap::logtools::LogMessageFilter filter;
@@ -86,8 +104,8 @@ int main(int argc, char** argv) {
         perf.AddMachineLoad(info.cpu_load);
         for (const auto& c : info.commands) {
           perf.AddCommandSample(info.deputy_id, c.command_id,
-                                c.state == sarmap::pm_command_status_t::STATE_RUNNING, c.cpu_percent,
-                                c.rss_bytes, c.restart_count);
+                                c.state == sarmap::pm_command_status_t::STATE_RUNNING,
+                                c.cpu_percent, c.rss_bytes, c.restart_count, event.timestamp_us);
         }
         continue;
       }
@@ -125,7 +143,26 @@ int main(int argc, char** argv) {
     }
     if (!filter.Summary().empty()) fprintf(stderr, "%s\n", filter.Summary().c_str());
     printf("log %s: %lld events\n", log.c_str(), static_cast<long long>(events));
-    fputs(sarmap::logtools::StackPerfText(perf.Summarise()).c_str(), stdout);
+    const sarmap::logtools::StackPerfSummary summary = perf.Summarise();
+    fputs(sarmap::logtools::StackPerfText(summary).c_str(), stdout);
+    if (!period_csv.empty()) {
+      FILE* csv = fopen(period_csv.c_str(), "w");
+      if (!csv) throw std::runtime_error("cannot write " + period_csv);
+      fprintf(
+          csv,
+          "start_s,end_s,process,samples,cpu_mean_percent,cpu_p95_percent,rss_end_mb,counted\n");
+      for (const auto& w : summary.windows) {
+        fprintf(csv, "%.0f,%.0f,stack,,%.2f,%.2f,,1\n", w.start_s, w.end_s,
+                w.stack_cpu_mean_percent, w.stack_cpu_p95_percent);
+        for (const auto& p : w.processes)
+          fprintf(csv, "%.0f,%.0f,%s,%d,%.2f,%.2f,%.2f,%d\n", w.start_s, w.end_s, p.command.c_str(),
+                  p.samples, p.mean_cpu_percent, p.p95_cpu_percent, p.rss_end_mb,
+                  p.excluded ? 0 : 1);
+      }
+      const bool ok = fclose(csv) == 0;
+      if (!ok) throw std::runtime_error("cannot write " + period_csv);
+      fprintf(stderr, "wrote %s\n", period_csv.c_str());
+    }
     return 0;
   });
 }

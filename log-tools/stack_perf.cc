@@ -39,14 +39,92 @@ LatencyStats Latencies(const std::map<int64_t, int64_t>& from, const std::map<in
 StackPerf::StackPerf(std::vector<std::string> exclude, double keep_radius_m)
     : exclude_(std::move(exclude)), keep_radius_m_(keep_radius_m) {}
 
-void StackPerf::AddCommandSample(const std::string& deputy, const std::string& command, bool running,
-                                 double cpu_percent, int64_t rss_bytes, int restart_count) {
+void StackPerf::SetPeriod(double period_s, double compare_from_s) {
+  period_s_ = std::isfinite(period_s) ? std::max(0.0, period_s) : 0.0;
+  compare_from_s_ = std::isfinite(compare_from_s) ? std::max(0.0, compare_from_s) : 0.0;
+}
+
+bool StackPerf::Excluded(const std::string& command) const {
+  return std::any_of(exclude_.begin(), exclude_.end(), [&](const std::string& e) {
+    return !e.empty() && command.find(e) != std::string::npos;
+  });
+}
+
+void StackPerf::AddCommandSample(const std::string& deputy, const std::string& command,
+                                 bool running, double cpu_percent, int64_t rss_bytes,
+                                 int restart_count, int64_t receive_us) {
   Samples& s = commands_[deputy + "/" + command];
   if (s.first_restarts < 0) s.first_restarts = restart_count;
   s.last_restarts = restart_count;
   if (!running || !std::isfinite(cpu_percent)) return;
   s.cpu.push_back(cpu_percent);
   s.max_rss_bytes = std::max(s.max_rss_bytes, static_cast<double>(rss_bytes));
+  if (period_s_ > 0) {
+    if (first_sample_us_ < 0 || receive_us < first_sample_us_) first_sample_us_ = receive_us;
+    s.timed.push_back({receive_us, cpu_percent, static_cast<double>(rss_bytes)});
+  }
+}
+
+void StackPerf::SummariseWindows(StackPerfSummary* out) const {
+  if (period_s_ <= 0 || first_sample_us_ < 0) return;
+  const auto seconds_from_start = [&](int64_t us) { return (us - first_sample_us_) * 1e-6; };
+  int64_t last_us = first_sample_us_;
+  for (const auto& [name, s] : commands_)
+    for (const Sample& x : s.timed) last_us = std::max(last_us, x.receive_us);
+  const double span_s = seconds_from_start(last_us);
+  const int num_windows = 1 + static_cast<int>(std::floor(span_s / period_s_));
+  // The stack's CPU per second of reports: each process's last sample in that second (a deputy
+  // reports every second; several deputies' reports of one second add up).
+  std::vector<std::map<int64_t, std::map<std::string, double>>> per_second(num_windows);
+  out->windows.resize(num_windows);
+  for (int w = 0; w < num_windows; ++w) {
+    out->windows[w].start_s = w * period_s_;
+    out->windows[w].end_s = std::min(span_s, (w + 1) * period_s_);
+  }
+  for (const auto& [name, s] : commands_) {
+    const bool excluded = Excluded(name);
+    std::vector<std::vector<double>> cpu(num_windows);
+    std::vector<double> rss_end(num_windows, -1.0);
+    double rss_then = -1.0, rss_end_all = -1.0;
+    for (const Sample& x : s.timed) {
+      const double t = seconds_from_start(x.receive_us);
+      const int w = std::clamp(static_cast<int>(std::floor(t / period_s_)), 0, num_windows - 1);
+      cpu[w].push_back(x.cpu_percent);
+      rss_end[w] = x.rss_bytes;  // samples arrive in time order
+      if (t <= compare_from_s_) rss_then = x.rss_bytes;
+      rss_end_all = x.rss_bytes;
+      if (!excluded) per_second[w][static_cast<int64_t>(std::floor(t))][name] = x.cpu_percent;
+    }
+    for (int w = 0; w < num_windows; ++w) {
+      if (cpu[w].empty()) continue;
+      WindowUsage u;
+      u.command = name;
+      u.samples = static_cast<int>(cpu[w].size());
+      double sum = 0.0;
+      for (double c : cpu[w]) sum += c;
+      u.mean_cpu_percent = sum / cpu[w].size();
+      u.p95_cpu_percent = Quantile(cpu[w], 0.95);
+      u.rss_end_mb = rss_end[w] / 1e6;
+      u.excluded = excluded;
+      out->windows[w].processes.push_back(u);
+    }
+    if (span_s > compare_from_s_ && rss_then >= 0)
+      out->rss_growth.push_back({name, rss_then / 1e6, rss_end_all / 1e6});
+  }
+  for (int w = 0; w < num_windows; ++w) {
+    std::vector<double> totals;
+    for (const auto& [second, by_command] : per_second[w]) {
+      double total = 0.0;
+      for (const auto& [name, c] : by_command) total += c;
+      totals.push_back(total);
+    }
+    if (totals.empty()) continue;
+    double sum = 0.0;
+    for (double t : totals) sum += t;
+    out->windows[w].stack_cpu_mean_percent = sum / totals.size();
+    out->windows[w].stack_cpu_p95_percent = Quantile(totals, 0.95);
+  }
+  out->compare_from_s = compare_from_s_;
 }
 
 void StackPerf::AddMachineLoad(double cpu_load_fraction) {
@@ -101,9 +179,7 @@ StackPerfSummary StackPerf::Summarise() const {
     u.p95_cpu_percent = Quantile(s.cpu, 0.95);
     u.max_rss_mb = s.max_rss_bytes / 1e6;
     u.restarts = std::max(0, s.last_restarts - std::max(0, s.first_restarts));
-    u.excluded = std::any_of(exclude_.begin(), exclude_.end(), [&](const std::string& e) {
-      return !e.empty() && name.find(e) != std::string::npos;
-    });
+    u.excluded = Excluded(name);
     (u.excluded ? out.excluded_cpu_percent : out.stack_cpu_percent) += u.mean_cpu_percent;
     out.processes.push_back(u);
   }
@@ -121,6 +197,7 @@ StackPerfSummary StackPerf::Summarise() const {
   out.people_map_restarts = map_restarts_;
   out.people_before_restarts = people_before_restarts_;
   out.people_kept_across_restarts = people_kept_;
+  SummariseWindows(&out);
   return out;
 }
 
@@ -159,6 +236,27 @@ std::string StackPerfText(const StackPerfSummary& summary) {
   out << line;
   latency("latency DEPTH -> PEOPLE_VISUAL", summary.depth_to_people_visual);
   latency("latency DEPTH -> PEOPLE_MAP", summary.depth_to_people_map);
+  for (const PerfWindow& w : summary.windows) {
+    snprintf(line, sizeof(line), "%6.0f-%6.0f s: stack CPU mean %.1f %%, p95 %.1f %% of one core\n",
+             w.start_s, w.end_s, w.stack_cpu_mean_percent, w.stack_cpu_p95_percent);
+    out << line;
+    for (const WindowUsage& p : w.processes) {
+      snprintf(line, sizeof(line), "    %-40s cpu %5.1f / %5.1f %%  rss %7.1f MB%s\n",
+               p.command.c_str(), p.mean_cpu_percent, p.p95_cpu_percent, p.rss_end_mb,
+               p.excluded ? "  (not counted)" : "");
+      out << line;
+    }
+  }
+  if (!summary.rss_growth.empty()) {
+    snprintf(line, sizeof(line), "memory at %.0f s and at the end:\n", summary.compare_from_s);
+    out << line;
+    for (const RssGrowth& g : summary.rss_growth) {
+      snprintf(line, sizeof(line), "    %-40s %7.1f -> %7.1f MB (%+.1f %%)\n", g.command.c_str(),
+               g.rss_then_mb, g.rss_end_mb,
+               g.rss_then_mb > 0 ? 100.0 * (g.rss_end_mb / g.rss_then_mb - 1.0) : 0.0);
+      out << line;
+    }
+  }
   if (summary.people_map_restarts > 0) {
     snprintf(line, sizeof(line), "people map restarted %d times: %d of the %d people reported before a restart still there after it\n",
              summary.people_map_restarts, summary.people_kept_across_restarts, summary.people_before_restarts);

@@ -26,6 +26,28 @@ struct ProcessUsage {
   bool excluded = false;          // not counted in the stack total (e.g. the simulator)
 };
 
+// One process in one window of a long mission (StackPerf::SetPeriod).
+struct WindowUsage {
+  std::string command;
+  int samples = 0;
+  double mean_cpu_percent = 0.0, p95_cpu_percent = 0.0;
+  double rss_end_mb = 0.0;  // its last sample in the window
+  bool excluded = false;
+};
+
+struct PerfWindow {
+  double start_s = 0.0, end_s = 0.0;  // from the first launcher report
+  // The stack's CPU (the processes not excluded, summed per second of reports).
+  double stack_cpu_mean_percent = 0.0, stack_cpu_p95_percent = 0.0;
+  std::vector<WindowUsage> processes;
+};
+
+// A process's memory at one time of the mission and at its end.
+struct RssGrowth {
+  std::string command;
+  double rss_then_mb = 0.0, rss_end_mb = 0.0;
+};
+
 struct LatencyStats {
   int count = 0;
   double median_ms = 0.0, p95_ms = 0.0, p99_ms = 0.0, max_ms = 0.0;
@@ -44,6 +66,11 @@ struct StackPerfSummary {
   int people_map_restarts = 0;
   int people_before_restarts = 0;
   int people_kept_across_restarts = 0;
+  // With SetPeriod: the mission in windows, and each process's memory growth from
+  // compare_from_s to the end (empty when the reports end before compare_from_s).
+  std::vector<PerfWindow> windows;
+  double compare_from_s = 0.0;
+  std::vector<RssGrowth> rss_growth;
 };
 
 class StackPerf {
@@ -53,9 +80,15 @@ class StackPerf {
   explicit StackPerf(std::vector<std::string> exclude = {"sarmap-sim", "logger", "record"},
                      double keep_radius_m = 0.45);
 
-  // One command's line of a PM_INFO report received at receive_us.
+  // Long missions: also summarise each period_s of reports (period_s > 0), and each process's
+  // memory growth from compare_from_s after the first report to the end.
+  void SetPeriod(double period_s, double compare_from_s);
+
+  // One command's line of a PM_INFO report received at receive_us (the time matters only with
+  // SetPeriod).
   void AddCommandSample(const std::string& deputy, const std::string& command, bool running,
-                        double cpu_percent, int64_t rss_bytes, int restart_count);
+                        double cpu_percent, int64_t rss_bytes, int restart_count,
+                        int64_t receive_us = 0);
   void AddMachineLoad(double cpu_load_fraction);
   // A message of the chain: its header.utime (the capture time of the frame it came from)
   // and when the logger received it.
@@ -76,11 +109,22 @@ class StackPerf {
   StackPerfSummary Summarise() const;
 
  private:
+  struct Sample {
+    int64_t receive_us = 0;
+    double cpu_percent = 0.0;
+    double rss_bytes = 0.0;
+  };
   struct Samples {
     std::vector<double> cpu;
+    std::vector<Sample> timed;  // with SetPeriod
     double max_rss_bytes = 0;
     int first_restarts = -1, last_restarts = 0;
   };
+  bool Excluded(const std::string& command) const;
+  void SummariseWindows(StackPerfSummary* out) const;
+
+  double period_s_ = 0.0, compare_from_s_ = 0.0;
+  int64_t first_sample_us_ = -1;
   std::vector<std::string> exclude_;
   double keep_radius_m_;
   int64_t last_map_seq_ = -1;

@@ -33,6 +33,77 @@ TEST(StackPerfTest, MeansPerProcessAndExcludesTheSimulator) {
   EXPECT_NEAR(s.machine_load_percent, 50.0, 1e-9);
 }
 
+TEST(StackPerfTest, WindowsOfALongMission) {
+  StackPerf perf;
+  perf.SetPeriod(10.0, 12.0);
+  const int64_t start_us = 1700000000000000;
+  // 25 s of reports, one per second: SLAM's CPU is 10 % in the first window, 30 % after; its
+  // memory grows by 1 MB a second. The simulator (excluded) runs at 90 %.
+  for (int i = 0; i < 25; ++i) {
+    const int64_t t = start_us + i * 1000000 + 3000;  // a report's jitter stays in its second
+    perf.AddCommandSample("localhost", "sarmap-slam", true, i < 10 ? 10.0 : 30.0,
+                          (100 + i) * 1000000LL, 0, t);
+    perf.AddCommandSample("localhost", "sarmap-sim", true, 90.0, 5000000, 0, t);
+    // The speech node is stopped from 15 s on: its samples do not count.
+    perf.AddCommandSample("localhost", "sarmap-speech", i < 15, i < 15 ? 5.0 : 99.0, 1000000, 0, t);
+  }
+  const StackPerfSummary s = perf.Summarise();
+  ASSERT_EQ(s.windows.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.windows[0].start_s, 0.0);
+  EXPECT_DOUBLE_EQ(s.windows[1].start_s, 10.0);
+  EXPECT_NEAR(s.windows[2].end_s, 24.0, 1e-9);
+  const auto find = [&](const PerfWindow& w, const std::string& name) -> const WindowUsage* {
+    for (const auto& p : w.processes)
+      if (p.command == name) return &p;
+    return nullptr;
+  };
+  const WindowUsage* slam0 = find(s.windows[0], "localhost/sarmap-slam");
+  const WindowUsage* slam1 = find(s.windows[1], "localhost/sarmap-slam");
+  ASSERT_NE(slam0, nullptr);
+  ASSERT_NE(slam1, nullptr);
+  EXPECT_EQ(slam0->samples, 10);
+  EXPECT_NEAR(slam0->mean_cpu_percent, 10.0, 1e-9);
+  EXPECT_NEAR(slam1->mean_cpu_percent, 30.0, 1e-9);
+  EXPECT_NEAR(slam0->rss_end_mb, 109.0, 1e-9);
+  EXPECT_NEAR(slam1->rss_end_mb, 119.0, 1e-9);
+  EXPECT_TRUE(find(s.windows[0], "localhost/sarmap-sim")->excluded);
+  // Window 2 (20-24 s): the speech node is not running.
+  EXPECT_EQ(find(s.windows[2], "localhost/sarmap-speech"), nullptr);
+  const WindowUsage* speech1 = find(s.windows[1], "localhost/sarmap-speech");
+  ASSERT_NE(speech1, nullptr);
+  EXPECT_EQ(speech1->samples, 5);
+  // The stack without the simulator: 15 % per second in window 0, 35 % then 30 % in window 1.
+  EXPECT_NEAR(s.windows[0].stack_cpu_mean_percent, 15.0, 1e-9);
+  EXPECT_NEAR(s.windows[0].stack_cpu_p95_percent, 15.0, 1e-9);
+  EXPECT_NEAR(s.windows[1].stack_cpu_mean_percent, 32.5, 1e-9);
+  EXPECT_NEAR(s.windows[1].stack_cpu_p95_percent, 35.0, 1e-9);
+  EXPECT_NEAR(s.windows[2].stack_cpu_mean_percent, 30.0, 1e-9);
+  // Memory from 12 s on: SLAM 112 -> 124 MB.
+  EXPECT_DOUBLE_EQ(s.compare_from_s, 12.0);
+  bool found_slam = false;
+  for (const auto& g : s.rss_growth)
+    if (g.command == "localhost/sarmap-slam") {
+      found_slam = true;
+      EXPECT_NEAR(g.rss_then_mb, 112.0, 1e-9);
+      EXPECT_NEAR(g.rss_end_mb, 124.0, 1e-9);
+    }
+  EXPECT_TRUE(found_slam);
+  EXPECT_NE(StackPerfText(s).find("memory at 12 s and at the end"), std::string::npos);
+}
+
+TEST(StackPerfTest, NoWindowsWithoutAPeriodOrBeforeTheComparisonTime) {
+  StackPerf plain;
+  plain.AddCommandSample("localhost", "sarmap-slam", true, 10.0, 1000000, 0, 5000000);
+  EXPECT_TRUE(plain.Summarise().windows.empty());
+  StackPerf short_log;
+  short_log.SetPeriod(600.0, 3600.0);
+  for (int i = 0; i < 3; ++i)
+    short_log.AddCommandSample("localhost", "sarmap-slam", true, 10.0, 1000000, 0, i * 1000000LL);
+  const StackPerfSummary s = short_log.Summarise();
+  EXPECT_EQ(s.windows.size(), 1u);
+  EXPECT_TRUE(s.rss_growth.empty());
+}
+
 TEST(StackPerfTest, LatencyMatchesFramesByCaptureTimeAndKeepsTheFirstUpdate) {
   StackPerf perf;
   for (int i = 0; i < 100; ++i) {
