@@ -12,6 +12,7 @@
 #include "log-tools/lcm_log_reader.h"
 #include "log-tools/stack_perf.h"
 #include "procman/order_auth.h"
+#include "sarmap/node_status_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/people_map_t.hpp"
 #include "sarmap/pm_info_t.hpp"
@@ -33,20 +34,27 @@ int main(int argc, char** argv) {
   return sarmap::common::RunMain("sarmap-log perf", [&] {
     sarmap::common::ArgParser parser(
         "sarmap-log perf",
-        "What the stack cost during a recorded mission: mean and 95th-percentile CPU (percent of one\n"
+        "What the stack cost during a recorded mission: mean and 95th-percentile CPU (percent of "
+        "one\n"
         "core, children included) and peak memory of every process, from the launcher's PM_INFO\n"
-        "reports (the deputies sample /proc every second), the total of the robot's stack without the\n"
+        "reports (the deputies sample /proc every second), the total of the robot's stack without "
+        "the\n"
         "simulator and the logger, and the latency from a DEPTH frame to the PEOPLE_VISUAL and\n"
-        "PEOPLE_MAP updates it causes (logger receive times, matched by the frame's capture time).");
+        "PEOPLE_MAP updates it causes (logger receive times, matched by the frame's capture "
+        "time);\n"
+        "every node's inputs received and lost, from their NODE_STATUS reports.");
     std::string log, exclude = "sarmap-sim,logger,record";
-    std::string depth_channel = "DEPTH", visual_channel = "PEOPLE_VISUAL", map_channel = "PEOPLE_MAP",
-                info_channel = "PM_INFO";
+    std::string depth_channel = "DEPTH", visual_channel = "PEOPLE_VISUAL",
+                map_channel = "PEOPLE_MAP", info_channel = "PM_INFO",
+                status_channel = "NODE_STATUS";
     parser.AddPositional("LOG", &log, "LCM log recorded while the stack ran under sarmap-procman");
     parser.AddFlag("--exclude", &exclude, "comma-separated substrings of commands not counted in the stack total");
     parser.AddFlag("--depth-channel", &depth_channel, "channel of the depth frames");
     parser.AddFlag("--visual-channel", &visual_channel, "channel of the visual detections");
     parser.AddFlag("--map-channel", &map_channel, "channel of the people map");
     parser.AddFlag("--info-channel", &info_channel, "channel of the launcher's deputy reports");
+    parser.AddFlag("--status-channel", &status_channel,
+                   "channel of the nodes' health reports (inputs received and lost)");
     std::string key_path;
     parser.AddFlag("--key", &key_path,
                    "the launcher's key file: only deputy reports signed with it are counted "
@@ -109,6 +117,16 @@ int main(int argc, char** argv) {
         }
         continue;
       }
+      if (event.channel == status_channel) {
+        sarmap::node_status_t status;
+        if (sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &status)) {
+          for (const auto& c : status.channels)
+            perf.AddNodeInput(status.node_name, status.pid, c.channel, c.received,
+                              c.dropped_malformed, c.handler_errors, c.sequence_gaps,
+                              event.timestamp_us);
+        }
+        continue;
+      }
       if (event.channel == map_channel) {
         sarmap::people_map_t map;
         if (sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &map)) {
@@ -132,8 +150,9 @@ int main(int argc, char** argv) {
       fprintf(stderr, "warning: the log breaks at byte %lld: %s\n", static_cast<long long>(p.file_offset),
               p.what.c_str());
     }
-    if (bad_info > 0) fprintf(stderr, "warning: %lld undecodable %s messages skipped\n",
-                              static_cast<long long>(bad_info), info_channel.c_str());
+    if (bad_info > 0)
+      fprintf(stderr, "warning: %lld undecodable %s messages skipped\n",
+              static_cast<long long>(bad_info), info_channel.c_str());
     if (key) {
       fprintf(stderr, "%lld %s reports not signed with the key skipped\n",
               static_cast<long long>(unsigned_info), info_channel.c_str());

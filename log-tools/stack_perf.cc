@@ -111,6 +111,19 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
     if (span_s > compare_from_s_ && rss_then >= 0)
       out->rss_growth.push_back({name, rss_then / 1e6, rss_end_all / 1e6});
   }
+  // Inputs: each process's counter increments, credited to the window of the report.
+  for (const auto& [key, reports] : inputs_) {
+    InputCounters before;
+    for (const InputCounters& c : reports) {
+      const int w =
+          std::clamp(static_cast<int>(std::floor(seconds_from_start(c.receive_us) / period_s_)), 0,
+                     num_windows - 1);
+      // (A late message can fill a gap counted before: the counter may go down.)
+      out->windows[w].inputs_received += c.received - before.received;
+      out->windows[w].input_sequence_gaps += c.sequence_gaps - before.sequence_gaps;
+      before = c;
+    }
+  }
   for (int w = 0; w < num_windows; ++w) {
     std::vector<double> totals;
     for (const auto& [second, by_command] : per_second[w]) {
@@ -129,6 +142,17 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
 
 void StackPerf::AddMachineLoad(double cpu_load_fraction) {
   if (std::isfinite(cpu_load_fraction)) machine_load_.push_back(cpu_load_fraction);
+}
+
+void StackPerf::AddNodeInput(const std::string& node, int32_t pid, const std::string& channel,
+                             int64_t received, int64_t dropped_malformed, int64_t handler_errors,
+                             int64_t sequence_gaps, int64_t receive_us) {
+  auto& reports = inputs_[{node, channel, pid}];
+  const InputCounters c{receive_us, received, dropped_malformed, handler_errors, sequence_gaps};
+  if (period_s_ > 0 || reports.empty())
+    reports.push_back(c);
+  else
+    reports.back() = c;
 }
 
 void StackPerf::AddDepthFrame(int64_t capture_utime, int64_t receive_us) {
@@ -197,6 +221,19 @@ StackPerfSummary StackPerf::Summarise() const {
   out.people_map_restarts = map_restarts_;
   out.people_before_restarts = people_before_restarts_;
   out.people_kept_across_restarts = people_kept_;
+  std::map<std::pair<std::string, std::string>, InputUsage> inputs;
+  for (const auto& [key, reports] : inputs_) {
+    const auto& [node, channel, pid] = key;
+    InputUsage& u = inputs[{node, channel}];
+    u.node = node;
+    u.channel = channel;
+    const InputCounters& last = reports.back();
+    u.received += last.received;
+    u.dropped_malformed += last.dropped_malformed;
+    u.handler_errors += last.handler_errors;
+    u.sequence_gaps += last.sequence_gaps;
+  }
+  for (auto& [key, u] : inputs) out.inputs.push_back(u);
   SummariseWindows(&out);
   return out;
 }
@@ -236,9 +273,39 @@ std::string StackPerfText(const StackPerfSummary& summary) {
   out << line;
   latency("latency DEPTH -> PEOPLE_VISUAL", summary.depth_to_people_visual);
   latency("latency DEPTH -> PEOPLE_MAP", summary.depth_to_people_map);
+  if (!summary.inputs.empty()) {
+    int64_t gaps = 0, malformed = 0, errors = 0;
+    for (const InputUsage& u : summary.inputs) {
+      gaps += u.sequence_gaps;
+      malformed += u.dropped_malformed;
+      errors += u.handler_errors;
+    }
+    snprintf(line, sizeof(line),
+             "inputs (NODE_STATUS): %zu node channels; %lld messages never handled (sequence gaps: "
+             "lost on "
+             "the bus, or passed over by a latest-only subscription while its node was busy), %lld "
+             "malformed, %lld handler errors\n",
+             summary.inputs.size(), static_cast<long long>(gaps), static_cast<long long>(malformed),
+             static_cast<long long>(errors));
+    out << line;
+    for (const InputUsage& u : summary.inputs) {
+      if (u.sequence_gaps == 0 && u.dropped_malformed == 0 && u.handler_errors == 0) continue;
+      snprintf(line, sizeof(line),
+               "    %-28s %-22s received %lld, never handled %lld, malformed %lld, handler errors "
+               "%lld\n",
+               u.node.c_str(), u.channel.c_str(), static_cast<long long>(u.received),
+               static_cast<long long>(u.sequence_gaps), static_cast<long long>(u.dropped_malformed),
+               static_cast<long long>(u.handler_errors));
+      out << line;
+    }
+  }
   for (const PerfWindow& w : summary.windows) {
-    snprintf(line, sizeof(line), "%6.0f-%6.0f s: stack CPU mean %.1f %%, p95 %.1f %% of one core\n",
-             w.start_s, w.end_s, w.stack_cpu_mean_percent, w.stack_cpu_p95_percent);
+    snprintf(line, sizeof(line),
+             "%6.0f-%6.0f s: stack CPU mean %.1f %%, p95 %.1f %% of one core; inputs %lld "
+             "received, %lld never handled\n",
+             w.start_s, w.end_s, w.stack_cpu_mean_percent, w.stack_cpu_p95_percent,
+             static_cast<long long>(w.inputs_received),
+             static_cast<long long>(w.input_sequence_gaps));
     out << line;
     for (const WindowUsage& p : w.processes) {
       snprintf(line, sizeof(line), "    %-40s cpu %5.1f / %5.1f %%  rss %7.1f MB%s\n",

@@ -6,11 +6,12 @@
 // time of the frame in header.utime, so a frame and its consequences are matched exactly).
 // Plain C++, no LCM: the tool decodes messages and feeds this.
 
-#include <cstdint>
 #include <array>
+#include <cstdint>
 #include <map>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace sarmap {
@@ -35,8 +36,17 @@ struct WindowUsage {
   bool excluded = false;
 };
 
+// One input channel of one node, from its NODE_STATUS reports (each process's last counters,
+// summed over the node's processes: a respawned node counts from zero again).
+struct InputUsage {
+  std::string node, channel;
+  int64_t received = 0, dropped_malformed = 0, handler_errors = 0, sequence_gaps = 0;
+};
+
 struct PerfWindow {
   double start_s = 0.0, end_s = 0.0;  // from the first launcher report
+  // Every node's inputs in the window (NODE_STATUS counters' increments).
+  int64_t inputs_received = 0, input_sequence_gaps = 0;  // gaps: never handled
   // The stack's CPU (the processes not excluded, summed per second of reports).
   double stack_cpu_mean_percent = 0.0, stack_cpu_p95_percent = 0.0;
   std::vector<WindowUsage> processes;
@@ -66,6 +76,7 @@ struct StackPerfSummary {
   int people_map_restarts = 0;
   int people_before_restarts = 0;
   int people_kept_across_restarts = 0;
+  std::vector<InputUsage> inputs;  // by node and channel
   // With SetPeriod: the mission in windows, and each process's memory growth from
   // compare_from_s to the end (empty when the reports end before compare_from_s).
   std::vector<PerfWindow> windows;
@@ -90,6 +101,11 @@ class StackPerf {
                         double cpu_percent, int64_t rss_bytes, int restart_count,
                         int64_t receive_us = 0);
   void AddMachineLoad(double cpu_load_fraction);
+  // One input channel's counters from a node's NODE_STATUS report (cumulative since that process
+  // started), received at receive_us.
+  void AddNodeInput(const std::string& node, int32_t pid, const std::string& channel,
+                    int64_t received, int64_t dropped_malformed, int64_t handler_errors,
+                    int64_t sequence_gaps, int64_t receive_us = 0);
   // A message of the chain: its header.utime (the capture time of the frame it came from)
   // and when the logger received it.
   void AddDepthFrame(int64_t capture_utime, int64_t receive_us);
@@ -120,6 +136,12 @@ class StackPerf {
     double max_rss_bytes = 0;
     int first_restarts = -1, last_restarts = 0;
   };
+  struct InputCounters {
+    int64_t receive_us = 0;
+    int64_t received = 0, dropped_malformed = 0, handler_errors = 0, sequence_gaps = 0;
+  };
+  // (node, channel, pid) -> its reports in time order (only the last one without SetPeriod).
+  std::map<std::tuple<std::string, std::string, int32_t>, std::vector<InputCounters>> inputs_;
   bool Excluded(const std::string& command) const;
   void SummariseWindows(StackPerfSummary* out) const;
 

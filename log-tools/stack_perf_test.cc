@@ -91,6 +91,40 @@ TEST(StackPerfTest, WindowsOfALongMission) {
   EXPECT_NE(StackPerfText(s).find("memory at 12 s and at the end"), std::string::npos);
 }
 
+TEST(StackPerfTest, InputsLostAreCountedPerNodeAcrossRestartsAndPerWindow) {
+  StackPerf perf;
+  perf.SetPeriod(10.0, 3600.0);
+  const int64_t start_us = 1000000;
+  for (int i = 0; i < 20; ++i) {
+    const int64_t t = start_us + i * 1000000LL;
+    perf.AddCommandSample("localhost", "sarmap-slam", true, 10.0, 1000000, 0, t);
+    // SLAM (pid 10) receives 30 scans a second and loses 2 at 5 s; it restarts at 12 s as pid 11
+    // and counts from zero again, losing 1 more at 15 s.
+    if (i < 12)
+      perf.AddNodeInput("sarmap-slam", 10, "SCAN", 30 * (i + 1), 0, 0, i >= 5 ? 2 : 0, t);
+    else
+      perf.AddNodeInput("sarmap-slam", 11, "SCAN", 30 * (i - 11), 0, 0, i >= 15 ? 1 : 0, t);
+    perf.AddNodeInput("sarmap-people-map", 20, "PEOPLE_VISUAL", 10 * (i + 1), i >= 3 ? 1 : 0, 0, 0,
+                      t);
+  }
+  const StackPerfSummary s = perf.Summarise();
+  ASSERT_EQ(s.inputs.size(), 2u);
+  const InputUsage& map = s.inputs[0];
+  const InputUsage& slam = s.inputs[1];
+  EXPECT_EQ(map.node, "sarmap-people-map");
+  EXPECT_EQ(map.received, 200);
+  EXPECT_EQ(map.dropped_malformed, 1);
+  EXPECT_EQ(map.sequence_gaps, 0);
+  EXPECT_EQ(slam.channel, "SCAN");
+  EXPECT_EQ(slam.received, 360 + 240);
+  EXPECT_EQ(slam.sequence_gaps, 3);
+  ASSERT_EQ(s.windows.size(), 2u);
+  EXPECT_EQ(s.windows[0].input_sequence_gaps, 2);
+  EXPECT_EQ(s.windows[1].input_sequence_gaps, 1);
+  EXPECT_EQ(s.windows[0].inputs_received + s.windows[1].inputs_received, 600 + 200);
+  EXPECT_NE(StackPerfText(s).find("3 messages never handled"), std::string::npos);
+}
+
 TEST(StackPerfTest, NoWindowsWithoutAPeriodOrBeforeTheComparisonTime) {
   StackPerf plain;
   plain.AddCommandSample("localhost", "sarmap-slam", true, 10.0, 1000000, 0, 5000000);
