@@ -120,6 +120,7 @@ int main(int argc, char** argv) {
       if (event.channel == status_channel) {
         sarmap::node_status_t status;
         if (sarmap::common::DecodeMessage(event.data.data(), event.data.size(), &status)) {
+          perf.AddNodeStatusText(status.node_name, status.message, event.timestamp_us);
           for (const auto& c : status.channels)
             perf.AddNodeInput(status.node_name, status.pid, c.channel, c.received,
                               c.dropped_malformed, c.handler_errors, c.sequence_gaps,

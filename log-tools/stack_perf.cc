@@ -124,6 +124,17 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
       before = c;
     }
   }
+  for (const auto& [node, texts] : status_texts_) {
+    std::vector<const std::string*> last(num_windows, nullptr);
+    for (const StatusText& t : texts) {
+      const int w =
+          std::clamp(static_cast<int>(std::floor(seconds_from_start(t.receive_us) / period_s_)), 0,
+                     num_windows - 1);
+      last[w] = &t.text;
+    }
+    for (int w = 0; w < num_windows; ++w)
+      if (last[w]) out->windows[w].node_status.emplace_back(node, *last[w]);
+  }
   for (int w = 0; w < num_windows; ++w) {
     std::vector<double> totals;
     for (const auto& [second, by_command] : per_second[w]) {
@@ -142,6 +153,12 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
 
 void StackPerf::AddMachineLoad(double cpu_load_fraction) {
   if (std::isfinite(cpu_load_fraction)) machine_load_.push_back(cpu_load_fraction);
+}
+
+void StackPerf::AddNodeStatusText(const std::string& node, const std::string& text,
+                                  int64_t receive_us) {
+  if (period_s_ <= 0 || text.empty()) return;
+  status_texts_[node].push_back({receive_us, text});
 }
 
 void StackPerf::AddNodeInput(const std::string& node, int32_t pid, const std::string& channel,
@@ -299,6 +316,9 @@ std::string StackPerfText(const StackPerfSummary& summary) {
       out << line;
     }
   }
+  if (!summary.windows.empty())
+    out << "per window: the stack's CPU and every node's inputs, each process's CPU (mean / p95) "
+           "and memory at the window's end, each node's own last NODE_STATUS summary\n";
   for (const PerfWindow& w : summary.windows) {
     snprintf(line, sizeof(line),
              "%6.0f-%6.0f s: stack CPU mean %.1f %%, p95 %.1f %% of one core; inputs %lld "
@@ -313,6 +333,7 @@ std::string StackPerfText(const StackPerfSummary& summary) {
                p.excluded ? "  (not counted)" : "");
       out << line;
     }
+    for (const auto& [node, text] : w.node_status) out << "    " << node << ": " << text << "\n";
   }
   if (!summary.rss_growth.empty()) {
     snprintf(line, sizeof(line), "memory at %.0f s and at the end:\n", summary.compare_from_s);

@@ -50,6 +50,8 @@ struct PerfWindow {
   // The stack's CPU (the processes not excluded, summed per second of reports).
   double stack_cpu_mean_percent = 0.0, stack_cpu_p95_percent = 0.0;
   std::vector<WindowUsage> processes;
+  // Each node's own summary (NODE_STATUS message) last reported in the window, by node.
+  std::vector<std::pair<std::string, std::string>> node_status;
 };
 
 // A process's memory at one time of the mission and at its end.
@@ -103,6 +105,8 @@ class StackPerf {
   void AddMachineLoad(double cpu_load_fraction);
   // One input channel's counters from a node's NODE_STATUS report (cumulative since that process
   // started), received at receive_us.
+  // A node's own summary of its state (NODE_STATUS message; kept only with SetPeriod).
+  void AddNodeStatusText(const std::string& node, const std::string& text, int64_t receive_us);
   void AddNodeInput(const std::string& node, int32_t pid, const std::string& channel,
                     int64_t received, int64_t dropped_malformed, int64_t handler_errors,
                     int64_t sequence_gaps, int64_t receive_us = 0);
@@ -142,6 +146,11 @@ class StackPerf {
   };
   // (node, channel, pid) -> its reports in time order (only the last one without SetPeriod).
   std::map<std::tuple<std::string, std::string, int32_t>, std::vector<InputCounters>> inputs_;
+  struct StatusText {
+    int64_t receive_us = 0;
+    std::string text;
+  };
+  std::map<std::string, std::vector<StatusText>> status_texts_;  // by node, in time order
   bool Excluded(const std::string& command) const;
   void SummariseWindows(StackPerfSummary* out) const;
 

@@ -123,6 +123,19 @@ TEST(StackPerfTest, InputsLostAreCountedPerNodeAcrossRestartsAndPerWindow) {
   EXPECT_EQ(s.windows[1].input_sequence_gaps, 1);
   EXPECT_EQ(s.windows[0].inputs_received + s.windows[1].inputs_received, 600 + 200);
   EXPECT_NE(StackPerfText(s).find("3 messages never handled"), std::string::npos);
+  // Each window shows each node's last summary in it.
+  StackPerf texts;
+  texts.SetPeriod(10.0, 3600.0);
+  for (int i = 0; i < 15; ++i) {
+    const int64_t t = start_us + i * 1000000LL;
+    texts.AddCommandSample("localhost", "sarmap-slam", true, 10.0, 1000000, 0, t);
+    texts.AddNodeStatusText("sarmap-slam", "nodes " + std::to_string(i), t);
+  }
+  const StackPerfSummary st = texts.Summarise();
+  ASSERT_EQ(st.windows.size(), 2u);
+  ASSERT_EQ(st.windows[0].node_status.size(), 1u);
+  EXPECT_EQ(st.windows[0].node_status[0].second, "nodes 9");
+  EXPECT_EQ(st.windows[1].node_status[0].second, "nodes 14");
 }
 
 TEST(StackPerfTest, NoWindowsWithoutAPeriodOrBeforeTheComparisonTime) {
