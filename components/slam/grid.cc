@@ -76,7 +76,8 @@ void ProbabilityGrid::Unfinish() {
   finished_ = false;
 }
 
-void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float miss_probability) {
+void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float miss_probability,
+                             float free_from_m) {
   Unfinish();
   if (update_mark_.size() != cells_.size()) {  // released by Finish()
     update_mark_.assign(cells_.size(), 0);
@@ -102,6 +103,8 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
   }
   // Rays: walk the cells from the origin towards each end point (Amanatides-Woo traversal),
   // excluding the end cell for hits.
+  const double free_from_cells2 =
+      static_cast<double>(free_from_m) * free_from_m * inv_resolution_ * inv_resolution_;
   auto cast = [&](const Eigen::Vector2f& end, bool include_end) {
     const double ox = (data.origin.x() - corner_.x()) * inv_resolution_;
     const double oy = (data.origin.y() - corner_.y()) * inv_resolution_;
@@ -122,7 +125,9 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
       const bool at_end = x == end_x && y == end_y;
       if (at_end && !include_end) break;
       const int i = y * width_ + x;
-      if (x >= 0 && y >= 0 && x < width_ && y < height_ && update_mark_[i] != current_mark_) {
+      const double cx = x + 0.5 - ox, cy = y + 0.5 - oy;  // the cell's centre, in cells
+      if (x >= 0 && y >= 0 && x < width_ && y < height_ && update_mark_[i] != current_mark_ &&
+          cx * cx + cy * cy >= free_from_cells2) {
         update_mark_[i] = current_mark_;
         ApplyOdds(i, miss_odds);
       }

@@ -74,8 +74,11 @@ class ProbabilityGrid {
   const float* LiveCells() const { return finished_ ? nullptr : cells_.data(); }
   bool finished() const { return finished_; }
 
-  // Inserts range data given in the map frame (hits update to occupied, rays to free).
-  void Insert(const RangeData& data, float hit_probability, float miss_probability);
+  // Inserts range data given in the map frame (hits update to occupied, rays to free). Rays
+  // clear only the cells at least free_from_m from the origin (a depth camera sees low objects
+  // only from some range on, and its rays pass over them closer in).
+  void Insert(const RangeData& data, float hit_probability, float miss_probability,
+              float free_from_m = 0.f);
 
   // Grows the grid so that `point` (map frame) lies inside, with a margin.
   void GrowToInclude(const Eigen::Vector2f& point);

@@ -91,6 +91,33 @@ TEST_F(ScanMatcherTest, GridStoresHitsAndFreeSpace) {
   EXPECT_NEAR(g.Raw(g.CellIndex(Eigen::Vector2f(0.15f, 0.05f))), miss_odds / (1 + miss_odds), 1e-6);
 }
 
+TEST(ProbabilityGridTest, RaysClearOnlyFromTheGivenRangeOn) {
+  // A low object at 0.8 m, seen from 3 m, then passed over by rays from 0.5 m away (a depth
+  // camera from close by): clearing from 1.2 m on keeps it; clearing all along erases it.
+  for (const float free_from_m : {0.f, 1.2f}) {
+    ProbabilityGrid g(0.1, Eigen::Vector2d::Zero(), 10);
+    RangeData far;
+    far.origin = Eigen::Vector2f(-2.15f, 0.05f);
+    far.hits.push_back(Eigen::Vector2f(0.85f, 0.05f));
+    g.Insert(far, 0.55f, 0.49f, free_from_m);
+    RangeData close;
+    close.origin = Eigen::Vector2f(0.35f, 0.05f);
+    close.hits.push_back(Eigen::Vector2f(3.05f, 0.05f));  // the wall behind it
+    for (int i = 0; i < 10; ++i) g.Insert(close, 0.55f, 0.49f, free_from_m);
+    const float object = g.Raw(g.CellIndex(Eigen::Vector2f(0.85f, 0.05f)));
+    if (free_from_m > 0) {
+      EXPECT_NEAR(object, 0.55f, 1e-6);
+      // Each ray clears from 1.2 m off its origin on: the close rays at (2.05, 0), 1.7 m away;
+      // the far one at (-0.55, 0), 1.6 m away, but not at (-1.55, 0), 0.6 m away.
+      EXPECT_LT(g.Raw(g.CellIndex(Eigen::Vector2f(2.05f, 0.05f))), 0.5f);
+      EXPECT_EQ(g.Raw(g.CellIndex(Eigen::Vector2f(-1.55f, 0.05f))), 0.f);
+      EXPECT_LT(g.Raw(g.CellIndex(Eigen::Vector2f(-0.55f, 0.05f))), 0.5f);
+    } else {
+      EXPECT_LT(object, 0.5f);
+    }
+  }
+}
+
 TEST_F(ScanMatcherTest, AngularStepMovesFarthestPointByOneCell) {
   PointCloud p = {Eigen::Vector2f(10, 0)};
   const double step = AngularSearchStep(p, 0.05);

@@ -938,7 +938,8 @@ OccupancyMap Slam::RenderMap() const {
     if (!nodes_[i].data) continue;
     grid.Insert(TransformRangeData(nodes_[i].data->range_data.Unpack(), node_global_[i]),
                 static_cast<float>(options_.local.hit_probability),
-                static_cast<float>(options_.local.miss_probability));
+                static_cast<float>(options_.local.miss_probability),
+                static_cast<float>(options_.scan.map_free_from_m));
   }
   Eigen::Array2i lo, hi;
   if (!grid.KnownBounds(&lo, &hi)) return map;

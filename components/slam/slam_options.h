@@ -19,6 +19,10 @@ struct ScanOptions {
   int adaptive_min_points = 200;
   double loop_adaptive_max_length_m = 0.9;  // points kept for loop closure
   int loop_adaptive_min_points = 100;
+  // MAP only: rays clear cells from this range on. A depth camera at height h whose lowest ray
+  // points a below the horizon sees an object of height z from (h - z) / tan(a) on; closer in,
+  // its scan's rays pass over low objects, and clearing there would erase them from MAP.
+  double map_free_from_m = 0.0;
   // Pose of the laser on the robot (base_from_laser).
   double laser_x_m = 0, laser_y_m = 0, laser_yaw_rad = 0;
   template <class V> void Visit(V& v) {
@@ -30,6 +34,9 @@ struct ScanOptions {
     v("adaptive_min_points", adaptive_min_points, "Adaptive voxel filter: keep at least this many points");
     v("loop_adaptive_max_length_m", loop_adaptive_max_length_m, "Adaptive voxel filter for loop-closure points");
     v("loop_adaptive_min_points", loop_adaptive_min_points, "Minimum loop-closure points per node");
+    v("map_free_from_m", map_free_from_m,
+      "MAP: rays clear cells only from this range on (a depth camera's rays pass over low objects "
+      "closer in); 0: from the sensor");
     v("laser_x_m", laser_x_m, "base_from_laser x, for scans that carry no laser pose of their own");
     v("laser_y_m", laser_y_m, "base_from_laser y, for scans that carry no laser pose of their own");
     v("laser_yaw_rad", laser_yaw_rad,
@@ -39,6 +46,7 @@ struct ScanOptions {
     c.NonNegative("min_range_m", min_range_m);
     c.That(max_range_m > min_range_m, "max_range_m", "must be > min_range_m");
     c.NonNegative("missing_data_ray_length_m", missing_data_ray_length_m);
+    c.NonNegative("map_free_from_m", map_free_from_m);
     c.Positive("voxel_size_m", voxel_size_m);
     c.Positive("adaptive_max_length_m", adaptive_max_length_m);
     c.Positive("loop_adaptive_max_length_m", loop_adaptive_max_length_m);
