@@ -134,8 +134,17 @@ SoundClassFeatures SoundClassifier::Features() const {
   int n_present = 0, n_shape = 0, n_flux = 0;
   double level_sum = 0, level_sq = 0;
   std::map<int, int> peak_count;
+  // Steadiness: of two consecutive sounding frames with a spectral shape, how often the strongest
+  // peak stays in its bin.
+  int steady_pairs = 0, pairs = 0, last_peak = -1;
   for (const Frame& f : frames_) {
+    const int prev_peak = last_peak;
+    last_peak = f.present && f.flatness >= 0 ? f.peak : -1;
     if (!f.present) continue;
+    if (f.flatness >= 0 && prev_peak >= 0) {
+      ++pairs;
+      steady_pairs += f.peak == prev_peak;
+    }
     ++n_present;
     const double level = 10 * std::log10(f.energy + 1e-20);
     level_sum += level;
@@ -182,6 +191,7 @@ SoundClassFeatures SoundClassifier::Features() const {
     out.peak_share = static_cast<double>(covered) / n_shape;
   }
   if (n_flux > 0) out.flux /= n_flux;
+  out.steadiness = pairs > 0 ? static_cast<double>(steady_pairs) / pairs : 0.0;
   // Syllabic modulation: RMS of the 2-8 Hz part of the sounding stretch's normalised energy
   // envelope E(t) / mean E (DFT over the history; pauses inside it count as silence).
   size_t first = frames_.size(), last = 0;
@@ -224,13 +234,17 @@ SoundClassEstimate SoundClassifier::Decide(const SoundClassFeatures& f,
     return std::clamp(std::abs(value - threshold) / std::max(threshold, 1e-9), 0.0, 1.0);
   };
   bool early = false;  // decided before min_present_s (a voice or a clear alarm)
-  if (f.tonality >= o.tonal_min && f.flux <= o.tonal_max_flux) {
+  const bool tonal = f.tonality >= o.tonal_min && f.flux <= o.tonal_max_flux;
+  const bool sustained = f.steadiness >= o.sustained_min;
+  if (tonal || sustained) {
     const bool alarm = f.peak_share >= o.alarm_peak_share;
     early = alarm && f.tonality >= o.clear_alarm_tonal_min;
     if (!long_enough && !early) return e;
     e.sound_class = alarm ? SoundClass::kAlarm : SoundClass::kMusic;
-    e.confidence = std::min({margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux),
-                             margin(f.peak_share, o.alarm_peak_share)});
+    const double held =
+        tonal ? std::min(margin(f.tonality, o.tonal_min), margin(f.flux, o.tonal_max_flux))
+              : margin(f.steadiness, o.sustained_min);
+    e.confidence = std::min(held, margin(f.peak_share, o.alarm_peak_share));
   } else if (f.syllabic >= o.voice_syllabic_min && f.level_std_db >= o.steady_level_std_db) {
     early = true;
     e.sound_class = SoundClass::kVoice;
