@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
     parser.AddFlag("--map-channel", &map_channel, "channel of the people map");
     parser.AddFlag("--info-channel", &info_channel, "channel of the launcher's deputy reports");
     parser.AddFlag("--status-channel", &status_channel,
-                   "channel of the nodes' health reports (inputs received and lost)");
+                   "channel of the nodes' health reports (inputs received and never handled)");
     std::string key_path;
     parser.AddFlag("--key", &key_path,
                    "the launcher's key file: only deputy reports signed with it are counted "
