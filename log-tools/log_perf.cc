@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
         "simulator and the logger, and the latency from a DEPTH frame to the PEOPLE_VISUAL and\n"
         "PEOPLE_MAP updates it causes (logger receive times, matched by the frame's capture "
         "time);\n"
-        "every node's inputs received and lost, from their NODE_STATUS reports.");
+        "every node's inputs received and never handled, from their NODE_STATUS reports.");
     std::string log, exclude = "sarmap-sim,logger,record";
     std::string depth_channel = "DEPTH", visual_channel = "PEOPLE_VISUAL",
                 map_channel = "PEOPLE_MAP", info_channel = "PM_INFO",
