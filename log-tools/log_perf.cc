@@ -34,15 +34,13 @@ int main(int argc, char** argv) {
   return sarmap::common::RunMain("sarmap-log perf", [&] {
     sarmap::common::ArgParser parser(
         "sarmap-log perf",
-        "What the stack cost during a recorded mission: mean and 95th-percentile CPU (percent of "
-        "one\n"
-        "core, children included) and peak memory of every process, from the launcher's PM_INFO\n"
-        "reports (the deputies sample /proc every second), the total of the robot's stack without "
-        "the\n"
-        "simulator and the logger, and the latency from a DEPTH frame to the PEOPLE_VISUAL and\n"
-        "PEOPLE_MAP updates it causes (logger receive times, matched by the frame's capture "
-        "time);\n"
-        "every node's inputs received and never handled, from their NODE_STATUS reports.");
+        "What the stack cost during a recorded mission: mean and 95th-percentile CPU (percent\n"
+        "of one core, children included) and peak memory of every process, from the launcher's\n"
+        "PM_INFO reports (the deputies sample /proc every second), the total of the robot's stack\n"
+        "without the simulator and the logger, and the latency from a DEPTH frame to the\n"
+        "PEOPLE_VISUAL and PEOPLE_MAP updates it causes (logger receive times, matched by the\n"
+        "frame's capture time); every node's inputs received and never handled, from their\n"
+        "NODE_STATUS reports.");
     std::string log, exclude = "sarmap-sim,logger,record";
     std::string depth_channel = "DEPTH", visual_channel = "PEOPLE_VISUAL",
                 map_channel = "PEOPLE_MAP", info_channel = "PM_INFO",

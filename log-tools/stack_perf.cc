@@ -9,6 +9,13 @@ namespace sarmap {
 namespace logtools {
 namespace {
 
+double Mean(const std::vector<double>& values) {
+  if (values.empty()) return 0.0;
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  return sum / values.size();
+}
+
 double Quantile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;
   std::sort(values.begin(), values.end());
@@ -68,11 +75,16 @@ void StackPerf::AddCommandSample(const std::string& deputy, const std::string& c
 void StackPerf::SummariseWindows(StackPerfSummary* out) const {
   if (period_s_ <= 0 || first_sample_us_ < 0) return;
   const auto seconds_from_start = [&](int64_t us) { return (us - first_sample_us_) * 1e-6; };
+  int num_windows = 1;  // set below, once the span is known
+  const auto window_of = [&](int64_t us) {
+    return std::clamp(static_cast<int>(std::floor(seconds_from_start(us) / period_s_)), 0,
+                      num_windows - 1);
+  };
   int64_t last_us = first_sample_us_;
   for (const auto& [name, s] : commands_)
     for (const Sample& x : s.timed) last_us = std::max(last_us, x.receive_us);
   const double span_s = seconds_from_start(last_us);
-  const int num_windows = 1 + static_cast<int>(std::floor(span_s / period_s_));
+  num_windows = 1 + static_cast<int>(std::floor(span_s / period_s_));
   // The stack's CPU per second of reports: each process's last sample in that second (a deputy
   // reports every second; several deputies' reports of one second add up).
   std::vector<std::map<int64_t, std::map<std::string, double>>> per_second(num_windows);
@@ -88,7 +100,7 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
     double rss_then = -1.0, rss_end_all = -1.0;
     for (const Sample& x : s.timed) {
       const double t = seconds_from_start(x.receive_us);
-      const int w = std::clamp(static_cast<int>(std::floor(t / period_s_)), 0, num_windows - 1);
+      const int w = window_of(x.receive_us);
       cpu[w].push_back(x.cpu_percent);
       rss_end[w] = x.rss_bytes;  // samples arrive in time order
       if (t <= compare_from_s_) rss_then = x.rss_bytes;
@@ -100,9 +112,7 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
       WindowUsage u;
       u.command = name;
       u.samples = static_cast<int>(cpu[w].size());
-      double sum = 0.0;
-      for (double c : cpu[w]) sum += c;
-      u.mean_cpu_percent = sum / cpu[w].size();
+      u.mean_cpu_percent = Mean(cpu[w]);
       u.p95_cpu_percent = Quantile(cpu[w], 0.95);
       u.rss_end_mb = rss_end[w] / 1e6;
       u.excluded = excluded;
@@ -115,9 +125,7 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
   for (const auto& [key, reports] : inputs_) {
     InputCounters before;
     for (const InputCounters& c : reports) {
-      const int w =
-          std::clamp(static_cast<int>(std::floor(seconds_from_start(c.receive_us) / period_s_)), 0,
-                     num_windows - 1);
+      const int w = window_of(c.receive_us);
       // (A late message can fill a gap counted before: the counter may go down.)
       out->windows[w].inputs_received += c.received - before.received;
       out->windows[w].input_sequence_gaps += c.sequence_gaps - before.sequence_gaps;
@@ -127,10 +135,7 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
   for (const auto& [node, texts] : status_texts_) {
     std::vector<const std::string*> last(num_windows, nullptr);
     for (const StatusText& t : texts) {
-      const int w =
-          std::clamp(static_cast<int>(std::floor(seconds_from_start(t.receive_us) / period_s_)), 0,
-                     num_windows - 1);
-      last[w] = &t.text;
+      last[window_of(t.receive_us)] = &t.text;
     }
     for (int w = 0; w < num_windows; ++w)
       if (last[w]) out->windows[w].node_status.emplace_back(node, *last[w]);
@@ -143,9 +148,7 @@ void StackPerf::SummariseWindows(StackPerfSummary* out) const {
       totals.push_back(total);
     }
     if (totals.empty()) continue;
-    double sum = 0.0;
-    for (double t : totals) sum += t;
-    out->windows[w].stack_cpu_mean_percent = sum / totals.size();
+    out->windows[w].stack_cpu_mean_percent = Mean(totals);
     out->windows[w].stack_cpu_p95_percent = Quantile(totals, 0.95);
   }
   out->compare_from_s = compare_from_s_;
@@ -214,9 +217,7 @@ StackPerfSummary StackPerf::Summarise() const {
     ProcessUsage u;
     u.command = name;
     u.samples = static_cast<int>(s.cpu.size());
-    double sum = 0.0;
-    for (double c : s.cpu) sum += c;
-    u.mean_cpu_percent = s.cpu.empty() ? 0.0 : sum / s.cpu.size();
+    u.mean_cpu_percent = Mean(s.cpu);
     u.p95_cpu_percent = Quantile(s.cpu, 0.95);
     u.max_rss_mb = s.max_rss_bytes / 1e6;
     u.restarts = std::max(0, s.last_restarts - std::max(0, s.first_restarts));
@@ -224,9 +225,7 @@ StackPerfSummary StackPerf::Summarise() const {
     (u.excluded ? out.excluded_cpu_percent : out.stack_cpu_percent) += u.mean_cpu_percent;
     out.processes.push_back(u);
   }
-  double load = 0.0;
-  for (double l : machine_load_) load += l;
-  out.machine_load_percent = machine_load_.empty() ? 0.0 : 100.0 * load / machine_load_.size();
+  out.machine_load_percent = 100.0 * Mean(machine_load_);
   out.depth_frames = static_cast<int>(depth_receive_us_.size());
   out.depth_to_people_visual = Latencies(depth_receive_us_, visual_receive_us_);
   std::map<int64_t, int64_t> seen_depth;

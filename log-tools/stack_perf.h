@@ -103,10 +103,10 @@ class StackPerf {
                         double cpu_percent, int64_t rss_bytes, int restart_count,
                         int64_t receive_us = 0);
   void AddMachineLoad(double cpu_load_fraction);
-  // One input channel's counters from a node's NODE_STATUS report (cumulative since that process
-  // started), received at receive_us.
   // A node's own summary of its state (NODE_STATUS message; kept only with SetPeriod).
   void AddNodeStatusText(const std::string& node, const std::string& text, int64_t receive_us);
+  // One input channel's counters from a node's NODE_STATUS report (cumulative since that process
+  // started), received at receive_us.
   void AddNodeInput(const std::string& node, int32_t pid, const std::string& channel,
                     int64_t received, int64_t dropped_malformed, int64_t handler_errors,
                     int64_t sequence_gaps, int64_t receive_us = 0);

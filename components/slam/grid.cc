@@ -105,6 +105,11 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
   // excluding the end cell for hits.
   const double free_from_cells2 =
       static_cast<double>(free_from_m) * free_from_m * inv_resolution_ * inv_resolution_;
+  // Squared distance from the origin (ox, oy) to the centre of cell (x, y), in cells.
+  auto FromOrigin2 = [](int x, int y, double ox, double oy) {
+    const double cx = x + 0.5 - ox, cy = y + 0.5 - oy;
+    return cx * cx + cy * cy;
+  };
   auto cast = [&](const Eigen::Vector2f& end, bool include_end) {
     const double ox = (data.origin.x() - corner_.x()) * inv_resolution_;
     const double oy = (data.origin.y() - corner_.y()) * inv_resolution_;
@@ -125,9 +130,8 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
       const bool at_end = x == end_x && y == end_y;
       if (at_end && !include_end) break;
       const int i = y * width_ + x;
-      const double cx = x + 0.5 - ox, cy = y + 0.5 - oy;  // the cell's centre, in cells
       if (x >= 0 && y >= 0 && x < width_ && y < height_ && update_mark_[i] != current_mark_ &&
-          cx * cx + cy * cy >= free_from_cells2) {
+          (free_from_cells2 == 0 || FromOrigin2(x, y, ox, oy) >= free_from_cells2)) {
         update_mark_[i] = current_mark_;
         ApplyOdds(i, miss_odds);
       }
