@@ -43,18 +43,17 @@ struct RecordFramesOptions {
   template <class V>
   void Visit(V& v) {
     v("channels", channels, "camera channels kept at a low rate (regular expression, whole name)");
-    v("rate_hz", rate_hz, "frames per second kept of each camera channel (by capture time)");
+    v("rate_hz", rate_hz, "frames per second kept of each camera channel (by capture time)",
+      Positive());
     v("pair_tolerance_s", pair_tolerance_s,
-      "a frame within this of a kept capture time is kept too (depth with its colour)");
+      "a frame within this of a kept capture time is kept too (depth with its colour)",
+      NonNegative());
     v("people_channel", people_channel,
       "people_detections_t channel: a message with a detection keeps every frame around it");
     v("around_people_s", around_people_s,
-      "frames captured within this of a detection are all kept (0: none)");
+      "frames captured within this of a detection are all kept (0: none)", NonNegative());
   }
   void Validate(common::Validator& check) const {
-    check.Positive("rate_hz", rate_hz);
-    check.NonNegative("pair_tolerance_s", pair_tolerance_s);
-    check.NonNegative("around_people_s", around_people_s);
     check.That(pair_tolerance_s * rate_hz < 0.5, "pair_tolerance_s",
                "must be under half the kept frame period");
   }
@@ -66,9 +65,8 @@ struct RecordGridsOptions {
   template <class V>
   void Visit(V& v) {
     v("channels", channels, "grid channels kept at a low rate (regular expression, whole name)");
-    v("period_s", period_s, "one grid kept every this many seconds of receive time");
+    v("period_s", period_s, "one grid kept every this many seconds of receive time", Positive());
   }
-  void Validate(common::Validator& check) const { check.Positive("period_s", period_s); }
 };
 
 struct RecordProfileOptions {
@@ -82,13 +80,13 @@ struct RecordProfileOptions {
     v("grids", grids, "occupancy grids");
     v("hold_s", hold_s,
       "every message waits this long (receive time) before it is written or dropped; must "
-      "cover frames.around_people_s plus the detector's latency");
+      "cover frames.around_people_s plus the detector's latency",
+      NonNegative());
     v("max_held_mb", max_held_mb,
-      "messages held above this many MB are decided early (a flood does not fill the memory)");
+      "messages held above this many MB are decided early (a flood does not fill the memory)",
+      Positive());
   }
   void Validate(common::Validator& check) const {
-    check.NonNegative("hold_s", hold_s);
-    check.Positive("max_held_mb", max_held_mb);
     check.That(hold_s >= frames.around_people_s, "hold_s",
                "must be >= frames.around_people_s (frames before a detection are still held)");
   }

@@ -261,7 +261,6 @@ void RosbagOptions::Validate(common::Validator& check) const {
                "'" + p + "' is not ROS_FRAME=SARMAP_FRAME");
   }
   check.Positive("audio_sample_rate_hz", audio_sample_rate_hz);
-  check.InRange("audio_channels", audio_channels, 1, 64);
   check.That(!base_frame.empty(), "base_frame", "must not be empty");
 }
 

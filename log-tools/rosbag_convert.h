@@ -71,8 +71,8 @@ struct RosbagOptions {
     v("laser_frame", laser_frame,
       "/tf_static frame written as the SLAM laser pose (\"\": the scans' frame)");
     v("audio_sample_rate_hz", audio_sample_rate_hz, "raw audio without AudioInfo: sample rate");
-    v("audio_channels", audio_channels,
-      "raw audio without AudioInfo: channels (interleaved S16LE)");
+    v("audio_channels", audio_channels, "raw audio without AudioInfo: channels (interleaved S16LE)",
+      InRange(1, 64));
     v("audio_device", audio_device, "audio_frame_t device_id");
     v("pose_channel", pose_channel, "export: pose_t channel");
     v("map_channel", map_channel, "export: occupancy_grid_t channel");

@@ -42,38 +42,32 @@ struct CaptureOptions {
 
   template <class V>
   void Visit(V& v) {
-    v("source", source, "alsa or file");
+    v("source", source, "alsa or file", OneOf({"alsa", "file"}));
     v("device", device, "ALSA capture PCM (arecord -L lists them)");
     v("file", file, "audio file for source file (WAV/FLAC; .raw/.pcm are headerless)");
     v("device_id", device_id, "stable device name published in audio_frame_t ('' = from device/file)");
     v("channel", channel, "LCM channel; AUDIO_* publishes on AUDIO_<DEVICE_ID>");
-    v("sample_rate_hz", sample_rate_hz, "requested (ALSA) or expected (file) rate; 0 = the file's");
-    v("num_channels", num_channels, "requested (ALSA) or expected (file) channels; 0 = the file's");
-    v("block_s", block_s, "audio per message");
-    v("speed", speed, "file pacing: 1 = real time, 0 = as fast as possible");
+    v("sample_rate_hz", sample_rate_hz, "requested (ALSA) or expected (file) rate; 0 = the file's",
+      AtLeast(0));
+    v("num_channels", num_channels, "requested (ALSA) or expected (file) channels; 0 = the file's",
+      InRange(0, 64));
+    v("block_s", block_s, "audio per message", InRange(0.001, 1.0));
+    v("speed", speed, "file pacing: 1 = real time, 0 = as fast as possible", NonNegative());
     v("loop", loop, "file: loop forever");
-    v("raw_encoding", raw_encoding, "headerless files: s16le, s32le or f32le");
+    v("raw_encoding", raw_encoding, "headerless files: s16le, s32le or f32le",
+      OneOf({"s16le", "s32le", "f32le"}));
     v("start_utime", start_utime, "file: utime of the first sample (0 = wall clock at start)");
-    v("alsa_period_frames", alsa_period_frames, "ALSA period size");
-    v("alsa_buffer_periods", alsa_buffer_periods, "ALSA buffer size in periods");
-    v("clip_warn_fraction", clip_warn_fraction, "warn when this fraction of a block is clipped");
+    v("alsa_period_frames", alsa_period_frames, "ALSA period size", AtLeast(16));
+    v("alsa_buffer_periods", alsa_buffer_periods, "ALSA buffer size in periods", AtLeast(2));
+    v("clip_warn_fraction", clip_warn_fraction, "warn when this fraction of a block is clipped",
+      InRange(0, 1));
     v("silence_dbfs", silence_dbfs, "channels quieter than this are silent");
-    v("silence_warn_s", silence_warn_s, "warn after a channel is silent this long");
+    v("silence_warn_s", silence_warn_s, "warn after a channel is silent this long", Positive());
   }
   void Validate(common::Validator& check) const {
-    check.OneOf("source", source, {"alsa", "file"});
     check.That(source != "file" || !file.empty(), "file", "needed for source file");
-    check.That(sample_rate_hz >= 0, "sample_rate_hz", "must be >= 0");
     check.That(source != "alsa" || sample_rate_hz > 0, "sample_rate_hz", "ALSA needs a rate");
-    check.That(num_channels >= 0 && num_channels <= 64, "num_channels", "must be in [0, 64]");
     check.That(source != "alsa" || num_channels > 0, "num_channels", "ALSA needs a channel count");
-    check.InRange("block_s", block_s, 0.001, 1.0);
-    check.NonNegative("speed", speed);
-    check.OneOf("raw_encoding", raw_encoding, {"s16le", "s32le", "f32le"});
-    check.That(alsa_period_frames >= 16, "alsa_period_frames", "must be >= 16");
-    check.That(alsa_buffer_periods >= 2, "alsa_buffer_periods", "must be >= 2");
-    check.InRange("clip_warn_fraction", clip_warn_fraction, 0, 1);
-    check.Positive("silence_warn_s", silence_warn_s);
   }
 };
 

@@ -7,9 +7,66 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 
 namespace sarmap {
+namespace {
+
+std::string Number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+std::string OptionRule::Describe() const {
+  switch (kind_) {
+    case Kind::kNone:
+      return "";
+    case Kind::kPositive:
+      return "> 0";
+    case Kind::kNonNegative:
+      return ">= 0";
+    case Kind::kAtLeast:
+      return ">= " + Number(lo_);
+    case Kind::kInRange:
+      return "in [" + Number(lo_) + ", " + Number(hi_) + "]";
+    case Kind::kOneOf: {
+      std::string list;
+      for (const auto& c : choices_) list += (list.empty() ? "" : ", ") + c;
+      return "one of {" + list + "}";
+    }
+  }
+  return "";
+}
+
 namespace common {
+
+void Validator::Obeys(const std::string& key, double value, const OptionRule& rule) {
+  switch (rule.kind()) {
+    case OptionRule::Kind::kNone:
+      return;
+    case OptionRule::Kind::kPositive:
+      return Positive(key, value);
+    case OptionRule::Kind::kNonNegative:
+      return NonNegative(key, value);
+    case OptionRule::Kind::kAtLeast:
+      return AtLeast(key, value, rule.lo());
+    case OptionRule::Kind::kInRange:
+      return InRange(key, value, rule.lo(), rule.hi());
+    case OptionRule::Kind::kOneOf:
+      return That(false, key, "a number cannot be " + rule.Describe());
+  }
+}
+
+void Validator::Obeys(const std::string& key, const std::string& value, const OptionRule& rule) {
+  if (rule.kind() == OptionRule::Kind::kOneOf) return OneOf(key, value, rule.choices());
+  if (rule.kind() != OptionRule::Kind::kNone) {
+    That(false, key, "a text cannot be " + rule.Describe());
+  }
+}
+
 namespace options_internal {
 namespace {
 

@@ -3,23 +3,29 @@
 // validated once, with errors that name the bad key (and file:line:col when it came from a
 // file).
 //
-// An options struct lists its fields in Visit() and checks them in Validate():
+// An options struct lists its fields in Visit(), each with its help and, where a value has
+// limits, the rule it obeys; Validate() is only for what involves several fields:
 //
 //   struct ScanOptions {
+//     double min_range_m = 0.3;
 //     double max_range_m = 4.5;
 //     GridOptions grid;                                  // nested options struct
 //     template <class V> void Visit(V& v) {
-//       v("max_range_m", max_range_m, "Ranges beyond this are no return");
+//       v("min_range_m", min_range_m, "Ranges below this are no return", NonNegative());
+//       v("max_range_m", max_range_m, "Ranges beyond this are no return", Positive());
 //       v("grid", grid, "Grid settings");
 //     }
 //     void Validate(Validator& check) const {
-//       check.Positive("max_range_m", max_range_m);
+//       check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
 //     }
 //   };
 //   ScanOptions opt = LoadOptions<ScanOptions>("config/scan.yaml", {"max_range_m=3"});
 //
 // Supported field types: bool, int, int64_t, double, std::string, std::vector of
 // double/int/std::string, and nested structs with Visit() (and optionally Validate()).
+// Rules: Positive(), NonNegative(), AtLeast(x), InRange(lo, hi) for numbers (a list's every
+// element), OneOf({...}) for strings. The loader checks them with Validate(), and --help,
+// --print-config and the README tables show them.
 
 #include <cmath>
 #include <cstdint>
@@ -36,6 +42,34 @@ class Node;
 }
 
 namespace sarmap {
+
+// The limits of one option's value, declared beside its key in Visit().
+class OptionRule {
+ public:
+  enum class Kind { kNone, kPositive, kNonNegative, kAtLeast, kInRange, kOneOf };
+  OptionRule() = default;
+  OptionRule(Kind kind, double lo, double hi, std::vector<std::string> choices = {})
+      : kind_(kind), lo_(lo), hi_(hi), choices_(std::move(choices)) {}
+  Kind kind() const { return kind_; }
+  double lo() const { return lo_; }
+  double hi() const { return hi_; }
+  const std::vector<std::string>& choices() const { return choices_; }
+  // "> 0", ">= 0", ">= 1", "in [0, 1]", "one of {a, b}"; "" without a rule.
+  std::string Describe() const;
+
+ private:
+  Kind kind_ = Kind::kNone;
+  double lo_ = 0, hi_ = 0;
+  std::vector<std::string> choices_;
+};
+inline OptionRule Positive() { return {OptionRule::Kind::kPositive, 0, 0}; }
+inline OptionRule NonNegative() { return {OptionRule::Kind::kNonNegative, 0, 0}; }
+inline OptionRule AtLeast(double lo) { return {OptionRule::Kind::kAtLeast, lo, 0}; }
+inline OptionRule InRange(double lo, double hi) { return {OptionRule::Kind::kInRange, lo, hi}; }
+inline OptionRule OneOf(std::vector<std::string> choices) {
+  return {OptionRule::Kind::kOneOf, 0, 0, std::move(choices)};
+}
+
 namespace common {
 
 class OptionsError : public std::runtime_error {
@@ -69,6 +103,16 @@ class Validator {
       list += (list.empty() ? "" : ", ") + a;
     }
     That(ok, key, "must be one of {" + list + "}, is '" + value + "'");
+  }
+  void AtLeast(const std::string& key, double value, double lo) {
+    That(std::isfinite(value) && value >= lo, key, "must be >= " + Str(lo) + ", is " + Str(value));
+  }
+  // The value against its declared rule (numbers and lists of numbers; OneOf: strings).
+  void Obeys(const std::string& key, double value, const OptionRule& rule);
+  void Obeys(const std::string& key, const std::string& value, const OptionRule& rule);
+  template <class T>
+  void Obeys(const std::string& key, const std::vector<T>& values, const OptionRule& rule) {
+    for (const auto& value : values) Obeys(key, value, rule);
   }
   const std::vector<std::string>& errors() const { return errors_; }
   std::vector<std::string>& mutable_errors() { return errors_; }
@@ -159,7 +203,7 @@ class Reader {
       : map_(std::move(map)), overrides_(overrides), prefix_(std::move(prefix)) {}
 
   template <class T>
-  void operator()(const char* key, T& value, const char* /*help*/) {
+  void operator()(const char* key, T& value, const char* /*help*/, const OptionRule& = {}) {
     seen_.emplace_back(key);
     const std::string full = prefix_ + key;
     if constexpr (IsOptionsStruct<T>::value) {
@@ -192,7 +236,7 @@ class Writer {
   Writer(std::ostream* out, int indent, bool with_help)
       : out_(out), indent_(indent), with_help_(with_help) {}
   template <class T>
-  void operator()(const char* key, const T& value, const char* help) {
+  void operator()(const char* key, const T& value, const char* help, const OptionRule& rule = {}) {
     const std::string pad(indent_, ' ');
     if (with_help_ && help && *help) *out_ << pad << "# " << help << "\n";
     if constexpr (IsOptionsStruct<T>::value) {
@@ -201,7 +245,10 @@ class Writer {
       const_cast<T&>(value).Visit(child);
     } else {
       *out_ << pad << key << ": " << Format(value);
-      if (with_help_) *out_ << "  # " << TypeName(&value);
+      if (with_help_) {
+        *out_ << "  # " << TypeName(&value);
+        if (rule.kind() != OptionRule::Kind::kNone) *out_ << ", " << rule.Describe();
+      }
       *out_ << "\n";
     }
   }
@@ -212,19 +259,19 @@ class Writer {
   bool with_help_;
 };
 
-// One Markdown table row per leaf key ("a.b.c"), its value and its help.
+// One Markdown table row per leaf key ("a.b.c"): its value, its rule and its help.
 class MarkdownWriter {
  public:
   MarkdownWriter(std::ostream* out, std::string prefix) : out_(out), prefix_(std::move(prefix)) {}
   template <class T>
-  void operator()(const char* key, const T& value, const char* help) {
+  void operator()(const char* key, const T& value, const char* help, const OptionRule& rule = {}) {
     const std::string full = prefix_ + key;
     if constexpr (IsOptionsStruct<T>::value) {
       MarkdownWriter child(out_, full + ".");
       const_cast<T&>(value).Visit(child);
     } else {
       *out_ << "| `" << full << "` | `" << MarkdownCell(Format(value)) << "` | "
-            << MarkdownCell(help ? help : "") << " |\n";
+            << MarkdownCell(rule.Describe()) << " | " << MarkdownCell(help ? help : "") << " |\n";
     }
   }
 
@@ -233,16 +280,23 @@ class MarkdownWriter {
   std::string prefix_;
 };
 
+// Each leaf against its rule; each nested struct's Validate() and leaves, under its prefix.
 struct ValidateVisitor {
   Validator* check;
   template <class T>
-  void operator()(const char* key, const T& value, const char*) {
+  void operator()(const char* key, const T& value, const char*, const OptionRule& rule = {}) {
     if constexpr (IsOptionsStruct<T>::value) {
       Validator child(check->prefix() + key + ".");
       if constexpr (HasValidate<T>::value) value.Validate(child);
       ValidateVisitor nested{&child};
       const_cast<T&>(value).Visit(nested);
       for (auto& e : child.errors()) check->mutable_errors().push_back(e);
+    } else if (rule.kind() != OptionRule::Kind::kNone) {
+      if constexpr (std::is_same_v<T, bool>) {
+        check->That(false, key, "a yes/no option has no rule");
+      } else {
+        check->Obeys(key, value, rule);
+      }
     }
   }
 };
@@ -253,14 +307,20 @@ std::vector<std::pair<std::string, std::string>> SplitOverrides(
 
 }  // namespace options_internal
 
-// Validates `options` (and every nested options struct); throws OptionsError naming every
-// bad key.
+// Checks `options` (every key against its rule, Validate(), and every nested options struct
+// the same way) into `check`, which collects an error per bad key.
+template <class Options>
+void CheckOptions(const Options& options, Validator* check) {
+  if constexpr (options_internal::HasValidate<Options>::value) options.Validate(*check);
+  options_internal::ValidateVisitor nested{check};
+  const_cast<Options&>(options).Visit(nested);
+}
+
+// CheckOptions; throws OptionsError naming every bad key.
 template <class Options>
 void ValidateOptions(const Options& options) {
   Validator check;
-  if constexpr (options_internal::HasValidate<Options>::value) options.Validate(check);
-  options_internal::ValidateVisitor nested{&check};
-  const_cast<Options&>(options).Visit(nested);
+  CheckOptions(options, &check);
   if (!check.errors().empty()) options_internal::ThrowErrors("invalid options", check.errors());
 }
 
@@ -310,12 +370,12 @@ std::string OptionsToYaml(const Options& options, bool with_help) {
   return out.str();
 }
 
-// Options as a Markdown table (key | value | meaning), for the configuration section of a
+// Options as a Markdown table (key | value | valid | meaning), for the configuration section of a
 // component's README.
 template <class Options>
 std::string OptionsToMarkdown(const Options& options) {
   std::ostringstream out;
-  out << "| key | value | meaning |\n|---|---|---|\n";
+  out << "| key | value | valid | meaning |\n|---|---|---|---|\n";
   options_internal::MarkdownWriter writer(&out, "");
   const_cast<Options&>(options).Visit(writer);
   return out.str();

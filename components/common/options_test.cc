@@ -15,16 +15,13 @@ struct GridOptions {
   int width = 100;
   template <class V>
   void Visit(V& v) {
-    v("resolution_m", resolution_m, "cell size");
-    v("width", width, "cells");
-  }
-  void Validate(Validator& check) const {
-    check.Positive("resolution_m", resolution_m);
-    check.That(width > 0, "width", "must be > 0");
+    v("resolution_m", resolution_m, "cell size", Positive());
+    v("width", width, "cells", AtLeast(1));
   }
 };
 
 struct TestOptions {
+  double min_range_m = 0.0;
   double max_range_m = 4.5;
   bool enabled = true;
   std::string mode = "fast";
@@ -32,15 +29,16 @@ struct TestOptions {
   GridOptions grid;
   template <class V>
   void Visit(V& v) {
-    v("max_range_m", max_range_m, "max range");
+    v("min_range_m", min_range_m, "min range", NonNegative());
+    v("max_range_m", max_range_m, "max range", Positive());
     v("enabled", enabled, "on/off");
-    v("mode", mode, "fast or exact");
-    v("weights", weights, "weights");
+    v("mode", mode, "fast or exact", OneOf({"fast", "exact"}));
+    v("weights", weights, "weights", InRange(0, 10));
     v("grid", grid, "grid");
   }
+  // What involves several keys.
   void Validate(Validator& check) const {
-    check.Positive("max_range_m", max_range_m);
-    check.OneOf("mode", mode, {"fast", "exact"});
+    check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
   }
 };
 
@@ -87,10 +85,45 @@ TEST(OptionsTest, WrongTypeIsNamed) {
 }
 
 TEST(OptionsTest, ValidationNamesEveryBadKeyIncludingNested) {
-  const std::string e = ErrorOf("", {"max_range_m=-1", "grid.width=0", "mode=slow"});
-  EXPECT_NE(e.find("max_range_m: must be > 0"), std::string::npos) << e;
-  EXPECT_NE(e.find("grid.width: must be > 0"), std::string::npos) << e;
-  EXPECT_NE(e.find("mode: must be one of"), std::string::npos) << e;
+  const std::string e =
+      ErrorOf("", {"max_range_m=-1", "grid.width=0", "mode=slow", "weights=[1, 11]"});
+  EXPECT_NE(e.find("max_range_m: must be > 0, is -1"), std::string::npos) << e;
+  EXPECT_NE(e.find("grid.width: must be >= 1, is 0"), std::string::npos) << e;
+  EXPECT_NE(e.find("mode: must be one of {fast, exact}, is 'slow'"), std::string::npos) << e;
+  EXPECT_NE(e.find("weights: must be in [0, 10], is 11"), std::string::npos) << e;
+  EXPECT_EQ(e.find("weights:"), e.rfind("weights:")) << e;  // 11 only, not 1
+  // Validate() still runs beside the rules.
+  const std::string cross = ErrorOf("", {"min_range_m=5"});
+  EXPECT_NE(cross.find("max_range_m: must exceed min_range_m"), std::string::npos) << cross;
+  EXPECT_EQ(ErrorOf("", {"min_range_m=1", "grid.width=1", "weights=[0, 10]"}), "");
+}
+
+struct MisruledOptions {
+  double gain = 1;
+  bool on = true;
+  std::string name = "a";
+  template <class V>
+  void Visit(V& v) {
+    v("gain", gain, "gain", OneOf({"a"}));
+    v("on", on, "on", Positive());
+    v("name", name, "name", Positive());
+  }
+};
+
+TEST(OptionsTest, ARuleThatCannotApplyToItsTypeIsAnError) {
+  Validator check;
+  CheckOptions(MisruledOptions(), &check);
+  ASSERT_EQ(check.errors().size(), 3u);
+  EXPECT_EQ(check.errors()[0], "gain: a number cannot be one of {a}");
+  EXPECT_EQ(check.errors()[1], "on: a yes/no option has no rule");
+  EXPECT_EQ(check.errors()[2], "name: a text cannot be > 0");
+}
+
+TEST(OptionsTest, PrintedHelpShowsEachKeysRule) {
+  const std::string yaml = OptionsToYaml(TestOptions(), true);
+  EXPECT_NE(yaml.find("max_range_m: 4.5  # a number, > 0\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("mode: fast  # a string, one of {fast, exact}\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("enabled: true  # a boolean\n"), std::string::npos) << yaml;
 }
 
 TEST(OptionsTest, BadOverridesAreRejected) {
@@ -125,14 +158,15 @@ TEST(OptionsTest, MarkdownTableHasEveryLeafKeyItsValueAndHelp) {
   o.mode = "exact";
   o.grid.width = 9;
   EXPECT_EQ(OptionsToMarkdown(o),
-            "| key | value | meaning |\n"
-            "|---|---|---|\n"
-            "| `max_range_m` | `4.5` | max range |\n"
-            "| `enabled` | `true` | on/off |\n"
-            "| `mode` | `exact` | fast or exact |\n"
-            "| `weights` | `[1, 2]` | weights |\n"
-            "| `grid.resolution_m` | `0.05` | cell size |\n"
-            "| `grid.width` | `9` | cells |\n");
+            "| key | value | valid | meaning |\n"
+            "|---|---|---|---|\n"
+            "| `min_range_m` | `0` | >= 0 | min range |\n"
+            "| `max_range_m` | `4.5` | > 0 | max range |\n"
+            "| `enabled` | `true` |  | on/off |\n"
+            "| `mode` | `exact` | one of {fast, exact} | fast or exact |\n"
+            "| `weights` | `[1, 2]` | in [0, 10] | weights |\n"
+            "| `grid.resolution_m` | `0.05` | > 0 | cell size |\n"
+            "| `grid.width` | `9` | >= 1 | cells |\n");
   EXPECT_EQ(options_internal::MarkdownCell("a | b\nc"), "a \\| b c");
 }
 

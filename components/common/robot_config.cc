@@ -15,9 +15,6 @@ Rigid3d ExtrinsicsOptions::ToRigid3d() const {
 }
 
 void MicArrayOptions::Validate(Validator& check) const {
-  check.That(sample_rate_hz >= 1000, "sample_rate_hz", "must be >= 1000");
-  check.Positive("speed_of_sound_mps", speed_of_sound_mps);
-  check.OneOf("geometry", geometry, {"linear", "planar", "3d"});
   check.That(mic_positions_m.size() % 3 == 0 && mic_positions_m.size() >= 6, "mic_positions_m",
              "must hold x y z for at least 2 microphones");
   const size_t n = mic_positions_m.size() / 3;
@@ -30,8 +27,6 @@ void MicArrayOptions::Validate(Validator& check) const {
              "must be empty or have one entry per microphone");
   check.That(clock_drift.empty() || clock_drift.size() == n, "clock_drift",
              "must be empty or have one entry per microphone");
-  check.OneOf("sensor_model", sensor_model, {"constant", "gp"});
-  check.Positive("doa_sigma_deg", doa_sigma_deg);
   check.That(sensor_model != "gp" || !gp_model_file.empty(), "gp_model_file",
              "needed when sensor_model is gp");
 }

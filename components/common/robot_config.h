@@ -45,14 +45,9 @@ struct RobotOptions {
     v("base_from_camera", base_from_camera, "camera optical frame (z fwd, x right, y down) in base");
     v("base_from_mic_array", base_from_mic_array, "microphone array frame in base");
     v("mic_array", mic_array, "array description in config/arrays/<name>.yaml");
-    v("wheel_base_m", wheel_base_m, "distance between the drive wheels");
-    v("max_linear_mps", max_linear_mps, "speed limit");
-    v("max_angular_radps", max_angular_radps, "turn rate limit");
-  }
-  void Validate(Validator& check) const {
-    check.Positive("wheel_base_m", wheel_base_m);
-    check.Positive("max_linear_mps", max_linear_mps);
-    check.Positive("max_angular_radps", max_angular_radps);
+    v("wheel_base_m", wheel_base_m, "distance between the drive wheels", Positive());
+    v("max_linear_mps", max_linear_mps, "speed limit", Positive());
+    v("max_angular_radps", max_angular_radps, "turn rate limit", Positive());
   }
 };
 
@@ -74,16 +69,16 @@ struct MicArrayOptions {
   template <class V>
   void Visit(V& v) {
     v("name", name, "array name");
-    v("sample_rate_hz", sample_rate_hz, "sample rate");
-    v("speed_of_sound_mps", speed_of_sound_mps, "speed of sound");
-    v("geometry", geometry, "linear, planar or 3d");
+    v("sample_rate_hz", sample_rate_hz, "sample rate", AtLeast(1000));
+    v("speed_of_sound_mps", speed_of_sound_mps, "speed of sound", Positive());
+    v("geometry", geometry, "linear, planar or 3d", OneOf({"linear", "planar", "3d"}));
     v("channel_map", channel_map, "device channel of each microphone, in microphone order");
     v("mic_positions_m", mic_positions_m, "x y z of each microphone (flattened), mic_array frame");
     v("mic_position_std_m", mic_position_std_m, "per-microphone position std (calibration), or []");
     v("start_offsets_s", start_offsets_s, "per-microphone start offset tau (asynchronous), or []");
     v("clock_drift", clock_drift, "per-microphone fractional clock drift delta, or []");
-    v("sensor_model", sensor_model, "constant or gp");
-    v("doa_sigma_deg", doa_sigma_deg, "constant sensor model: DOA std in degrees");
+    v("sensor_model", sensor_model, "constant or gp", OneOf({"constant", "gp"}));
+    v("doa_sigma_deg", doa_sigma_deg, "constant sensor model: DOA std in degrees", Positive());
     v("gp_model_file", gp_model_file, "gp sensor model file, relative to this file");
   }
   void Validate(Validator& check) const;

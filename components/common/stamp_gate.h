@@ -42,21 +42,19 @@ struct StampGateOptions {
   void Visit(V& v) {
     v("max_ahead_s", max_ahead_s,
       "an input stamped further ahead of its stream's clock (the most advanced accepted stamp + "
-      "receive time since) is dropped and counted");
+      "receive time since) is dropped and counted",
+      Positive());
     v("max_behind_s", max_behind_s,
-      "an input stamped further behind its stream's clock is dropped and counted (0: never)");
+      "an input stamped further behind its stream's clock is dropped and counted (0: never)",
+      NonNegative());
     v("reanchor_count", reanchor_count,
       "this many consecutive dropped stamps that agree with each other re-anchor the stream (a "
-      "genuine clock step is followed)");
+      "genuine clock step is followed)",
+      AtLeast(1));
     v("reanchor_min_s", reanchor_min_s,
       "a re-anchoring run of stamps must span at least this much receive time with no accepted "
-      "stamp in it (a live stream is never re-anchored by a second publisher)");
-  }
-  void Validate(Validator& check) const {
-    check.Positive("max_ahead_s", max_ahead_s);
-    check.NonNegative("max_behind_s", max_behind_s);
-    check.That(reanchor_count >= 1, "reanchor_count", "must be at least 1");
-    check.NonNegative("reanchor_min_s", reanchor_min_s);
+      "stamp in it (a live stream is never re-anchored by a second publisher)",
+      NonNegative());
   }
 };
 

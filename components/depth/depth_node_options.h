@@ -55,7 +55,8 @@ struct DepthNodeOptions {
   void Visit(V& v) {
     v("source", source,
       "openni2 (device or .oni), folder (image replay), or lcm (DEPTH from the bus, e.g. the "
-      "simulator: only SCAN is published)");
+      "simulator: only SCAN is published)",
+      OneOf({"openni2", "folder", "lcm"}));
     v("device_uri", device_uri, "OpenNI2 device URI or .oni file; empty = first device");
     v("color", color, "publish RGB as well");
     v("register_depth", register_depth, "OpenNI2: register depth to colour when supported");
@@ -65,47 +66,40 @@ struct DepthNodeOptions {
       "folder replay: colour file = depth path with depth_pattern replaced by this");
     v("folder_depth_unit_m", folder_depth_unit_m,
       "folder replay: metres per depth unit (used when depth_scale is 0 and the folder is no TUM "
-      "sequence)");
+      "sequence)",
+      Positive());
     v("depth_scale", depth_scale,
       "folder replay: stored depth units per metre (1000: millimetres, 5000: TUM); 0: "
-      "folder_depth_unit_m, or 5000 for a TUM folder (depth.txt + rgb.txt)");
+      "folder_depth_unit_m, or 5000 for a TUM folder (depth.txt + rgb.txt)",
+      NonNegative());
     v("folder_fx", folder_fx, "folder replay intrinsics fx");
     v("folder_fy", folder_fy, "folder replay intrinsics fy");
     v("folder_cx", folder_cx, "folder replay intrinsics cx");
     v("folder_cy", folder_cy, "folder replay intrinsics cy");
-    v("rate_hz", rate_hz, "folder replay rate");
+    v("rate_hz", rate_hz, "folder replay rate", Positive());
     v("loop", loop, "folder replay: loop");
     v("robot_config", robot_config, "robot description with base_from_camera");
     v("depth_channel", depth_channel, "output depth images");
     v("rgb_channel", rgb_channel, "output colour images");
     v("scan_channel", scan_channel, "output depth-derived laser scans");
-    v("jpeg_quality", jpeg_quality, "RGB JPEG quality");
+    v("jpeg_quality", jpeg_quality, "RGB JPEG quality", InRange(1, 100));
     v("min_height_m", min_height_m, "scan height band: lowest obstacle height above the floor");
     v("max_height_m", max_height_m, "scan height band: highest obstacle height (robot height)");
-    v("range_min_m", range_min_m, "closer depth is invalid");
+    v("range_min_m", range_min_m, "closer depth is invalid", Positive());
     v("range_max_m", range_max_m, "farther depth is no return (free up to here)");
-    v("num_beams", num_beams, "beams per scan (0 = image width)");
-    v("row_step", row_step, "use every n-th image row for the scan");
+    v("num_beams", num_beams, "beams per scan (0 = image width)", AtLeast(0));
+    v("row_step", row_step, "use every n-th image row for the scan", AtLeast(1));
     v("range_noise_k", range_noise_k,
       "depth noise sigma = k * range^2 (m): a beam is the range of its nearest surface's pixels "
       "(their mean about their median), not their minimum, which lies ~2.5 sigma short (0: the "
-      "minimum)");
+      "minimum)",
+      NonNegative());
     v("surface_window_sigmas", surface_window_sigmas,
-      "the nearest surface: pixels within this many sigma of the beam's closest pixel");
+      "the nearest surface: pixels within this many sigma of the beam's closest pixel", Positive());
   }
   void Validate(common::Validator& c) const {
-    c.OneOf("source", source, {"openni2", "folder", "lcm"});
-    c.Positive("folder_depth_unit_m", folder_depth_unit_m);
-    c.NonNegative("depth_scale", depth_scale);
-    c.Positive("rate_hz", rate_hz);
     c.That(max_height_m > min_height_m, "max_height_m", "must be > min_height_m");
-    c.Positive("range_min_m", range_min_m);
     c.That(range_max_m > range_min_m, "range_max_m", "must be > range_min_m");
-    c.That(num_beams >= 0, "num_beams", "must be >= 0");
-    c.That(row_step >= 1, "row_step", "must be >= 1");
-    c.NonNegative("range_noise_k", range_noise_k);
-    c.Positive("surface_window_sigmas", surface_window_sigmas);
-    c.InRange("jpeg_quality", jpeg_quality, 1, 100);
   }
 };
 

@@ -61,23 +61,15 @@ struct ReactiveOptions {
   template <class V>
   void Visit(V& v) {
     v("danger_distance_m", danger_distance_m,
-      "stop and turn when the nearest valid range is below this");
+      "stop and turn when the nearest valid range is below this", Positive());
     v("unknown_rate_limit", unknown_rate_limit,
-      "stop and turn when this fraction of readings is unknown");
+      "stop and turn when this fraction of readings is unknown", InRange(0.0, 1.0));
     v("low_average_m", low_average_m,
-      "when both sides' mean range is below this, turn to the side with more unknown");
+      "when both sides' mean range is below this, turn to the side with more unknown", Positive());
     v("max_range_margin_m", max_range_margin_m,
-      "finite readings above range_max minus this are unknown");
-    v("forward_speed_mps", forward_speed_mps, "speed when the way is safe");
-    v("turn_speed_radps", turn_speed_radps, "turn rate of the avoiding behaviour");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("danger_distance_m", danger_distance_m);
-    check.InRange("unknown_rate_limit", unknown_rate_limit, 0.0, 1.0);
-    check.Positive("low_average_m", low_average_m);
-    check.NonNegative("max_range_margin_m", max_range_margin_m);
-    check.Positive("forward_speed_mps", forward_speed_mps);
-    check.Positive("turn_speed_radps", turn_speed_radps);
+      "finite readings above range_max minus this are unknown", NonNegative());
+    v("forward_speed_mps", forward_speed_mps, "speed when the way is safe", Positive());
+    v("turn_speed_radps", turn_speed_radps, "turn rate of the avoiding behaviour", Positive());
   }
 };
 
@@ -115,40 +107,38 @@ struct SafetyOptions {
   template <class V>
   void Visit(V& v) {
     v("stop_distance_m", stop_distance_m,
-      "no forward motion when an obstacle ahead is nearer (from the base centre)");
+      "no forward motion when an obstacle ahead is nearer (from the base centre)", Positive());
     v("footprint_radius_m", footprint_radius_m,
       "no forward motion when the commanded arc brings the base this close to a map obstacle (a "
-      "corner cut while turning)");
-    v("sweep_horizon_s", sweep_horizon_s, "the commanded arc is checked this far ahead in time");
+      "corner cut while turning)",
+      Positive());
+    v("sweep_horizon_s", sweep_horizon_s, "the commanded arc is checked this far ahead in time",
+      NonNegative());
     v("unseen_lookahead_m", unseen_lookahead_m,
       "along this much of the commanded arc, space the base would sweep (footprint_radius_m) "
       "that the sensor has never seen, outside its view and beyond its minimum range (a corner "
-      "beside a doorway), is looked at first: the robot turns to it on the spot (0: off)");
+      "beside a doorway), is looked at first: the robot turns to it on the spot (0: off)",
+      NonNegative());
     v("max_pose_age_s", max_pose_age_s,
       "when the newest POSE is older than this against the SCAN's stamp (SLAM lags or is down), "
-      "the robot stands still and the scan stays out of the explorer's map (0: no check)");
+      "the robot stands still and the scan stays out of the explorer's map (0: no check)",
+      NonNegative());
     v("memory_s", memory_s,
       "the scan's returns are kept this long in the odometry frame, so that the checks above "
       "still see an obstacle once it is beside the base or nearer than the camera's minimum "
-      "range (0: no memory, the map alone)");
+      "range (0: no memory, the map alone)",
+      NonNegative());
     v("memory_radius_m", memory_radius_m,
-      "kept returns further than this from the base are dropped");
+      "kept returns further than this from the base are dropped", Positive());
     v("slow_distance_m", slow_distance_m, "full speed only when the way ahead is clear this far");
-    v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead");
+    v("corridor_half_width_m", corridor_half_width_m, "half width of the corridor checked ahead",
+      Positive());
     v("blind_fraction", blind_fraction,
-      "the corridor counts as blocked when this fraction of its beams carries no information");
+      "the corridor counts as blocked when this fraction of its beams carries no information",
+      InRange(0.0, 1.0));
   }
   void Validate(common::Validator& check) const {
-    check.Positive("stop_distance_m", stop_distance_m);
     check.That(slow_distance_m > stop_distance_m, "slow_distance_m", "must exceed stop_distance_m");
-    check.Positive("corridor_half_width_m", corridor_half_width_m);
-    check.InRange("blind_fraction", blind_fraction, 0.0, 1.0);
-    check.Positive("footprint_radius_m", footprint_radius_m);
-    check.NonNegative("sweep_horizon_s", sweep_horizon_s);
-    check.NonNegative("unseen_lookahead_m", unseen_lookahead_m);
-    check.NonNegative("max_pose_age_s", max_pose_age_s);
-    check.NonNegative("memory_s", memory_s);
-    check.Positive("memory_radius_m", memory_radius_m);
   }
 };
 
@@ -163,19 +153,12 @@ struct FollowerOptions {
   double heading_gain = 1.8;         // angular rate per radian of heading error
   template <class V>
   void Visit(V& v) {
-    v("lookahead_m", lookahead_m, "pure-pursuit lookahead");
-    v("max_linear_mps", max_linear_mps, "speed limit while following a path");
-    v("max_angular_radps", max_angular_radps, "turn-rate limit");
+    v("lookahead_m", lookahead_m, "pure-pursuit lookahead", Positive());
+    v("max_linear_mps", max_linear_mps, "speed limit while following a path", Positive());
+    v("max_angular_radps", max_angular_radps, "turn-rate limit", Positive());
     v("rotate_in_place_rad", rotate_in_place_rad,
-      "turn on the spot when the heading error exceeds this");
-    v("heading_gain", heading_gain, "angular rate per radian of heading error");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("lookahead_m", lookahead_m);
-    check.Positive("max_linear_mps", max_linear_mps);
-    check.Positive("max_angular_radps", max_angular_radps);
-    check.InRange("rotate_in_place_rad", rotate_in_place_rad, 0.05, M_PI);
-    check.Positive("heading_gain", heading_gain);
+      "turn on the spot when the heading error exceeds this", InRange(0.05, M_PI));
+    v("heading_gain", heading_gain, "angular rate per radian of heading error", Positive());
   }
 };
 
@@ -199,41 +182,32 @@ struct GoalOptions {
   double sweep_min_age_s = 120;  // a cell visited more recently than this is not a goal
   template <class V>
   void Visit(V& v) {
-    v("size_weight", size_weight, "path metres one metre of frontier is worth");
+    v("size_weight", size_weight, "path metres one metre of frontier is worth", NonNegative());
     v("heading_weight_m", heading_weight_m,
-      "path metres a half turn away from the heading is worth");
+      "path metres a half turn away from the heading is worth", NonNegative());
     v("switch_margin_m", switch_margin_m,
-      "a new frontier must score this much better to replace the current goal");
-    v("goal_reached_m", goal_reached_m, "distance at which a goal counts as reached");
-    v("replan_period_s", replan_period_s, "goals and paths are recomputed at most this often");
+      "a new frontier must score this much better to replace the current goal", NonNegative());
+    v("goal_reached_m", goal_reached_m, "distance at which a goal counts as reached", Positive());
+    v("replan_period_s", replan_period_s, "goals and paths are recomputed at most this often",
+      Positive());
     v("blacklist_radius_m", blacklist_radius_m,
-      "frontiers this close to a given-up goal are skipped");
-    v("blacklist_expiry_s", blacklist_expiry_s, "a given-up goal may be tried again after this");
+      "frontiers this close to a given-up goal are skipped", NonNegative());
+    v("blacklist_expiry_s", blacklist_expiry_s, "a given-up goal may be tried again after this",
+      Positive());
     v("time_budget_s", time_budget_s,
-      "mission time after which the robot goes home (0: none); the way home is reserved");
-    v("return_speed_mps", return_speed_mps, "average speed assumed for the way home");
+      "mission time after which the robot goes home (0: none); the way home is reserved",
+      NonNegative());
+    v("return_speed_mps", return_speed_mps, "average speed assumed for the way home", Positive());
     v("return_home", return_home, "go back to the start when exploration ends");
     v("look_around", look_around, "turn once on the spot at the start");
     v("when_explored", when_explored,
       "home: return (or finish) when nothing is left to explore; sweep: search the explored site "
-      "again, the longest-unvisited place first, until the time budget sends the robot home");
-    v("sweep_cell_m", sweep_cell_m, "sweep: the site is remembered as visited in cells this size");
+      "again, the longest-unvisited place first, until the time budget sends the robot home",
+      OneOf({"home", "sweep"}));
+    v("sweep_cell_m", sweep_cell_m, "sweep: the site is remembered as visited in cells this size",
+      Positive());
     v("sweep_min_age_s", sweep_min_age_s,
-      "sweep: a cell visited more recently than this is not a goal");
-  }
-  void Validate(common::Validator& check) const {
-    check.NonNegative("size_weight", size_weight);
-    check.NonNegative("heading_weight_m", heading_weight_m);
-    check.NonNegative("switch_margin_m", switch_margin_m);
-    check.Positive("goal_reached_m", goal_reached_m);
-    check.Positive("replan_period_s", replan_period_s);
-    check.NonNegative("blacklist_radius_m", blacklist_radius_m);
-    check.Positive("blacklist_expiry_s", blacklist_expiry_s);
-    check.NonNegative("time_budget_s", time_budget_s);
-    check.Positive("return_speed_mps", return_speed_mps);
-    check.OneOf("when_explored", when_explored, {"home", "sweep"});
-    check.Positive("sweep_cell_m", sweep_cell_m);
-    check.NonNegative("sweep_min_age_s", sweep_min_age_s);
+      "sweep: a cell visited more recently than this is not a goal", NonNegative());
   }
 };
 
@@ -254,41 +228,31 @@ struct RecoveryOptions {
   template <class V>
   void Visit(V& v) {
     v("contact_window_s", contact_window_s,
-      "window over which commanded and actual forward motion are compared");
+      "window over which commanded and actual forward motion are compared", Positive());
     v("contact_ratio", contact_ratio,
       "moving less than this share of the commanded distance means an obstacle the sensors miss "
-      "(glass): it is marked and avoided");
-    v("stuck_timeout_s", stuck_timeout_s,
-      "no progress for this long while driving counts as stuck");
-    v("progress_m", progress_m, "moving this far counts as progress");
-    v("progress_rad", progress_rad, "turning this much counts as progress");
+      "(glass): it is marked and avoided",
+      InRange(0.0, 1.0));
+    v("stuck_timeout_s", stuck_timeout_s, "no progress for this long while driving counts as stuck",
+      Positive());
+    v("progress_m", progress_m, "moving this far counts as progress", Positive());
+    v("progress_rad", progress_rad, "turning this much counts as progress", Positive());
     v("blocked_timeout_s", blocked_timeout_s,
-      "the safety layer holding the robot this long counts as stuck");
-    v("backoff_m", backoff_m, "recovery: reverse this far (when the map behind is free)");
-    v("backoff_speed_mps", backoff_speed_mps, "recovery: reversing speed");
-    v("turn_rad", turn_rad, "recovery: turn this much towards the open side");
-    v("turn_speed_radps", turn_speed_radps, "recovery: turn rate");
-    v("attempts_per_goal", attempts_per_goal, "recoveries on one goal before it is given up");
+      "the safety layer holding the robot this long counts as stuck", Positive());
+    v("backoff_m", backoff_m, "recovery: reverse this far (when the map behind is free)",
+      NonNegative());
+    v("backoff_speed_mps", backoff_speed_mps, "recovery: reversing speed", Positive());
+    v("turn_rad", turn_rad, "recovery: turn this much towards the open side", NonNegative());
+    v("turn_speed_radps", turn_speed_radps, "recovery: turn rate", Positive());
+    v("attempts_per_goal", attempts_per_goal, "recoveries on one goal before it is given up",
+      AtLeast(1));
     v("escape_after", escape_after,
       "after this many recoveries in a row with no plan out of the robot's place in the map "
       "(SLAM's "
-      "pose wrong, or the map closed around it), drive on the scan alone (0: never)");
-    v("escape_s", escape_s, "how long that drive on the scan alone lasts before planning again");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("stuck_timeout_s", stuck_timeout_s);
-    check.Positive("progress_m", progress_m);
-    check.Positive("progress_rad", progress_rad);
-    check.Positive("blocked_timeout_s", blocked_timeout_s);
-    check.NonNegative("backoff_m", backoff_m);
-    check.Positive("backoff_speed_mps", backoff_speed_mps);
-    check.NonNegative("turn_rad", turn_rad);
-    check.Positive("turn_speed_radps", turn_speed_radps);
-    check.That(attempts_per_goal >= 1, "attempts_per_goal", "must be >= 1");
-    check.Positive("contact_window_s", contact_window_s);
-    check.InRange("contact_ratio", contact_ratio, 0.0, 1.0);
-    check.That(escape_after >= 0, "escape_after", "must be >= 0");
-    check.Positive("escape_s", escape_s);
+      "pose wrong, or the map closed around it), drive on the scan alone (0: never)",
+      AtLeast(0));
+    v("escape_s", escape_s, "how long that drive on the scan alone lasts before planning again",
+      Positive());
   }
 };
 
@@ -308,32 +272,29 @@ struct SoundGoalOptions {
   template <class V>
   void Visit(V& v) {
     v("max_position_std_m", max_position_std_m,
-      "heard people and voices placed less certainly than this are not goals");
-    v("min_view_m", min_view_m, "nearest viewing distance");
+      "heard people and voices placed less certainly than this are not goals", Positive());
+    v("min_view_m", min_view_m, "nearest viewing distance", Positive());
     v("max_view_m", max_view_m, "farthest viewing distance");
-    v("dwell_s", dwell_s, "time spent facing a heard person so the camera can confirm");
+    v("dwell_s", dwell_s, "time spent facing a heard person so the camera can confirm",
+      NonNegative());
     v("revisit_radius_m", revisit_radius_m,
-      "a heard person near an already visited place is not a goal again");
+      "a heard person near an already visited place is not a goal again", NonNegative());
     v("max_detour_m", max_detour_m,
-      "heard people farther than this by path wait for exploration to bring the robot closer");
+      "heard people farther than this by path wait for exploration to bring the robot closer",
+      Positive());
     v("voices", voices,
       "voices on SOUND_MAP (placed, classed voice) that nobody on PEOPLE_MAP explains are goals "
       "too: the robot goes near and listens, which places a caller behind cover");
     v("seen_radius_m", seen_radius_m,
-      "a voice this near a person on PEOPLE_MAP (seen or heard) is that person, not a goal");
+      "a voice this near a person on PEOPLE_MAP (seen or heard) is that person, not a goal",
+      NonNegative());
     v("listen_s", listen_s,
       "time spent standing still facing a voice, so that its next call is heard from there "
-      "(instead of dwell_s)");
+      "(instead of dwell_s)",
+      NonNegative());
   }
   void Validate(common::Validator& check) const {
-    check.Positive("max_position_std_m", max_position_std_m);
-    check.Positive("min_view_m", min_view_m);
     check.That(max_view_m > min_view_m, "max_view_m", "must exceed min_view_m");
-    check.NonNegative("dwell_s", dwell_s);
-    check.NonNegative("revisit_radius_m", revisit_radius_m);
-    check.Positive("max_detour_m", max_detour_m);
-    check.NonNegative("seen_radius_m", seen_radius_m);
-    check.NonNegative("listen_s", listen_s);
   }
 };
 
@@ -367,12 +328,14 @@ struct ExploreOptions {
   template <class V>
   void Visit(V& v) {
     v("mode", mode,
-      "reactive (Sales 2014), frontier (map-driven), sound_guided (frontier + people heard)");
+      "reactive (Sales 2014), frontier (map-driven), sound_guided (frontier + people heard)",
+      OneOf({"reactive", "frontier", "sound_guided"}));
     v("teleop_timeout_s", teleop_timeout_s,
-      "operator override ends this long after the last TELEOP arrived");
-    v("teleop_max_linear_mps", teleop_max_linear_mps, "operator speeds are clamped to this");
+      "operator override ends this long after the last TELEOP arrived", Positive());
+    v("teleop_max_linear_mps", teleop_max_linear_mps, "operator speeds are clamped to this",
+      Positive());
     v("teleop_max_angular_radps", teleop_max_angular_radps,
-      "operator turn rates are clamped to this");
+      "operator turn rates are clamped to this", Positive());
     v("reactive", reactive, "reactive behaviour (mode reactive)");
     v("planner", planner, "cost map and planner");
     v("safety", safety, "safety layer on the scan and the map");
@@ -380,12 +343,6 @@ struct ExploreOptions {
     v("goals", goals, "goal selection and the mission");
     v("recovery", recovery, "stuck detection and recovery");
     v("sound", sound, "sound-guided goals (mode sound_guided)");
-  }
-  void Validate(common::Validator& check) const {
-    check.OneOf("mode", mode, {"reactive", "frontier", "sound_guided"});
-    check.Positive("teleop_timeout_s", teleop_timeout_s);
-    check.Positive("teleop_max_linear_mps", teleop_max_linear_mps);
-    check.Positive("teleop_max_angular_radps", teleop_max_angular_radps);
   }
 };
 

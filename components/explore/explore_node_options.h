@@ -49,7 +49,7 @@ struct ExploreNodeOptions {
     v("teleop_channel", teleop_channel, "operator override");
     v("command_channel", command_channel, "velocity commands out");
     v("status_channel", status_channel, "mission state, goal and path out");
-    v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often");
+    v("status_period_s", status_period_s, "EXPLORE_STATUS at most this often", Positive());
     v("scan_intensities_are_visible_from", scan_intensities_are_visible_from,
       "SCAN's intensities are each return's visible-from range, as sarmap-depth publishes them "
       "(a depth camera looks over low objects close by); false for a laser's reflectance");
@@ -60,9 +60,6 @@ struct ExploreNodeOptions {
       "SCAN stamped far from its stream's clock is dropped and counted "
       "(components/common/README.md)");
     v("explore", explore, "exploration");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("status_period_s", status_period_s);
   }
 };
 

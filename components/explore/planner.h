@@ -65,36 +65,33 @@ struct PlannerOptions {
   double glass_extend_m = 4.0;         // such a surface is extended along its line up to this far
   template <class V>
   void Visit(V& v) {
-    v("robot_radius_m", robot_radius_m,
-      "cells closer than this to an obstacle are not traversable");
-    v("clearance_m", clearance_m, "paths prefer this much room beyond the radius");
-    v("clearance_weight", clearance_weight, "cost factor of a step at the radius is 1 + this");
+    v("robot_radius_m", robot_radius_m, "cells closer than this to an obstacle are not traversable",
+      Positive());
+    v("clearance_m", clearance_m, "paths prefer this much room beyond the radius", NonNegative());
+    v("clearance_weight", clearance_weight, "cost factor of a step at the radius is 1 + this",
+      NonNegative());
     v("free_threshold", free_threshold, "occupancy below this is free");
     v("occupied_threshold", occupied_threshold, "occupancy at or above this is an obstacle");
-    v("min_frontier_cells", min_frontier_cells, "smaller frontiers are ignored");
-    v("pad_m", pad_m, "the explorer's grid extends MAP by this on each side (scans fill it)");
+    v("min_frontier_cells", min_frontier_cells, "smaller frontiers are ignored", AtLeast(1));
+    v("pad_m", pad_m, "the explorer's grid extends MAP by this on each side (scans fill it)",
+      NonNegative());
     v("assume_free_radius_m", assume_free_radius_m,
       "unknown cells this close to any pose the robot has had are free (the camera cannot see its "
-      "own footprint)");
+      "own footprint)",
+      NonNegative());
     v("glass_join_m", glass_join_m,
       "two contacts in line (similar heading, each on the other's surface) this close are one "
-      "invisible surface (glass)");
+      "invisible surface (glass)",
+      NonNegative());
     v("glass_extend_m", glass_extend_m,
       "an invisible surface is extended along its line over seen-through cells, until an obstacle "
-      "or this far");
+      "or this far",
+      NonNegative());
   }
   void Validate(common::Validator& check) const {
-    check.Positive("robot_radius_m", robot_radius_m);
-    check.NonNegative("clearance_m", clearance_m);
-    check.NonNegative("clearance_weight", clearance_weight);
     check.That(
         free_threshold >= 0 && free_threshold < occupied_threshold && occupied_threshold <= 100,
         "occupied_threshold", "need 0 <= free_threshold < occupied_threshold <= 100");
-    check.That(min_frontier_cells >= 1, "min_frontier_cells", "must be >= 1");
-    check.NonNegative("pad_m", pad_m);
-    check.NonNegative("assume_free_radius_m", assume_free_radius_m);
-    check.NonNegative("glass_join_m", glass_join_m);
-    check.NonNegative("glass_extend_m", glass_extend_m);
   }
 };
 

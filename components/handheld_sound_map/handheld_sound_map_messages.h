@@ -41,17 +41,11 @@ struct HandheldSoundMapOptions {
       "the mic_array frame (its x axis along the linear array) in the rig frame; the default is "
       "a level Kinect's bar along the rig's y axis, 3 cm below the camera");
     v("reorder_delay_s", reorder_delay_s,
-      "inputs are processed in time order once this much newer data arrived");
-    v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
+      "inputs are processed in time order once this much newer data arrived", NonNegative());
+    v("publish_period_s", publish_period_s, "SOUND_MAP period, message time", Positive());
     v("stamp_gate", stamp_gate,
       "inputs stamped far from their stream's clock are dropped and counted, never adopted");
     v("map", map, "linear-array sound map (Su 2017 ch. 5)");
-  }
-  void Validate(common::Validator& check) const {
-    check.NonNegative("reorder_delay_s", reorder_delay_s);
-    check.Positive("publish_period_s", publish_period_s);
-    stamp_gate.Validate(check);
-    map.Validate(check);
   }
 };
 

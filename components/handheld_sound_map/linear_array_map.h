@@ -88,40 +88,52 @@ struct LinearArrayMapOptions {
     v("min_observations", hypotheses.min_observations, "updates before a hypothesis may converge");
     v("cluster_radius_m", hypotheses.cluster_radius_m,
       "survivors must agree within this radius to converge");
-    v("keyframe_distance_m", keyframe_distance_m, "a new keyframe after this much motion");
-    v("keyframe_angle_deg", keyframe_angle_deg, "... or this much rotation");
+    v("keyframe_distance_m", keyframe_distance_m, "a new keyframe after this much motion",
+      Positive());
+    v("keyframe_angle_deg", keyframe_angle_deg, "... or this much rotation", Positive());
     v("window_keyframes", window_keyframes,
-      "online joint optimisation over the last keyframes (5.28-5.32)");
+      "online joint optimisation over the last keyframes (5.28-5.32)", AtLeast(1));
     v("full_optimisation_keyframes", full_optimisation_keyframes,
-      "optimise every keyframe and source every this many keyframes (0: only at the end)");
+      "optimise every keyframe and source every this many keyframes (0: only at the end)",
+      AtLeast(0));
     v("odometry_sigma_m_per_m", odometry_sigma_m_per_m,
-      "pose source's translation noise per metre travelled");
-    v("odometry_sigma_floor_m", odometry_sigma_floor_m, "... plus this per keyframe step");
+      "pose source's translation noise per metre travelled", NonNegative());
+    v("odometry_sigma_floor_m", odometry_sigma_floor_m, "... plus this per keyframe step",
+      Positive());
     v("odometry_sigma_deg_per_m", odometry_sigma_deg_per_m,
-      "pose source's rotation noise per metre travelled");
-    v("odometry_sigma_floor_deg", odometry_sigma_floor_deg, "... plus this per keyframe step");
-    v("doa_sigma_floor_deg", doa_sigma_floor_deg, "lower bound of a DOA's standard deviation");
-    v("gate_chi2", gate_chi2, "association gate of a DOA to a source (chi-square, 1 dof)");
-    v("update_gate_chi2", update_gate_chi2, "gate of a DOA whose track belongs to the source");
+      "pose source's rotation noise per metre travelled", NonNegative());
+    v("odometry_sigma_floor_deg", odometry_sigma_floor_deg, "... plus this per keyframe step",
+      Positive());
+    v("doa_sigma_floor_deg", doa_sigma_floor_deg, "lower bound of a DOA's standard deviation",
+      Positive());
+    v("gate_chi2", gate_chi2, "association gate of a DOA to a source (chi-square, 1 dof)",
+      Positive());
+    v("update_gate_chi2", update_gate_chi2, "gate of a DOA whose track belongs to the source",
+      Positive());
     v("confirm_observations", confirm_observations,
       "a new DOA track joins a converged source only when this many of its DOAs all pass that "
-      "source's gate");
+      "source's gate",
+      AtLeast(1));
     v("track_release_misses", track_release_misses,
       "a DOA track missing its source this many times in a row is released (the tracker's id "
-      "moved)");
+      "moved)",
+      AtLeast(1));
     v("associate_min_observations", associate_min_observations,
       "an initialising source takes other tracks' DOAs after this many");
-    v("max_pose_gap_s", max_pose_gap_s, "a DOA without a pose within this is dropped");
+    v("max_pose_gap_s", max_pose_gap_s, "a DOA without a pose within this is dropped", Positive());
     v("prune_after_s", prune_after_s,
-      "remove a source not converged and not heard for this long ...");
+      "remove a source not converged and not heard for this long ...", Positive());
     v("prune_min_observations", prune_min_observations, "... with fewer DOAs than this");
     v("max_source_range_m", max_source_range_m,
-      "a source the optimisation carries farther than this from every pose that heard it keeps its place from before");
+      "a source the optimisation carries farther than this from every pose that heard it keeps its "
+      "place from before",
+      Positive());
     v("merge_radius_m", merge_radius_m,
-      "two converged sources this close are one (heard under two track ids)");
+      "two converged sources this close are one (heard under two track ids)", NonNegative());
     v("level_height_spread_m", level_height_spread_m,
       "a source heard only from poses within this height of each other has two possible heights "
-      "(its z variance says so)");
+      "(its z variance says so)",
+      NonNegative());
     v("mirror_check", mirror_check,
       "keep a source or its reflection through the mean height of the poses that heard it, the "
       "better");
@@ -133,24 +145,6 @@ struct LinearArrayMapOptions {
     c.Positive("linearity_threshold", hypotheses.linearity_threshold);
     c.That(hypotheses.min_observations >= 1, "min_observations", "must be >= 1");
     c.Positive("cluster_radius_m", hypotheses.cluster_radius_m);
-    c.Positive("keyframe_distance_m", keyframe_distance_m);
-    c.Positive("keyframe_angle_deg", keyframe_angle_deg);
-    c.That(window_keyframes >= 1, "window_keyframes", "must be >= 1");
-    c.That(full_optimisation_keyframes >= 0, "full_optimisation_keyframes", "must be >= 0");
-    c.Positive("odometry_sigma_floor_m", odometry_sigma_floor_m);
-    c.Positive("odometry_sigma_floor_deg", odometry_sigma_floor_deg);
-    c.NonNegative("odometry_sigma_m_per_m", odometry_sigma_m_per_m);
-    c.NonNegative("odometry_sigma_deg_per_m", odometry_sigma_deg_per_m);
-    c.Positive("doa_sigma_floor_deg", doa_sigma_floor_deg);
-    c.Positive("gate_chi2", gate_chi2);
-    c.Positive("update_gate_chi2", update_gate_chi2);
-    c.Positive("max_pose_gap_s", max_pose_gap_s);
-    c.That(confirm_observations >= 1, "confirm_observations", "must be >= 1");
-    c.That(track_release_misses >= 1, "track_release_misses", "must be >= 1");
-    c.Positive("prune_after_s", prune_after_s);
-    c.Positive("max_source_range_m", max_source_range_m);
-    c.NonNegative("level_height_spread_m", level_height_spread_m);
-    c.NonNegative("merge_radius_m", merge_radius_m);
   }
 };
 

@@ -491,32 +491,8 @@ double ClockStdAt(const CalibrationResult& r, double t) {
 }
 
 void SolverOptions::Validate(common::Validator& check) const {
-  check.OneOf("geometry", geometry, {"planar", "3d", "linear"});
-  check.Positive("speed_of_sound_mps", speed_of_sound_mps);
-  check.Positive("tdoa_sigma_s", tdoa_sigma_s);
-  check.Positive("random_walk_sigma_m", random_walk_sigma_m);
-  check.Positive("random_walk_sigma_rad", random_walk_sigma_rad);
-  check.Positive("linear_spacing_m", linear_spacing_m);
-  check.That(num_starts >= 1, "num_starts", "must be >= 1");
-  check.NonNegative("agree_tolerance", agree_tolerance);
-  check.Positive("init_extent_m", init_extent_m);
-  check.That(max_iterations >= 1, "max_iterations", "must be >= 1");
-  check.Positive("parameter_tolerance", parameter_tolerance);
-  check.Positive("function_tolerance", function_tolerance);
-  check.OneOf("loss", loss, {"none", "huber", "cauchy"});
-  check.Positive("loss_scale", loss_scale);
-  check.Positive("max_position_std_m", max_position_std_m);
-  check.Positive("max_offset_std_s", max_offset_std_s);
-  check.That(num_threads >= 1, "num_threads", "must be >= 1");
-  check.InRange("min_bearing_span_deg", min_bearing_span_deg, 0, 180);
-  check.NonNegative("grid_margin_m", grid_margin_m);
-  check.Positive("grid_step_m", grid_step_m);
   check.That(static_source_prior_xy_m.empty() || static_source_prior_xy_m.size() == 2,
              "static_source_prior_xy_m", "must be empty or [x, y]");
-  check.Positive("static_source_prior_sigma_m", static_source_prior_sigma_m);
-  check.NonNegative("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m);
-  check.NonNegative("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad);
-  check.NonNegative("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m);
   check.That(gauge_x_mic >= 0 && gauge_plane_mic >= 0 && gauge_z_mic >= 0, "gauge_*_mic",
              "must be >= 0");
 }

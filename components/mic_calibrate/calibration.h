@@ -104,53 +104,66 @@ struct SolverOptions {
 
   template <class V>
   void Visit(V& v) {
-    v("geometry", geometry, "planar, 3d or linear (known spacing: offsets and drift only)");
+    v("geometry", geometry, "planar, 3d or linear (known spacing: offsets and drift only)",
+      OneOf({"planar", "3d", "linear"}));
     v("synchronous", synchronous, "synchronous array: estimate positions only (tau = delta = 0)");
     v("estimate_drift", estimate_drift, "estimate clock drift (false: thesis Fig. 3.13 ablation)");
     v("mic_heights_m", mic_heights_m, "3d: known mic heights in the gauge frame (prior)");
     v("height_prior_sigma_m", height_prior_sigma_m, "3d: std of the height prior (0 = off)");
     v("known_positions", known_positions,
       "microphone positions known (--nominal): estimate offsets, drifts and sources only");
-    v("speed_of_sound_mps", speed_of_sound_mps, "speed of sound c");
-    v("tdoa_sigma_s", tdoa_sigma_s, "TDOA noise std where the input has none");
-    v("random_walk_sigma_m", random_walk_sigma_m, "source random-walk prior std (planar/3d)");
-    v("random_walk_sigma_rad", random_walk_sigma_rad, "source-angle random-walk std (linear)");
-    v("linear_spacing_m", linear_spacing_m, "linear: known adjacent-microphone spacing");
+    v("speed_of_sound_mps", speed_of_sound_mps, "speed of sound c", Positive());
+    v("tdoa_sigma_s", tdoa_sigma_s, "TDOA noise std where the input has none", Positive());
+    v("random_walk_sigma_m", random_walk_sigma_m, "source random-walk prior std (planar/3d)",
+      Positive());
+    v("random_walk_sigma_rad", random_walk_sigma_rad, "source-angle random-walk std (linear)",
+      Positive());
+    v("linear_spacing_m", linear_spacing_m, "linear: known adjacent-microphone spacing",
+      Positive());
     v("sources_in_gauge_plane", sources_in_gauge_plane,
       "3d: the source moved in the z = 0 plane of mic 1, the x mic and the plane mic");
     v("gauge_x_mic", gauge_x_mic, "1-based mic on +x (0: automatic)");
     v("gauge_plane_mic", gauge_plane_mic, "1-based mic with y > 0 (3d: and z = 0) (0: automatic)");
     v("gauge_z_mic", gauge_z_mic, "3d: 1-based mic with z > 0 (0: automatic)");
-    v("num_starts", num_starts, "random initialisations tried (best cost kept)");
-    v("init_extent_m", init_extent_m, "random initialisation box half-size");
+    v("num_starts", num_starts, "random initialisations tried (best cost kept)", AtLeast(1));
+    v("init_extent_m", init_extent_m, "random initialisation box half-size", Positive());
     v("seed", seed, "random seed of the initialisations");
-    v("agree_tolerance", agree_tolerance, "stop once two starts reach the same lowest cost (relative)");
-    v("max_iterations", max_iterations, "solver iterations per start");
-    v("parameter_tolerance", parameter_tolerance, "relative step size that ends a start");
-    v("function_tolerance", function_tolerance, "relative cost decrease that ends a start");
-    v("loss", loss, "robust loss on TDOA residuals: none, huber or cauchy");
-    v("loss_scale", loss_scale, "robust loss scale in TDOA sigmas");
+    v("agree_tolerance", agree_tolerance,
+      "stop once two starts reach the same lowest cost (relative)", NonNegative());
+    v("max_iterations", max_iterations, "solver iterations per start", AtLeast(1));
+    v("parameter_tolerance", parameter_tolerance, "relative step size that ends a start",
+      Positive());
+    v("function_tolerance", function_tolerance, "relative cost decrease that ends a start",
+      Positive());
+    v("loss", loss, "robust loss on TDOA residuals: none, huber or cauchy",
+      OneOf({"none", "huber", "cauchy"}));
+    v("loss_scale", loss_scale, "robust loss scale in TDOA sigmas", Positive());
     v("compute_covariance", compute_covariance, "marginal covariances of every estimate");
-    v("max_position_std_m", max_position_std_m, "refuse when a mic position std exceeds this");
-    v("max_offset_std_s", max_offset_std_s, "refuse when a start-offset std exceeds this");
-    v("num_threads", num_threads, "Ceres threads");
+    v("max_position_std_m", max_position_std_m, "refuse when a mic position std exceeds this",
+      Positive());
+    v("max_offset_std_s", max_offset_std_s, "refuse when a start-offset std exceeds this",
+      Positive());
+    v("num_threads", num_threads, "Ceres threads", AtLeast(1));
     v("verbose", verbose, "progress per start on stderr");
     v("static_source_dz_m", static_source_dz_m,
       "known array poses: height of the static source above the microphones (m)");
     v("static_source_prior_xy_m", static_source_prior_xy_m,
       "known array poses: prior on the static source's x, y in the pose frame (empty = none)");
     v("static_source_prior_sigma_m", static_source_prior_sigma_m,
-      "known array poses: std of that prior");
+      "known array poses: std of that prior", Positive());
     v("min_bearing_span_deg", min_bearing_span_deg,
-      "known array poses: refuse when the source bearing in the array frame spans less");
-    v("grid_margin_m", grid_margin_m, "known array poses: source search grid beyond the path");
-    v("grid_step_m", grid_step_m, "known array poses: source search grid step");
+      "known array poses: refuse when the source bearing in the array frame spans less",
+      InRange(0, 180));
+    v("grid_margin_m", grid_margin_m, "known array poses: source search grid beyond the path",
+      NonNegative());
+    v("grid_step_m", grid_step_m, "known array poses: source search grid step", Positive());
     v("pose_trans_sigma_per_sqrt_m", pose_trans_sigma_per_sqrt_m,
-      "known array poses: odometry distance error std after 1 m (0 with the others: exact)");
+      "known array poses: odometry distance error std after 1 m (0 with the others: exact)",
+      NonNegative());
     v("pose_rot_sigma_per_sqrt_rad", pose_rot_sigma_per_sqrt_rad,
-      "known array poses: odometry heading error std after turning 1 rad");
+      "known array poses: odometry heading error std after turning 1 rad", NonNegative());
     v("pose_rot_sigma_per_sqrt_m", pose_rot_sigma_per_sqrt_m,
-      "known array poses: odometry heading error std after driving 1 m");
+      "known array poses: odometry heading error std after driving 1 m", NonNegative());
   }
   void Validate(common::Validator& check) const;
   int dim() const { return geometry == "3d" ? 3 : 2; }

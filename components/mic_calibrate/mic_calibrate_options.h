@@ -21,9 +21,9 @@ struct ArrayPosesOptions {
       "pose channel (odometry_t, pose_t or sim_truth_t) of the robot carrying the array while "
       "a static source sounded; empty = off (the source moved around a static array)");
     v("robot_config", robot_config, "robot YAML with base_from_mic_array");
-    v("max_gap_s", max_gap_s, "largest time from an emission to a pose (interpolation)");
+    v("max_gap_s", max_gap_s, "largest time from an emission to a pose (interpolation)",
+      Positive());
   }
-  void Validate(common::Validator& check) const { check.Positive("max_gap_s", max_gap_s); }
 };
 
 struct MicCalibrateOptions {
@@ -36,13 +36,12 @@ struct MicCalibrateOptions {
   template <class V>
   void Visit(V& v) {
     v("array_name", array_name, "name written into the array YAML");
-    v("step_s", step_s, "TDOA CSV without t_s column: seconds between steps k");
+    v("step_s", step_s, "TDOA CSV without t_s column: seconds between steps k", Positive());
     v("lcm_channel_prefix", lcm_channel_prefix, "LCM log input: audio channels with this prefix");
     v("solver", solver, "graph least-squares calibration");
     v("extraction", extraction, "TDOA extraction from audio");
     v("array_poses", array_poses, "known array motion with a static source");
   }
-  void Validate(common::Validator& check) const { check.Positive("step_s", step_s); }
 };
 
 }  // namespace mic_calibrate

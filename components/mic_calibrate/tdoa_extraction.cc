@@ -90,18 +90,6 @@ Biquad HighPassBiquad(double fs, double fc, double q) {
 
 }  // namespace
 
-void ExtractionOptions::Validate(common::Validator& check) const {
-  check.NonNegative("highpass_hz", highpass_hz);
-  check.OneOf("method", method, {"gcc_phat", "matched"});
-  check.Positive("max_lag_s", max_lag_s);
-  check.Positive("window_s", window_s);
-  check.NonNegative("pre_onset_s", pre_onset_s);
-  check.Positive("onset_threshold_db", onset_threshold_db);
-  check.Positive("min_event_spacing_s", min_event_spacing_s);
-  check.Positive("frame_s", frame_s);
-  check.That(min_peak_ratio >= 1, "min_peak_ratio", "must be >= 1");
-}
-
 void HighPass(std::vector<float>* x, double fs, double fc) {
   if (fc <= 0) return;
   // 4th-order Butterworth: two biquads with q = 0.5412 and 1.3066.

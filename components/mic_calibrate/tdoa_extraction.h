@@ -41,17 +41,20 @@ struct ExtractionOptions {
   double min_peak_ratio = 2.0;       // peak / next-best peak outside +-1 ms; lower = missing
   template <class V>
   void Visit(V& v) {
-    v("highpass_hz", highpass_hz, "high-pass cut-off before onset detection and correlation");
-    v("method", method, "gcc_phat or matched (plain cross-correlation with the reference)");
-    v("max_lag_s", max_lag_s, "largest |TDOA| searched (must cover the start offsets)");
-    v("window_s", window_s, "correlation window length from the onset");
-    v("pre_onset_s", pre_onset_s, "window start before the detected onset");
-    v("onset_threshold_db", onset_threshold_db, "onset: frame energy this far above the floor");
-    v("min_event_spacing_s", min_event_spacing_s, "minimum time between two emissions");
-    v("frame_s", frame_s, "energy frame for onset detection");
-    v("min_peak_ratio", min_peak_ratio, "weaker correlation peaks give a missing TDOA (NaN)");
+    v("highpass_hz", highpass_hz, "high-pass cut-off before onset detection and correlation",
+      NonNegative());
+    v("method", method, "gcc_phat or matched (plain cross-correlation with the reference)",
+      OneOf({"gcc_phat", "matched"}));
+    v("max_lag_s", max_lag_s, "largest |TDOA| searched (must cover the start offsets)", Positive());
+    v("window_s", window_s, "correlation window length from the onset", Positive());
+    v("pre_onset_s", pre_onset_s, "window start before the detected onset", NonNegative());
+    v("onset_threshold_db", onset_threshold_db, "onset: frame energy this far above the floor",
+      Positive());
+    v("min_event_spacing_s", min_event_spacing_s, "minimum time between two emissions", Positive());
+    v("frame_s", frame_s, "energy frame for onset detection", Positive());
+    v("min_peak_ratio", min_peak_ratio, "weaker correlation peaks give a missing TDOA (NaN)",
+      AtLeast(1));
   }
-  void Validate(common::Validator& check) const;
 };
 
 struct ExtractionStats {

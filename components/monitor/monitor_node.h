@@ -21,14 +21,11 @@ struct MonitorOptions {
   std::vector<std::string> extra_channels;  // CHANNEL=type_t pairs beyond the defaults
   template <class V>
   void Visit(V& v) {
-    v("print_period_s", print_period_s, "seconds between tables on stdout (0: never)");
-    v("window_s", window_s, "window of the rate estimate");
+    v("print_period_s", print_period_s, "seconds between tables on stdout (0: never)",
+      NonNegative());
+    v("window_s", window_s, "window of the rate estimate", Positive());
     v("channels", channels, "regular expression selecting default channels to watch");
     v("extra_channels", extra_channels, "more channels to watch, as CHANNEL=type_t");
-  }
-  void Validate(common::Validator& check) const {
-    check.NonNegative("print_period_s", print_period_s);
-    check.Positive("window_s", window_s);
   }
 };
 

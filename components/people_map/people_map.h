@@ -71,70 +71,63 @@ struct PeopleMapOptions {
   double sighting_gate_chi2 = 9.21;  // 99 % for 2 dof
   template <class V>
   void Visit(V& v) {
-    v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place");
+    v("merge_radius_m", merge_radius_m, "detections this close (x, y) are the same place",
+      Positive());
     v("fuse_gate_chi2", fuse_gate_chi2,
-      "Mahalanobis gate (2 dof; 9.21 is 99 %) for a heard and a seen person to be one");
+      "Mahalanobis gate (2 dof; 9.21 is 99 %) for a heard and a seen person to be one", Positive());
     v("fuse_max_distance_m", fuse_max_distance_m,
-      "a heard and a seen person further apart are never fused");
+      "a heard and a seen person further apart are never fused", Positive());
     v("heard_gate_chi2", heard_gate_chi2,
-      "gate (1 dof; 6.63 is 99 %) for a heard direction to point at a sound source");
-    v("min_direction_sigma_rad", min_direction_sigma_rad, "floor of a heard direction's std");
-    v("min_position_sigma_m", min_position_sigma_m, "floor of a seen person's position std");
-    v("confidence_gain", confidence_gain, "how fast confidence grows with each detection (0..1)");
+      "gate (1 dof; 6.63 is 99 %) for a heard direction to point at a sound source", Positive());
+    v("min_direction_sigma_rad", min_direction_sigma_rad, "floor of a heard direction's std",
+      Positive());
+    v("min_position_sigma_m", min_position_sigma_m, "floor of a seen person's position std",
+      Positive());
+    v("confidence_gain", confidence_gain, "how fast confidence grows with each detection (0..1)",
+      InRange(0.0, 1.0));
     v("confidence_half_life_s", confidence_half_life_s,
-      "confidence halves after this long without evidence");
+      "confidence halves after this long without evidence", Positive());
     v("min_report_confidence", min_report_confidence,
-      "people below this confidence are not reported, unless it once reached keep_confidence");
+      "people below this confidence are not reported, unless it once reached keep_confidence",
+      InRange(0.0, 1.0));
     v("keep_confidence", keep_confidence,
       "a person whose confidence once reached this is reported for good, its confidence decaying "
-      "(0.75: two full-confidence detections); above 1: never");
+      "(0.75: two full-confidence detections); above 1: never",
+      Positive());
     v("heard_person_window_s", heard_person_window_s,
       "a sound source stays a person this long after being heard calling; min_heard_calls are "
       "counted within it, and a call towards a source that converges within it still places "
-      "that caller");
+      "that caller",
+      Positive());
     v("heard_needs_converged_source", heard_needs_converged_source,
       "a heard-only person is placed only at a converged sound source; a call towards an "
       "initialising "
       "source is remembered and places the person when the source converges");
     v("heard_max_source_sigma_m", heard_max_source_sigma_m,
       "with heard_needs_converged_source: a source whose largest planar position std is at most "
-      "this is placed too, converged or not (0: converged sources only)");
+      "this is placed too, converged or not (0: converged sources only)",
+      NonNegative());
     v("min_heard_calls", min_heard_calls,
       "a sound source becomes a heard person only after this many keyword calls towards it within "
-      "heard_person_window_s: one keyword false alarm is not a person");
+      "heard_person_window_s: one keyword false alarm is not a person",
+      AtLeast(1));
     v("same_call_s", same_call_s,
       "keyword hits towards a source within this long of its previous call are one call (one "
       "utterance "
-      "often fires several keywords); 0: every hit is a call");
+      "often fires several keywords); 0: every hit is a call",
+      NonNegative());
     v("track_gap_s", track_gap_s,
       "a detector track id seen again after longer than this is another track (one sighting "
-      "ends)");
+      "ends)",
+      Positive());
     v("relative_pose_sigma_m", relative_pose_sigma_m,
       "std per axis of the change of the robot pose error between two sightings of one person "
       "(SLAM drift that its covariance does not show); a new sighting joins a seen person it is "
       "within sighting_gate_chi2 of (0: only within merge_radius_m); a seen and a heard estimate "
-      "are gated and fused with it too");
+      "are gated and fused with it too",
+      NonNegative());
     v("sighting_gate_chi2", sighting_gate_chi2,
-      "Mahalanobis gate (2 dof) for a new sighting to be a seen person");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("merge_radius_m", merge_radius_m);
-    check.Positive("fuse_gate_chi2", fuse_gate_chi2);
-    check.Positive("fuse_max_distance_m", fuse_max_distance_m);
-    check.Positive("heard_gate_chi2", heard_gate_chi2);
-    check.Positive("min_direction_sigma_rad", min_direction_sigma_rad);
-    check.Positive("min_position_sigma_m", min_position_sigma_m);
-    check.InRange("confidence_gain", confidence_gain, 0.0, 1.0);
-    check.Positive("confidence_half_life_s", confidence_half_life_s);
-    check.InRange("min_report_confidence", min_report_confidence, 0.0, 1.0);
-    check.Positive("keep_confidence", keep_confidence);
-    check.Positive("heard_person_window_s", heard_person_window_s);
-    check.NonNegative("heard_max_source_sigma_m", heard_max_source_sigma_m);
-    check.That(min_heard_calls >= 1, "min_heard_calls", "must be at least 1");
-    check.NonNegative("same_call_s", same_call_s);
-    check.Positive("track_gap_s", track_gap_s);
-    check.NonNegative("relative_pose_sigma_m", relative_pose_sigma_m);
-    check.Positive("sighting_gate_chi2", sighting_gate_chi2);
+      "Mahalanobis gate (2 dof) for a new sighting to be a seen person", Positive());
   }
 };
 

@@ -61,14 +61,18 @@ struct PeopleMapNodeOptions {
   void Visit(V& v) {
     v("robot_config", robot_config, "robot extrinsics YAML (camera and array on the base)");
     v("state_file", state_file, "where the people map is saved and resumed from (\"\": nowhere)");
-    v("save_period_s", save_period_s, "seconds between state saves (when changed)");
-    v("publish_period_s", publish_period_s, "PEOPLE_MAP is also republished this often");
+    v("save_period_s", save_period_s, "seconds between state saves (when changed)", Positive());
+    v("publish_period_s", publish_period_s, "PEOPLE_MAP is also republished this often",
+      Positive());
     v("reorder_delay_s", reorder_delay_s,
-      "inputs wait this long to be applied in capture-time order");
-    v("max_pose_gap_s", max_pose_gap_s, "largest gap to a known pose accepted for a detection (further: dropped and counted)");
+      "inputs wait this long to be applied in capture-time order", NonNegative());
+    v("max_pose_gap_s", max_pose_gap_s,
+      "largest gap to a known pose accepted for a detection (further: dropped and counted)",
+      Positive());
     v("pose_wait_s", pose_wait_s,
       "a detection newer than the latest pose waits this long (message time) for a later pose to "
-      "interpolate from, else it is dropped (never placed with an extrapolated pose)");
+      "interpolate from, else it is dropped (never placed with an extrapolated pose)",
+      NonNegative());
     v("visual_channel", visual_channel, "people seen");
     v("audio_channel", audio_channel, "people heard");
     v("sound_map_channel", sound_map_channel, "sound-source map");
@@ -79,25 +83,17 @@ struct PeopleMapNodeOptions {
       "the SLAM nodes seen people hang from are asked for here");
     v("client_id", client_id, "client id in SLAM_ANCHOR_REQUEST");
     v("request_repeat_s", request_repeat_s,
-      "re-send the anchor request this often (wall clock; 0: only on change)");
+      "re-send the anchor request this often (wall clock; 0: only on change)", NonNegative());
     v("max_anchor_nodes", max_anchor_nodes,
       "at most this many SLAM nodes are asked for, those of the people reported (confirmed "
       "people's first, then the people seen last; each costs SLAM_ANCHORS three covariance "
       "rows); people beyond stay where they are. At most sarmap-slam's "
-      "max_anchor_ids_per_request");
+      "max_anchor_ids_per_request",
+      AtLeast(1));
     v("output_channel", output_channel, "the people map");
     v("stamp_gate", stamp_gate,
       "inputs stamped far from their stream's clock are dropped and counted, never adopted");
     v("map", map, "people map");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("save_period_s", save_period_s);
-    check.Positive("publish_period_s", publish_period_s);
-    check.NonNegative("reorder_delay_s", reorder_delay_s);
-    check.Positive("max_pose_gap_s", max_pose_gap_s);
-    check.NonNegative("pose_wait_s", pose_wait_s);
-    check.NonNegative("request_repeat_s", request_repeat_s);
-    check.That(max_anchor_nodes >= 1, "max_anchor_nodes", "must be at least 1");
   }
 };
 

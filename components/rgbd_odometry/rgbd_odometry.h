@@ -77,48 +77,42 @@ struct RgbdOdometryOptions {
   void Visit(V& v) {
     v("method", method,
       "rgbd | icp | rgbd_icp | fast_icp (OpenCV rgbd module odometry; icp and fast_icp need "
-      "no colour)");
-    v("image_scale", image_scale, "resize factor before odometry (1 full, 0.5 half: ~4x faster)");
-    v("min_depth_m", min_depth_m, "depth readings closer than this are invalid");
+      "no colour)",
+      OneOf({"rgbd", "icp", "rgbd_icp", "fast_icp"}));
+    v("image_scale", image_scale, "resize factor before odometry (1 full, 0.5 half: ~4x faster)",
+      InRange(0.125, 1.0));
+    v("min_depth_m", min_depth_m, "depth readings closer than this are invalid", NonNegative());
     v("max_depth_m", max_depth_m, "depth readings farther than this are invalid");
-    v("max_depth_diff_m", max_depth_diff_m, "reject correspondences with a larger depth gap");
+    v("max_depth_diff_m", max_depth_diff_m, "reject correspondences with a larger depth gap",
+      Positive());
     v("max_points_part", max_points_part, "fraction of pixels used per level (rgbd, icp)");
     v("iteration_counts", iteration_counts, "iterations per pyramid level, finest level first");
     v("min_gradient_magnitude", min_gradient_magnitude,
-      "rgbd, rgbd_icp: pixels with a weaker intensity gradient are not used");
+      "rgbd, rgbd_icp: pixels with a weaker intensity gradient are not used", NonNegative());
     v("keyframe_translation_m", keyframe_translation_m,
-      "new keyframe when the rig moved farther than this from the keyframe");
+      "new keyframe when the rig moved farther than this from the keyframe", Positive());
     v("keyframe_rotation_deg", keyframe_rotation_deg,
-      "new keyframe when the rig turned more than this from the keyframe");
+      "new keyframe when the rig turned more than this from the keyframe", Positive());
     v("max_frame_translation_m", max_frame_translation_m,
-      "larger motion between consecutive frames is a failure (lost)");
+      "larger motion between consecutive frames is a failure (lost)", Positive());
     v("max_frame_rotation_deg", max_frame_rotation_deg,
-      "larger rotation between consecutive frames is a failure (lost)");
+      "larger rotation between consecutive frames is a failure (lost)", InRange(1e-6, 180));
     v("velocity_prior_gain", velocity_prior_gain,
-      "initial guess = last motion x this (1: constant velocity; 0: the last pose, safer where walls are bare)");
+      "initial guess = last motion x this (1: constant velocity; 0: the last pose, safer where "
+      "walls are bare)",
+      InRange(0.0, 1.0));
     v("min_valid_depth_fraction", min_valid_depth_fraction,
-      "fewer valid depth pixels than this fraction -> lost");
+      "fewer valid depth pixels than this fraction -> lost", InRange(0, 1));
     v("min_overlap_fraction", min_overlap_fraction,
-      "fewer aligned points agreeing with the keyframe's depth than this fraction -> lost");
+      "fewer aligned points agreeing with the keyframe's depth than this fraction -> lost",
+      InRange(0, 1));
   }
   void Validate(common::Validator& c) const {
-    c.OneOf("method", method, {"rgbd", "icp", "rgbd_icp", "fast_icp"});
-    c.InRange("image_scale", image_scale, 0.125, 1.0);
-    c.NonNegative("min_depth_m", min_depth_m);
     c.That(max_depth_m > min_depth_m, "max_depth_m", "must be > min_depth_m");
-    c.Positive("max_depth_diff_m", max_depth_diff_m);
     c.That(max_points_part > 0 && max_points_part <= 1, "max_points_part", "must be in (0, 1]");
     c.That(!iteration_counts.empty() && iteration_counts.size() <= 6, "iteration_counts",
            "needs 1 to 6 levels");
     for (int n : iteration_counts) c.That(n >= 1, "iteration_counts", "each must be >= 1");
-    c.NonNegative("min_gradient_magnitude", min_gradient_magnitude);
-    c.Positive("keyframe_translation_m", keyframe_translation_m);
-    c.Positive("keyframe_rotation_deg", keyframe_rotation_deg);
-    c.Positive("max_frame_translation_m", max_frame_translation_m);
-    c.InRange("velocity_prior_gain", velocity_prior_gain, 0.0, 1.0);
-    c.InRange("max_frame_rotation_deg", max_frame_rotation_deg, 1e-6, 180);
-    c.InRange("min_valid_depth_fraction", min_valid_depth_fraction, 0, 1);
-    c.InRange("min_overlap_fraction", min_overlap_fraction, 0, 1);
   }
 };
 
@@ -140,24 +134,19 @@ struct PoseCovarianceOptions {
 
   template <class V>
   void Visit(V& v) {
-    v("position_sigma_m", position_sigma_m, "position standard deviation at the start");
-    v("position_drift", position_drift, "position sigma grows by this fraction of the path");
-    v("rotation_sigma_deg", rotation_sigma_deg, "rotation standard deviation at the start");
-    v("rotation_drift_deg_per_m", rotation_drift_deg_per_m, "rotation sigma growth per metre");
-    v("rotation_drift", rotation_drift, "rotation sigma grows by this fraction of the turning");
+    v("position_sigma_m", position_sigma_m, "position standard deviation at the start", Positive());
+    v("position_drift", position_drift, "position sigma grows by this fraction of the path",
+      NonNegative());
+    v("rotation_sigma_deg", rotation_sigma_deg, "rotation standard deviation at the start",
+      Positive());
+    v("rotation_drift_deg_per_m", rotation_drift_deg_per_m, "rotation sigma growth per metre",
+      NonNegative());
+    v("rotation_drift", rotation_drift, "rotation sigma grows by this fraction of the turning",
+      NonNegative());
     v("relocalisation_sigma_m", relocalisation_sigma_m,
-      "position sigma added (in quadrature) per tracking loss");
+      "position sigma added (in quadrature) per tracking loss", NonNegative());
     v("relocalisation_sigma_deg", relocalisation_sigma_deg,
-      "rotation sigma added (in quadrature) per tracking loss");
-  }
-  void Validate(common::Validator& c) const {
-    c.Positive("position_sigma_m", position_sigma_m);
-    c.NonNegative("position_drift", position_drift);
-    c.Positive("rotation_sigma_deg", rotation_sigma_deg);
-    c.NonNegative("rotation_drift_deg_per_m", rotation_drift_deg_per_m);
-    c.NonNegative("rotation_drift", rotation_drift);
-    c.NonNegative("relocalisation_sigma_m", relocalisation_sigma_m);
-    c.NonNegative("relocalisation_sigma_deg", relocalisation_sigma_deg);
+      "rotation sigma added (in quadrature) per tracking loss", NonNegative());
   }
 };
 

@@ -30,8 +30,10 @@ struct RgbdOdometryNodeOptions {
     v("pose_channel", pose_channel, "output rig pose (pose_t)");
     v("frame", frame, "parent frame of the published pose (header.frame)");
     v("child_frame", child_frame, "frame located by the published pose");
-    v("max_pair_dt_s", max_pair_dt_s, "colour image paired with depth within this time");
-    v("color_wait_s", color_wait_s, "message time a depth frame waits for its colour image");
+    v("max_pair_dt_s", max_pair_dt_s, "colour image paired with depth within this time",
+      NonNegative());
+    v("color_wait_s", color_wait_s, "message time a depth frame waits for its colour image",
+      NonNegative());
     v("publish_lost", publish_lost, "also publish the held pose while tracking is lost");
   }
   void Validate(common::Validator& c) const {
@@ -39,8 +41,6 @@ struct RgbdOdometryNodeOptions {
     c.That(!rgb_channel.empty(), "rgb_channel", "must not be empty");
     c.That(!pose_channel.empty(), "pose_channel", "must not be empty");
     c.That(!frame.empty() && !child_frame.empty(), "frame", "frame names must not be empty");
-    c.NonNegative("max_pair_dt_s", max_pair_dt_s);
-    c.NonNegative("color_wait_s", color_wait_s);
   }
 };
 

@@ -46,53 +46,39 @@ struct CameraOptions {
   template <class V>
   void Visit(V& v) {
     v("enabled", enabled, "publish DEPTH and RGB");
-    v("rate_hz", rate_hz, "frame rate");
+    v("rate_hz", rate_hz, "frame rate", Positive());
     v("width", width, "image width (pixels)");
     v("height", height, "image height (pixels)");
-    v("color_hfov_deg", color_hfov_deg, "colour camera horizontal field of view");
-    v("color_vfov_deg", color_vfov_deg, "colour camera vertical field of view");
-    v("depth_hfov_deg", depth_hfov_deg, "depth camera horizontal field of view");
-    v("depth_vfov_deg", depth_vfov_deg, "depth camera vertical field of view");
-    v("min_range_m", min_range_m, "nearest valid depth");
+    v("color_hfov_deg", color_hfov_deg, "colour camera horizontal field of view", InRange(10, 170));
+    v("color_vfov_deg", color_vfov_deg, "colour camera vertical field of view", InRange(10, 170));
+    v("depth_hfov_deg", depth_hfov_deg, "depth camera horizontal field of view", InRange(10, 170));
+    v("depth_vfov_deg", depth_vfov_deg, "depth camera vertical field of view", InRange(10, 170));
+    v("min_range_m", min_range_m, "nearest valid depth", Positive());
     v("max_range_m", max_range_m, "farthest valid depth");
-    v("depth_noise_k", depth_noise_k, "depth noise sigma = k * z^2 (1/m)");
-    v("baseline_m", baseline_m, "projector-camera baseline");
-    v("depth_fx_px", depth_fx_px, "IR camera focal length for disparity quantisation");
-    v("disparity_subpixel", disparity_subpixel, "disparity steps per pixel");
-    v("dropout", dropout, "fraction of random invalid depth pixels");
-    v("grazing_limit_deg", grazing_limit_deg, "no depth return beyond this incidence angle");
+    v("depth_noise_k", depth_noise_k, "depth noise sigma = k * z^2 (1/m)", NonNegative());
+    v("baseline_m", baseline_m, "projector-camera baseline", Positive());
+    v("depth_fx_px", depth_fx_px, "IR camera focal length for disparity quantisation", Positive());
+    v("disparity_subpixel", disparity_subpixel, "disparity steps per pixel", AtLeast(0));
+    v("dropout", dropout, "fraction of random invalid depth pixels", InRange(0, 1));
+    v("grazing_limit_deg", grazing_limit_deg, "no depth return beyond this incidence angle",
+      InRange(0, 90));
     v("shadows", shadows, "projector shadows beside foreground edges");
-    v("color_noise", color_noise, "colour noise sigma when lit (fraction of full scale)");
-    v("dark_gain", dark_gain, "lights off: brightness fraction");
-    v("dark_noise", dark_noise, "lights off: colour noise sigma");
-    v("jpeg_quality", jpeg_quality, "RGB JPEG quality 1..100, 0 = raw RGB8");
+    v("color_noise", color_noise, "colour noise sigma when lit (fraction of full scale)",
+      InRange(0, 1));
+    v("dark_gain", dark_gain, "lights off: brightness fraction", InRange(0, 1));
+    v("dark_noise", dark_noise, "lights off: colour noise sigma", InRange(0, 1));
+    v("jpeg_quality", jpeg_quality, "RGB JPEG quality 1..100, 0 = raw RGB8", InRange(0, 100));
     v("compress_depth", compress_depth, "lossless depth compression");
     v("surface_texture", surface_texture,
-      "modulate surface colours by +- this fraction in map-fixed cubes (0: flat; visual odometry needs texture)");
-    v("surface_texture_cell_m", surface_texture_cell_m, "size of the texture cubes");
+      "modulate surface colours by +- this fraction in map-fixed cubes (0: flat; visual odometry "
+      "needs texture)",
+      InRange(0, 1));
+    v("surface_texture_cell_m", surface_texture_cell_m, "size of the texture cubes", Positive());
   }
   void Validate(Validator& check) const {
-    check.Positive("rate_hz", rate_hz);
     check.That(width >= 16 && height >= 16, "width", "image must be at least 16x16");
-    check.InRange("color_hfov_deg", color_hfov_deg, 10, 170);
-    check.InRange("color_vfov_deg", color_vfov_deg, 10, 170);
-    check.InRange("depth_hfov_deg", depth_hfov_deg, 10, 170);
-    check.InRange("depth_vfov_deg", depth_vfov_deg, 10, 170);
-    check.Positive("min_range_m", min_range_m);
     check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
     check.That(max_range_m < 65.0, "max_range_m", "must fit 16-bit millimetres");
-    check.NonNegative("depth_noise_k", depth_noise_k);
-    check.Positive("baseline_m", baseline_m);
-    check.Positive("depth_fx_px", depth_fx_px);
-    check.That(disparity_subpixel >= 0, "disparity_subpixel", "must be >= 0 (0: no quantisation)");
-    check.InRange("dropout", dropout, 0, 1);
-    check.InRange("grazing_limit_deg", grazing_limit_deg, 0, 90);
-    check.InRange("color_noise", color_noise, 0, 1);
-    check.InRange("dark_gain", dark_gain, 0, 1);
-    check.InRange("dark_noise", dark_noise, 0, 1);
-    check.InRange("jpeg_quality", jpeg_quality, 0, 100);
-    check.InRange("surface_texture", surface_texture, 0, 1);
-    check.Positive("surface_texture_cell_m", surface_texture_cell_m);
   }
 };
 
@@ -116,30 +102,26 @@ struct AudioOptions {
   void Visit(V& v) {
     v("enabled", enabled, "publish AUDIO");
     v("mic_array", mic_array, "array in config/arrays/<name>.yaml; empty: the robot's");
-    v("block_samples", block_samples, "samples per channel per audio_frame_t");
-    v("convolve_block_samples", convolve_block_samples, "internal FFT convolution block");
+    v("block_samples", block_samples, "samples per channel per audio_frame_t", InRange(16, 16384));
+    v("convolve_block_samples", convolve_block_samples, "internal FFT convolution block",
+      InRange(64, 16384));
     v("full_scale_db_spl", full_scale_db_spl, "SPL that reads full scale");
     v("sensor_noise_db_spl", sensor_noise_db_spl, "self noise of each microphone");
     v("reverb", reverb, "image-source reverberation (also needs acoustics.reverb in the world)");
-    v("rir_max_length_s", rir_max_length_s, "room impulse responses are truncated here");
-    v("rir_update_distance_m", rir_update_distance_m, "recompute responses after this mic motion");
-    v("exact_order", exact_order, "reflection order with full windowed-sinc delays");
-    v("sinc_half_width", sinc_half_width, "windowed-sinc half width (taps)");
+    v("rir_max_length_s", rir_max_length_s, "room impulse responses are truncated here",
+      Positive());
+    v("rir_update_distance_m", rir_update_distance_m, "recompute responses after this mic motion",
+      Positive());
+    v("exact_order", exact_order, "reflection order with full windowed-sinc delays", AtLeast(0));
+    v("sinc_half_width", sinc_half_width, "windowed-sinc half width (taps)", InRange(2, 64));
     v("motor_noise_db_spl", motor_noise_db_spl, "motor noise at the array at 0.5 m/s");
     v("asynchronous", asynchronous, "one sound card per microphone (AUDIO_<DEVICE> channels)");
-    v("timestamp_jitter_s", timestamp_jitter_s, "asynchronous: host timestamp jitter");
+    v("timestamp_jitter_s", timestamp_jitter_s, "asynchronous: host timestamp jitter",
+      NonNegative());
     v("espeak", espeak, "render espeak: phrases with espeak-ng");
   }
   void Validate(Validator& check) const {
-    check.That(block_samples >= 16 && block_samples <= 16384, "block_samples", "must be in [16, 16384]");
-    check.That(convolve_block_samples >= 64 && convolve_block_samples <= 16384,
-               "convolve_block_samples", "must be in [64, 16384]");
-    check.Positive("rir_max_length_s", rir_max_length_s);
     check.That(rir_max_length_s <= 2.0, "rir_max_length_s", "must be <= 2 s");
-    check.Positive("rir_update_distance_m", rir_update_distance_m);
-    check.That(exact_order >= 0, "exact_order", "must be >= 0");
-    check.That(sinc_half_width >= 2 && sinc_half_width <= 64, "sinc_half_width", "must be in [2, 64]");
-    check.NonNegative("timestamp_jitter_s", timestamp_jitter_s);
   }
 };
 
@@ -155,20 +137,16 @@ struct OdometryOptions {
   double slip_noise = 0.0;        // sigma of that fraction
   template <class V>
   void Visit(V& v) {
-    v("rate_hz", rate_hz, "ODOM rate");
-    v("trans_noise", trans_noise, "distance error: std after 1 m as a fraction (grows with sqrt(distance))");
-    v("rot_noise", rot_noise, "heading error: std after turning 1 rad as a fraction (grows with sqrt(angle))");
-    v("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m, "heading drift std after driving 1 m (rad)");
-    v("slip", slip, "mean fraction of motion lost to wheel slip");
-    v("slip_noise", slip_noise, "sigma of the slip fraction");
-  }
-  void Validate(Validator& check) const {
-    check.Positive("rate_hz", rate_hz);
-    check.InRange("trans_noise", trans_noise, 0, 1);
-    check.InRange("rot_noise", rot_noise, 0, 1);
-    check.NonNegative("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m);
-    check.InRange("slip", slip, 0, 1);
-    check.InRange("slip_noise", slip_noise, 0, 1);
+    v("rate_hz", rate_hz, "ODOM rate", Positive());
+    v("trans_noise", trans_noise,
+      "distance error: std after 1 m as a fraction (grows with sqrt(distance))", InRange(0, 1));
+    v("rot_noise", rot_noise,
+      "heading error: std after turning 1 rad as a fraction (grows with sqrt(angle))",
+      InRange(0, 1));
+    v("rot_per_trans_rad_per_m", rot_per_trans_rad_per_m,
+      "heading drift std after driving 1 m (rad)", NonNegative());
+    v("slip", slip, "mean fraction of motion lost to wheel slip", InRange(0, 1));
+    v("slip_noise", slip_noise, "sigma of the slip fraction", InRange(0, 1));
   }
 };
 
@@ -217,32 +195,27 @@ struct SimOptions {
     v("robot_config", robot_config, "robot description (camera and array extrinsics)");
     v("data_dir", data_dir, "shared data (people photos, voices); relative: from the repository root");
     v("seed", seed, "random seed: the same seed gives the same run (--seed N)");
-    v("speed", speed, "simulated seconds per wall-clock second; 0 = as fast as possible (--speed X)");
-    v("start_utime", start_utime, "simulated time at start (us since epoch); 0 = wall clock");
-    v("duration_s", duration_s, "stop after this many simulated seconds; 0 = until stopped (--duration S)");
-    v("drive", drive, "auto (path until CMD_VEL arrives), cmd_vel, or path");
-    v("cmd_vel_timeout_s", cmd_vel_timeout_s, "stop when CMD_VEL is older than this");
+    v("speed", speed,
+      "simulated seconds per wall-clock second; 0 = as fast as possible (--speed X)",
+      NonNegative());
+    v("start_utime", start_utime, "simulated time at start (us since epoch); 0 = wall clock",
+      AtLeast(0));
+    v("duration_s", duration_s,
+      "stop after this many simulated seconds; 0 = until stopped (--duration S)", NonNegative());
+    v("drive", drive, "auto (path until CMD_VEL arrives), cmd_vel, or path",
+      OneOf({"auto", "cmd_vel", "path"}));
+    v("cmd_vel_timeout_s", cmd_vel_timeout_s, "stop when CMD_VEL is older than this", Positive());
     v("command_key_file", command_key_file,
       "key (>= 16 random bytes, mode 600) that must sign CMD_VEL; empty: any CMD_VEL is obeyed");
-    v("physics_rate_hz", physics_rate_hz, "robot integration rate");
-    v("truth_rate_hz", truth_rate_hz, "SIM_TRUTH rate");
-    v("robot_radius_m", robot_radius_m, "robot footprint radius for collisions");
-    v("floor_period_s", floor_period_s, "publish the reachable floor (SIM_FLOOR) this often; 0 = never");
+    v("physics_rate_hz", physics_rate_hz, "robot integration rate", InRange(10, 10000));
+    v("truth_rate_hz", truth_rate_hz, "SIM_TRUTH rate", Positive());
+    v("robot_radius_m", robot_radius_m, "robot footprint radius for collisions", Positive());
+    v("floor_period_s", floor_period_s,
+      "publish the reachable floor (SIM_FLOOR) this often; 0 = never", NonNegative());
     v("camera", camera, "RGB-D camera");
     v("audio", audio, "microphone array");
     v("odometry", odometry, "odometry noise");
     v("channels", channels, "channel names");
-  }
-  void Validate(Validator& check) const {
-    check.NonNegative("speed", speed);
-    check.NonNegative("duration_s", duration_s);
-    check.OneOf("drive", drive, {"auto", "cmd_vel", "path"});
-    check.Positive("cmd_vel_timeout_s", cmd_vel_timeout_s);
-    check.InRange("physics_rate_hz", physics_rate_hz, 10, 10000);
-    check.Positive("truth_rate_hz", truth_rate_hz);
-    check.Positive("robot_radius_m", robot_radius_m);
-    check.NonNegative("floor_period_s", floor_period_s);
-    check.That(start_utime >= 0, "start_utime", "must be >= 0");
   }
 };
 

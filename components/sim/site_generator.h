@@ -66,13 +66,13 @@ struct SiteOptions {
   template <class V>
   void Visit(V& v) {
     v("seed", seed, "random seed: the same seed gives the same site");
-    v("floor_area_m2", floor_area_m2, "building footprint, 60..600 m^2");
-    v("min_rooms", min_rooms, "at least this many rooms besides the corridor");
+    v("floor_area_m2", floor_area_m2, "building footprint, 60..600 m^2", InRange(60, 600));
+    v("min_rooms", min_rooms, "at least this many rooms besides the corridor", InRange(4, 24));
     v("corridor_width_min_m", corridor_width_min_m, "corridor width range");
     v("corridor_width_max_m", corridor_width_max_m, "");
     v("door_width_min_m", door_width_min_m, "door gap range (robot diameter + 0.3 m at least)");
     v("door_width_max_m", door_width_max_m, "");
-    v("wall_height_min_m", wall_height_min_m, "wall (and ceiling) height range");
+    v("wall_height_min_m", wall_height_min_m, "wall (and ceiling) height range", InRange(2.0, 4.0));
     v("wall_height_max_m", wall_height_max_m, "");
     v("furniture_min_per_room", furniture_min_per_room,
       "furniture items per room (plus one per 12 m^2)");
@@ -84,22 +84,24 @@ struct SiteOptions {
     v("hidden_min", hidden_min, "people hidden behind a screen in a room corner (only heard)");
     v("hidden_max", hidden_max, "");
     v("voice_probability", voice_probability,
-      "chance that a person in view calls (hidden people always do)");
+      "chance that a person in view calls (hidden people always do)", InRange(0, 1));
     v("alarm_probability", alarm_probability,
-      "chance of an alarm sounding in the corridor (a siren or a beeper)");
-    v("music_probability", music_probability, "chance of a radio playing music in one room");
+      "chance of an alarm sounding in the corridor (a siren or a beeper)", InRange(0, 1));
+    v("music_probability", music_probability, "chance of a radio playing music in one room",
+      InRange(0, 1));
     v("machines_min", machines_min, "machines humming in rooms");
     v("machines_max", machines_max, "");
-    v("lighting", lighting, "lit, dark, or seed (dark with dark_probability)");
-    v("dark_probability", dark_probability, "lighting: seed: chance that the lights are off");
-    v("robot_radius_m", robot_radius_m, "robot radius for the reachability checks");
+    v("lighting", lighting, "lit, dark, or seed (dark with dark_probability)",
+      OneOf({"lit", "dark", "seed"}));
+    v("dark_probability", dark_probability, "lighting: seed: chance that the lights are off",
+      InRange(0, 1));
+    v("robot_radius_m", robot_radius_m, "robot radius for the reachability checks",
+      InRange(0.1, 0.5));
     v("passage_margin_m", passage_margin_m,
       "every room must be reachable by a robot this much wider on each side (debris never leaves a squeeze)");
-    v("max_attempts", max_attempts, "layouts tried before giving up");
+    v("max_attempts", max_attempts, "layouts tried before giving up", AtLeast(1));
   }
   void Validate(common::Validator& check) const {
-    check.InRange("floor_area_m2", floor_area_m2, 60, 600);
-    check.InRange("min_rooms", min_rooms, 4, 24);
     check.That(corridor_width_min_m >= 2 * robot_radius_m + 0.5, "corridor_width_min_m",
                "must leave 0.5 m beside the robot's diameter");
     check.That(corridor_width_max_m >= corridor_width_min_m && corridor_width_max_m <= 3.0,
@@ -108,7 +110,6 @@ struct SiteOptions {
                "must exceed the robot's diameter by 0.3 m");
     check.That(door_width_max_m >= door_width_min_m && door_width_max_m <= 1.6, "door_width_max_m",
                "must be in [door_width_min_m, 1.6]");
-    check.InRange("wall_height_min_m", wall_height_min_m, 2.0, 4.0);
     check.That(wall_height_max_m >= wall_height_min_m && wall_height_max_m <= 4.0,
                "wall_height_max_m", "must be in [wall_height_min_m, 4]");
     check.That(furniture_min_per_room >= 0 && furniture_max_per_room >= furniture_min_per_room &&
@@ -121,17 +122,10 @@ struct SiteOptions {
     check.That(hidden_min >= 0 && hidden_max >= hidden_min && hidden_max <= 6, "hidden_max",
                "need 0 <= min <= max <= 6");
     check.That(hidden_min <= people_min, "hidden_min", "must be <= people_min");
-    check.InRange("voice_probability", voice_probability, 0, 1);
-    check.InRange("alarm_probability", alarm_probability, 0, 1);
-    check.InRange("music_probability", music_probability, 0, 1);
     check.That(machines_min >= 0 && machines_max >= machines_min && machines_max <= 6,
                "machines_max", "need 0 <= min <= max <= 6");
-    check.OneOf("lighting", lighting, {"lit", "dark", "seed"});
-    check.InRange("dark_probability", dark_probability, 0, 1);
-    check.InRange("robot_radius_m", robot_radius_m, 0.1, 0.5);
     check.That(passage_margin_m >= 0 && 2 * (robot_radius_m + passage_margin_m) < door_width_min_m,
                "passage_margin_m", "must be >= 0 and leave the narrowest door passable");
-    check.That(max_attempts >= 1, "max_attempts", "must be >= 1");
   }
 };
 

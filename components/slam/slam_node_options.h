@@ -54,53 +54,52 @@ struct SlamNodeOptions {
     v("map_channel", map_channel, "Output occupancy grid (occupancy_grid_t, zstd)");
     v("anchors_channel", anchors_channel, "Output anchors with joint covariance (slam_anchors_t)");
     v("anchor_request_channel", anchor_request_channel, "Input anchor requests (slam_anchor_request_t)");
-    v("queue_delay_s", queue_delay_s, "Inputs are released in time order this long after arrival (message time)");
+    v("queue_delay_s", queue_delay_s,
+      "Inputs are released in time order this long after arrival (message time)", NonNegative());
     v("input_queue_capacity", input_queue_capacity,
-      "Scans / odometry held per channel while the node is busy; beyond it the oldest are lost");
-    v("map_period_s", map_period_s, "Publish MAP at most this often (message time)");
+      "Scans / odometry held per channel while the node is busy; beyond it the oldest are lost",
+      AtLeast(1));
+    v("map_period_s", map_period_s, "Publish MAP at most this often (message time)", Positive());
     v("max_busy_fraction", max_busy_fraction,
       "MAP rendering and state saving each use at most this fraction of the wall time (they slow "
       "with the graph)");
     v("state_file", state_file, "Pose-graph file saved periodically (temp + rename) and at exit");
-    v("state_save_period_s", state_save_period_s, "Message time between periodic state saves");
+    v("state_save_period_s", state_save_period_s, "Message time between periodic state saves",
+      Positive());
     v("resume", resume, "Load state_file at start if it exists and continue mapping");
     v("load_map", load_map, "Localisation only in this saved pose-graph file");
     v("map_output_prefix", map_output_prefix, "At exit write PREFIX.pgm and PREFIX.yaml (map_server)");
     v("initial_pose", initial_pose, "Localisation only: start pose [x, y, yaw] in the map (empty: last saved pose)");
-    v("pose_sigma_xy_m", pose_sigma_xy_m, "Local matching standard deviation added to POSE covariance");
-    v("pose_sigma_yaw_deg", pose_sigma_yaw_deg, "Local matching yaw standard deviation added to POSE covariance");
+    v("pose_sigma_xy_m", pose_sigma_xy_m,
+      "Local matching standard deviation added to POSE covariance", NonNegative());
+    v("pose_sigma_yaw_deg", pose_sigma_yaw_deg,
+      "Local matching yaw standard deviation added to POSE covariance", NonNegative());
     v("stamp_gate", stamp_gate,
       "SCAN / ODOM stamped far from their stream's clock are dropped and counted, never adopted");
     v("anchor_replies_per_client_per_min", anchor_replies_per_client_per_min,
       "changed anchor requests answered at once per client per minute; more are refused (counted) "
-      "and the client is served after the next optimisation");
+      "and the client is served after the next optimisation",
+      Positive());
     v("anchor_replies_per_min", anchor_replies_per_min,
-      "changed anchor requests answered at once per minute over all clients");
+      "changed anchor requests answered at once per minute over all clients", Positive());
     v("max_anchor_clients", max_anchor_clients,
       "anchor requests of at most this many clients are kept; requests of further clients are "
-      "refused");
+      "refused",
+      AtLeast(1));
     v("anchor_client_timeout_s", anchor_client_timeout_s,
-      "a client that has not repeated its anchor request for this long (wall clock) is forgotten");
+      "a client that has not repeated its anchor request for this long (wall clock) is forgotten",
+      Positive());
     v("max_anchor_ids_per_request", max_anchor_ids_per_request,
       "anchor requests naming more node ids are refused (each id adds 3 rows to the joint "
-      "covariance)");
+      "covariance)",
+      AtLeast(1));
     v("slam", slam, "SLAM core");
   }
   void Validate(common::Validator& c) const {
-    c.NonNegative("queue_delay_s", queue_delay_s);
-    c.That(initial_pose.empty() || initial_pose.size() == 3, "initial_pose", "must be empty or [x, y, yaw]");
-    c.Positive("map_period_s", map_period_s);
-    c.That(input_queue_capacity >= 1, "input_queue_capacity", "must be >= 1");
+    c.That(initial_pose.empty() || initial_pose.size() == 3, "initial_pose",
+           "must be empty or [x, y, yaw]");
     c.That(max_busy_fraction > 0 && max_busy_fraction <= 1, "max_busy_fraction",
            "must be in (0, 1]");
-    c.Positive("state_save_period_s", state_save_period_s);
-    c.NonNegative("pose_sigma_xy_m", pose_sigma_xy_m);
-    c.NonNegative("pose_sigma_yaw_deg", pose_sigma_yaw_deg);
-    c.Positive("anchor_replies_per_client_per_min", anchor_replies_per_client_per_min);
-    c.Positive("anchor_replies_per_min", anchor_replies_per_min);
-    c.That(max_anchor_clients >= 1, "max_anchor_clients", "must be >= 1");
-    c.Positive("anchor_client_timeout_s", anchor_client_timeout_s);
-    c.That(max_anchor_ids_per_request >= 1, "max_anchor_ids_per_request", "must be >= 1");
   }
 };
 

@@ -26,32 +26,30 @@ struct ScanOptions {
   // Pose of the laser on the robot (base_from_laser).
   double laser_x_m = 0, laser_y_m = 0, laser_yaw_rad = 0;
   template <class V> void Visit(V& v) {
-    v("min_range_m", min_range_m, "Shorter ranges are ignored");
+    v("min_range_m", min_range_m, "Shorter ranges are ignored", NonNegative());
     v("max_range_m", max_range_m, "Longer ranges only clear free space (up to missing_data_ray_length_m)");
-    v("missing_data_ray_length_m", missing_data_ray_length_m, "Free-space ray length for no-return beams");
-    v("voxel_size_m", voxel_size_m, "Voxel filter size applied to each scan");
-    v("adaptive_max_length_m", adaptive_max_length_m, "Adaptive voxel filter: largest voxel for local matching");
-    v("adaptive_min_points", adaptive_min_points, "Adaptive voxel filter: keep at least this many points");
-    v("loop_adaptive_max_length_m", loop_adaptive_max_length_m, "Adaptive voxel filter for loop-closure points");
-    v("loop_adaptive_min_points", loop_adaptive_min_points, "Minimum loop-closure points per node");
+    v("missing_data_ray_length_m", missing_data_ray_length_m,
+      "Free-space ray length for no-return beams", NonNegative());
+    v("voxel_size_m", voxel_size_m, "Voxel filter size applied to each scan", Positive());
+    v("adaptive_max_length_m", adaptive_max_length_m,
+      "Adaptive voxel filter: largest voxel for local matching", Positive());
+    v("adaptive_min_points", adaptive_min_points,
+      "Adaptive voxel filter: keep at least this many points", Positive());
+    v("loop_adaptive_max_length_m", loop_adaptive_max_length_m,
+      "Adaptive voxel filter for loop-closure points", Positive());
+    v("loop_adaptive_min_points", loop_adaptive_min_points, "Minimum loop-closure points per node",
+      Positive());
     v("map_free_from_m", map_free_from_m,
       "MAP: rays clear cells only from this range on (a depth camera's rays pass over low objects "
-      "closer in); 0: from the sensor");
+      "closer in); 0: from the sensor",
+      NonNegative());
     v("laser_x_m", laser_x_m, "base_from_laser x, for scans that carry no laser pose of their own");
     v("laser_y_m", laser_y_m, "base_from_laser y, for scans that carry no laser pose of their own");
     v("laser_yaw_rad", laser_yaw_rad,
       "base_from_laser yaw, for scans that carry no laser pose of their own");
   }
   void Validate(Validator& c) const {
-    c.NonNegative("min_range_m", min_range_m);
     c.That(max_range_m > min_range_m, "max_range_m", "must be > min_range_m");
-    c.NonNegative("missing_data_ray_length_m", missing_data_ray_length_m);
-    c.NonNegative("map_free_from_m", map_free_from_m);
-    c.Positive("voxel_size_m", voxel_size_m);
-    c.Positive("adaptive_max_length_m", adaptive_max_length_m);
-    c.Positive("loop_adaptive_max_length_m", loop_adaptive_max_length_m);
-    c.That(adaptive_min_points > 0, "adaptive_min_points", "must be > 0");
-    c.That(loop_adaptive_min_points > 0, "loop_adaptive_min_points", "must be > 0");
   }
 };
 
@@ -93,13 +91,17 @@ struct LocalOptions {
   double node_max_distance_m = 0.2;
   double node_max_angle_deg = 1.0;
   template <class V> void Visit(V& v) {
-    v("resolution_m", resolution_m, "Submap cell size");
-    v("scans_per_submap", scans_per_submap, "Scans inserted before a new submap starts (each submap gets 2x)");
-    v("hit_probability", hit_probability, "Occupancy update for a return");
-    v("miss_probability", miss_probability, "Occupancy update for a cell a ray passes");
+    v("resolution_m", resolution_m, "Submap cell size", Positive());
+    v("scans_per_submap", scans_per_submap,
+      "Scans inserted before a new submap starts (each submap gets 2x)", AtLeast(2));
+    v("hit_probability", hit_probability, "Occupancy update for a return", InRange(0.5001, 0.99));
+    v("miss_probability", miss_probability, "Occupancy update for a cell a ray passes",
+      InRange(0.01, 0.4999));
     v("use_correlative_search", use_correlative_search, "Correlative search before the Ceres refinement");
-    v("correlative_linear_window_m", correlative_linear_window_m, "Correlative search half-window (m)");
-    v("correlative_angular_window_deg", correlative_angular_window_deg, "Correlative search half-window (deg)");
+    v("correlative_linear_window_m", correlative_linear_window_m,
+      "Correlative search half-window (m)", NonNegative());
+    v("correlative_angular_window_deg", correlative_angular_window_deg,
+      "Correlative search half-window (deg)", NonNegative());
     v("correlative_translation_cost", correlative_translation_cost, "Penalty weight on translation from prediction");
     v("correlative_rotation_cost", correlative_rotation_cost, "Penalty weight on rotation from prediction");
     v("ceres_rotation_prior_from_prediction", ceres_rotation_prior_from_prediction,
@@ -111,19 +113,22 @@ struct LocalOptions {
       "and a constant-velocity model predicts, for logs that freeze odometry while moving)");
     v("odometry_extrapolation_s", odometry_extrapolation_s,
       "A scan up to this much newer than the last odometry reading is predicted by extrapolating "
-      "the last odometry step, in turns (0: the last reading is held)");
+      "the last odometry step, in turns (0: the last reading is held)",
+      InRange(0.0, 0.5));
     v("odometry_extrapolation_min_turn_radps", odometry_extrapolation_min_turn_radps,
-      "Odometry extrapolation only while the odometry turns at least this fast (rad/s)");
+      "Odometry extrapolation only while the odometry turns at least this fast (rad/s)",
+      NonNegative());
     v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
     v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
     v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
     v("ceres_occupied_weight", ceres_occupied_weight, "Scan matcher: weight of the map term");
     v("ceres_translation_weight", ceres_translation_weight, "Scan matcher: weight of staying at the prior translation");
     v("ceres_rotation_weight", ceres_rotation_weight, "Scan matcher: weight of staying at the prior rotation");
-    v("ceres_max_iterations", ceres_max_iterations, "Scan matcher iterations");
+    v("ceres_max_iterations", ceres_max_iterations, "Scan matcher iterations", Positive());
     v("ceres_rotation_weight_informative", ceres_rotation_weight_informative,
       "Scan matcher: rotation prior weight for a scan whose heading information (1/rad^2) is at "
-      "least rotation_information_high (0: off, ceres_rotation_weight always)");
+      "least rotation_information_high (0: off, ceres_rotation_weight always)",
+      NonNegative());
     v("rotation_information_low", rotation_information_low,
       "Scan matcher: heading information at or below which ceres_rotation_weight applies");
     v("rotation_information_high", rotation_information_high,
@@ -133,16 +138,6 @@ struct LocalOptions {
     v("node_max_angle_deg", node_max_angle_deg, "Motion filter: new node after this rotation");
   }
   void Validate(Validator& c) const {
-    c.Positive("resolution_m", resolution_m);
-    c.That(scans_per_submap >= 2, "scans_per_submap", "must be >= 2");
-    c.InRange("hit_probability", hit_probability, 0.5001, 0.99);
-    c.InRange("miss_probability", miss_probability, 0.01, 0.4999);
-    c.NonNegative("correlative_linear_window_m", correlative_linear_window_m);
-    c.NonNegative("correlative_angular_window_deg", correlative_angular_window_deg);
-    c.That(ceres_max_iterations > 0, "ceres_max_iterations", "must be > 0");
-    c.NonNegative("ceres_rotation_weight_informative", ceres_rotation_weight_informative);
-    c.InRange("odometry_extrapolation_s", odometry_extrapolation_s, 0.0, 0.5);
-    c.NonNegative("odometry_extrapolation_min_turn_radps", odometry_extrapolation_min_turn_radps);
     c.That(rotation_information_low > 0 && rotation_information_high > rotation_information_low,
            "rotation_information_high", "must be > rotation_information_low > 0");
   }
@@ -187,20 +182,28 @@ struct LoopClosureOptions {
   double consistency_match_sigma_deg = 1.0;
   double consistency_max_chi2 = 16.27;  // chi-square, 3 degrees of freedom, 99.9 %
   template <class V> void Visit(V& v) {
-    v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched");
+    v("sampling_ratio", sampling_ratio, "Fraction of (node, finished submap) pairs searched",
+      InRange(0, 1));
     v("max_constraint_distance_m", max_constraint_distance_m, "Only search submaps this close to the node");
-    v("min_score", min_score, "Accept a loop closure when its mean matched probability is at least this");
+    v("min_score", min_score,
+      "Accept a loop closure when its mean matched probability is at least this", InRange(0, 1));
     v("linear_window_m", linear_window_m, "Branch-and-bound half-window (m)");
     v("angular_window_deg", angular_window_deg, "Branch-and-bound half-window (deg)");
-    v("branch_and_bound_depth", branch_and_bound_depth, "Levels of the precomputation stack");
+    v("branch_and_bound_depth", branch_and_bound_depth, "Levels of the precomputation stack",
+      InRange(1, 12));
     v("ceres_occupied_weight", ceres_occupied_weight, "Refinement: map term weight");
     v("ceres_translation_weight", ceres_translation_weight, "Refinement: translation prior weight");
     v("ceres_rotation_weight", ceres_rotation_weight, "Refinement: rotation prior weight");
     v("translation_weight", translation_weight, "Pose graph weight of loop closures (translation)");
     v("rotation_weight", rotation_weight, "Pose graph weight of loop closures (rotation)");
-    v("max_cached_precomputations", max_cached_precomputations, "Submap precomputation stacks kept in memory (least recently used; a stack is rebuilt in milliseconds)");
-    v("max_submaps_per_node", max_submaps_per_node, "A new node is searched against at most this many nearest finished submaps");
-    v("max_old_nodes_per_submap", max_old_nodes_per_submap, "A newly finished submap is searched for at most this many older nodes");
+    v("max_cached_precomputations", max_cached_precomputations,
+      "Submap precomputation stacks kept in memory (least recently used; a stack is rebuilt in "
+      "milliseconds)",
+      AtLeast(1));
+    v("max_submaps_per_node", max_submaps_per_node,
+      "A new node is searched against at most this many nearest finished submaps", AtLeast(0));
+    v("max_old_nodes_per_submap", max_old_nodes_per_submap,
+      "A newly finished submap is searched for at most this many older nodes", AtLeast(0));
     v("weight_by_match_information", weight_by_match_information,
       "Loop closure translation weight per direction follows the match's information (a match along a wall pulls across it, not along it)");
     v("consistency_gate", consistency_gate,
@@ -208,31 +211,20 @@ struct LoopClosureOptions {
     v("reject_window_edge", reject_window_edge,
       "Reject a loop closure whose best pose lies on the branch-and-bound window's boundary (not a verified maximum)");
     v("consistency_drift_m_per_sqrt_m", consistency_drift_m_per_sqrt_m,
-      "Consistency gate: local SLAM's position drift, std per sqrt(metre driven) (random walk)");
+      "Consistency gate: local SLAM's position drift, std per sqrt(metre driven) (random walk)",
+      NonNegative());
     v("consistency_drift_deg_per_sqrt_rad", consistency_drift_deg_per_sqrt_rad,
-      "Consistency gate: heading drift, std (deg) per sqrt(radian turned)");
+      "Consistency gate: heading drift, std (deg) per sqrt(radian turned)", NonNegative());
     v("consistency_drift_deg_per_sqrt_m", consistency_drift_deg_per_sqrt_m,
-      "Consistency gate: heading drift, std (deg) per sqrt(metre driven)");
+      "Consistency gate: heading drift, std (deg) per sqrt(metre driven)", NonNegative());
     v("consistency_match_sigma_m", consistency_match_sigma_m,
-      "Consistency gate: std of one scan-to-submap match, translation (m)");
+      "Consistency gate: std of one scan-to-submap match, translation (m)", Positive());
     v("consistency_match_sigma_deg", consistency_match_sigma_deg,
-      "Consistency gate: std of one scan-to-submap match, rotation (deg)");
+      "Consistency gate: std of one scan-to-submap match, rotation (deg)", Positive());
     v("consistency_max_chi2", consistency_max_chi2,
-      "Consistency gate: largest squared Mahalanobis distance kept (16.27: chi-square, 3 dof, 99.9 %)");
-  }
-  void Validate(Validator& c) const {
-    c.InRange("sampling_ratio", sampling_ratio, 0, 1);
-    c.InRange("min_score", min_score, 0, 1);
-    c.That(branch_and_bound_depth >= 1 && branch_and_bound_depth <= 12, "branch_and_bound_depth", "must be in [1, 12]");
-    c.That(max_cached_precomputations >= 1, "max_cached_precomputations", "must be >= 1");
-    c.That(max_submaps_per_node >= 0, "max_submaps_per_node", "must be >= 0");
-    c.That(max_old_nodes_per_submap >= 0, "max_old_nodes_per_submap", "must be >= 0");
-    c.NonNegative("consistency_drift_m_per_sqrt_m", consistency_drift_m_per_sqrt_m);
-    c.NonNegative("consistency_drift_deg_per_sqrt_rad", consistency_drift_deg_per_sqrt_rad);
-    c.NonNegative("consistency_drift_deg_per_sqrt_m", consistency_drift_deg_per_sqrt_m);
-    c.Positive("consistency_match_sigma_m", consistency_match_sigma_m);
-    c.Positive("consistency_match_sigma_deg", consistency_match_sigma_deg);
-    c.Positive("consistency_max_chi2", consistency_max_chi2);
+      "Consistency gate: largest squared Mahalanobis distance kept (16.27: chi-square, 3 dof, 99.9 "
+      "%)",
+      Positive());
   }
 };
 
@@ -248,22 +240,18 @@ struct GraphOptions {
   double local_slam_translation_weight = 1e4;  // 1e5 (Cartographer) held revisits apart on Intel
   double local_slam_rotation_weight = 1e5;
   template <class V> void Visit(V& v) {
-    v("optimise_every_n_nodes", optimise_every_n_nodes, "Run the global optimisation after this many new nodes (0: only at the end)");
-    v("max_iterations", max_iterations, "Ceres iterations per optimisation");
-    v("final_max_iterations", final_max_iterations, "Ceres iterations of the final optimisation (Optimise())");
-    v("huber_scale", huber_scale, "Huber loss scale on loop closures");
+    v("optimise_every_n_nodes", optimise_every_n_nodes,
+      "Run the global optimisation after this many new nodes (0: only at the end)", AtLeast(0));
+    v("max_iterations", max_iterations, "Ceres iterations per optimisation", Positive());
+    v("final_max_iterations", final_max_iterations,
+      "Ceres iterations of the final optimisation (Optimise())", Positive());
+    v("huber_scale", huber_scale, "Huber loss scale on loop closures", Positive());
     v("intra_translation_weight", intra_translation_weight, "Node-in-submap constraints (translation)");
     v("intra_rotation_weight", intra_rotation_weight, "Node-in-submap constraints (rotation)");
     v("odometry_translation_weight", odometry_translation_weight, "Consecutive-node odometry (translation)");
     v("odometry_rotation_weight", odometry_rotation_weight, "Consecutive-node odometry (rotation)");
     v("local_slam_translation_weight", local_slam_translation_weight, "Consecutive-node local matching (translation)");
     v("local_slam_rotation_weight", local_slam_rotation_weight, "Consecutive-node local matching (rotation)");
-  }
-  void Validate(Validator& c) const {
-    c.That(optimise_every_n_nodes >= 0, "optimise_every_n_nodes", "must be >= 0");
-    c.That(max_iterations > 0, "max_iterations", "must be > 0");
-    c.That(final_max_iterations > 0, "final_max_iterations", "must be > 0");
-    c.Positive("huber_scale", huber_scale);
   }
 };
 
@@ -312,16 +300,15 @@ struct TrimOptions {
   double cell_m = 0.2;  // the coverage raster
   template <class V> void Visit(V& v) {
     v("enabled", enabled, "Trim each finished submap that maps nothing new (the graph grows with the explored area, not the mission time)");
-    v("fresh_submaps", fresh_submaps, "A cell is new while fewer than this many older submaps know it");
-    v("min_fresh_area_m2", min_fresh_area_m2, "A finished submap with less new area than this is trimmed (m^2)");
-    v("min_new_obstacle_m2", min_new_obstacle_m2, "... and with less new obstacle than this (m^2): occupied cells no older submap sees an obstacle within one raster cell of");
-    v("cell_m", cell_m, "Cell size of the coverage raster (m)");
-  }
-  void Validate(Validator& c) const {
-    c.That(fresh_submaps >= 1, "fresh_submaps", "must be >= 1");
-    c.NonNegative("min_fresh_area_m2", min_fresh_area_m2);
-    c.NonNegative("min_new_obstacle_m2", min_new_obstacle_m2);
-    c.Positive("cell_m", cell_m);
+    v("fresh_submaps", fresh_submaps,
+      "A cell is new while fewer than this many older submaps know it", AtLeast(1));
+    v("min_fresh_area_m2", min_fresh_area_m2,
+      "A finished submap with less new area than this is trimmed (m^2)", NonNegative());
+    v("min_new_obstacle_m2", min_new_obstacle_m2,
+      "... and with less new obstacle than this (m^2): occupied cells no older submap sees an "
+      "obstacle within one raster cell of",
+      NonNegative());
+    v("cell_m", cell_m, "Cell size of the coverage raster (m)", Positive());
   }
 };
 
@@ -331,14 +318,12 @@ struct InputOptions {
   double max_odometry_turn_radps = 10.0;
   double max_odometry_jump_m = 1.0;   // regardless of elapsed time
   template <class V> void Visit(V& v) {
-    v("max_odometry_speed_mps", max_odometry_speed_mps, "Odometry faster than this is a jump (rejected)");
-    v("max_odometry_turn_radps", max_odometry_turn_radps, "Odometry turning faster than this is a jump (rejected)");
-    v("max_odometry_jump_m", max_odometry_jump_m, "Odometry steps longer than this are jumps (rejected)");
-  }
-  void Validate(Validator& c) const {
-    c.Positive("max_odometry_speed_mps", max_odometry_speed_mps);
-    c.Positive("max_odometry_turn_radps", max_odometry_turn_radps);
-    c.Positive("max_odometry_jump_m", max_odometry_jump_m);
+    v("max_odometry_speed_mps", max_odometry_speed_mps,
+      "Odometry faster than this is a jump (rejected)", Positive());
+    v("max_odometry_turn_radps", max_odometry_turn_radps,
+      "Odometry turning faster than this is a jump (rejected)", Positive());
+    v("max_odometry_jump_m", max_odometry_jump_m,
+      "Odometry steps longer than this are jumps (rejected)", Positive());
   }
 };
 

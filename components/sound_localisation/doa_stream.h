@@ -49,7 +49,8 @@ struct SoundLocalisationOptions {
     v("device_id", device_id,
       "only use this device ('' = the first one heard); others are dropped and reported");
     v("max_bridged_gap_s", max_bridged_gap_s,
-      "a gap in the audio up to this long is bridged (analysis goes on); longer ones restart it");
+      "a gap in the audio up to this long is bridged (analysis goes on); longer ones restart it",
+      NonNegative());
     v("publish_untracked", publish_untracked,
       "publish directions outside confirmed tracks with track_id -1");
     v("devices", devices, "asynchronous array: device ids of its cards ([] = one device)");
@@ -63,7 +64,6 @@ struct SoundLocalisationOptions {
     v("classes", classes, "source classification");
   }
   void Validate(common::Validator& check) const {
-    check.NonNegative("max_bridged_gap_s", max_bridged_gap_s);
     for (int d : mic_devices)
       check.That(d >= 0 && d < static_cast<int>(devices.size()), "mic_devices",
                  "indices must point into devices");

@@ -89,114 +89,100 @@ struct LocaliserOptions {
 
   template <class V>
   void Visit(V& v) {
-    v("method", method, "gcc_phat, srp_phat, music, gevd_music or esprit (uniform linear arrays)");
+    v("method", method, "gcc_phat, srp_phat, music, gevd_music or esprit (uniform linear arrays)",
+      OneOf({"gcc_phat", "srp_phat", "music", "gevd_music", "esprit"}));
     v("search", search,
-      "auto (1d for linear arrays, else azimuth_elevation), 1d, azimuth, azimuth_elevation");
+      "auto (1d for linear arrays, else azimuth_elevation), 1d, azimuth, azimuth_elevation",
+      OneOf({"auto", "1d", "azimuth", "azimuth_elevation"}));
     v("fft_size", fft_size, "STFT frame length (samples)");
     v("hop_size", hop_size, "STFT hop (samples)");
-    v("min_frequency_hz", min_frequency_hz, "lowest analysed frequency");
+    v("min_frequency_hz", min_frequency_hz, "lowest analysed frequency", Positive());
     v("max_frequency_hz", max_frequency_hz, "highest analysed frequency");
-    v("block_s", block_s, "one DOA output per block of this length");
-    v("window_blocks", window_blocks, "covariances are summed over this many blocks");
-    v("coarse_step_deg", coarse_step_deg, "coarse direction grid step");
-    v("fine_step_deg", fine_step_deg, "refinement stops at this step");
-    v("min_elevation_deg", min_elevation_deg, "elevation search range (azimuth_elevation)");
-    v("max_elevation_deg", max_elevation_deg, "elevation search range (azimuth_elevation)");
-    v("max_sources", max_sources, "most simultaneous sources reported per block");
-    v("min_separation_deg", min_separation_deg, "closer peaks are suppressed");
+    v("block_s", block_s, "one DOA output per block of this length", Positive());
+    v("window_blocks", window_blocks, "covariances are summed over this many blocks", AtLeast(1));
+    v("coarse_step_deg", coarse_step_deg, "coarse direction grid step", Positive());
+    v("fine_step_deg", fine_step_deg, "refinement stops at this step", Positive());
+    v("min_elevation_deg", min_elevation_deg, "elevation search range (azimuth_elevation)",
+      InRange(-90, 90));
+    v("max_elevation_deg", max_elevation_deg, "elevation search range (azimuth_elevation)",
+      InRange(min_elevation_deg, 90));
+    v("max_sources", max_sources, "most simultaneous sources reported per block", AtLeast(1));
+    v("min_separation_deg", min_separation_deg, "closer peaks are suppressed", NonNegative());
     v("min_peak_ratio", min_peak_ratio,
-      "secondary peaks must reach this fraction of the best (0..1)");
-    v("music_num_sources", music_num_sources, "MUSIC/ESPRIT signal-subspace dimension");
+      "secondary peaks must reach this fraction of the best (0..1)", InRange(0, 1));
+    v("music_num_sources", music_num_sources, "MUSIC/ESPRIT signal-subspace dimension", AtLeast(1));
     v("activity_snr_db", activity_snr_db,
       "frames this far above the noise floor are active (sound)");
-    v("min_active_fraction", min_active_fraction, "a block needs this fraction of active frames");
+    v("min_active_fraction", min_active_fraction, "a block needs this fraction of active frames",
+      InRange(0, 1));
     v("noise_rise_db_per_s", noise_rise_db_per_s, "noise-floor tracker rise rate");
-    v("noise_average_s", noise_average_s, "time constant of the noise covariance (GEVD)");
-    v("min_confidence", min_confidence, "weaker estimates are dropped");
+    v("noise_average_s", noise_average_s, "time constant of the noise covariance (GEVD)",
+      Positive());
+    v("min_confidence", min_confidence, "weaker estimates are dropped", InRange(0, 1));
     v("direct_path_threshold", direct_path_threshold,
       "use a time-frequency bin only when its short-time covariance is this close to rank 1 "
-      "(|R|_F^2 / tr(R)^2, 1/M diffuse .. 1 one plane wave); 0 uses every bin");
+      "(|R|_F^2 / tr(R)^2, 1/M diffuse .. 1 one plane wave); 0 uses every bin",
+      InRange(0, 1));
     v("direct_path_smoothing", direct_path_smoothing,
-      "weight of the past in that short-time covariance (0..1)");
+      "weight of the past in that short-time covariance (0..1)", InRange(0, 0.99));
     v("onset_rise_db", onset_rise_db,
       "precedence effect: use a bin only when its power rose this many dB above its recent level "
-      "(0: all)");
-    v("onset_memory_s", onset_memory_s, "time constant of that recent level");
+      "(0: all)",
+      NonNegative());
+    v("onset_memory_s", onset_memory_s, "time constant of that recent level", Positive());
     v("band_hz", band_hz,
       "srp_phat: also report each band's (this wide) power-weighted peak, so a narrowband source "
       "that "
-      "dominates its own band is heard beside broadband ones (0: broadband only)");
+      "dominates its own band is heard beside broadband ones (0: broadband only)",
+      NonNegative());
     v("band_min_coherence", band_min_coherence,
-      "a band's peak needs this weighted PHAT coherence (0..1)");
-    v("band_max_sources", band_max_sources, "most band peaks added per block");
+      "a band's peak needs this weighted PHAT coherence (0..1)", InRange(0, 1));
+    v("band_max_sources", band_max_sources, "most band peaks added per block", AtLeast(0));
     v("band_min_tonality", band_min_tonality,
       "a band peak needs this share of its band's power in its 3 strongest bins (tones ~1; noise "
       "and "
-      "voiced speech lower); 0: any band");
+      "voiced speech lower); 0: any band",
+      InRange(0, 1));
     v("noise_subtraction", noise_subtraction,
       "srp_phat: remove this share (0..1) of the steady noise's cross-spectra (learnt between "
       "sounds) "
-      "before steering, so a steady interferer does not bend a voice's bearing; 0: off");
+      "before steering, so a steady interferer does not bend a voice's bearing; 0: off",
+      InRange(0, 1));
     v("detection", detection,
       "activity (energy gate) or cfar (srp_phat: every block, standardised against learnt noise "
       "statistics per "
-      "direction, calibrated false-alarm rate, several sources by suppression)");
+      "direction, calibrated false-alarm rate, several sources by suppression)",
+      OneOf({"activity", "cfar"}));
     v("false_alarm_probability", false_alarm_probability,
       "cfar: chance per block that noise alone gives a detection");
-    v("noise_map_s", noise_map_s, "cfar: time constant of the per-direction noise statistics");
+    v("noise_map_s", noise_map_s, "cfar: time constant of the per-direction noise statistics",
+      Positive());
     v("steady_s", steady_s,
       "cfar: blocks with a detection also teach the noise statistics with this time constant, so "
       "an "
-      "unceasing sound becomes background (0: never)");
+      "unceasing sound becomes background (0: never)",
+      NonNegative());
     v("suppression", suppression,
-      "cfar: clean (subtract a found source's whole correlation) or zero (its lag neighbourhood)");
+      "cfar: clean (subtract a found source's whole correlation) or zero (its lag neighbourhood)",
+      OneOf({"clean", "zero"}));
     v("secondary_local_max", secondary_local_max,
       "cfar: a further source must be a local maximum of the block's map");
     v("suppression_samples", suppression_samples,
       "cfar: half-width of the lag neighbourhood removed around a found source (0: band's main "
-      "lobe)");
+      "lobe)",
+      NonNegative());
     v("tracker", tracker, "multi-source tracker");
   }
   void Validate(common::Validator& check) const {
-    check.OneOf("method", method, {"gcc_phat", "srp_phat", "music", "gevd_music", "esprit"});
-    check.OneOf("search", search, {"auto", "1d", "azimuth", "azimuth_elevation"});
     check.That(fft_size >= 64 && (fft_size & (fft_size - 1)) == 0, "fft_size",
                "must be a power of two >= 64");
     check.That(hop_size >= 1 && hop_size <= fft_size, "hop_size", "must be in [1, fft_size]");
-    check.Positive("min_frequency_hz", min_frequency_hz);
     check.That(max_frequency_hz > min_frequency_hz, "max_frequency_hz",
                "must exceed min_frequency_hz");
-    check.Positive("block_s", block_s);
-    check.That(window_blocks >= 1, "window_blocks", "must be >= 1");
-    check.Positive("coarse_step_deg", coarse_step_deg);
-    check.Positive("fine_step_deg", fine_step_deg);
-    check.InRange("min_elevation_deg", min_elevation_deg, -90, 90);
-    check.InRange("max_elevation_deg", max_elevation_deg, min_elevation_deg, 90);
-    check.That(max_sources >= 1, "max_sources", "must be >= 1");
-    check.NonNegative("min_separation_deg", min_separation_deg);
-    check.InRange("min_peak_ratio", min_peak_ratio, 0, 1);
-    check.That(music_num_sources >= 1, "music_num_sources", "must be >= 1");
-    check.InRange("min_active_fraction", min_active_fraction, 0, 1);
-    check.Positive("noise_average_s", noise_average_s);
-    check.InRange("min_confidence", min_confidence, 0, 1);
-    check.InRange("direct_path_threshold", direct_path_threshold, 0, 1);
-    check.InRange("direct_path_smoothing", direct_path_smoothing, 0, 0.99);
-    check.NonNegative("onset_rise_db", onset_rise_db);
-    check.Positive("onset_memory_s", onset_memory_s);
-    check.NonNegative("band_hz", band_hz);
-    check.InRange("band_min_coherence", band_min_coherence, 0, 1);
-    check.That(band_max_sources >= 0, "band_max_sources", "must be >= 0");
-    check.InRange("band_min_tonality", band_min_tonality, 0, 1);
-    check.InRange("noise_subtraction", noise_subtraction, 0, 1);
-    check.OneOf("detection", detection, {"activity", "cfar"});
     check.That(detection != "cfar" || method == "srp_phat", "detection",
                "cfar needs method srp_phat");
     check.That(false_alarm_probability > 0 && false_alarm_probability < 1,
                "false_alarm_probability", "must be in (0, 1)");
-    check.Positive("noise_map_s", noise_map_s);
-    check.NonNegative("steady_s", steady_s);
-    check.NonNegative("suppression_samples", suppression_samples);
-    check.OneOf("suppression", suppression, {"clean", "zero"});
   }
 };
 

@@ -107,65 +107,54 @@ struct SourceClassOptions {
   void Visit(V& v) {
     v("fft_size", fft_size, "STFT frame length (samples)");
     v("hop_size", hop_size, "STFT hop (samples)");
-    v("min_frequency_hz", min_frequency_hz, "lowest frequency of the features");
+    v("min_frequency_hz", min_frequency_hz, "lowest frequency of the features", Positive());
     v("max_frequency_hz", max_frequency_hz, "highest frequency of the features");
-    v("history_s", history_s, "features over this much of a source's recent frames");
+    v("history_s", history_s, "features over this much of a source's recent frames", Positive());
     v("min_present_s", min_present_s,
-      "a source heard for less than this is unknown (a voice: min_voice_present_s)");
+      "a source heard for less than this is unknown (a voice: min_voice_present_s)",
+      InRange(0, history_s));
     v("min_voice_present_s", min_voice_present_s,
-      "a voice is decided from this much sound (a short call)");
+      "a voice is decided from this much sound (a short call)", InRange(0, min_present_s));
     v("clear_alarm_tonal_min", clear_alarm_tonal_min,
-      "an alarm this tonal is decided from min_voice_present_s of sound (> 1: never)");
+      "an alarm this tonal is decided from min_voice_present_s of sound (> 1: never)",
+      NonNegative());
     v("present_range_db", present_range_db,
-      "one recording: frames this far below the loudest are pauses");
-    v("tonal_min", tonal_min, "mean tonality (3 peaks' share of the power) of alarms and music");
+      "one recording: frames this far below the loudest are pauses", Positive());
+    v("tonal_min", tonal_min, "mean tonality (3 peaks' share of the power) of alarms and music",
+      InRange(0, 1));
     v("tonal_max_flux", tonal_max_flux,
-      "mean spectral flux of alarms and music (speech changes faster)");
+      "mean spectral flux of alarms and music (speech changes faster)", InRange(0, 1));
     v("alarm_peak_share", alarm_peak_share,
-      "tonal: share of frames on the two commonest pitches for an alarm");
+      "tonal: share of frames on the two commonest pitches for an alarm", InRange(0, 1));
     v("sustained_min", sustained_min,
       "a sound whose strongest peak stays in its bin over this share of consecutive frames holds "
-      "its pitch: alarm or music, never a voice (> 1: off)");
-    v("steady_level_std_db", steady_level_std_db, "level std of a steady (machine) source, dB");
+      "its pitch: alarm or music, never a voice (> 1: off)",
+      NonNegative());
+    v("steady_level_std_db", steady_level_std_db, "level std of a steady (machine) source, dB",
+      NonNegative());
     v("voice_syllabic_min", voice_syllabic_min,
-      "2-8 Hz RMS modulation of a voice's normalised energy envelope");
+      "2-8 Hz RMS modulation of a voice's normalised energy envelope", NonNegative());
     v("min_bin_coherence", min_bin_coherence,
-      "a bin belongs to a direction this coherent with it (0..1)");
-    v("bin_margin", bin_margin, "... by this margin over the next direction");
+      "a bin belongs to a direction this coherent with it (0..1)", InRange(0, 1));
+    v("bin_margin", bin_margin, "... by this margin over the next direction", InRange(0, 1));
     v("dominant_share", dominant_share,
       "a frame also sounds for a direction owning this share of its band energy, reported or not "
-      "(0: off)");
+      "(0: off)",
+      InRange(0, 1));
     v("replay_s", replay_s,
-      "a new class track first takes the frames of its reporting block kept this long");
-    v("gate_deg", gate_deg, "a reported direction continues the nearest class track within this");
-    v("forget_s", forget_s, "a class track not reported for this long is dropped");
-    v("max_tracks", max_tracks, "most class tracks kept");
+      "a new class track first takes the frames of its reporting block kept this long",
+      NonNegative());
+    v("gate_deg", gate_deg, "a reported direction continues the nearest class track within this",
+      Positive());
+    v("forget_s", forget_s, "a class track not reported for this long is dropped", Positive());
+    v("max_tracks", max_tracks, "most class tracks kept", AtLeast(1));
   }
   void Validate(common::Validator& check) const {
     check.That(fft_size >= 64 && (fft_size & (fft_size - 1)) == 0, "fft_size",
                "must be a power of two >= 64");
     check.That(hop_size >= 1 && hop_size <= fft_size, "hop_size", "must be in [1, fft_size]");
-    check.Positive("min_frequency_hz", min_frequency_hz);
     check.That(max_frequency_hz > min_frequency_hz, "max_frequency_hz",
                "must exceed min_frequency_hz");
-    check.Positive("history_s", history_s);
-    check.InRange("min_present_s", min_present_s, 0, history_s);
-    check.InRange("min_voice_present_s", min_voice_present_s, 0, min_present_s);
-    check.NonNegative("clear_alarm_tonal_min", clear_alarm_tonal_min);
-    check.Positive("present_range_db", present_range_db);
-    check.InRange("tonal_min", tonal_min, 0, 1);
-    check.InRange("tonal_max_flux", tonal_max_flux, 0, 1);
-    check.InRange("alarm_peak_share", alarm_peak_share, 0, 1);
-    check.NonNegative("sustained_min", sustained_min);
-    check.NonNegative("steady_level_std_db", steady_level_std_db);
-    check.NonNegative("voice_syllabic_min", voice_syllabic_min);
-    check.InRange("min_bin_coherence", min_bin_coherence, 0, 1);
-    check.InRange("bin_margin", bin_margin, 0, 1);
-    check.InRange("dominant_share", dominant_share, 0, 1);
-    check.NonNegative("replay_s", replay_s);
-    check.Positive("gate_deg", gate_deg);
-    check.Positive("forget_s", forget_s);
-    check.That(max_tracks >= 1, "max_tracks", "must be >= 1");
   }
 };
 

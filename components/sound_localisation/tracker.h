@@ -37,30 +37,25 @@ struct TrackerOptions {
   int primary_hits = 0;
   template <class V>
   void Visit(V& v) {
-    v("gate_deg", gate_deg, "a measurement further than this from a track starts a new one");
-    v("birth_hits", birth_hits, "hits needed to confirm a track (and give it an id)");
-    v("birth_window_s", birth_window_s, "tentative tracks not confirmed within this die");
-    v("max_silence_s", max_silence_s, "a track survives silences up to this long");
-    v("process_noise_deg_per_sqrt_s", process_noise_deg_per_sqrt_s, "random-walk process noise");
+    v("gate_deg", gate_deg, "a measurement further than this from a track starts a new one",
+      Positive());
+    v("birth_hits", birth_hits, "hits needed to confirm a track (and give it an id)", AtLeast(1));
+    v("birth_window_s", birth_window_s, "tentative tracks not confirmed within this die",
+      Positive());
+    v("max_silence_s", max_silence_s, "a track survives silences up to this long", Positive());
+    v("process_noise_deg_per_sqrt_s", process_noise_deg_per_sqrt_s, "random-walk process noise",
+      NonNegative());
     v("velocity_noise_deg_per_s_sqrt_s", velocity_noise_deg_per_s_sqrt_s,
-      "constant-velocity model: noise of the bearing rate (0: random walk only)");
+      "constant-velocity model: noise of the bearing rate (0: random walk only)", NonNegative());
     v("velocity_time_constant_s", velocity_time_constant_s,
-      "the bearing rate decays to 0 with this time constant");
+      "the bearing rate decays to 0 with this time constant", Positive());
     v("primary_hits", primary_hits,
-      "hits as its block's strongest direction needed to confirm a track");
+      "hits as its block's strongest direction needed to confirm a track", AtLeast(0));
     v("gate_probability", gate_probability,
       "also gate by Mahalanobis distance: a track's own measurement falls inside with this "
       "probability (0: off)");
   }
   void Validate(common::Validator& check) const {
-    check.Positive("gate_deg", gate_deg);
-    check.That(birth_hits >= 1, "birth_hits", "must be >= 1");
-    check.Positive("birth_window_s", birth_window_s);
-    check.Positive("max_silence_s", max_silence_s);
-    check.NonNegative("process_noise_deg_per_sqrt_s", process_noise_deg_per_sqrt_s);
-    check.NonNegative("velocity_noise_deg_per_s_sqrt_s", velocity_noise_deg_per_s_sqrt_s);
-    check.That(primary_hits >= 0, "primary_hits", "must be >= 0");
-    check.Positive("velocity_time_constant_s", velocity_time_constant_s);
     check.That(gate_probability >= 0 && gate_probability < 1, "gate_probability",
                "must be in [0, 1)");
   }

@@ -67,39 +67,33 @@ struct BearingEvidenceOptions {
   template <class V>
   void Visit(V& v) {
     v("enabled", enabled, "also find sources where the bearings cross (all DOAs, a batch solve)");
-    v("cell_m", cell_m, "grid cell, m");
-    v("min_range_m", min_range_m, "a ray starts this far from the array, m");
+    v("cell_m", cell_m, "grid cell, m", Positive());
+    v("min_range_m", min_range_m, "a ray starts this far from the array, m", NonNegative());
     v("max_range_m", max_range_m, "a ray counts up to this range, m");
-    v("sigma_floor_deg", sigma_floor_deg, "lower bound on a DOA's std, deg");
-    v("window_sigmas", window_sigmas, "a ray covers cells within this many stds of its bearing");
+    v("sigma_floor_deg", sigma_floor_deg, "lower bound on a DOA's std, deg", Positive());
+    v("window_sigmas", window_sigmas, "a ray covers cells within this many stds of its bearing",
+      Positive());
     v("turn_lag_s", turn_lag_s,
       "a DOA's lag behind the heading while turning, s: it is turned back by the yaw rate times "
-      "this, and its std grows by half that");
-    v("iterations", iterations, "EM iterations per solve");
+      "this, and its std grows by half that",
+      NonNegative());
+    v("iterations", iterations, "EM iterations per solve", AtLeast(1));
     v("peak_radius_m", peak_radius_m,
-      "a source's mass is summed within this radius; sources lie twice this apart");
-    v("min_rays", min_rays, "a source explains more than half of each of at least this many rays");
-    v("solve_period_s", solve_period_s, "message time between solves, s");
+      "a source's mass is summed within this radius; sources lie twice this apart", Positive());
+    v("min_rays", min_rays, "a source explains more than half of each of at least this many rays",
+      Positive());
+    v("solve_period_s", solve_period_s, "message time between solves, s", Positive());
     v("max_rays", max_rays,
       "rays kept; beyond this, rays within 0.5 m of one another, in bearing bins of half "
-      "sigma_floor_deg and of one class, merge into one that stands for all; then the oldest go");
+      "sigma_floor_deg and of one class, merge into one that stands for all; then the oldest go",
+      AtLeast(100));
     v("merge_radius_m", merge_radius_m,
       "a source this close to a placed EKF source is that emitter (published once, by the better "
-      "placed), m");
+      "placed), m",
+      NonNegative());
   }
   void Validate(common::Validator& check) const {
-    check.Positive("cell_m", cell_m);
-    check.NonNegative("min_range_m", min_range_m);
     check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
-    check.Positive("sigma_floor_deg", sigma_floor_deg);
-    check.Positive("window_sigmas", window_sigmas);
-    check.NonNegative("turn_lag_s", turn_lag_s);
-    check.That(iterations >= 1, "iterations", "must be at least 1");
-    check.Positive("peak_radius_m", peak_radius_m);
-    check.Positive("min_rays", min_rays);
-    check.Positive("solve_period_s", solve_period_s);
-    check.That(max_rays >= 100, "max_rays", "must be at least 100");
-    check.NonNegative("merge_radius_m", merge_radius_m);
   }
 };
 

@@ -128,65 +128,79 @@ struct OnlineSoundMapOptions {
   template <class V>
   void Visit(V& v) {
     v("three_d", three_d, "map sources in 3D (azimuth + elevation) instead of the plane");
-    v("initial_range_m", initial_range_m, "range assumed at first observation (1/rho_0)");
+    v("initial_range_m", initial_range_m, "range assumed at first observation (1/rho_0)",
+      Positive());
     v("inverse_depth_sigma", inverse_depth_sigma,
-      "std of the inverse depth at first observation, 1/m");
+      "std of the inverse depth at first observation, 1/m", Positive());
     v("doa_sigma_floor_deg", doa_sigma_floor_deg,
-      "lower bound on the DOA std taken from DOA messages");
+      "lower bound on the DOA std taken from DOA messages", Positive());
     v("elevation_sigma_deg", elevation_sigma_deg,
-      "3D map, azimuth-only DOA: std of the 0-elevation prior");
-    v("gate_chi2", gate_chi2, "chi-square gate for associating an unknown DOA track to a source");
-    v("update_gate_chi2", update_gate_chi2, "chi-square outlier gate on source updates (0: none)");
-    v("max_signature_distance", max_signature_distance, "spectral signature cosine distance gate");
+      "3D map, azimuth-only DOA: std of the 0-elevation prior", Positive());
+    v("gate_chi2", gate_chi2, "chi-square gate for associating an unknown DOA track to a source",
+      Positive());
+    v("update_gate_chi2", update_gate_chi2, "chi-square outlier gate on source updates (0: none)",
+      NonNegative());
+    v("max_signature_distance", max_signature_distance, "spectral signature cosine distance gate",
+      InRange(0, 2));
     v("motion_noise_m_per_m", motion_noise_m_per_m,
-      "current-pose position noise per metre between SLAM updates");
-    v("motion_noise_rad_per_m", motion_noise_rad_per_m, "current-pose heading noise per metre");
+      "current-pose position noise per metre between SLAM updates", NonNegative());
+    v("motion_noise_rad_per_m", motion_noise_rad_per_m, "current-pose heading noise per metre",
+      NonNegative());
     v("motion_noise_rad_per_rad", motion_noise_rad_per_rad,
-      "current-pose heading noise per radian turned");
+      "current-pose heading noise per radian turned", NonNegative());
     v("converged_sigma_m", converged_sigma_m,
-      "a source is converged when its largest position std is below this");
-    v("silent_after_s", silent_after_s, "a source not heard for this long is reported silent");
+      "a source is converged when its largest position std is below this", Positive());
+    v("silent_after_s", silent_after_s, "a source not heard for this long is reported silent",
+      Positive());
     v("observable_sigmas", observable_sigmas,
       "a source has a position once its inverse depth exceeds this many of its standard "
-      "deviations");
+      "deviations",
+      Positive());
     v("max_position_sigma_m", max_position_sigma_m,
-      "... and its largest planar position std is below this");
+      "... and its largest planar position std is below this", Positive());
     v("site_margin_m", site_margin_m,
-      "a person must lie within this distance of the mapped site's known cells' box");
+      "a person must lie within this distance of the mapped site's known cells' box",
+      NonNegative());
     v("min_class_votes", min_class_votes,
-      "classified DOAs a source needs before it has a class (unknown until then)");
+      "classified DOAs a source needs before it has a class (unknown until then)", AtLeast(1));
     v("person_min_voice_share", person_min_voice_share,
-      "a source is a person only when at least this share of its classified DOAs are voice");
+      "a source is a person only when at least this share of its classified DOAs are voice",
+      InRange(0, 1));
     v("birth_min_observations", birth_min_observations,
-      "consistent DOAs needed before a new source is born");
-    v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time");
+      "consistent DOAs needed before a new source is born", AtLeast(1));
+    v("birth_window_s", birth_window_s, "a tentative source must gather its DOAs within this time",
+      Positive());
     v("birth_gate_chi2", birth_gate_chi2,
-      "chi-square gate between map-frame bearings of a tentative source");
+      "chi-square gate between map-frame bearings of a tentative source", Positive());
     v("birth_drift_deg_per_s", birth_drift_deg_per_s,
-      "bearing drift allowed between DOAs of a tentative source");
+      "bearing drift allowed between DOAs of a tentative source", NonNegative());
     v("prune_after_s", prune_after_s,
-      "an unconverged source with little support is removed after this silence");
+      "an unconverged source with little support is removed after this silence", Positive());
     v("prune_min_observations", prune_min_observations,
-      "sources with at least this many DOAs are never pruned");
+      "sources with at least this many DOAs are never pruned", NonNegative());
     v("prune_behind_sigmas", prune_behind_sigmas,
       "remove a source whose inverse depth is below zero by this many standard deviations (0: "
-      "never)");
+      "never)",
+      NonNegative());
     v("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s,
-      "DOAs heard while the robot turns faster than this are dropped (0: keep all)");
+      "DOAs heard while the robot turns faster than this are dropped (0: keep all)", NonNegative());
     v("max_abs_elevation_deg", max_abs_elevation_deg,
       "DOAs steeper than this above or below the array plane are dropped (robot's own motors; 0: "
-      "keep all)");
+      "keep all)",
+      InRange(0, 90));
     v("path_clearance_m", path_clearance_m,
       "a converged source within this distance of where the robot drove is removed as a ghost (0: "
-      "never)");
+      "never)",
+      NonNegative());
     v("doa_moves_poses", doa_moves_poses,
       "DOA updates also correct the current pose and anchors (false: only the sources; the poses "
       "are SLAM's)");
     v("anchor_sigma_floor_m", anchor_sigma_floor_m,
       "position std added to every pose of SLAM_ANCHORS (SLAM's covariance is overconfident; 0: as "
-      "is)");
+      "is)",
+      NonNegative());
     v("anchor_sigma_floor_deg", anchor_sigma_floor_deg,
-      "heading std added to every pose of SLAM_ANCHORS (0: as is)");
+      "heading std added to every pose of SLAM_ANCHORS (0: as is)", NonNegative());
     v("use_slam_covariance", use_slam_covariance,
       "take SLAM_ANCHORS' joint covariance (true) or only its means, keeping this map's pose "
       "covariance (false)");
@@ -197,40 +211,9 @@ struct OnlineSoundMapOptions {
       "SLAM_ANCHORS also regresses the sources on the anchors' correction (eq. 4.25; false: "
       "sources move rigidly with their anchors)");
     v("mirror_prune_misses", mirror_prune_misses,
-      "linear arrays: a mirror source is removed after this many DOAs only its twin explains");
+      "linear arrays: a mirror source is removed after this many DOAs only its twin explains",
+      AtLeast(1));
     v("evidence", evidence, "sources where the bearings cross (every DOA, a batch solve)");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("initial_range_m", initial_range_m);
-    check.Positive("inverse_depth_sigma", inverse_depth_sigma);
-    check.Positive("doa_sigma_floor_deg", doa_sigma_floor_deg);
-    check.Positive("elevation_sigma_deg", elevation_sigma_deg);
-    check.Positive("gate_chi2", gate_chi2);
-    check.NonNegative("update_gate_chi2", update_gate_chi2);
-    check.InRange("max_signature_distance", max_signature_distance, 0, 2);
-    check.NonNegative("motion_noise_m_per_m", motion_noise_m_per_m);
-    check.NonNegative("motion_noise_rad_per_m", motion_noise_rad_per_m);
-    check.NonNegative("motion_noise_rad_per_rad", motion_noise_rad_per_rad);
-    check.Positive("converged_sigma_m", converged_sigma_m);
-    check.Positive("silent_after_s", silent_after_s);
-    check.Positive("observable_sigmas", observable_sigmas);
-    check.Positive("max_position_sigma_m", max_position_sigma_m);
-    check.NonNegative("site_margin_m", site_margin_m);
-    check.That(min_class_votes >= 1, "min_class_votes", "must be at least 1");
-    check.InRange("person_min_voice_share", person_min_voice_share, 0, 1);
-    check.That(birth_min_observations >= 1, "birth_min_observations", "must be at least 1");
-    check.Positive("birth_window_s", birth_window_s);
-    check.Positive("birth_gate_chi2", birth_gate_chi2);
-    check.NonNegative("birth_drift_deg_per_s", birth_drift_deg_per_s);
-    check.Positive("prune_after_s", prune_after_s);
-    check.NonNegative("prune_min_observations", prune_min_observations);
-    check.NonNegative("prune_behind_sigmas", prune_behind_sigmas);
-    check.NonNegative("max_turn_rate_deg_per_s", max_turn_rate_deg_per_s);
-    check.InRange("max_abs_elevation_deg", max_abs_elevation_deg, 0, 90);
-    check.NonNegative("path_clearance_m", path_clearance_m);
-    check.NonNegative("anchor_sigma_floor_m", anchor_sigma_floor_m);
-    check.NonNegative("anchor_sigma_floor_deg", anchor_sigma_floor_deg);
-    check.That(mirror_prune_misses >= 1, "mirror_prune_misses", "must be at least 1");
   }
 };
 

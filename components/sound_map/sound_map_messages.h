@@ -59,14 +59,16 @@ struct SoundMapNodeOptions {
     v("sound_map_channel", sound_map_channel, "the sound map out");
     v("site_map_channel", site_map_channel,
       "occupancy grid of the mapped site in (a person must lie near its known cells; '' = none)");
-    v("reorder_delay_s", reorder_delay_s, "inputs are processed in time order once this much newer data arrived");
-    v("publish_period_s", publish_period_s, "SOUND_MAP period, message time");
-    v("request_repeat_s", request_repeat_s, "re-send the anchor request this often (wall clock; 0: only on change)");
+    v("reorder_delay_s", reorder_delay_s,
+      "inputs are processed in time order once this much newer data arrived", NonNegative());
+    v("publish_period_s", publish_period_s, "SOUND_MAP period, message time", Positive());
+    v("request_repeat_s", request_repeat_s,
+      "re-send the anchor request this often (wall clock; 0: only on change)", NonNegative());
     v("state_file", state_file,
       "where the map's state is saved (written beside it, then renamed over it: crash-safe) and "
       "resumed from (\"\": nowhere)");
     v("state_save_period_s", state_save_period_s,
-      "save the state this often when it changed (wall clock)");
+      "save the state this often when it changed (wall clock)", Positive());
     v("resume", resume,
       "start from state_file if it exists (after a crash or kill, the launcher restarts us)");
     v("stamp_gate", stamp_gate,
@@ -74,10 +76,6 @@ struct SoundMapNodeOptions {
     v("map", map, "sound map estimator");
   }
   void Validate(common::Validator& check) const {
-    check.NonNegative("reorder_delay_s", reorder_delay_s);
-    check.Positive("publish_period_s", publish_period_s);
-    check.NonNegative("request_repeat_s", request_repeat_s);
-    check.Positive("state_save_period_s", state_save_period_s);
     check.That(!robot_config.empty(), "robot_config", "must name the robot description");
   }
 };

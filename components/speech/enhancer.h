@@ -39,25 +39,23 @@ struct EnhancerOptions {
   bool post_filter = true;
   template <class V>
   void Visit(V& v) {
-    v("beamformer", beamformer, "mvdr or delay_and_sum");
+    v("beamformer", beamformer, "mvdr or delay_and_sum", OneOf({"mvdr", "delay_and_sum"}));
     v("fft_size", fft_size, "STFT frame");
     v("hop_size", hop_size, "STFT hop (fft_size/2 or fft_size/4)");
-    v("noise_average_s", noise_average_s, "noise covariance time constant");
+    v("noise_average_s", noise_average_s, "noise covariance time constant", Positive());
     v("activity_snr_db", activity_snr_db, "frames this far above the noise floor are not used for noise");
     v("noise_rise_db_per_s", noise_rise_db_per_s, "noise-floor tracker rise rate");
     v("min_noise_frames", min_noise_frames, "delay-and-sum until this many noise frames were seen");
-    v("diagonal_loading", diagonal_loading, "MVDR robustness: loading as a fraction of noise power");
+    v("diagonal_loading", diagonal_loading, "MVDR robustness: loading as a fraction of noise power",
+      NonNegative());
     v("post_filter_floor_db", post_filter_floor_db, "lowest post-filter gain");
-    v("decision_directed_alpha", decision_directed_alpha, "a-priori SNR smoothing");
+    v("decision_directed_alpha", decision_directed_alpha, "a-priori SNR smoothing", InRange(0, 1));
     v("post_filter", post_filter, "apply the spectral-gain post-filter");
   }
   void Validate(common::Validator& check) const {
-    check.OneOf("beamformer", beamformer, {"mvdr", "delay_and_sum"});
     check.That(fft_size >= 64 && (fft_size & (fft_size - 1)) == 0, "fft_size", "power of two >= 64");
-    check.That(hop_size == fft_size / 2 || hop_size == fft_size / 4, "hop_size", "fft_size/2 or fft_size/4");
-    check.Positive("noise_average_s", noise_average_s);
-    check.NonNegative("diagonal_loading", diagonal_loading);
-    check.InRange("decision_directed_alpha", decision_directed_alpha, 0, 1);
+    check.That(hop_size == fft_size / 2 || hop_size == fft_size / 4, "hop_size",
+               "fft_size/2 or fft_size/4");
   }
 };
 
@@ -123,24 +121,18 @@ struct VadOptions {
   double pre_roll_s = 0.25;
   template <class V>
   void Visit(V& v) {
-    v("frame_s", frame_s, "analysis frame");
+    v("frame_s", frame_s, "analysis frame", Positive());
     v("threshold_db", threshold_db, "speech when the frame energy is this far above the noise floor");
     v("fluctuation_factor", fluctuation_factor,
-      "threshold at least this times the mean frame-to-frame level change below it (0: off)");
-    v("fluctuation_time_s", fluctuation_time_s, "time constant of that mean");
+      "threshold at least this times the mean frame-to-frame level change below it (0: off)",
+      NonNegative());
+    v("fluctuation_time_s", fluctuation_time_s, "time constant of that mean", Positive());
     v("floor_rise_db_per_s", floor_rise_db_per_s, "noise-floor tracker rise rate");
-    v("hangover_s", hangover_s, "speech continues this long after the last loud frame");
+    v("hangover_s", hangover_s, "speech continues this long after the last loud frame",
+      NonNegative());
     v("min_speech_s", min_speech_s, "shorter bursts are ignored");
-    v("max_utterance_s", max_utterance_s, "longer utterances are cut");
-    v("pre_roll_s", pre_roll_s, "audio kept before the detected onset");
-  }
-  void Validate(common::Validator& check) const {
-    check.Positive("frame_s", frame_s);
-    check.NonNegative("fluctuation_factor", fluctuation_factor);
-    check.Positive("fluctuation_time_s", fluctuation_time_s);
-    check.Positive("max_utterance_s", max_utterance_s);
-    check.NonNegative("hangover_s", hangover_s);
-    check.NonNegative("pre_roll_s", pre_roll_s);
+    v("max_utterance_s", max_utterance_s, "longer utterances are cut", Positive());
+    v("pre_roll_s", pre_roll_s, "audio kept before the detected onset", NonNegative());
   }
 };
 

@@ -69,24 +69,32 @@ struct KeywordOptions {
     v("model_dir", model_dir, "PocketSphinx model directory (en-us/, en-us.lm.bin, cmudict-en-us.dict)");
     v("keywords", keywords, "keyphrases to spot (words must be in the dictionary)");
     v("thresholds", thresholds, "detection thresholds per keyword (or one for all), e.g. 1e-20");
-    v("min_confidence", min_confidence, "keywords below this confidence (0..1) are ignored");
+    v("min_confidence", min_confidence, "keywords below this confidence (0..1) are ignored",
+      InRange(0, 1));
     v("full_decoding", full_decoding, "also decode full text with the language model");
     v("verify_with_lm", verify_with_lm, "confirm detections with language-model decoding (confidence = posterior)");
     v("verify_with_grammar", verify_with_grammar, "confirm detections with a general-vocabulary word loop");
-    v("cmn", cmn, "PocketSphinx cepstral mean normalisation: current, prior or none");
+    v("cmn", cmn, "PocketSphinx cepstral mean normalisation: current, prior or none",
+      OneOf({"current", "prior", "none"}));
     v("full_utterance", full_utterance, "process each utterance as one block (batch front end)");
     v("verify_acoustic", verify_acoustic, "verify detections: forced alignment vs phone loop, per-frame LLR");
     v("verify_min_llr", verify_min_llr, "minimum per-frame log-likelihood ratio of the verification (PocketSphinx scaled log units)");
     v("verify_phone_lm", verify_phone_lm, "weight the verification phone loop with the en-us phonetic LM");
-    v("verify_pad_s", verify_pad_s, "seconds added to each side of the hit for the verification");
+    v("verify_pad_s", verify_pad_s, "seconds added to each side of the hit for the verification",
+      InRange(0, 1));
     v("min_duration_s", min_duration_s, "shortest accepted detection (s)");
     v("max_duration_s", max_duration_s, "longest accepted detection (s)");
     v("min_utterance_fraction", min_utterance_fraction,
-      "detection must cover at least this fraction of its voice-activity segment (0..1)");
-    v("max_utterance_s", max_utterance_s, "> 0: only utterances at most this long (s) can hold a call; 0: every utterance is "
-      "decoded (safer where other people talk near a caller)");
+      "detection must cover at least this fraction of its voice-activity segment (0..1)",
+      InRange(0, 1));
+    v("max_utterance_s", max_utterance_s,
+      "> 0: only utterances at most this long (s) can hold a call; 0: every utterance is "
+      "decoded (safer where other people talk near a caller)",
+      AtLeast(0));
     v("call_join_s", call_join_s,
-      "with max_utterance_s: segments closer than this (s) count as one call for the length limit (0: off)");
+      "with max_utterance_s: segments closer than this (s) count as one call for the length limit "
+      "(0: off)",
+      InRange(0, 5));
     v("verifier", verifier, "logistic-regression verifier over per-hit features (README)");
   }
   void Validate(common::Validator& check) const {
@@ -94,14 +102,8 @@ struct KeywordOptions {
     check.That(thresholds.size() == 1 || thresholds.size() == keywords.size(), "thresholds",
                "one value, or one per keyword");
     for (double t : thresholds) check.That(t > 0 && t < 1, "thresholds", "must be in (0, 1)");
-    check.InRange("min_confidence", min_confidence, 0, 1);
-    check.OneOf("cmn", cmn, {"current", "prior", "none"});
-    check.InRange("verify_pad_s", verify_pad_s, 0, 1);
     check.That(min_duration_s >= 0 && max_duration_s > min_duration_s, "max_duration_s",
                "needs 0 <= min_duration_s < max_duration_s");
-    check.InRange("min_utterance_fraction", min_utterance_fraction, 0, 1);
-    check.That(max_utterance_s >= 0, "max_utterance_s", "must be >= 0 (0: no limit)");
-    check.InRange("call_join_s", call_join_s, 0, 5);
   }
 };
 

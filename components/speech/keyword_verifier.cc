@@ -49,7 +49,6 @@ void VerifierOptions::Validate(common::Validator& check) const {
                  weights.size() == features.size(),
              "weights", "means, scales and weights need one value per feature");
   for (double s : scales) check.That(s > 0, "scales", "must be > 0");
-  check.InRange("min_probability", min_probability, 0, 1);
 }
 
 double KeywordVerifier::Probability(const HitFeatures& f) const {

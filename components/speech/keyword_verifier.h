@@ -34,7 +34,8 @@ struct VerifierOptions {
     v("scales", scales, "per feature: scale divided before the weight");
     v("weights", weights, "per feature: logistic-regression weight");
     v("bias", bias, "logistic-regression bias");
-    v("min_probability", min_probability, "detections below this verifier probability are dropped");
+    v("min_probability", min_probability, "detections below this verifier probability are dropped",
+      InRange(0, 1));
   }
   void Validate(common::Validator& check) const;
 };

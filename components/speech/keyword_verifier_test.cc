@@ -66,7 +66,7 @@ TEST(KeywordVerifier, FitsAndSeparatesOneFeature) {
   }
   VerifierOptions o = FitKeywordVerifier(x, y, {"tilt_db"});
   common::Validator check;
-  o.Validate(check);
+  common::CheckOptions(o, &check);
   EXPECT_TRUE(check.errors().empty());
   EXPECT_GT(o.weights[0], 0);
   KeywordVerifier v(o);
@@ -87,7 +87,7 @@ TEST(KeywordVerifier, BadOptionsAreClearErrors) {
   VerifierOptions o;
   o.features = {"tilt_db", "nonsense"};
   common::Validator check;
-  o.Validate(check);
+  common::CheckOptions(o, &check);
   ASSERT_FALSE(check.errors().empty());
   EXPECT_THROW(FeatureValue(HitFeatures(), "nonsense"), std::invalid_argument);
   EXPECT_THROW(FitKeywordVerifier({HitFeatures()}, {1}, {"tilt_db"}), std::invalid_argument);  // one class

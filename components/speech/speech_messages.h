@@ -33,13 +33,11 @@ struct SpeechNodeOptions {
     v("device_id", device_id,
       "only this device ('' = the first heard); others are dropped and reported");
     v("max_bridged_gap_s", max_bridged_gap_s,
-      "an audio gap up to this long is counted as bridged, a longer one as a restart");
+      "an audio gap up to this long is counted as bridged, a longer one as a restart",
+      NonNegative());
     v("search", search, "direction kind of the DOA input: auto, 1d, azimuth, azimuth_elevation (as the localiser's "
       "localiser.search; 1d for linear arrays)");
     v("speech", speech, "enhancement, VAD and keyword spotting");
-  }
-  void Validate(common::Validator& check) const {
-    check.NonNegative("max_bridged_gap_s", max_bridged_gap_s);
   }
 };
 

@@ -51,26 +51,25 @@ struct SpeechOptions {
     v("enhancer", enhancer, "beamformer and post-filter");
     v("vad", vad, "voice activity detection");
     v("keywords", keywords, "PocketSphinx keyword spotting");
-    v("max_sources", max_sources, "most sources enhanced at once");
-    v("track_timeout_s", track_timeout_s, "forget a direction not refreshed for this long");
+    v("max_sources", max_sources, "most sources enhanced at once", AtLeast(1));
+    v("track_timeout_s", track_timeout_s, "forget a direction not refreshed for this long",
+      Positive());
     v("max_tracks", max_tracks,
       "tracks kept at once; a new one beyond this evicts the least recently updated (counted)");
-    v("min_track_updates", min_track_updates,
-      "DOA updates a track needs before it is given a beam");
+    v("min_track_updates", min_track_updates, "DOA updates a track needs before it is given a beam",
+      AtLeast(1));
     v("max_doa_ahead_s", max_doa_ahead_s,
-      "DOAs stamped further ahead of the audio than this are dropped (counted)");
+      "DOAs stamped further ahead of the audio than this are dropped (counted)", Positive());
     v("untracked_beam", untracked_beam, "without tracks, listen on one beam (track_id -1, no direction)");
     v("beam_arbitration_s", beam_arbitration_s,
-      "keyword hits go to the tracked direction their speech came from; of hits of several tracks at once "
-      "(one talker leaking into other beams) the best-fitting is kept; hits wait this long (s) (0: off)");
+      "keyword hits go to the tracked direction their speech came from; of hits of several tracks "
+      "at once "
+      "(one talker leaking into other beams) the best-fitting is kept; hits wait this long (s) (0: "
+      "off)",
+      InRange(0, 10));
   }
   void Validate(common::Validator& check) const {
-    check.That(max_sources >= 1, "max_sources", "must be >= 1");
-    check.Positive("track_timeout_s", track_timeout_s);
     check.That(max_tracks >= max_sources, "max_tracks", "must be >= max_sources");
-    check.That(min_track_updates >= 1, "min_track_updates", "must be >= 1");
-    check.Positive("max_doa_ahead_s", max_doa_ahead_s);
-    check.InRange("beam_arbitration_s", beam_arbitration_s, 0, 10);
   }
 };
 

@@ -15,10 +15,6 @@ void TeleopOptions::Validate(common::Validator& check) const {
   check.That(!channel.empty(), "channel", "must not be empty");
   // Below 2 Hz the explorer's 0.5 s dead man would end an override between two messages.
   check.InRange("rate_hz", rate_hz, 2, 100);
-  check.That(repeat >= 1 && repeat <= 100, "repeat",
-             "must be in [1, 100], is " + std::to_string(repeat));
-  check.NonNegative("confirm_timeout_s", confirm_timeout_s);
-  check.Positive("max_drive_s", max_drive_s);
   check.That(operator_id.find('\0') == std::string::npos, "operator_id",
              "must not hold a NUL byte (it could not be signed)");
 }

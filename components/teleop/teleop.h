@@ -36,10 +36,12 @@ struct TeleopOptions {
       "after the last one arrived)");
     v("repeat", repeat,
       "stop, release and the end of a drive are sent this many times, 1/rate_hz apart, "
-      "against datagram loss");
+      "against datagram loss",
+      InRange(1, 100));
     v("confirm_timeout_s", confirm_timeout_s,
-      "wait this long for EXPLORE_STATUS to show the command obeyed (exit 1 if not); 0: no wait");
-    v("max_drive_s", max_drive_s, "longest drive one command may ask for");
+      "wait this long for EXPLORE_STATUS to show the command obeyed (exit 1 if not); 0: no wait",
+      NonNegative());
+    v("max_drive_s", max_drive_s, "longest drive one command may ask for", Positive());
   }
   void Validate(common::Validator& check) const;
 };

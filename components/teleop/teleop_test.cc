@@ -96,7 +96,7 @@ TEST(TeleopTest, OptionsAreValidated) {
   TeleopOptions options;
   options.rate_hz = 1;  // the explorer's 0.5 s dead man would lapse between messages
   common::Validator check;
-  options.Validate(check);
+  common::CheckOptions(options, &check);
   EXPECT_EQ(check.errors().size(), 1u);
 }
 

@@ -28,34 +28,27 @@ struct ViewerNodeOptions {
     v("token_file", token_file, "file holding the access token (one line, at least 8 characters); \"\" serves without a "
       "token");
     v("camera_jpeg_quality", camera_jpeg_quality,
-      "quality of the re-encoded thumbnail when RGB is not JPEG");
-    v("http_threads", http_threads, "connections served at once");
+      "quality of the re-encoded thumbnail when RGB is not JPEG", InRange(1, 100));
+    v("http_threads", http_threads, "connections served at once", InRange(1, 256));
     v("http_connection_limit_s", http_connection_limit_s,
-      "a connection is closed after this long in all");
+      "a connection is closed after this long in all", Positive());
     v("http_io_timeout_s", http_io_timeout_s,
-      "one read or write of a connection waits at most this long");
+      "one read or write of a connection waits at most this long", Positive());
     v("forget_after_s", forget_after_s,
-      "deputies and nodes not heard from this long leave the page");
-    v("max_deputies", max_deputies, "deputies shown at most (the least recently heard goes first)");
-    v("max_commands_per_deputy", max_commands_per_deputy, "commands shown per deputy at most");
+      "deputies and nodes not heard from this long leave the page", Positive());
+    v("max_deputies", max_deputies, "deputies shown at most (the least recently heard goes first)",
+      InRange(1, 1000));
+    v("max_commands_per_deputy", max_commands_per_deputy, "commands shown per deputy at most",
+      InRange(1, 10000));
     v("max_nodes", max_nodes,
-      "nodes (NODE_STATUS) kept at most (the least recently heard goes first)");
-    v("max_items", max_items, "people, sound sources, scan points and path points shown at most");
+      "nodes (NODE_STATUS) kept at most (the least recently heard goes first)", InRange(1, 10000));
+    v("max_items", max_items, "people, sound sources, scan points and path points shown at most",
+      InRange(1, 100000));
     v("max_text_bytes", max_text_bytes,
-      "longest string from the bus shown (names, keywords, messages)");
+      "longest string from the bus shown (names, keywords, messages)", InRange(8, 4096));
   }
   void Validate(common::Validator& check) const {
     check.That(port >= 0 && port < 65536, "port", "must be 0..65535");
-    check.InRange("camera_jpeg_quality", camera_jpeg_quality, 1, 100);
-    check.InRange("http_threads", http_threads, 1, 256);
-    check.Positive("http_connection_limit_s", http_connection_limit_s);
-    check.Positive("http_io_timeout_s", http_io_timeout_s);
-    check.Positive("forget_after_s", forget_after_s);
-    check.InRange("max_deputies", max_deputies, 1, 1000);
-    check.InRange("max_commands_per_deputy", max_commands_per_deputy, 1, 10000);
-    check.InRange("max_nodes", max_nodes, 1, 10000);
-    check.InRange("max_items", max_items, 1, 100000);
-    check.InRange("max_text_bytes", max_text_bytes, 8, 4096);
   }
 };
 

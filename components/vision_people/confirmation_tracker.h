@@ -18,14 +18,9 @@ struct ConfirmationOptions {
   double gate_m = 0.5;   // largest 3D jump between frames for the same track
   template <class V>
   void Visit(V& v) {
-    v("k", k, "frames with a detection needed to report a person");
-    v("n", n, "window of most recent frames (k of n)");
-    v("gate_m", gate_m, "nearest-neighbour association gate in 3D");
-  }
-  void Validate(common::Validator& check) const {
-    check.InRange("n", n, 1, 62);
-    check.InRange("k", k, 1, n);
-    check.Positive("gate_m", gate_m);
+    v("k", k, "frames with a detection needed to report a person", InRange(1, n));
+    v("n", n, "window of most recent frames (k of n)", InRange(1, 62));
+    v("gate_m", gate_m, "nearest-neighbour association gate in 3D", Positive());
   }
 };
 

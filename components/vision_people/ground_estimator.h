@@ -76,65 +76,52 @@ struct GroundOptions {
   template <class V>
   void Visit(V& v) {
     v("refine", refine, "fit the floor per frame (false: always the mounting plane)");
-    v("sample_stride_px", sample_stride_px, "RANSAC samples every n-th pixel in x and y");
-    v("ransac_iterations", ransac_iterations, "RANSAC plane hypotheses per frame");
-    v("ransac_eval_points", ransac_eval_points,
-      "hypotheses are scored on at most this many points");
+    v("sample_stride_px", sample_stride_px, "RANSAC samples every n-th pixel in x and y",
+      InRange(1, 16));
+    v("ransac_iterations", ransac_iterations, "RANSAC plane hypotheses per frame",
+      InRange(1, 10000));
+    v("ransac_eval_points", ransac_eval_points, "hypotheses are scored on at most this many points",
+      InRange(50, 1000000));
     v("inlier_m", inlier_m,
-      "inlier distance (plus 2 sigma of the depth noise at the point's range)");
-    v("below_m", below_m, "points this far (plus 3 sigma) under a hypothesis count against it");
-    v("min_camera_height_m", min_camera_height_m, "lowest accepted camera height above the floor");
+      "inlier distance (plus 2 sigma of the depth noise at the point's range)", Positive());
+    v("below_m", below_m, "points this far (plus 3 sigma) under a hypothesis count against it",
+      Positive());
+    v("min_camera_height_m", min_camera_height_m, "lowest accepted camera height above the floor",
+      Positive());
     v("max_camera_height_m", max_camera_height_m, "highest accepted camera height above the floor");
-    v("max_tilt_deg", max_tilt_deg, "largest accepted tilt of the optical axis (up or down)");
-    v("max_roll_deg", max_roll_deg, "largest accepted roll about the optical axis");
+    v("max_tilt_deg", max_tilt_deg, "largest accepted tilt of the optical axis (up or down)",
+      InRange(0, 80));
+    v("max_roll_deg", max_roll_deg, "largest accepted roll about the optical axis", InRange(0, 80));
     v("min_inlier_fraction", min_inlier_fraction,
-      "fewer floor points (fraction of the sample): no floor found in the frame");
+      "fewer floor points (fraction of the sample): no floor found in the frame", InRange(0, 1));
     v("band_m", band_m,
-      "voxels within this distance of the RANSAC plane are floor candidates for the polish");
+      "voxels within this distance of the RANSAC plane are floor candidates for the polish",
+      Positive());
     v("min_voxels", min_voxels, "minimum floor voxels for the polish");
     v("max_tilt_change_deg", max_tilt_change_deg,
-      "largest accepted tilt of the polished plane from the RANSAC plane");
+      "largest accepted tilt of the polished plane from the RANSAC plane", Positive());
     v("max_offset_change_m", max_offset_change_m,
-      "largest accepted height change of the polished plane");
+      "largest accepted height change of the polished plane", Positive());
     v("removal_m", removal_m,
-      "points closer than this to the floor are removed (Munaro: voxel size)");
+      "points closer than this to the floor are removed (Munaro: voxel size)", Positive());
     v("smoothing", smoothing,
-      "weight of a new frame's floor in the tracked floor (1: no smoothing)");
+      "weight of a new frame's floor in the tracked floor (1: no smoothing)", InRange(0.01, 1));
     v("reset_height_m", reset_height_m,
-      "a camera height jump larger than this restarts the floor track");
+      "a camera height jump larger than this restarts the floor track", Positive());
     v("reset_angle_deg", reset_angle_deg,
-      "a floor tilt jump larger than this restarts the floor track");
+      "a floor tilt jump larger than this restarts the floor track", Positive());
     v("reset_gap_s", reset_gap_s,
-      "frames further apart in time (or out of order) restart the floor track");
+      "frames further apart in time (or out of order) restart the floor track", Positive());
     v("established_frames", established_frames,
       "frames after which the tracked floor is trusted over the mounting file");
     v("mismatch_height_m", mismatch_height_m,
-      "tracked vs configured camera height: reported beyond this");
+      "tracked vs configured camera height: reported beyond this", Positive());
     v("mismatch_angle_deg", mismatch_angle_deg,
-      "tracked vs configured floor angle: reported beyond this");
+      "tracked vs configured floor angle: reported beyond this", Positive());
   }
   void Validate(common::Validator& check) const {
-    check.InRange("sample_stride_px", sample_stride_px, 1, 16);
-    check.InRange("ransac_iterations", ransac_iterations, 1, 10000);
-    check.InRange("ransac_eval_points", ransac_eval_points, 50, 1000000);
-    check.Positive("inlier_m", inlier_m);
-    check.Positive("below_m", below_m);
-    check.Positive("min_camera_height_m", min_camera_height_m);
     check.That(max_camera_height_m > min_camera_height_m, "max_camera_height_m",
                "must exceed min_camera_height_m");
-    check.InRange("max_tilt_deg", max_tilt_deg, 0, 80);
-    check.InRange("max_roll_deg", max_roll_deg, 0, 80);
-    check.InRange("min_inlier_fraction", min_inlier_fraction, 0, 1);
-    check.Positive("band_m", band_m);
-    check.Positive("removal_m", removal_m);
-    check.Positive("max_tilt_change_deg", max_tilt_change_deg);
-    check.Positive("max_offset_change_m", max_offset_change_m);
-    check.InRange("smoothing", smoothing, 0.01, 1);
-    check.Positive("reset_height_m", reset_height_m);
-    check.Positive("reset_angle_deg", reset_angle_deg);
-    check.Positive("reset_gap_s", reset_gap_s);
-    check.Positive("mismatch_height_m", mismatch_height_m);
-    check.Positive("mismatch_angle_deg", mismatch_angle_deg);
   }
 };
 

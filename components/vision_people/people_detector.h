@@ -83,13 +83,13 @@ struct DepthShapeOptions {
   double accept = 0.5;                  // depth-only decision threshold on the shape score
   template <class V>
   void Visit(V& v) {
-    v("min_height_m", min_height_m, "lowest standing person");
+    v("min_height_m", min_height_m, "lowest standing person", Positive());
     v("max_height_m", max_height_m, "tallest standing person");
     v("height_margin_m", height_margin_m, "soft margin on the height limits");
     v("max_bottom_m", max_bottom_m,
       "lowest cluster point above the floor when the feet are in view");
     v("min_visible_fraction", min_visible_fraction,
-      "depth-only: fraction of the head-to-floor span that must be in the image");
+      "depth-only: fraction of the head-to-floor span that must be in the image", InRange(0, 1));
     v("min_width_m", min_width_m, "narrowest torso");
     v("max_width_m", max_width_m, "widest torso");
     v("max_depth_extent_m", max_depth_extent_m, "largest extent along the viewing ray");
@@ -112,15 +112,11 @@ struct DepthShapeOptions {
       "half (a lap), the shoulders are looked for beyond head_radius_m in every direction (seen "
       "side-on they lie along the viewing ray)");
     v("max_head_width_m", max_head_width_m, "widest head across the viewing ray (+0.15 m: zero)");
-    v("min_fill", min_fill, "smallest occupied fraction of the 6 cm height slices");
-    v("accept", accept, "depth-only: accept when the shape score reaches this");
+    v("min_fill", min_fill, "smallest occupied fraction of the 6 cm height slices", InRange(0, 1));
+    v("accept", accept, "depth-only: accept when the shape score reaches this", InRange(0, 1));
   }
   void Validate(common::Validator& check) const {
-    check.Positive("min_height_m", min_height_m);
     check.That(max_height_m > min_height_m, "max_height_m", "must exceed min_height_m");
-    check.InRange("accept", accept, 0, 1);
-    check.InRange("min_fill", min_fill, 0, 1);
-    check.InRange("min_visible_fraction", min_visible_fraction, 0, 1);
   }
 };
 
@@ -152,15 +148,13 @@ struct LyingOptions {
     v("max_width_m", max_width_m, "widest lying body");
     v("min_relief_m", min_relief_m,
       "a body's top varies at least this much along it (a box's does not)");
-    v("min_fill", min_fill, "occupied fraction of the 0.1 m bins along the body");
-    v("accept", accept, "accept when the lying shape score reaches this");
+    v("min_fill", min_fill, "occupied fraction of the 0.1 m bins along the body", InRange(0, 1));
+    v("accept", accept, "accept when the lying shape score reaches this", InRange(0, 1));
   }
   void Validate(common::Validator& check) const {
     check.That(max_top_m > min_top_m, "max_top_m", "must exceed min_top_m");
     check.That(max_length_m > min_length_m, "max_length_m", "must exceed min_length_m");
     check.That(max_width_m > min_width_m, "max_width_m", "must exceed min_width_m");
-    check.InRange("min_fill", min_fill, 0, 1);
-    check.InRange("accept", accept, 0, 1);
   }
 };
 
@@ -179,28 +173,23 @@ struct ColorOptions {
   double accept = 0.5;            // combined confidence to accept
   template <class V>
   void Visit(V& v) {
-    v("hog", hog, "colour classifier: opencv, pcl or none");
+    v("hog", hog, "colour classifier: opencv, pcl or none", OneOf({"opencv", "pcl", "none"}));
     v("pcl_svm_file", pcl_svm_file,
       "PCL's trained HOG SVM (for hog: pcl), relative to the working directory");
     v("hog_threshold", hog_threshold, "SVM score where the colour cue gives probability 0.5");
-    v("hog_scale", hog_scale, "SVM score units per logistic unit");
+    v("hog_scale", hog_scale, "SVM score units per logistic unit", Positive());
     v("search_steps", search_steps,
-      "HOG windows tried around the theoretical box: +-steps of 1/8 window in x, y and scale");
+      "HOG windows tried around the theoretical box: +-steps of 1/8 window in x, y and scale",
+      InRange(0, 4));
     v("dark_mean", dark_mean, "image (or patch) grey mean below which colour is unusable");
     v("min_contrast", min_contrast, "image (or patch) grey std below which colour is unusable");
     v("max_saturated", max_saturated,
       "fraction of saturated pixels above which colour is unusable (glare)");
     v("color_weight", color_weight,
-      "weight of HOG in the combined confidence (depth gets the rest)");
+      "weight of HOG in the combined confidence (depth gets the rest)", InRange(0, 1));
     v("min_depth_score", min_depth_score, "with colour: lowest depth shape score still considered");
-    v("accept", accept, "with colour: accept when the combined confidence reaches this");
-  }
-  void Validate(common::Validator& check) const {
-    check.OneOf("hog", hog, {"opencv", "pcl", "none"});
-    check.Positive("hog_scale", hog_scale);
-    check.InRange("color_weight", color_weight, 0, 1);
-    check.InRange("accept", accept, 0, 1);
-    check.InRange("search_steps", search_steps, 0, 4);
+    v("accept", accept, "with colour: accept when the combined confidence reaches this",
+      InRange(0, 1));
   }
 };
 
@@ -216,19 +205,14 @@ struct NoiseOptions {
   double body_thickness_m = 0.25;
   template <class V>
   void Visit(V& v) {
-    v("depth_coeff", depth_coeff, "depth noise: sigma_z = depth_coeff * z^2 (1/m)");
-    v("pixel_sigma", pixel_sigma, "lateral noise in pixels");
+    v("depth_coeff", depth_coeff, "depth noise: sigma_z = depth_coeff * z^2 (1/m)", NonNegative());
+    v("pixel_sigma", pixel_sigma, "lateral noise in pixels", NonNegative());
     v("body_sigma_m", body_sigma_m,
-      "uncertainty of the body centre about the visible surface centroid");
+      "uncertainty of the body centre about the visible surface centroid", NonNegative());
     v("body_thickness_m", body_thickness_m,
       "front-to-back thickness of a body: the position is (pi/8) of it beyond the visible "
-      "surface's centroid, along the line of sight on the floor (0: the centroid)");
-  }
-  void Validate(common::Validator& check) const {
-    check.InRange("body_thickness_m", body_thickness_m, 0, 1);
-    check.NonNegative("depth_coeff", depth_coeff);
-    check.NonNegative("pixel_sigma", pixel_sigma);
-    check.NonNegative("body_sigma_m", body_sigma_m);
+      "surface's centroid, along the line of sight on the floor (0: the centroid)",
+      InRange(0, 1));
   }
 };
 
@@ -256,13 +240,14 @@ struct DetectorOptions {
   NoiseOptions noise;
   template <class V>
   void Visit(V& v) {
-    v("voxel_size_m", voxel_size_m, "voxel grid edge (Munaro: 0.06)");
-    v("pixel_stride", pixel_stride, "take every n-th pixel in x and y (1: all)");
+    v("voxel_size_m", voxel_size_m, "voxel grid edge (Munaro: 0.06)", Positive());
+    v("pixel_stride", pixel_stride, "take every n-th pixel in x and y (1: all)", InRange(1, 8));
     v("min_range_m", min_range_m, "nearer points are ignored");
-    v("max_range_m", max_range_m, "farther points are ignored (along the floor)");
-    v("max_lateral_m", max_lateral_m, "points farther sideways are ignored");
-    v("top_cut_m", top_cut_m, "points higher above the prior floor are ignored");
-    v("cluster_tolerance_m", cluster_tolerance_m, "Euclidean clustering distance (2 x voxel)");
+    v("max_range_m", max_range_m, "farther points are ignored (along the floor)", Positive());
+    v("max_lateral_m", max_lateral_m, "points farther sideways are ignored", Positive());
+    v("top_cut_m", top_cut_m, "points higher above the prior floor are ignored", Positive());
+    v("cluster_tolerance_m", cluster_tolerance_m, "Euclidean clustering distance (2 x voxel)",
+      Positive());
     v("min_cluster_voxels", min_cluster_voxels, "smallest cluster");
     v("max_cluster_voxels", max_cluster_voxels, "largest cluster");
     v("split_walls", split_walls,
@@ -270,8 +255,8 @@ struct DetectorOptions {
       "(a person in front of a wall)");
     v("merge_distance_m", merge_distance_m,
       "merge clusters whose ground-plane centroids are closer");
-    v("min_head_distance_m", min_head_distance_m,
-      "height-map maxima closer than this are one head");
+    v("min_head_distance_m", min_head_distance_m, "height-map maxima closer than this are one head",
+      Positive());
     v("min_head_dip_m", min_head_dip_m, "the height map must dip this much between two heads");
     v("min_subcluster_voxels", min_subcluster_voxels, "smallest sub-cluster");
     v("candidate_min_height_m", candidate_min_height_m, "lowest candidate top above the floor");
@@ -283,16 +268,9 @@ struct DetectorOptions {
     v("noise", noise, "depth noise model for the position covariance");
   }
   void Validate(common::Validator& check) const {
-    check.Positive("voxel_size_m", voxel_size_m);
-    check.InRange("pixel_stride", pixel_stride, 1, 8);
-    check.Positive("max_range_m", max_range_m);
     check.That(max_range_m > min_range_m, "max_range_m", "must exceed min_range_m");
-    check.Positive("max_lateral_m", max_lateral_m);
-    check.Positive("top_cut_m", top_cut_m);
-    check.Positive("cluster_tolerance_m", cluster_tolerance_m);
     check.That(cluster_tolerance_m <= 2 * voxel_size_m + 1e-9, "cluster_tolerance_m",
                "at most 2 x voxel_size_m (the neighbourhood searched is +-2 voxels)");
-    check.Positive("min_head_distance_m", min_head_distance_m);
     check.That(candidate_max_height_m > candidate_min_height_m, "candidate_max_height_m",
                "must exceed candidate_min_height_m");
   }

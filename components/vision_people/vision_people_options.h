@@ -43,13 +43,17 @@ struct VisionPeopleOptions {
     v("ground_coefficients", ground_coefficients,
       "fixed floor a b c d in the camera frame ([] = from robot_config)");
     v("camera_height_m", camera_height_m,
-      "camera height above the floor (> 0: used instead of robot_config's mounting)");
+      "camera height above the floor (> 0: used instead of robot_config's mounting)",
+      NonNegative());
     v("camera_tilt_down_deg", camera_tilt_down_deg,
-      "with camera_height_m: optical axis below the horizon, degrees (negative: up)");
+      "with camera_height_m: optical axis below the horizon, degrees (negative: up)",
+      InRange(-89, 89));
     v("camera_roll_deg", camera_roll_deg,
-      "with camera_height_m: roll about the optical axis, degrees");
-    v("max_pair_dt_s", max_pair_dt_s, "depth and colour closer in time than this are a pair");
-    v("color_wait_s", color_wait_s, "how long (message time) a depth frame waits for its colour");
+      "with camera_height_m: roll about the optical axis, degrees", InRange(-89, 89));
+    v("max_pair_dt_s", max_pair_dt_s, "depth and colour closer in time than this are a pair",
+      NonNegative());
+    v("color_wait_s", color_wait_s, "how long (message time) a depth frame waits for its colour",
+      NonNegative());
     v("require_color", require_color,
       "drop depth frames without colour instead of going depth-only");
     v("detector", detector, "people detector");
@@ -60,11 +64,6 @@ struct VisionPeopleOptions {
   void Validate(common::Validator& check) const {
     check.That(ground_coefficients.empty() || ground_coefficients.size() == 4,
                "ground_coefficients", "must be empty or a b c d");
-    check.NonNegative("camera_height_m", camera_height_m);
-    check.InRange("camera_tilt_down_deg", camera_tilt_down_deg, -89, 89);
-    check.InRange("camera_roll_deg", camera_roll_deg, -89, 89);
-    check.NonNegative("max_pair_dt_s", max_pair_dt_s);
-    check.NonNegative("color_wait_s", color_wait_s);
   }
 };
 

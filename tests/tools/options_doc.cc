@@ -73,7 +73,8 @@ std::string Regenerate(const std::string& text, const std::string& path,
       out += text.substr(line_end + 1, close - line_end - 1);
     } else {
       out += "Keys and values of `config/" + name +
-             ".yaml`, with each key's help (generated from the options: `make docs`).\n\n";
+             ".yaml`, with each key's valid values and help (generated from the options: `make "
+             "docs`).\n\n";
       out += config->second->markdown((config_dir / (name + ".yaml")).string());
     }
     pos = close;

@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
       k.verify_acoustic = verify == "acoustic";
       k.min_confidence = min_conf;
       common::Validator check;
-      k.Validate(check);
+      common::CheckOptions(k, &check);
       if (!check.errors().empty())
         throw common::ArgError("invalid keyword settings: " + check.errors().front());
       k.verify_with_lm = verify == "lm";
