@@ -24,7 +24,7 @@
 // Supported field types: bool, int, int64_t, double, std::string, std::vector of
 // double/int/std::string, and nested structs with Visit() (and optionally Validate()).
 // Rules: Positive(), NonNegative(), AtLeast(x), InRange(lo, hi) for numbers (a list's every
-// element), OneOf({...}) for strings. The loader checks them with Validate(), and
+// element), OneOf({...}) for strings. The loader checks them beside Validate(), and
 // --print-config and the README tables show them.
 
 #include <cmath>
