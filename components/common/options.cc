@@ -44,27 +44,37 @@ std::string OptionRule::Describe() const {
 namespace common {
 
 void Validator::Obeys(const std::string& key, double value, const OptionRule& rule) {
+  using Kind = OptionRule::Kind;
+  bool ok = std::isfinite(value);
   switch (rule.kind()) {
-    case OptionRule::Kind::kNone:
+    case Kind::kNone:
       return;
-    case OptionRule::Kind::kPositive:
-      return Positive(key, value);
-    case OptionRule::Kind::kNonNegative:
-      return NonNegative(key, value);
-    case OptionRule::Kind::kAtLeast:
-      return AtLeast(key, value, rule.lo());
-    case OptionRule::Kind::kInRange:
-      return InRange(key, value, rule.lo(), rule.hi());
-    case OptionRule::Kind::kOneOf:
+    case Kind::kPositive:
+      ok = ok && value > 0;
+      break;
+    case Kind::kNonNegative:
+      ok = ok && value >= 0;
+      break;
+    case Kind::kAtLeast:
+      ok = ok && value >= rule.lo();
+      break;
+    case Kind::kInRange:
+      ok = ok && value >= rule.lo() && value <= rule.hi();
+      break;
+    case Kind::kOneOf:
       return That(false, key, "a number cannot be " + rule.Describe());
   }
+  That(ok, key, "must be " + rule.Describe() + ", is " + Number(value));
 }
 
 void Validator::Obeys(const std::string& key, const std::string& value, const OptionRule& rule) {
-  if (rule.kind() == OptionRule::Kind::kOneOf) return OneOf(key, value, rule.choices());
-  if (rule.kind() != OptionRule::Kind::kNone) {
-    That(false, key, "a text cannot be " + rule.Describe());
+  if (rule.kind() == OptionRule::Kind::kNone) return;
+  if (rule.kind() != OptionRule::Kind::kOneOf) {
+    return That(false, key, "a text cannot be " + rule.Describe());
   }
+  const auto& choices = rule.choices();
+  That(std::find(choices.begin(), choices.end(), value) != choices.end(), key,
+       "must be " + rule.Describe() + ", is '" + value + "'");
 }
 
 namespace options_internal {

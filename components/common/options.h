@@ -84,30 +84,19 @@ class Validator {
   void That(bool ok, const std::string& key, const std::string& what) {
     if (!ok) errors_.push_back(prefix_ + key + ": " + what);
   }
-  void Positive(const std::string& key, double value) {
-    That(std::isfinite(value) && value > 0, key, "must be > 0, is " + Str(value));
-  }
+  void Positive(const std::string& key, double value) { Obeys(key, value, sarmap::Positive()); }
   void NonNegative(const std::string& key, double value) {
-    That(std::isfinite(value) && value >= 0, key, "must be >= 0, is " + Str(value));
+    Obeys(key, value, sarmap::NonNegative());
   }
   void InRange(const std::string& key, double value, double lo, double hi) {
-    That(std::isfinite(value) && value >= lo && value <= hi, key,
-         "must be in [" + Str(lo) + ", " + Str(hi) + "], is " + Str(value));
+    Obeys(key, value, sarmap::InRange(lo, hi));
   }
   void OneOf(const std::string& key, const std::string& value,
              const std::vector<std::string>& allowed) {
-    bool ok = false;
-    std::string list;
-    for (const auto& a : allowed) {
-      ok = ok || a == value;
-      list += (list.empty() ? "" : ", ") + a;
-    }
-    That(ok, key, "must be one of {" + list + "}, is '" + value + "'");
+    Obeys(key, value, sarmap::OneOf(allowed));
   }
-  void AtLeast(const std::string& key, double value, double lo) {
-    That(std::isfinite(value) && value >= lo, key, "must be >= " + Str(lo) + ", is " + Str(value));
-  }
-  // The value against its declared rule (numbers and lists of numbers; OneOf: strings).
+  // The value against a rule: "must be <rule>, is <value>" when it breaks it (numbers and lists
+  // of numbers; OneOf: strings).
   void Obeys(const std::string& key, double value, const OptionRule& rule);
   void Obeys(const std::string& key, const std::string& value, const OptionRule& rule);
   template <class T>
@@ -119,11 +108,6 @@ class Validator {
   const std::string& prefix() const { return prefix_; }
 
  private:
-  static std::string Str(double v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-  }
   std::string prefix_;
   std::vector<std::string> errors_;
 };
