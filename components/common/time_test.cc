@@ -4,6 +4,8 @@
 
 #include <vector>
 
+#include "common/stamp_decimator.h"
+
 namespace sarmap {
 namespace common {
 namespace {
@@ -80,6 +82,25 @@ TEST(BusyLimiterTest, KeepsAGrowingJobToItsFractionOfTheWallTime) {
   BusyLimiter unlimited(1.0);
   unlimited.Ran(0.0, 3.0);
   EXPECT_TRUE(unlimited.Allowed(3.0));
+}
+
+// A 30 Hz camera with jittered stamps thinned to 15 Hz keeps every second frame; 0 keeps all;
+// a stamp going back is taken and starts again.
+TEST(StampDecimatorTest, KeepsEverySecondFrameOfAJitteredThirtyHertzStream) {
+  StampDecimator half(15.0);
+  const Utime jitter_us[] = {0, 3000, -2500, 1500, -3000, 2000, 0, -1000};
+  std::vector<int> kept;
+  for (int i = 0; i < 8; ++i) {
+    if (half.Take(1000000 + i * 33333 + jitter_us[i])) kept.push_back(i);
+  }
+  EXPECT_EQ(kept, (std::vector<int>{0, 2, 4, 6}));
+  EXPECT_EQ(half.skipped(), 4);
+  EXPECT_TRUE(half.Take(500000));  // back in time
+  EXPECT_FALSE(half.Take(520000));
+
+  StampDecimator all(0.0);
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(all.Take(1000000 + i * 1000));
+  EXPECT_EQ(all.skipped(), 0);
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include "common/node.h"
 #include "common/node_main.h"
 #include "common/robot_config.h"
+#include "common/stamp_decimator.h"
 #include "common/time.h"
 #include "depth/depth_node_options.h"
 #include "depth/depth_to_scan.h"
@@ -52,9 +53,15 @@ class Publisher {
         base_from_camera_(base_from_camera),
         depth_pub_(node->Advertise<image_t>(o.depth_channel)),
         rgb_pub_(node->Advertise<image_t>(o.rgb_channel)),
-        scan_pub_(node->Advertise<laser_scan_t>(o.scan_channel)) {}
+        scan_pub_(node->Advertise<laser_scan_t>(o.scan_channel)),
+        scan_decimator_(o.scan_max_rate_hz) {}
 
-  void Publish(const Frame& f) {
+  // Whether the frame stamped `utime` becomes a SCAN (scan_max_rate_hz); a frame that does not
+  // is counted in scans_skipped().
+  bool ScanDue(common::Utime utime) { return scan_decimator_.Take(utime); }
+
+  // Publishes the frame's images (unless they came from the bus) and, with `with_scan`, its SCAN.
+  void Publish(const Frame& f, bool with_scan) {
     if (!converter_ || converter_->intrinsics().width != f.intrinsics.width ||
         converter_->intrinsics().height != f.intrinsics.height) {
       converter_ = std::make_unique<depth::DepthToScan>(options_.ScanOptions(), f.intrinsics,
@@ -82,6 +89,8 @@ class Publisher {
                                                options_.jpeg_quality);
       rgb_pub_.Publish(&rgb_msg);
     }
+    ++frames_;
+    if (!with_scan) return;
     const depth::PlanarScan s = converter_->Convert(f.depth_mm.data(), f.depth_unit_m);
     laser_scan_t scan{};
     scan.header.utime = f.utime;
@@ -97,9 +106,9 @@ class Publisher {
     scan.intensities = s.visible_from_m;
     scan.num_intensities = static_cast<int32_t>(scan.intensities.size());
     scan_pub_.Publish(&scan);
-    ++frames_;
   }
   int64_t frames() const { return frames_; }
+  int64_t scans_skipped() const { return scan_decimator_.skipped(); }
 
  private:
   depth::DepthNodeOptions options_;
@@ -107,6 +116,7 @@ class Publisher {
   common::Node::Publisher<image_t> depth_pub_, rgb_pub_;
   common::Node::Publisher<laser_scan_t> scan_pub_;
   std::unique_ptr<depth::DepthToScan> converter_;
+  common::StampDecimator scan_decimator_;
   int64_t frames_ = 0;
 };
 
@@ -256,7 +266,7 @@ int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
         f.rgb_height = c.rows;
       }
     }
-    pub->Publish(f);
+    pub->Publish(f, pub->ScanDue(f.utime));
     node->SpinOnce(0.0);
     next += period;
     const double wait = next - common::SteadySeconds();
@@ -267,7 +277,8 @@ int RunFolder(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
                              std::to_string(unreadable) + " of " + std::to_string(images.size()) +
                              " images unreadable)");
   }
-  SARMAP_LOG(INFO) << "published " << pub->frames() << " frames";
+  SARMAP_LOG(INFO) << "published " << pub->frames() << " frames (" << pub->scans_skipped()
+                   << " without a scan: scan_max_rate_hz)";
   return 0;
 }
 
@@ -338,10 +349,11 @@ int RunOpenNI(const depth::DepthNodeOptions& o, common::Node* node, Publisher* p
       f.rgb_width = color_frame.getWidth();
       f.rgb_height = color_frame.getHeight();
     }
-    pub->Publish(f);
+    pub->Publish(f, pub->ScanDue(f.utime));
     node->SpinOnce(0.0);
   }
-  SARMAP_LOG(INFO) << "published " << pub->frames() << " frames";
+  SARMAP_LOG(INFO) << "published " << pub->frames() << " frames (" << pub->scans_skipped()
+                   << " without a scan: scan_max_rate_hz)";
   return 0;
 }
 
@@ -351,6 +363,7 @@ int RunLcm(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub)
   node->Subscribe<image_t>(
       o.depth_channel,
       [&](const image_t& m, const common::ReceiveInfo&) {
+        if (!pub->ScanDue(m.header.utime)) return;  // not decoded either
         Frame f;
         std::string error;
         if (!common::DecodeDepthImage(m, &f.depth_mm, &error)) {
@@ -367,7 +380,7 @@ int RunLcm(const depth::DepthNodeOptions& o, common::Node* node, Publisher* pub)
         f.intrinsics.cy = m.intrinsics.cy;
         f.depth_unit_m = m.depth_unit_m;
         f.republish_images = false;
-        pub->Publish(f);
+        pub->Publish(f, true);
       },
       2);
   return node->Run();

@@ -38,6 +38,7 @@ struct DepthNodeOptions {
   int row_step = 2;
   double range_noise_k = 0;
   double surface_window_sigmas = 6;
+  double scan_max_rate_hz = 0;  // SCANs per second of frame stamps at most (0: one per frame)
   // The scan part, for depth::DepthToScan.
   DepthToScanOptions ScanOptions() const {
     DepthToScanOptions o;
@@ -96,6 +97,10 @@ struct DepthNodeOptions {
       NonNegative());
     v("surface_window_sigmas", surface_window_sigmas,
       "the nearest surface: pixels within this many sigma of the beam's closest pixel", Positive());
+    v("scan_max_rate_hz", scan_max_rate_hz,
+      "make a SCAN from at most this many frames per second (by their stamps; images are still "
+      "published from every frame); 0: every frame",
+      NonNegative());
   }
   void Validate(common::Validator& c) const {
     c.That(max_height_m > min_height_m, "max_height_m", "must be > min_height_m");

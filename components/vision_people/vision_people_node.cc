@@ -16,13 +16,15 @@ VisionPeopleNode::VisionPeopleNode(const VisionPeopleOptions& options, common::N
                 MakeHogClassifier(options.detector.color)),
       tracker_(options.confirmation),
       assembler_(options.max_pair_dt_s, options.color_wait_s, options.require_color),
+      decimator_(options.max_rate_hz),
       publisher_(node->Advertise<people_detections_t>(options.output_channel)),
       gates_(options.stamp_gate),
       configured_(MountingFromGround(InitialGround(options))),
       last_message_s_(node->Now()),
       quiet_s_(std::max(1.0, 5 * options.color_wait_s)) {  // a loaded machine may lag 0.2 s
   node->AddTimer(0.1, [this] { FlushWhenQuiet(); });
-  node->SetStatusMessage("frames 0 bad 0 people 0 colour none input_warnings 0 floor none");
+  node->SetStatusMessage(
+      "frames 0 bad 0 people 0 colour none input_warnings 0 skipped 0 floor none");
   node->Subscribe<image_t>(
       options_.depth_channel,
       [this](const image_t& m, const common::ReceiveInfo& info) {
@@ -78,6 +80,7 @@ void VisionPeopleNode::Process() {
     }
   }
   for (RgbdFrame& frame : ready_) {
+    if (!decimator_.Take(frame.utime)) continue;
     std::string error;
     const DetectionResult result = detector_.Detect(frame, &error);
     Report(frame, result, error);
@@ -91,7 +94,7 @@ void VisionPeopleNode::Process() {
   std::ostringstream status;
   status << "frames " << frames_ << " bad " << bad_frames_ << " people " << published_people_
          << " colour " << last_color_state_ << " input_warnings " << assembler_.total_warnings()
-         << " " << floor_status_;
+         << " skipped " << decimator_.skipped() << " " << floor_status_;
   node_->SetStatusMessage(status.str());
 }
 

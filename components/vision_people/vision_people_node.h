@@ -11,6 +11,7 @@
 
 #include "common/logging.h"
 #include "common/node.h"
+#include "common/stamp_decimator.h"
 #include "common/stamp_gate.h"
 #include "vision_people/confirmation_tracker.h"
 #include "vision_people/frame_assembler.h"
@@ -35,6 +36,8 @@ class VisionPeopleNode {
   void set_frame_observer(FrameObserver observer) { observer_ = std::move(observer); }
 
   int64_t frames() const { return frames_; }
+  // Frames left out to keep to max_rate_hz.
+  int64_t skipped_frames() const { return decimator_.skipped(); }
   int64_t bad_frames() const { return bad_frames_; }
   // Frame-pairing warnings by kind (FrameAssembler::warnings).
   const std::map<std::string, int64_t>& pairing_warnings() const { return assembler_.warnings(); }
@@ -55,6 +58,7 @@ class VisionPeopleNode {
   PeopleDetector detector_;
   ConfirmationTracker tracker_;
   FrameAssembler assembler_;
+  common::StampDecimator decimator_;
   common::Node::Publisher<people_detections_t> publisher_;
   common::StampGates gates_;
   common::RateLimiter warn_limit_{2.0};

@@ -1,5 +1,5 @@
 // VisionPeopleNode in-process over memq://: synthetic dark DEPTH + RGB in, people confirmed over
-// k of n frames out, a frame stamped far ahead dropped.
+// k of n frames out, a frame stamped far ahead dropped, a 30 Hz camera thinned to max_rate_hz.
 #include <gtest/gtest.h>
 
 #include <vector>
@@ -83,6 +83,23 @@ TEST(VisionPeopleNodeTest, AFrameStampedFarAheadIsDroppedAndLaterFramesGoOn) {
   ASSERT_EQ(bus.people.size(), 4u);
   EXPECT_EQ(bus.people.back().num_detections, 1);
   EXPECT_EQ(bus.people.back().header.utime, t0 + 4 * 33333);
+}
+
+// A 30 Hz camera with max_rate_hz 15: every second frame is detected in and published, the
+// others are skipped and counted.
+TEST(VisionPeopleNodeTest, MaxRateKeepsEverySecondFrameOfAThirtyHertzCamera) {
+  Bus bus;
+  VisionPeopleOptions options = Options();
+  options.max_rate_hz = 15;
+  VisionPeopleNode adapter(options, &bus.node);
+  const int64_t t0 = 1700000000000000;
+  for (int i = 0; i < 6; ++i) bus.Send(i, t0 + i * 33333);
+  EXPECT_EQ(adapter.frames(), 3);
+  EXPECT_EQ(adapter.skipped_frames(), 3);
+  ASSERT_EQ(bus.people.size(), 3u);
+  for (size_t i = 0; i < bus.people.size(); ++i)
+    EXPECT_EQ(bus.people[i].header.utime, t0 + static_cast<int64_t>(2 * i) * 33333);
+  EXPECT_EQ(bus.people.back().num_detections, 1);  // confirmed over 2 of the 3 frames detected in
 }
 
 }  // namespace

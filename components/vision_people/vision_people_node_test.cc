@@ -46,10 +46,11 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
   const std::string src = SARMAP_SOURCE_DIR;
   const std::string log =
       ::testing::TempDir() + "/vision_people_node_" + std::to_string(getpid()) + ".log";
-  testing::Process node({"sarmap-vision-people", "--config", src + "/config/vision_people.yaml",
-                         "--set", "robot_config=" + src + "/config/robot.yaml", "--set",
-                         "confirmation.k=2", "--set", "confirmation.n=3"},
-                        log);
+  testing::Process node(
+      {"sarmap-vision-people", "--config", src + "/config/vision_people.yaml", "--set",
+       "robot_config=" + src + "/config/robot.yaml", "--set", "confirmation.k=2", "--set",
+       "confirmation.n=3", "--set", "max_rate_hz=0"},  // every frame of the 30 Hz stream
+      log);
   lcm::LCM lcm(common::DefaultLcmUrl());
   ASSERT_TRUE(lcm.good());
   Sink sink;

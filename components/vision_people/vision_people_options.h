@@ -30,6 +30,7 @@ struct VisionPeopleOptions {
   double max_pair_dt_s = 0.02;      // depth and colour closer than this in utime form a pair
   double color_wait_s = 0.1;        // a depth frame waits this long (message time) for its colour
   bool require_color = false;       // false: depth frames without colour are processed depth-only
+  double max_rate_hz = 0;           // frames processed per second of stamps at most (0: every one)
   DetectorOptions detector;
   ConfirmationOptions confirmation;
   common::StampGateOptions stamp_gate;  // DEPTH and RGB, each on its own clock
@@ -56,6 +57,10 @@ struct VisionPeopleOptions {
       NonNegative());
     v("require_color", require_color,
       "drop depth frames without colour instead of going depth-only");
+    v("max_rate_hz", max_rate_hz,
+      "process at most this many frames per second (by their stamps; the rest are skipped and "
+      "counted); 0: every frame",
+      NonNegative());
     v("detector", detector, "people detector");
     v("confirmation", confirmation, "k-of-n multi-frame confirmation");
     v("stamp_gate", stamp_gate,
