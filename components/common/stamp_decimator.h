@@ -2,6 +2,7 @@
 // Thinning a sensor stream by its stamps, so that a replay thins it exactly as the live node did.
 
 #include <cstdint>
+#include <optional>
 
 #include "common/time.h"
 
@@ -18,20 +19,18 @@ class StampDecimator {
   explicit StampDecimator(double max_rate_hz)
       : min_gap_us_(max_rate_hz > 0 ? SecondsToUtime(0.9 / max_rate_hz) : 0) {}
   bool Take(Utime utime) {
-    if (taken_ && utime >= last_ && utime - last_ < min_gap_us_) {
+    if (last_taken_ && utime >= *last_taken_ && utime - *last_taken_ < min_gap_us_) {
       ++skipped_;
       return false;
     }
-    taken_ = true;
-    last_ = utime;
+    last_taken_ = utime;
     return true;
   }
   int64_t skipped() const { return skipped_; }
 
  private:
   Utime min_gap_us_;
-  bool taken_ = false;
-  Utime last_ = 0;
+  std::optional<Utime> last_taken_;  // none before the first item
   int64_t skipped_ = 0;
 };
 
