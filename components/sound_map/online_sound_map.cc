@@ -733,8 +733,23 @@ std::vector<OnlineSoundMap::Source> OnlineSoundMap::Sources(int64_t now) const {
   }
   std::vector<Source> kept;
   kept.reserve(out.size());
-  for (size_t j = 0; j < out.size(); ++j)
-    if (j >= num_ekf || !superseded[j]) kept.push_back(std::move(out[j]));
+  for (size_t j = 0; j < out.size(); ++j) {
+    if (j < num_ekf && superseded[j]) continue;
+    Source& s = out[j];
+    // A position beyond the mapped site (and its margin) is a reflection's crossing or a range
+    // the bearings do not really fix: it goes out as the bearing it was heard on, never as a
+    // place (Classify has already kept it from being a person).
+    if (s.has_position && !s.inside_site) {
+      s.has_position = false;
+      s.position_m = s.bearing_origin_m;
+      s.covariance.setZero();
+      if (j < num_ekf) {
+        s.covariance.topLeftCorner<2, 2>() =
+            ekf_.anchor_covariance(ekf_.source_anchor(s.id)).topLeftCorner<2, 2>();
+      }
+    }
+    kept.push_back(std::move(s));
+  }
   return kept;
 }
 

@@ -19,7 +19,8 @@
 //   * Published (Sources): a source's range is observable when its inverse depth rho exceeds
 //     observable_sigmas times its standard deviation (the 3-sigma range interval is bounded)
 //     and its largest planar position std is below max_position_sigma_m. Until then it is a
-//     bearing from its anchor (has_position false), never a position. A source is a person
+//     bearing from its anchor (has_position false), never a position; so is a source placed
+//     beyond site_margin_m of the mapped site. A source is a person
 //     only when it was heard (PEOPLE_AUDIO), its class is voice, its position is observable
 //     and it lies within site_margin_m of the mapped site (SetSite; no site known: anywhere).
 // Inputs must arrive in time order (the node puts a TimeOrderedQueue in front).
@@ -58,7 +59,7 @@ struct OnlineSoundMapOptions {
   // Range observability (published position vs bearing only).
   double observable_sigmas = 3.0;
   double max_position_sigma_m = 2.0;
-  double site_margin_m = 1.0;  // a person must lie this close to the mapped site
+  double site_margin_m = 1.0;  // a person, and a placed source, lie this close to the mapped site
   int min_class_votes = 3;     // DOAs with a class needed before a source has one
   // A person's source is a voice by a clear majority: a source's DOAs are classed one by one,
   // and a machine or an alarm heard together with voices gets many DOAs classed voice.
@@ -159,7 +160,8 @@ struct OnlineSoundMapOptions {
     v("max_position_sigma_m", max_position_sigma_m,
       "... and its largest planar position std is below this", Positive());
     v("site_margin_m", site_margin_m,
-      "a person must lie within this distance of the mapped site's known cells' box",
+      "a person must lie within this distance of the mapped site's known cells' box; a source "
+      "placed beyond it is published as a bearing",
       NonNegative());
     v("min_class_votes", min_class_votes,
       "classified DOAs a source needs before it has a class (unknown until then)", AtLeast(1));

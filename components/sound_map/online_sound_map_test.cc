@@ -786,7 +786,7 @@ TEST(OnlineSoundMap, MachinesAndAlarmsNeverBecomePeople) {
   }
 }
 
-TEST(OnlineSoundMap, NoPersonOutsideTheMappedSite) {
+TEST(OnlineSoundMap, NoPersonAndNoPositionOutsideTheMappedSite) {
   OnlineSoundMap map(OnlineSoundMapOptions{}, ArrayMount{});
   const Eigen::Vector2d voice(5.0, -2.0);
   DriveBy drive;
@@ -797,9 +797,16 @@ TEST(OnlineSoundMap, NoPersonOutsideTheMappedSite) {
   ASSERT_TRUE(map.Sources(now)[0].is_person);
   EXPECT_EQ(map.Sources(now)[0].priority, OnlineSoundMap::kPriorityVoice);
   map.SetSite(Eigen::Vector2d(0, 0), Eigen::Vector2d(6.5, 2.0));  // the source is 2 m south of it
-  EXPECT_FALSE(map.Sources(now)[0].inside_site);
-  EXPECT_FALSE(map.Sources(now)[0].is_person);
+  const auto outside = map.Sources(now)[0];
+  EXPECT_FALSE(outside.inside_site);
+  EXPECT_FALSE(outside.is_person);
+  // Published as the bearing it was heard on, not as a place beyond the site.
+  EXPECT_FALSE(outside.has_position);
+  EXPECT_EQ(outside.position_m, outside.bearing_origin_m);
+  const Eigen::Vector2d to_voice = voice - outside.bearing_origin_m.head<2>();
+  EXPECT_NEAR(outside.bearing_rad, std::atan2(to_voice.y(), to_voice.x()), 0.05);
   map.SetSite(Eigen::Vector2d(0, -3), Eigen::Vector2d(6.5, 2.0));
+  EXPECT_TRUE(map.Sources(now)[0].has_position);
   EXPECT_TRUE(map.Sources(now)[0].is_person);
 }
 
