@@ -52,6 +52,12 @@ class ProcmanSystem : public ::testing::Test {
     return r;
   }
   std::string Pmd(const std::string& body) { return scratch_.Write("test.pmd", body); }
+  // A pmd line `cmd "name" { exec = "exec"; deputy = "<this test's deputy>";settings }`.
+  std::string Cmd(const std::string& name, const std::string& exec,
+                  const std::string& settings = "") const {
+    return "cmd \"" + name + "\" { exec = \"" + exec + "\"; deputy = \"" + deputy_id_ + "\";" +
+           settings + " }";
+  }
 
   Scratch scratch_;
   Watcher watch_;
@@ -88,16 +94,8 @@ sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exe
 TEST_F(ProcmanSystem, GroupStartStopRestart) {
   const std::string d = deputy_id_;
   const std::string pmd =
-      Pmd("group \"g\" {\n"
-          "  cmd \"a\" { exec = \"" +
-          SleepCmd(1) + "\"; deputy = \"" + d +
-          "\"; }\n"
-          "  group \"inner\" { cmd \"b\" { exec = \"" +
-          SleepCmd(2) + "\"; deputy = \"" + d +
-          "\"; } }\n"
-          "}\n"
-          "cmd \"c\" { exec = \"" +
-          SleepCmd(3) + "\"; deputy = \"" + d + "\"; }\n");
+      Pmd("group \"g\" {\n  " + Cmd("a", SleepCmd(1)) + "\n  group \"inner\" { " +
+          Cmd("b", SleepCmd(2)) + " }\n}\n" + Cmd("c", SleepCmd(3)) + "\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "g"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "a") && watch_.IsRunning(d, "b"); }));
@@ -133,10 +131,11 @@ TEST_F(ProcmanSystem, GroupStartStopRestart) {
 TEST_F(ProcmanSystem, OutputAndEnvironmentReachTheSheriff) {
   const std::string d = deputy_id_;
   setenv("PROCMAN_TEST_VALUE", Marker(5).c_str(), 1);  // the deputy inherits it
-  const std::string pmd =
-      Pmd("cmd \"talker\" { exec = \"GREETING=hello-$PROCMAN_TEST_VALUE sh -c "
-          "'echo $GREETING; echo to-stderr >&2; exec " +
-          SleepCmd(1) + "'\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd = Pmd(Cmd("talker",
+                                  "GREETING=hello-$PROCMAN_TEST_VALUE sh -c "
+                                  "'echo $GREETING; echo to-stderr >&2; exec " +
+                                      SleepCmd(1) + "'") +
+                              "\n");
   auto deputy = StartDeputy(d);
   std::string output;
   lcm::Subscription* sub = watch_.lcm().subscribeFunction(
@@ -161,8 +160,7 @@ TEST_F(ProcmanSystem, OutputAndEnvironmentReachTheSheriff) {
 TEST_F(ProcmanSystem, CrashingCommandIsRespawned) {
   const std::string d = deputy_id_;
   const std::string pmd =
-      Pmd("cmd \"crasher\" { exec = \"sh -c 'sleep 0.3; exit 3'\"; deputy = \"" + d +
-          "\"; auto_respawn = true; }\n");
+      Pmd(Cmd("crasher", "sh -c 'sleep 0.3; exit 3'", " auto_respawn = true;") + "\n");
   auto deputy = StartDeputy(d);
   Sheriff(pmd, {"start", "crasher"});  // may or may not catch it running: not asserted
   ASSERT_TRUE(watch_.WaitFor([&] {
@@ -231,8 +229,9 @@ TEST_F(ProcmanSystem, NoDescendantSurvivesAStop) {
   // Background children of sh ignore SIGINT; one leaves the process group with setsid.
   const std::string s = SleepCmd(1);
   const std::string pmd =
-      Pmd("cmd \"family\" { exec = \"sh -c '" + s + " & " + s + " & setsid " + s + " & " + s +
-          "'\"; deputy = \"" + d + "\"; stop_time_allowed = 1; }\n");
+      Pmd(Cmd("family", "sh -c '" + s + " & " + s + " & setsid " + s + " & " + s + "'",
+              " stop_time_allowed = 1;") +
+          "\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "family"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).size() == 4; }, 5));
@@ -245,8 +244,7 @@ TEST_F(ProcmanSystem, NoDescendantSurvivesAStop) {
 TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
   const std::string d = deputy_id_;
   const std::string evil = SleepCmd(9);
-  const std::string pmd =
-      Pmd("cmd \"victim\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd = Pmd(Cmd("victim", SleepCmd(1)) + "\n");
   auto deputy = StartDeputy(d);
   const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
                              std::chrono::system_clock::now().time_since_epoch())
@@ -317,8 +315,7 @@ TEST_F(ProcmanSystem, RefusesUnsignedForgedAndReplayedOrders) {
 
 TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
   const std::string d = deputy_id_;
-  const std::string pmd =
-      Pmd("cmd \"x\" { exec = \"" + SleepCmd(1) + "\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd = Pmd(Cmd("x", SleepCmd(1)) + "\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "x"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return watch_.IsRunning(d, "x"); }));
@@ -344,16 +341,8 @@ TEST_F(ProcmanSystem, StaleResendOfAnotherSheriffDoesNotUndoAChange) {
 TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
   const std::string d = deputy_id_;
   const std::string pmd =
-      Pmd("group \"g\" {\n"
-          "  cmd \"a\" { exec = \"" +
-          SleepCmd(1) + "\"; deputy = \"" + d +
-          "\"; }\n"
-          "  cmd \"b\" { exec = \"" +
-          SleepCmd(2) + "\"; deputy = \"" + d +
-          "\"; auto_respawn = true; }\n"
-          "}\n"
-          "cmd \"c\" { exec = \"" +
-          SleepCmd(3) + "\"; deputy = \"" + d + "\"; }\n");
+      Pmd("group \"g\" {\n  " + Cmd("a", SleepCmd(1)) + "\n  " +
+          Cmd("b", SleepCmd(2), " auto_respawn = true;") + "\n}\n" + Cmd("c", SleepCmd(3)) + "\n");
   auto deputy = StartDeputy(d);
   const std::vector<std::string> live_argv = {BinDir() + "/sarmap-procman", pmd, "--key",
                                               scratch_.key()};
@@ -417,14 +406,9 @@ TEST_F(ProcmanSystem, RestartingTheSheriffDisturbsNoRunningProcess) {
 TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
   const std::string d = deputy_id_;
   const std::string pmd =
-      Pmd("group \"all\" {\n"
-          "  cmd \"a\" { exec = \"" +
-          SleepCmd(1) + "\"; deputy = \"" + d +
-          "\"; }\n"
-          "  cmd \"b\" { exec = \"sh -c '" +
-          SleepCmd(2) + " & " + SleepCmd(2) + "'\"; deputy = \"" + d +
-          "\"; stop_time_allowed = 1; }\n"
-          "}\n"
+      Pmd("group \"all\" {\n  " + Cmd("a", SleepCmd(1)) + "\n  " +
+          Cmd("b", "sh -c '" + SleepCmd(2) + " & " + SleepCmd(2) + "'", " stop_time_allowed = 1;") +
+          "\n}\n"
           "script \"up\" { start group \"all\" wait \"running\" timeout 10; }\n");
   Child lone(
       {BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key(), "--lone-ranger", "run", "up"},
@@ -444,19 +428,12 @@ TEST_F(ProcmanSystem, LoneRangerBringsUpAndTearsDownOneComputer) {
 // sheriff's script fails instead of waiting for its whole timeout.
 TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
   const std::string d = deputy_id_;
-  const std::string pmd =
-      Pmd("group \"g\" {\n"
-          "  cmd \"a\" { exec = \"" +
-          SleepCmd(1) + "\"; deputy = \"" + d +
-          "\"; }\n"
-          "  cmd \"b\" { exec = \"" +
-          SleepCmd(2) + "\"; deputy = \"" + d +
-          "\"; auto_respawn = true; }\n"
-          "}\n"
-          "script \"mission\" {\n"
-          "  start group \"g\" wait \"running\" timeout 10;\n"
-          "  wait cmd \"a\" status \"stopped\" timeout 1800;\n"
-          "}\n");
+  const std::string pmd = Pmd("group \"g\" {\n  " + Cmd("a", SleepCmd(1)) + "\n  " +
+                              Cmd("b", SleepCmd(2), " auto_respawn = true;") + "\n}\n" +
+                              "script \"mission\" {\n"
+                              "  start group \"g\" wait \"running\" timeout 10;\n"
+                              "  wait cmd \"a\" status \"stopped\" timeout 1800;\n"
+                              "}\n");
   auto deputy = StartDeputy(d);
   Child sheriff({BinDir() + "/sarmap-procman", pmd, "--key", scratch_.key(), "--set",
                  "deputy_gone_after_s=3", "run", "mission"},
@@ -488,8 +465,7 @@ TEST_F(ProcmanSystem, KilledDeputyTakesItsCommandsAlongAndTheScriptFails) {
 TEST_F(ProcmanSystem, KilledDeputyTakesWhatItsCommandsForkedAlong) {
   const std::string d = deputy_id_;
   const std::string s = SleepCmd(3);
-  const std::string pmd = Pmd("cmd \"family\" { exec = \"sh -c '" + s + " & " + s + " & " + s +
-                              "'\"; deputy = \"" + d + "\"; }\n");
+  const std::string pmd = Pmd(Cmd("family", "sh -c '" + s + " & " + s + " & " + s + "'") + "\n");
   auto deputy = StartDeputy(d);
   ASSERT_EQ(Sheriff(pmd, {"start", "family"}).exit_code, 0);
   ASSERT_TRUE(watch_.WaitFor([&] { return ProcessesWithCmdline(s).size() == 3; }, 5));
@@ -504,8 +480,8 @@ TEST_F(ProcmanSystem, KilledDeputyTakesWhatItsCommandsForkedAlong) {
 TEST_F(ProcmanSystem, ScriptWaitTimesOutWithLocation) {
   const std::string d = deputy_id_;
   const std::string pmd =
-      Pmd("cmd \"dies\" { exec = \"no-such-program-xyz\"; deputy = \"" + d +
-          "\"; }\n"
+      Pmd(Cmd("dies", "no-such-program-xyz") +
+          "\n"
           "script \"s\" {\n  start cmd \"dies\" wait \"running\" timeout 2;\n}\n");
   auto deputy = StartDeputy(d);
   const CliResult r = Sheriff(pmd, {"run", "s"});
