@@ -8,6 +8,8 @@
 #include <fstream>
 #include <limits>
 
+#include "procman/orders_test_util.h"
+
 namespace sarmap {
 namespace procman {
 namespace {
@@ -19,27 +21,12 @@ Key TestKey(uint8_t seed) {
 }
 
 sarmap::pm_orders_t SomeOrders(int64_t counter) {
-  sarmap::pm_orders_t o;
+  sarmap::pm_orders_t o =
+      testing_util::OrdersToRun("sheriff@base", "compute", "sarmap-slam", "sarmap-slam", counter);
   o.header.utime = 1700000000000000;
   o.header.seq = 3;
-  o.header.frame = "";
-  o.sheriff_id = "sheriff@base";
-  o.deputy_id = "compute";
-  o.deputy_session = 0;
-  o.counter = counter;
-  sarmap::pm_command_order_t c;
-  c.command_id = "sarmap-slam";
-  c.group = "mapping";
-  c.exec = "sarmap-slam";
-  c.use_shell = false;
-  c.auto_respawn = true;
-  c.stop_signal = 2;
-  c.stop_time_allowed_s = 5;
-  c.desired_running = true;
-  c.desired_runid = 1;
-  o.commands.push_back(c);
-  o.num_commands = 1;
-  std::fill(std::begin(o.hmac_sha256), std::end(o.hmac_sha256), 0);
+  o.commands[0].group = "mapping";
+  o.commands[0].stop_time_allowed_s = 5;
   return o;
 }
 

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "procman/order_auth.h"
+#include "procman/orders_test_util.h"
 #include "procman/test_support.h"
 #include "sarmap/pm_command_status_t.hpp"
 #include "sarmap/pm_output_t.hpp"
@@ -65,30 +66,10 @@ class ProcmanSystem : public ::testing::Test {
   long base_ = 0;
 };
 
+// Orders as an attacker without the key sends them: unsigned, from sheriff "mallory".
 sarmap::pm_orders_t EvilOrders(const std::string& deputy, const std::string& exec,
                                int64_t counter) {
-  sarmap::pm_orders_t o;
-  o.header.utime = counter;
-  o.header.seq = 0;
-  o.header.frame = "";
-  o.sheriff_id = "mallory";
-  o.deputy_id = deputy;
-  o.deputy_session = 0;
-  o.counter = counter;
-  sarmap::pm_command_order_t c;
-  c.command_id = "evil";
-  c.group = "";
-  c.exec = exec;
-  c.use_shell = false;
-  c.auto_respawn = true;
-  c.stop_signal = 2;
-  c.stop_time_allowed_s = 1;
-  c.desired_running = true;
-  c.desired_runid = 1;
-  o.commands.push_back(c);
-  o.num_commands = 1;
-  std::fill(std::begin(o.hmac_sha256), std::end(o.hmac_sha256), 0);
-  return o;
+  return testing_util::OrdersToRun("mallory", deputy, "evil", exec, counter);
 }
 
 TEST_F(ProcmanSystem, GroupStartStopRestart) {
