@@ -5,10 +5,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
-#include <regex>
 
 #include "common/image_codec.h"
 #include "common/image_messages.h"
@@ -18,6 +16,7 @@
 #include "rgbd_odometry/synthetic_room.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pose_t.hpp"
+#include "tests/node_watch.h"
 #include "tests/process.h"
 
 namespace sarmap {
@@ -26,16 +25,8 @@ namespace {
 
 struct Sink {
   std::vector<pose_t> poses;
-  std::string status;
-  int64_t dropped = 0;
   void OnPose(const lcm::ReceiveBuffer*, const std::string&, const pose_t* m) {
     poses.push_back(*m);
-  }
-  void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const node_status_t* s) {
-    if (s->node_name != "sarmap-rgbd-odometry") return;
-    status = s->message;
-    dropped = 0;
-    for (const auto& c : s->channels) dropped += c.dropped_malformed;
   }
 };
 
@@ -51,13 +42,11 @@ TEST(RgbdOdometryNode, WalkingForwardGivesRigPosesAndBadImagesAreCounted) {
   ASSERT_TRUE(lcm.good());
   Sink sink;
   lcm.subscribe("RIG_POSE", &Sink::OnPose, &sink);
-  lcm.subscribe("NODE_STATUS", &Sink::OnStatus, &sink);
-  auto spin_until = [&](auto pred, double timeout_s) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (!pred() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
-    return pred();
-  };
-  ASSERT_TRUE(spin_until([&] { return !sink.status.empty(); }, 15)) << node.Output();
+  testing::NodeStatusSink status("sarmap-rgbd-odometry");
+  lcm.subscribe("NODE_STATUS", &testing::NodeStatusSink::OnStatus, &status);
+  ASSERT_TRUE(testing::SpinUntil(
+      lcm, [&] { return !status.message.empty(); }, 15))
+      << node.Output();
 
   const synthetic::Room room;
   const int64_t t0 = 1700000000000000;
@@ -77,7 +66,8 @@ TEST(RgbdOdometryNode, WalkingForwardGivesRigPosesAndBadImagesAreCounted) {
   };
   for (int i = 0; i < 8; ++i) {
     send(i, false, false);
-    spin_until([&] { return static_cast<int>(sink.poses.size()) > i; }, 10);
+    testing::SpinUntil(
+        lcm, [&] { return static_cast<int>(sink.poses.size()) > i; }, 10);
   }
   ASSERT_EQ(sink.poses.size(), 8u) << node.Output();
   for (const pose_t& p : sink.poses) {
@@ -104,16 +94,13 @@ TEST(RgbdOdometryNode, WalkingForwardGivesRigPosesAndBadImagesAreCounted) {
   const std::vector<uint8_t> junk(100, 0xab);
   lcm.publish("DEPTH", junk.data(), static_cast<unsigned>(junk.size()));
   send(10, false, false);
-  ASSERT_TRUE(spin_until([&] { return sink.poses.size() >= 9; }, 10)) << node.Output();
+  ASSERT_TRUE(testing::SpinUntil(
+      lcm, [&] { return sink.poses.size() >= 9; }, 10))
+      << node.Output();
   EXPECT_NEAR(sink.poses.back().position_m[0], 0.10, 3e-3);
-  ASSERT_TRUE(spin_until(
-      [&] {
-        std::smatch m;
-        return std::regex_search(sink.status, m, std::regex("input_warnings (\\d+)")) &&
-               std::stoi(m[1]) >= 2 && sink.dropped >= 1;
-      },
-      5))
-      << sink.status << "; dropped " << sink.dropped;
+  ASSERT_TRUE(testing::SpinUntil(
+      lcm, [&] { return status.InputWarnings().value_or(0) >= 2 && status.dropped >= 1; }, 5))
+      << status.message << "; dropped " << status.dropped;
   ASSERT_TRUE(node.Running()) << node.Output();
   node.Signal(SIGINT);
   EXPECT_EQ(node.Wait(10), 0) << node.Output();

@@ -4,10 +4,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
-#include <regex>
+#include <optional>
 
 #include "common/image_codec.h"
 #include "common/image_messages.h"
@@ -15,6 +14,7 @@
 #include "common/testing/isolated_network.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/people_detections_t.hpp"
+#include "tests/node_watch.h"
 #include "tests/process.h"
 #include "vision_people/synthetic_scene.h"
 #include "vision_people/vision_test_util.h"
@@ -25,16 +25,8 @@ namespace {
 
 struct Sink {
   std::vector<people_detections_t> people;
-  std::string status;
-  int64_t dropped = 0;
   void OnPeople(const lcm::ReceiveBuffer*, const std::string&, const people_detections_t* m) {
     people.push_back(*m);
-  }
-  void OnStatus(const lcm::ReceiveBuffer*, const std::string&, const node_status_t* s) {
-    if (s->node_name != "sarmap-vision-people") return;
-    status = s->message;
-    dropped = 0;
-    for (const auto& c : s->channels) dropped += c.dropped_malformed;
   }
 };
 
@@ -55,13 +47,11 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
   ASSERT_TRUE(lcm.good());
   Sink sink;
   lcm.subscribe("PEOPLE_VISUAL", &Sink::OnPeople, &sink);
-  lcm.subscribe("NODE_STATUS", &Sink::OnStatus, &sink);
-  auto spin_until = [&](auto pred, double timeout_s) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (!pred() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(50);
-    return pred();
-  };
-  ASSERT_TRUE(spin_until([&] { return !sink.status.empty(); }, 15)) << node.Output();
+  testing::NodeStatusSink status("sarmap-vision-people");
+  lcm.subscribe("NODE_STATUS", &testing::NodeStatusSink::OnStatus, &status);
+  ASSERT_TRUE(testing::SpinUntil(
+      lcm, [&] { return !status.message.empty(); }, 15))
+      << node.Output();
 
   SyntheticScene scene;  // the robot.yaml mounting: 0.55 m, level
   scene.people.push_back({3.0, 0.4, 1.75, 0.3});
@@ -87,7 +77,8 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
   };
   for (int i = 0; i < 4; ++i) {
     send(i, 640, 480, false);
-    spin_until([&] { return static_cast<int>(sink.people.size()) > i; }, 10);
+    testing::SpinUntil(
+        lcm, [&] { return static_cast<int>(sink.people.size()) > i; }, 10);
   }
   ASSERT_EQ(sink.people.size(), 4u) << node.Output();
   EXPECT_EQ(sink.people[0].num_detections, 0);  // 1 of 3: not yet confirmed
@@ -111,16 +102,18 @@ TEST(VisionPeopleNode, DarkRoomDepthOnlyPeopleAreConfirmedAndBadFramesCounted) {
   send(4, 320, 240, false);
   send(5, 640, 480, true);
   send(6, 640, 480, false);
-  ASSERT_TRUE(spin_until([&] { return sink.people.size() >= 6; }, 10)) << node.Output();
+  ASSERT_TRUE(testing::SpinUntil(
+      lcm, [&] { return sink.people.size() >= 6; }, 10))
+      << node.Output();
   EXPECT_EQ(sink.people.back().num_detections, 1);
-  ASSERT_TRUE(spin_until(
+  ASSERT_TRUE(testing::SpinUntil(
+      lcm,
       [&] {
-        std::smatch m;
-        return std::regex_search(sink.status, m, std::regex("input_warnings (\\d+)")) &&
-               std::stoi(m[1]) + sink.dropped >= 2;
+        const std::optional<int> warnings = status.InputWarnings();
+        return warnings && *warnings + status.dropped >= 2;
       },
       5))
-      << sink.status << "; dropped " << sink.dropped;
+      << status.message << "; dropped " << status.dropped;
   ASSERT_TRUE(node.Running()) << node.Output();
   node.Signal(SIGINT);
   EXPECT_EQ(node.Wait(10), 0) << node.Output();
