@@ -8,7 +8,9 @@
 #include <chrono>
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "common/testing/isolated_network.h"
 #include "sarmap/doa_t.hpp"
@@ -81,21 +83,46 @@ void PublishStep(lcm::LCM& lcm, int k, double sx, double sy) {
   lcm.publish("SLAM_ANCHORS", &a);
 }
 
-TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
-  if (!sarmap::IsolatedNetwork())
-    GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
-  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+constexpr char kUrl[] = "udpm://239.255.76.67:7667?ttl=0";
+
+// sarmap-sound-map on kUrl with the shipped config and robot.
+std::vector<std::string> NodeCommand() {
+  const std::string config_dir = std::string(SARMAP_SOURCE_DIR) + "/config";
+  return {"sarmap-sound-map",
+          "--lcm-url",
+          kUrl,
+          "--config",
+          config_dir + "/sound_map.yaml",
+          "--set",
+          "robot_config=" + config_dir + "/robot.yaml"};
+}
+
+// Gives the node time to apply its last reorder_delay_s of inputs, stops it (a clean exit
+// expected) and hears the final map it sends.
+void StopAndHearTheFinalMap(lcm::LCM& lcm, sarmap::testing::Process& node) {
+  for (int i = 0; i < 20; ++i) lcm.handleTimeout(50);
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(5), 0);
+  for (int i = 0; i < 10; ++i) lcm.handleTimeout(50);
+}
+
+// Each test: a bus to the node (in a private network namespace) and the maps it sends.
+class SoundMapNode : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!sarmap::IsolatedNetwork())
+      GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
+    ASSERT_TRUE(lcm.good());
+    lcm.subscribe("SOUND_MAP", &Sink::OnMap, &sink);
+  }
+  lcm::LCM lcm{kUrl};
+  Sink sink;
+};
+
+TEST_F(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
   const std::string log =
       ::testing::TempDir() + "/sound-map-node-" + std::to_string(getpid()) + ".log";
-  sarmap::testing::Process node(
-      {"sarmap-sound-map", "--lcm-url", url, "--config",
-       std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
-       "robot_config=" + std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml"},
-      log);
-  lcm::LCM lcm(url);
-  ASSERT_TRUE(lcm.good());
-  Sink sink;
-  lcm.subscribe("SOUND_MAP", &Sink::OnMap, &sink);
+  sarmap::testing::Process node(NodeCommand(), log);
   lcm.subscribe("SLAM_ANCHOR_REQUEST", &Sink::OnRequest, &sink);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   // The array sits 0.10 m ahead of the base (config/robot.yaml); a source at (3, 2).
@@ -122,10 +149,7 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
     lcm.handleTimeout(10);
   }
   // The last reorder_delay_s of inputs is applied when the node stops, and the final map sent.
-  for (int i = 0; i < 20; ++i) lcm.handleTimeout(50);
-  node.Signal(SIGTERM);
-  EXPECT_EQ(node.Wait(5), 0);
-  for (int i = 0; i < 10; ++i) lcm.handleTimeout(50);
+  StopAndHearTheFinalMap(lcm, node);
   ASSERT_GT(sink.requests, 0) << node.Output();
   EXPECT_EQ(sink.request.num_node_ids, 1);
   EXPECT_EQ(sink.request.node_ids.at(0), 0);
@@ -145,21 +169,10 @@ TEST(SoundMapNode, MapsASourceFromPoseDoaAndAnchors) {
 
 // Two POSEs stamped a year ahead (a skewed clock, a forged message) are dropped and counted:
 // the inputs after them are still used and SOUND_MAP keeps its stamps.
-TEST(SoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
-  if (!sarmap::IsolatedNetwork())
-    GTEST_SKIP() << "run through tests/harness/sarmap-netns (ctest does)";
-  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+TEST_F(SoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
   const std::string log =
       ::testing::TempDir() + "/sound-map-future-" + std::to_string(getpid()) + ".log";
-  sarmap::testing::Process node(
-      {"sarmap-sound-map", "--lcm-url", url, "--config",
-       std::string(SARMAP_SOURCE_DIR) + "/config/sound_map.yaml", "--set",
-       "robot_config=" + std::string(SARMAP_SOURCE_DIR) + "/config/robot.yaml"},
-      log);
-  lcm::LCM lcm(url);
-  ASSERT_TRUE(lcm.good());
-  Sink sink;
-  lcm.subscribe("SOUND_MAP", &Sink::OnMap, &sink);
+  sarmap::testing::Process node(NodeCommand(), log);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const double sx = 3.0, sy = 2.0;
   constexpr int64_t kYearUs = 365LL * 24 * 3600 * 1000000;
@@ -177,10 +190,7 @@ TEST(SoundMapNode, FarFuturePosesAreDroppedAndTheMapGoesOn) {
     PublishStep(lcm, k, sx, sy);
     lcm.handleTimeout(10);
   }
-  for (int i = 0; i < 20; ++i) lcm.handleTimeout(50);
-  node.Signal(SIGTERM);
-  EXPECT_EQ(node.Wait(5), 0);
-  for (int i = 0; i < 10; ++i) lcm.handleTimeout(50);
+  StopAndHearTheFinalMap(lcm, node);
   ASSERT_EQ(sink.map.num_sources, 1) << node.Output();
   // DOAs after the future poses were used (60 published, the last reorder delay's flushed at exit).
   EXPECT_GE(sink.map.sources[0].num_observations, 45) << node.Output();
