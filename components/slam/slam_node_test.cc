@@ -85,6 +85,18 @@ class Listener {
   std::vector<slam_anchors_t> anchors;
 };
 
+// Handles LCM for `seconds` of wall time.
+void HandleFor(lcm::LCM* lcm, double seconds) {
+  const double until = common::SteadySeconds() + seconds;
+  while (common::SteadySeconds() < until) lcm->handleTimeout(10);
+}
+
+// Stops the node with SIGTERM: it must exit cleanly.
+void StopCleanly(testing::Process& node) {
+  node.Signal(SIGTERM);
+  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+}
+
 // Publishes events [begin, end) at `rate_hz` scans per second, handling LCM meanwhile.
 void Publish(lcm::LCM* lcm, const std::vector<Event>& ev, size_t begin, size_t end, double rate_hz,
              std::map<int64_t, double>* sent_s) {
@@ -102,20 +114,35 @@ void Publish(lcm::LCM* lcm, const std::vector<Event>& ev, size_t begin, size_t e
   }
 }
 
-TEST(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
-  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+// Each test: a bus to the node, what arrives on it, and when each scan was sent.
+class SlamNodeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+    ASSERT_TRUE(lcm.good());
+  }
+  lcm::LCM lcm{common::kDefaultLcmUrl};
+  Listener listener{&lcm};
+  std::map<int64_t, double> sent_s;
+};
+
+TEST_F(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
   const std::vector<Event> events = LoadIntelPrefix(500);
   size_t half = 0;
   for (int scans = 0; half < events.size() && scans < 250; ++half) scans += events[half].is_scan;
   const std::string state = ::testing::TempDir() + "/slam_node_test.pg";
   std::remove(state.c_str());
-  const std::vector<std::string> args = {
-      "sarmap-slam", "--config", "", "--set", "state_file=" + state, "--set", "resume=true",
-      "--set", "state_save_period_s=3", "--set", "slam.graph.optimise_every_n_nodes=30"};
-  lcm::LCM lcm(common::kDefaultLcmUrl);
-  ASSERT_TRUE(lcm.good());
-  Listener listener(&lcm);
-  std::map<int64_t, double> sent_s;
+  const std::vector<std::string> args = {"sarmap-slam",
+                                         "--config",
+                                         "",
+                                         "--set",
+                                         "state_file=" + state,
+                                         "--set",
+                                         "resume=true",
+                                         "--set",
+                                         "state_save_period_s=3",
+                                         "--set",
+                                         "slam.graph.optimise_every_n_nodes=30"};
 
   auto node = std::make_unique<testing::Process>(args, ::testing::TempDir() + "/slam_node_1.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -144,8 +171,7 @@ TEST(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
   request.node_ids = {2, 5};
   request.num_node_ids = 2;
   lcm.publish("SLAM_ANCHOR_REQUEST", &request);
-  const double wait_until = common::SteadySeconds() + 2.0;
-  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
+  HandleFor(&lcm, 2.0);
   node->Signal(SIGKILL);
   node->Wait(5);
   const std::string log1 = node->Output();
@@ -168,10 +194,8 @@ TEST(SlamNodeTest, KilledAndRestartedFromSavedStateResumesMapping) {
   const size_t poses_before = listener.poses.size();
   lcm.publish("SLAM_ANCHOR_REQUEST", &request);  // clients repeat their request to a new node
   Publish(&lcm, events, half, events.size(), 40, &sent_s);
-  const double wait2 = common::SteadySeconds() + 2.0;
-  while (common::SteadySeconds() < wait2) lcm.handleTimeout(10);
-  node->Signal(SIGTERM);
-  EXPECT_EQ(node->Wait(20), 0) << node->Output();
+  HandleFor(&lcm, 2.0);
+  StopCleanly(*node);
   const std::string log2 = node->Output();
   EXPECT_NE(log2.find("resumed mapping"), std::string::npos) << log2;
 
@@ -223,13 +247,8 @@ size_t NthScan(const std::vector<Event>& events, int n) {
 
 // One SCAN stamped a year ahead, then a pause long enough for the queue to flush: the scan is
 // dropped and counted, POSE goes on with the scans after it and is never stamped in the future.
-TEST(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
-  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+TEST_F(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
   const std::vector<Event> events = LoadIntelPrefix(160);
-  lcm::LCM lcm(common::kDefaultLcmUrl);
-  ASSERT_TRUE(lcm.good());
-  Listener listener(&lcm);
-  std::map<int64_t, double> sent_s;
   testing::Process node({"sarmap-slam", "--config", ""},
                         ::testing::TempDir() + "/slam_node_future.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -238,14 +257,11 @@ TEST(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
   laser_scan_t future = events[split].scan;
   future.header.utime += 365LL * 24 * 3600 * 1000000;
   lcm.publish("SCAN", &future);
-  const double pause_until = common::SteadySeconds() + 0.5;
-  while (common::SteadySeconds() < pause_until) lcm.handleTimeout(10);
+  HandleFor(&lcm, 0.5);
   const int64_t split_utime = events[split].scan.header.utime;
   Publish(&lcm, events, split, events.size(), 40, &sent_s);
-  const double wait_until = common::SteadySeconds() + 2.0;
-  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
-  node.Signal(SIGTERM);
-  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+  HandleFor(&lcm, 2.0);
+  StopCleanly(node);
 
   std::lock_guard<std::mutex> lock(listener.mu);
   ASSERT_FALSE(listener.poses.empty()) << node.Output();
@@ -259,12 +275,8 @@ TEST(SlamNodeTest, AFarFutureScanIsDroppedAndPoseGoesOn) {
 
 // Anchor requests from 300 new client ids, each naming every node: a few are answered, the rest
 // refused and counted, and POSE goes on.
-TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
-  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+TEST_F(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
   const std::vector<Event> events = LoadIntelPrefix(160);
-  lcm::LCM lcm(common::kDefaultLcmUrl);
-  ASSERT_TRUE(lcm.good());
-  Listener listener(&lcm);
   int64_t refused = 0;
   struct StatusSink {
     int64_t* refused;
@@ -276,7 +288,6 @@ TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
     }
   } status{&refused};
   lcm.subscribe("NODE_STATUS", &StatusSink::OnStatus, &status);
-  std::map<int64_t, double> sent_s;
   testing::Process node({"sarmap-slam", "--config", ""},
                         ::testing::TempDir() + "/slam_node_flood.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -297,10 +308,8 @@ TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
   }
   const int64_t split_utime = events[split].scan.header.utime;
   Publish(&lcm, events, split, events.size(), 40, &sent_s);
-  const double wait_until = common::SteadySeconds() + 2.0;
-  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
-  node.Signal(SIGTERM);
-  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+  HandleFor(&lcm, 2.0);
+  StopCleanly(node);
 
   std::lock_guard<std::mutex> lock(listener.mu);
   std::printf("%d anchor requests from new clients: %zu SLAM_ANCHORS, %lld refused\n", kClients,
@@ -313,26 +322,19 @@ TEST(SlamNodeTest, AnchorRequestFloodIsRateLimited) {
 
 // A corrupt state file (a truncated old-format graph) is refused with one clear line and set
 // aside; the node maps from scratch instead of exiting at every restart.
-TEST(SlamNodeTest, ACorruptStateFileGivesACleanStart) {
-  if (!std::ifstream(kIntel)) GTEST_SKIP() << "shared data missing: " << kIntel;
+TEST_F(SlamNodeTest, ACorruptStateFileGivesACleanStart) {
   const std::vector<Event> events = LoadIntelPrefix(60);
   const std::string state = ::testing::TempDir() + "/slam_node_corrupt.pg";
   std::remove((state + ".corrupt").c_str());
   std::ofstream(state, std::ios::binary | std::ios::trunc) << "SARMAPPG\x01\x00\x00\x00garbage";
-  lcm::LCM lcm(common::kDefaultLcmUrl);
-  ASSERT_TRUE(lcm.good());
-  Listener listener(&lcm);
-  std::map<int64_t, double> sent_s;
   testing::Process node(
       {"sarmap-slam", "--config", "", "--set", "state_file=" + state, "--set", "resume=true"},
       ::testing::TempDir() + "/slam_node_corrupt.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   Publish(&lcm, events, 0, events.size(), 40, &sent_s);
-  const double wait_until = common::SteadySeconds() + 1.0;
-  while (common::SteadySeconds() < wait_until) lcm.handleTimeout(10);
+  HandleFor(&lcm, 1.0);
   EXPECT_TRUE(node.Running()) << node.Output();
-  node.Signal(SIGTERM);
-  EXPECT_EQ(node.Wait(20), 0) << node.Output();
+  StopCleanly(node);
   EXPECT_NE(node.Output().find("not resumed"), std::string::npos) << node.Output();
   EXPECT_TRUE(std::ifstream(state + ".corrupt").good());
   std::lock_guard<std::mutex> lock(listener.mu);
