@@ -402,19 +402,11 @@ class Loop : public sim::SimSink {
     SoundChain* sound = perception_ ? perception_->sound() : nullptr;
     // As sarmap-slam: no MAP before the map has a cell (a grid of no cells is malformed).
     if ((observer_ || sound) && map.width > 0 && map.height > 0) {
-      sarmap::occupancy_grid_t m{};
-      m.header.utime = static_cast<int64_t>((start_s_ + t) * 1e6);
-      m.header.seq = map_seq_++;
-      m.header.frame = "map";
-      m.resolution_m = map.resolution_m;
-      m.width = map.width;
-      m.height = map.height;
-      m.origin_x_m = map.origin_x_m;
-      m.origin_y_m = map.origin_y_m;
-      m.origin_yaw_rad = 0;
-      m.compression = sarmap::occupancy_grid_t::COMPRESSION_NONE;
-      m.data.assign(map.cells.begin(), map.cells.end());
-      m.size = static_cast<int32_t>(m.data.size());
+      sarmap::header_t header{};
+      header.utime = static_cast<int64_t>((start_s_ + t) * 1e6);
+      header.seq = map_seq_++;
+      header.frame = "map";
+      const sarmap::occupancy_grid_t m = common::MakeOccupancyGrid(header, map, false);
       if (observer_) observer_->OnMap(t, m);
       if (sound) sound->intake->OnSiteMap(m);
     }

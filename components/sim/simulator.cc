@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <map>
 
-#include "common/compression.h"
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "sim/appearance.h"
@@ -161,19 +160,9 @@ Simulator::Simulator(const SimSetup& setup) : impl_(std::make_unique<Impl>()), s
   // The floor the robot can cover (the world is static: computed once, zstd-compressed; a
   // 180 m^2 site is ~100 k cells, a few kB on the wire).
   const GridMap floor = ReachableFloor(setup_.world, o.robot_radius_m, 0.05);
-  sarmap::occupancy_grid_t& grid = impl_->floor;
-  grid.header.frame = "map";
-  grid.resolution_m = floor.resolution_m;
-  grid.width = floor.width;
-  grid.height = floor.height;
-  grid.origin_x_m = floor.origin_x_m;
-  grid.origin_y_m = floor.origin_y_m;
-  grid.origin_yaw_rad = 0;
-  const std::vector<uint8_t> packed =
-      common::CompressBytes(reinterpret_cast<const uint8_t*>(floor.cells.data()), floor.cells.size());
-  grid.compression = sarmap::occupancy_grid_t::COMPRESSION_ZSTD;
-  grid.data.assign(packed.begin(), packed.end());
-  grid.size = static_cast<int32_t>(grid.data.size());
+  sarmap::header_t header{};
+  header.frame = "map";
+  impl_->floor = common::MakeOccupancyGrid(header, floor, true);
 }
 
 Simulator::~Simulator() = default;

@@ -7,7 +7,7 @@
 #include <map>
 #include <variant>
 
-#include "common/compression.h"
+#include "common/image_messages.h"
 #include "common/logging.h"
 #include "common/memory.h"
 #include "common/message_conversions.h"
@@ -321,20 +321,10 @@ class SlamNode::Impl {
   void PublishMap(Utime utime) {
     const slam::OccupancyMap map = slam_.RenderMap();
     if (map.width == 0) return;
-    occupancy_grid_t msg{};
-    msg.header.utime = utime;
-    msg.header.frame = "map";
-    msg.resolution_m = map.resolution_m;
-    msg.width = map.width;
-    msg.height = map.height;
-    msg.origin_x_m = map.origin_x_m;
-    msg.origin_y_m = map.origin_y_m;
-    msg.origin_yaw_rad = 0;
-    const auto packed = common::CompressBytes(reinterpret_cast<const uint8_t*>(map.cells.data()),
-                                              map.cells.size());
-    msg.compression = occupancy_grid_t::COMPRESSION_ZSTD;
-    msg.data.assign(packed.begin(), packed.end());
-    msg.size = static_cast<int32_t>(msg.data.size());
+    header_t header{};
+    header.utime = utime;
+    header.frame = "map";
+    occupancy_grid_t msg = common::MakeOccupancyGrid(header, map, true);
     map_pub_.Publish(&msg);
   }
 
