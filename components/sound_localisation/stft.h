@@ -51,15 +51,7 @@ class MultichannelStft {
     for (int i = 0; i < frames; ++i) {
       for (int c = 0; c < num_channels_; ++c)
         ring_[c][fill_] = data[i * block_channels + channel_map[c]] * (1.0f / 32768.0f);
-      ++fill_;
-      ++samples_seen_;
-      if (fill_ == fft_size_) {
-        Analyse();
-        on_frame(spectra_, samples_seen_);
-        for (int c = 0; c < num_channels_; ++c)
-          std::copy(ring_[c].begin() + hop_size_, ring_[c].end(), ring_[c].begin());
-        fill_ = fft_size_ - hop_size_;
-      }
+      SampleAdded(on_frame);
     }
   }
   // Same for channel-major float input (channels[c][i]).
@@ -67,21 +59,27 @@ class MultichannelStft {
   void PushFloat(const std::vector<std::vector<float>>& channels, size_t begin, size_t count, F&& on_frame) {
     for (size_t i = begin; i < begin + count; ++i) {
       for (int c = 0; c < num_channels_; ++c) ring_[c][fill_] = channels[c][i];
-      ++fill_;
-      ++samples_seen_;
-      if (fill_ == fft_size_) {
-        Analyse();
-        on_frame(spectra_, samples_seen_);
-        for (int c = 0; c < num_channels_; ++c)
-          std::copy(ring_[c].begin() + hop_size_, ring_[c].end(), ring_[c].begin());
-        fill_ = fft_size_ - hop_size_;
-      }
+      SampleAdded(on_frame);
     }
   }
   void Reset();
   const std::vector<float>& window() const { return window_; }
 
  private:
+  // After one sample of every channel went into the ring at fill_: on a full frame, analyses
+  // it, hands it to on_frame and keeps the overlap for the next.
+  template <class F>
+  void SampleAdded(F& on_frame) {
+    ++fill_;
+    ++samples_seen_;
+    if (fill_ == fft_size_) {
+      Analyse();
+      on_frame(spectra_, samples_seen_);
+      for (int c = 0; c < num_channels_; ++c)
+        std::copy(ring_[c].begin() + hop_size_, ring_[c].end(), ring_[c].begin());
+      fill_ = fft_size_ - hop_size_;
+    }
+  }
   void Analyse();
   int num_channels_, fft_size_, hop_size_;
   int fill_ = 0;
