@@ -61,6 +61,23 @@ std::vector<double> SearchScales(int steps) {
   return {1.0 / 1.1, 1.0, 1.1};
 }
 
+// The best of best_window(region) over the search regions around a person (SearchRegion) at
+// each of SearchScales(search_steps); -inf for a person of 4 px or less, or at no finite column.
+template <class BestWindow>
+double BestOverScales(const uint8_t* rgb, int width, int height, double u_center, double v_top,
+                      double v_bottom, int search_steps, BestWindow& best_window) {
+  const double person_px = v_bottom - v_top;
+  if (!(person_px > 4) || !std::isfinite(u_center)) return -std::numeric_limits<double>::infinity();
+  const cv::Mat image(height, width, CV_8UC3, const_cast<uint8_t*>(rgb));
+  const double vc = 0.5 * (v_top + v_bottom);
+  double best = -std::numeric_limits<double>::infinity();
+  for (double scale : SearchScales(search_steps)) {
+    const cv::Mat region = SearchRegion(image, u_center, vc, person_px * scale, search_steps);
+    best = std::max(best, best_window(region));
+  }
+  return best;
+}
+
 class OpenCvHog : public HogClassifier {
  public:
   OpenCvHog() {
@@ -73,27 +90,23 @@ class OpenCvHog : public HogClassifier {
 
   double Score(const uint8_t* rgb, int width, int height, double u_center, double v_top,
                double v_bottom, int search_steps) const override {
-    const double person_px = v_bottom - v_top;
-    if (!(person_px > 4) || !std::isfinite(u_center)) return -std::numeric_limits<double>::infinity();
-    const cv::Mat image(height, width, CV_8UC3, const_cast<uint8_t*>(rgb));
-    const double vc = 0.5 * (v_top + v_bottom);
-    double best = -std::numeric_limits<double>::infinity();
     std::vector<cv::Point> locations;
     for (int j = 0; j <= 2 * search_steps; ++j) {
       for (int i = 0; i <= 2 * search_steps; ++i) locations.emplace_back(8 * i, 16 * j);
     }
     std::vector<float> descriptors;
-    for (double scale : SearchScales(search_steps)) {
-      const cv::Mat region = SearchRegion(image, u_center, vc, person_px * scale, search_steps);
+    auto best_window = [&](const cv::Mat& region) {
       hog_.compute(region, descriptors, cv::Size(8, 8), cv::Size(0, 0), locations);
+      double best = -std::numeric_limits<double>::infinity();
       const size_t n = weights_.size();
       for (size_t w = 0; w + n <= descriptors.size(); w += n) {
         double s = bias_;
         for (size_t k = 0; k < n; ++k) s += weights_[k] * descriptors[w + k];
         best = std::max(best, s);
       }
-    }
-    return best;
+      return best;
+    };
+    return BestOverScales(rgb, width, height, u_center, v_top, v_bottom, search_steps, best_window);
   }
 
  private:
@@ -140,16 +153,11 @@ class PclHog : public HogClassifier {
 
   double Score(const uint8_t* rgb, int width, int height, double u_center, double v_top,
                double v_bottom, int search_steps) const override {
-    const double person_px = v_bottom - v_top;
-    if (!(person_px > 4) || !std::isfinite(u_center)) return -std::numeric_limits<double>::infinity();
-    const cv::Mat image(height, width, CV_8UC3, const_cast<uint8_t*>(rgb));
-    const double vc = 0.5 * (v_top + v_bottom);
-    double best = -std::numeric_limits<double>::infinity();
     std::vector<float> sample(kWinW * kWinH * 3);
     std::vector<float> descriptor(weights_.size());
     pcl::people::HOG hog;
-    for (double scale : SearchScales(search_steps)) {
-      const cv::Mat region = SearchRegion(image, u_center, vc, person_px * scale, search_steps);
+    auto best_window = [&](const cv::Mat& region) {
+      double best = -std::numeric_limits<double>::infinity();
       for (int j = 0; j <= 2 * search_steps; ++j) {
         for (int i = 0; i <= 2 * search_steps; ++i) {
           const cv::Mat win = region(cv::Rect(8 * i, 16 * j, kWinW, kWinH));
@@ -169,8 +177,9 @@ class PclHog : public HogClassifier {
           best = std::max(best, s);
         }
       }
-    }
-    return best;
+      return best;
+    };
+    return BestOverScales(rgb, width, height, u_center, v_top, v_bottom, search_steps, best_window);
   }
 
  private:
