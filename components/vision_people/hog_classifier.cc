@@ -10,6 +10,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -279,6 +280,25 @@ int MatchBoxes(const std::vector<ImageBox>& detections, const std::vector<ImageB
   }
   if (truth_found) *truth_found = used;
   return tp;
+}
+
+std::vector<ImageBox> ReadPascalBoxes(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::vector<ImageBox> boxes;
+  const std::regex box(R"(Bounding box for object \d+ .*: \((\d+), (\d+)\) - \((\d+), (\d+)\))");
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (std::regex_search(line, m, box)) {
+      ImageBox b;
+      b.x = std::stod(m[1]);
+      b.y = std::stod(m[2]);
+      b.w = std::stod(m[3]) - b.x;
+      b.h = std::stod(m[4]) - b.y;
+      boxes.push_back(b);
+    }
+  }
+  return boxes;
 }
 
 bool ReadRgbImage(const std::string& path, std::vector<uint8_t>* rgb, int* width, int* height) {

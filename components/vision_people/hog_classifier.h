@@ -64,5 +64,9 @@ int MatchBoxes(const std::vector<ImageBox>& detections, const std::vector<ImageB
 // Reads an RGB8 image from a file (PNG, JPEG); false when it cannot be read.
 bool ReadRgbImage(const std::string& path, std::vector<uint8_t>* rgb, int* width, int* height);
 
+// The boxes of a PASCAL annotation file (INRIA): "Bounding box for object N ... : (xmin, ymin) -
+// (xmax, ymax)"; none when the file cannot be read.
+std::vector<ImageBox> ReadPascalBoxes(const std::string& path);
+
 }  // namespace vision_people
 }  // namespace sarmap

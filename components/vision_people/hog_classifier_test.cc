@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <regex>
 #include <sstream>
 
 namespace sarmap {
@@ -21,26 +20,6 @@ bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 
 std::vector<ImageBox> Standardized(std::vector<ImageBox> boxes) {
   for (auto& b : boxes) b = StandardizeAspect(b);
-  return boxes;
-}
-
-// PASCAL annotation: "Bounding box for object N ... : (xmin, ymin) - (xmax, ymax)".
-std::vector<ImageBox> ReadPascal(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::vector<ImageBox> boxes;
-  const std::regex box(R"(Bounding box for object \d+ .*: \((\d+), (\d+)\) - \((\d+), (\d+)\))");
-  while (std::getline(in, line)) {
-    std::smatch m;
-    if (std::regex_search(line, m, box)) {
-      ImageBox b;
-      b.x = std::stod(m[1]);
-      b.y = std::stod(m[2]);
-      b.w = std::stod(m[3]) - b.x;
-      b.h = std::stod(m[4]) - b.y;
-      boxes.push_back(b);
-    }
-  }
   return boxes;
 }
 
@@ -70,7 +49,7 @@ TEST(HogClassifier, InriaSamplesEveryBoxedPersonFound) {
     std::vector<uint8_t> rgb;
     int w = 0, h = 0;
     ASSERT_TRUE(ReadRgbImage(image_path, &rgb, &w, &h));
-    const auto truth = ReadPascal(kRgbDir + "/inria_samples/" + name + ".txt");
+    const auto truth = ReadPascalBoxes(kRgbDir + "/inria_samples/" + name + ".txt");
     ASSERT_FALSE(truth.empty());
     const auto found = DetectPeopleInImage(rgb.data(), w, h, SlidingWindowOptions());
     std::vector<bool> hit;

@@ -15,7 +15,6 @@
 #include <fstream>
 #include <map>
 #include <random>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -65,24 +64,11 @@ std::vector<Frame> LoadTud(const std::string& dir) {
 
 std::vector<Frame> LoadInria(const std::string& dir) {
   std::vector<Frame> frames;
-  const std::regex box(R"(Bounding box for object \d+ .*: \((\d+), (\d+)\) - \((\d+), (\d+)\))");
   for (const std::string name : {"crop001501", "crop_000001"}) {
     Frame frame;
     if (!ReadRgbImage(dir + "/" + name + ".png", &frame.rgb, &frame.width, &frame.height)) continue;
     frame.name = name;
-    std::ifstream in(dir + "/" + name + ".txt");
-    std::string line;
-    while (std::getline(in, line)) {
-      std::smatch m;
-      if (std::regex_search(line, m, box)) {
-        ImageBox b;
-        b.x = std::stod(m[1]);
-        b.y = std::stod(m[2]);
-        b.w = std::stod(m[3]) - b.x;
-        b.h = std::stod(m[4]) - b.y;
-        frame.truth.push_back(b);
-      }
-    }
+    frame.truth = ReadPascalBoxes(dir + "/" + name + ".txt");
     frames.push_back(std::move(frame));
   }
   return frames;
