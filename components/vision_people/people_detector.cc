@@ -175,13 +175,17 @@ void CloudFromDepth(const uint16_t* depth, int width, int height, double unit_m,
   }
 }
 
-void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double* mean,
-                     double* stddev, double* saturated) {
+namespace {
+
+// ImageStatistics over a width x height region of a larger image with rows of row_stride
+// pixels (`rgb` at the region's top-left pixel).
+void RegionStatistics(const uint8_t* rgb, int width, int height, int row_stride, int step,
+                      double* mean, double* stddev, double* saturated) {
   double s = 0, s2 = 0;
   int64_t n = 0, sat = 0;
   step = std::max(1, step);
   for (int v = 0; v < height; v += step) {
-    const uint8_t* row = rgb + static_cast<size_t>(v) * width * 3;
+    const uint8_t* row = rgb + static_cast<size_t>(v) * row_stride * 3;
     for (int u = 0; u < width; u += step) {
       const uint8_t* p = row + 3 * u;
       const int grey = (77 * p[0] + 150 * p[1] + 29 * p[2]) >> 8;
@@ -195,6 +199,13 @@ void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double
   *mean = m;
   *stddev = n ? std::sqrt(std::max(0.0, s2 / n - m * m)) : 0.0;
   *saturated = n ? static_cast<double>(sat) / n : 0.0;
+}
+
+}  // namespace
+
+void ImageStatistics(const uint8_t* rgb, int width, int height, int step, double* mean,
+                     double* stddev, double* saturated) {
+  RegionStatistics(rgb, width, height, width, step, mean, stddev, saturated);
 }
 
 namespace {
@@ -714,6 +725,29 @@ void MergeNearClusters(double merge_distance_m, const DetectorWorkspace& ws,
   }
 }
 
+// The horizontal axis across the viewing ray to a cluster's centre, and the
+// cluster's extent along it.
+struct SpanAcrossRay {
+  Eigen::Vector2d across;
+  double min, max;
+};
+SpanAcrossRay SpanAcrossViewingRay(const std::vector<int>& cluster, const DetectorWorkspace& ws) {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (int i : cluster) centre += ws.floor[i].head<2>();
+  centre /= static_cast<double>(cluster.size());
+  const Eigen::Vector2d ray = centre.norm() > 1e-6 ? centre.normalized() : Eigen::Vector2d(0, 1);
+  SpanAcrossRay span;
+  span.across = Eigen::Vector2d(-ray.y(), ray.x());
+  span.min = std::numeric_limits<double>::infinity();
+  span.max = -span.min;
+  for (int i : cluster) {
+    const double s = span.across.dot(ws.floor[i].head<2>());
+    span.min = std::min(span.min, s);
+    span.max = std::max(span.max, s);
+  }
+  return span;
+}
+
 // Stage 5b: an arm held up above the head is no head. On the lateral height profile (highest
 // point per 6 cm bin across the viewing ray) it is a spike at most two bins wide 0.1 m below
 // its top, beside a lower, wider maximum (the head) within 0.5 m. The arm's bins above the
@@ -723,18 +757,9 @@ void RemoveRaisedArms(const DetectorOptions& o, const DetectorWorkspace& ws, Clu
   const double vs = o.voxel_size_m;
   for (auto& cluster : *clusters) {
     for (int pass = 0; pass < 2; ++pass) {  // both arms
-      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-      for (int i : cluster) centre += ws.floor[i].head<2>();
-      centre /= static_cast<double>(cluster.size());
-      const Eigen::Vector2d ray =
-          centre.norm() > 1e-6 ? centre.normalized() : Eigen::Vector2d(0, 1);
-      const Eigen::Vector2d across(-ray.y(), ray.x());
-      double smin = std::numeric_limits<double>::infinity(), smax = -smin;
-      for (int i : cluster) {
-        const double s = across.dot(ws.floor[i].head<2>());
-        smin = std::min(smin, s);
-        smax = std::max(smax, s);
-      }
+      const SpanAcrossRay span = SpanAcrossViewingRay(cluster, ws);
+      const Eigen::Vector2d across = span.across;
+      const double smin = span.min, smax = span.max;
       const int nbins = static_cast<int>((smax - smin) / vs) + 1;
       if (nbins < 4) break;
       std::vector<double> profile(nbins, -1.0);
@@ -808,17 +833,9 @@ HeadParts SplitAtHeads(const Clusters& clusters, const DetectorOptions& o,
     double cluster_top = -std::numeric_limits<double>::infinity();
     for (int i : cluster) cluster_top = std::max(cluster_top, ws.floor[i].z());
     if (cluster_top < o.candidate_min_height_m) continue;  // lying-body test instead
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (int i : cluster) centre += ws.floor[i].head<2>();
-    centre /= static_cast<double>(cluster.size());
-    const Eigen::Vector2d ray = centre.norm() > 1e-6 ? centre.normalized() : Eigen::Vector2d(0, 1);
-    const Eigen::Vector2d across(-ray.y(), ray.x());
-    double smin = std::numeric_limits<double>::infinity(), smax = -smin;
-    for (int i : cluster) {
-      const double s = across.dot(ws.floor[i].head<2>());
-      smin = std::min(smin, s);
-      smax = std::max(smax, s);
-    }
+    const SpanAcrossRay span = SpanAcrossViewingRay(cluster, ws);
+    const Eigen::Vector2d across = span.across;
+    const double smin = span.min, smax = span.max;
     const int nbins = static_cast<int>((smax - smin) / vs) + 1;
     std::vector<int> top(nbins, -1);
     for (int i : cluster) {
@@ -1161,24 +1178,10 @@ void Classify(double loose_score, bool color_ok, const RgbdFrame& frame, const H
       patch_ok = false;
     } else {
       const int sub_w = x1p - x0p + 1, sub_h = y1p - y0p + 1;
-      // Statistics over the patch (row pointer offset into the full image).
-      double s = 0, s2 = 0;
-      int64_t n = 0, nsat = 0;
-      const int step = std::max(1, std::min(sub_w, sub_h) / 32);
-      for (int vv = y0p; vv <= y1p; vv += step) {
-        const uint8_t* rowp = &frame.rgb[(static_cast<size_t>(vv) * frame.width + x0p) * 3];
-        for (int uu = 0; uu < sub_w; uu += step) {
-          const uint8_t* px = rowp + 3 * uu;
-          const int grey = (77 * px[0] + 150 * px[1] + 29 * px[2]) >> 8;
-          s += grey;
-          s2 += grey * grey;
-          nsat += grey >= 250;
-          ++n;
-        }
-      }
-      const double mean = s / n;
-      const double stddev = std::sqrt(std::max(0.0, s2 / n - mean * mean));
-      const double sat = static_cast<double>(nsat) / n;
+      double mean, stddev, sat;
+      RegionStatistics(&frame.rgb[(static_cast<size_t>(y0p) * frame.width + x0p) * 3], sub_w,
+                       sub_h, frame.width, std::max(1, std::min(sub_w, sub_h) / 32), &mean,
+                       &stddev, &sat);
       patch_ok = mean >= co.dark_mean && stddev >= co.min_contrast && sat <= co.max_saturated;
     }
   }
