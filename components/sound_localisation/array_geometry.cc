@@ -53,6 +53,14 @@ double ArrayGeometry::aperture_m() const {
   return best;
 }
 
+void ArrayGeometry::CheckChannels(int block_channels) const {
+  for (int c : channel_map)
+    if (c >= block_channels)
+      throw std::invalid_argument("array '" + name + "' uses device channel " + std::to_string(c) +
+                                  " but the audio has " + std::to_string(block_channels) +
+                                  " channels");
+}
+
 double ArrayGeometry::UniformSpacing() const {
   if (!is_linear() || num_mics() < 3) return is_linear() ? aperture_m() : 0;
   const double d = (positions_m.col(1) - positions_m.col(0)).norm();

@@ -52,6 +52,9 @@ struct ArrayGeometry {
   Eigen::VectorXd Delays(const Eigen::Vector3d& u) const { return -(positions_m.transpose() * u) / speed_of_sound_mps; }
   // Uniform linear array: spacing, else 0.
   double UniformSpacing() const;
+  // Throws std::invalid_argument when a microphone's device channel is not in audio blocks of
+  // `block_channels` channels.
+  void CheckChannels(int block_channels) const;
 };
 
 // Angle between two directions of a kind (on the sphere; 1-D: |difference|).

@@ -283,11 +283,7 @@ DirectionalClassifier::DirectionalClassifier(ArrayGeometry geometry, DoaKind kin
 }
 
 void DirectionalClassifier::Push(const int16_t* data, int frames, int block_channels) {
-  for (int c : geometry_.channel_map)
-    if (c >= block_channels)
-      throw std::invalid_argument("array '" + geometry_.name + "' uses device channel " +
-                                  std::to_string(c) + " but the audio has " +
-                                  std::to_string(block_channels) + " channels");
+  geometry_.CheckChannels(block_channels);
   stft_.PushInterleaved(
       data, frames, block_channels, geometry_.channel_map,
       [&](const Eigen::MatrixXcf& s, int64_t end) { OnFrame(s, stream_offset_ + end); });
