@@ -18,6 +18,16 @@ namespace {
 
 using common::Utime;
 
+// A person merged into another: `into` counts `from`'s detections and keeps the higher
+// confidence, the confirmation and the whole time span of both.
+void AddDetectionsOf(const Person& from, Person* into) {
+  into->num_detections += from.num_detections;
+  into->confidence = std::max(into->confidence, from.confidence);
+  into->confirmed = into->confirmed || from.confirmed;
+  into->first_detected_utime = std::min(into->first_detected_utime, from.first_detected_utime);
+  into->last_detected_utime = std::max(into->last_detected_utime, from.last_detected_utime);
+}
+
 // Clamps the eigenvalues of a covariance from below (repeated detections share the pose
 // error, so fusion must not make a person arbitrarily certain).
 Eigen::Matrix3d Floor(const Eigen::Matrix3d& cov, double min_variance) {
@@ -237,20 +247,12 @@ void PeopleMap::AddSeen(Utime utime, const std::vector<SeenDetection>& detection
       // A heard-only person this seen one agrees with: one person, both cues.
       for (auto& [id, q] : people_) {
         if (q.has_seen || !q.has_heard) continue;
-        if ((q.heard_position_m - z).head<2>().norm() <= options_.fuse_max_distance_m &&
-            HeardSeenMahalanobis2(z, Pz, q.heard_position_m, q.heard_covariance) <=
-                options_.fuse_gate_chi2) {
+        if (HeardAgreesWithSeen(z, Pz, q.heard_position_m, q.heard_covariance)) {
           p = &q;
           break;
         }
       }
-      if (!p) {
-        Person fresh;
-        fresh.id = next_id_++;
-        fresh.first_detected_utime = utime;
-        fresh.last_detected_utime = utime;
-        p = &people_.emplace(fresh.id, fresh).first->second;
-      }
+      if (!p) p = NewPerson(utime);
       p->has_seen = true;
       p->has_settled = false;
     }
@@ -387,6 +389,23 @@ void PeopleMap::ForgetAnchors() {
   for (auto& [id, p] : people_) p.anchor_node_id = -1;
 }
 
+bool PeopleMap::HeardAgreesWithSeen(const Eigen::Vector3d& seen_m,
+                                    const Eigen::Matrix3d& seen_covariance,
+                                    const Eigen::Vector3d& heard_m,
+                                    const Eigen::Matrix3d& heard_covariance) const {
+  return (seen_m - heard_m).head<2>().norm() <= options_.fuse_max_distance_m &&
+         HeardSeenMahalanobis2(seen_m, seen_covariance, heard_m, heard_covariance) <=
+             options_.fuse_gate_chi2;
+}
+
+Person* PeopleMap::NewPerson(common::Utime utime) {
+  Person fresh;
+  fresh.id = next_id_++;
+  fresh.first_detected_utime = utime;
+  fresh.last_detected_utime = utime;
+  return &people_.emplace(fresh.id, fresh).first->second;
+}
+
 double PeopleMap::HeardSeenMahalanobis2(const Eigen::Vector3d& seen_m,
                                         const Eigen::Matrix3d& seen_covariance,
                                         const Eigen::Vector3d& heard_m,
@@ -499,10 +518,8 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     if (!p) {
       for (auto& [id, q] : people_) {
         if (q.has_heard || !q.has_seen) continue;
-        if ((q.seen_position_m - best->position_m).head<2>().norm() <=
-                options_.fuse_max_distance_m &&
-            HeardSeenMahalanobis2(q.seen_position_m, q.seen_covariance, best->position_m,
-                                  best->covariance) <= options_.fuse_gate_chi2) {
+        if (HeardAgreesWithSeen(q.seen_position_m, q.seen_covariance, best->position_m,
+                                best->covariance)) {
           p = &q;
           break;
         }
@@ -511,13 +528,7 @@ int PeopleMap::AddHeard(Utime utime, const std::vector<HeardDetection>& detectio
     // Only voices become people: a keyword false alarm on a machine or an alarm makes nobody
     // (the call is counted; the source becomes a person if the sound map later calls it a voice).
     if (!p && !best->is_person) continue;
-    if (!p) {
-      Person fresh;
-      fresh.id = next_id_++;
-      fresh.first_detected_utime = utime;
-      fresh.last_detected_utime = utime;
-      p = &people_.emplace(fresh.id, fresh).first->second;
-    }
+    if (!p) p = NewPerson(utime);
     p->sound_source_id = best->id;
     p->has_heard = true;
     p->heard_position_m = best->position_m;
@@ -556,17 +567,13 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
       Refuse(linked);
     } else if (s.is_person && recently_heard && Placed(s) &&
                RecentCalls(s.id, utime) >= options_.min_heard_calls) {
-      Person fresh;
-      fresh.id = next_id_++;
-      fresh.first_detected_utime = utime;
-      fresh.last_detected_utime = utime;
-      fresh.sound_source_id = s.id;
-      fresh.has_heard = true;
-      fresh.heard_position_m = s.position_m;
-      fresh.heard_covariance = s.covariance;
-      fresh.cues = kHeard;
-      if (source_keyword_.count(s.id)) fresh.keyword = source_keyword_[s.id];
-      Person& p = people_.emplace(fresh.id, fresh).first->second;
+      Person& p = *NewPerson(utime);
+      p.sound_source_id = s.id;
+      p.has_heard = true;
+      p.heard_position_m = s.position_m;
+      p.heard_covariance = s.covariance;
+      p.cues = kHeard;
+      if (source_keyword_.count(s.id)) p.keyword = source_keyword_[s.id];
       AddEvidence(&p, utime, 0.8);
       Refuse(&p);
     }
@@ -578,23 +585,15 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
     if (heard.has_heard && !heard.has_seen) {
       for (auto& [id, seen] : people_) {
         if (!seen.has_seen || seen.has_heard) continue;
-        if ((seen.seen_position_m - heard.heard_position_m).head<2>().norm() <=
-                options_.fuse_max_distance_m &&
-            HeardSeenMahalanobis2(seen.seen_position_m, seen.seen_covariance,
-                                  heard.heard_position_m,
-                                  heard.heard_covariance) <= options_.fuse_gate_chi2) {
+        if (HeardAgreesWithSeen(seen.seen_position_m, seen.seen_covariance, heard.heard_position_m,
+                                heard.heard_covariance)) {
           seen.has_heard = true;
           seen.heard_position_m = heard.heard_position_m;
           seen.heard_covariance = heard.heard_covariance;
           seen.sound_source_id = heard.sound_source_id;
           seen.cues |= heard.cues;
           if (!heard.keyword.empty()) seen.keyword = heard.keyword;
-          seen.num_detections += heard.num_detections;
-          seen.confidence = std::max(seen.confidence, heard.confidence);
-          seen.confirmed = seen.confirmed || heard.confirmed;
-          seen.first_detected_utime =
-              std::min(seen.first_detected_utime, heard.first_detected_utime);
-          seen.last_detected_utime = std::max(seen.last_detected_utime, heard.last_detected_utime);
+          AddDetectionsOf(heard, &seen);
           Refuse(&seen);
           merged = true;
           break;
@@ -610,20 +609,11 @@ void PeopleMap::UpdateSoundSources(Utime utime, const std::vector<SoundSource>& 
         const bool close =
             (other.position_m - heard.heard_position_m).head<2>().norm() <= options_.merge_radius_m;
         const bool agrees_with_seen =
-            other.has_seen &&
-            (other.seen_position_m - heard.heard_position_m).head<2>().norm() <=
-                options_.fuse_max_distance_m &&
-            HeardSeenMahalanobis2(other.seen_position_m, other.seen_covariance,
-                                  heard.heard_position_m,
-                                  heard.heard_covariance) <= options_.fuse_gate_chi2;
+            other.has_seen && HeardAgreesWithSeen(other.seen_position_m, other.seen_covariance,
+                                                  heard.heard_position_m, heard.heard_covariance);
         if (!close && !agrees_with_seen) continue;
         source_alias_[heard.sound_source_id] = id;
-        other.num_detections += heard.num_detections;
-        other.confidence = std::max(other.confidence, heard.confidence);
-        other.confirmed = other.confirmed || heard.confirmed;
-        other.first_detected_utime =
-            std::min(other.first_detected_utime, heard.first_detected_utime);
-        other.last_detected_utime = std::max(other.last_detected_utime, heard.last_detected_utime);
+        AddDetectionsOf(heard, &other);
         merged = true;
         break;
       }

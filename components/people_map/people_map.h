@@ -295,6 +295,13 @@ class PeopleMap {
                                const Eigen::Matrix3d& seen_covariance,
                                const Eigen::Vector3d& heard_m,
                                const Eigen::Matrix3d& heard_covariance) const;
+  // The fusion gate: a seen and a heard estimate within fuse_max_distance_m and, by
+  // HeardSeenMahalanobis2, within fuse_gate_chi2 are one person.
+  bool HeardAgreesWithSeen(const Eigen::Vector3d& seen_m, const Eigen::Matrix3d& seen_covariance,
+                           const Eigen::Vector3d& heard_m,
+                           const Eigen::Matrix3d& heard_covariance) const;
+  // A new person with the next id, first and last detected at `utime`.
+  Person* NewPerson(common::Utime utime);
   // relative_pose_sigma_m^2 on x and y.
   Eigen::Matrix3d RelativePoseCovariance() const;
   // The source's position is settled enough to place a heard-only person there.
