@@ -18,6 +18,7 @@
 #include "common/command_auth.h"
 #include "common/node.h"
 #include "common/time.h"
+#include "explore/explore_process_test_util.h"
 #include "sarmap/laser_scan_t.hpp"
 #include "sarmap/teleop_t.hpp"
 #include "sarmap/velocity_command_t.hpp"
@@ -28,18 +29,6 @@ namespace {
 
 using testing::Process;
 
-laser_scan_t Scan(float range_m) {
-  laser_scan_t scan{};
-  scan.header.frame = "base";
-  scan.angle_min_rad = -M_PI / 2;
-  scan.angle_increment_rad = M_PI / 180;
-  scan.range_min_m = 0.45f;
-  scan.range_max_m = 8.0f;
-  scan.ranges_m.assign(181, range_m);
-  scan.num_ranges = 181;
-  return scan;
-}
-
 struct AttackRun {
   std::vector<velocity_command_t> before, during;
   std::string output;
@@ -47,9 +36,7 @@ struct AttackRun {
 
 // sarmap-explore (reactive) with or without the bus key; the stack's side is keyed the same.
 AttackRun DriveThroughAnAttack(const std::string& dir, bool signed_bus) {
-  const std::string key_path = dir + "/bus.key";
-  std::ofstream(key_path, std::ios::binary) << std::string(32, 'b');
-  EXPECT_EQ(chmod(key_path.c_str(), 0600), 0);
+  const std::string key_path = testing_util::WriteKeyFile(dir + "/bus.key", 'b');
 
   common::Node stack("signed_bus_stack");
   if (signed_bus) stack.SetBusKey(common::LoadAuthKeyFile(key_path));
@@ -61,7 +48,7 @@ AttackRun DriveThroughAnAttack(const std::string& dir, bool signed_bus) {
   auto scan_pub = stack.Advertise<laser_scan_t>("SCAN");
   auto forged_scan_pub = attacker.Advertise<laser_scan_t>("SCAN");
   auto forged_teleop_pub = attacker.Advertise<teleop_t>("TELEOP");
-  laser_scan_t open = Scan(3.0f), wall = Scan(0.5f);
+  laser_scan_t open = testing_util::UniformScan(3.0f), wall = testing_util::UniformScan(0.5f);
   double next_scan_s = 0;
   // Signed open-space SCANs at 10 Hz; with `attack`, forged ones between them at 50 Hz.
   auto pump = [&](double limit_s, bool attack, const std::function<bool()>& done) {

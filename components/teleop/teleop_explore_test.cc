@@ -17,6 +17,7 @@
 #include "common/command_auth.h"
 #include "common/node.h"
 #include "common/time.h"
+#include "explore/explore_process_test_util.h"
 #include "sarmap/laser_scan_t.hpp"
 #include "sarmap/velocity_command_t.hpp"
 #include "tests/process.h"
@@ -26,30 +27,12 @@ namespace {
 
 using testing::Process;
 
-std::string WriteKey(const std::string& path, char fill) {
-  std::ofstream(path, std::ios::binary) << std::string(32, fill);
-  EXPECT_EQ(chmod(path.c_str(), 0600), 0);
-  return path;
-}
-
-laser_scan_t OpenScan() {
-  laser_scan_t scan{};
-  scan.header.frame = "base";
-  scan.angle_min_rad = -M_PI / 2;
-  scan.angle_increment_rad = M_PI / 180;
-  scan.range_min_m = 0.45f;
-  scan.range_max_m = 8.0f;
-  scan.ranges_m.assign(181, 3.0f);  // open space all round
-  scan.num_ranges = 181;
-  return scan;
-}
-
 TEST(TeleopExplore, SignedStopStopsTheRobotAndOnlySignedCommandsMoveItAgain) {
   const std::string dir = "/tmp/sarmap_teleop_explore_" + std::to_string(getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const std::string key_path = WriteKey(dir + "/command.key", 'k');
-  const std::string other_key_path = WriteKey(dir + "/other.key", 'o');
+  const std::string key_path = testing_util::WriteKeyFile(dir + "/command.key", 'k');
+  const std::string other_key_path = testing_util::WriteKeyFile(dir + "/other.key", 'o');
   const common::AuthKey key = common::LoadAuthKeyFile(key_path);
 
   common::Node node("teleop_explore_test");
@@ -58,7 +41,7 @@ TEST(TeleopExplore, SignedStopStopsTheRobotAndOnlySignedCommandsMoveItAgain) {
       "CMD_VEL",
       [&](const velocity_command_t& m, const common::ReceiveInfo&) { commands.push_back(m); });
   auto scan_pub = node.Advertise<laser_scan_t>("SCAN");
-  laser_scan_t scan = OpenScan();
+  laser_scan_t scan = testing_util::UniformScan(3.0f);  // open space all round
   double next_scan_s = 0;
   // Publishes SCAN at 10 Hz and handles what arrives until `done` or `limit_s`.
   auto pump = [&](double limit_s, const std::function<bool()>& done) {
