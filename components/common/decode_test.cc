@@ -13,25 +13,7 @@
 
 #include "common/node.h"
 #include "sarmap/message_samples.h"
-
-// The largest single allocation since the last reset: proves that a hostile count is refused
-// before anything sizes a vector from it. Replaces the global operator new of this binary.
-namespace {
-size_t g_largest_allocation = 0;
-}  // namespace
-
-// free() on what operator new returned is right here: this operator new is malloc.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(size_t size) {
-  if (size > g_largest_allocation) g_largest_allocation = size;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, size_t) noexcept { std::free(p); }
-void operator delete[](void* p, size_t) noexcept { std::free(p); }
+#include "tests/largest_allocation.h"
 
 namespace sarmap {
 namespace common {
@@ -138,9 +120,10 @@ void ExpectRejected(const std::vector<uint8_t>& wire, const std::string& what) {
   EXPECT_FALSE(why.empty());
   EXPECT_EQ(why.find('\n'), std::string::npos) << why;
   T msg;
-  g_largest_allocation = 0;
+  sarmap::testing::StartMeasuringAllocations();
   EXPECT_FALSE(DecodeMessage(wire.data(), wire.size(), &msg, &why));
-  EXPECT_LT(g_largest_allocation, kAllocationLimit) << T::getTypeName() << " " << what;
+  EXPECT_LT(sarmap::testing::LargestAllocation(), kAllocationLimit)
+      << T::getTypeName() << " " << what;
 }
 
 template <class T>
@@ -219,9 +202,9 @@ void RandomFlipsNeverCrash(std::mt19937_64& rng, int* accepted, int* rejected) {
       }
       T msg;
       std::string why;
-      g_largest_allocation = 0;
+      sarmap::testing::StartMeasuringAllocations();
       (void)DecodeMessage(wire.data(), wire.size(), &msg, &why);
-      EXPECT_LT(g_largest_allocation, kAllocationLimit) << T::getTypeName();
+      EXPECT_LT(sarmap::testing::LargestAllocation(), kAllocationLimit) << T::getTypeName();
       if (CheckWire<T>(wire.data(), wire.size(), nullptr)) {
         ++*accepted;
         T again;
@@ -321,13 +304,13 @@ class NodeUnderAttackTest : public ::testing::Test {
 
   // Publishes `wire` and then a valid message, and handles both.
   void Receive(const std::vector<uint8_t>& wire) {
-    g_largest_allocation = 0;
+    sarmap::testing::StartMeasuringAllocations();
     for (const std::vector<uint8_t>* w :
          {&wire, const_cast<const std::vector<uint8_t>*>(&valid_)}) {
       node_.lcm().publish("SOUND_MAP", w->data(), static_cast<unsigned int>(w->size()));
       ASSERT_TRUE(node_.SpinOnce(1.0));
     }
-    largest_allocation_ = g_largest_allocation;
+    largest_allocation_ = sarmap::testing::LargestAllocation();
   }
 
   Node node_;

@@ -29,41 +29,25 @@
 
 #include "common/args.h"
 #include "tests/fuzz/wire_mutations.h"
+#include "tests/largest_allocation.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 
-// The largest single allocation since SarmapFuzzDecodeBegin().
 namespace {
-bool g_measuring = false;
-size_t g_largest_allocation = 0;
 int64_t g_decoded_messages = 0;
 int64_t g_accepted_messages = 0;
 }  // namespace
 
-// free() on what operator new returned is right here: this operator new is malloc.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(size_t size) {
-  if (g_measuring && size > g_largest_allocation) g_largest_allocation = size;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, size_t) noexcept { std::free(p); }
-void operator delete[](void* p, size_t) noexcept { std::free(p); }
-
-extern "C" void SarmapFuzzDecodeBegin() {
-  g_largest_allocation = 0;
-  g_measuring = true;
-}
+// Each decode is one window of the largest-allocation measure.
+extern "C" void SarmapFuzzDecodeBegin() { sarmap::testing::StartMeasuringAllocations(); }
 
 extern "C" void SarmapFuzzDecodeEnd(const char* type, size_t size, bool message, bool accepted) {
-  g_measuring = false;
+  sarmap::testing::StopMeasuringAllocations();
   const size_t limit = (size_t{1} << 20) + 64 * size;
-  if (g_largest_allocation > limit) {
+  const size_t largest = sarmap::testing::LargestAllocation();
+  if (largest > limit) {
     std::fprintf(stderr, "decode fuzz: %s: one allocation of %zu bytes for an input of %zu bytes\n",
-                 type, g_largest_allocation, size);
+                 type, largest, size);
     std::abort();
   }
   if (message) {
