@@ -73,17 +73,54 @@ class DepthColorPairer {
   std::string last_warning_;
 };
 
-// Decodes each of `pairs` with build(pair, &frame) (false: skipped) into `ready`, in order, and
-// empties `pairs`.
-template <class Frame, class Build>
-void DecodePairs(std::vector<DepthColorPairer::Pair>* pairs, Build build,
-                 std::vector<Frame>* ready) {
-  for (const auto& pair : *pairs) {
-    Frame frame;
-    if (build(pair, &frame)) ready->push_back(std::move(frame));
+// A component's RGB-D frame assembler: pairs DEPTH and RGB messages with a DepthColorPairer and
+// decodes each pair into a Frame with Build(); the warnings are the pairer's and Build()'s.
+template <class Frame>
+class FrameAssemblerBase {
+ public:
+  explicit FrameAssemblerBase(const DepthColorPairing& pairing) : pairer_(pairing) {}
+  virtual ~FrameAssemblerBase() = default;
+
+  // Each call may complete frames; they are appended to `ready` in time order.
+  void AddDepth(const sarmap::image_t& depth, std::vector<Frame>* ready) {
+    pairer_.AddDepth(depth, &pairs_);
+    BuildAll(ready);
   }
-  pairs->clear();
-}
+  void AddColor(const sarmap::image_t& color, std::vector<Frame>* ready) {
+    pairer_.AddColor(color, &pairs_);
+    BuildAll(ready);
+  }
+  // No more messages are coming for now (the bus went quiet): depth frames still waiting for
+  // their colour go on as if the wait had timed out (the last frame of a depth-only replay).
+  void Flush(std::vector<Frame>* ready) {
+    pairer_.Flush(&pairs_);
+    BuildAll(ready);
+  }
+  bool has_pending() const { return pairer_.has_pending(); }
+
+  // Warning name -> count.
+  const std::map<std::string, int64_t>& warnings() const { return pairer_.warnings(); }
+  int64_t total_warnings() const { return pairer_.total_warnings(); }
+  // The last warning's text, for logs.
+  const std::string& last_warning() const { return pairer_.last_warning(); }
+
+ protected:
+  // Decodes one pair into `frame`; false (a warning counted through pairer_.Warn) skips it.
+  virtual bool Build(const DepthColorPairer::Pair& pair, Frame* frame) = 0;
+
+  DepthColorPairer pairer_;
+
+ private:
+  void BuildAll(std::vector<Frame>* ready) {
+    for (const auto& pair : pairs_) {
+      Frame frame;
+      if (Build(pair, &frame)) ready->push_back(std::move(frame));
+    }
+    pairs_.clear();
+  }
+
+  std::vector<DepthColorPairer::Pair> pairs_;
+};
 
 }  // namespace common
 }  // namespace sarmap

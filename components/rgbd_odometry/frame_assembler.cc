@@ -25,22 +25,7 @@ common::DepthColorPairing Pairing(bool need_color, double max_pair_dt_s, double 
 
 FrameAssembler::FrameAssembler(bool need_color, double max_pair_dt_s, double color_wait_s,
                                int max_pending)
-    : pairer_(Pairing(need_color, max_pair_dt_s, color_wait_s, max_pending)) {}
-
-void FrameAssembler::AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready) {
-  pairer_.AddDepth(depth, &pairs_);
-  BuildAll(ready);
-}
-
-void FrameAssembler::AddColor(const sarmap::image_t& color, std::vector<RgbdFrame>* ready) {
-  pairer_.AddColor(color, &pairs_);
-  BuildAll(ready);
-}
-
-void FrameAssembler::BuildAll(std::vector<RgbdFrame>* ready) {
-  common::DecodePairs(
-      &pairs_, [this](const auto& pair, RgbdFrame* frame) { return Build(pair, frame); }, ready);
-}
+    : FrameAssemblerBase(Pairing(need_color, max_pair_dt_s, color_wait_s, max_pending)) {}
 
 bool FrameAssembler::Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame) {
   const sarmap::image_t& depth = pair.depth;

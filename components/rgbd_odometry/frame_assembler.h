@@ -21,26 +21,14 @@
 namespace sarmap {
 namespace rgbd_odometry {
 
-class FrameAssembler {
+class FrameAssembler : public common::FrameAssemblerBase<RgbdFrame> {
  public:
+  // Warnings: "depth_decode", "color_decode", "color_size_mismatch", "no_color",
+  // "depth_backlog", "depth_out_of_order", "time_restart", "bad_intrinsics".
   FrameAssembler(bool need_color, double max_pair_dt_s, double color_wait_s, int max_pending = 3);
 
-  // Each call may complete frames; they are appended to `ready` in time order.
-  void AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready);
-  void AddColor(const sarmap::image_t& color, std::vector<RgbdFrame>* ready);
-
-  // Warning name -> count ("depth_decode", "color_decode", "color_size_mismatch", "no_color",
-  // "depth_backlog", "depth_out_of_order", "time_restart", "bad_intrinsics").
-  const std::map<std::string, int64_t>& warnings() const { return pairer_.warnings(); }
-  int64_t total_warnings() const { return pairer_.total_warnings(); }
-  const std::string& last_warning() const { return pairer_.last_warning(); }
-
  private:
-  void BuildAll(std::vector<RgbdFrame>* ready);
-  bool Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame);
-
-  common::DepthColorPairer pairer_;
-  std::vector<common::DepthColorPairer::Pair> pairs_;
+  bool Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame) override;
 };
 
 }  // namespace rgbd_odometry

@@ -26,7 +26,7 @@ common::DepthColorPairing Pairing(double max_pair_dt_s, double color_wait_s, boo
 }  // namespace
 
 FrameAssembler::FrameAssembler(double max_pair_dt_s, double color_wait_s, bool require_color)
-    : pairer_(Pairing(max_pair_dt_s, color_wait_s, require_color)) {}
+    : FrameAssemblerBase(Pairing(max_pair_dt_s, color_wait_s, require_color)) {}
 
 bool FrameAssembler::Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame) {
   const sarmap::image_t& depth = pair.depth;
@@ -74,24 +74,13 @@ bool FrameAssembler::Build(const common::DepthColorPairer::Pair& pair, RgbdFrame
   return true;
 }
 
-void FrameAssembler::Flush(std::vector<RgbdFrame>* ready) {
-  pairer_.Flush(&pairs_);
-  BuildAll(ready);
-}
-
-void FrameAssembler::BuildAll(std::vector<RgbdFrame>* ready) {
-  common::DecodePairs(
-      &pairs_, [this](const auto& pair, RgbdFrame* frame) { return Build(pair, frame); }, ready);
-}
-
 void FrameAssembler::AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready) {
   if (depth.pixel_format != sarmap::image_t::PIXEL_DEPTH_U16) {
     pairer_.Warn("depth_format",
                  "DEPTH message with pixel format " + std::to_string(depth.pixel_format));
     return;
   }
-  pairer_.AddDepth(depth, &pairs_);
-  BuildAll(ready);
+  FrameAssemblerBase::AddDepth(depth, ready);
 }
 
 void FrameAssembler::AddColor(const sarmap::image_t& color, std::vector<RgbdFrame>* ready) {
@@ -99,8 +88,7 @@ void FrameAssembler::AddColor(const sarmap::image_t& color, std::vector<RgbdFram
     pairer_.Warn("color_format", "RGB message carries a depth image");
     return;
   }
-  pairer_.AddColor(color, &pairs_);
-  BuildAll(ready);
+  FrameAssemblerBase::AddColor(color, ready);
 }
 
 }  // namespace vision_people

@@ -20,31 +20,18 @@
 namespace sarmap {
 namespace vision_people {
 
-class FrameAssembler {
+class FrameAssembler : public common::FrameAssemblerBase<RgbdFrame> {
  public:
+  // Warnings: e.g. "depth_decode", "color_size_mismatch", "no_color".
   FrameAssembler(double max_pair_dt_s, double color_wait_s, bool require_color);
 
-  // Each call may complete frames; they are appended to `ready` in time order.
+  // As FrameAssemblerBase's, after refusing (and counting) a message of the other kind of image.
   void AddDepth(const sarmap::image_t& depth, std::vector<RgbdFrame>* ready);
   void AddColor(const sarmap::image_t& color, std::vector<RgbdFrame>* ready);
 
-  // No more messages are coming for now (the bus went quiet): depth frames still waiting for
-  // their colour go on as if the wait had timed out (the last frame of a depth-only replay).
-  void Flush(std::vector<RgbdFrame>* ready);
-  bool has_pending() const { return pairer_.has_pending(); }
-
-  // Warning name -> count (e.g. "depth_decode", "color_size_mismatch", "no_color").
-  const std::map<std::string, int64_t>& warnings() const { return pairer_.warnings(); }
-  int64_t total_warnings() const { return pairer_.total_warnings(); }
-  // The last warning's text, for logs.
-  const std::string& last_warning() const { return pairer_.last_warning(); }
-
  private:
-  void BuildAll(std::vector<RgbdFrame>* ready);
-  bool Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame);
+  bool Build(const common::DepthColorPairer::Pair& pair, RgbdFrame* frame) override;
 
-  common::DepthColorPairer pairer_;
-  std::vector<common::DepthColorPairer::Pair> pairs_;
   std::vector<uint16_t> depth_buffer_;
 };
 
