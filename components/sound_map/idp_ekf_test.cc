@@ -213,14 +213,7 @@ TEST(Experiments, Fig411CiMatchesFullEkf) {
     double rms[3] = {0, 0, 0};
     const Method methods[3] = {Method::kCiSubmaps, Method::kFullEkf, Method::kJoint};
     for (int r = 0; r < 2; ++r) {
-      Sim2dConfig c;
-      c.side_m = side;
-      c.overshoot_m = 5;
-      c.landmarks = true;
-      c.odo_sigma_m = 0.02;
-      c.odo_sigma_rad = 5 * M_PI / 180;
-      c.seed = 2000 + r;
-      const Sim2dData d = Simulate2d(c);
+      const Sim2dData d = Simulate2d(Fig411Config(side, r));
       for (int i = 0; i < 3; ++i) rms[i] += RunMethod(d, methods[i]).score.rms_m / 2;
     }
     printf("side %.0f m: ci %.3f full-ekf %.3f joint %.3f\n", side, rms[0], rms[1], rms[2]);

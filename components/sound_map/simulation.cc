@@ -14,6 +14,17 @@ Eigen::Matrix3d Sim2dData::odometry_covariance() const {
 
 double Sim2dData::length_m() const { return config.step_m * static_cast<double>(odometry.size() - 1); }
 
+Sim2dConfig Fig411Config(double side_m, int run) {
+  Sim2dConfig c;
+  c.side_m = side_m;
+  c.overshoot_m = 5.0;
+  c.landmarks = true;
+  c.odo_sigma_m = 0.02;
+  c.odo_sigma_rad = 5.0 * M_PI / 180;
+  c.seed = 2000 + run;
+  return c;
+}
+
 Sim2dData Simulate2d(const Sim2dConfig& c) {
   Sim2dData d;
   d.config = c;

@@ -60,6 +60,9 @@ struct Sim2dData {
 };
 
 Sim2dData Simulate2d(const Sim2dConfig& config);
+// The scenario of Fig. 4.11 (Part II): a square of side_m with range-bearing landmarks, 5 m of
+// overshoot and the noisier odometry (0.02 m and 5 deg per step); run r has seed 2000 + r.
+Sim2dConfig Fig411Config(double side_m, int run);
 
 }  // namespace sound_map
 }  // namespace sarmap

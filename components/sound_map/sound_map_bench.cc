@@ -96,16 +96,7 @@ void BM_CopyOnly(benchmark::State& state) {
 }
 BENCHMARK(BM_CopyOnly)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
-sm::Sim2dData Sim185() {
-  sm::Sim2dConfig c;
-  c.side_m = 45;
-  c.overshoot_m = 5;
-  c.landmarks = true;
-  c.odo_sigma_m = 0.02;
-  c.odo_sigma_rad = 5 * M_PI / 180;
-  c.seed = 2000;
-  return sm::Simulate2d(c);
-}
+sm::Sim2dData Sim185() { return sm::Simulate2d(sm::Fig411Config(45, 0)); }
 
 void BM_JointOptimisation185m(benchmark::State& state) {
   static const sm::Sim2dData d = Sim185();

@@ -66,14 +66,7 @@ void Fig411(int runs) {
       std::vector<double> rms, conv, t, step, stepmax;
       double length = 0;
       for (int r = 0; r < runs; ++r) {
-        Sim2dConfig c;
-        c.side_m = side;
-        c.overshoot_m = 5.0;
-        c.landmarks = true;
-        c.odo_sigma_m = 0.02;
-        c.odo_sigma_rad = 5.0 * M_PI / 180;
-        c.seed = 2000 + r;
-        const Sim2dData d = Simulate2d(c);
+        const Sim2dData d = Simulate2d(Fig411Config(side, r));
         length = d.length_m();
         const RunResult res = RunMethod(d, m);
         rms.push_back(res.score.rms_m);
