@@ -29,10 +29,26 @@ std::string MakeTestWav() {
   return path;
 }
 
-TEST(FileSource, ContiguousBlocksWithSampleCounterAndUtime) {
+// Capture from the test WAV at `speed` (0: as fast as it reads).
+CaptureOptions TestWavAtSpeed(double speed) {
   CaptureOptions o;
   o.file = MakeTestWav();
-  o.speed = 0;
+  o.speed = speed;
+  return o;
+}
+
+// Opening the source fails with `message` in its error.
+void ExpectOpenFails(const CaptureOptions& o, const std::string& message) {
+  try {
+    OpenAudioSource(o);
+    FAIL() << "expected an error";
+  } catch (const AudioSourceError& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+  }
+}
+
+TEST(FileSource, ContiguousBlocksWithSampleCounterAndUtime) {
+  CaptureOptions o = TestWavAtSpeed(0);
   o.start_utime = 1000000;
   auto src = OpenAudioSource(o);
   EXPECT_EQ(src->num_channels(), 4);
@@ -52,9 +68,7 @@ TEST(FileSource, ContiguousBlocksWithSampleCounterAndUtime) {
 }
 
 TEST(FileSource, RealTimePacingAndSpeed) {
-  CaptureOptions o;
-  o.file = MakeTestWav();
-  o.speed = 4.0;  // 0.5 s of audio in about 0.125 s
+  const CaptureOptions o = TestWavAtSpeed(4.0);  // 0.5 s of audio in about 0.125 s
   auto src = OpenAudioSource(o);
   AudioBlock b;
   const auto t0 = std::chrono::steady_clock::now();
@@ -69,20 +83,10 @@ TEST(FileSource, ClearErrorsForMismatches) {
   CaptureOptions o;
   o.file = MakeTestWav();
   o.num_channels = 6;
-  try {
-    OpenAudioSource(o);
-    FAIL() << "expected an error";
-  } catch (const AudioSourceError& e) {
-    EXPECT_NE(std::string(e.what()).find("has 4 channels, expected 6"), std::string::npos) << e.what();
-  }
+  ExpectOpenFails(o, "has 4 channels, expected 6");
   o.num_channels = 4;
   o.sample_rate_hz = 48000;
-  try {
-    OpenAudioSource(o);
-    FAIL() << "expected an error";
-  } catch (const AudioSourceError& e) {
-    EXPECT_NE(std::string(e.what()).find("sample rate is 16000 Hz, expected 48000"), std::string::npos) << e.what();
-  }
+  ExpectOpenFails(o, "sample rate is 16000 Hz, expected 48000");
   o.file = TempPath("missing.wav");
   EXPECT_THROW(OpenAudioSource(o), AudioSourceError);
 }
@@ -102,9 +106,7 @@ TEST(FileSource, RawFilesNeedAndUseTheGivenFormat) {
 }
 
 TEST(SignalChecker, WarnsOnClippingAndSilence) {
-  CaptureOptions o;
-  o.file = MakeTestWav();
-  o.speed = 0;
+  CaptureOptions o = TestWavAtSpeed(0);
   o.silence_warn_s = 0.25;
   auto src = OpenAudioSource(o);
   SignalChecker checker(o, 16000, 4);
