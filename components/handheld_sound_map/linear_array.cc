@@ -16,6 +16,7 @@
 
 #include "common/logging.h"
 #include "handheld_sound_map/linear_array_costs.h"
+#include "sound_map/joint_solver_options.h"
 
 namespace sarmap {
 namespace sound_map {
@@ -812,13 +813,7 @@ class Mapper {
     if (problem.NumResidualBlocks() == 0) return;
     std::map<int64_t, Eigen::Vector3d> before;
     for (int64_t id : srcs) before[id] = tracks_[id].point;
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-    so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-    so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    so.max_num_iterations = first == 0 ? 200 : 10;
-    so.num_threads = 1;
-    so.logging_type = ceres::SILENT;
+    const ceres::Solver::Options so = JointSolverOptions(first == 0 ? 200 : 10);
     ceres::Solver::Summary sum;
     ceres::Solve(so, &problem, &sum);
     for (int k : used_poses) poses_[k].q.normalize();

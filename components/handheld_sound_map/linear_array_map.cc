@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "handheld_sound_map/linear_array_costs.h"
+#include "sound_map/joint_solver_options.h"
 
 namespace sarmap {
 namespace sound_map {
@@ -244,12 +245,7 @@ struct LinearArraySoundMap::Impl {
     if (problem.NumResidualBlocks() == 0) return;
     std::vector<Eigen::Vector3d> before;
     for (Track* t : sources) before.push_back(t->point);
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-    so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-    so.max_num_iterations = first == 0 ? 100 : 10;
-    so.num_threads = 1;
-    so.logging_type = ceres::SILENT;
+    const ceres::Solver::Options so = JointSolverOptions(first == 0 ? 100 : 10);
     ceres::Solver::Summary summary;
     ceres::Solve(so, &problem, &summary);
     for (int k : used_poses) keyframes[k].est.q.normalize();

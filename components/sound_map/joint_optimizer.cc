@@ -6,6 +6,8 @@
 #include <Eigen/Eigenvalues>
 #include <memory>
 
+#include "sound_map/joint_solver_options.h"
+
 namespace sarmap {
 namespace sound_map {
 
@@ -278,14 +280,7 @@ JointReport SolveJoint(JointProblem2d* p, int max_iterations) {
   }
   if (!pose_params.empty() && problem.HasParameterBlock(pose_params[0].data()))
     problem.SetParameterBlockConstant(pose_params[0].data());
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-  options.minimizer_type = ceres::TRUST_REGION;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.max_num_iterations = max_iterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options options = JointSolverOptions(max_iterations);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   for (size_t i = 0; i < p->poses.size(); ++i) p->poses[i] = Pose2::FromVec(pose_params[i]);
