@@ -12,8 +12,8 @@ namespace common {
 // Keeps a stream to at most `max_rate_hz` items per second of stamps (0: keeps every item). An
 // item is taken when it is at least 0.9 / max_rate_hz after the last one taken: the 10 % margin
 // absorbs the jitter of camera stamps, so a 30 Hz camera thinned to 15 Hz keeps every second
-// frame. A stamp before the last
-// one taken (a replay started over, a clock step back) is taken and starts the count again.
+// frame. A stamp before the last one taken (a replay started over, a clock step back) is taken
+// and starts the count again.
 class StampDecimator {
  public:
   explicit StampDecimator(double max_rate_hz)
