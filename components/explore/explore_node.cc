@@ -26,23 +26,26 @@ ExploreNode::ExploreNode(const ExploreNodeOptions& options, common::Node* node)
   node->Subscribe<teleop_t>(
       options.teleop_channel,
       [this](const teleop_t& m, const common::ReceiveInfo& info) { OnTeleop(m, info); });
-  node->Subscribe<pose_t>(
-      options.pose_channel, [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); }, 1);
+  // Poses and odometry are cheap to take and each one counts (the trail, the odometry history),
+  // so they queue like any input; MAP and SCAN are latest-only: a newer one replaces a stale one,
+  // whose handling (the grid, a control step) would only delay it.
+  node->Subscribe<pose_t>(options.pose_channel,
+                          [this](const pose_t& m, const common::ReceiveInfo&) { OnPose(m); });
   if (!options.odometry_channel.empty()) {
     node->Subscribe<odometry_t>(
         options.odometry_channel,
-        [this](const odometry_t& m, const common::ReceiveInfo& info) { OnOdometry(m, info); }, 1);
+        [this](const odometry_t& m, const common::ReceiveInfo& info) { OnOdometry(m, info); });
   }
   node->Subscribe<occupancy_grid_t>(
       options.map_channel,
       [this](const occupancy_grid_t& m, const common::ReceiveInfo&) { OnMap(m); }, 1);
   node->Subscribe<people_map_t>(
       options.people_channel,
-      [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 1);
+      [this](const people_map_t& m, const common::ReceiveInfo&) { OnPeople(m); }, 5);
   if (!options.sound_map_channel.empty()) {
     node->Subscribe<sound_map_t>(
         options.sound_map_channel,
-        [this](const sound_map_t& m, const common::ReceiveInfo&) { OnSoundMap(m); }, 1);
+        [this](const sound_map_t& m, const common::ReceiveInfo&) { OnSoundMap(m); }, 5);
   }
   node->Subscribe<laser_scan_t>(
       options.scan_channel,

@@ -191,9 +191,10 @@ class SlamNode::Impl {
     if (client.node_ids == m.node_ids && client.answered) return;
     client.node_ids = m.node_ids;
     client.answered = false;
-    // The request is kept either way: it is served after the next optimisation.
+    // Over the reply rate the request is deferred, not refused: it is kept and served after the
+    // next optimisation, so it is not counted as a dropped input.
     if (!client.replies.Take(now_s) || !anchor_replies_.Take(now_s)) {
-      refuse("reply rate");
+      ++anchor_requests_deferred_;
       return;
     }
     client.answered = true;
@@ -340,19 +341,20 @@ class SlamNode::Impl {
   void UpdateStatus() {
     const auto& s = slam_.stats();
     char text[512];
-    std::snprintf(text, sizeof(text),
-                  "nodes %lld (live %d) submaps %lld (live %d, %d held for anchors) loops %lld "
-                  "opt %lld (%.1f s) "
-                  "rejected scans %lld odom %lld late %lld off-clock stamps %lld (re-anchors "
-                  "%lld) anchor requests refused %lld mean latency %.1f ms data %.1f MB",
-                  (long long)s.nodes, slam_.num_live_nodes(), (long long)s.submaps,
-                  slam_.num_live_submaps(), slam_.num_submaps_held_for_anchors(),
-                  (long long)s.loop_closures, (long long)s.optimisations, s.optimise_seconds,
-                  (long long)s.rejected_scans, (long long)s.rejected_odometry,
-                  (long long)queue_.dropped_late(), (long long)gates_.dropped(),
-                  (long long)gates_.reanchors(), (long long)anchor_requests_refused_,
-                  latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0,
-                  common::Megabytes(slam_.Memory().Total()));
+    std::snprintf(
+        text, sizeof(text),
+        "nodes %lld (live %d) submaps %lld (live %d, %d held for anchors) loops %lld "
+        "opt %lld (%.1f s) "
+        "rejected scans %lld odom %lld late %lld off-clock stamps %lld (re-anchors "
+        "%lld) anchor requests refused %lld deferred %lld mean latency %.1f ms data %.1f MB",
+        (long long)s.nodes, slam_.num_live_nodes(), (long long)s.submaps, slam_.num_live_submaps(),
+        slam_.num_submaps_held_for_anchors(), (long long)s.loop_closures,
+        (long long)s.optimisations, s.optimise_seconds, (long long)s.rejected_scans,
+        (long long)s.rejected_odometry, (long long)queue_.dropped_late(),
+        (long long)gates_.dropped(), (long long)gates_.reanchors(),
+        (long long)anchor_requests_refused_, (long long)anchor_requests_deferred_,
+        latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0,
+        common::Megabytes(slam_.Memory().Total()));
     node_->SetStatusMessage(text);
   }
 
@@ -373,7 +375,8 @@ class SlamNode::Impl {
   };
   std::map<std::string, AnchorClient> anchor_requests_;
   TokenBucket anchor_replies_;
-  int64_t anchor_requests_refused_ = 0;
+  int64_t anchor_requests_refused_ = 0;   // dropped: too many ids or clients
+  int64_t anchor_requests_deferred_ = 0;  // over the reply rate, served after an optimisation
   Eigen::Matrix3d node_covariance_ = Eigen::Matrix3d::Zero();
   std::vector<int> covariance_ids_;  // latest node first, then the anchors
   Eigen::MatrixXd joint_covariance_;

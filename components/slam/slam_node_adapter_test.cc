@@ -1,8 +1,10 @@
 // SlamNode in-process over memq://: SCAN and ODOM on the bus give a POSE for every scan
 // (stamped with it, with a node id), an anchor request is answered with SLAM_ANCHORS, and a
-// scan stamped a year ahead is dropped.
+// scan stamped a year ahead is dropped; a changed request over the reply rate is deferred to the
+// next optimisation, not dropped.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -104,6 +106,57 @@ TEST(SlamNodeAdapterTest, ScansAndOdometryOnTheBusGivePosesAndAnchors) {
   EXPECT_GT(adapter.slam().num_nodes(), 1);
   ASSERT_FALSE(anchors.empty());
   EXPECT_GE(anchors.back().num_anchors, 1);
+}
+
+// A client that changes its request faster than its reply rate: the first request is answered at
+// once, the second is deferred (no reply yet, not counted as a dropped input) and served by the
+// anchors published after the next optimisation.
+TEST(SlamNodeAdapterTest, AnchorRequestOverTheReplyRateIsDeferredNotDropped) {
+  common::Node node("slam_node_test", "memq://");
+  std::vector<slam_anchors_t> anchors;
+  node.Subscribe<slam_anchors_t>(
+      "SLAM_ANCHORS", [&](const slam_anchors_t& m, const auto&) { anchors.push_back(m); }, 100);
+  SlamNodeOptions options;
+  options.map_period_s = 1e9;
+  options.anchor_replies_per_client_per_min = 6;  // one reply at once, then one every 10 s
+  SlamNode adapter(options, &node);
+  auto scan_pub = node.Advertise<laser_scan_t>("SCAN");
+  auto odom_pub = node.Advertise<odometry_t>("ODOM");
+  auto request_pub = node.Advertise<slam_anchor_request_t>("SLAM_ANCHOR_REQUEST");
+  const auto drain = [&] {
+    while (node.lcm().handleTimeout(0) > 0) {
+    }
+  };
+  const int64_t t0 = 1'000'000;
+  for (int i = 0; i < 20; ++i) {
+    const int64_t t = t0 + i * 100'000;
+    auto odom = Odometry(t, 0.05 * i);
+    odom_pub.Publish(&odom);
+    auto scan = RoomScan(t, 0.05 * i);
+    scan_pub.Publish(&scan);
+    drain();
+  }
+  ASSERT_GT(adapter.slam().num_nodes(), 2);
+  slam_anchor_request_t request{};
+  request.header.frame = "map";
+  request.client_id = "sound_map";
+  request.node_ids = {0};
+  request.num_node_ids = 1;
+  request_pub.Publish(&request);
+  drain();
+  ASSERT_EQ(anchors.size(), 1u) << "the first request is answered at once";
+  request.node_ids = {0, 1};
+  request.num_node_ids = 2;
+  request_pub.Publish(&request);
+  drain();
+  EXPECT_EQ(anchors.size(), 1u) << "the changed request is over the reply rate";
+  EXPECT_EQ(node.stats().at("SLAM_ANCHOR_REQUEST").dropped_malformed, 0);
+  adapter.Finish();
+  drain();
+  ASSERT_GE(anchors.size(), 2u);
+  std::vector<int64_t> ids;
+  for (const auto& a : anchors.back().anchors) ids.push_back(a.node_id);
+  EXPECT_NE(std::find(ids.begin(), ids.end(), 1), ids.end()) << "the deferred request is served";
 }
 
 }  // namespace

@@ -77,7 +77,7 @@ struct SlamNodeOptions {
     v("stamp_gate", stamp_gate,
       "SCAN / ODOM stamped far from their stream's clock are dropped and counted, never adopted");
     v("anchor_replies_per_client_per_min", anchor_replies_per_client_per_min,
-      "changed anchor requests answered at once per client per minute; more are refused (counted) "
+      "changed anchor requests answered at once per client per minute; more are deferred (counted) "
       "and the client is served after the next optimisation",
       Positive());
     v("anchor_replies_per_min", anchor_replies_per_min,

@@ -81,14 +81,11 @@ void ViewerNode::Subscribe(common::Node* node) {
         state_.SetMap(std::move(grid));
       },
       1);
-  node->Subscribe<pose_t>(
-      "POSE",
-      [this](const pose_t& m, const common::ReceiveInfo&) {
-        map_from_base_ = common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
-        state_.SetPose(m.header.utime, map_from_base_.translation().x(),
-                       map_from_base_.translation().y(), map_from_base_.yaw_rad());
-      },
-      5);
+  node->Subscribe<pose_t>("POSE", [this](const pose_t& m, const common::ReceiveInfo&) {
+    map_from_base_ = common::ToRigid3d(m.position_m, m.orientation).ToRigid2d();
+    state_.SetPose(m.header.utime, map_from_base_.translation().x(),
+                   map_from_base_.translation().y(), map_from_base_.yaw_rad());
+  });
   node->Subscribe<laser_scan_t>(
       "SCAN",
       [this](const laser_scan_t& m, const common::ReceiveInfo&) {
@@ -100,13 +97,13 @@ void ViewerNode::Subscribe(common::Node* node) {
       [this](const people_map_t& m, const common::ReceiveInfo&) {
         state_.SetPeople(PeopleViews(m));
       },
-      1);
+      5);
   node->Subscribe<sound_map_t>(
       "SOUND_MAP",
       [this](const sound_map_t& m, const common::ReceiveInfo&) {
         state_.SetSources(SourceViews(m));
       },
-      1);
+      5);
   node->Subscribe<image_t>(
       "RGB",
       [this](const image_t& m, const common::ReceiveInfo&) {
