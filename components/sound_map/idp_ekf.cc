@@ -179,8 +179,9 @@ void IdpEkf::RemoveAnchor(int64_t id) {
   RemoveBlock(i, 3);
 }
 
-void IdpEkf::SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,
-                            std::vector<int>* cols) const {
+Eigen::VectorXd IdpEkf::SourceInnovation(int64_t id, const Eigen::VectorXd& z, Eigen::MatrixXd* h,
+                                         std::vector<int>* cols) const {
+  const Source& s = sources_.at(id);
   const int a = anchors_.at(s.anchor);
   const int sd = source_dim(), m = obs_dim();
   Jet9 cur[3], anc[3], idp[3], out[2];
@@ -188,23 +189,22 @@ void IdpEkf::SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::
   for (int k = 0; k < 3; ++k) anc[k] = Jet9(x_[a + k], 3 + k);
   for (int k = 0; k < sd; ++k) idp[k] = Jet9(x_[s.index + k], 6 + k);
   IdpObservation(cur, anc, idp, options_.three_d, options_.mount, out);
-  predicted->resize(m);
+  Eigen::VectorXd nu(m);
   h->resize(m, 6 + sd);
   for (int k = 0; k < m; ++k) {
-    (*predicted)[k] = out[k].a;
+    nu[k] = z[k] - out[k].a;
     h->row(k) = out[k].v.head(6 + sd).transpose();
   }
+  nu[0] = WrapAngle(nu[0]);
   *cols = {0, 1, 2, a, a + 1, a + 2};
   for (int k = 0; k < sd; ++k) cols->push_back(s.index + k);
+  return nu;
 }
 
 double IdpEkf::SourceChi2(int64_t id, const Eigen::VectorXd& z, const Eigen::MatrixXd& r) const {
-  Eigen::VectorXd pred;
   Eigen::MatrixXd h;
   std::vector<int> cols;
-  SourceJacobian(sources_.at(id), &pred, &h, &cols);
-  Eigen::VectorXd nu = z - pred;
-  nu[0] = WrapAngle(nu[0]);
+  const Eigen::VectorXd nu = SourceInnovation(id, z, &h, &cols);
   const Eigen::MatrixXd s = h * p_(cols, cols) * h.transpose() + r;
   return nu.dot(s.ldlt().solve(nu));
 }
@@ -212,12 +212,9 @@ double IdpEkf::SourceChi2(int64_t id, const Eigen::VectorXd& z, const Eigen::Mat
 double IdpEkf::UpdateSource(int64_t id, const Eigen::VectorXd& z, const Eigen::MatrixXd& r,
                             double gate) {
   if (z.size() != obs_dim()) throw std::invalid_argument("IdpEkf::UpdateSource: wrong size");
-  Eigen::VectorXd pred;
   Eigen::MatrixXd h;
   std::vector<int> cols;
-  SourceJacobian(sources_.at(id), &pred, &h, &cols);
-  Eigen::VectorXd nu = z - pred;
-  nu[0] = WrapAngle(nu[0]);
+  const Eigen::VectorXd nu = SourceInnovation(id, z, &h, &cols);
   return Correct(cols, h, nu, r, gate, !options_.source_updates_move_poses);
 }
 

@@ -145,8 +145,10 @@ class IdpEkf {
   // Generic EKF correction with the observation Jacobian over the columns `cols`.
   double Correct(const std::vector<int>& cols, const Eigen::MatrixXd& h, const Eigen::VectorXd& nu,
                  const Eigen::MatrixXd& r, double gate, bool fix_poses = false);
-  void SourceJacobian(const Source& s, Eigen::VectorXd* predicted, Eigen::MatrixXd* h,
-                      std::vector<int>* cols) const;
+  // The innovation z - h(x) of source `id` (bearing wrapped), its Jacobian `h` and the state
+  // columns `cols` it is non-zero on.
+  Eigen::VectorXd SourceInnovation(int64_t id, const Eigen::VectorXd& z, Eigen::MatrixXd* h,
+                                   std::vector<int>* cols) const;
   void WrapAngles();
   void RemoveBlock(int i, int n);
 
