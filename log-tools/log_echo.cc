@@ -18,6 +18,7 @@
 #include "common/decode.h"
 #include "common/lcm_guard.h"
 #include "common/node.h"
+#include "common/signal_handlers.h"
 #include "log-tools/lcm_json.h"
 #include "log-tools/lcm_log_reader.h"
 #include "sarmap/message_registry.h"
@@ -139,12 +140,7 @@ int EchoLog(Echo* echo, const EchoOptions& options) {
 
 int EchoLive(Echo* echo, const EchoOptions& options) {
   std::string url = options.lcm_url.empty() ? sarmap::common::DefaultLcmUrl() : options.lcm_url;
-  struct sigaction action;
-  std::memset(&action, 0, sizeof(action));
-  action.sa_handler = OnStop;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  sarmap::common::SetSignalHandler({SIGINT, SIGTERM}, OnStop);
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {

@@ -27,6 +27,7 @@
 #include "common/node.h"
 #include "common/options.h"
 #include "common/robot_config.h"
+#include "common/signal_handlers.h"
 #include "log-tools/lcm_log_writer.h"
 #include "log-tools/record_profile.h"
 
@@ -247,12 +248,7 @@ int Record(int argc, char** argv) {
   if (url.empty()) url = sarmap::common::DefaultLcmUrl();
   url = WithReceiveBuffer(url);
 
-  struct sigaction action;
-  std::memset(&action, 0, sizeof(action));
-  action.sa_handler = OnStop;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  sarmap::common::SetSignalHandler({SIGINT, SIGTERM}, OnStop);
 
   Recorder recorder(output, increment, force, static_cast<int64_t>(split_mb * 1024 * 1024),
                     std::move(thinner));

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "common/lcm_guard.h"
+#include "common/signal_handlers.h"
 
 namespace sarmap {
 namespace common {
@@ -31,12 +32,7 @@ void OnSignal(int) {
 void InstallSignalHandlers() {
   if (g_signal_pipe[0] >= 0) return;
   if (pipe(g_signal_pipe) != 0) throw std::runtime_error("pipe() failed");
-  struct sigaction action;
-  memset(&action, 0, sizeof(action));
-  action.sa_handler = OnSignal;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  SetSignalHandler({SIGINT, SIGTERM}, OnSignal);
   signal(SIGPIPE, SIG_IGN);
 }
 

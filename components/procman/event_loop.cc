@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "common/logging.h"
+#include "common/signal_handlers.h"
 
 namespace sarmap {
 namespace procman {
@@ -32,14 +33,7 @@ void OnSignal(int sig) {
 void InstallHandlers() {
   if (g_wake_pipe[0] >= 0) return;
   if (pipe2(g_wake_pipe, O_CLOEXEC | O_NONBLOCK) != 0) throw std::runtime_error("pipe2 failed");
-  struct sigaction action;
-  memset(&action, 0, sizeof(action));
-  action.sa_handler = OnSignal;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = SA_RESTART | SA_NOCLDSTOP;
-  sigaction(SIGCHLD, &action, nullptr);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  common::SetSignalHandler({SIGCHLD, SIGINT, SIGTERM}, OnSignal, SA_RESTART | SA_NOCLDSTOP);
   signal(SIGPIPE, SIG_IGN);
 }
 
