@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/decode.h"
+#include "common/testing/test_keys.h"
 #include "sarmap/teleop_t.hpp"
 #include "sarmap/velocity_command_t.hpp"
 
@@ -17,11 +18,7 @@ namespace sarmap {
 namespace common {
 namespace {
 
-AuthKey TestKey(uint8_t seed) {
-  AuthKey key(32);
-  for (size_t i = 0; i < key.size(); ++i) key[i] = static_cast<uint8_t>(seed + 7 * i);
-  return key;
-}
+using testing_util::TestKey;
 
 velocity_command_t Command(int64_t utime, double linear_mps) {
   velocity_command_t m{};

@@ -8,17 +8,14 @@
 #include <fstream>
 #include <limits>
 
+#include "common/testing/test_keys.h"
 #include "procman/orders_test_util.h"
 
 namespace sarmap {
 namespace procman {
 namespace {
 
-Key TestKey(uint8_t seed) {
-  Key k(32);
-  for (size_t i = 0; i < k.size(); ++i) k[i] = static_cast<uint8_t>(seed + 7 * i);
-  return k;
-}
+using common::testing_util::TestKey;
 
 sarmap::pm_orders_t SomeOrders(int64_t counter) {
   sarmap::pm_orders_t o =

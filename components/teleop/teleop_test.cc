@@ -10,6 +10,7 @@
 #include "common/args.h"
 #include "common/command_auth.h"
 #include "common/node.h"
+#include "common/testing/test_keys.h"
 #include "sarmap/explore_status_t.hpp"
 #include "teleop/teleop_sender.h"
 
@@ -17,11 +18,7 @@ namespace sarmap {
 namespace teleop {
 namespace {
 
-common::AuthKey TestKey(uint8_t seed) {
-  common::AuthKey key(32);
-  for (size_t i = 0; i < key.size(); ++i) key[i] = static_cast<uint8_t>(seed * 13 + i);
-  return key;
-}
+using common::testing_util::TestKey;
 
 TEST(TeleopTest, RequestsParseAndBadOnesSayWhy) {
   TeleopOptions options;
