@@ -6,20 +6,13 @@
 #include "common/image_messages.h"
 #include "vision_people/hog_classifier.h"
 #include "vision_people/synthetic_scene.h"
+#include "vision_people/vision_test_util.h"
 
 namespace sarmap {
 namespace vision_people {
 namespace {
 
-sarmap::camera_intrinsics_t Kinect(int w, int h) {
-  sarmap::camera_intrinsics_t k{};
-  k.width = w;
-  k.height = h;
-  k.fx = k.fy = 525.0 * w / 640.0;
-  k.cx = (w - 1) / 2.0;
-  k.cy = (h - 1) / 2.0;
-  return k;
-}
+using testing_util::KinectIntrinsics;
 
 sarmap::image_t Depth(int64_t utime, int w = 64, int h = 48, uint16_t value = 2000) {
   sarmap::header_t hd;
@@ -27,7 +20,7 @@ sarmap::image_t Depth(int64_t utime, int w = 64, int h = 48, uint16_t value = 20
   hd.seq = 0;
   hd.frame = "camera";
   std::vector<uint16_t> d(w * h, value);
-  return common::MakeDepthImage(hd, Kinect(w, h), d.data(), w, h);
+  return common::MakeDepthImage(hd, KinectIntrinsics(w, h), d.data(), w, h);
 }
 
 sarmap::image_t Color(int64_t utime, int w = 64, int h = 48, uint8_t value = 120) {
@@ -36,7 +29,7 @@ sarmap::image_t Color(int64_t utime, int w = 64, int h = 48, uint8_t value = 120
   hd.seq = 0;
   hd.frame = "camera";
   std::vector<uint8_t> rgb(w * h * 3, value);
-  return common::MakeColorImage(hd, Kinect(w, h), rgb.data(), w, h, 90);
+  return common::MakeColorImage(hd, KinectIntrinsics(w, h), rgb.data(), w, h, 90);
 }
 
 TEST(FrameAssembler, PairsByUtimeInEitherOrder) {
@@ -139,7 +132,8 @@ TEST(FrameAssembler, SyntheticFrameThroughMessagesStillFindsThePerson) {
   hd.utime = 5000000;
   hd.seq = 0;
   hd.frame = "camera";
-  const auto depth = common::MakeDepthImage(hd, Kinect(640, 480), depth_mm.data(), 640, 480);
+  const auto depth =
+      common::MakeDepthImage(hd, KinectIntrinsics(640, 480), depth_mm.data(), 640, 480);
   FrameAssembler a(0.02, 0.1, false);
   std::vector<RgbdFrame> ready;
   a.AddColor(Color(5000000, 640, 480, 3), &ready);  // dark

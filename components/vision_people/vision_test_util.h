@@ -1,5 +1,5 @@
 #pragma once
-// For the vision node's tests (not part of a library): a Kinect's nominal intrinsics as a
+// For the vision tests (not part of a library): a Kinect's nominal intrinsics as a
 // message, scaled to a resolution.
 
 #include "sarmap/camera_intrinsics_t.hpp"
