@@ -14,6 +14,7 @@ command -v iptables >/dev/null || { echo "FAIL: iptables is not installed (make 
 out="$(mktemp -d /tmp/sarmap_demo_hostile_test_XXXXXX)"
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; echo "--- demo output"; cat "$out/demo.txt" || true; exit 1; }
+source "$SRC/tests/harness/demo_checks.sh"
 
 DEMO_HOSTILE=1 DEMO_SECONDS="${DEMO_TEST_SECONDS:-30}" DEMO_OUT="$out/run" \
   "$SRC/launch-scripts/demo.sh" "$BIN/.." >"$out/demo.txt" 2>&1 || fail "demo.sh exited with $?"
@@ -23,15 +24,9 @@ sent="$(sed -nE 's/^ *sent ([0-9]+) datagrams.*/\1/p' "$out/demo.txt")"
 lost="$(sed -nE 's/^ *datagrams lost: ([0-9]+) of ([0-9]+) .*/\1/p' "$out/demo.txt")"
 [ -n "$lost" ] && [ "$lost" -gt 0 ] || fail "no datagram was lost"
 [ -s "$out/run/report/report.html" ] && [ -s "$out/run/report/report.json" ] || fail "the report is incomplete"
-for process in sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people \
-               sarmap-sound-map sarmap-people-map sarmap-explore sarmap-viewer; do
-  line="$(grep "localhost/$process " "$out/run/perf.txt" || true)"
-  [ -n "$line" ] || fail "$process never reported by the launcher"
-  samples="$(echo "$line" | awk '{print $2}')"
-  restarts="$(echo "$line" | awk '{print $6}')"
-  [ "$samples" -ge 5 ] || fail "$process ran for only $samples launcher samples"
-  [ "$restarts" = 0 ] || fail "$process restarted $restarts times under the attack"
-done
+check_ran_without_restart "$out/run/perf.txt" " under the attack" sarmap-depth sarmap-slam \
+  sarmap-sound-localisation sarmap-speech sarmap-vision-people sarmap-sound-map sarmap-people-map \
+  sarmap-explore sarmap-viewer
 for f in "$out"/run/output/*.txt; do
   if grep -aqE "terminate called|Segmentation|Aborted|core dumped|exited with code [1-9]" "$f"; then
     fail "$(basename "$f" .txt) crashed: $(grep -aE "terminate called|Segmentation|Aborted|core dumped|exited with code" "$f" | head -3)"

@@ -12,6 +12,7 @@ SRC="${SARMAP_SOURCE_DIR:?SARMAP_SOURCE_DIR not set}"
 out="$(mktemp -d /tmp/sarmap_demo_test_XXXXXX)"
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; echo "--- demo output"; cat "$out/demo.txt" || true; exit 1; }
+source "$SRC/tests/harness/demo_checks.sh"
 
 DEMO_SECONDS="${DEMO_TEST_SECONDS:-20}" DEMO_OUT="$out/run" "$SRC/launch-scripts/demo.sh" "$BIN/.." \
   >"$out/demo.txt" 2>&1 || fail "demo.sh exited with $?"
@@ -19,15 +20,8 @@ grep -q "the mission script failed" "$out/demo.txt" && fail "the launcher's miss
 [ -s "$out/run/demo.lcmlog" ] || fail "no log recorded"
 [ -s "$out/run/report/report.html" ] && [ -s "$out/run/report/map.png" ] && [ -s "$out/run/report/report.json" ] \
   || fail "the report is incomplete"
-for process in sarmap-depth sarmap-slam sarmap-sound-localisation sarmap-speech sarmap-vision-people \
-               sarmap-sound-map sarmap-people-map sarmap-explore; do
-  line="$(grep "localhost/$process " "$out/run/perf.txt" || true)"
-  [ -n "$line" ] || fail "$process never reported by the launcher"
-  samples="$(echo "$line" | awk '{print $2}')"
-  restarts="$(echo "$line" | awk '{print $6}')"
-  [ "$samples" -ge 5 ] || fail "$process ran for only $samples launcher samples"
-  [ "$restarts" = 0 ] || fail "$process restarted $restarts times"
-done
+check_ran_without_restart "$out/run/perf.txt" "" sarmap-depth sarmap-slam sarmap-sound-localisation \
+  sarmap-speech sarmap-vision-people sarmap-sound-map sarmap-people-map sarmap-explore
 grep -q "^stack CPU:" "$out/run/perf.txt" || fail "no stack CPU figure"
 grep -Eq "latency DEPTH -> PEOPLE_VISUAL: [0-9]+ frames" "$out/run/perf.txt" || fail "no DEPTH -> PEOPLE_VISUAL latency"
 people="$(sed -nE 's/^mission: .*; ([0-9]+) people on the map.*/\1/p' "$out/demo.txt")"
