@@ -178,21 +178,20 @@ class Perception {
     // The observer sees each input before the sound map's intake takes it: an input can make
     // the intake ask SLAM for anchors, whose answer reaches the intake (and the observer) at
     // once, so a log written by the observer holds the inputs in the order the intake took them.
+    // The observer's CPU time is not the sound chain's.
     double observer_cpu_s = 0;
+    auto observe = [&](auto show) {
+      if (!observer_) return;
+      const double c = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
+      show();
+      observer_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - c;
+    };
     for (const auto& d : s.map_doas) {
-      if (observer_) {
-        const double c = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
-        observer_->OnDoaMap(common::UtimeToSeconds(d.header.utime) - start_s_, d);
-        observer_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - c;
-      }
+      observe([&] { observer_->OnDoaMap(common::UtimeToSeconds(d.header.utime) - start_s_, d); });
       s.intake->OnDoa(d);
     }
     for (const auto& h : s.heard) {
-      if (observer_) {
-        const double c = CpuSeconds(CLOCK_THREAD_CPUTIME_ID);
-        observer_->OnHeard(common::UtimeToSeconds(h.header.utime) - start_s_, h);
-        observer_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - c;
-      }
+      observe([&] { observer_->OnHeard(common::UtimeToSeconds(h.header.utime) - start_s_, h); });
       s.intake->OnHeard(h);
     }
     result_->sound_cpu_s += CpuSeconds(CLOCK_THREAD_CPUTIME_ID) - cpu0 - observer_cpu_s;
