@@ -254,16 +254,23 @@ class Parser {
     return false;
   }
 
+  // Fails at `name` when `defined` already holds a `kind` of that name (its `name_of` member).
+  template <class Entry>
+  void FailIfDefined(const Token& name, const std::string& kind, const std::vector<Entry>& defined,
+                     std::string Entry::*name_of) {
+    for (const auto& e : defined) {
+      if (e.*name_of == name.text) {
+        Fail(name, "duplicate " + kind + " \"" + name.text + "\" (first defined at " +
+                       e.where.ToString() + ")");
+      }
+    }
+  }
+
   void ParseCommand(const std::string& group) {
     const Token& kw = Next();  // cmd
     const Token& name = ExpectString("a command name");
     if (name.text.empty()) Fail(name, "command name must not be empty");
-    for (const auto& c : config_->commands) {
-      if (c.id == name.text) {
-        Fail(name, "duplicate command \"" + name.text + "\" (first defined at " +
-                       c.where.ToString() + ")");
-      }
-    }
+    FailIfDefined(name, "command", config_->commands, &CommandConfig::id);
     CommandConfig cmd;
     cmd.id = name.text;
     cmd.group = group;
@@ -377,12 +384,7 @@ class Parser {
   void ParseScript() {
     const Token& kw = Next();  // script
     const Token& name = ExpectString("a script name");
-    for (const auto& s : config_->scripts) {
-      if (s.name == name.text) {
-        Fail(name, "duplicate script \"" + name.text + "\" (first defined at " +
-                       s.where.ToString() + ")");
-      }
-    }
+    FailIfDefined(name, "script", config_->scripts, &Script::name);
     Script script;
     script.name = name.text;
     script.where = kw.where;
