@@ -29,6 +29,16 @@ CommandSpec Spec(const std::string& id, const std::string& exec, bool run, int r
   return s;
 }
 
+// A command line in shell syntax, run through the shell, ordered to run, with
+// `stop_time_allowed_s` between its stop signal and SIGKILL.
+CommandSpec ShellSpec(const std::string& id, const std::string& script,
+                      double stop_time_allowed_s) {
+  CommandSpec s = Spec(id, script, true);
+  s.use_shell = true;
+  s.stop_time_allowed_s = stop_time_allowed_s;
+  return s;
+}
+
 const CommandStatus* Find(const std::vector<CommandStatus>& all, const std::string& id) {
   for (const auto& s : all) {
     if (s.id == id) return &s;
@@ -150,9 +160,7 @@ TEST(Supervisor, RestartOnNewRunId) {
 
 TEST(Supervisor, IgnoredStopSignalEscalatesToSigkill) {
   Supervisor sup;
-  CommandSpec s = Spec("stubborn", "trap '' INT; echo ready; exec sleep 100", true);
-  s.use_shell = true;
-  s.stop_time_allowed_s = 0.3;
+  CommandSpec s = ShellSpec("stubborn", "trap '' INT; echo ready; exec sleep 100", 0.3);
   sup.SetDesired({s});
   std::string out;
   ASSERT_TRUE(
@@ -188,10 +196,8 @@ TEST(Supervisor, NoDescendantSurvivesAStop) {
   Supervisor sup;
   // Background children of a non-interactive sh ignore SIGINT; one even leaves the group.
   const std::string marker = "31" + std::to_string(getpid());  // unique sleep length
-  CommandSpec s =
-      Spec("family", "sleep " + marker + " & setsid sleep " + marker + " & sleep " + marker, true);
-  s.use_shell = true;
-  s.stop_time_allowed_s = 0.5;
+  CommandSpec s = ShellSpec(
+      "family", "sleep " + marker + " & setsid sleep " + marker + " & sleep " + marker, 0.5);
   sup.SetDesired({s});
   ASSERT_TRUE(
       StepUntil(&sup, [&] { return LiveDescendantsWithMarker("sleep " + marker).size() == 3; }));
@@ -272,9 +278,7 @@ TEST(Supervisor, ForgetsCommandsNoLongerOrderedAfterStoppingThem) {
 
 TEST(Supervisor, CountsCpuAndMemoryOfChildren) {
   Supervisor sup;
-  CommandSpec s = Spec("busy", "while :; do :; done & sleep 100", true);
-  s.use_shell = true;
-  s.stop_time_allowed_s = 0.3;
+  CommandSpec s = ShellSpec("busy", "while :; do :; done & sleep 100", 0.3);
   sup.SetDesired({s});
   ASSERT_TRUE(StepUntil(&sup, [&] { return StateOf(&sup, "busy") == CommandState::kRunning; }));
   sup.UpdateUsage(Now());
