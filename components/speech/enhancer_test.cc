@@ -77,15 +77,22 @@ TEST(MultiBeamEnhancer, MvdrAndPostFilterBeatOneMicrophoneAgainstADirectionalNoi
   EXPECT_GT(mvdr_pf, mic + 6);
 }
 
+// Every utterance the detector finds in `x`, its end included.
+std::vector<Utterance> Utterances(const std::vector<float>& x, int sample_rate_hz,
+                                  const VadOptions& options) {
+  VoiceActivityDetector vad(sample_rate_hz, options);
+  std::vector<Utterance> u;
+  vad.Push(x.data(), x.size(), &u);
+  vad.Flush(&u);
+  return u;
+}
+
 TEST(VoiceActivityDetector, FindsOneUtteranceWithItsBounds) {
   std::vector<float> x(48000, 0.0f);
   auto noise = sound::testing_util::WhiteNoise(48000, 3);
   for (size_t i = 0; i < x.size(); ++i) x[i] = 0.001f * noise[i];
   for (size_t i = 16000; i < 32000; ++i) x[i] += 0.2f * std::sin(2 * M_PI * 300 * i / 16000.0) * (1 + 0.5f * std::sin(i * 0.001f));
-  VoiceActivityDetector vad(16000, VadOptions{});
-  std::vector<Utterance> u;
-  vad.Push(x.data(), x.size(), &u);
-  vad.Flush(&u);
+  const std::vector<Utterance> u = Utterances(x, 16000, VadOptions{});
   ASSERT_EQ(u.size(), 1u);
   EXPECT_NEAR(u[0].start_sample / 16000.0, 1.0, 0.05);
   EXPECT_NEAR(u[0].end_sample / 16000.0, 2.0, 0.35);
@@ -100,10 +107,7 @@ TEST(VoiceActivityDetector, DigitalSilenceDoesNotSetTheFloor) {
   std::vector<float> x(56000, 0.0f);
   for (size_t i = 8000; i < x.size(); ++i) x[i] = 0.001f * noise[i];
   for (size_t i = 32000; i < 48000; ++i) x[i] += 0.2f * std::sin(2 * M_PI * 300 * i / 16000.0);
-  VoiceActivityDetector vad(16000, VadOptions{});
-  std::vector<Utterance> u;
-  vad.Push(x.data(), x.size(), &u);
-  vad.Flush(&u);
+  const std::vector<Utterance> u = Utterances(x, 16000, VadOptions{});
   ASSERT_EQ(u.size(), 1u);
   EXPECT_NEAR(u[0].start_sample / 16000.0, 2.0, 0.05);
   EXPECT_LT((u[0].end_sample - u[0].start_sample) / 16000.0, 1.5);
@@ -130,11 +134,8 @@ TEST(VoiceActivityDetector, AResidualThatJumpsFromFrameToFrameIsNotSpeech) {
   for (size_t i = tone_begin; i < tone_end; ++i) x[i] += 0.0056f * std::sin(2 * M_PI * 300 * i / rate);
   // The utterances that start after the first 1.5 s, in which the threshold learns the noise.
   auto run = [&](const VadOptions& o) {
-    VoiceActivityDetector vad(rate, o);
-    std::vector<Utterance> all, after_learning;
-    vad.Push(x.data(), x.size(), &all);
-    vad.Flush(&all);
-    for (const auto& a : all)
+    std::vector<Utterance> after_learning;
+    for (const auto& a : Utterances(x, rate, o))
       if (a.start_sample > 3 * rate / 2) after_learning.push_back(a);
     return after_learning;
   };
