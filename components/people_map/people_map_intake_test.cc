@@ -15,7 +15,7 @@ namespace {
 
 using common::Utime;
 
-using testing_util::Pose;
+using testing_util::PoseAlongX;
 using testing_util::Seen;
 
 struct Fixture {
@@ -42,11 +42,11 @@ struct Fixture {
 
 TEST(PeopleMapIntakeTest, PlacesADetectionWithThePoseInterpolatedAtItsTime) {
   Fixture f;
-  f.intake->OnPose(Pose(1'000'000, 0.0));
+  f.intake->OnPose(PoseAlongX(1'000'000, 0.0));
   // Seen at 1.05 s, before the pose of 1.1 s arrives: it waits for it, then is placed halfway.
   f.intake->OnSeen(Seen(1'050'000, 2.0));
   for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000)
-    f.intake->OnPose(Pose(u, 0.1 * (u - 1'000'000) / 100'000));
+    f.intake->OnPose(PoseAlongX(u, 0.1 * (u - 1'000'000) / 100'000));
   ASSERT_EQ(f.map.people().size(), 1u);
   const Person& p = f.map.people().begin()->second;
   EXPECT_NEAR(p.position_m.x(), 0.05 + f.camera_ahead_m() + 2.0, 1e-6);
@@ -62,9 +62,9 @@ TEST(PeopleMapIntakeTest, PlacesADetectionWithThePoseInterpolatedAtItsTime) {
 TEST(PeopleMapIntakeTest, DropsADetectionNoPoseCovers) {
   Fixture f;
   // No pose within max_pose_gap_s (0.5 s) of 5 s: POSE jumps from 1 s to 10 s.
-  f.intake->OnPose(Pose(1'000'000, 0.0));
+  f.intake->OnPose(PoseAlongX(1'000'000, 0.0));
   f.intake->OnSeen(Seen(5'000'000, 2.0));
-  f.intake->OnPose(Pose(10'000'000, 1.0));
+  f.intake->OnPose(PoseAlongX(10'000'000, 1.0));
   f.intake->Finish();
   EXPECT_TRUE(f.map.people().empty());
   EXPECT_EQ(f.intake->without_pose(), 1);
@@ -72,7 +72,7 @@ TEST(PeopleMapIntakeTest, DropsADetectionNoPoseCovers) {
 
 TEST(PeopleMapIntakeTest, FinishDropsWhatStillWaitsForAPose) {
   Fixture f;
-  f.intake->OnPose(Pose(1'000'000, 0.0));
+  f.intake->OnPose(PoseAlongX(1'000'000, 0.0));
   f.intake->OnSeen(Seen(1'200'000, 2.0));  // newer than every pose: never placed by extrapolation
   f.intake->Finish();
   EXPECT_TRUE(f.map.people().empty());
@@ -83,7 +83,7 @@ TEST(PeopleMapIntakeTest, ASeenPersonHangsFromItsSlamNodeAndFollowsItsCorrection
   Fixture f;
   // Node 3 is made by the scan at 1 s (x = 0); node 4 by the scan at 2 s (x = 1).
   for (Utime u = 1'000'000; u <= 3'000'000; u += 100'000) {
-    pose_t m = Pose(u, 1e-6 * static_cast<double>(u - 1'000'000));
+    pose_t m = PoseAlongX(u, 1e-6 * static_cast<double>(u - 1'000'000));
     m.node_id = u < 2'000'000 ? 3 : 4;
     f.intake->OnPose(m);
     if (u == 1'500'000) f.intake->OnSeen(Seen(u, 2.0));  // seen from x = 0.5, node 3
@@ -123,7 +123,7 @@ TEST(PeopleMapIntakeTest, ASlamRestartedWithANewGraphMovesNobody) {
   Fixture f;
   // Seen from node 40 of the first graph.
   for (Utime u = 1'000'000; u <= 2'000'000; u += 100'000) {
-    pose_t m = Pose(u, 0.0);
+    pose_t m = PoseAlongX(u, 0.0);
     m.node_id = 40;
     f.intake->OnPose(m);
     if (u == 1'200'000) f.intake->OnSeen(Seen(u, 2.0));
@@ -131,7 +131,7 @@ TEST(PeopleMapIntakeTest, ASlamRestartedWithANewGraphMovesNobody) {
   // SLAM restarts without its state: its nodes are numbered from 0 again, node 40 comes later
   // somewhere else.
   for (Utime u = 2'100'000; u <= 3'000'000; u += 100'000) {
-    pose_t m = Pose(u, 0.0);
+    pose_t m = PoseAlongX(u, 0.0);
     m.node_id = 0;
     f.intake->OnPose(m);
   }

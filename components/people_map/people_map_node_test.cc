@@ -20,7 +20,7 @@ namespace people_map {
 namespace {
 
 using common::Utime;
-using testing_util::Pose;
+using testing_util::PoseAlongX;
 using testing_util::Seen;
 
 struct Bus {
@@ -64,14 +64,14 @@ double CameraAheadM() {
 TEST(PeopleMapNodeTest, PublishesThePersonSeenWithThePoseAtItsTime) {
   Bus bus;
   PeopleMapNode adapter(FastOptions(), &bus.node);
-  auto first = Pose(1'000'000, 0.0);
+  auto first = PoseAlongX(1'000'000, 0.0);
   bus.pose_pub.Publish(&first);
   bus.Spin(0.05);
   // Seen at 1.05 s, before the pose of 1.1 s: it waits for that pose, then is placed halfway.
   auto seen = Seen(1'050'000, 2.0);
   bus.seen_pub.Publish(&seen);
   for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000) {
-    auto pose = Pose(u, 0.1 * (u - 1'000'000) / 100'000);
+    auto pose = PoseAlongX(u, 0.1 * (u - 1'000'000) / 100'000);
     bus.pose_pub.Publish(&pose);
   }
   bus.Spin(0.2);
@@ -87,16 +87,16 @@ TEST(PeopleMapNodeTest, PublishesThePersonSeenWithThePoseAtItsTime) {
 TEST(PeopleMapNodeTest, AStampFarAheadIsRejectedAndMovesNothing) {
   Bus bus;
   PeopleMapNode adapter(FastOptions(), &bus.node);
-  auto pose = Pose(1'000'000, 0.0);
+  auto pose = PoseAlongX(1'000'000, 0.0);
   bus.pose_pub.Publish(&pose);
   bus.Spin(0.05);
   // A year ahead: the gate drops it, so the detection below still finds the poses around it.
-  auto far = Pose(1'000'000 + 365LL * 86400 * 1'000'000, 50.0);
+  auto far = PoseAlongX(1'000'000 + 365LL * 86400 * 1'000'000, 50.0);
   bus.pose_pub.Publish(&far);
   auto seen = Seen(1'050'000, 2.0);
   bus.seen_pub.Publish(&seen);
   for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000) {
-    pose = Pose(u, 0.1 * (u - 1'000'000) / 100'000);
+    pose = PoseAlongX(u, 0.1 * (u - 1'000'000) / 100'000);
     bus.pose_pub.Publish(&pose);
   }
   bus.Spin(0.2);
@@ -115,7 +115,7 @@ TEST(PeopleMapNodeTest, AsksSlamForTheNodeOfASeenPersonAndMovesThemWithIt) {
   auto anchors_pub = bus.node.Advertise<slam_anchors_t>("SLAM_ANCHORS");
   PeopleMapNode adapter(FastOptions(), &bus.node);
   for (Utime u = 1'000'000; u <= 2'000'000; u += 100'000) {
-    auto pose = Pose(u, 0.0);
+    auto pose = PoseAlongX(u, 0.0);
     pose.node_id = 11;
     bus.pose_pub.Publish(&pose);
     if (u == 1'200'000) {
@@ -135,7 +135,7 @@ TEST(PeopleMapNodeTest, AsksSlamForTheNodeOfASeenPersonAndMovesThemWithIt) {
   a.covariance.assign(3, std::vector<double>(3, 0.0));
   for (int i = 0; i < 3; ++i) a.covariance[i][i] = 1e-4;
   anchors_pub.Publish(&a);
-  auto later = Pose(3'000'000, 0.3);
+  auto later = PoseAlongX(3'000'000, 0.3);
   later.node_id = 12;
   bus.pose_pub.Publish(&later);
   ASSERT_TRUE(bus.SpinUntil(
@@ -156,11 +156,11 @@ TEST(PeopleMapNodeTest, ARestartedNodePublishesThePeopleItSavedAtOnce) {
   {
     Bus bus;
     PeopleMapNode adapter(options, &bus.node);
-    auto pose = Pose(1'000'000, 0.0);
+    auto pose = PoseAlongX(1'000'000, 0.0);
     bus.pose_pub.Publish(&pose);
     auto seen = Seen(1'050'000, 2.0);
     bus.seen_pub.Publish(&seen);
-    pose = Pose(1'100'000, 0.1);
+    pose = PoseAlongX(1'100'000, 0.1);
     bus.pose_pub.Publish(&pose);
     bus.Spin(0.1);
     adapter.Finish();

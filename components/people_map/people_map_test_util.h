@@ -2,24 +2,15 @@
 // Messages for the people map's tests (not part of a library): the robot's pose and a person
 // seen straight ahead of the camera.
 
+#include "common/testing/pose_messages.h"
 #include "common/time.h"
 #include "sarmap/people_detections_t.hpp"
-#include "sarmap/pose_t.hpp"
 
 namespace sarmap {
 namespace people_map {
 namespace testing_util {
 
-// The robot at (x_m, 0) facing +x, with a small covariance.
-inline pose_t Pose(common::Utime utime, double x_m) {
-  pose_t m{};
-  m.header.utime = utime;
-  m.header.frame = "map";
-  m.position_m[0] = x_m;
-  m.orientation[0] = 1;
-  for (int i = 0; i < 6; ++i) m.covariance[7 * i] = 1e-4;
-  return m;
-}
+using common::testing_util::PoseAlongX;
 
 // One person straight ahead of the camera, forward_m along its optical axis.
 inline people_detections_t Seen(common::Utime utime, double forward_m) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "common/robot_config.h"
+#include "common/testing/pose_messages.h"
 #include "sound_map/sound_map_node.h"
 
 namespace sarmap {
@@ -13,12 +14,7 @@ namespace sound_map {
 namespace {
 
 pose_t Pose(int64_t utime, double x_m, int64_t node_id) {
-  pose_t m{};
-  m.header.utime = utime;
-  m.header.frame = "map";
-  m.position_m[0] = x_m;
-  m.orientation[0] = 1;
-  for (int i = 0; i < 6; ++i) m.covariance[7 * i] = 1e-4;
+  pose_t m = common::testing_util::PoseAlongX(utime, x_m);
   m.node_id = node_id;
   return m;
 }
