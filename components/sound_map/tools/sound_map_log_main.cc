@@ -161,9 +161,9 @@ int main(int argc, char** argv) {
         "--anchor-covariance-scale", &anchor_covariance_scale,
         "diagnosis: multiply SLAM_ANCHORS' covariance by this (with use_slam_covariance)");
     parser.AddSwitch("--trace-evidence", &trace_evidence,
-                     "diagnosis: at the end, print every source where the bearings cross "
-                     "(map.evidence) with its "
-                     "support and the nearest true source");
+                     "diagnosis: at the end and at every --report-every, print every source "
+                     "where the bearings cross (map.evidence) with its support and the nearest "
+                     "true source");
     parser.AddFlag(
         "--report-every", &report_every_s,
         "also print the map and its errors every this many seconds of the log (0: end only)");
@@ -334,7 +334,7 @@ int main(int argc, char** argv) {
               s.is_person ? ", person" : "");
         }
       }
-      if (final_report && trace_evidence) {
+      if (trace_evidence) {
         printf("  where the bearings cross (%zu rays kept, %ld solves):\n", map.evidence_rays(),
                static_cast<long>(c.evidence_solves));
         for (const auto& e : map.evidence_sources()) {
