@@ -14,16 +14,22 @@ Ellipse EllipseOf(const double* covariance3) {
   return ThreeSigmaEllipse(cov);
 }
 
+// Where a mapped person or sound source is: its id, x-y position and 3-sigma ellipse.
+template <class Message, class View>
+void SetPlace(const Message& m, View* v) {
+  v->id = m.id;
+  v->x_m = m.position_m[0];
+  v->y_m = m.position_m[1];
+  v->ellipse = EllipseOf(m.covariance);
+}
+
 }  // namespace
 
 std::vector<PersonView> PeopleViews(const people_map_t& m) {
   std::vector<PersonView> people;
   for (const auto& p : m.people) {
     PersonView v;
-    v.id = p.id;
-    v.x_m = p.position_m[0];
-    v.y_m = p.position_m[1];
-    v.ellipse = EllipseOf(p.covariance);
+    SetPlace(p, &v);
     v.confidence = p.confidence;
     v.seen = p.cues & (mapped_person_t::CUE_SEEN_RGBD | mapped_person_t::CUE_SEEN_DEPTH);
     v.seen_depth_only =
@@ -41,10 +47,7 @@ std::vector<SourceView> SourceViews(const sound_map_t& m) {
   std::vector<SourceView> sources;
   for (const auto& s : m.sources) {
     SourceView v;
-    v.id = s.id;
-    v.x_m = s.position_m[0];
-    v.y_m = s.position_m[1];
-    v.ellipse = EllipseOf(s.covariance);
+    SetPlace(s, &v);
     v.state = s.state == sound_source_t::STATE_CONVERGED ? "converged"
               : s.state == sound_source_t::STATE_SILENT  ? "silent"
                                                          : "initialising";
