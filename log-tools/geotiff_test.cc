@@ -19,12 +19,19 @@ namespace sarmap {
 namespace logtools {
 namespace {
 
+// A person or sound source on the map at (x, y) with `variance` on each axis.
+template <class Mapped>
+Mapped Placed(int64_t id, double x, double y, double variance) {
+  Mapped m{};
+  m.id = id;
+  m.position_m[0] = x;
+  m.position_m[1] = y;
+  m.covariance[0] = m.covariance[4] = m.covariance[8] = variance;
+  return m;
+}
+
 mapped_person_t MakePerson(int64_t id, double x, double y, int cues, double variance) {
-  mapped_person_t p{};
-  p.id = id;
-  p.position_m[0] = x;
-  p.position_m[1] = y;
-  p.covariance[0] = p.covariance[4] = p.covariance[8] = variance;
+  mapped_person_t p = Placed<mapped_person_t>(id, x, y, variance);
   p.confidence = 0.8f;
   p.cues = static_cast<int8_t>(cues);
   p.people_count = 1;
@@ -33,11 +40,7 @@ mapped_person_t MakePerson(int64_t id, double x, double y, int cues, double vari
 }
 
 sound_source_t MakeSource(int64_t id, double x, double y, double variance, int8_t state) {
-  sound_source_t s{};
-  s.id = id;
-  s.position_m[0] = x;
-  s.position_m[1] = y;
-  s.covariance[0] = s.covariance[4] = s.covariance[8] = variance;
+  sound_source_t s = Placed<sound_source_t>(id, x, y, variance);
   s.state = state;
   s.has_position = true;
   return s;
