@@ -33,6 +33,21 @@ struct Bus {
     node.Subscribe<people_map_t>("PEOPLE_MAP",
                                  [this](const people_map_t& m, const auto&) { maps.push_back(m); });
   }
+  // POSE: the robot at (x_m, 0) at `utime`.
+  void PublishPose(Utime utime, double x_m) {
+    pose_t m = PoseAlongX(utime, x_m);
+    pose_pub.Publish(&m);
+  }
+  // POSE every 0.1 s from 1.1 s to 2 s: the robot driving along x at 1 m/s from x = 0 at 1 s.
+  void PublishDrivingAlongX() {
+    for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000)
+      PublishPose(u, 0.1 * (u - 1'000'000) / 100'000);
+  }
+  // PEOPLE_VISUAL: one person `forward_m` ahead of the camera at `utime`.
+  void PublishSeen(Utime utime, double forward_m) {
+    people_detections_t m = Seen(utime, forward_m);
+    seen_pub.Publish(&m);
+  }
   // Handles what is queued and runs due timers for `seconds`.
   void Spin(double seconds) {
     for (int i = 0; i < static_cast<int>(seconds / 0.01); ++i) node.SpinOnce(0.01);
@@ -64,16 +79,11 @@ double CameraAheadM() {
 TEST(PeopleMapNodeTest, PublishesThePersonSeenWithThePoseAtItsTime) {
   Bus bus;
   PeopleMapNode adapter(FastOptions(), &bus.node);
-  auto first = PoseAlongX(1'000'000, 0.0);
-  bus.pose_pub.Publish(&first);
+  bus.PublishPose(1'000'000, 0.0);
   bus.Spin(0.05);
   // Seen at 1.05 s, before the pose of 1.1 s: it waits for that pose, then is placed halfway.
-  auto seen = Seen(1'050'000, 2.0);
-  bus.seen_pub.Publish(&seen);
-  for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000) {
-    auto pose = PoseAlongX(u, 0.1 * (u - 1'000'000) / 100'000);
-    bus.pose_pub.Publish(&pose);
-  }
+  bus.PublishSeen(1'050'000, 2.0);
+  bus.PublishDrivingAlongX();
   bus.Spin(0.2);
   ASSERT_FALSE(bus.maps.empty());
   const people_map_t& last = bus.maps.back();
@@ -87,18 +97,12 @@ TEST(PeopleMapNodeTest, PublishesThePersonSeenWithThePoseAtItsTime) {
 TEST(PeopleMapNodeTest, AStampFarAheadIsRejectedAndMovesNothing) {
   Bus bus;
   PeopleMapNode adapter(FastOptions(), &bus.node);
-  auto pose = PoseAlongX(1'000'000, 0.0);
-  bus.pose_pub.Publish(&pose);
+  bus.PublishPose(1'000'000, 0.0);
   bus.Spin(0.05);
   // A year ahead: the gate drops it, so the detection below still finds the poses around it.
-  auto far = PoseAlongX(1'000'000 + 365LL * 86400 * 1'000'000, 50.0);
-  bus.pose_pub.Publish(&far);
-  auto seen = Seen(1'050'000, 2.0);
-  bus.seen_pub.Publish(&seen);
-  for (Utime u = 1'100'000; u <= 2'000'000; u += 100'000) {
-    pose = PoseAlongX(u, 0.1 * (u - 1'000'000) / 100'000);
-    bus.pose_pub.Publish(&pose);
-  }
+  bus.PublishPose(1'000'000 + 365LL * 86400 * 1'000'000, 50.0);
+  bus.PublishSeen(1'050'000, 2.0);
+  bus.PublishDrivingAlongX();
   bus.Spin(0.2);
   EXPECT_EQ(bus.node.stats().at("POSE").dropped_malformed, 1);
   ASSERT_EQ(adapter.map().people().size(), 1u);
@@ -118,10 +122,7 @@ TEST(PeopleMapNodeTest, AsksSlamForTheNodeOfASeenPersonAndMovesThemWithIt) {
     auto pose = PoseAlongX(u, 0.0);
     pose.node_id = 11;
     bus.pose_pub.Publish(&pose);
-    if (u == 1'200'000) {
-      auto seen = Seen(u, 2.0);
-      bus.seen_pub.Publish(&seen);
-    }
+    if (u == 1'200'000) bus.PublishSeen(u, 2.0);
   }
   ASSERT_TRUE(bus.SpinUntil([&] { return !requests.empty(); }, 5.0));
   EXPECT_EQ(requests.back().client_id, "sarmap-people-map");
@@ -156,12 +157,9 @@ TEST(PeopleMapNodeTest, ARestartedNodePublishesThePeopleItSavedAtOnce) {
   {
     Bus bus;
     PeopleMapNode adapter(options, &bus.node);
-    auto pose = PoseAlongX(1'000'000, 0.0);
-    bus.pose_pub.Publish(&pose);
-    auto seen = Seen(1'050'000, 2.0);
-    bus.seen_pub.Publish(&seen);
-    pose = PoseAlongX(1'100'000, 0.1);
-    bus.pose_pub.Publish(&pose);
+    bus.PublishPose(1'000'000, 0.0);
+    bus.PublishSeen(1'050'000, 2.0);
+    bus.PublishPose(1'100'000, 0.1);
     bus.Spin(0.1);
     adapter.Finish();
     ASSERT_EQ(adapter.map().people().size(), 1u);
