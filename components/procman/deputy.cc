@@ -9,7 +9,7 @@
 #include "common/bus_publish.h"
 #include "common/decode.h"
 #include "common/logging.h"
-#include "common/time.h"
+#include "procman/launcher_header.h"
 #include "sarmap/node_status_t.hpp"
 #include "sarmap/pm_output_t.hpp"
 
@@ -177,9 +177,7 @@ void Deputy::OnWake(const std::vector<pollfd>& /*fds*/, double now_s) {
 
 void Deputy::PublishInfo(double now_s) {
   sarmap::pm_info_t info;
-  info.header.utime = common::WallClockUtime();
-  info.header.seq = info_seq_++;
-  info.header.frame = "";
+  info.header = LauncherHeader(&info_seq_);
   info.deputy_id = id_;
   info.host = host_;
   info.cpu_load = machine_.cpu_load();
@@ -223,9 +221,7 @@ void Deputy::PublishInfo(double now_s) {
 
 void Deputy::PublishNodeStatus(double now_s) {
   sarmap::node_status_t status;
-  status.header.utime = common::WallClockUtime();
-  status.header.seq = status_seq_++;
-  status.header.frame = "";
+  status.header = LauncherHeader(&status_seq_);
   status.node_name = "sarmap-procman-deputy[" + id_ + "]";
   status.host = host_;
   status.pid = getpid();
@@ -253,9 +249,7 @@ void Deputy::PublishOutput() {
   auto chunks = supervisor_.TakeOutput(static_cast<size_t>(options_.output_max_bytes));
   if (chunks.empty()) return;
   sarmap::pm_output_t out;
-  out.header.utime = common::WallClockUtime();
-  out.header.seq = output_seq_++;
-  out.header.frame = "";
+  out.header = LauncherHeader(&output_seq_);
   out.deputy_id = id_;
   for (auto& [cmd, text] : chunks) {
     out.command_ids.push_back(cmd);

@@ -10,7 +10,7 @@
 #include "common/bus_publish.h"
 #include "common/decode.h"
 #include "common/logging.h"
-#include "common/time.h"
+#include "procman/launcher_header.h"
 #include "procman/supervisor.h"
 
 namespace sarmap {
@@ -95,9 +95,7 @@ Sheriff::Sheriff(lcm::LCM* lcm, const ProcmanOptions& options, Config config, co
 
 void Sheriff::SendProbe() {
   sarmap::pm_orders_t probe;
-  probe.header.utime = common::WallClockUtime();
-  probe.header.seq = orders_seq_++;
-  probe.header.frame = "";
+  probe.header = LauncherHeader(&orders_seq_);
   probe.sheriff_id = sheriff_id_;
   probe.deputy_id = kProbeDeputyId;
   probe.deputy_session = 0;
@@ -483,9 +481,7 @@ int64_t Sheriff::EstimatedDeputyClockUs(const DeputyView& d, double now_s) const
 
 void Sheriff::SendOrders(DeputyView* d, double now_s) {
   sarmap::pm_orders_t orders;
-  orders.header.utime = common::WallClockUtime();
-  orders.header.seq = orders_seq_++;
-  orders.header.frame = "";
+  orders.header = LauncherHeader(&orders_seq_);
   orders.sheriff_id = sheriff_id_;
   orders.deputy_id = d->id;
   orders.deputy_session = d->session;
