@@ -22,36 +22,46 @@ namespace {
 constexpr double kMsPerS = 1e3;
 constexpr double kPpm = 1e6;
 
-// TDOA edge of mic n >= 2 at emission k, with the microphones' world positions known:
+// TDOA edge of mic n >= 2 at emission k:
 //   r = ((|m_n(k) - s| - |m_1(k) - s|) / c + tau_n + t_k delta_n - z_n(k)) / sigma
-// Parameters: clock_n = (tau_n [ms], delta_n [ppm]), s = (x, y) [m]; s_z is known.
-struct PosedTdoaResidual {
+// from the microphones' offsets to the source, (x, y) in the plane and dz in height.
+// clock_n = (tau_n [ms], delta_n [ppm]).
+struct TdoaEdge {
+  TdoaEdge(double z_s, double t_s, double sigma_s, double c)
+      : z_s(z_s), t_s(t_s), inv_sigma(1 / sigma_s), inv_c(1 / c) {}
+  template <class T>
+  T Residual(const T* clock, const T& xn, const T& yn, double dzn, const T& x1, const T& y1,
+             double dz1) const {
+    const T dn = sqrt(xn * xn + yn * yn + T(dzn * dzn + 1e-12));
+    const T d1 = sqrt(x1 * x1 + y1 * y1 + T(dz1 * dz1 + 1e-12));
+    const T predicted = (dn - d1) * inv_c + clock[0] / kMsPerS + t_s * clock[1] / kPpm;
+    return (predicted - z_s) * inv_sigma;
+  }
+  double z_s, t_s, inv_sigma, inv_c;
+};
+
+// The edge with the microphones' world positions known. Parameters: clock_n, s = (x, y) [m];
+// s_z is known.
+struct PosedTdoaResidual : TdoaEdge {
   PosedTdoaResidual(const Eigen::Vector3d& mic_n, const Eigen::Vector3d& mic_1, double s_z,
                     double z_s, double t_s, double sigma_s, double c)
-      : mic_n(mic_n), mic_1(mic_1), s_z(s_z), z_s(z_s), t_s(t_s), inv_sigma(1 / sigma_s),
-        inv_c(1 / c) {}
+      : TdoaEdge(z_s, t_s, sigma_s, c), mic_n(mic_n), mic_1(mic_1), s_z(s_z) {}
   template <class T>
   bool operator()(const T* clock, const T* src, T* residual) const {
-    const T dxn = T(mic_n.x()) - src[0], dyn = T(mic_n.y()) - src[1];
-    const T dx1 = T(mic_1.x()) - src[0], dy1 = T(mic_1.y()) - src[1];
-    const double dzn = mic_n.z() - s_z, dz1 = mic_1.z() - s_z;
-    const T dn = sqrt(dxn * dxn + dyn * dyn + T(dzn * dzn + 1e-12));
-    const T d1 = sqrt(dx1 * dx1 + dy1 * dy1 + T(dz1 * dz1 + 1e-12));
-    const T predicted = (dn - d1) * inv_c + clock[0] / kMsPerS + t_s * clock[1] / kPpm;
-    residual[0] = (predicted - z_s) * inv_sigma;
+    residual[0] = Residual(clock, T(mic_n.x()) - src[0], T(mic_n.y()) - src[1], mic_n.z() - s_z,
+                           T(mic_1.x()) - src[0], T(mic_1.y()) - src[1], mic_1.z() - s_z);
     return true;
   }
   Eigen::Vector3d mic_n, mic_1;
-  double s_z, z_s, t_s, inv_sigma, inv_c;
+  double s_z;
 };
 
 // The same edge with the array pose (x, y, yaw) an unknown (odometry drift): microphone i is
 // at (x, y) + R(yaw) a_i in the plane (a_i: its position in the array frame), at height h_i.
-struct FreePoseTdoaResidual {
+struct FreePoseTdoaResidual : TdoaEdge {
   FreePoseTdoaResidual(const Eigen::Vector3d& mic_n, const Eigen::Vector3d& mic_1, double h_n,
                        double h_1, double s_z, double z_s, double t_s, double sigma_s, double c)
-      : a_n(mic_n), a_1(mic_1), dz_n(h_n - s_z), dz_1(h_1 - s_z), z_s(z_s), t_s(t_s),
-        inv_sigma(1 / sigma_s), inv_c(1 / c) {}
+      : TdoaEdge(z_s, t_s, sigma_s, c), a_n(mic_n), a_1(mic_1), dz_n(h_n - s_z), dz_1(h_1 - s_z) {}
   template <class T>
   bool operator()(const T* clock, const T* src, const T* pose, T* residual) const {
     const T cy = cos(pose[2]), sy = sin(pose[2]);
@@ -59,14 +69,11 @@ struct FreePoseTdoaResidual {
     const T yn = pose[1] + sy * a_n.x() + cy * a_n.y() - src[1];
     const T x1 = pose[0] + cy * a_1.x() - sy * a_1.y() - src[0];
     const T y1 = pose[1] + sy * a_1.x() + cy * a_1.y() - src[1];
-    const T dn = sqrt(xn * xn + yn * yn + T(dz_n * dz_n + 1e-12));
-    const T d1 = sqrt(x1 * x1 + y1 * y1 + T(dz_1 * dz_1 + 1e-12));
-    const T predicted = (dn - d1) * inv_c + clock[0] / kMsPerS + t_s * clock[1] / kPpm;
-    residual[0] = (predicted - z_s) * inv_sigma;
+    residual[0] = Residual(clock, xn, yn, dz_n, x1, y1, dz_1);
     return true;
   }
   Eigen::Vector3d a_n, a_1;
-  double dz_n, dz_1, z_s, t_s, inv_sigma, inv_c;
+  double dz_n, dz_1;
 };
 
 // Prior on the static source: r = (s - p) / sigma.
