@@ -72,6 +72,18 @@ SimOptions Options(const std::string& world) {
   return o;
 }
 
+// The world's options with the camera and the audio off and odometry noise along the path only
+// (`trans_noise`, no rotation noise).
+SimOptions OdometryOnly(const std::string& world, double trans_noise) {
+  SimOptions o = Options(world);
+  o.camera.enabled = false;
+  o.audio.enabled = false;
+  o.odometry.trans_noise = trans_noise;
+  o.odometry.rot_noise = 0;
+  o.odometry.rot_per_trans_rad_per_m = 0;
+  return o;
+}
+
 void ExpectChannel(const CollectingSink& sink, const std::string& channel, const std::string& frame,
                    double rate_hz, double seconds) {
   SCOPED_TRACE(channel);
@@ -219,13 +231,8 @@ TEST(SimulatorTest, SameSeedSameRunOtherSeedOtherRun) {
 }
 
 TEST(SimulatorTest, FollowsVelocityCommandsAndStopsWhenTheyStop) {
-  SimOptions o = Options("open_area_sound.yaml");
+  SimOptions o = OdometryOnly("open_area_sound.yaml", 0);
   o.drive = "cmd_vel";
-  o.camera.enabled = false;
-  o.audio.enabled = false;
-  o.odometry.trans_noise = 0;
-  o.odometry.rot_noise = 0;
-  o.odometry.rot_per_trans_rad_per_m = 0;
   Simulator sim(LoadSetup(o, ""));
   CollectingSink sink;
   sim.SetVelocityCommand(0.4, 0.0);
@@ -248,15 +255,10 @@ TEST(SimulatorTest, OdometryNoiseGrowsAsConfigured) {
     double sum2 = 0;
     const int runs = 60;
     for (int seed = 1; seed <= runs; ++seed) {
-      SimOptions o = Options("open_area_sound.yaml");
+      SimOptions o = OdometryOnly("open_area_sound.yaml", 0.05);
       o.drive = "cmd_vel";
-      o.camera.enabled = false;
-      o.audio.enabled = false;
       o.seed = seed;
       o.odometry.rate_hz = rate;
-      o.odometry.trans_noise = 0.05;
-      o.odometry.rot_noise = 0;
-      o.odometry.rot_per_trans_rad_per_m = 0;
       Simulator sim(LoadSetup(o, ""));
       struct LastOdom : SimSink {
         sarmap::odometry_t last;
@@ -280,13 +282,8 @@ TEST(SimulatorTest, OdometryNoiseGrowsAsConfigured) {
 }
 
 TEST(SimulatorTest, OdometryNoiseAndSlipMakeOdometryDrift) {
-  SimOptions o = Options("open_area_sound.yaml");
-  o.camera.enabled = false;
-  o.audio.enabled = false;
+  SimOptions o = OdometryOnly("open_area_sound.yaml", 0);
   o.odometry.slip = 0.1;  // the base moves 10 % less than the wheels say
-  o.odometry.trans_noise = 0;
-  o.odometry.rot_noise = 0;
-  o.odometry.rot_per_trans_rad_per_m = 0;
   Simulator sim(LoadSetup(o, ""));
   struct OdomSink : CollectingSink {
     sarmap::odometry_t last;
