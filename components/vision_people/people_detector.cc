@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <tuple>
@@ -132,6 +133,24 @@ bool HiddenBelow(const RgbdFrame& frame, const Eigen::Vector3d& low) {
 }
 
 }  // namespace
+
+std::string DescribeCandidate(const PersonCandidate& c) {
+  auto format = [&c](char* out, size_t size) {
+    return snprintf(
+        out, size,
+        "%s pos (%.2f %.2f %.2f) H %.2f bottom %.2f width %.2f depth %.2f head %.2f/%.2f prom "
+        "%.2f areas %.3f/%.3f fill %.2f visible %.2f%s voxels %d | depth %.2f hog %s %.2f conf "
+        "%.2f",
+        c.accepted ? "PERSON" : "reject", c.position_camera.x(), c.position_camera.y(),
+        c.position_camera.z(), c.height_m, c.bottom_m, c.width_m, c.depth_extent_m, c.head_width_m,
+        c.shoulder_width_m, c.head_prominence_m, c.head_area_m2, c.shoulder_area_m2, c.fill,
+        c.visible_fraction, c.truncated_top ? " (top cut)" : "", c.num_voxels, c.depth_score,
+        c.hog_used ? "yes" : "no", c.hog_score, c.confidence);
+  };
+  std::string line(format(nullptr, 0), '\0');
+  format(&line[0], line.size() + 1);
+  return line;
+}
 
 const char* ColorStateName(ColorState state) {
   switch (state) {

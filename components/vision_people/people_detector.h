@@ -312,6 +312,9 @@ struct PersonCandidate {
   bool supported = true;  // touches the floor, or its bottom is hidden by something nearer
 };
 
+// One line of a candidate's verdict and measurements (no newline), for diagnostic output.
+std::string DescribeCandidate(const PersonCandidate& c);
+
 struct DetectionStats {
   int num_points = 0;  // finite points used
   int num_voxels = 0;

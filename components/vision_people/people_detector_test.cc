@@ -24,17 +24,7 @@ bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 
 void Print(const DetectionResult& r) {
   for (const auto* list : {&r.people, &r.rejected}) {
-    for (const auto& c : *list) {
-      printf(
-          "  %s pos (%.2f %.2f %.2f) H %.2f bottom %.2f width %.2f depth %.2f head %.2f/%.2f prom "
-          "%.2f areas %.3f/%.3f "
-          "fill %.2f visible %.2f%s voxels %d | depth %.2f hog %d %.2f conf %.2f\n",
-          c.accepted ? "PERSON" : "reject", c.position_camera.x(), c.position_camera.y(),
-          c.position_camera.z(), c.height_m, c.bottom_m, c.width_m, c.depth_extent_m,
-          c.head_width_m, c.shoulder_width_m, c.head_prominence_m, c.head_area_m2,
-          c.shoulder_area_m2, c.fill, c.visible_fraction, c.truncated_top ? " (top cut)" : "",
-          c.num_voxels, c.depth_score, c.hog_used, c.hog_score, c.confidence);
-    }
+    for (const auto& c : *list) printf("  %s\n", DescribeCandidate(c).c_str());
   }
 }
 

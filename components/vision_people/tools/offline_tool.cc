@@ -121,17 +121,8 @@ int main(int argc, char** argv) {
       }
       for (const auto* list : {&r.people, &r.rejected}) {
         for (const auto& c : *list) {
-          printf(
-              "  %s pos (%.2f %.2f %.2f) H %.2f bottom %.2f width %.2f depth %.2f head %.2f/%.2f "
-              "prom %.2f areas %.3f/%.3f "
-              "fill %.2f visible %.2f%s voxels %d | depth %.2f hog %s %.2f conf %.2f box u %.0f v "
-              "%.0f..%.0f\n",
-              c.accepted ? "PERSON" : "reject", c.position_camera.x(), c.position_camera.y(),
-              c.position_camera.z(), c.height_m, c.bottom_m, c.width_m, c.depth_extent_m,
-              c.head_width_m, c.shoulder_width_m, c.head_prominence_m, c.head_area_m2,
-              c.shoulder_area_m2, c.fill, c.visible_fraction, c.truncated_top ? " (top cut)" : "",
-              c.num_voxels, c.depth_score, c.hog_used ? "yes" : "no", c.hog_score, c.confidence,
-              c.box_u_center, c.box_v_top, c.box_v_bottom);
+          printf("  %s box u %.0f v %.0f..%.0f\n", DescribeCandidate(c).c_str(), c.box_u_center,
+                 c.box_v_top, c.box_v_bottom);
         }
       }
     }
