@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/grid_geometry.h"
 #include "common/image_messages.h"
 
 namespace sarmap {
@@ -165,12 +166,8 @@ void MissionMetrics::OnMap(int64_t utime, const sarmap::occupancy_grid_t& map) {
   Grid grid;
   std::string error;
   if (map.resolution_m <= 0 || !common::DecodeOccupancyGrid(map, &grid.cells, &error)) return;
-  grid.resolution_m = map.resolution_m;
-  grid.origin_x_m = map.origin_x_m;
-  grid.origin_y_m = map.origin_y_m;
+  common::CopyGridGeometry(map, &grid);
   grid.origin_yaw_rad = map.origin_yaw_rad;
-  grid.width = map.width;
-  grid.height = map.height;
   map_ = std::move(grid);
   map_time_s_ = Since(utime);
   map_on_curve_ = false;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/compression.h"
+#include "common/grid_geometry.h"
 #include "sarmap/image_t.hpp"
 #include "sarmap/occupancy_grid_t.hpp"
 
@@ -31,11 +32,7 @@ sarmap::occupancy_grid_t MakeOccupancyGrid(const sarmap::header_t& header, const
                                            bool compress) {
   sarmap::occupancy_grid_t grid{};
   grid.header = header;
-  grid.resolution_m = map.resolution_m;
-  grid.width = map.width;
-  grid.height = map.height;
-  grid.origin_x_m = map.origin_x_m;
-  grid.origin_y_m = map.origin_y_m;
+  CopyGridGeometry(map, &grid);
   grid.origin_yaw_rad = 0;
   if (compress) {
     const std::vector<uint8_t> packed =

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "common/grid_geometry.h"
 #include "common/image_messages.h"
 #include "common/memory.h"
 #include "common/message_conversions.h"
@@ -391,11 +392,7 @@ class Loop : public sim::SimSink {
   void PublishMap(double t) {
     const slam::OccupancyMap map = slam_.RenderMap();
     explore::Grid grid;
-    grid.width = map.width;
-    grid.height = map.height;
-    grid.resolution_m = map.resolution_m;
-    grid.origin_x_m = map.origin_x_m;
-    grid.origin_y_m = map.origin_y_m;
+    common::CopyGridGeometry(map, &grid);
     grid.cells = map.cells;
     explore_.OnMap(grid);
     SoundChain* sound = perception_ ? perception_->sound() : nullptr;

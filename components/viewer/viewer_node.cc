@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/grid_geometry.h"
 #include "common/image_codec.h"
 #include "common/image_messages.h"
 #include "common/logging.h"
@@ -68,11 +69,7 @@ void ViewerNode::Subscribe(common::Node* node) {
       "MAP",
       [this](const occupancy_grid_t& m, const common::ReceiveInfo&) {
         GridImage grid;
-        grid.width = m.width;
-        grid.height = m.height;
-        grid.resolution_m = m.resolution_m;
-        grid.origin_x_m = m.origin_x_m;
-        grid.origin_y_m = m.origin_y_m;
+        common::CopyGridGeometry(m, &grid);
         std::string error;
         if (!common::DecodeOccupancyGrid(m, &grid.cells, &error)) {
           SARMAP_LOG(WARN) << "bad MAP: " << common::EscapeForLog(error, 512);

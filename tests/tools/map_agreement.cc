@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/args.h"
+#include "common/grid_geometry.h"
 #include "sim/floor_plan.h"
 #include "sim/world.h"
 #include "slam/map_io.h"
@@ -35,11 +36,7 @@ int main(int argc, char** argv) {
     const sarmap::sim::World world = sarmap::sim::LoadWorld(world_path);
     const sarmap::slam::OccupancyMap slam_map = sarmap::slam::LoadMapServerMap(map_path);
     sarmap::sim::GridMap map;
-    map.resolution_m = slam_map.resolution_m;
-    map.width = slam_map.width;
-    map.height = slam_map.height;
-    map.origin_x_m = slam_map.origin_x_m;
-    map.origin_y_m = slam_map.origin_y_m;
+    sarmap::common::CopyGridGeometry(slam_map, &map);
     map.cells = slam_map.cells;
     if (world.walls.empty()) throw std::runtime_error("the world '" + world_path + "' has no walls: no floor plan to compare with");
 
