@@ -3,12 +3,12 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <iostream>
 
 #include "common/args.h"
 #include "common/lcm_guard.h"
 #include "common/logging.h"
 #include "common/node.h"
+#include "procman/cli_common.h"
 #include "procman/deputy.h"
 #include "procman/procman_cli.h"
 
@@ -30,22 +30,12 @@ int RunDeputy(int argc, char** argv) {
       "SIGINT/SIGTERM stop every command (signal, then SIGKILL) before the deputy exits;\n"
       "a second one exits at once, killing what is left. Commands die with the deputy\n"
       "(SIGKILL) if it is killed.");
-  if (!parser.Parse(argc, argv)) return 0;
-  common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
-  auto options = common::LoadOptions<ProcmanOptions>(node_args.config_path, node_args.overrides);
-  if (key_path.empty()) key_path = options.key_file;
-  if (node_args.print_config) {
-    std::cout << common::OptionsToYaml(options, true);
-    return 0;
-  }
+  const std::optional<ProcmanOptions> options =
+      ParseCommandLine(&parser, &node_args, argc, argv, "", &key_path);
+  if (!options) return 0;  // --help or --print-config
   if (id.empty()) throw common::ArgError("--id NAME is required");
   common::SetLogName("sarmap-procman-deputy[" + id + "]");
-  Key key;
-  try {
-    key = LoadKeyFile(key_path);
-  } catch (const std::runtime_error& e) {
-    throw common::ArgError(e.what());
-  }
+  Key key = LoadKeyFileOrArgError(key_path);
   if (!BecomeSubreaper()) {
     SARMAP_LOG(WARN) << "cannot become child subreaper; orphans go to init";
   }
@@ -58,7 +48,7 @@ int RunDeputy(int argc, char** argv) {
   lcm::LCM lcm(url);
   if (!lcm.good()) throw std::runtime_error("cannot initialise LCM on '" + url + "'");
   EventLoop loop(&lcm);
-  Deputy deputy(&lcm, options, id, std::move(key), InheritedEnvironment(OwnDirectory()));
+  Deputy deputy(&lcm, *options, id, std::move(key), InheritedEnvironment(OwnDirectory()));
   if (!node_args.bus_key_file.empty()) {
     try {
       deputy.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));

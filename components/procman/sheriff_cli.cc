@@ -21,6 +21,7 @@
 #include "common/logging.h"
 #include "common/node.h"
 #include "common/time.h"
+#include "procman/cli_common.h"
 #include "procman/deputy.h"
 #include "procman/procman_cli.h"
 #include "procman/sheriff.h"
@@ -287,15 +288,10 @@ int RunSheriff(int argc, char** argv) {
       "  sarmap-procman launch-scripts/robot-two-computers.pmd status\n"
       "  sarmap-procman launch-scripts/robot-two-computers.pmd restart compute/mapping\n"
       "exit code of one-shot commands: 0 when done, 1 when a wait timed out, 2 on bad use.");
-  if (!parser.Parse(argc, argv)) return 0;
-  common::SetLogLevel(common::ParseLogLevel(node_args.log_level));
-  common::SetLogName("sarmap-procman");
-  auto options = common::LoadOptions<ProcmanOptions>(node_args.config_path, node_args.overrides);
-  if (key_path.empty()) key_path = options.key_file;
-  if (node_args.print_config) {
-    std::cout << common::OptionsToYaml(options, true);
-    return 0;
-  }
+  const std::optional<ProcmanOptions> parsed =
+      ParseCommandLine(&parser, &node_args, argc, argv, "sarmap-procman", &key_path);
+  if (!parsed) return 0;  // --help or --print-config
+  const ProcmanOptions& options = *parsed;
   Config config;
   try {
     config = LoadConfigFile(pmd_path);
@@ -337,13 +333,7 @@ int RunSheriff(int argc, char** argv) {
   // status only watches: no key needed.
   const bool watch_only = observer || (status_only && !lone_ranger);
   Key key;
-  if (!watch_only) {
-    try {
-      key = LoadKeyFile(key_path);
-    } catch (const std::runtime_error& e) {
-      throw common::ArgError(e.what());
-    }
-  }
+  if (!watch_only) key = LoadKeyFileOrArgError(key_path);
   const std::string sheriff_id = sheriff_name + "/" + std::to_string(getpid());
 
   const std::string url = node_args.lcm_url.empty() ? common::DefaultLcmUrl() : node_args.lcm_url;
