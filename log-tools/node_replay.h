@@ -2,10 +2,10 @@
 // Replays a log into a node adapter: the class that runs live (its subscriptions, message
 // checks, stamp gates and timers) runs offline on the recorded inputs, so a replay is the live
 // pipeline by construction. The node runs over memq://, its clock is the log's receive time
-// from the first event fed on (common::Node::SetClock), and each event fed is published on the node's bus and handled,
-// with everything it causes, before the next is read.
+// from the first event fed on (common::Node::SetClock), and each event fed is published on the
+// node's bus and handled, with everything it causes, before the next is read.
 //
-//   common::Node node("sarmap-log-speech", "memq://");
+//   common::Node node("sarmap-log-speech", logtools::ReplayNodeArgs(node_args));
 //   speech::SpeechNode speech(options, &node);
 //   logtools::NodeReplay replay(&node);
 //   replay.Capture("SPEECH|PEOPLE_AUDIO", [&](const std::string& channel,
@@ -20,11 +20,19 @@
 #include <string>
 #include <vector>
 
+#include "common/args.h"
 #include "common/node.h"
 #include "log-tools/lcm_log_reader.h"
 
 namespace sarmap {
 namespace logtools {
+
+// The arguments of the node a replay runs: `args` (--bus-key-file: a signed log's bus key, its
+// inputs checked and its outputs signed as live) over memq://.
+inline common::NodeArgs ReplayNodeArgs(common::NodeArgs args) {
+  args.lcm_url = "memq://";
+  return args;
+}
 
 class NodeReplay {
  public:

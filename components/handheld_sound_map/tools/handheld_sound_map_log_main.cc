@@ -19,7 +19,6 @@
 #include <vector>
 
 #include "common/args.h"
-#include "common/command_auth.h"
 #include "common/decode.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
@@ -108,10 +107,8 @@ int main(int argc, char** argv) {
     // sarmap-handheld-sound-map's adapter on the log's clock: its stamp gates, its reorder
     // queue, its map; the rig poses are the log's RIG_POSE, or replaced (--truth-poses,
     // --trajectory) by poses published in their place.
-    sarmap::common::Node node("sarmap-log-handheld-sound-map", "memq://");
-    if (!node_args.bus_key_file.empty()) {
-      node.SetBusKey(sarmap::common::LoadAuthKeyFile(node_args.bus_key_file));
-    }
+    sarmap::common::Node node("sarmap-log-handheld-sound-map",
+                              sarmap::logtools::ReplayNodeArgs(node_args));
     sarmap::sound_map::HandheldSoundMapNode handheld(options, &node);
     sarmap::logtools::NodeReplay replay(&node);
     auto publish_pose = [&](int64_t utime, const Eigen::Isometry3d& odom_from_rig) {

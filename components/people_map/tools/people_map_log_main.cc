@@ -21,7 +21,6 @@
 #include <string>
 #include <vector>
 
-#include "common/command_auth.h"
 #include "common/decode.h"
 #include "common/message_conversions.h"
 #include "common/node_main.h"
@@ -163,10 +162,7 @@ int main(int argc, char** argv) {
     // nothing.
     people_map::PeopleMapNodeOptions replay_options = options;
     replay_options.state_file = "";
-    common::Node node("sarmap-log-people-map", "memq://");
-    if (!node_args.bus_key_file.empty()) {
-      node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
-    }
+    common::Node node("sarmap-log-people-map", logtools::ReplayNodeArgs(node_args));
     people_map::PeopleMapNode people_map_node(replay_options, &node);
     people_map::PeopleMap& map = *people_map_node.mutable_map();
     logtools::NodeReplay replay(&node);

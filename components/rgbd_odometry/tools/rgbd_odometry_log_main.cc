@@ -13,7 +13,6 @@
 #include <stdexcept>
 
 #include "common/args.h"
-#include "common/command_auth.h"
 #include "common/decode.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
@@ -77,10 +76,8 @@ int main(int argc, char** argv) {
     double compute_ms = 0;
     // sarmap-rgbd-odometry's adapter on the log's clock: its frame pairing, its restart when
     // time goes back, every frame's result observed.
-    sarmap::common::Node node("sarmap-log-rgbd-odometry", "memq://");
-    if (!node_args.bus_key_file.empty()) {
-      node.SetBusKey(sarmap::common::LoadAuthKeyFile(node_args.bus_key_file));
-    }
+    sarmap::common::Node node("sarmap-log-rgbd-odometry",
+                              sarmap::logtools::ReplayNodeArgs(node_args));
     sarmap::rgbd_odometry::RgbdOdometryNode odometry_node(options, &node);
     odometry_node.set_result_observer([&](const RgbdOdometryResult& r) {
       if (print_large_steps && r.previous_from_rig.translation().norm() > 0.03)

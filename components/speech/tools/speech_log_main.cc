@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "common/args.h"
-#include "common/command_auth.h"
 #include "common/node.h"
 #include "common/node_main.h"
 #include "log-tools/lcm_log_writer.h"
@@ -32,10 +31,7 @@ int main(int argc, char** argv) {
     if (!parsed) return 0;
     const speech::SpeechNodeOptions& options = *parsed;
 
-    common::Node node("sarmap-log-speech", "memq://");
-    // A signed log (the bus key it was recorded with): inputs checked and outputs signed as live.
-    if (!node_args.bus_key_file.empty())
-      node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
+    common::Node node("sarmap-log-speech", logtools::ReplayNodeArgs(node_args));
     speech::SpeechNode speech_node(options, &node);
     logtools::NodeReplay replay(&node);
     logtools::LcmLogWriter out(out_path);

@@ -16,7 +16,6 @@
 #include <vector>
 
 #include "common/args.h"
-#include "common/command_auth.h"
 #include "common/decode.h"
 #include "common/message_conversions.h"
 #include "common/node.h"
@@ -151,10 +150,7 @@ int main(int argc, char** argv) {
 
     // sarmap-vision-people's adapter on the log's clock: its stamp gates, frame pairing,
     // detector and confirmation, each frame scored as it is processed.
-    common::Node node("sarmap-log-vision-people", "memq://");
-    if (!node_args.bus_key_file.empty()) {
-      node.SetBusKey(common::LoadAuthKeyFile(node_args.bus_key_file));
-    }
+    common::Node node("sarmap-log-vision-people", logtools::ReplayNodeArgs(node_args));
     VisionPeopleNode vision(options, &node);
     vision.set_frame_observer([&](const RgbdFrame& frame, const DetectionResult& result,
                                   const std::vector<ConfirmedPerson>& accepted) {
