@@ -24,6 +24,15 @@ inline void FromRigid3d(const Rigid3d& pose, double (&position_m)[3], double (&o
   orientation_wxyz[3] = pose.rotation().z();
 }
 
+// 3x3 row-major (x y z) covariance <-> Eigen.
+inline Eigen::Matrix3d ToCovariance3(const double (&cov)[9]) {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cov);
+}
+inline void FromCovariance3(const Eigen::Matrix3d& m, double (&cov)[9]) {
+  Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> out(cov);
+  out = m;
+}
+
 // 6x6 row-major (x y z roll pitch yaw) covariance <-> Eigen.
 inline Eigen::Matrix<double, 6, 6> ToCovariance6(const double (&cov)[36]) {
   return Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(cov);

@@ -7,14 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "common/message_conversions.h"
 #include "common/options.h"
 #include "common/robot_config.h"
 #include "common/stamp_gate.h"
+#include "handheld_sound_map/linear_array_map.h"
 #include "sarmap/doa_t.hpp"
 #include "sarmap/people_detections_t.hpp"
 #include "sarmap/pose_t.hpp"
 #include "sarmap/sound_map_t.hpp"
-#include "handheld_sound_map/linear_array_map.h"
 
 namespace sarmap {
 namespace sound_map {
@@ -121,8 +122,7 @@ inline sarmap::sound_map_t LinearSoundMapMessage(const LinearArraySoundMap& map,
     out.has_position = s.converged;
     for (int i = 0; i < 3; ++i) out.bearing_origin_m[i] = s.position_m[i];
     out.bearing_variance = M_PI * M_PI;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
+    common::FromCovariance3(s.covariance, out.covariance);
     // (unary + : the LCM constants are declared, not defined; no reference to them may be taken)
     out.state = s.converged ? +sarmap::sound_source_t::STATE_CONVERGED : +sarmap::sound_source_t::STATE_INITIALISING;
     out.hypotheses_left = s.hypotheses_left;

@@ -29,7 +29,7 @@ sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, Utime u
     sarmap::mapped_person_t m{};
     m.id = p.id;
     for (int i = 0; i < 3; ++i) m.position_m[i] = p.position_m[i];
-    for (int i = 0; i < 9; ++i) m.covariance[i] = p.covariance(i / 3, i % 3);
+    common::FromCovariance3(p.covariance, m.covariance);
     m.confidence = static_cast<float>(p.confidence);
     m.cues = static_cast<int8_t>(p.cues);
     m.num_detections = p.num_detections;
@@ -214,8 +214,7 @@ void PeopleMapIntake::OnSeen(const sarmap::people_detections_t& m) {
     if (!d.has_range || d.cue == sarmap::person_detection_t::CUE_HEARD) continue;
     SeenDetection s;
     s.position_camera_m = Eigen::Vector3d(d.position_m[0], d.position_m[1], d.position_m[2]);
-    s.covariance_camera =
-        Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d.position_covariance);
+    s.covariance_camera = common::ToCovariance3(d.position_covariance);
     s.confidence = d.confidence;
     s.cue = d.cue == sarmap::person_detection_t::CUE_SEEN_DEPTH ? kSeenDepth : kSeenRgbd;
     s.track_id = d.track_id;
@@ -272,7 +271,7 @@ void PeopleMapIntake::OnSoundMap(const sarmap::sound_map_t& m) {
     SoundSource src;
     src.id = s.id;
     src.position_m = Eigen::Vector3d(s.position_m[0], s.position_m[1], s.position_m[2]);
-    src.covariance = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(s.covariance);
+    src.covariance = common::ToCovariance3(s.covariance);
     src.is_person = s.is_person;
     src.converged = s.state == sarmap::sound_source_t::STATE_CONVERGED;
     sources.push_back(src);

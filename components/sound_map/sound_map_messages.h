@@ -202,8 +202,7 @@ inline sarmap::sound_map_t SoundMapMessage(const OnlineSoundMap& map, int64_t ut
     sarmap::sound_source_t out{};
     out.id = s.id;
     for (int i = 0; i < 3; ++i) out.position_m[i] = s.position_m[i];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) out.covariance[3 * r + c] = s.covariance(r, c);
+    common::FromCovariance3(s.covariance, out.covariance);
     out.state = static_cast<int8_t>(s.state);
     out.hypotheses_left = s.hypotheses_left;
     out.is_person = s.is_person;

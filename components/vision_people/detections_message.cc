@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/message_conversions.h"
+
 namespace sarmap {
 namespace vision_people {
 
@@ -34,7 +36,7 @@ sarmap::people_detections_t DetectionsMessage(const std::vector<ConfirmedPerson>
                               : sarmap::person_detection_t::CUE_SEEN_DEPTH;
     d.has_range = true;
     for (int i = 0; i < 3; ++i) d.position_m[i] = c.person.position_camera(i);
-    for (int i = 0; i < 9; ++i) d.position_covariance[i] = c.person.covariance(i / 3, i % 3);
+    common::FromCovariance3(c.person.covariance, d.position_covariance);
     FillDirection(c.person.position_camera, c.person.covariance, &d);
     d.height_m = static_cast<float>(c.person.height_m);
     d.confidence = static_cast<float>(std::clamp(c.person.confidence, 0.0, 1.0));
