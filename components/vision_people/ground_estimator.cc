@@ -251,10 +251,17 @@ GroundTracker::GroundTracker(const GroundOptions& options, const GroundPlane& mo
 void GroundTracker::Reset() {
   frames_ = 0;
   tracked_ = mounting_;
+  jumping_ = false;
+}
+
+bool GroundTracker::Apart(const GroundPlane& a, const GroundPlane& b) const {
+  return std::abs(a.offset - b.offset) > options_.reset_height_m ||
+         AngleBetweenDeg(a, b) > options_.reset_angle_deg;
 }
 
 GroundPlane GroundTracker::Update(const GroundPlane* fit, int64_t utime) {
   last_reset_ = false;
+  last_held_off_ = false;
   if (frames_ > 0 && (utime < last_utime_ || (utime - last_utime_) * 1e-6 > options_.reset_gap_s)) {
     Reset();
     last_reset_ = true;
@@ -266,12 +273,25 @@ GroundPlane GroundTracker::Update(const GroundPlane* fit, int64_t utime) {
     // track (or, without one, the mounting file) is the best guess.
     return frames_ > 0 ? tracked_ : mounting_;
   }
-  if (frames_ > 0 && (std::abs(fit->offset - tracked_.offset) > options_.reset_height_m ||
-                      AngleBetweenDeg(*fit, tracked_) > options_.reset_angle_deg)) {
+  if (frames_ > 0 && Apart(*fit, tracked_)) {
+    // A camera on a robot does not move on its mount: a jump away from the mounting file is
+    // something else filling the view until it has lasted, unless the track is still young (the
+    // mounting file may be wrong) or the jump comes back to the mounting file.
+    if (established() && options_.reset_confirm_s > 0 && Apart(*fit, mounting_)) {
+      if (!jumping_ || Apart(*fit, jump_)) jump_since_utime_ = utime;
+      jumping_ = true;
+      jump_ = *fit;
+      if ((utime - jump_since_utime_) * 1e-6 < options_.reset_confirm_s) {
+        last_held_off_ = true;
+        ++held_off_;
+        return tracked_;
+      }
+    }
     frames_ = 0;
     last_reset_ = true;
     ++resets_;
   }
+  jumping_ = false;
   if (frames_ == 0) {
     tracked_ = *fit;
   } else {

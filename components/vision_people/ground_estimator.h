@@ -70,6 +70,10 @@ struct GroundOptions {
   double reset_height_m = 0.12;  // a jump larger than this restarts the track
   double reset_angle_deg = 6;
   double reset_gap_s = 2.0;        // frames further apart than this (or out of order) restart it
+  // An established track is restarted by a jump away from the mounting file only once fits that
+  // agree with each other have disagreed with it this long (a box top or a table filling the
+  // view for a moment is not the floor); a jump back to the mounting file restarts it at once.
+  double reset_confirm_s = 2.0;
   int established_frames = 5;      // a track this long is trusted over the mounting file
   double mismatch_height_m = 0.1;  // track vs mounting file: reported beyond these
   double mismatch_angle_deg = 5;
@@ -112,6 +116,11 @@ struct GroundOptions {
       "a floor tilt jump larger than this restarts the floor track", Positive());
     v("reset_gap_s", reset_gap_s,
       "frames further apart in time (or out of order) restart the floor track", Positive());
+    v("reset_confirm_s", reset_confirm_s,
+      "an established floor track is restarted by a jump away from the mounting file only when "
+      "the jumped-to floor persists this long (a box top filling the view is held off); 0: at "
+      "once",
+      NonNegative());
     v("established_frames", established_frames,
       "frames after which the tracked floor is trusted over the mounting file");
     v("mismatch_height_m", mismatch_height_m,
@@ -146,7 +155,9 @@ class GroundTracker {
  public:
   GroundTracker(const GroundOptions& options, const GroundPlane& mounting);
 
-  // One frame: `fit` is this frame's estimate (nullptr: none). Returns the floor to use.
+  // One frame: `fit` is this frame's estimate (nullptr: none). Returns the floor to use: the
+  // track, which a fit that jumps away from an established track joins only once the jump has
+  // lasted reset_confirm_s (until then the fit is held off and the track is returned).
   GroundPlane Update(const GroundPlane* fit, int64_t utime);
   void Reset();
 
@@ -157,6 +168,9 @@ class GroundTracker {
   int frames() const { return frames_; }
   int resets() const { return resets_; }
   bool last_update_reset() const { return last_reset_; }
+  // This frame's fit jumped away from the track and was held off (reset_confirm_s).
+  bool last_update_held_off() const { return last_held_off_; }
+  int held_off() const { return held_off_; }  // fits held off so far
   // The established track disagrees with the configured mounting.
   bool mismatch() const;
 
@@ -167,7 +181,16 @@ class GroundTracker {
   int frames_ = 0;
   int resets_ = 0;
   bool last_reset_ = false;
+  bool last_held_off_ = false;
+  int held_off_ = 0;
   int64_t last_utime_ = 0;
+  // Fits that jump away from the established track: the latest one, and since when fits that
+  // agree with it have come.
+  bool jumping_ = false;
+  GroundPlane jump_;
+  int64_t jump_since_utime_ = 0;
+
+  bool Apart(const GroundPlane& a, const GroundPlane& b) const;
 };
 
 }  // namespace vision_people

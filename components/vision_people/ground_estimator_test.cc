@@ -158,14 +158,63 @@ TEST(GroundEstimator, TrackerSmoothsResetsAndReportsAMismatch) {
   EXPECT_NEAR(tracker.Update(&off, t += 33333).offset - tracker.tracked().offset, 0.0, 1e-12);
   EXPECT_NEAR(tracker.tracked().offset, 0.85 + o.smoothing * 0.05, 0.01);
   EXPECT_FALSE(tracker.last_update_reset());
-  // A jump (another camera, another folder's frame) restarts the track at once.
+  // A jump away from the established track and from the mounting file (a box top filling the
+  // view) is held off: the track is used, and it restarts only once the jump has lasted
+  // reset_confirm_s (another camera).
   const GroundPlane other = GroundFromCameraMounting({1.4, -5 * kDeg, 0});
+  EXPECT_NEAR(tracker.Update(&other, t += 33333).offset, tracker.tracked().offset, 1e-12);
+  EXPECT_NEAR(tracker.tracked().offset, 0.85 + o.smoothing * 0.05, 0.01);
+  EXPECT_TRUE(tracker.last_update_held_off());
+  EXPECT_FALSE(tracker.last_update_reset());
+  const int64_t jump_start = t;
+  while (t - jump_start < static_cast<int64_t>(o.reset_confirm_s * 1e6) - 33333) {
+    tracker.Update(&other, t += 33333);
+    ASSERT_TRUE(tracker.last_update_held_off());
+  }
+  EXPECT_EQ(tracker.held_off(), static_cast<int>((t - jump_start) / 33333) + 1);
   EXPECT_NEAR(tracker.Update(&other, t += 33333).offset, 1.4, 1e-12);
   EXPECT_TRUE(tracker.last_update_reset());
+  EXPECT_FALSE(tracker.last_update_held_off());
   EXPECT_FALSE(tracker.mismatch());  // not established yet
+  // A young track follows a jump at once.
+  EXPECT_NEAR(tracker.Update(&truth, t += 33333).offset, 0.85, 1e-12);
+  EXPECT_TRUE(tracker.last_update_reset());
   // A gap in time restarts it too; without a fit it then falls back to the mounting file.
   EXPECT_NEAR(tracker.Update(nullptr, t += 10'000'000).offset, 0.55, 1e-12);
   EXPECT_TRUE(tracker.last_update_reset());
+}
+
+// On a camera whose mounting file is right, fits of other planes (a box top, a table) that
+// interrupt the floor are held off however they differ from each other, and a jump back to the
+// mounting file is taken at once.
+TEST(GroundEstimator, TrackerHoldsOffOtherPlanesAndReturnsToTheMountingAtOnce) {
+  GroundOptions o;
+  const GroundPlane mounting = GroundFromCameraMounting({0.55, 0, 0});
+  GroundTracker tracker(o, mounting);
+  int64_t t = 0;
+  for (int i = 0; i < o.established_frames; ++i) tracker.Update(&mounting, t += 66667);
+  ASSERT_TRUE(tracker.established());
+  const GroundPlane box_top = GroundFromCameraMounting({0.27, -3 * kDeg, 14 * kDeg});
+  const GroundPlane table = GroundFromCameraMounting({0.97, 19 * kDeg, 0});
+  for (int i = 0; i < 40; ++i) {  // 2.7 s of alternating other planes
+    const GroundPlane& other = i % 2 ? box_top : table;
+    EXPECT_NEAR(tracker.Update(&other, t += 66667).offset, 0.55, 1e-9) << "frame " << i;
+    EXPECT_TRUE(tracker.last_update_held_off());
+  }
+  EXPECT_EQ(tracker.resets(), 0);
+  // With the mounting file wrong, the track is established on the floor the data shows; a
+  // jump back to the file's floor is believed at once.
+  GroundTracker wrong_file(o, GroundFromCameraMounting({0.85, 10 * kDeg, 0}));
+  for (int i = 0; i < o.established_frames; ++i) wrong_file.Update(&mounting, t += 66667);
+  ASSERT_TRUE(wrong_file.established());
+  const GroundPlane file_floor = GroundFromCameraMounting({0.85, 10 * kDeg, 0});
+  EXPECT_NEAR(wrong_file.Update(&file_floor, t += 66667).offset, file_floor.offset, 1e-12);
+  EXPECT_TRUE(wrong_file.last_update_reset());
+  // Without the hold-off every other plane restarts the track.
+  o.reset_confirm_s = 0;
+  GroundTracker at_once(o, mounting);
+  for (int i = 0; i < o.established_frames; ++i) at_once.Update(&mounting, t += 66667);
+  EXPECT_NEAR(at_once.Update(&box_top, t += 66667).offset, box_top.offset, 1e-12);
 }
 
 // The mounting file wrong by 0.3 m and 10 degrees (either way): people are still found, the

@@ -1333,6 +1333,7 @@ DetectionResult PeopleDetector::Detect(const RgbdFrame& frame, std::string* erro
   const GroundPlane ground =
       PolishFloor(fit, o, mounting_, frame.utime, ws, tracker_, &result.stats);
   result.stats.ground_reset = o.ground.refine && tracker_.last_update_reset();
+  result.stats.ground_held_off = o.ground.refine && tracker_.last_update_held_off();
   result.stats.mounting_mismatch = tracker_.mismatch();
   result.camera = MountingFromGround(ground);
   result.ground = ground;

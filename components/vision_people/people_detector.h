@@ -322,6 +322,7 @@ struct DetectionStats {
   int num_ground_points = 0;       // RANSAC inliers among the sampled points
   bool ground_refined = false;     // the floor was found in this frame's data
   bool ground_reset = false;       // the floor track restarted (a jump or a gap in time)
+  bool ground_held_off = false;    // this frame's floor jumped away from the track: not used
   bool mounting_mismatch = false;  // the tracked floor disagrees with the configured mounting
   int num_clusters = 0;
   int num_candidates = 0;

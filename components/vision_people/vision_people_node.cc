@@ -133,9 +133,15 @@ void VisionPeopleNode::Report(const RgbdFrame& frame, const DetectionResult& res
   }
   std::ostringstream f;
   f.precision(3);
-  f << "floor " << (result.stats.ground_refined ? "seen" : "kept") << " height_m "
-    << result.camera.height_m << " tilt_down_deg " << result.camera.tilt_down_rad * 180 / M_PI
-    << " roll_deg " << result.camera.roll_rad * 180 / M_PI
+  // seen: this frame's floor; held: this frame's floor jumped away from the track and the
+  // track is used; kept: no floor in view, the track (or the mounting file) is used.
+  f << "floor "
+    << (result.stats.ground_held_off  ? "held"
+        : result.stats.ground_refined ? "seen"
+                                      : "kept")
+    << " height_m " << result.camera.height_m << " tilt_down_deg "
+    << result.camera.tilt_down_rad * 180 / M_PI << " roll_deg "
+    << result.camera.roll_rad * 180 / M_PI
     << (result.stats.mounting_mismatch ? " MOUNTING_MISMATCH" : "");
   floor_status_ = f.str();
 }
