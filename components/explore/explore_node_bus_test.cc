@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "common/testing/isolated_network.h"
+#include "common/testing/pose_messages.h"
 #include "explore/explore_node.h"
 
 namespace sarmap {
@@ -23,12 +24,7 @@ TEST(ExploreNodeBusTest, PosesAndOdometryArrivingWhileBusyAreAllHandled) {
   auto odom_pub = node.Advertise<odometry_t>("ODOM");
   constexpr int kEach = 20;
   for (int i = 0; i < kEach; ++i) {
-    pose_t pose{};
-    pose.header.utime = 1'000'000 + i * 33'000;
-    pose.header.frame = "map";
-    pose.child_frame = "base";
-    pose.position_m[0] = 0.01 * i;
-    pose.orientation[0] = 1;
+    pose_t pose = common::testing_util::PoseAlongX(1'000'000 + i * 33'000, 0.01 * i);
     pose_pub.Publish(&pose);
     odometry_t odom{};
     odom.header.utime = pose.header.utime;
