@@ -13,8 +13,8 @@ namespace sarmap {
 namespace procman {
 namespace testing_util {
 
-// Unsigned orders (an all-zero HMAC), stamped `counter` us, from `sheriff_id` to session 0 of
-// `deputy_id`: run `command_id` (`exec`, no group) once, respawned, stopped with SIGINT.
+// Unsigned orders (an all-zero HMAC), stamped `counter` us, from `sheriff_id` to `deputy_id`
+// (deputy_session 0): run `command_id` (`exec`, no group) once, respawned, stopped with SIGINT.
 inline sarmap::pm_orders_t OrdersToRun(const std::string& sheriff_id, const std::string& deputy_id,
                                        const std::string& command_id, const std::string& exec,
                                        int64_t counter) {
