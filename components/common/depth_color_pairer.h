@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -98,6 +99,10 @@ class FrameAssemblerBase {
   }
   bool has_pending() const { return pairer_.has_pending(); }
 
+  // Pairs for which `take(depth stamp)` is false are passed over before they are decoded (a
+  // node that thins its stream by stamps saves the decoding of every frame it would drop).
+  void TakeOnly(std::function<bool(int64_t utime)> take) { take_ = std::move(take); }
+
   // Warning name -> count.
   const std::map<std::string, int64_t>& warnings() const { return pairer_.warnings(); }
   int64_t total_warnings() const { return pairer_.total_warnings(); }
@@ -113,6 +118,7 @@ class FrameAssemblerBase {
  private:
   void BuildAll(std::vector<Frame>* ready) {
     for (const auto& pair : pairs_) {
+      if (take_ && !take_(pair.depth.header.utime)) continue;
       Frame frame;
       if (Build(pair, &frame)) ready->push_back(std::move(frame));
     }
@@ -120,6 +126,7 @@ class FrameAssemblerBase {
   }
 
   std::vector<DepthColorPairer::Pair> pairs_;
+  std::function<bool(int64_t utime)> take_;
 };
 
 }  // namespace common

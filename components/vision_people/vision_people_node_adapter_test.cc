@@ -1,5 +1,6 @@
 // VisionPeopleNode in-process over memq://: synthetic dark DEPTH + RGB in, people confirmed over
-// k of n frames out, a frame stamped far ahead dropped, a 30 Hz camera thinned to max_rate_hz.
+// k of n frames out, a frame stamped far ahead dropped, a 30 Hz camera thinned to max_rate_hz
+// before decoding.
 #include <gtest/gtest.h>
 
 #include <vector>
@@ -29,8 +30,9 @@ struct Bus {
     scene.people.push_back({3.0, 0.4, 1.75, 0.3});
     scene.objects.push_back({SyntheticObject::kChair, 2.2, -0.6, 0.5, 0});
   }
-  // A dark colour frame and the scene's depth at `utime`.
-  void Send(int i, int64_t utime) {
+  // A dark colour frame and the scene's depth at `utime`; with `corrupt_depth` the depth's
+  // compressed bytes are cut short, so decoding it fails.
+  void Send(int i, int64_t utime, bool corrupt_depth = false) {
     header_t h;
     h.utime = utime;
     h.seq = i;
@@ -41,6 +43,10 @@ struct Bus {
     const std::vector<uint16_t> depth_mm = scene.RenderDepth(i);
     image_t depth =
         common::MakeDepthImage(h, KinectIntrinsics(640, 480), depth_mm.data(), 640, 480);
+    if (corrupt_depth) {
+      depth.data.resize(depth.data.size() / 2);
+      depth.size = static_cast<int32_t>(depth.data.size());
+    }
     depth_pub.Publish(&depth);
     for (int k = 0; k < 4; ++k) node.SpinOnce(0.001);
   }
@@ -100,6 +106,24 @@ TEST(VisionPeopleNodeTest, MaxRateKeepsEverySecondFrameOfAThirtyHertzCamera) {
   for (size_t i = 0; i < bus.people.size(); ++i)
     EXPECT_EQ(bus.people[i].header.utime, t0 + static_cast<int64_t>(2 * i) * 33333);
   EXPECT_EQ(bus.people.back().num_detections, 1);  // confirmed over 2 of the 3 frames detected in
+}
+
+// A frame over max_rate_hz is passed over before it is decoded: undecodable depth at a stamp
+// that is thinned out raises no decoding warning; the same depth at a stamp that is taken does.
+TEST(VisionPeopleNodeTest, AFrameThinnedOutIsNotDecoded) {
+  Bus bus;
+  VisionPeopleOptions options = Options();
+  options.max_rate_hz = 15;
+  VisionPeopleNode adapter(options, &bus.node);
+  const int64_t t0 = 1700000000000000;
+  bus.Send(0, t0);
+  bus.Send(1, t0 + 33333, /*corrupt_depth=*/true);
+  EXPECT_EQ(adapter.skipped_frames(), 1);
+  EXPECT_EQ(adapter.pairing_warnings().count("depth_decode"), 0u);
+  bus.Send(2, t0 + 2 * 33333, /*corrupt_depth=*/true);
+  ASSERT_EQ(adapter.pairing_warnings().count("depth_decode"), 1u);
+  EXPECT_EQ(adapter.pairing_warnings().at("depth_decode"), 1);
+  EXPECT_EQ(adapter.frames(), 1);
 }
 
 }  // namespace
