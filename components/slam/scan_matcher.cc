@@ -12,18 +12,22 @@
 namespace sarmap {
 namespace slam {
 
-PointCloud VoxelFilter(const PointCloud& points, float size_m) {
+PointCloud VoxelFilter(const PointCloud& points, float size_m, std::vector<int>* kept) {
   PointCloud out;
+  if (kept) kept->clear();
   out.reserve(points.size());
   std::unordered_set<uint64_t> seen;
   seen.reserve(points.size() * 2);
   const float inv = 1.f / size_m;
-  for (const auto& p : points) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2f& p = points[i];
     const int64_t x = static_cast<int64_t>(std::floor(p.x() * inv));
     const int64_t y = static_cast<int64_t>(std::floor(p.y() * inv));
     const uint64_t key =
         (static_cast<uint64_t>(x) << 32) ^ (static_cast<uint64_t>(y) & 0xffffffffu);
-    if (seen.insert(key).second) out.push_back(p);
+    if (!seen.insert(key).second) continue;
+    out.push_back(p);
+    if (kept) kept->push_back(static_cast<int>(i));
   }
   return out;
 }
