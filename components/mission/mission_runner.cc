@@ -307,7 +307,6 @@ class Loop : public sim::SimSink {
     scan.range_min_m = planar.range_min_m;
     scan.range_max_m = planar.range_max_m;
     scan.ranges_m = planar.ranges_m;
-    scan.intensities = planar.visible_from_m;  // as sarmap-depth publishes them on SCAN
     const slam::ScanResult r = slam_.AddScan(scan);
     const double t = scan.time_s - start_s_;
     if (r.accepted) {

@@ -15,7 +15,6 @@ RangeData TransformRangeData(const RangeData& data, const Rigid2d& t) {
   out.misses.reserve(data.misses.size());
   for (const auto& p : data.hits) out.hits.push_back(r * p + tr);
   for (const auto& p : data.misses) out.misses.push_back(r * p + tr);
-  out.hit_visible_from_m = data.hit_visible_from_m;
   return out;
 }
 
@@ -47,15 +46,6 @@ void ProbabilityGrid::GrowToInclude(const Eigen::Vector2f& point) {
               cells.begin() + static_cast<size_t>(y + grow_down) * new_w + grow_left);
   }
   cells_.swap(cells);
-  if (!visible_from_cells2_.empty()) {
-    std::vector<float> layer(static_cast<size_t>(new_w) * new_h, 0.f);
-    for (int y = 0; y < height_; ++y) {
-      std::copy(visible_from_cells2_.begin() + static_cast<size_t>(y) * width_,
-                visible_from_cells2_.begin() + static_cast<size_t>(y + 1) * width_,
-                layer.begin() + static_cast<size_t>(y + grow_down) * new_w + grow_left);
-    }
-    visible_from_cells2_.swap(layer);
-  }
   update_mark_.assign(cells_.size(), 0);
   current_mark_ = 1;
   width_ = new_w;
@@ -141,9 +131,7 @@ void ProbabilityGrid::Insert(const RangeData& data, float hit_probability, float
       if (at_end && !include_end) break;
       const int i = y * width_ + x;
       if (x >= 0 && y >= 0 && x < width_ && y < height_ && update_mark_[i] != current_mark_ &&
-          (free_from_cells2 == 0 || FromOrigin2(x, y, ox, oy) >= free_from_cells2) &&
-          (visible_from_cells2_.empty() || visible_from_cells2_[i] == 0.f ||
-           FromOrigin2(x, y, ox, oy) >= visible_from_cells2_[i])) {
+          (free_from_cells2 == 0 || FromOrigin2(x, y, ox, oy) >= free_from_cells2)) {
         update_mark_[i] = current_mark_;
         ApplyOdds(i, miss_odds);
       }
@@ -174,25 +162,9 @@ bool ProbabilityGrid::KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) cons
   return max->x() >= 0;
 }
 
-void ProbabilityGrid::MarkVisibleFrom(const RangeData& data) {
-  Unfinish();
-  const size_t n = std::min(data.hits.size(), data.hit_visible_from_m.size());
-  for (size_t k = 0; k < n; ++k) {
-    const float from_m = data.hit_visible_from_m[k];
-    if (!(from_m > 0.f) || !std::isfinite(from_m)) continue;
-    GrowToInclude(data.hits[k]);
-    if (visible_from_cells2_.empty()) visible_from_cells2_.assign(cells_.size(), 0.f);
-    const Eigen::Array2i c = CellIndex(data.hits[k]);
-    float& cell = visible_from_cells2_[static_cast<size_t>(c.y()) * width_ + c.x()];
-    const float from_cells = from_m * static_cast<float>(inv_resolution_);
-    cell = std::max(cell, from_cells * from_cells);
-  }
-}
-
 void ProbabilityGrid::Finish() {
   if (finished_) return;
   std::vector<uint32_t>().swap(update_mark_);
-  std::vector<float>().swap(visible_from_cells2_);
   Eigen::Array2i min, max;
   if (!KnownBounds(&min, &max)) {  // nothing known: keep the extent
     min = Eigen::Array2i(0, 0);
@@ -220,7 +192,6 @@ void ProbabilityGrid::SetRaw(int width, int height, const Eigen::Vector2d& corne
   finished_ = false;
   std::vector<uint16_t>().swap(finished_cells_);
   cells_ = std::move(cells);
-  std::vector<float>().swap(visible_from_cells2_);
   update_mark_.assign(cells_.size(), 0);
   current_mark_ = 1;
 }

@@ -32,10 +32,6 @@ struct RangeData {
   Eigen::Vector2f origin = Eigen::Vector2f::Zero();  // sensor position
   PointCloud hits;                                   // returns
   PointCloud misses;  // end points of no-return rays (free space only)
-  // Per hit (empty: none known): the range from which its surface is in view, 0 for "from the
-  // sensor's minimum range". A depth camera's scan sees a low object only from afar; closer in
-  // its rays pass over it (components/depth/README.md).
-  std::vector<float> hit_visible_from_m;
 };
 
 RangeData TransformRangeData(const RangeData& data, const Rigid2d& transform);
@@ -84,12 +80,6 @@ class ProbabilityGrid {
   void Insert(const RangeData& data, float hit_probability, float miss_probability,
               float free_from_m = 0.f);
 
-  // Records the hits' visible-from ranges (RangeData::hit_visible_from_m; map frame): from then
-  // on, a ray of Insert leaves a cell alone when its origin is nearer to the cell than the
-  // largest range recorded there, as the ray passed over what the cell holds. Marking every
-  // scan before inserting any makes the result independent of the order of the scans.
-  void MarkVisibleFrom(const RangeData& data);
-
   // Grows the grid so that `point` (map frame) lies inside, with a margin.
   void GrowToInclude(const Eigen::Vector2f& point);
 
@@ -97,17 +87,15 @@ class ProbabilityGrid {
   bool KnownBounds(Eigen::Array2i* min, Eigen::Array2i* max) const;
 
   // For a grid that is only read from now on: crops it to its known cells (growth leaves up to
-  // half the grid unknown), stores them in 16 bits and frees the per-scan update marks and the
-  // ranges MarkVisibleFrom recorded; reads change by at most half a 16-bit step (outside and
-  // unknown read alike). Inserting again works, at the cost of going back to floats and
-  // re-allocating the marks.
+  // half the grid unknown), stores them in 16 bits and frees the per-scan update marks; reads
+  // change by at most half a 16-bit step (outside and unknown read alike). Inserting again
+  // works, at the cost of going back to floats and re-allocating the marks.
   void Finish();
 
   // Bytes of its cells and update marks (capacity).
   size_t MemoryBytes() const {
     return cells_.capacity() * sizeof(float) + finished_cells_.capacity() * sizeof(uint16_t) +
-           update_mark_.capacity() * sizeof(uint32_t) +
-           visible_from_cells2_.capacity() * sizeof(float);
+           update_mark_.capacity() * sizeof(uint32_t);
   }
 
   // The 16-bit code of a probability (0 for unknown) and back.
@@ -132,8 +120,6 @@ class ProbabilityGrid {
   std::vector<uint16_t> finished_cells_;  // once finished (Encode)
   std::vector<uint32_t> update_mark_;
   uint32_t current_mark_ = 1;
-  // Per cell, squared, in cells^2 (MarkVisibleFrom); empty until a range is recorded.
-  std::vector<float> visible_from_cells2_;
 };
 
 }  // namespace slam

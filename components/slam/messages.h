@@ -21,7 +21,6 @@ inline LaserScan FromScanMessage(const laser_scan_t& msg) {
   s.range_min_m = msg.range_min_m;
   s.range_max_m = msg.range_max_m;
   s.ranges_m = msg.ranges_m;
-  if (msg.num_intensities == msg.num_ranges) s.intensities = msg.intensities;
   return s;
 }
 

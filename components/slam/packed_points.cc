@@ -33,26 +33,5 @@ PointCloud PackedPoints::Unpack() const {
   return points;
 }
 
-PackedRangeData::PackedRangeData(const RangeData& data)
-    : origin(data.origin), hits(data.hits), misses(data.misses) {
-  // PackedPoints leaves out non-finite points: index the hits as stored.
-  int32_t stored = 0;
-  for (size_t k = 0; k < data.hits.size(); ++k) {
-    if (!std::isfinite(data.hits[k].x()) || !std::isfinite(data.hits[k].y())) continue;
-    const float from_m = k < data.hit_visible_from_m.size() ? data.hit_visible_from_m[k] : 0.f;
-    if (from_m > 0.f && std::isfinite(from_m)) visible_from.push_back({stored, from_m});
-    ++stored;
-  }
-}
-
-RangeData PackedRangeData::Unpack() const {
-  RangeData data{origin, hits.Unpack(), misses.Unpack(), {}};
-  if (!visible_from.empty()) {
-    data.hit_visible_from_m.assign(data.hits.size(), 0.f);
-    for (const VisibleFrom& v : visible_from) data.hit_visible_from_m[v.hit] = v.from_m;
-  }
-  return data;
-}
-
 }  // namespace slam
 }  // namespace sarmap

@@ -30,27 +30,17 @@ class PackedPoints {
   std::vector<int16_t> xy_;  // x0, y0, x1, y1, ...
 };
 
-// A node's scan in its base frame, packed (see RangeData). Visible-from ranges are kept only
-// for the hits that have one (most returns of a depth camera's scan are in view from its
-// minimum range on; a laser's have none).
+// A node's scan in its base frame, packed (see RangeData).
 struct PackedRangeData {
   PackedRangeData() = default;
-  explicit PackedRangeData(const RangeData& data);
-  RangeData Unpack() const;
-  size_t MemoryBytes() const {
-    return hits.MemoryBytes() + misses.MemoryBytes() +
-           visible_from.capacity() * sizeof(VisibleFrom);
-  }
-
-  struct VisibleFrom {
-    int32_t hit;   // index into hits
-    float from_m;  // RangeData::hit_visible_from_m, > 0
-  };
+  explicit PackedRangeData(const RangeData& data)
+      : origin(data.origin), hits(data.hits), misses(data.misses) {}
+  RangeData Unpack() const { return {origin, hits.Unpack(), misses.Unpack()}; }
+  size_t MemoryBytes() const { return hits.MemoryBytes() + misses.MemoryBytes(); }
 
   Eigen::Vector2f origin = Eigen::Vector2f::Zero();
   PackedPoints hits;
   PackedPoints misses;
-  std::vector<VisibleFrom> visible_from;  // in hit order
 };
 
 }  // namespace slam

@@ -61,22 +61,6 @@ TEST(PackedPointsTest, ARangeDataKeepsItsOriginAndBothClouds) {
   ASSERT_EQ(back.misses.size(), 1u);
   EXPECT_NEAR(back.hits[1].x(), -3.25f, 1e-3f);
   EXPECT_NEAR(back.misses[0].x(), 4.5f, 1e-3f);
-  EXPECT_TRUE(back.hit_visible_from_m.empty());
-}
-
-TEST(PackedPointsTest, ARangeDataKeepsTheVisibleFromRangesOfItsHits) {
-  RangeData data;
-  data.hits = {{1.0f, 2.0f}, {NAN, 0.5f}, {-3.25f, 0.5f}, {0.5f, 0.5f}};
-  data.hit_visible_from_m = {0.f, 1.5f, 0.9f, NAN};
-  const PackedRangeData packed(data);
-  ASSERT_EQ(packed.visible_from.size(), 1u);  // zero, the non-finite hit and NaN are not kept
-  const RangeData back = packed.Unpack();
-  ASSERT_EQ(back.hits.size(), 3u);  // the non-finite hit is never stored
-  ASSERT_EQ(back.hit_visible_from_m.size(), 3u);
-  EXPECT_EQ(back.hit_visible_from_m[0], 0.f);
-  EXPECT_EQ(back.hit_visible_from_m[1], 0.9f);
-  EXPECT_NEAR(back.hits[1].x(), -3.25f, 1e-3f);
-  EXPECT_EQ(back.hit_visible_from_m[2], 0.f);
 }
 
 }  // namespace

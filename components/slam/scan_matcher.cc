@@ -12,22 +12,18 @@
 namespace sarmap {
 namespace slam {
 
-PointCloud VoxelFilter(const PointCloud& points, float size_m, std::vector<int>* kept) {
+PointCloud VoxelFilter(const PointCloud& points, float size_m) {
   PointCloud out;
-  if (kept) kept->clear();
   out.reserve(points.size());
   std::unordered_set<uint64_t> seen;
   seen.reserve(points.size() * 2);
   const float inv = 1.f / size_m;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector2f& p = points[i];
+  for (const auto& p : points) {
     const int64_t x = static_cast<int64_t>(std::floor(p.x() * inv));
     const int64_t y = static_cast<int64_t>(std::floor(p.y() * inv));
     const uint64_t key =
         (static_cast<uint64_t>(x) << 32) ^ (static_cast<uint64_t>(y) & 0xffffffffu);
-    if (!seen.insert(key).second) continue;
-    out.push_back(p);
-    if (kept) kept->push_back(static_cast<int>(i));
+    if (seen.insert(key).second) out.push_back(p);
   }
   return out;
 }

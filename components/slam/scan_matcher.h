@@ -12,9 +12,8 @@
 namespace sarmap {
 namespace slam {
 
-// Voxel filter: keeps one point per `size_m` cell (the first seen); `kept`, if given, receives
-// the index in `points` of each point kept.
-PointCloud VoxelFilter(const PointCloud& points, float size_m, std::vector<int>* kept = nullptr);
+// Voxel filter: keeps one point per `size_m` cell (the first seen).
+PointCloud VoxelFilter(const PointCloud& points, float size_m);
 // Largest voxel size <= max_length_m that still leaves `min_points` (Cartographer's adaptive
 // voxel filter); points farther than max_range_m are dropped first.
 PointCloud AdaptiveVoxelFilter(const PointCloud& points, float max_length_m, int min_points,

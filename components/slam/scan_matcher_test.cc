@@ -118,49 +118,6 @@ TEST(ProbabilityGridTest, RaysClearOnlyFromTheGivenRangeOn) {
   }
 }
 
-TEST(ProbabilityGridTest, ARayFromNearerThanAReturnsVisibleFromRangeLeavesItsCell) {
-  // A low object at 0.85 m, in view from 2 m on (a depth camera looks over it closer in), seen
-  // from 3 m; rays towards the wall behind it from 0.5 m away pass over it, rays from 2.5 m away
-  // would have hit it had it been there. Marked, it stays against ten near rays and goes
-  // against ten far ones; unmarked, the near rays erase it.
-  for (const bool marked : {false, true}) {
-    ProbabilityGrid g(0.1, Eigen::Vector2d::Zero(), 10);
-    RangeData far;
-    far.origin = Eigen::Vector2f(-2.15f, 0.05f);
-    far.hits.push_back(Eigen::Vector2f(0.85f, 0.05f));
-    far.hit_visible_from_m.push_back(2.0f);
-    if (marked) g.MarkVisibleFrom(far);
-    g.Insert(far, 0.55f, 0.49f);
-    RangeData close;
-    close.origin = Eigen::Vector2f(0.35f, 0.05f);
-    close.hits.push_back(Eigen::Vector2f(3.05f, 0.05f));  // the wall behind it
-    for (int i = 0; i < 10; ++i) g.Insert(close, 0.55f, 0.49f);
-    const Eigen::Array2i object = g.CellIndex(Eigen::Vector2f(0.85f, 0.05f));
-    if (marked) {
-      EXPECT_NEAR(g.Raw(object), 0.55f, 1e-6);
-      // The rest of the near rays' cells are cleared as before.
-      EXPECT_LT(g.Raw(g.CellIndex(Eigen::Vector2f(1.85f, 0.05f))), 0.5f);
-    } else {
-      EXPECT_LT(g.Raw(object), 0.5f);
-    }
-    // Growing the grid keeps the marks in their cells.
-    g.GrowToInclude(Eigen::Vector2f(-30.f, -30.f));
-    RangeData from_afar = close;
-    from_afar.origin = Eigen::Vector2f(-1.95f, 0.05f);  // 2.8 m from the object
-    for (int i = 0; i < 10; ++i) g.Insert(from_afar, 0.55f, 0.49f);
-    EXPECT_LT(g.Raw(g.CellIndex(Eigen::Vector2f(0.85f, 0.05f))), 0.5f);
-  }
-}
-
-TEST(VoxelFilterTest, GivesTheIndexOfEachPointKept) {
-  const PointCloud points = {{0.01f, 0.01f}, {0.02f, 0.01f}, {0.51f, 0.0f}, {0.011f, 0.012f}};
-  std::vector<int> kept;
-  const PointCloud out = VoxelFilter(points, 0.1f, &kept);
-  ASSERT_EQ(out.size(), 2u);
-  ASSERT_EQ(kept, (std::vector<int>{0, 2}));
-  EXPECT_EQ(out[1], points[2]);
-}
-
 TEST_F(ScanMatcherTest, AngularStepMovesFarthestPointByOneCell) {
   PointCloud p = {Eigen::Vector2f(10, 0)};
   const double step = AngularSearchStep(p, 0.05);

@@ -96,9 +96,6 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
   data->origin = base_from_laser.translation().cast<float>();
   data->hits.clear();
   data->misses.clear();
-  data->hit_visible_from_m.clear();
-  const bool visible_from =
-      o.intensities_are_visible_from && scan.intensities.size() == scan.ranges_m.size();
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const float r = scan.ranges_m[i];
     const double a = scan.angle_min_rad + i * scan.angle_increment_rad + base_from_laser.yaw_rad();
@@ -107,12 +104,6 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
         std::isfinite(r) && r >= scan.range_min_m && r <= scan.range_max_m && r >= o.min_range_m;
     if (is_return && r <= o.max_range_m) {
       data->hits.push_back((base_from_laser.translation() + r * dir).cast<float>());
-      if (visible_from) {
-        // From the minimum range or nearer: in view wherever the sensor sees anything.
-        const float from_m = scan.intensities[i];
-        data->hit_visible_from_m.push_back(
-            std::isfinite(from_m) && from_m > scan.range_min_m ? from_m : 0.f);
-      }
     } else if ((!is_return && !(r < o.min_range_m) && r > scan.range_min_m) ||
                (is_return && r > o.max_range_m)) {
       if (o.missing_data_ray_length_m > 0) {
@@ -229,9 +220,7 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
   RangeData data;
   ScanToRangeData(scan, &data);
   const auto& so = options_.scan;
-  std::vector<int> voxel_kept;
-  const PointCloud voxel_hits =
-      VoxelFilter(data.hits, static_cast<float>(so.voxel_size_m), &voxel_kept);
+  const PointCloud voxel_hits = VoxelFilter(data.hits, static_cast<float>(so.voxel_size_m));
   const PointCloud points =
       AdaptiveVoxelFilter(voxel_hits, static_cast<float>(so.adaptive_max_length_m),
                           so.adaptive_min_points, static_cast<float>(so.max_range_m));
@@ -296,9 +285,6 @@ ScanResult Slam::AddScanInOrder(const LaserScan& scan, double stamp_s) {
     local_data.origin = data.origin;
     local_data.hits = voxel_hits;
     local_data.misses = data.misses;
-    if (!data.hit_visible_from_m.empty()) {
-      for (int k : voxel_kept) local_data.hit_visible_from_m.push_back(data.hit_visible_from_m[k]);
-    }
     const RangeData in_local = TransformRangeData(local_data, local);
     const std::vector<int> inserted = active_submaps_.ids();
     for (int id : inserted) {
@@ -861,16 +847,11 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
     node.trimmed = true;
     // Its returns on what no older submap holds stay on MAP (a low object seen from afar,
     // which later scans from close by look over).
-    const RangeData scan = node.data->range_data.Unpack();
-    RangeData kept;
-    for (size_t k = 0; k < scan.hits.size(); ++k) {
-      const int64_t key =
-          CellKey(node_global_[n] * scan.hits[k].cast<double>(), options_.trim.cell_m);
+    PointCloud kept;
+    for (const Eigen::Vector2f& hit : node.data->range_data.hits.Unpack()) {
+      const int64_t key = CellKey(node_global_[n] * hit.cast<double>(), options_.trim.cell_m);
       if (new_obstacles.count(key) == 0) continue;
-      kept.hits.push_back(scan.hits[k]);
-      if (!scan.hit_visible_from_m.empty()) {
-        kept.hit_visible_from_m.push_back(scan.hit_visible_from_m[k]);
-      }
+      kept.push_back(hit);
       retained_obstacles_.insert(key);
     }
     ReleaseTrimmedData(&node, std::move(kept));
@@ -913,15 +894,14 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
   }
 }
 
-void Slam::ReleaseTrimmedData(Node* node, RangeData kept) {
-  if (kept.hits.empty()) {
+void Slam::ReleaseTrimmedData(Node* node, PointCloud kept_hits) {
+  if (kept_hits.empty()) {
     node->data.reset();
     return;
   }
   auto data = std::make_unique<NodeData>();
-  kept.origin = node->data->range_data.origin;
-  kept.misses.clear();
-  data->range_data = PackedRangeData(kept);
+  data->range_data.origin = node->data->range_data.origin;
+  data->range_data.hits = PackedPoints(kept_hits);
   node->data = std::move(data);
 }
 
@@ -954,19 +934,6 @@ OccupancyMap Slam::RenderMap() const {
   map.resolution_m = options_.local.resolution_m;
   if (nodes_.empty()) return map;
   ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
-  // Every scan's visible-from ranges before any ray: a low object seen from afar stays on MAP
-  // however many scans from close by pass over it.
-  for (size_t i = 0; i < nodes_.size(); ++i) {
-    if (!nodes_[i].data || nodes_[i].data->range_data.visible_from.empty()) continue;
-    const PackedRangeData& d = nodes_[i].data->range_data;
-    RangeData marks;
-    const PointCloud hits = d.hits.Unpack();
-    for (const PackedRangeData::VisibleFrom& v : d.visible_from) {
-      marks.hits.push_back(hits[v.hit]);
-      marks.hit_visible_from_m.push_back(v.from_m);
-    }
-    grid.MarkVisibleFrom(TransformRangeData(marks, node_global_[i]));
-  }
   for (size_t i = 0; i < nodes_.size(); ++i) {
     if (!nodes_[i].data) continue;
     grid.Insert(TransformRangeData(nodes_[i].data->range_data.Unpack(), node_global_[i]),

@@ -47,8 +47,6 @@ struct LaserScan {
   float range_min_m = 0;
   float range_max_m = 0;  // a reading outside [min, max] or not finite is "no return"
   std::vector<float> ranges_m;
-  // Per range, or empty: slam.scan.intensities_are_visible_from says what they are.
-  std::vector<float> intensities;
   // base_from_laser of this scan (CARMEN ROBOTLASER1 lines carry it); unset: slam.scan.laser_*.
   bool has_base_from_laser = false;
   Rigid2d base_from_laser;
@@ -233,9 +231,8 @@ class Slam {
   void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles);
   // retained_obstacles_ from the returns the trimmed nodes keep (after a load).
   void RebuildRetainedObstacles();
-  // A just-trimmed node keeps only the hits of `kept`, with their visible-from ranges (no hits:
-  // no data at all).
-  static void ReleaseTrimmedData(Node* node, RangeData kept);
+  // A just-trimmed node keeps only `kept_hits` (none: no data at all).
+  static void ReleaseTrimmedData(Node* node, PointCloud kept_hits);
   // The map-frame circle around the submap's grid.
   void SubmapCircle(int submap_id, Eigen::Vector2d* centre_m, double* radius_m) const;
   // The map-frame raster cells (trim.cell_m) the submap's grid knows and those it holds an

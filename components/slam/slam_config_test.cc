@@ -60,10 +60,6 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
 
   // A depth scan's "no return" is free space only up to the sensor's range limit.
   EXPECT_LT(robot.slam.scan.missing_data_ray_length_m, base.slam.scan.missing_data_ray_length_m);
-  // Its scans come from sarmap-depth, whose intensities are each return's visible-from range; a
-  // laser's are reflectance.
-  EXPECT_FALSE(base.slam.scan.intensities_are_visible_from);
-  EXPECT_TRUE(robot.slam.scan.intensities_are_visible_from);
 
   // The laser logs trim submaps that map nothing new; the robot, whose camera sees low debris
   // only from afar, keeps them all.
@@ -99,7 +95,6 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
                                             "consistency_gate",
                                             "reject_window_edge",
                                             "missing_data_ray_length_m",
-                                            "intensities_are_visible_from",
                                             "enabled"};
   EXPECT_GE(differing.size(), 2u);
   for (const auto& line : differing) {

@@ -23,11 +23,6 @@ struct ScanOptions {
   // points a below the horizon sees an object of height z from (h - z) / tan(a) on; closer in,
   // its scan's rays pass over low objects, and clearing there would erase them from MAP.
   double map_free_from_m = 0.0;
-  // MAP only: the scan's intensities are each return's visible-from range, as sarmap-depth
-  // publishes them; a ray from nearer than that to a cell holding such a return does not clear
-  // the cell (ProbabilityGrid::MarkVisibleFrom). False for a laser, whose intensities are
-  // reflectance.
-  bool intensities_are_visible_from = false;
   // Pose of the laser on the robot (base_from_laser).
   double laser_x_m = 0, laser_y_m = 0, laser_yaw_rad = 0;
   template <class V> void Visit(V& v) {
@@ -48,9 +43,6 @@ struct ScanOptions {
       "MAP: rays clear cells only from this range on (a depth camera's rays pass over low objects "
       "closer in); 0: from the sensor",
       NonNegative());
-    v("intensities_are_visible_from", intensities_are_visible_from,
-      "MAP: SCAN's intensities are each return's visible-from range (sarmap-depth's scans); rays "
-      "from nearer do not clear the return's cell. False for a laser's reflectance");
     v("laser_x_m", laser_x_m, "base_from_laser x, for scans that carry no laser pose of their own");
     v("laser_y_m", laser_y_m, "base_from_laser y, for scans that carry no laser pose of their own");
     v("laser_yaw_rad", laser_yaw_rad,

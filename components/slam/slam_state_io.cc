@@ -53,9 +53,9 @@ class Reader : public common::BinaryReader {
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
 // Of the body. Version 2 adds each constraint's translation shape, version 3 the trimmed flags
 // of submaps and nodes (a trimmed submap has no grid) and each constraint's steps, version 4 the
-// raster cells only trimmed submaps knew, version 5 each node's visible-from ranges; version 1-4
-// bodies are still read (shape: the identity; nothing trimmed; no such cells; no ranges).
-constexpr int32_t kVersion = 5;
+// raster cells only trimmed submaps knew; version 1-3 bodies are still read (shape: the
+// identity; nothing trimmed; no such cells).
+constexpr int32_t kVersion = 4;
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -117,10 +117,6 @@ void Slam::Save(const std::string& path) const {
       w.Pod(d.range_data.origin.x()), w.Pod(d.range_data.origin.y());
       w.Cloud(d.range_data.hits.Unpack());
       w.Cloud(d.range_data.misses.Unpack());
-      w.Pod<int64_t>(d.range_data.visible_from.size());
-      for (const PackedRangeData::VisibleFrom& v : d.range_data.visible_from) {
-        w.Pod<int32_t>(v.hit), w.Pod<float>(v.from_m);
-      }
     }
     // Constraints.
     w.Pod<int64_t>(constraints_.size());
@@ -231,18 +227,6 @@ void Slam::Load(const std::string& path) {
     range_data.origin.y() = r.Pod<float>();
     range_data.hits = r.Cloud();
     range_data.misses = r.Cloud();
-    if (body_version >= 5) {
-      const int64_t num_visible_from = r.Count(10000000);
-      if (num_visible_from > 0) range_data.hit_visible_from_m.assign(range_data.hits.size(), 0.f);
-      for (int64_t k = 0; k < num_visible_from; ++k) {
-        const int32_t hit = r.Pod<int32_t>();
-        const float from_m = r.Pod<float>();
-        if (hit < 0 || static_cast<size_t>(hit) >= range_data.hits.size()) {
-          throw std::runtime_error("pose-graph file: a visible-from range of no return");
-        }
-        range_data.hit_visible_from_m[hit] = from_m;
-      }
-    }
     d.range_data = PackedRangeData(range_data);
     nodes.push_back(std::move(n));
   }
@@ -336,7 +320,7 @@ void Slam::Load(const std::string& path) {
   submap_global_ = std::move(submap_global);
   active_submaps_.Restore(std::move(active));
   for (Node& n : nodes) {
-    if (n.trimmed) ReleaseTrimmedData(&n, n.data->range_data.Unpack());
+    if (n.trimmed) ReleaseTrimmedData(&n, n.data->range_data.hits.Unpack());
   }
   nodes_ = std::move(nodes);
   motion_filter_.Restore(last_node_time, last_node_local);

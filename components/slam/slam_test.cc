@@ -420,9 +420,6 @@ struct Pillar {
   // Open windows in the wall y = 3: 0.4 m wide, centred at these x, with nothing behind them in
   // range (the beams through them return nothing: free-space rays).
   std::vector<double> windows_x;
-  // > 0: a low object, returned (with this as the return's visible-from range in the scan's
-  // intensities) only from at least this far from its centre; nearer, the beams pass over it.
-  double visible_from_m = 0;
 };
 
 // Step k of a robot driving back and forth along y = 0 in the room (x from -3 to 1 m and back,
@@ -445,14 +442,7 @@ ScanResult BackAndForthStep(Slam* slam, int k, const Pillar& pillar) {
     }
     const float to_pillar =
         pillar.present ? PillarRange(x, 0, angle, pillar.x_m, 1.5, pillar.half_m) : INFINITY;
-    if (pillar.visible_from_m > 0) {
-      scan.intensities.resize(scan.ranges_m.size(), 0.f);
-      if (to_pillar < scan.ranges_m[i] &&
-          std::hypot(x - pillar.x_m, 1.5) >= pillar.visible_from_m) {
-        scan.ranges_m[i] = to_pillar;
-        scan.intensities[i] = static_cast<float>(pillar.visible_from_m);
-      }
-    } else if (to_pillar < scan.ranges_m[i]) {
+    if (to_pillar < scan.ranges_m[i]) {
       scan.ranges_m[i] = x < pillar.seen_below_x ? to_pillar : 0.0f;
     }
   }
@@ -727,46 +717,6 @@ TEST(SlamTrimTest, ASmallObstacleSeenOnlyOnARevisitStaysOnMapAfterItsSubmapsAreT
   resumed.Load(path);
   const OccupancyMap reloaded = resumed.RenderMap();
   EXPECT_EQ(reloaded.cells, map.cells);
-}
-
-TEST(SlamMapTest, ALowObjectSeenFromAfarStaysOnMapAgainstTheRaysThatPassOverIt) {
-  // A 0.2 m low object at (-1, 1.5), in view from 2.4 m on: the drive sees it from its two ends
-  // (x < -2.87, x > 0.87) and passes its rays over it from everywhere else. With the scan's
-  // intensities read as visible-from ranges MAP keeps it, through trimming and a save and a load;
-  // without, the rays from close by erase it.
-  for (const bool visible_from : {false, true}) {
-    for (const bool trim : {false, true}) {
-      SlamOptions o = BackAndForthOptions(trim);
-      o.scan.intensities_are_visible_from = visible_from;
-      Slam slam{o};
-      Pillar low;
-      low.present = true;
-      low.half_m = 0.1;
-      low.visible_from_m = 2.4;
-      for (int k = 0; k < 3 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k, low).accepted);
-      const OccupancyMap map = slam.RenderMap();
-      // The map frame is the first scan's pose, (-3, 0): the object is at (2, 1.5).
-      int at_object = -1;
-      for (double dx = -0.06; dx <= 0.06; dx += 0.02) {
-        for (double dy = -0.14; dy <= -0.06; dy += 0.02)  // its face towards the drive
-          at_object = std::max(at_object, MapValueAt(map, 2.0 + dx, 1.5 + dy));
-      }
-      std::printf("visible-from %d, trimming %d: %d of %d nodes trimmed, MAP at the object %d\n",
-                  visible_from, trim, static_cast<int>(slam.stats().nodes_trimmed),
-                  slam.num_nodes(), at_object);
-      if (!visible_from) {
-        EXPECT_LT(at_object, 50);
-        continue;
-      }
-      EXPECT_GT(at_object, 50);
-      EXPECT_LT(MapValueAt(map, 2.0, 0.5), 50);  // the floor between stays free
-      const std::string path = ::testing::TempDir() + "/slam_state_low_object.pg";
-      slam.Save(path);
-      Slam resumed{o};
-      resumed.Load(path);
-      EXPECT_EQ(resumed.RenderMap().cells, map.cells);
-    }
-  }
 }
 
 TEST(SlamTrimTest, APlaceOnlyTrimmedSubmapsSawIsNotNewToALaterPass) {
