@@ -9,7 +9,7 @@ CTEST_ARGS ?=
 
 # Build tools and libraries (ARCHITECTURE.md), and tools the tests and demo run.
 PACKAGES = cmake ninja-build ccache pkg-config g++ python3 \
-  liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libzstd-dev \
+  liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libzstd-dev zlib1g-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   libopencv-dev libopencv-contrib-dev libpcl-dev libceres-dev libsuitesparse-dev \
   libopenni2-dev libpocketsphinx-dev pocketsphinx-en-us libfftw3-dev libsndfile1-dev \

@@ -7,6 +7,7 @@
 
 #include "common/args.h"
 #include "common/decode.h"
+#include "common/node.h"
 #include "common/sequence.h"
 #include "common/time.h"
 #include "log-tools/lcm_log_reader.h"
@@ -27,10 +28,25 @@ struct ChannelSummary {
   int64_t first_us = 0, last_us = 0;
   int64_t first_utime = 0, last_utime = 0;
   bool has_header = false;
-  sarmap::common::SequenceTracker sequence;
+  sarmap::common::PublisherSequences sequence;  // per publisher, as a node counts them
   std::string geometry;          // of the last message that has one
   bool geometry_varies = false;  // not the same in every message
 };
+
+// Who published a message, for the channels several publishers share (common::PublisherOf);
+// "" otherwise.
+std::string Publisher(const std::string& type, const std::vector<uint8_t>& data) {
+  const auto of = [&](auto msg) {
+    return sarmap::common::DecodeMessage(data.data(), data.size(), &msg)
+               ? sarmap::common::PublisherOf(msg)
+               : std::string();
+  };
+  if (type == "slam_anchor_request_t") return of(sarmap::slam_anchor_request_t());
+  if (type == "node_status_t") return of(sarmap::node_status_t());
+  if (type == "pm_info_t") return of(sarmap::pm_info_t());
+  if (type == "pm_output_t") return of(sarmap::pm_output_t());
+  return "";
+}
 
 // The sensor geometry of a message, for the types that have one; "" otherwise.
 std::string Geometry(const std::string& type, const std::vector<uint8_t>& data) {
@@ -125,7 +141,7 @@ int main(int argc, char** argv) {
         if (!c.has_header) c.first_utime = utime;
         c.has_header = true;
         c.last_utime = utime;
-        c.sequence.Observe(seq);
+        c.sequence.Observe(Publisher(type, event.data), seq);
       }
       const std::string geometry = Geometry(type, event.data);
       if (!geometry.empty()) {

@@ -149,6 +149,16 @@ int64_t Node::total_dropped() const {
   return total;
 }
 
+std::string PublisherOf(const sarmap::slam_anchor_request_t& msg) { return msg.client_id; }
+
+std::string PublisherOf(const sarmap::node_status_t& msg) {
+  return msg.node_name + "@" + msg.host + ":" + std::to_string(msg.pid);
+}
+
+std::string PublisherOf(const sarmap::pm_info_t& msg) { return msg.deputy_id + "@" + msg.host; }
+
+std::string PublisherOf(const sarmap::pm_output_t& msg) { return msg.deputy_id; }
+
 void Node::PublishStatus() {
   if (status_channel_.empty()) return;
   sarmap::node_status_t status{};

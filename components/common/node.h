@@ -34,6 +34,10 @@
 #include "common/logging.h"
 #include "common/sequence.h"
 #include "common/time.h"
+#include "sarmap/node_status_t.hpp"
+#include "sarmap/pm_info_t.hpp"
+#include "sarmap/pm_output_t.hpp"
+#include "sarmap/slam_anchor_request_t.hpp"
 
 namespace sarmap {
 namespace common {
@@ -54,9 +58,21 @@ struct ChannelStats {
   int64_t received = 0;
   int64_t dropped_malformed = 0;
   int64_t handler_errors = 0;
-  SequenceTracker sequence;
+  PublisherSequences sequence;  // per publisher (PublisherOf)
   int64_t last_utime = 0;
 };
+
+// Who published a message, for the gap accounting of a channel that several publishers share,
+// each numbering its own messages: "" (the channel's one publisher) but for the types whose
+// messages name their sender.
+template <class T>
+std::string PublisherOf(const T&) {
+  return std::string();
+}
+std::string PublisherOf(const sarmap::slam_anchor_request_t& msg);  // the SLAM client
+std::string PublisherOf(const sarmap::node_status_t& msg);          // node, host and pid
+std::string PublisherOf(const sarmap::pm_info_t& msg);              // the deputy
+std::string PublisherOf(const sarmap::pm_output_t& msg);            // the deputy
 
 class Node {
  public:
@@ -220,7 +236,7 @@ class Node::TypedSubscription : public Node::SubscriptionBase {
     ReceiveInfo info;
     info.channel = channel;
     info.receive_time_s = node_->Now();
-    info.missed_before = stats_->sequence.Observe(msg.header.seq);
+    info.missed_before = stats_->sequence.Observe(PublisherOf(msg), msg.header.seq);
     ++stats_->received;
     stats_->last_utime = msg.header.utime;
     try {

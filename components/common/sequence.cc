@@ -32,5 +32,20 @@ int64_t SequenceTracker::Observe(int64_t seq) {
   return 0;
 }
 
+int64_t PublisherSequences::Observe(const std::string& publisher, int64_t seq) {
+  auto it = trackers_.find(publisher);
+  if (it == trackers_.end()) {
+    const bool room = trackers_.size() + 1 < kMaxPublishers;  // one place stays for ""
+    it = trackers_.try_emplace(room ? publisher : std::string()).first;
+  }
+  return it->second.Observe(seq);
+}
+
+int64_t PublisherSequences::Sum(int64_t (SequenceTracker::*count)() const) const {
+  int64_t total = 0;
+  for (const auto& [publisher, tracker] : trackers_) total += (tracker.*count)();
+  return total;
+}
+
 }  // namespace common
 }  // namespace sarmap

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <random>
 #include <sstream>
 
 namespace sarmap {
@@ -30,6 +31,30 @@ TEST(Crc32Test, MatchesTheStandardCheckValue) {
   EXPECT_EQ(Crc32(check.data(), check.size()), 0xCBF43926u);
   // Continued over two parts: the same as at once.
   EXPECT_EQ(Crc32(check.data() + 4, 5, Crc32(check.data(), 4)), 0xCBF43926u);
+}
+
+// The definition, one bit at a time (reflected polynomial 0xEDB88320).
+uint32_t BitwiseCrc32(const std::string& data) {
+  uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char byte : data) {
+    crc ^= byte;
+    for (int k = 0; k < 8; ++k) crc = (crc & 1) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
+  }
+  return ~crc;
+}
+
+TEST(Crc32Test, MatchesTheDefinitionOnLongBuffersAndUnalignedSplits) {
+  std::mt19937 rng(7);
+  std::string data(100003, '\0');
+  for (char& c : data) c = static_cast<char>(rng());
+  const uint32_t expected = BitwiseCrc32(data);
+  EXPECT_EQ(Crc32(data.data(), data.size()), expected);
+  for (size_t split : {size_t{0}, size_t{1}, size_t{7}, size_t{4097}, data.size()}) {
+    const uint32_t head = Crc32(data.data(), split);
+    EXPECT_EQ(Crc32(data.data() + split, data.size() - split, head), expected) << split;
+  }
+  data[54321] ^= 0x10;  // one flipped bit changes it
+  EXPECT_NE(Crc32(data.data(), data.size()), expected);
 }
 
 TEST(StateFileTest, RoundTripsABinaryBody) {
