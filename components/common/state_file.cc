@@ -23,7 +23,9 @@ constexpr char kPrefix[] = "# sarmap-state ";
 
 uint32_t Crc32(const void* data, size_t size, uint32_t crc) {
   // zlib's braided CRC: a large state file (SLAM's grows to tens of MB, saved every few
-  // seconds) costs a few ms, where a byte-at-a-time table costs tens.
+  // seconds) costs a few ms, where a byte-at-a-time table costs tens. (zlib answers 0 for a
+  // null buffer, whatever crc it continues.)
+  if (size == 0) return crc;
   return static_cast<uint32_t>(crc32_z(crc, static_cast<const Bytef*>(data), size));
 }
 

@@ -31,6 +31,9 @@ TEST(Crc32Test, MatchesTheStandardCheckValue) {
   EXPECT_EQ(Crc32(check.data(), check.size()), 0xCBF43926u);
   // Continued over two parts: the same as at once.
   EXPECT_EQ(Crc32(check.data() + 4, 5, Crc32(check.data(), 4)), 0xCBF43926u);
+  // Nothing more leaves it as it was, whatever the pointer.
+  EXPECT_EQ(Crc32(nullptr, 0, 0xCBF43926u), 0xCBF43926u);
+  EXPECT_EQ(Crc32(nullptr, 0), 0u);
 }
 
 // The definition, one bit at a time (reflected polynomial 0xEDB88320).
