@@ -246,30 +246,32 @@ void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out)
                "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
                "sound | RSS MB | heap MB | SLAM MB | SLAM nodes (live) | submaps (live) | held for "
                "anchors | kept: new area / obstacles | loop closures | "
-               "optimise s (period) | "
+               "optimise s (period) | MAP s (period) | MAP redrawn / drawn | "
                "people | sound sources | detections without pose |\n");
   const mission::MissionReport* prev = nullptr;
   for (const mission::MissionReport& r : reports) {
     const double dt = prev ? r.t_s - prev->t_s : r.t_s;
     auto pct = [&](double now, double before) { return dt > 0 ? 100 * (now - before) / dt : 0.0; };
-    std::fprintf(out,
-                 "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %.0f | "
-                 "%.1f | %lld | %lld "
-                 "| %lld | %lld / %lld | %lld | %.2f | %d | %d | %lld |\n",
-                 r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
-                 pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
-                 pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
-                 pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
-                 pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
-                 pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb, r.heap_mb,
-                 common::Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
-                 static_cast<long long>(r.slam_submaps),
-                 static_cast<long long>(r.slam_submaps_held),
-                 static_cast<long long>(r.slam_submaps_kept_area),
-                 static_cast<long long>(r.slam_submaps_kept_obstacles),
-                 static_cast<long long>(r.slam_loop_closures),
-                 r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0), r.people_on_map,
-                 r.sound_sources, static_cast<long long>(r.detections_without_pose));
+    std::fprintf(
+        out,
+        "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %.0f | "
+        "%.1f | %lld | %lld "
+        "| %lld | %lld / %lld | %lld | %.2f | %.2f | %lld / %lld | %d | %d | %lld |\n",
+        r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
+        pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
+        pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
+        pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
+        pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
+        pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb, r.heap_mb,
+        common::Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
+        static_cast<long long>(r.slam_submaps), static_cast<long long>(r.slam_submaps_held),
+        static_cast<long long>(r.slam_submaps_kept_area),
+        static_cast<long long>(r.slam_submaps_kept_obstacles),
+        static_cast<long long>(r.slam_loop_closures),
+        r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0),
+        r.slam_map_s - (prev ? prev->slam_map_s : 0), static_cast<long long>(r.slam_map_redraws),
+        static_cast<long long>(r.slam_map_draws), r.people_on_map, r.sound_sources,
+        static_cast<long long>(r.detections_without_pose));
     prev = &r;
   }
 }
@@ -282,7 +284,8 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
          "slam_submaps,slam_submaps_held,slam_submaps_kept_area,slam_submaps_kept_obstacles,"
          "slam_optimisations,"
          "slam_loop_closures,"
-         "slam_optimise_s,people_on_map,sound_sources,detections_without_pose\n";
+         "slam_optimise_s,slam_map_s,slam_map_draws,slam_map_redraws,people_on_map,sound_sources,"
+         "detections_without_pose\n";
   for (const mission::MissionReport& r : reports) {
     csv << r.t_s << "," << r.state << "," << r.distance_m << "," << r.cpu_s << "," << r.slam_cpu_s
         << "," << r.explore_cpu_s << "," << r.vision_cpu_s << "," << r.people_map_cpu_s << ","
@@ -296,7 +299,8 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
         << common::Megabytes(r.slam_memory.trajectory) << "," << r.slam_nodes << ","
         << r.slam_submaps << "," << r.slam_submaps_held << "," << r.slam_submaps_kept_area << ","
         << r.slam_submaps_kept_obstacles << "," << r.slam_optimisations << ","
-        << r.slam_loop_closures << "," << r.slam_optimise_s << "," << r.people_on_map << ","
+        << r.slam_loop_closures << "," << r.slam_optimise_s << "," << r.slam_map_s << ","
+        << r.slam_map_draws << "," << r.slam_map_redraws << "," << r.people_on_map << ","
         << r.sound_sources << "," << r.detections_without_pose << "\n";
   }
 }

@@ -390,7 +390,7 @@ class Loop : public sim::SimSink {
   static double Seconds(int64_t utime) { return common::UtimeToSeconds(utime); }
 
   void PublishMap(double t) {
-    const slam::OccupancyMap map = slam_.RenderMap();
+    const slam::OccupancyMap map = slam_.DrawMap();
     explore::Grid grid;
     common::CopyGridGeometry(map, &grid);
     grid.cells = map.cells;
@@ -685,6 +685,10 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       report.slam_optimisations = stats.optimisations;
       report.slam_loop_closures = stats.loop_closures;
       report.slam_optimise_s = stats.optimise_seconds;
+      const slam::Slam::MapDrawingStats& drawing = loop.slam().map_drawing_stats();
+      report.slam_map_s = drawing.seconds;
+      report.slam_map_draws = drawing.redraws + drawing.extensions;
+      report.slam_map_redraws = drawing.redraws;
       if (perception) {
         report.people_on_map = perception->people_on_map();
         report.sound_sources = perception->sound_sources();

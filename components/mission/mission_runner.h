@@ -95,6 +95,8 @@ struct MissionReport {
   int64_t slam_submaps_kept_area = 0, slam_submaps_kept_obstacles = 0;
   int64_t slam_optimisations = 0, slam_loop_closures = 0;
   double slam_optimise_s = 0;  // cumulative time in the global optimisation
+  double slam_map_s = 0;       // cumulative time drawing MAP (Slam::DrawMap)
+  int64_t slam_map_draws = 0, slam_map_redraws = 0;  // MAPs drawn; of them drawn from every node
   int people_on_map = 0, sound_sources = 0;
   int64_t detections_without_pose = 0;
 };

@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "common/angles.h"
+
 namespace sarmap {
 namespace slam {
 namespace {
@@ -929,18 +931,12 @@ bool Slam::JointCovariance(const std::vector<int>& node_ids, Eigen::MatrixXd* co
   return NodeCovariance(constraints_, node_global_, submap_global_, node_ids, covariance, p, model);
 }
 
-OccupancyMap Slam::RenderMap() const {
+namespace {
+
+// The known part of `grid` as an output map (-1 unknown, 0..100).
+OccupancyMap ToOccupancyMap(const ProbabilityGrid& grid) {
   OccupancyMap map;
-  map.resolution_m = options_.local.resolution_m;
-  if (nodes_.empty()) return map;
-  ProbabilityGrid grid(map.resolution_m, node_global_.front().translation());
-  for (size_t i = 0; i < nodes_.size(); ++i) {
-    if (!nodes_[i].data) continue;
-    grid.Insert(TransformRangeData(nodes_[i].data->range_data.Unpack(), node_global_[i]),
-                static_cast<float>(options_.local.hit_probability),
-                static_cast<float>(options_.local.miss_probability),
-                static_cast<float>(options_.scan.map_free_from_m));
-  }
+  map.resolution_m = grid.resolution();
   Eigen::Array2i lo, hi;
   if (!grid.KnownBounds(&lo, &hi)) return map;
   map.width = hi.x() - lo.x() + 1;
@@ -955,6 +951,73 @@ OccupancyMap Slam::RenderMap() const {
           p == 0.f ? int8_t(-1) : static_cast<int8_t>(std::lround(p * 100));
     }
   }
+  return map;
+}
+
+float Reach(const RangeData& base_data) {
+  float reach2 = base_data.origin.squaredNorm();
+  for (const Eigen::Vector2f& p : base_data.hits) reach2 = std::max(reach2, p.squaredNorm());
+  for (const Eigen::Vector2f& p : base_data.misses) reach2 = std::max(reach2, p.squaredNorm());
+  return std::sqrt(reach2);
+}
+
+}  // namespace
+
+float Slam::DrawNode(int id, ProbabilityGrid* grid) const {
+  const Node& node = nodes_[id];
+  if (!node.data) return -1.f;
+  const RangeData base_data = node.data->range_data.Unpack();
+  grid->Insert(TransformRangeData(base_data, node_global_[id]),
+               static_cast<float>(options_.local.hit_probability),
+               static_cast<float>(options_.local.miss_probability),
+               static_cast<float>(options_.scan.map_free_from_m));
+  return Reach(base_data);
+}
+
+OccupancyMap Slam::RenderMap() const {
+  if (nodes_.empty()) {
+    OccupancyMap map;
+    map.resolution_m = options_.local.resolution_m;
+    return map;
+  }
+  ProbabilityGrid grid(options_.local.resolution_m, node_global_.front().translation());
+  for (int i = 0; i < num_nodes(); ++i) DrawNode(i, &grid);
+  return ToOccupancyMap(grid);
+}
+
+OccupancyMap Slam::DrawMap() {
+  if (nodes_.empty()) return RenderMap();
+  const auto t0 = std::chrono::steady_clock::now();
+  // Redraw when a drawn return has moved by more than the tolerance: a point p of a scan at
+  // pose (t, R) moves by |t' - t + (R' - R) p| <= |t' - t| + |yaw' - yaw| |p|.
+  const double tolerance_m = options_.scan.map_redraw_shift_cells * options_.local.resolution_m;
+  bool redraw = !map_drawing_;
+  for (size_t i = 0; !redraw && i < drawn_nodes_.size(); ++i) {
+    const DrawnNode& d = drawn_nodes_[i];
+    if (d.reach_m < 0.f) continue;  // nothing drawn
+    const Rigid2d& now = node_global_[i];
+    const double shift_m =
+        (now.translation() - d.pose.translation()).norm() +
+        std::abs(common::WrapAngle(now.yaw_rad() - d.pose.yaw_rad())) * d.reach_m;
+    redraw = shift_m > tolerance_m;
+  }
+  size_t first = drawn_nodes_.size();
+  if (redraw) {
+    map_drawing_ = std::make_unique<ProbabilityGrid>(options_.local.resolution_m,
+                                                     node_global_.front().translation());
+    drawn_nodes_.clear();
+    first = 0;
+    ++map_drawing_stats_.redraws;
+  } else {
+    ++map_drawing_stats_.extensions;
+  }
+  for (size_t i = first; i < nodes_.size(); ++i) {
+    const float reach_m = DrawNode(static_cast<int>(i), map_drawing_.get());
+    drawn_nodes_.push_back({node_global_[i], reach_m});
+    if (nodes_[i].data) ++map_drawing_stats_.nodes_drawn;
+  }
+  OccupancyMap map = ToOccupancyMap(*map_drawing_);
+  map_drawing_stats_.seconds += Seconds(t0);
   return map;
 }
 

@@ -158,6 +158,20 @@ class Slam {
 
   // The map, rendered from every node's scan at its optimised pose.
   OccupancyMap RenderMap() const;
+  // The map as a live node publishes it: RenderMap() with the drawing kept between calls.
+  // Nodes added since the last call are drawn into it; it is drawn again from every node only
+  // after Load() or when an optimisation has moved a drawn node's returns by more than
+  // scan.map_redraw_shift_cells, bounded by |translation change| + |yaw change| x the scan's
+  // reach. Between redraws it equals RenderMap() up to that shift, except that a node trimmed
+  // after it was drawn stays drawn with its whole scan.
+  OccupancyMap DrawMap();
+  struct MapDrawingStats {
+    int64_t redraws = 0;     // drawn from every node
+    int64_t extensions = 0;  // only new nodes drawn
+    int64_t nodes_drawn = 0;
+    double seconds = 0;  // in DrawMap
+  };
+  const MapDrawingStats& map_drawing_stats() const { return map_drawing_stats_; }
 
   // Our own pose-graph file (everything needed to continue mapping or to localise);
   // written to a temporary file and renamed, so a crash never leaves a broken file.
@@ -245,6 +259,9 @@ class Slam {
   bool ConsistentWithGraph(int node_id, int submap_id, const Rigid2d& measured);
   const PrecomputationStack& Precomputation(int submap_id);
   void RunOptimisation(int max_iterations = 0);  // 0: graph.max_iterations
+  // Draws node `id`'s data (if any) into `grid` at its global pose; returns the scan's reach
+  // (largest distance of a point from the node's pose), -1 without data.
+  float DrawNode(int id, ProbabilityGrid* grid) const;
 
   SlamOptions options_;
   bool localisation_only_ = false;
@@ -279,6 +296,15 @@ class Slam {
   // min_fresh_area_m2): they count as known by one submap, so that a later pass over them does
   // not find them new again.
   std::unordered_set<int64_t> retained_known_;
+
+  // DrawMap's drawing: the grid, and per drawn node the pose it was drawn at and its reach.
+  struct DrawnNode {
+    Rigid2d pose;
+    float reach_m = 0;
+  };
+  std::unique_ptr<ProbabilityGrid> map_drawing_;
+  std::vector<DrawnNode> drawn_nodes_;
+  MapDrawingStats map_drawing_stats_;
 };
 
 }  // namespace slam

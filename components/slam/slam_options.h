@@ -23,6 +23,11 @@ struct ScanOptions {
   // points a below the horizon sees an object of height z from (h - z) / tan(a) on; closer in,
   // its scan's rays pass over low objects, and clearing there would erase them from MAP.
   double map_free_from_m = 0.0;
+  // MAP as published (Slam::DrawMap) keeps its drawing between calls and draws it again from
+  // every node only when an optimisation has moved some drawn return by more than this many
+  // cells: below half a cell, a return stays in its cell or moves to a neighbour, which is the
+  // grid's own rounding.
+  double map_redraw_shift_cells = 0.5;
   // Pose of the laser on the robot (base_from_laser).
   double laser_x_m = 0, laser_y_m = 0, laser_yaw_rad = 0;
   template <class V> void Visit(V& v) {
@@ -42,6 +47,10 @@ struct ScanOptions {
     v("map_free_from_m", map_free_from_m,
       "MAP: rays clear cells only from this range on (a depth camera's rays pass over low objects "
       "closer in); 0: from the sensor",
+      NonNegative());
+    v("map_redraw_shift_cells", map_redraw_shift_cells,
+      "MAP: drawn again from every node when an optimisation moves a drawn return by more than "
+      "this (cells); otherwise only new nodes are drawn",
       NonNegative());
     v("laser_x_m", laser_x_m, "base_from_laser x, for scans that carry no laser pose of their own");
     v("laser_y_m", laser_y_m, "base_from_laser y, for scans that carry no laser pose of their own");

@@ -332,6 +332,8 @@ void Slam::Load(const std::string& path) {
   constraints_ = std::move(constraints);
   precomputations_.clear();
   scans_.clear();
+  map_drawing_.reset();  // DrawMap draws the loaded graph afresh
+  drawn_nodes_.clear();
   // A new odometry segment: the odometry frame of a restarted robot may differ.
   odometry_.Reset(odom_segment + 1);
   have_scan_since_load_ = false;
