@@ -687,7 +687,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       report.slam_optimise_s = stats.optimise_seconds;
       const slam::Slam::MapDrawingStats& drawing = loop.slam().map_drawing_stats();
       report.slam_map_s = drawing.seconds;
-      report.slam_map_draws = drawing.redraws + drawing.extensions;
+      report.slam_map_draws = drawing.draws;
       report.slam_map_redraws = drawing.redraws;
       if (perception) {
         report.people_on_map = perception->people_on_map();

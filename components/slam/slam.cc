@@ -985,9 +985,102 @@ OccupancyMap Slam::RenderMap() const {
   return ToOccupancyMap(grid);
 }
 
+OccupancyMap Slam::ComposeMap() const {
+  if (nodes_.empty()) return RenderMap();
+  // The output lattice is RenderMap's (through the first node's position), grown to hold every
+  // live submap's grid at its global pose.
+  const double r = options_.local.resolution_m;
+  ProbabilityGrid out(r, node_global_.front().translation());
+  struct Placed {
+    const ProbabilityGrid* grid;
+    Rigid2d global_from_local;
+    Eigen::Vector2d lo, hi;  // its map-frame bounding box
+    int parity;              // of its submap id
+  };
+  std::vector<Placed> placed;
+  for (size_t s = 0; s < submaps_.size(); ++s) {
+    const Submap& submap = submaps_[s];
+    if (submap.trimmed || !submap.grid) continue;
+    const ProbabilityGrid& grid = *submap.grid;
+    Placed p{
+        &grid, submap_global_[s] * submap.local_pose.inverse(), {}, {}, static_cast<int>(s % 2)};
+    const Eigen::Vector2d size = r * Eigen::Vector2d(grid.width(), grid.height());
+    p.lo = p.hi = p.global_from_local * grid.corner();
+    for (const Eigen::Vector2d& c :
+         {Eigen::Vector2d(size.x(), 0), Eigen::Vector2d(0, size.y()), size}) {
+      const Eigen::Vector2d g = p.global_from_local * Eigen::Vector2d(grid.corner() + c);
+      p.lo = p.lo.cwiseMin(g);
+      p.hi = p.hi.cwiseMax(g);
+    }
+    out.GrowToInclude(p.lo.cast<float>());
+    out.GrowToInclude(p.hi.cast<float>());
+    placed.push_back(p);
+  }
+  // Local SLAM inserts node k into submaps floor(k / n) - 1 and floor(k / n) (n =
+  // scans_per_submap; the first n nodes into submap 0 alone), so the even-numbered submaps hold
+  // each node once, and so do the odd-numbered ones but for the first n nodes: each parity's
+  // log-odds sum is the nodes' evidence. Trimming takes submaps from either; a cell takes the
+  // parity that knows it, or, when both do, the one with more evidence (larger |log-odds|).
+  const int width = out.width(), height = out.height();
+  const size_t num_cells = static_cast<size_t>(width) * height;
+  std::vector<float> log_odds[2] = {std::vector<float>(num_cells, 0.f),
+                                    std::vector<float>(num_cells, 0.f)};
+  std::vector<uint8_t> known(num_cells, 0);  // bit k: parity k knows the cell
+  for (const Placed& p : placed) {
+    // Each output cell in the submap's box samples the submap cell under its centre:
+    // q(x, y) = local_from_global * centre(x, y) = q0 + x ex + y ey.
+    const Rigid2d local_from_global = p.global_from_local.inverse();
+    const Eigen::Matrix2d rotation = local_from_global.rotation().toRotationMatrix();
+    const Eigen::Vector2d ex = r * rotation.col(0), ey = r * rotation.col(1);
+    const Eigen::Vector2d q0 = local_from_global * Eigen::Vector2d(out.corner().array() + 0.5 * r);
+    const Eigen::Array2i lo = out.CellIndex(p.lo.cast<float>()).max(0);
+    const Eigen::Array2i hi =
+        out.CellIndex(p.hi.cast<float>()).min(Eigen::Array2i(width - 1, height - 1));
+    const ProbabilityGrid& grid = *p.grid;
+    std::vector<float>& sum = log_odds[p.parity];
+    const uint8_t bit = static_cast<uint8_t>(1 << p.parity);
+    const double inv_r = 1.0 / r;
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      Eigen::Vector2d q = q0 + lo.x() * ex + y * ey;
+      for (int x = lo.x(); x <= hi.x(); ++x, q += ex) {
+        const int cx = static_cast<int>(std::floor((q.x() - grid.corner().x()) * inv_r));
+        const int cy = static_cast<int>(std::floor((q.y() - grid.corner().y()) * inv_r));
+        if (cx < 0 || cy < 0 || cx >= grid.width() || cy >= grid.height()) continue;
+        const float probability = grid.RawAt(static_cast<size_t>(cy) * grid.width() + cx);
+        if (probability == 0.f) continue;
+        const size_t i = static_cast<size_t>(y) * width + x;
+        sum[i] += std::log(probability / (1.f - probability));
+        known[i] |= bit;
+      }
+    }
+  }
+  std::vector<float> cells(num_cells, 0.f);
+  for (size_t i = 0; i < num_cells; ++i) {
+    if (!known[i]) continue;
+    const float even = log_odds[0][i], odd = log_odds[1][i];
+    const float l = known[i] == 1                     ? even
+                    : known[i] == 2                   ? odd
+                    : std::abs(even) >= std::abs(odd) ? even
+                                                      : odd;
+    cells[i] = std::clamp(1.f / (1.f + std::exp(-l)), kMinProbability, kMaxProbability);
+  }
+  out.SetRaw(width, height, out.corner(), std::move(cells));
+  // Returns of obstacles only trimmed nodes hold.
+  for (int i = 0; i < num_nodes(); ++i) {
+    if (nodes_[i].trimmed) DrawNode(i, &out);
+  }
+  return ToOccupancyMap(out);
+}
+
 OccupancyMap Slam::DrawMap() {
   if (nodes_.empty()) return RenderMap();
   const auto t0 = std::chrono::steady_clock::now();
+  ++map_drawing_stats_.draws;
+  if (options_.scan.map_source == "submaps") {
+    OccupancyMap map = ComposeMap();
+    map_drawing_stats_.seconds += Seconds(t0);
+    return map;
+  }
   // Redraw when a drawn return has moved by more than the tolerance: a point p of a scan at
   // pose (t, R) moves by |t' - t + (R' - R) p| <= |t' - t| + |yaw' - yaw| |p|.
   const double tolerance_m = options_.scan.map_redraw_shift_cells * options_.local.resolution_m;
@@ -1008,8 +1101,6 @@ OccupancyMap Slam::DrawMap() {
     drawn_nodes_.clear();
     first = 0;
     ++map_drawing_stats_.redraws;
-  } else {
-    ++map_drawing_stats_.extensions;
   }
   for (size_t i = first; i < nodes_.size(); ++i) {
     const float reach_m = DrawNode(static_cast<int>(i), map_drawing_.get());

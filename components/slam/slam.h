@@ -158,16 +158,23 @@ class Slam {
 
   // The map, rendered from every node's scan at its optimised pose.
   OccupancyMap RenderMap() const;
-  // The map as a live node publishes it: RenderMap() with the drawing kept between calls.
-  // Nodes added since the last call are drawn into it; it is drawn again from every node only
-  // after Load() or when an optimisation has moved a drawn node's returns by more than
-  // scan.map_redraw_shift_cells, bounded by |translation change| + |yaw change| x the scan's
-  // reach. Between redraws it equals RenderMap() up to that shift, except that a node trimmed
-  // after it was drawn stays drawn with its whole scan.
+  // The map composed from the live submaps' grids at their optimised poses, with the returns
+  // trimmed nodes keep drawn on it. The even-numbered submaps hold every node once, and so do
+  // the odd-numbered ones (but for the first scans_per_submap nodes), so each parity's sum of
+  // log-odds is the evidence RenderMap() gathers from the nodes; a cell takes the parity that
+  // knows it, or the one with more evidence (trimming takes submaps from either). Its cost
+  // grows with the live submaps' area, not with the nodes.
+  OccupancyMap ComposeMap() const;
+  // The map as a live node publishes it (scan.map_source): ComposeMap(), or RenderMap() with
+  // the drawing kept between calls. Nodes added since the last call are drawn into it; it is
+  // drawn again from every node only after Load() or when an optimisation has moved a drawn
+  // node's returns by more than scan.map_redraw_shift_cells, bounded by |translation change| +
+  // |yaw change| x the scan's reach. Between redraws it equals RenderMap() up to that shift,
+  // except that a node trimmed after it was drawn stays drawn with its whole scan.
   OccupancyMap DrawMap();
   struct MapDrawingStats {
-    int64_t redraws = 0;     // drawn from every node
-    int64_t extensions = 0;  // only new nodes drawn
+    int64_t draws = 0;
+    int64_t redraws = 0;  // map_source nodes: drawn from every node
     int64_t nodes_drawn = 0;
     double seconds = 0;  // in DrawMap
   };

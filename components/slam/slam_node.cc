@@ -347,7 +347,7 @@ class SlamNode::Impl {
         "opt %lld (%.1f s) "
         "rejected scans %lld odom %lld late %lld off-clock stamps %lld (re-anchors "
         "%lld) anchor requests refused %lld deferred %lld mean latency %.1f ms data %.1f MB "
-        "map redrawn %lld of %lld",
+        "maps %lld (%.1f s, %lld from every node)",
         (long long)s.nodes, slam_.num_live_nodes(), (long long)s.submaps, slam_.num_live_submaps(),
         slam_.num_submaps_held_for_anchors(), (long long)s.loop_closures,
         (long long)s.optimisations, s.optimise_seconds, (long long)s.rejected_scans,
@@ -355,8 +355,8 @@ class SlamNode::Impl {
         (long long)gates_.dropped(), (long long)gates_.reanchors(),
         (long long)anchor_requests_refused_, (long long)anchor_requests_deferred_,
         latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0,
-        common::Megabytes(slam_.Memory().Total()), (long long)slam_.map_drawing_stats().redraws,
-        (long long)(slam_.map_drawing_stats().redraws + slam_.map_drawing_stats().extensions));
+        common::Megabytes(slam_.Memory().Total()), (long long)slam_.map_drawing_stats().draws,
+        slam_.map_drawing_stats().seconds, (long long)slam_.map_drawing_stats().redraws);
     node_->SetStatusMessage(text);
   }
 

@@ -2,6 +2,7 @@
 // Options of the SLAM core (config/slam.yaml, section "slam" of the node's options).
 
 #include <cmath>
+#include <string>
 
 #include "common/options.h"
 
@@ -23,10 +24,13 @@ struct ScanOptions {
   // points a below the horizon sees an object of height z from (h - z) / tan(a) on; closer in,
   // its scan's rays pass over low objects, and clearing there would erase them from MAP.
   double map_free_from_m = 0.0;
-  // MAP as published (Slam::DrawMap) keeps its drawing between calls and draws it again from
-  // every node only when an optimisation has moved some drawn return by more than this many
-  // cells: below half a cell, a return stays in its cell or moves to a neighbour, which is the
-  // grid's own rounding.
+  // MAP as published (Slam::DrawMap): "nodes" draws it from every live node's scan (cost grows
+  // with the live nodes; honours map_free_from_m), keeping the drawing between calls and
+  // drawing it again only when an optimisation has moved some drawn return by more than
+  // map_redraw_shift_cells: below half a cell, a return stays in its cell or moves to a
+  // neighbour, which is the grid's own rounding. "submaps" composes it from the live submaps'
+  // grids at their optimised poses (cost grows with the mapped area; Slam::ComposeMap).
+  std::string map_source = "nodes";
   double map_redraw_shift_cells = 0.5;
   // Pose of the laser on the robot (base_from_laser).
   double laser_x_m = 0, laser_y_m = 0, laser_yaw_rad = 0;
@@ -48,9 +52,13 @@ struct ScanOptions {
       "MAP: rays clear cells only from this range on (a depth camera's rays pass over low objects "
       "closer in); 0: from the sensor",
       NonNegative());
+    v("map_source", map_source,
+      "MAP as published: drawn from every live node's scan (nodes), or composed from the live "
+      "submaps' grids (submaps; not with map_free_from_m)",
+      OneOf({"submaps", "nodes"}));
     v("map_redraw_shift_cells", map_redraw_shift_cells,
-      "MAP: drawn again from every node when an optimisation moves a drawn return by more than "
-      "this (cells); otherwise only new nodes are drawn",
+      "MAP from nodes: drawn again from every node when an optimisation moves a drawn return by "
+      "more than this (cells); otherwise only new nodes are drawn",
       NonNegative());
     v("laser_x_m", laser_x_m, "base_from_laser x, for scans that carry no laser pose of their own");
     v("laser_y_m", laser_y_m, "base_from_laser y, for scans that carry no laser pose of their own");
@@ -59,6 +67,8 @@ struct ScanOptions {
   }
   void Validate(Validator& c) const {
     c.That(max_range_m > min_range_m, "max_range_m", "must be > min_range_m");
+    c.That(map_free_from_m == 0 || map_source == "nodes", "map_free_from_m",
+           "needs map_source: nodes (the submaps' grids clear cells from the sensor on)");
   }
 };
 
