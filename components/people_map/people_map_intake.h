@@ -55,6 +55,8 @@ struct PeopleMapNodeOptions {
   double request_repeat_s = 5.0;
   int max_anchor_nodes = 32;
   std::string output_channel = "PEOPLE_MAP";
+  // Per input channel: 20 s of 15 Hz PEOPLE_VISUAL or POSE, longer than the node's longest pause.
+  int input_queue_capacity = 300;
   common::StampGateOptions stamp_gate;
   PeopleMapOptions map;
   template <class V>
@@ -91,6 +93,10 @@ struct PeopleMapNodeOptions {
       "max_anchor_ids_per_request",
       AtLeast(1));
     v("output_channel", output_channel, "the people map");
+    v("input_queue_capacity", input_queue_capacity,
+      "Messages held per input channel while the node is busy (a state save, a publication); "
+      "beyond it the oldest are lost",
+      AtLeast(1));
     v("stamp_gate", stamp_gate,
       "inputs stamped far from their stream's clock are dropped and counted, never adopted");
     v("map", map, "people map");

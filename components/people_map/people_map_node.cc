@@ -44,19 +44,24 @@ PeopleMapNode::PeopleMapNode(const PeopleMapNodeOptions& options, common::Node* 
     latest_utime = std::max(latest_utime, person.last_detected_utime);
   intake_->set_latest_utime(latest_utime);
 
-  node->Subscribe<pose_t>(options_.pose_channel, [this](const pose_t& m, const auto& info) {
-    if (StampOk(kPoseGate, m.header.utime, info)) intake_->OnPose(m);
-  });
-  node->Subscribe<people_detections_t>(options_.visual_channel,
-                                       [this](const people_detections_t& m, const auto& info) {
-                                         if (StampOk(kSeenGate, m.header.utime, info))
-                                           intake_->OnSeen(m);
-                                       });
-  node->Subscribe<people_detections_t>(options_.audio_channel,
-                                       [this](const people_detections_t& m, const auto& info) {
-                                         if (StampOk(kHeardGate, m.header.utime, info))
-                                           intake_->OnHeard(m);
-                                       });
+  node->Subscribe<pose_t>(
+      options_.pose_channel,
+      [this](const pose_t& m, const auto& info) {
+        if (StampOk(kPoseGate, m.header.utime, info)) intake_->OnPose(m);
+      },
+      options_.input_queue_capacity);
+  node->Subscribe<people_detections_t>(
+      options_.visual_channel,
+      [this](const people_detections_t& m, const auto& info) {
+        if (StampOk(kSeenGate, m.header.utime, info)) intake_->OnSeen(m);
+      },
+      options_.input_queue_capacity);
+  node->Subscribe<people_detections_t>(
+      options_.audio_channel,
+      [this](const people_detections_t& m, const auto& info) {
+        if (StampOk(kHeardGate, m.header.utime, info)) intake_->OnHeard(m);
+      },
+      options_.input_queue_capacity);
   node->Subscribe<sound_map_t>(options_.sound_map_channel,
                                [this](const sound_map_t& m, const auto& info) {
                                  if (StampOk(kSoundMapGate, m.header.utime, info))

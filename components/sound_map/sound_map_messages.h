@@ -34,6 +34,8 @@ struct SoundMapNodeOptions {
   std::string anchor_request_channel = "SLAM_ANCHOR_REQUEST";
   std::string sound_map_channel = "SOUND_MAP";
   std::string site_map_channel = "MAP";  // the mapped site: a person must lie on it
+  // Per input channel: 20 s of 15 Hz POSE, longer than the node's longest solve or save.
+  int input_queue_capacity = 300;
   // Inputs wait this long for older ones still on their way. PEOPLE_AUDIO comes 1.9-2.8 s after
   // its time (the utterance is decoded when it ends and its keyword hits wait 2 s for the other
   // beams'), and POSE up to 2.8 s late while SLAM optimises a long mission's graph: with 0.3 s
@@ -59,6 +61,10 @@ struct SoundMapNodeOptions {
     v("sound_map_channel", sound_map_channel, "the sound map out");
     v("site_map_channel", site_map_channel,
       "occupancy grid of the mapped site in (a person must lie near its known cells; '' = none)");
+    v("input_queue_capacity", input_queue_capacity,
+      "Messages held per input channel while the node is busy (a state save, a solve); beyond "
+      "it the oldest are lost",
+      AtLeast(1));
     v("reorder_delay_s", reorder_delay_s,
       "inputs are processed in time order once this much newer data arrived", NonNegative());
     v("publish_period_s", publish_period_s, "SOUND_MAP period, message time", Positive());

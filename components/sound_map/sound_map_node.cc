@@ -38,20 +38,27 @@ SoundMapNode::SoundMapNode(const SoundMapNodeOptions& options, common::Node* nod
       options_, map_.get(), [this](sound_map_t& m) { map_pub_.Publish(&m); },
       [this](slam_anchor_request_t& r) { request_pub_.Publish(&r); });
 
-  node->Subscribe<pose_t>(options_.pose_channel, [this](const pose_t& m, const auto& info) {
-    if (StampOk(kPoseGate, m.header.utime, info)) intake_->OnPose(m);
-  });
+  node->Subscribe<pose_t>(
+      options_.pose_channel,
+      [this](const pose_t& m, const auto& info) {
+        if (StampOk(kPoseGate, m.header.utime, info)) intake_->OnPose(m);
+      },
+      options_.input_queue_capacity);
   node->Subscribe<slam_anchors_t>(
       options_.anchors_channel,
       [this](const slam_anchors_t& m, const auto& info) { OnAnchors(m, info); });
-  node->Subscribe<doa_t>(options_.doa_channel, [this](const doa_t& m, const auto& info) {
-    if (StampOk(kDoaGate, m.header.utime, info)) intake_->OnDoa(m);
-  });
-  node->Subscribe<people_detections_t>(options_.people_audio_channel,
-                                       [this](const people_detections_t& m, const auto& info) {
-                                         if (StampOk(kHeardGate, m.header.utime, info))
-                                           intake_->OnHeard(m);
-                                       });
+  node->Subscribe<doa_t>(
+      options_.doa_channel,
+      [this](const doa_t& m, const auto& info) {
+        if (StampOk(kDoaGate, m.header.utime, info)) intake_->OnDoa(m);
+      },
+      options_.input_queue_capacity);
+  node->Subscribe<people_detections_t>(
+      options_.people_audio_channel,
+      [this](const people_detections_t& m, const auto& info) {
+        if (StampOk(kHeardGate, m.header.utime, info)) intake_->OnHeard(m);
+      },
+      options_.input_queue_capacity);
   if (!options_.site_map_channel.empty()) {
     node->Subscribe<occupancy_grid_t>(
         options_.site_map_channel,
