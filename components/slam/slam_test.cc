@@ -681,6 +681,53 @@ int MapValueAt(const OccupancyMap& map, double x, double y) {
   return map.cells[static_cast<size_t>(cy) * map.width + cx];
 }
 
+// The largest MAP value within 0.06 m of (x, y), on a 0.02 m raster.
+int MaxValueNear(const OccupancyMap& map, double x, double y) {
+  int value = -1;
+  for (double dx = -0.06; dx <= 0.06; dx += 0.02) {
+    for (double dy = -0.06; dy <= 0.06; dy += 0.02)
+      value = std::max(value, MapValueAt(map, x + dx, y + dy));
+  }
+  return value;
+}
+
+// How a planner reads a MAP value (config/explore.yaml's thresholds): unknown, free, between,
+// occupied.
+int MapClass(int value) { return value < 0 ? 0 : value <= 25 ? 1 : value < 65 ? 2 : 3; }
+
+// The cells of `reference` (known in either map) whose value in `other`, read at the cell's
+// centre, differs (`by_class`: differs in MapClass).
+int CellsDiffering(const OccupancyMap& other, const OccupancyMap& reference,
+                   bool by_class = false) {
+  int differing = 0;
+  for (int y = 0; y < reference.height; ++y) {
+    for (int x = 0; x < reference.width; ++x) {
+      const double mx = reference.origin_x_m + (x + 0.5) * reference.resolution_m;
+      const double my = reference.origin_y_m + (y + 0.5) * reference.resolution_m;
+      const int a = MapValueAt(other, mx, my);
+      const int b = reference.cells[static_cast<size_t>(y) * reference.width + x];
+      differing += by_class ? MapClass(a) != MapClass(b) : a != b;
+    }
+  }
+  // Known cells of `other` outside `reference`.
+  int known_other = 0, known_inside = 0;
+  for (int8_t c : other.cells) known_other += c >= 0;
+  for (int y = 0; y < reference.height; ++y) {
+    for (int x = 0; x < reference.width; ++x) {
+      known_inside += MapValueAt(other, reference.origin_x_m + (x + 0.5) * reference.resolution_m,
+                                 reference.origin_y_m + (y + 0.5) * reference.resolution_m) >= 0;
+    }
+  }
+  return differing + std::max(0, known_other - known_inside);
+}
+
+// Known cells of a map.
+int KnownCells(const OccupancyMap& map) {
+  int known = 0;
+  for (int8_t c : map.cells) known += c >= 0;
+  return known;
+}
+
 TEST(SlamTrimTest, ASmallObstacleSeenOnlyOnARevisitStaysOnMapAfterItsSubmapsAreTrimmed) {
   // A 0.08 m post at (-0.9, 1.5) appears after two passes, seen only from the far end of the
   // drive (x < -2.5). It lies in one cell of the trim raster (0.04 m^2, less new obstacle than
@@ -701,15 +748,21 @@ TEST(SlamTrimTest, ASmallObstacleSeenOnlyOnARevisitStaysOnMapAfterItsSubmapsAreT
   for (int n = 0; n < slam.num_nodes(); ++n) trimmed_nodes += slam.NodeTrimmed(n);
   const OccupancyMap map = slam.RenderMap();
   // The map frame is the first scan's pose, (-3, 0): the post is at (2.1, 1.5).
-  int at_post = -1;
-  for (double dx = -0.06; dx <= 0.06; dx += 0.02) {
-    for (double dy = -0.06; dy <= 0.06; dy += 0.02)
-      at_post = std::max(at_post, MapValueAt(map, 2.1 + dx, 1.5 + dy));
-  }
-  std::printf("%d of %d nodes trimmed, MAP at the post %d\n", trimmed_nodes, slam.num_nodes(),
-              at_post);
+  const int at_post = MaxValueNear(map, 2.1, 1.5);
+  // Composed from the submaps, the returns the freed nodes keep are drawn on one parity's
+  // evidence that the place was free (the two passes before the post), and the post stays below
+  // even; the rest of the room reads as drawn from the nodes.
+  const OccupancyMap composed = slam.ComposeMap();
+  const int composed_at_post = MaxValueNear(composed, 2.1, 1.5);
+  std::printf(
+      "%d of %d nodes trimmed, MAP at the post %d (composed from submaps %d; %d of %d "
+      "known cells read otherwise by a planner)\n",
+      trimmed_nodes, slam.num_nodes(), at_post, composed_at_post,
+      CellsDiffering(composed, map, true), KnownCells(map));
   EXPECT_GT(slam.stats().nodes_trimmed, slam.num_nodes() / 2);
   EXPECT_GT(at_post, 50);
+  EXPECT_GT(composed_at_post, 35);
+  EXPECT_LT(CellsDiffering(composed, map, true), KnownCells(map) / 40);
   // What the freed nodes keep is in the state file.
   const std::string path = ::testing::TempDir() + "/slam_state_post.pg";
   slam.Save(path);
@@ -1156,36 +1209,6 @@ TEST(SlamRealDataTest, ResumeBridgesTheMotionMadeWhileDownWithOdometry) {
   EXPECT_LT(std::abs(std::remainder(a.yaw_rad() - b.yaw_rad(), 2 * M_PI)), 0.05);
 }
 
-// How a planner reads a MAP value (config/explore.yaml's thresholds): unknown, free, between,
-// occupied.
-int MapClass(int value) { return value < 0 ? 0 : value <= 25 ? 1 : value < 65 ? 2 : 3; }
-
-// The cells of `reference` (known in either map) whose value in `other`, read at the cell's
-// centre, differs (`by_class`: differs in MapClass).
-int CellsDiffering(const OccupancyMap& other, const OccupancyMap& reference,
-                   bool by_class = false) {
-  int differing = 0;
-  for (int y = 0; y < reference.height; ++y) {
-    for (int x = 0; x < reference.width; ++x) {
-      const double mx = reference.origin_x_m + (x + 0.5) * reference.resolution_m;
-      const double my = reference.origin_y_m + (y + 0.5) * reference.resolution_m;
-      const int a = MapValueAt(other, mx, my);
-      const int b = reference.cells[static_cast<size_t>(y) * reference.width + x];
-      differing += by_class ? MapClass(a) != MapClass(b) : a != b;
-    }
-  }
-  // Known cells of `other` outside `reference`.
-  int known_other = 0, known_inside = 0;
-  for (int8_t c : other.cells) known_other += c >= 0;
-  for (int y = 0; y < reference.height; ++y) {
-    for (int x = 0; x < reference.width; ++x) {
-      known_inside += MapValueAt(other, reference.origin_x_m + (x + 0.5) * reference.resolution_m,
-                                 reference.origin_y_m + (y + 0.5) * reference.resolution_m) >= 0;
-    }
-  }
-  return differing + std::max(0, known_other - known_inside);
-}
-
 TEST(SlamMapDrawingTest, KeptDrawingEqualsTheFullRenderingWhileNothingMoves) {
   // No optimisation runs: no drawn node moves, so the drawing is only ever extended and equals
   // the rendering from scratch after every call.
@@ -1260,13 +1283,6 @@ TEST(SlamMapDrawingTest, ALoadedGraphIsDrawnAfresh) {
   EXPECT_EQ(other.map_drawing_stats().redraws, 2);
 }
 
-// Known cells of a map.
-int KnownCells(const OccupancyMap& map) {
-  int known = 0;
-  for (int8_t c : map.cells) known += c >= 0;
-  return known;
-}
-
 TEST(SlamMapDrawingTest, MapComposedFromSubmapsReadsAsTheMapDrawnFromNodes) {
   // One pass and back along the room: every node is in two live submaps, and the composed map
   // has the nodes' evidence; a planner reads it as the map drawn from every node in all but the
@@ -1289,35 +1305,6 @@ TEST(SlamMapDrawingTest, MapComposedFromSubmapsReadsAsTheMapDrawnFromNodes) {
   EXPECT_EQ(CellsDiffering(slam.DrawMap(), composed), 0);
   EXPECT_EQ(slam.map_drawing_stats().draws, 1);
   EXPECT_EQ(slam.map_drawing_stats().redraws, 0);
-}
-
-TEST(SlamMapDrawingTest, ComposedMapDrawsTheReturnsTrimmedNodesKeep) {
-  // The post of ASmallObstacleSeenOnlyOnARevisitStaysOnMapAfterItsSubmapsAreTrimmed: its
-  // submaps are trimmed, and the composition draws the returns their freed nodes keep on the
-  // live submaps' evidence that its place was free (the two passes before it appeared). The
-  // map from nodes reads 55 there, 31 when the freed nodes keep nothing; the composition takes
-  // the free evidence of one parity whole, and the post stays below even.
-  Slam slam{BackAndForthOptions(true)};
-  Pillar post;
-  post.x_m = -0.9;
-  post.half_m = 0.04;
-  post.seen_below_x = -2.5;
-  for (int k = 0; k < 5 * 160; ++k) {
-    post.present = k >= 2 * 160;
-    ASSERT_TRUE(BackAndForthStep(&slam, k, post).accepted);
-  }
-  const OccupancyMap composed = slam.ComposeMap();
-  int at_post = -1;
-  for (double dx = -0.06; dx <= 0.06; dx += 0.02) {
-    for (double dy = -0.06; dy <= 0.06; dy += 0.02)
-      at_post = std::max(at_post, MapValueAt(composed, 2.1 + dx, 1.5 + dy));
-  }
-  const OccupancyMap drawn = slam.RenderMap();
-  std::printf("composed MAP at the post %d; %d of %d known cells read otherwise than drawn\n",
-              at_post, CellsDiffering(composed, drawn, true), KnownCells(drawn));
-  EXPECT_GT(slam.stats().submaps_trimmed, 10);
-  EXPECT_GT(at_post, 35);
-  EXPECT_LT(CellsDiffering(composed, drawn, true), KnownCells(drawn) / 40);
 }
 
 TEST(SlamMapDrawingTest, IntelMapComposedFromSubmapsReadsAsTheMapDrawnFromNodes) {
