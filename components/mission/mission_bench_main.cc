@@ -242,36 +242,37 @@ std::string WhyMissed(const logtools::TruthMatch& t, const std::map<int64_t, dou
 // The long-mission figures: per period, each component's share of one core over that period,
 // the memory, SLAM's graph, and what is on the maps.
 void PrintReports(const std::vector<mission::MissionReport>& reports, FILE* out) {
-  std::fprintf(out,
-               "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
-               "sound | RSS MB | heap MB | SLAM MB | SLAM nodes (live) | submaps (live) | held for "
-               "anchors | kept: new area / obstacles | loop closures | "
-               "optimise s (period) | MAP s (period) | MAP redrawn / drawn | "
-               "people | sound sources | detections without pose |\n");
+  std::fprintf(
+      out,
+      "  | t min | state | driven m | CPU %% all | SLAM | explore | vision | people map | "
+      "sound | RSS MB | heap MB | SLAM MB | SLAM nodes (live) | submaps (live) | nodes kept "
+      "for anchors alone | kept: new area / obstacles | loop closures | "
+      "optimise s (period) | MAP s (period) | MAP redrawn / drawn | "
+      "people | sound sources | detections without pose |\n");
   const mission::MissionReport* prev = nullptr;
   for (const mission::MissionReport& r : reports) {
     const double dt = prev ? r.t_s - prev->t_s : r.t_s;
     auto pct = [&](double now, double before) { return dt > 0 ? 100 * (now - before) / dt : 0.0; };
-    std::fprintf(
-        out,
-        "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %.0f | "
-        "%.1f | %lld | %lld "
-        "| %lld | %lld / %lld | %lld | %.2f | %.2f | %lld / %lld | %d | %d | %lld |\n",
-        r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
-        pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
-        pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
-        pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
-        pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
-        pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb, r.heap_mb,
-        common::Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
-        static_cast<long long>(r.slam_submaps), static_cast<long long>(r.slam_submaps_held),
-        static_cast<long long>(r.slam_submaps_kept_area),
-        static_cast<long long>(r.slam_submaps_kept_obstacles),
-        static_cast<long long>(r.slam_loop_closures),
-        r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0),
-        r.slam_map_s - (prev ? prev->slam_map_s : 0), static_cast<long long>(r.slam_map_redraws),
-        static_cast<long long>(r.slam_map_draws), r.people_on_map, r.sound_sources,
-        static_cast<long long>(r.detections_without_pose));
+    std::fprintf(out,
+                 "  | %.0f | %s | %.0f | %.1f | %.1f | %.2f | %.1f | %.2f | %.1f | %.0f | %.0f | "
+                 "%.1f | %lld | %lld "
+                 "| %lld | %lld / %lld | %lld | %.2f | %.2f | %lld / %lld | %d | %d | %lld |\n",
+                 r.t_s / 60, r.state.c_str(), r.distance_m, pct(r.cpu_s, prev ? prev->cpu_s : 0),
+                 pct(r.slam_cpu_s, prev ? prev->slam_cpu_s : 0),
+                 pct(r.explore_cpu_s, prev ? prev->explore_cpu_s : 0),
+                 pct(r.vision_cpu_s, prev ? prev->vision_cpu_s : 0),
+                 pct(r.people_map_cpu_s, prev ? prev->people_map_cpu_s : 0),
+                 pct(r.sound_cpu_s, prev ? prev->sound_cpu_s : 0), r.rss_mb, r.heap_mb,
+                 common::Megabytes(r.slam_memory.Total()), static_cast<long long>(r.slam_nodes),
+                 static_cast<long long>(r.slam_submaps), static_cast<long long>(r.slam_nodes_kept),
+                 static_cast<long long>(r.slam_submaps_kept_area),
+                 static_cast<long long>(r.slam_submaps_kept_obstacles),
+                 static_cast<long long>(r.slam_loop_closures),
+                 r.slam_optimise_s - (prev ? prev->slam_optimise_s : 0),
+                 r.slam_map_s - (prev ? prev->slam_map_s : 0),
+                 static_cast<long long>(r.slam_map_redraws),
+                 static_cast<long long>(r.slam_map_draws), r.people_on_map, r.sound_sources,
+                 static_cast<long long>(r.detections_without_pose));
     prev = &r;
   }
 }
@@ -281,7 +282,7 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
   csv << "time_s,state,distance_m,cpu_s,slam_cpu_s,explore_cpu_s,vision_cpu_s,people_map_cpu_s,"
          "sound_cpu_s,rss_mb,heap_mb,slam_mb,slam_grids_mb,slam_precomputations_mb,"
          "slam_live_nodes_mb,slam_trimmed_nodes_mb,slam_graph_mb,slam_trajectory_mb,slam_nodes,"
-         "slam_submaps,slam_submaps_held,slam_submaps_kept_area,slam_submaps_kept_obstacles,"
+         "slam_submaps,slam_nodes_kept,slam_submaps_kept_area,slam_submaps_kept_obstacles,"
          "slam_optimisations,"
          "slam_loop_closures,"
          "slam_optimise_s,slam_map_s,slam_map_draws,slam_map_redraws,people_on_map,sound_sources,"
@@ -297,7 +298,7 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
         << common::Megabytes(r.slam_memory.trimmed_nodes) << ","
         << common::Megabytes(r.slam_memory.graph) << ","
         << common::Megabytes(r.slam_memory.trajectory) << "," << r.slam_nodes << ","
-        << r.slam_submaps << "," << r.slam_submaps_held << "," << r.slam_submaps_kept_area << ","
+        << r.slam_submaps << "," << r.slam_nodes_kept << "," << r.slam_submaps_kept_area << ","
         << r.slam_submaps_kept_obstacles << "," << r.slam_optimisations << ","
         << r.slam_loop_closures << "," << r.slam_optimise_s << "," << r.slam_map_s << ","
         << r.slam_map_draws << "," << r.slam_map_redraws << "," << r.people_on_map << ","

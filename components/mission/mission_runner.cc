@@ -679,7 +679,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
       const slam::SlamStats& stats = loop.slam().stats();
       report.slam_nodes = loop.slam().num_live_nodes();
       report.slam_submaps = loop.slam().num_live_submaps();
-      report.slam_submaps_held = loop.slam().num_submaps_held_for_anchors();
+      report.slam_nodes_kept = loop.slam().num_nodes_kept_for_anchors();
       report.slam_submaps_kept_area = stats.submaps_kept_new_area;
       report.slam_submaps_kept_obstacles = stats.submaps_kept_new_obstacles;
       report.slam_optimisations = stats.optimisations;

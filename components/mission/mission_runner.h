@@ -90,7 +90,7 @@ struct MissionReport {
   double heap_mb = 0;  // of which the allocator hands out (in use, every arena and mmap)
   slam::Slam::MemoryUsage slam_memory;       // of which SLAM's data, by part
   int64_t slam_nodes = 0, slam_submaps = 0;  // live (untrimmed)
-  int64_t slam_submaps_held = 0;             // live only because they hold a node a client keeps
+  int64_t slam_nodes_kept = 0;               // live nodes without a live submap, kept for a client
   // Finished submaps kept by trimming for their new area / for new obstacles only (cumulative).
   int64_t slam_submaps_kept_area = 0, slam_submaps_kept_obstacles = 0;
   int64_t slam_optimisations = 0, slam_loop_closures = 0;

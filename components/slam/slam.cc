@@ -585,7 +585,8 @@ Slam::MemoryUsage Slam::Memory() const {
   m.graph =
       constraints_.capacity() * sizeof(Constraint) +
       (node_global_.capacity() + submap_global_.capacity()) * sizeof(Rigid2d) +
-      chain_drift_.MemoryBytes() + kept_nodes_.capacity() * sizeof(int) +
+      chain_drift_.MemoryBytes() +
+      (kept_nodes_.capacity() + orphan_nodes_.capacity()) * sizeof(int) +
       (retained_obstacles_.size() + retained_known_.size()) * (sizeof(int64_t) + 2 * sizeof(void*));
   m.trajectory = scans_.size() * sizeof(ScanRecord);
   return m;
@@ -675,11 +676,17 @@ std::vector<int> Slam::HoldAnchors(const std::vector<int64_t>& requested) {
   }
   std::sort(kept_nodes_.begin(), kept_nodes_.end());
   kept_nodes_.erase(std::unique(kept_nodes_.begin(), kept_nodes_.end()), kept_nodes_.end());
-  if (options_.trim.enabled && !trims_waiting_.empty()) {
-    // Those still held go back on the list, in order.
-    std::vector<int> waiting;
-    waiting.swap(trims_waiting_);
-    for (int submap_id : waiting) TrimIfCovered(submap_id);
+  // Nodes that outlived their submaps and are no longer kept go, each keeping its returns on
+  // obstacles that only trimmed submaps held.
+  std::vector<int> released;
+  std::vector<int> still_kept;
+  for (int n : orphan_nodes_) {
+    (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n) ? still_kept : released)
+        .push_back(n);
+  }
+  if (!released.empty()) {
+    orphan_nodes_.swap(still_kept);
+    TrimNodes(released, retained_obstacles_);
   }
   std::vector<int> ids = {num_nodes() - 1};
   ids.insert(ids.end(), kept_nodes_.begin(), kept_nodes_.end());
@@ -764,13 +771,6 @@ void Slam::TrimIfCovered(int submap_id) {
   const TrimOptions& t = options_.trim;
   if (submap_id <= kOwnChain) return;  // submap 0 holds the map frame
   if (submaps_[submap_id].trimmed) return;
-  for (int n : submaps_[submap_id].nodes) {
-    if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) {
-      // A client keeps the node: the trim waits until it is released (HoldAnchors).
-      trims_waiting_.push_back(submap_id);
-      return;
-    }
-  }
   std::vector<int64_t> mine, mine_occupied;
   Eigen::Vector2d centre;
   double radius;
@@ -827,10 +827,8 @@ void Slam::TrimIfCovered(int submap_id) {
   }
 }
 
-// Removes submap `submap_id`, the nodes no live submap holds, and every constraint on them. A run
-// of trimmed nodes between live nodes p < q becomes one TRIMMED_CHAIN constraint p -> q at the
-// graph's current estimate (the chain it replaces, as springs in series), so the graph stays one
-// piece and its solution where it was.
+// Removes submap `submap_id`, its constraints, and the nodes no live submap holds but those a
+// client keeps (HoldAnchors): they stay, tied to the graph by the chains around them.
 void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles) {
   Submap& sub = submaps_[submap_id];
   sub.trimmed = true;
@@ -839,13 +837,35 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
   sub.occupied_samples = {};
   precomputations_.remove_if([submap_id](const auto& p) { return p.first == submap_id; });
   ++stats_.submaps_trimmed;
-  std::vector<int> trimmed_nodes;
+  constraints_.erase(std::remove_if(constraints_.begin(), constraints_.end(),
+                                    [&](const Constraint& c) {
+                                      return c.submap_to_node() && c.from == submap_id;
+                                    }),
+                     constraints_.end());
+  std::vector<int> freed;
   for (int n : sub.nodes) {
-    Node& node = nodes_[n];
+    const Node& node = nodes_[n];
     if (node.trimmed) continue;
     bool held = false;
     for (int other : node.data->submaps) held = held || !submaps_[other].trimmed;
     if (held) continue;
+    if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) {
+      orphan_nodes_.insert(std::upper_bound(orphan_nodes_.begin(), orphan_nodes_.end(), n), n);
+      continue;
+    }
+    freed.push_back(n);
+  }
+  TrimNodes(freed, new_obstacles);
+}
+
+// The chain across a run of trimmed nodes p < q, k = q - p steps: z = T_p^-1 T_q at the current
+// estimate, weights w / sqrt(k) (k springs in series), so the graph stays one piece and its
+// solution where it was.
+void Slam::TrimNodes(const std::vector<int>& node_ids,
+                     const std::unordered_set<int64_t>& new_obstacles) {
+  if (node_ids.empty()) return;
+  for (int n : node_ids) {
+    Node& node = nodes_[n];
     node.trimmed = true;
     // Its returns on what no older submap holds stay on MAP (a low object seen from afar,
     // which later scans from close by look over).
@@ -859,24 +879,22 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
     ReleaseTrimmedData(&node, std::move(kept));
     chain_drift_.Release(n);
     ++stats_.nodes_trimmed;
-    trimmed_nodes.push_back(n);
   }
   auto node_gone = [&](int n) { return nodes_[n].trimmed; };
-  constraints_.erase(
-      std::remove_if(constraints_.begin(), constraints_.end(),
-                     [&](const Constraint& c) {
-                       if (c.submap_to_node()) return c.from == submap_id || node_gone(c.to);
-                       return node_gone(c.from) || node_gone(c.to);
-                     }),
-      constraints_.end());
+  constraints_.erase(std::remove_if(constraints_.begin(), constraints_.end(),
+                                    [&](const Constraint& c) {
+                                      return (!c.submap_to_node() && node_gone(c.from)) ||
+                                             node_gone(c.to);
+                                    }),
+                     constraints_.end());
   // Bridge each run of trimmed nodes.
   const auto& g = options_.graph;
   const bool local = g.local_slam_translation_weight > 0 && g.local_slam_rotation_weight > 0;
   const double chain_wt = local ? g.local_slam_translation_weight : g.intra_translation_weight;
   const double chain_wr = local ? g.local_slam_rotation_weight : g.intra_rotation_weight;
   const int last = static_cast<int>(nodes_.size()) - 1;
-  int done_up_to = -1;  // trimmed_nodes ascend: a run is bridged once
-  for (int n : trimmed_nodes) {
+  int done_up_to = -1;  // node_ids ascend: a run is bridged once
+  for (int n : node_ids) {
     if (n <= done_up_to) continue;
     int p = n, q = n;
     while (p >= 0 && nodes_[p].trimmed) --p;

@@ -140,12 +140,15 @@ class Slam {
   int num_live_submaps() const {
     return static_cast<int>(submaps_.size() - stats_.submaps_trimmed);
   }
-  // Finished submaps left untrimmed only because they hold a node a client keeps.
-  int num_submaps_held_for_anchors() const { return static_cast<int>(trims_waiting_.size()); }
-  // SLAM_ANCHORS: of the nodes clients request, those that exist and are live are held (their
-  // submaps are not trimmed; replaces the last set). A finished submap whose trim waited for a
-  // node no longer held is considered for trimming again now. Returns the latest node followed
-  // by the held ones: the nodes of one joint covariance. Needs at least one node.
+  // Live nodes every submap of which is trimmed: live only because a client keeps them.
+  int num_nodes_kept_for_anchors() const { return static_cast<int>(orphan_nodes_.size()); }
+  // SLAM_ANCHORS: of the nodes clients request, those that exist and are live are kept (replaces
+  // the last set). A kept node outlives its submaps: trimming takes them as if it were not there,
+  // and the node stays in the graph, tied to its live neighbours by TRIMMED_CHAIN constraints
+  // (and to later submaps by loop closures), so that its pose and covariance keep following the
+  // graph. A node that outlived its submaps and is no longer kept is trimmed now. Returns the
+  // latest node followed by the kept ones: the nodes of one joint covariance. Needs at least one
+  // node.
   std::vector<int> HoldAnchors(const std::vector<int64_t>& requested);
   Rigid2d NodePose(int id) const { return node_global_[id]; }
   double NodeTime(int id) const { return nodes_[id].time_s; }
@@ -250,6 +253,11 @@ class Slam {
   // `new_obstacles`: the raster cells (trim.cell_m, map frame) where the submap saw an obstacle
   // no older submap holds; a freed node keeps its returns in them.
   void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles);
+  // Frees the nodes (ascending, live) and every constraint on them; each node keeps its returns
+  // in `new_obstacles`. Each run of trimmed nodes between live nodes p < q becomes one
+  // TRIMMED_CHAIN constraint p -> q at the graph's current estimate.
+  void TrimNodes(const std::vector<int>& node_ids,
+                 const std::unordered_set<int64_t>& new_obstacles);
   // retained_obstacles_ from the returns the trimmed nodes keep (after a load).
   void RebuildRetainedObstacles();
   // A just-trimmed node keeps only `kept_hits` (none: no data at all).
@@ -294,9 +302,9 @@ class Slam {
   std::deque<ScanRecord> scans_;
   std::list<std::pair<int, std::unique_ptr<PrecomputationStack>>> precomputations_;
   std::vector<int> kept_nodes_;  // sorted
-  // Finished submaps whose trim waits for their kept nodes to be released (ascending). Not in
-  // the state file: after a load they stay.
-  std::vector<int> trims_waiting_;
+  // Live nodes whose submaps are all trimmed (ascending): kept for a client, trimmed once it
+  // releases them (HoldAnchors). After a load they are found again from the nodes.
+  std::vector<int> orphan_nodes_;
   // Raster cells (trim.cell_m) of the returns trimmed nodes keep: obstacles no live submap holds.
   std::unordered_set<int64_t> retained_obstacles_;
   // Raster cells (trim.cell_m) trimmed submaps knew and no older live submap did (each under

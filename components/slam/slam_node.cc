@@ -343,17 +343,17 @@ class SlamNode::Impl {
     char text[512];
     std::snprintf(
         text, sizeof(text),
-        "nodes %lld (live %d) submaps %lld (live %d, %d held for anchors) loops %lld "
+        "nodes %lld (live %d) submaps %lld (live %d) nodes kept for anchors alone %d loops %lld "
         "opt %lld (%.1f s) "
         "rejected scans %lld odom %lld late %lld off-clock stamps %lld (re-anchors "
         "%lld) anchor requests refused %lld deferred %lld mean latency %.1f ms data %.1f MB "
         "maps %lld (%.1f s, %lld from every node)",
         (long long)s.nodes, slam_.num_live_nodes(), (long long)s.submaps, slam_.num_live_submaps(),
-        slam_.num_submaps_held_for_anchors(), (long long)s.loop_closures,
-        (long long)s.optimisations, s.optimise_seconds, (long long)s.rejected_scans,
-        (long long)s.rejected_odometry, (long long)queue_.dropped_late(),
-        (long long)gates_.dropped(), (long long)gates_.reanchors(),
-        (long long)anchor_requests_refused_, (long long)anchor_requests_deferred_,
+        slam_.num_nodes_kept_for_anchors(), (long long)s.loop_closures, (long long)s.optimisations,
+        s.optimise_seconds, (long long)s.rejected_scans, (long long)s.rejected_odometry,
+        (long long)queue_.dropped_late(), (long long)gates_.dropped(),
+        (long long)gates_.reanchors(), (long long)anchor_requests_refused_,
+        (long long)anchor_requests_deferred_,
         latency_count_ ? 1e3 * latency_sum_s_ / latency_count_ : 0.0,
         common::Megabytes(slam_.Memory().Total()), (long long)slam_.map_drawing_stats().draws,
         slam_.map_drawing_stats().seconds, (long long)slam_.map_drawing_stats().redraws);

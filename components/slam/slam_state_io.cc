@@ -328,7 +328,14 @@ void Slam::Load(const std::string& path) {
   node_global_ = std::move(node_global);
   RebuildRetainedObstacles();
   retained_known_ = std::move(retained_known);
-  trims_waiting_.clear();
+  orphan_nodes_.clear();
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& n = nodes_[i];
+    if (n.trimmed || !n.data || n.data->submaps.empty()) continue;
+    bool all_trimmed = true;
+    for (int s : n.data->submaps) all_trimmed = all_trimmed && submaps_[s].trimmed;
+    if (all_trimmed) orphan_nodes_.push_back(static_cast<int>(i));
+  }
   constraints_ = std::move(constraints);
   precomputations_.clear();
   scans_.clear();

@@ -861,38 +861,67 @@ TEST(SlamTrimTest, KeptNodesSurviveAndTheTrimmedGraphResumesFromItsStateFile) {
   EXPECT_NEAR(resumed.CurrentPose().translation().x(), phase < 4.0 ? phase : 8.0 - phase, 0.05);
 }
 
-TEST(SlamTrimTest, ASubmapHeldForAClientIsTrimmedOnceTheClientReleasesIt) {
-  // In the third pass every submap maps nothing new. A node of that pass is held while its
-  // submaps finish, so they stay; released, they go at the next request, with the node, and
-  // the graph is again the size the room needs.
+TEST(SlamTrimTest, ANodeAClientKeepsOutlivesItsSubmapsAndGoesOnceReleased) {
+  // In the third pass every submap maps nothing new. A node of that pass is kept while its
+  // submaps finish: they are trimmed all the same (the live graph is that of the same drive
+  // without a client), and the node stays, following the graph with a computable covariance.
+  // Released, it goes at the next request and the graph stays one piece.
   Slam slam{BackAndForthOptions(true)};
+  Slam unkept{BackAndForthOptions(true)};
   int k = 0;
-  for (; k < 2 * 160 + 40; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
-  const int held = slam.num_nodes() - 1;
-  slam.HoldAnchors({held});
-  for (; k < 3 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
-  const int live_while_held = slam.num_live_submaps();
-  std::printf("held node %d: %d submaps held, %d live\n", held, slam.num_submaps_held_for_anchors(),
-              live_while_held);
-  EXPECT_GE(slam.num_submaps_held_for_anchors(), 1);
-  EXPECT_FALSE(slam.NodeTrimmed(held));
-  // Still requested: still held.
-  slam.HoldAnchors({held});
-  EXPECT_GE(slam.num_submaps_held_for_anchors(), 1);
-  EXPECT_FALSE(slam.NodeTrimmed(held));
-  // Released.
-  EXPECT_EQ(slam.HoldAnchors({}), (std::vector<int>{slam.num_nodes() - 1}));
-  EXPECT_EQ(slam.num_submaps_held_for_anchors(), 0);
-  EXPECT_TRUE(slam.NodeTrimmed(held));
-  EXPECT_LT(slam.num_live_submaps(), live_while_held);
-  EXPECT_EQ(slam.num_nodes() - slam.num_live_nodes(), slam.stats().nodes_trimmed);
-  // The graph stays one piece: the latest node's covariance is computable and the drive goes on
-  // on the truth.
+  for (; k < 2 * 160 + 40; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&unkept, k).accepted);
+  }
+  const int kept = slam.num_nodes() - 1;
+  slam.HoldAnchors({kept});
+  for (; k < 3 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&unkept, k).accepted);
+  }
+  std::printf("kept node %d: %d nodes kept alone, %d live submaps (%d without the client)\n", kept,
+              slam.num_nodes_kept_for_anchors(), slam.num_live_submaps(),
+              unkept.num_live_submaps());
+  ASSERT_TRUE(unkept.NodeTrimmed(kept));  // without the client it goes with its submaps
+  EXPECT_EQ(slam.num_live_submaps(), unkept.num_live_submaps());
+  EXPECT_EQ(slam.num_live_nodes(), unkept.num_live_nodes() + 1);
+  EXPECT_EQ(slam.num_nodes_kept_for_anchors(), 1);
+  EXPECT_FALSE(slam.NodeTrimmed(kept));
+  // Its pose is the drive's truth at its step (x from -3 to 1 m and back; map frame at x = -3).
+  const double phase = std::fmod(0.05 * (2 * 160 + 39), 8.0);
+  EXPECT_NEAR(slam.NodePose(kept).translation().x(), phase < 4.0 ? phase : 8.0 - phase, 0.05);
+  EXPECT_NEAR(slam.NodePose(kept).translation().y(), 0, 0.05);
   Eigen::MatrixXd cov;
-  EXPECT_TRUE(slam.JointCovariance({slam.num_nodes() - 1}, &cov));
-  for (; k < 4 * 160; ++k) ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
-  slam.Optimise();
-  EXPECT_LT(BackAndForthError(slam), 0.05);
+  ASSERT_TRUE(slam.JointCovariance({slam.num_nodes() - 1, kept}, &cov));
+  EXPECT_GT(cov(3, 3), 0);
+  EXPECT_LT(std::sqrt(cov(3, 3)), 1.0);
+  // Still requested: still kept, also through a save and load.
+  slam.HoldAnchors({kept});
+  EXPECT_FALSE(slam.NodeTrimmed(kept));
+  const std::string path = ::testing::TempDir() + "/slam_state_kept_node.pg";
+  slam.Save(path);
+  Slam resumed{BackAndForthOptions(true)};
+  resumed.Load(path);
+  EXPECT_EQ(resumed.num_nodes_kept_for_anchors(), 1);
+  EXPECT_FALSE(resumed.NodeTrimmed(kept));
+  // Released.
+  for (Slam* s : {&slam, &resumed}) {
+    EXPECT_EQ(s->HoldAnchors({}), (std::vector<int>{s->num_nodes() - 1}));
+    EXPECT_EQ(s->num_nodes_kept_for_anchors(), 0);
+    EXPECT_TRUE(s->NodeTrimmed(kept));
+    EXPECT_EQ(s->num_live_nodes(), unkept.num_live_nodes());
+    EXPECT_EQ(s->num_nodes() - s->num_live_nodes(), s->stats().nodes_trimmed);
+    // The latest node's covariance is computable and the drive goes on on the truth.
+    EXPECT_TRUE(s->JointCovariance({s->num_nodes() - 1}, &cov));
+  }
+  for (; k < 4 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&slam, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&resumed, k).accepted);
+  }
+  for (Slam* s : {&slam, &resumed}) {
+    s->Optimise();
+    EXPECT_LT(BackAndForthError(*s), 0.05);
+  }
 }
 
 std::string ReadBytes(const std::string& path) {
