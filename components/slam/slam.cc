@@ -677,16 +677,15 @@ std::vector<int> Slam::HoldAnchors(const std::vector<int64_t>& requested) {
   std::sort(kept_nodes_.begin(), kept_nodes_.end());
   kept_nodes_.erase(std::unique(kept_nodes_.begin(), kept_nodes_.end()), kept_nodes_.end());
   // Nodes that outlived their submaps and are no longer kept go, each keeping its returns on
-  // obstacles that only trimmed submaps held.
-  std::vector<int> released;
-  std::vector<int> still_kept;
-  for (int n : orphan_nodes_) {
-    (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n) ? still_kept : released)
-        .push_back(n);
-  }
-  if (!released.empty()) {
-    orphan_nodes_.swap(still_kept);
-    TrimNodes(released, retained_obstacles_);
+  // obstacles that only trimmed submaps held (retained_obstacles_ itself: TrimNodes only
+  // re-inserts keys it already holds).
+  const auto released = std::stable_partition(
+      orphan_nodes_.begin(), orphan_nodes_.end(),
+      [&](int n) { return std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n); });
+  if (released != orphan_nodes_.end()) {
+    const std::vector<int> gone(released, orphan_nodes_.end());
+    orphan_nodes_.erase(released, orphan_nodes_.end());
+    TrimNodes(gone, retained_obstacles_);
   }
   std::vector<int> ids = {num_nodes() - 1};
   ids.insert(ids.end(), kept_nodes_.begin(), kept_nodes_.end());
@@ -844,11 +843,7 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
                      constraints_.end());
   std::vector<int> freed;
   for (int n : sub.nodes) {
-    const Node& node = nodes_[n];
-    if (node.trimmed) continue;
-    bool held = false;
-    for (int other : node.data->submaps) held = held || !submaps_[other].trimmed;
-    if (held) continue;
+    if (nodes_[n].trimmed || InLiveSubmap(n)) continue;
     if (std::binary_search(kept_nodes_.begin(), kept_nodes_.end(), n)) {
       orphan_nodes_.insert(std::upper_bound(orphan_nodes_.begin(), orphan_nodes_.end(), n), n);
       continue;
@@ -856,6 +851,13 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
     freed.push_back(n);
   }
   TrimNodes(freed, new_obstacles);
+}
+
+bool Slam::InLiveSubmap(int node_id) const {
+  for (int s : nodes_[node_id].data->submaps) {
+    if (!submaps_[s].trimmed) return true;
+  }
+  return false;
 }
 
 // The chain across a run of trimmed nodes p < q, k = q - p steps: z = T_p^-1 T_q at the current

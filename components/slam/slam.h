@@ -253,6 +253,8 @@ class Slam {
   // `new_obstacles`: the raster cells (trim.cell_m, map frame) where the submap saw an obstacle
   // no older submap holds; a freed node keeps its returns in them.
   void TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obstacles);
+  // Whether some submap the live node was inserted into is live.
+  bool InLiveSubmap(int node_id) const;
   // Frees the nodes (ascending, live) and every constraint on them; each node keeps its returns
   // in `new_obstacles`. Each run of trimmed nodes between live nodes p < q becomes one
   // TRIMMED_CHAIN constraint p -> q at the graph's current estimate.

@@ -329,12 +329,10 @@ void Slam::Load(const std::string& path) {
   RebuildRetainedObstacles();
   retained_known_ = std::move(retained_known);
   orphan_nodes_.clear();
-  for (size_t i = 0; i < nodes_.size(); ++i) {
+  for (int i = 0; i < static_cast<int>(nodes_.size()); ++i) {
     const Node& n = nodes_[i];
-    if (n.trimmed || !n.data || n.data->submaps.empty()) continue;
-    bool all_trimmed = true;
-    for (int s : n.data->submaps) all_trimmed = all_trimmed && submaps_[s].trimmed;
-    if (all_trimmed) orphan_nodes_.push_back(static_cast<int>(i));
+    if (n.trimmed || !n.data || n.data->submaps.empty() || InLiveSubmap(i)) continue;
+    orphan_nodes_.push_back(i);
   }
   constraints_ = std::move(constraints);
   precomputations_.clear();
