@@ -62,6 +62,12 @@ void PeopleMapIntake::Applied(Utime utime) {
   latest_utime_ = std::max(latest_utime_, utime);
   dirty_ = true;
   RequestIfAnchorsChanged();
+  applied_since_notice_ = true;
+}
+
+void PeopleMapIntake::NoticeApplied() {
+  if (!applied_since_notice_) return;
+  applied_since_notice_ = false;
   if (on_applied_) on_applied_(latest_utime_);
 }
 
@@ -141,6 +147,7 @@ void PeopleMapIntake::Release() {
     Applied(utime);
   });
   PlaceWaiting(false);
+  NoticeApplied();
 }
 
 void PeopleMapIntake::Finish() {
@@ -150,6 +157,7 @@ void PeopleMapIntake::Finish() {
     dirty_ = true;
   });
   PlaceWaiting(true);
+  NoticeApplied();
 }
 
 void PeopleMapIntake::OnPose(const sarmap::pose_t& m) {

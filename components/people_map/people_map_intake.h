@@ -109,9 +109,11 @@ sarmap::people_map_t PeopleMapMessage(const std::vector<Person>& people, common:
 class PeopleMapIntake {
  public:
   using Request = std::function<void(sarmap::slam_anchor_request_t&)>;
-  // `map` must outlive the intake. `on_applied(utime)` is called after each input that changed
-  // the map (the node publishes PEOPLE_MAP there), with the newest applied input's utime;
-  // `request` whenever the SLAM nodes the seen people hang from change.
+  // `map` must outlive the intake. `on_applied(utime)` is called once after each release of
+  // inputs that changed the map (the node publishes PEOPLE_MAP there), with the newest applied
+  // input's utime: a batch released together (a late pose places every detection that waited
+  // for it) is one snapshot, not a burst a subscriber's queue has to hold. `request` whenever
+  // the SLAM nodes the seen people hang from change.
   PeopleMapIntake(const PeopleMapNodeOptions& options, const common::Rigid3d& base_from_camera,
                   const common::Rigid3d& base_from_mic, PeopleMap* map,
                   std::function<void(common::Utime latest_utime)> on_applied = nullptr,
@@ -145,6 +147,8 @@ class PeopleMapIntake {
 
  private:
   void Applied(common::Utime utime);
+  // on_applied once if anything was applied since the last call.
+  void NoticeApplied();
   std::optional<common::StampedPose> PoseAt(common::Utime utime);
   void PlaceWaiting(bool final);
   void WhenPosed(common::Utime utime, std::function<void()> place);
@@ -157,6 +161,7 @@ class PeopleMapIntake {
   common::Rigid3d base_from_camera_, base_from_mic_;
   PeopleMap* map_;
   std::function<void(common::Utime)> on_applied_;
+  bool applied_since_notice_ = false;
   Request request_;
   common::PoseHistory poses_;
   // The node id of each POSE where it changed (the last pose_history window), and the latest

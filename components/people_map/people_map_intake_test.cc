@@ -59,6 +59,23 @@ TEST(PeopleMapIntakeTest, PlacesADetectionWithThePoseInterpolatedAtItsTime) {
   EXPECT_EQ(msg.people[0].cues, static_cast<int8_t>(mapped_person_t::CUE_SEEN_DEPTH));
 }
 
+// Detections released together (the reorder queue lets them go at one pose) change the map
+// once: one on_applied (one PEOPLE_MAP), stamped with the newest of them, not one per detection.
+TEST(PeopleMapIntakeTest, ABatchReleasedTogetherIsOneSnapshot) {
+  Fixture f;
+  f.intake->OnPose(PoseAlongX(1'000'000, 0.0));
+  for (Utime u = 1'020'000; u <= 1'100'000; u += 20'000) f.intake->OnSeen(Seen(u, 2.0));
+  f.intake->OnPose(PoseAlongX(1'400'000, 0.0));  // every detection is posed, none due yet
+  EXPECT_EQ(f.applied, 0);
+  f.intake->OnPose(PoseAlongX(1'610'000, 0.0));  // the queue's clock passes all five
+  EXPECT_EQ(f.applied, 1);
+  EXPECT_EQ(f.last_applied, 1'100'000);
+  ASSERT_EQ(f.map.people().size(), 1u);
+  EXPECT_EQ(f.intake->without_pose(), 0);
+  f.intake->OnPose(PoseAlongX(1'700'000, 0.0));  // nothing new applied: no snapshot
+  EXPECT_EQ(f.applied, 1);
+}
+
 TEST(PeopleMapIntakeTest, DropsADetectionNoPoseCovers) {
   Fixture f;
   // No pose within max_pose_gap_s (0.5 s) of 5 s: POSE jumps from 1 s to 10 s.
