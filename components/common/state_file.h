@@ -6,9 +6,14 @@
 // The file is one ASCII header line, then the body as given (binary or text):
 //   # sarmap-state <kind> v<version> bytes <body size> crc32 <8 hex digits>\n
 // (the "# " keeps a YAML body a valid YAML file). Written to PATH.tmp, then renamed over PATH.
+// The writer pads the size with zeros to 20 digits, so the header has its final length before
+// the body is known (the body streams to disk; see SealedStateWriter).
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +31,32 @@ class StateFileError : public std::runtime_error {
 
 void WriteSealedState(const std::string& path, const std::string& kind, int version,
                       const std::string& body);
+
+// Writes a sealed state file as its body is produced: body() streams to PATH.tmp through the
+// checksum, so a large body (SLAM's pose graph: tens of MB) is never held in memory whole.
+// Commit() fills in the header and renames PATH.tmp over PATH; a writer destroyed without
+// Commit() (an exception while writing) removes PATH.tmp and leaves PATH as it was.
+class SealedStateWriter {
+ public:
+  // Throws std::runtime_error when PATH.tmp cannot be created.
+  SealedStateWriter(const std::string& path, const std::string& kind, int version);
+  ~SealedStateWriter();
+  SealedStateWriter(const SealedStateWriter&) = delete;
+  SealedStateWriter& operator=(const SealedStateWriter&) = delete;
+
+  std::ostream& body() { return *body_; }
+  // Throws std::runtime_error on any write failure (PATH is then left as it was).
+  void Commit();
+
+ private:
+  class ChecksumBuffer;
+  std::string path_, tmp_, kind_;
+  int version_;
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<ChecksumBuffer> buffer_;
+  std::unique_ptr<std::ostream> body_;
+  bool committed_ = false;
+};
 
 enum class StateFileRead {
   kMissing,   // no file: nothing to resume

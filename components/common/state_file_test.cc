@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -69,6 +70,66 @@ TEST(StateFileTest, RoundTripsABinaryBody) {
   EXPECT_EQ(read, body);
   std::remove(path.c_str());
   EXPECT_EQ(ReadSealedState(path, "test-kind", 3, &read), StateFileRead::kMissing);
+}
+
+// A body streamed in small and large pieces (the buffer's size and beyond) is the file
+// WriteSealedState makes of the whole body at once, and reads back.
+TEST(StateFileTest, AStreamedBodyIsTheSameFileAsAWholeOne) {
+  const std::string streamed_path = TempPath("streamed"), whole_path = TempPath("whole");
+  std::mt19937 rng(3);
+  std::string body;
+  {
+    SealedStateWriter writer(streamed_path, "test-kind", 4);
+    for (size_t piece : {size_t{1}, size_t{7}, size_t{40000}, size_t{3}, size_t{300000},
+                         size_t{65536}, size_t{12}}) {
+      std::string bytes(piece, '\0');
+      for (char& c : bytes) c = static_cast<char>(rng());
+      writer.body().write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      body += bytes;
+    }
+    writer.body().put('\n');
+    body += '\n';
+    writer.Commit();
+  }
+  WriteSealedState(whole_path, "test-kind", 4, body);
+  EXPECT_EQ(ReadAll(streamed_path), ReadAll(whole_path));
+  std::string read;
+  EXPECT_EQ(ReadSealedState(streamed_path, "test-kind", 4, &read), StateFileRead::kSealed);
+  EXPECT_EQ(read, body);
+  EXPECT_FALSE(std::ifstream(streamed_path + ".tmp").good());
+  std::remove(streamed_path.c_str());
+  std::remove(whole_path.c_str());
+}
+
+// A save that fails half-way (the writer goes without Commit) leaves the previous file whole.
+TEST(StateFileTest, AnUncommittedWriterLeavesThePreviousFile) {
+  const std::string path = TempPath("uncommitted");
+  WriteSealedState(path, "test-kind", 1, "before");
+  {
+    SealedStateWriter writer(path, "test-kind", 1);
+    writer.body() << "half of the next st";
+  }
+  std::string read;
+  EXPECT_EQ(ReadSealedState(path, "test-kind", 1, &read), StateFileRead::kSealed);
+  EXPECT_EQ(read, "before");
+  EXPECT_FALSE(std::ifstream(path + ".tmp").good());
+  EXPECT_THROW(SealedStateWriter(TempPath("no-such-dir") + "/x", "test-kind", 1),
+               std::runtime_error);
+  std::remove(path.c_str());
+}
+
+// A header whose size is not zero-padded reads as well.
+TEST(StateFileTest, ReadsAnUnpaddedHeader) {
+  const std::string path = TempPath("unpadded");
+  const std::string body = "abc";
+  char header[128];
+  std::snprintf(header, sizeof(header), "# sarmap-state test-kind v2 bytes 3 crc32 %08x\n",
+                Crc32(body.data(), body.size()));
+  WriteAll(path, header + body);
+  std::string read;
+  EXPECT_EQ(ReadSealedState(path, "test-kind", 2, &read), StateFileRead::kSealed);
+  EXPECT_EQ(read, body);
+  std::remove(path.c_str());
 }
 
 TEST(StateFileTest, RefusesFlippedTruncatedForeignAndOtherVersions) {

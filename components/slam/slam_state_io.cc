@@ -70,7 +70,9 @@ bool Finite(const Rigid2d& p) {
 
 void Slam::Save(const std::string& path) const {
   {
-    std::ostringstream out(std::ios::binary);
+    // Streamed to disk: the file (tens of MB on a long mission) is never in memory whole.
+    common::SealedStateWriter file(path, kStateKind, kStateVersion);
+    std::ostream& out = file.body();
     Writer w(&out);
     out.write(kMagic, 8);
     w.Pod(kVersion);
@@ -147,7 +149,7 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int32_t>(odometry_.segment());
     out.write(kMagic, 8);  // trailer: a complete file
     if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
-    common::WriteSealedState(path, kStateKind, kStateVersion, out.str());
+    file.Commit();
   }
 }
 
