@@ -196,5 +196,17 @@ void ProbabilityGrid::SetRaw(int width, int height, const Eigen::Vector2d& corne
   current_mark_ = 1;
 }
 
+void ProbabilityGrid::SetRawFinished(int width, int height, const Eigen::Vector2d& corner,
+                                     std::vector<uint16_t> codes) {
+  width_ = width;
+  height_ = height;
+  corner_ = corner;
+  finished_ = true;
+  std::vector<float>().swap(cells_);
+  std::vector<uint32_t>().swap(update_mark_);
+  finished_cells_ = std::move(codes);
+  current_mark_ = 1;
+}
+
 }  // namespace slam
 }  // namespace sarmap

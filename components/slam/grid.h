@@ -105,8 +105,12 @@ class ProbabilityGrid {
                   : kMinProbability + (v - 1) * ((kMaxProbability - kMinProbability) / 32766.f);
   }
 
-  // Raw access for loading.
+  // Raw access for saving and loading: a finished grid's 16-bit codes (nullptr while not
+  // finished), and a grid set from floats (not finished) or from codes (finished).
+  const uint16_t* FinishedCells() const { return finished_ ? finished_cells_.data() : nullptr; }
   void SetRaw(int width, int height, const Eigen::Vector2d& corner, std::vector<float> cells);
+  void SetRawFinished(int width, int height, const Eigen::Vector2d& corner,
+                      std::vector<uint16_t> codes);
 
  private:
   void ApplyOdds(int index, float odds_factor);

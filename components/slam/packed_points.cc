@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace sarmap {
 namespace slam {
@@ -23,6 +24,20 @@ PackedPoints::PackedPoints(const PointCloud& points) {
     xy_.push_back(static_cast<int16_t>(std::lround(p.x() / step_m_)));
     xy_.push_back(static_cast<int16_t>(std::lround(p.y() / step_m_)));
   }
+}
+
+PackedPoints PackedPoints::FromRaw(float step_m, std::vector<int16_t> xy) {
+  if (xy.empty() && step_m == 0) return PackedPoints();  // as default-constructed
+  int exponent = 0;
+  if (!(step_m > 0) || !std::isfinite(step_m) || std::frexp(step_m, &exponent) != 0.5f) {
+    throw std::invalid_argument("packed points: step " + std::to_string(step_m) +
+                                " m is not a power of two");
+  }
+  if (xy.size() % 2 != 0) throw std::invalid_argument("packed points: odd coordinate count");
+  PackedPoints packed;
+  packed.step_m_ = step_m;
+  packed.xy_ = std::move(xy);
+  return packed;
 }
 
 PointCloud PackedPoints::Unpack() const {

@@ -7,6 +7,7 @@
 // back packs to the same cloud).
 
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "slam/grid.h"
@@ -18,6 +19,13 @@ class PackedPoints {
  public:
   PackedPoints() = default;
   explicit PackedPoints(const PointCloud& points);
+
+  // The stored form (a state file writes it as it is): step_m (a power of two) and x0, y0,
+  // x1, y1, ... in steps (an empty cloud never packed has step 0). Throws
+  // std::invalid_argument when `step_m` is not a positive power of two (or 0 with no points) or
+  // `xy` has an odd count.
+  static PackedPoints FromRaw(float step_m, std::vector<int16_t> xy);
+  const std::vector<int16_t>& raw() const { return xy_; }
 
   PointCloud Unpack() const;
   bool empty() const { return xy_.empty(); }

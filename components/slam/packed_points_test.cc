@@ -50,6 +50,22 @@ TEST(PackedPointsTest, PackingUnpackedPointsAgainGivesTheSamePoints) {
   EXPECT_TRUE(PackedPoints(PointCloud()).Unpack().empty());
 }
 
+// The stored form round-trips to the same bits; a step that is not a power of two, or an odd
+// coordinate count, is refused (a corrupt state file).
+TEST(PackedPointsTest, TheStoredFormRoundTripsAndBadOnesAreRefused) {
+  const PackedPoints packed(RandomCloud(12.0f, 50, 5));
+  const PackedPoints back = PackedPoints::FromRaw(packed.step_m(), packed.raw());
+  EXPECT_EQ(back.step_m(), packed.step_m());
+  EXPECT_EQ(back.raw(), packed.raw());
+  EXPECT_EQ(back.Unpack(), packed.Unpack());
+  EXPECT_TRUE(PackedPoints::FromRaw(0.0f, {}).empty());  // never packed
+  EXPECT_THROW(PackedPoints::FromRaw(0.0f, {1, 2}), std::invalid_argument);
+  EXPECT_THROW(PackedPoints::FromRaw(0.003f, {1, 2}), std::invalid_argument);
+  EXPECT_THROW(PackedPoints::FromRaw(-0.5f, {1, 2}), std::invalid_argument);
+  EXPECT_THROW(PackedPoints::FromRaw(NAN, {1, 2}), std::invalid_argument);
+  EXPECT_THROW(PackedPoints::FromRaw(0.5f, {1, 2, 3}), std::invalid_argument);
+}
+
 TEST(PackedPointsTest, ARangeDataKeepsItsOriginAndBothClouds) {
   RangeData data;
   data.origin = Eigen::Vector2f(0.1f, -0.05f);

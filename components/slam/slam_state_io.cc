@@ -27,6 +27,15 @@ class Writer : public common::BinaryWriter {
     Pod<int64_t>(c.size());
     out_->write(reinterpret_cast<const char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
   }
+  void Packed(const PackedPoints& p) {
+    Pod<float>(p.step_m());
+    Array(p.raw());
+  }
+  template <class T>
+  void Array(const std::vector<T>& v) {
+    Pod<int64_t>(v.size());
+    out_->write(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
 
  private:
   std::ostream* out_;
@@ -45,6 +54,21 @@ class Reader : public common::BinaryReader {
     if (!*in_) throw std::runtime_error("pose-graph file truncated");
     return c;
   }
+  PackedPoints Packed() {
+    const float step_m = Pod<float>();
+    try {
+      return PackedPoints::FromRaw(step_m, Array<int16_t>(20000000));
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("pose-graph file corrupt (") + e.what() + ")");
+    }
+  }
+  template <class T>
+  std::vector<T> Array(int64_t max_count) {
+    std::vector<T> v(Count(max_count));
+    in_->read(reinterpret_cast<char*>(v.data()), v.size() * sizeof(T));
+    if (!*in_) throw std::runtime_error("pose-graph file truncated");
+    return v;
+  }
 
  private:
   std::istream* in_;
@@ -53,9 +77,11 @@ class Reader : public common::BinaryReader {
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
 // Of the body. Version 2 adds each constraint's translation shape, version 3 the trimmed flags
 // of submaps and nodes (a trimmed submap has no grid) and each constraint's steps, version 4 the
-// raster cells only trimmed submaps knew; version 1-3 bodies are still read (shape: the
-// identity; nothing trimmed; no such cells).
-constexpr int32_t kVersion = 4;
+// raster cells only trimmed submaps knew, version 5 the stored forms (a finished grid's 16-bit
+// codes, a node's returns in 16-bit steps) and nothing but the poses of a node without returns;
+// version 1-4 bodies are still read (shape: the identity; nothing trimmed; no such cells; grids
+// and returns as floats).
+constexpr int32_t kVersion = 5;
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -95,30 +121,36 @@ void Slam::Save(const std::string& path) const {
       w.Pod<int32_t>(s.grid->height());
       w.Pod<double>(s.grid->corner().x());
       w.Pod<double>(s.grid->corner().y());
-      // As floats, whether the grid is live or finished (16-bit codes round-trip exactly).
-      std::vector<float> cells(static_cast<size_t>(s.grid->width()) * s.grid->height());
-      for (size_t c = 0; c < cells.size(); ++c) cells[c] = s.grid->RawAt(c);
-      out.write(reinterpret_cast<const char*>(cells.data()), cells.size() * sizeof(float));
+      // As stored: a finished grid's 16-bit codes, a live grid's floats.
+      const size_t num_cells = static_cast<size_t>(s.grid->width()) * s.grid->height();
+      w.Pod<int32_t>(s.grid->finished());
+      if (const uint16_t* codes = s.grid->FinishedCells()) {
+        out.write(reinterpret_cast<const char*>(codes), num_cells * sizeof(uint16_t));
+      } else {
+        out.write(reinterpret_cast<const char*>(s.grid->LiveCells()), num_cells * sizeof(float));
+      }
     }
     w.Pod<int64_t>(active_submaps_.ids().size());
     for (int a : active_submaps_.ids()) w.Pod<int32_t>(a);
     // Nodes.
     w.Pod<int64_t>(nodes_.size());
-    const NodeData none;  // what a trimmed node that keeps no returns writes
     for (size_t i = 0; i < nodes_.size(); ++i) {
       const Node& n = nodes_[i];
-      const NodeData& d = n.data ? *n.data : none;
       w.Pod(n.time_s);
       w.Pose(n.local_pose);
       w.Pose(node_global_[i]);
+      w.Pod<int32_t>(n.trimmed);
+      // A trimmed node that keeps no returns (most of a long mission's) is its poses alone.
+      w.Pod<int32_t>(n.data != nullptr);
+      if (!n.data) continue;
+      const NodeData& d = *n.data;
       w.Pod<int32_t>(d.has_odometry);
       w.Pod<int32_t>(d.odom_segment);
-      w.Pod<int32_t>(n.trimmed);
       w.Pose(d.odom_pose);
       w.Cloud(d.loop_points);
       w.Pod(d.range_data.origin.x()), w.Pod(d.range_data.origin.y());
-      w.Cloud(d.range_data.hits.Unpack());
-      w.Cloud(d.range_data.misses.Unpack());
+      w.Packed(d.range_data.hits);
+      w.Packed(d.range_data.misses);
     }
     // Constraints.
     w.Pod<int64_t>(constraints_.size());
@@ -198,11 +230,22 @@ void Slam::Load(const std::string& path) {
     if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > 400000000) {
       throw std::runtime_error("pose-graph file corrupt (grid size)");
     }
-    std::vector<float> cells(static_cast<size_t>(w) * h);
-    in.read(reinterpret_cast<char*>(cells.data()), cells.size() * sizeof(float));
-    if (!in) throw std::runtime_error("pose-graph file truncated");
+    const size_t num_cells = static_cast<size_t>(w) * h;
     s.grid = std::make_unique<ProbabilityGrid>(resolution, Eigen::Vector2d(cx, cy), 1);
-    s.grid->SetRaw(w, h, Eigen::Vector2d(cx, cy), std::move(cells));
+    if (body_version >= 5 && r.Pod<int32_t>() != 0) {
+      std::vector<uint16_t> codes(num_cells);
+      in.read(reinterpret_cast<char*>(codes.data()), num_cells * sizeof(uint16_t));
+      if (!in) throw std::runtime_error("pose-graph file truncated");
+      if (std::any_of(codes.begin(), codes.end(), [](uint16_t v) { return v > 32767; })) {
+        throw std::runtime_error("pose-graph file corrupt (grid cell)");
+      }
+      s.grid->SetRawFinished(w, h, Eigen::Vector2d(cx, cy), std::move(codes));
+    } else {
+      std::vector<float> cells(num_cells);
+      in.read(reinterpret_cast<char*>(cells.data()), num_cells * sizeof(float));
+      if (!in) throw std::runtime_error("pose-graph file truncated");
+      s.grid->SetRaw(w, h, Eigen::Vector2d(cx, cy), std::move(cells));
+    }
     if (s.finished) s.grid->Finish();
     submaps.push_back(std::move(s));
   }
@@ -219,17 +262,27 @@ void Slam::Load(const std::string& path) {
     n.time_s = r.Pod<double>();
     n.local_pose = r.Pose();
     node_global.push_back(r.Pose());
+    if (body_version >= 5) {
+      n.trimmed = r.Pod<int32_t>() != 0;
+      if (r.Pod<int32_t>() == 0) {  // no returns: an empty NodeData, released below if trimmed
+        nodes.push_back(std::move(n));
+        continue;
+      }
+    }
     d.has_odometry = r.Pod<int32_t>() != 0;
     d.odom_segment = r.Pod<int32_t>();
-    if (body_version >= 3) n.trimmed = r.Pod<int32_t>() != 0;
+    if (body_version >= 3 && body_version < 5) n.trimmed = r.Pod<int32_t>() != 0;
     d.odom_pose = r.Pose();
     d.loop_points = r.Cloud();
-    RangeData range_data;
-    range_data.origin.x() = r.Pod<float>();
-    range_data.origin.y() = r.Pod<float>();
-    range_data.hits = r.Cloud();
-    range_data.misses = r.Cloud();
-    d.range_data = PackedRangeData(range_data);
+    d.range_data.origin.x() = r.Pod<float>();
+    d.range_data.origin.y() = r.Pod<float>();
+    if (body_version >= 5) {
+      d.range_data.hits = r.Packed();
+      d.range_data.misses = r.Packed();
+    } else {
+      d.range_data.hits = PackedPoints(r.Cloud());
+      d.range_data.misses = PackedPoints(r.Cloud());
+    }
     nodes.push_back(std::move(n));
   }
   std::vector<Constraint> constraints;
