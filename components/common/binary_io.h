@@ -40,6 +40,17 @@ class BinaryWriter {
   std::ostream* out_;
 };
 
+// Reads bytes held elsewhere (a state file's body) as a stream, without copying them:
+//   MemoryStreamBuffer buffer(body.data(), body.size()); std::istream in(&buffer);
+// The bytes must outlive it.
+class MemoryStreamBuffer : public std::streambuf {
+ public:
+  MemoryStreamBuffer(const char* data, size_t size) {
+    char* begin = const_cast<char*>(data);  // only ever read
+    setg(begin, begin, begin + size);
+  }
+};
+
 class BinaryReader {
  public:
   // what: names the file in errors ("pose-graph file", "sound-map state").

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 #include "common/binary_io.h"
@@ -192,7 +191,8 @@ void Slam::Load(const std::string& path) {
       common::StateFileRead::kMissing) {
     throw std::runtime_error("cannot open pose-graph file '" + path + "'");
   }
-  std::istringstream in(body, std::ios::binary);
+  common::MemoryStreamBuffer bytes(body.data(), body.size());  // read in place, not copied
+  std::istream in(&bytes);
   Reader r(&in);
   char magic[8];
   in.read(magic, 8);

@@ -6,7 +6,6 @@
 #include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 
 #include "common/state_file.h"
 
@@ -769,8 +768,8 @@ Pose2 ReadPose(common::BinaryReader* r) {
 }  // namespace
 
 void OnlineSoundMap::Save(const std::string& path) const {
-  std::ostringstream body(std::ios::binary);
-  common::BinaryWriter writer(&body);
+  common::SealedStateWriter file(path, kStateKind, kStateVersion);  // streamed to disk
+  common::BinaryWriter writer(&file.body());
   const auto write = [this](common::BinaryWriter* w) {
     for (char c : kStateMagic) w->Pod(c);
     w->Pod(kStateVersion);
@@ -812,7 +811,8 @@ void OnlineSoundMap::Save(const std::string& path) const {
     for (char c : kStateMagic) w->Pod(c);  // trailer: a complete file
   };
   write(&writer);
-  common::WriteSealedState(path, kStateKind, kStateVersion, body.str());
+  if (!file.body()) throw std::runtime_error("cannot serialise the sound map for '" + path + "'");
+  file.Commit();
 }
 
 bool OnlineSoundMap::Load(const std::string& path) {
@@ -821,7 +821,8 @@ bool OnlineSoundMap::Load(const std::string& path) {
   if (common::ReadSealedState(path, kStateKind, kStateVersion, &body) ==
       common::StateFileRead::kMissing)
     return false;
-  std::istringstream in(body, std::ios::binary);
+  common::MemoryStreamBuffer bytes(body.data(), body.size());  // read in place, not copied
+  std::istream in(&bytes);
   common::BinaryReader r(&in, "sound-map state '" + path + "'");
   auto magic = [&r] {
     for (char c : kStateMagic)
