@@ -186,25 +186,25 @@ void ProbabilityGrid::Finish() {
 
 void ProbabilityGrid::SetRaw(int width, int height, const Eigen::Vector2d& corner,
                              std::vector<float> cells) {
-  width_ = width;
-  height_ = height;
-  corner_ = corner;
-  finished_ = false;
-  std::vector<uint16_t>().swap(finished_cells_);
+  Reset(width, height, corner, false);
   cells_ = std::move(cells);
   update_mark_.assign(cells_.size(), 0);
-  current_mark_ = 1;
 }
 
 void ProbabilityGrid::SetRawFinished(int width, int height, const Eigen::Vector2d& corner,
                                      std::vector<uint16_t> codes) {
+  Reset(width, height, corner, true);
+  finished_cells_ = std::move(codes);
+}
+
+void ProbabilityGrid::Reset(int width, int height, const Eigen::Vector2d& corner, bool finished) {
   width_ = width;
   height_ = height;
   corner_ = corner;
-  finished_ = true;
+  finished_ = finished;
   std::vector<float>().swap(cells_);
+  std::vector<uint16_t>().swap(finished_cells_);
   std::vector<uint32_t>().swap(update_mark_);
-  finished_cells_ = std::move(codes);
   current_mark_ = 1;
 }
 

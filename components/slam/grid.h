@@ -115,6 +115,8 @@ class ProbabilityGrid {
  private:
   void ApplyOdds(int index, float odds_factor);
   void Unfinish();  // back to float cells, for inserting into a finished grid
+  // Empty cells of the given extent, finished or not (SetRaw, SetRawFinished fill them).
+  void Reset(int width, int height, const Eigen::Vector2d& corner, bool finished);
 
   double resolution_, inv_resolution_;
   Eigen::Vector2d corner_;
