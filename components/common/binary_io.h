@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 namespace sarmap {
 namespace common {
@@ -27,6 +28,14 @@ class BinaryWriter {
   void String(const std::string& s) {
     Pod<int64_t>(static_cast<int64_t>(s.size()));
     out_->write(s.data(), static_cast<std::streamsize>(s.size()));
+  }
+  // A counted sequence of plain values (bytes as in memory: numbers, fixed-size Eigen vectors),
+  // written as one block.
+  template <class T>
+  void Array(const std::vector<T>& v) {
+    Pod<int64_t>(static_cast<int64_t>(v.size()));
+    out_->write(reinterpret_cast<const char*>(v.data()),
+                static_cast<std::streamsize>(v.size() * sizeof(T)));
   }
   template <class Derived>
   void Matrix(const Eigen::DenseBase<Derived>& m) {
@@ -74,6 +83,15 @@ class BinaryReader {
     in_->read(&s[0], static_cast<std::streamsize>(s.size()));
     if (!*in_) throw std::runtime_error(what_ + " truncated");
     return s;
+  }
+  // What BinaryWriter::Array wrote, at most max_count values.
+  template <class T>
+  std::vector<T> Array(int64_t max_count) {
+    std::vector<T> v(static_cast<size_t>(Count(max_count)));
+    in_->read(reinterpret_cast<char*>(v.data()),
+              static_cast<std::streamsize>(v.size() * sizeof(T)));
+    if (!*in_) throw std::runtime_error(what_ + " truncated");
+    return v;
   }
   Eigen::MatrixXd Matrix(int64_t max_elements = 1 << 26) {
     const int64_t rows = Count(max_elements), cols = Count(max_elements);

@@ -18,59 +18,32 @@ namespace {
 
 class Writer : public common::BinaryWriter {
  public:
-  explicit Writer(std::ostream* out) : BinaryWriter(out), out_(out) {}
+  using BinaryWriter::BinaryWriter;
   void Pose(const Rigid2d& p) {
     Pod(p.translation().x()), Pod(p.translation().y()), Pod(p.yaw_rad());
-  }
-  void Cloud(const PointCloud& c) {
-    Pod<int64_t>(c.size());
-    out_->write(reinterpret_cast<const char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
   }
   void Packed(const PackedPoints& p) {
     Pod<float>(p.step_m());
     Array(p.raw());
   }
-  template <class T>
-  void Array(const std::vector<T>& v) {
-    Pod<int64_t>(v.size());
-    out_->write(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
-  }
-
- private:
-  std::ostream* out_;
 };
 
 class Reader : public common::BinaryReader {
  public:
-  explicit Reader(std::istream* in) : BinaryReader(in, "pose-graph file"), in_(in) {}
+  explicit Reader(std::istream* in) : BinaryReader(in, "pose-graph file") {}
   Rigid2d Pose() {
     const double x = Pod<double>(), y = Pod<double>(), t = Pod<double>();
     return Rigid2d(x, y, t);
   }
-  PointCloud Cloud() {
-    PointCloud c(Count(10000000));
-    in_->read(reinterpret_cast<char*>(c.data()), c.size() * sizeof(Eigen::Vector2f));
-    if (!*in_) throw std::runtime_error("pose-graph file truncated");
-    return c;
-  }
+  PointCloud Cloud() { return Array<Eigen::Vector2f>(10000000); }
   PackedPoints Packed() {
     const float step_m = Pod<float>();
     try {
       return PackedPoints::FromRaw(step_m, Array<int16_t>(20000000));
     } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(std::string("pose-graph file corrupt (") + e.what() + ")");
+      Corrupt(e.what());
     }
   }
-  template <class T>
-  std::vector<T> Array(int64_t max_count) {
-    std::vector<T> v(Count(max_count));
-    in_->read(reinterpret_cast<char*>(v.data()), v.size() * sizeof(T));
-    if (!*in_) throw std::runtime_error("pose-graph file truncated");
-    return v;
-  }
-
- private:
-  std::istream* in_;
 };
 
 constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
@@ -146,7 +119,7 @@ void Slam::Save(const std::string& path) const {
       w.Pod<int32_t>(d.has_odometry);
       w.Pod<int32_t>(d.odom_segment);
       w.Pose(d.odom_pose);
-      w.Cloud(d.loop_points);
+      w.Array(d.loop_points);
       w.Pod(d.range_data.origin.x()), w.Pod(d.range_data.origin.y());
       w.Packed(d.range_data.hits);
       w.Packed(d.range_data.misses);
@@ -179,8 +152,7 @@ void Slam::Save(const std::string& path) const {
     w.Pod<int32_t>(-1);  // unused (scans carry their own geometry); kept for the file layout
     w.Pod<int32_t>(odometry_.segment());
     out.write(kMagic, 8);  // trailer: a complete file
-    if (!out) throw std::runtime_error("cannot serialise the pose graph for '" + path + "'");
-    file.Commit();
+    file.Commit();         // throws if any write failed
   }
 }
 

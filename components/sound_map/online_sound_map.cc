@@ -811,8 +811,7 @@ void OnlineSoundMap::Save(const std::string& path) const {
     for (char c : kStateMagic) w->Pod(c);  // trailer: a complete file
   };
   write(&writer);
-  if (!file.body()) throw std::runtime_error("cannot serialise the sound map for '" + path + "'");
-  file.Commit();
+  file.Commit();  // throws if any write failed
 }
 
 bool OnlineSoundMap::Load(const std::string& path) {
