@@ -1,14 +1,12 @@
 #pragma once
 // Little-endian binary state files (SLAM's pose graph, the sound map): plain values, counted
 // sequences and Eigen arrays written field by field, read back with bounds and truncation checks.
-// Written to PATH.tmp and renamed over PATH (WriteAtomically), so a crash mid-save leaves the
-// previous file whole.
+// The files themselves are sealed and replaced atomically by common::SealedStateWriter
+// (state_file.h).
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <cstdio>
 #include <fstream>
-#include <functional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -109,23 +107,6 @@ class BinaryReader {
   std::istream* in_;
   std::string what_;
 };
-
-// Writes PATH.tmp with write(), then renames it over PATH.
-inline void WriteAtomically(const std::string& path,
-                            const std::function<void(BinaryWriter*)>& write) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
-    BinaryWriter w(&out);
-    write(&w);
-    out.flush();
-    if (!out) throw std::runtime_error("write failed: '" + tmp + "'");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    throw std::runtime_error("cannot replace '" + path + "'");
-  }
-}
 
 }  // namespace common
 }  // namespace sarmap

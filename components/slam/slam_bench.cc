@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <string>
 
@@ -13,6 +14,14 @@ int main(int argc, char** argv) {
   const std::string bin = SARMAP_BIN_DIR;
   const std::string data = std::string(SARMAP_DATA_DIR) + "/slam";
   const std::string config = std::string(SARMAP_SOURCE_DIR) + "/config/slam.yaml";
+  if (argc > 2 || (argc == 2 && argv[1][0] == '-')) {
+    std::printf(
+        "usage: bench_slam [OUT_DIR]\n\n"
+        "Runs sarmap-slam-offline on the Intel, ACES and MIT-CSAIL laser logs and on Intel\n"
+        "interlaced over 2 laps (from the shared data), then sarmap-log-eval-relations on each;\n"
+        "trajectories, maps and plots go to OUT_DIR (default /tmp).\n");
+    return std::strcmp(argv[1], "-h") == 0 || std::strcmp(argv[1], "--help") == 0 ? 0 : 2;
+  }
   const std::string out_dir = argc > 1 ? argv[1] : "/tmp";
   struct Dataset {
     const char* name;
