@@ -567,10 +567,11 @@ Slam::MemoryUsage Slam::Memory() const {
   MemoryUsage m;
   auto cloud = [](const PointCloud& c) { return c.capacity() * sizeof(Eigen::Vector2f); };
   for (const Submap& sm : submaps_) {
-    m.submap_grids += sizeof(Submap) + sm.nodes.capacity() * sizeof(int);
-    if (sm.grid) m.submap_grids += sizeof(ProbabilityGrid) + sm.grid->MemoryBytes();
-    m.submap_grids +=
+    size_t bytes =
+        sizeof(Submap) + sm.nodes.capacity() * sizeof(int) +
         (sm.known_samples.capacity() + sm.occupied_samples.capacity()) * sizeof(uint32_t);
+    if (sm.grid) bytes += sizeof(ProbabilityGrid) + sm.grid->MemoryBytes();
+    (sm.trimmed ? m.trimmed_submaps : m.submap_grids) += bytes;
   }
   for (const auto& [id, stack] : precomputations_) m.precomputations += stack->MemoryBytes();
   for (const Node& n : nodes_) {
@@ -762,7 +763,9 @@ void Slam::KnownCells(int submap_id, std::vector<int64_t>* known,
 // submaps know it; it is a new obstacle when s sees it occupied and none of them sees an
 // obstacle within one raster cell of it (seen only on a revisit: debris come closer to, a door
 // closed). s is trimmed when it maps nothing new: new cells under min_fresh_area_m2 and new
-// obstacles under min_new_obstacle_m2. What stays is the first map of each place, the one later
+// obstacles under min_new_obstacle_m2, or new obstacles when the submaps kept for those alone
+// already number obstacle_submaps_per_area_submap per submap kept for its area (the live graph
+// stays bounded by the explored area). What stays is the first map of each place, the one later
 // scans were matched against, with what was added to it since; the freed nodes keep their
 // returns on the new obstacles, so that MAP still draws them.
 void Slam::TrimIfCovered(int submap_id) {
@@ -813,17 +816,24 @@ void Slam::TrimIfCovered(int submap_id) {
     if (!seen) new_obstacles.insert(key);
   }
   const double cell_m2 = t.cell_m * t.cell_m;
-  if (fresh_cells * cell_m2 < t.min_fresh_area_m2 &&
-      static_cast<double>(new_obstacles.size()) * cell_m2 < t.min_new_obstacle_m2) {
-    for (const auto& [key, count] : known_before) {
-      if (count < t.fresh_submaps) retained_known_.insert(key);
-    }
-    TrimSubmap(submap_id, new_obstacles);
-  } else if (fresh_cells * cell_m2 >= t.min_fresh_area_m2) {
+  if (fresh_cells * cell_m2 >= t.min_fresh_area_m2) {
     ++stats_.submaps_kept_new_area;
-  } else {
-    ++stats_.submaps_kept_new_obstacles;
+    return;
   }
+  if (static_cast<double>(new_obstacles.size()) * cell_m2 >= t.min_new_obstacle_m2) {
+    // The area's submaps: those kept for their area and the first ones, never judged.
+    const int64_t area_submaps = stats_.submaps_kept_new_area + kOwnChain + 1;
+    if (stats_.submaps_kept_new_obstacles + 1 <=
+        t.obstacle_submaps_per_area_submap * static_cast<double>(area_submaps)) {
+      ++stats_.submaps_kept_new_obstacles;
+      return;
+    }
+    ++stats_.submaps_trimmed_over_obstacle_budget;
+  }
+  for (const auto& [key, count] : known_before) {
+    if (count < t.fresh_submaps) retained_known_.insert(key);
+  }
+  TrimSubmap(submap_id, new_obstacles);
 }
 
 // Removes submap `submap_id`, its constraints, and the nodes no live submap holds but those a
@@ -832,8 +842,9 @@ void Slam::TrimSubmap(int submap_id, const std::unordered_set<int64_t>& new_obst
   Submap& sub = submaps_[submap_id];
   sub.trimmed = true;
   sub.grid.reset();
-  sub.known_samples = {};
-  sub.occupied_samples = {};
+  // Swapped out, not assigned {}: that clears a vector and keeps its capacity.
+  std::vector<uint32_t>().swap(sub.known_samples);
+  std::vector<uint32_t>().swap(sub.occupied_samples);
   precomputations_.remove_if([submap_id](const auto& p) { return p.first == submap_id; });
   ++stats_.submaps_trimmed;
   constraints_.erase(std::remove_if(constraints_.begin(), constraints_.end(),

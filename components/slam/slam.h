@@ -75,9 +75,10 @@ struct SlamStats {
   int64_t precomputations_built = 0;       // branch-and-bound stacks built (cache misses)
   int64_t optimisations = 0;
   int64_t submaps_trimmed = 0, nodes_trimmed = 0;  // trim.enabled
-  // trim.enabled: finished submaps judged and kept for their new area (new obstacles or not), or
-  // for new obstacles only.
+  // trim.enabled: finished submaps kept for their new area (new obstacles or not), for new
+  // obstacles only, and trimmed with new obstacles because the budget for those was spent.
   int64_t submaps_kept_new_area = 0, submaps_kept_new_obstacles = 0;
+  int64_t submaps_trimmed_over_obstacle_budget = 0;
   double optimise_seconds = 0, loop_seconds = 0, local_seconds = 0;
 };
 
@@ -124,10 +125,12 @@ class Slam {
     size_t precomputations = 0;  // cached loop-closure precomputation stacks
     size_t live_nodes = 0;       // live nodes: record, loop points and range data
     size_t trimmed_nodes = 0;    // trimmed nodes: record and the returns they keep
+    size_t trimmed_submaps = 0;  // trimmed submaps: record and node list
     size_t graph = 0;            // constraints and the nodes' and submaps' global poses
     size_t trajectory = 0;       // every accepted scan's pose
     size_t Total() const {
-      return submap_grids + precomputations + live_nodes + trimmed_nodes + graph + trajectory;
+      return submap_grids + precomputations + live_nodes + trimmed_nodes + trimmed_submaps + graph +
+             trajectory;
     }
   };
   MemoryUsage Memory() const;

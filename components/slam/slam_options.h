@@ -303,19 +303,24 @@ struct CovarianceOptions {
   }
 };
 
-// Bounded graph: a submap that maps nothing new is trimmed when it finishes, with the nodes only
+// Bounded graph: a submap that maps no new area is trimmed when it finishes, with the nodes only
 // it holds, so that revisits cost no lasting state and the graph grows with the explored area,
 // not the mission time (Cartographer's overlapping-submaps trimmer, keeping the oldest map of a
 // place instead of the newest). A cell of the new submap s is new while fewer than
-// fresh_submaps live submaps older than s - 2 know it, and a new obstacle when s sees it
-// occupied and none of them sees an obstacle within one cell; s is trimmed when both add up to
-// less than their areas. Submaps holding a node kept for a client (SLAM_ANCHORS) stay. The chain
-// across trimmed nodes is kept by one constraint between the live nodes either side.
+// fresh_submaps live submaps older than s - 2 know it; s is trimmed when its new cells add up
+// to less than min_fresh_area_m2, unless it sees at least min_new_obstacle_m2 of new obstacle
+// (occupied where none of the older submaps has an obstacle within one cell) and fewer than
+// obstacle_submaps_per_area_submap submaps per submap kept for its area were kept that way:
+// the live graph is bounded by the explored area. Past that budget what changed stays on MAP
+// through the freed nodes' returns on it. A node kept for a client (SLAM_ANCHORS) outlives its
+// submaps. The chain across trimmed nodes is kept by one constraint between the live nodes
+// either side.
 struct TrimOptions {
   bool enabled = true;
   int fresh_submaps = 1;
   double min_fresh_area_m2 = 1.0;
   double min_new_obstacle_m2 = 0.08;
+  double obstacle_submaps_per_area_submap = 0.25;
   double cell_m = 0.2;  // the coverage raster
   template <class V> void Visit(V& v) {
     v("enabled", enabled, "Trim each finished submap that maps nothing new (the graph grows with the explored area, not the mission time)");
@@ -324,8 +329,13 @@ struct TrimOptions {
     v("min_fresh_area_m2", min_fresh_area_m2,
       "A finished submap with less new area than this is trimmed (m^2)", NonNegative());
     v("min_new_obstacle_m2", min_new_obstacle_m2,
-      "... and with less new obstacle than this (m^2): occupied cells no older submap sees an "
+      "... unless it sees this much new obstacle (m^2): occupied cells no older submap sees an "
       "obstacle within one raster cell of",
+      NonNegative());
+    v("obstacle_submaps_per_area_submap", obstacle_submaps_per_area_submap,
+      "Submaps kept for new obstacles alone, at most this many per submap that holds new area "
+      "(the first three and those kept for it; past that, a new obstacle stays on MAP through "
+      "the returns on it, not a submap)",
       NonNegative());
     v("cell_m", cell_m, "Cell size of the coverage raster (m)", Positive());
   }

@@ -50,10 +50,11 @@ constexpr char kMagic[8] = {'S', 'A', 'R', 'M', 'A', 'P', 'P', 'G'};
 // Of the body. Version 2 adds each constraint's translation shape, version 3 the trimmed flags
 // of submaps and nodes (a trimmed submap has no grid) and each constraint's steps, version 4 the
 // raster cells only trimmed submaps knew, version 5 the stored forms (a finished grid's 16-bit
-// codes, a node's returns in 16-bit steps) and nothing but the poses of a node without returns;
-// version 1-4 bodies are still read (shape: the identity; nothing trimmed; no such cells; grids
-// and returns as floats).
-constexpr int32_t kVersion = 5;
+// codes, a node's returns in 16-bit steps) and nothing but the poses of a node without returns,
+// version 6 the counts of submaps trimming kept for their area and for new obstacles; version 1-5
+// bodies are still read (shape: the identity; nothing trimmed; no such cells; grids and returns
+// as floats; every live submap kept for its area).
+constexpr int32_t kVersion = 6;
 // The body is sealed (common/state_file.h) with this kind and version; a file of version 1 is
 // an unsealed body (written before sealing).
 constexpr char kStateKind[] = "slam-pose-graph";
@@ -139,6 +140,9 @@ void Slam::Save(const std::string& path) const {
     std::sort(known.begin(), known.end());
     w.Pod<int64_t>(known.size());
     for (int64_t key : known) w.Pod(key);
+    // The live submaps trimming kept for their area and for new obstacles (the budget of these).
+    w.Pod<int64_t>(stats_.submaps_kept_new_area);
+    w.Pod<int64_t>(stats_.submaps_kept_new_obstacles);
     // Local state to continue.
     w.Pose(global_from_local_);
     w.Pod<int32_t>(extrapolator_.have_last());
@@ -285,6 +289,12 @@ void Slam::Load(const std::string& path) {
     const int64_t nk = r.Count(1000000000);
     for (int64_t i = 0; i < nk; ++i) retained_known.insert(r.Pod<int64_t>());
   }
+  // Before version 6 every live finished submap past the first three counts as kept for its area.
+  int64_t kept_new_area = -1, kept_new_obstacles = 0;
+  if (body_version >= 6) {
+    kept_new_area = r.Count(1000000000);
+    kept_new_obstacles = r.Count(1000000000);
+  }
   // Read into locals: a file refused below leaves this Slam as it was (a clean start).
   const Rigid2d global_from_local = r.Pose();
   const bool have_last_scan = r.Pod<int32_t>() != 0;
@@ -377,6 +387,14 @@ void Slam::Load(const std::string& path) {
   stats_.submaps = submaps_.size();
   stats_.submaps_trimmed = submaps_trimmed;
   stats_.nodes_trimmed = nodes_trimmed;
+  if (kept_new_area < 0) {
+    kept_new_area = 0;
+    for (size_t i = 3; i < submaps_.size(); ++i) {
+      kept_new_area += submaps_[i].finished && !submaps_[i].trimmed;
+    }
+  }
+  stats_.submaps_kept_new_area = kept_new_area;
+  stats_.submaps_kept_new_obstacles = kept_new_obstacles;
 }
 
 }  // namespace slam

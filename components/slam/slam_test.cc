@@ -626,7 +626,10 @@ TEST(SlamTrimTest, RevisitingTheSameRoomKeepsTheGraphTheSizeOfTheRoom) {
       static_cast<double>(memory.trimmed_nodes) / (trimmed.num_nodes() - trimmed.num_live_nodes());
   EXPECT_LT(per_trimmed, per_live / 20) << per_trimmed << " against " << per_live << " bytes";
   EXPECT_EQ(memory.Total(), memory.submap_grids + memory.precomputations + memory.live_nodes +
-                                memory.trimmed_nodes + memory.graph + memory.trajectory);
+                                memory.trimmed_nodes + memory.trimmed_submaps + memory.graph +
+                                memory.trajectory);
+  // A trimmed submap keeps its record and node list, nothing of its grid or samples.
+  EXPECT_LT(memory.trimmed_submaps, trimmed.stats().submaps_trimmed * 512);
   std::printf("4 passes: %d nodes, %lld submaps untrimmed; %d nodes, %d submaps live after 4 "
               "passes, %d, %d after 8 (%lld submaps trimmed)\n",
               plain.num_nodes(), (long long)plain.stats().submaps, live_nodes_at_4,
@@ -650,27 +653,6 @@ TEST(SlamTrimTest, RevisitingTheSameRoomKeepsTheGraphTheSizeOfTheRoom) {
   while (!trimmed.NodeTrimmed(gone)) ++gone;
   EXPECT_FALSE(trimmed.JointCovariance({gone}, &cov));
   EXPECT_GT(trimmed.RenderMap().width, 150);  // the 10 m room at 5 cm
-}
-
-TEST(SlamTrimTest, AnObstacleSeenOnlyOnARevisitIsMapped) {
-  // A pillar appears after two passes. The submaps of the pass that first sees it map nothing
-  // else new, yet they stay (the same drive without the pillar trims them); later passes are
-  // trimmed again.
-  Slam plain{BackAndForthOptions(true)};
-  Slam pillar{BackAndForthOptions(true)};
-  int live_after_3 = 0, plain_after_3 = 0;
-  for (int k = 0; k < 5 * 160; ++k) {
-    ASSERT_TRUE(BackAndForthStep(&plain, k).accepted);
-    ASSERT_TRUE(BackAndForthStep(&pillar, k, k >= 2 * 160).accepted);
-    if (k == 3 * 160 - 1) {
-      live_after_3 = pillar.num_live_submaps();
-      plain_after_3 = plain.num_live_submaps();
-    }
-  }
-  std::printf("live submaps after 3 passes: %d with the pillar, %d without; after 5: %d, %d\n",
-              live_after_3, plain_after_3, pillar.num_live_submaps(), plain.num_live_submaps());
-  EXPECT_GE(live_after_3, plain_after_3 + 2);
-  EXPECT_LE(pillar.num_live_submaps() - live_after_3, plain.num_live_submaps() - plain_after_3 + 1);
 }
 
 // MAP's occupancy (0-100, -1 unknown) at map-frame point (x, y).
@@ -726,6 +708,73 @@ int KnownCells(const OccupancyMap& map) {
   int known = 0;
   for (int8_t c : map.cells) known += c >= 0;
   return known;
+}
+
+TEST(SlamTrimTest, AnObstacleSeenOnlyOnARevisitIsMapped) {
+  // A pillar appears after two passes. The submaps of the pass that first sees it map nothing
+  // else new, yet they stay (the same drive without the pillar trims them); later passes are
+  // trimmed again. Without a budget for such submaps: the room's three submaps that hold its
+  // area would allow none.
+  SlamOptions o = BackAndForthOptions(true);
+  o.trim.obstacle_submaps_per_area_submap = 1e9;
+  Slam plain{o};
+  Slam pillar{o};
+  int live_after_3 = 0, plain_after_3 = 0;
+  for (int k = 0; k < 5 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&plain, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&pillar, k, k >= 2 * 160).accepted);
+    if (k == 3 * 160 - 1) {
+      live_after_3 = pillar.num_live_submaps();
+      plain_after_3 = plain.num_live_submaps();
+    }
+  }
+  std::printf("live submaps after 3 passes: %d with the pillar, %d without; after 5: %d, %d\n",
+              live_after_3, plain_after_3, pillar.num_live_submaps(), plain.num_live_submaps());
+  EXPECT_GE(live_after_3, plain_after_3 + 2);
+  EXPECT_LE(pillar.num_live_submaps() - live_after_3, plain.num_live_submaps() - plain_after_3 + 1);
+}
+
+TEST(SlamTrimTest, PastTheBudgetANewObstacleStaysOnMapWithoutItsSubmaps) {
+  // The pillar of the test above, with no budget for submaps kept for new obstacles: the
+  // passes that see it are trimmed as in the same drive without the pillar, so the live graph
+  // stays the room's. The freed nodes' returns on the pillar keep it on MAP, where a planner
+  // reads it as occupied (MapClass 3) from the pass after it appeared on, and after a reload,
+  // which keeps the counts the budget is made of.
+  SlamOptions o = BackAndForthOptions(true);
+  o.trim.obstacle_submaps_per_area_submap = 0;
+  Slam plain{o};
+  Slam pillar{o};
+  int pillar_at_3 = -1;
+  for (int k = 0; k < 5 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&plain, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&pillar, k, k >= 2 * 160).accepted);
+    // The map frame is the first scan's pose, (-3, 0): the pillar's face towards the drive is
+    // at y = 1.3 from x = 1.8 to 2.2.
+    if (k == 3 * 160 - 1) pillar_at_3 = MaxValueNear(pillar.RenderMap(), 2.0, 1.3);
+  }
+  const OccupancyMap map = pillar.RenderMap();
+  const int pillar_at_5 = MaxValueNear(map, 2.0, 1.3);
+  const int before_pillar = MaxValueNear(map, 2.0, 0.9);
+  std::printf(
+      "live submaps after 5 passes: %d with the pillar, %d without; MAP at its face after 3 / 5 "
+      "passes %d / %d, in front of it %d\n",
+      pillar.num_live_submaps(), plain.num_live_submaps(), pillar_at_3, pillar_at_5, before_pillar);
+  EXPECT_LE(pillar.num_live_submaps(), plain.num_live_submaps() + 1);
+  EXPECT_GT(pillar.stats().submaps_trimmed, 20);
+  EXPECT_EQ(pillar.stats().submaps_kept_new_obstacles, 0);
+  EXPECT_GT(pillar.stats().submaps_trimmed_over_obstacle_budget, 0);
+  EXPECT_EQ(MapClass(pillar_at_3), 3);
+  EXPECT_EQ(MapClass(pillar_at_5), 3);
+  EXPECT_EQ(MapClass(before_pillar), 1);
+  // Without the pillar the same place is free.
+  EXPECT_EQ(MapClass(MaxValueNear(plain.RenderMap(), 2.0, 1.3)), 1);
+  const std::string path = ::testing::TempDir() + "/slam_state_pillar.pg";
+  pillar.Save(path);
+  Slam resumed{o};
+  resumed.Load(path);
+  EXPECT_EQ(resumed.RenderMap().cells, map.cells);
+  EXPECT_EQ(resumed.stats().submaps_kept_new_area, pillar.stats().submaps_kept_new_area);
+  EXPECT_EQ(resumed.stats().submaps_kept_new_obstacles, 0);
 }
 
 TEST(SlamTrimTest, ASmallObstacleSeenOnlyOnARevisitStaysOnMapAfterItsSubmapsAreTrimmed) {

@@ -277,10 +277,11 @@ int main(int argc, char** argv) {
         (long long)s.precomputations_built, (long long)s.optimisations);
     if (s.submaps_trimmed + s.submaps_kept_new_area + s.submaps_kept_new_obstacles > 0) {
       std::printf(
-          "trimming: %lld submaps trimmed, %lld kept for their new area, %lld for new obstacles "
-          "only; %lld nodes trimmed\n",
-          (long long)s.submaps_trimmed, (long long)s.submaps_kept_new_area,
-          (long long)s.submaps_kept_new_obstacles, (long long)s.nodes_trimmed);
+          "trimming: %lld submaps trimmed (%lld with new obstacles, over their budget), %lld kept "
+          "for their new area, %lld for new obstacles only; %lld nodes trimmed\n",
+          (long long)s.submaps_trimmed, (long long)s.submaps_trimmed_over_obstacle_budget,
+          (long long)s.submaps_kept_new_area, (long long)s.submaps_kept_new_obstacles,
+          (long long)s.nodes_trimmed);
     }
     std::printf(
         "data %.1f s, processing %.2f s (local %.2f, loop search %.2f, optimisation %.2f, final "
@@ -294,10 +295,10 @@ int main(int argc, char** argv) {
     const slam::Slam::MemoryUsage m = slam.Memory();
     std::printf(
         "SLAM data at the end %.1f MB: submap grids %.1f, precomputations %.1f, live nodes %.1f, "
-        "trimmed nodes %.1f, graph %.1f, trajectory %.1f\n",
+        "trimmed nodes %.1f, trimmed submaps %.1f, graph %.1f, trajectory %.1f\n",
         m.Total() / 1048576.0, m.submap_grids / 1048576.0, m.precomputations / 1048576.0,
-        m.live_nodes / 1048576.0, m.trimmed_nodes / 1048576.0, m.graph / 1048576.0,
-        m.trajectory / 1048576.0);
+        m.live_nodes / 1048576.0, m.trimmed_nodes / 1048576.0, m.trimmed_submaps / 1048576.0,
+        m.graph / 1048576.0, m.trajectory / 1048576.0);
     const double cpu_s = ru.ru_utime.tv_sec + 1e-6 * ru.ru_utime.tv_usec + ru.ru_stime.tv_sec +
                          1e-6 * ru.ru_stime.tv_usec;
     std::printf("CPU time (one thread, incl. reading) %.2f s = %.1fx real time\n", cpu_s,
