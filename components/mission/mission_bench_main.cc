@@ -281,8 +281,8 @@ void WriteReports(const std::vector<mission::MissionReport>& reports, const std:
   std::ofstream csv(path);
   csv << "time_s,state,distance_m,cpu_s,slam_cpu_s,explore_cpu_s,vision_cpu_s,people_map_cpu_s,"
          "sound_cpu_s,rss_mb,heap_mb,slam_mb,slam_grids_mb,slam_precomputations_mb,"
-         "slam_live_nodes_mb,slam_trimmed_nodes_mb,slam_trimmed_submaps_mb,slam_graph_mb,slam_"
-         "trajectory_mb,slam_nodes,"
+         "slam_live_nodes_mb,slam_trimmed_nodes_mb,slam_trimmed_submaps_mb,slam_graph_mb,"
+         "slam_trajectory_mb,slam_nodes,"
          "slam_submaps,slam_nodes_kept,slam_submaps_kept_area,slam_submaps_kept_obstacles,"
          "slam_optimisations,"
          "slam_loop_closures,"

@@ -764,7 +764,7 @@ void Slam::KnownCells(int submap_id, std::vector<int64_t>* known,
 // obstacle within one raster cell of it (seen only on a revisit: debris come closer to, a door
 // closed). s is trimmed when it maps nothing new: new cells under min_fresh_area_m2 and new
 // obstacles under min_new_obstacle_m2, or new obstacles when the submaps kept for those alone
-// already number obstacle_submaps_per_area_submap per submap kept for its area (the live graph
+// already number obstacle_submaps_per_area_submap per submap that holds area (the live graph
 // stays bounded by the explored area). What stays is the first map of each place, the one later
 // scans were matched against, with what was added to it since; the freed nodes keep their
 // returns on the new obstacles, so that MAP still draws them.

@@ -303,14 +303,14 @@ struct CovarianceOptions {
   }
 };
 
-// Bounded graph: a submap that maps no new area is trimmed when it finishes, with the nodes only
+// Bounded graph: a submap that maps nothing new is trimmed when it finishes, with the nodes only
 // it holds, so that revisits cost no lasting state and the graph grows with the explored area,
 // not the mission time (Cartographer's overlapping-submaps trimmer, keeping the oldest map of a
 // place instead of the newest). A cell of the new submap s is new while fewer than
 // fresh_submaps live submaps older than s - 2 know it; s is trimmed when its new cells add up
 // to less than min_fresh_area_m2, unless it sees at least min_new_obstacle_m2 of new obstacle
 // (occupied where none of the older submaps has an obstacle within one cell) and fewer than
-// obstacle_submaps_per_area_submap submaps per submap kept for its area were kept that way:
+// obstacle_submaps_per_area_submap submaps per submap that holds area were kept that way:
 // the live graph is bounded by the explored area. Past that budget what changed stays on MAP
 // through the freed nodes' returns on it. A node kept for a client (SLAM_ANCHORS) outlives its
 // submaps. The chain across trimmed nodes is kept by one constraint between the live nodes

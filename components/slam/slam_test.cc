@@ -734,6 +734,30 @@ TEST(SlamTrimTest, AnObstacleSeenOnlyOnARevisitIsMapped) {
   EXPECT_LE(pillar.num_live_submaps() - live_after_3, plain.num_live_submaps() - plain_after_3 + 1);
 }
 
+TEST(SlamTrimTest, TheBudgetCapsTheSubmapsKeptForNewObstacles) {
+  // The pillar drive with 0.5 submaps kept for new obstacles per submap that holds area: the
+  // room's three allow one (1 <= 1.5); the pass that first sees the pillar would keep more
+  // without the cap, so the rest are trimmed with their new obstacles.
+  SlamOptions o = BackAndForthOptions(true);
+  o.trim.obstacle_submaps_per_area_submap = 0.5;
+  Slam plain{o};
+  Slam pillar{o};
+  for (int k = 0; k < 5 * 160; ++k) {
+    ASSERT_TRUE(BackAndForthStep(&plain, k).accepted);
+    ASSERT_TRUE(BackAndForthStep(&pillar, k, k >= 2 * 160).accepted);
+  }
+  std::printf(
+      "kept for new obstacles %lld, trimmed over the budget %lld, live submaps %d (%d "
+      "without the pillar)\n",
+      (long long)pillar.stats().submaps_kept_new_obstacles,
+      (long long)pillar.stats().submaps_trimmed_over_obstacle_budget, pillar.num_live_submaps(),
+      plain.num_live_submaps());
+  EXPECT_EQ(pillar.stats().submaps_kept_new_area, 0);
+  EXPECT_EQ(pillar.stats().submaps_kept_new_obstacles, 1);
+  EXPECT_GT(pillar.stats().submaps_trimmed_over_obstacle_budget, 0);
+  EXPECT_EQ(pillar.num_live_submaps(), plain.num_live_submaps() + 1);
+}
+
 TEST(SlamTrimTest, PastTheBudgetANewObstacleStaysOnMapWithoutItsSubmaps) {
   // The pillar of the test above, with no budget for submaps kept for new obstacles: the
   // passes that see it are trimmed as in the same drive without the pillar, so the live graph
