@@ -769,7 +769,6 @@ void Slam::KnownCells(int submap_id, std::vector<int64_t>* known,
 // scans were matched against, with what was added to it since; the freed nodes keep their
 // returns on the new obstacles, so that MAP still draws them.
 void Slam::TrimIfCovered(int submap_id) {
-  constexpr int kOwnChain = 2;
   const TrimOptions& t = options_.trim;
   if (submap_id <= kOwnChain) return;  // submap 0 holds the map frame
   if (submaps_[submap_id].trimmed) return;
@@ -802,6 +801,11 @@ void Slam::TrimIfCovered(int submap_id) {
     count += retained_known_.count(key) > 0;
     fresh_cells += count < t.fresh_submaps;
   }
+  const double cell_m2 = t.cell_m * t.cell_m;
+  if (fresh_cells * cell_m2 >= t.min_fresh_area_m2) {
+    ++stats_.submaps_kept_new_area;
+    return;
+  }
   // What trimmed nodes kept is held too (an obstacle seen again on a later revisit is not new).
   std::unordered_set<int64_t> new_obstacles;
   for (int64_t key : mine_occupied) {
@@ -814,11 +818,6 @@ void Slam::TrimIfCovered(int submap_id) {
       }
     }
     if (!seen) new_obstacles.insert(key);
-  }
-  const double cell_m2 = t.cell_m * t.cell_m;
-  if (fresh_cells * cell_m2 >= t.min_fresh_area_m2) {
-    ++stats_.submaps_kept_new_area;
-    return;
   }
   if (static_cast<double>(new_obstacles.size()) * cell_m2 >= t.min_new_obstacle_m2) {
     // The area's submaps: those kept for their area and the first ones, never judged.

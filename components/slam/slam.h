@@ -251,7 +251,10 @@ class Slam {
   // A new active submap whose grid starts at `local_pose` (translation only).
   void StartSubmap(const Rigid2d& local_pose);
   void FinishSubmap(int submap_id);
-  // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions).
+  // trim.enabled: trims a just-finished submap that older ones cover (TrimOptions). Submaps
+  // 0..kOwnChain are never judged (submap 0 holds the map frame; each is s - 1 or s - 2 of the
+  // next, the same pass).
+  static constexpr int kOwnChain = 2;
   void TrimIfCovered(int submap_id);
   // `new_obstacles`: the raster cells (trim.cell_m, map frame) where the submap saw an obstacle
   // no older submap holds; a freed node keeps its returns in them.

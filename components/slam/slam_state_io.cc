@@ -289,7 +289,7 @@ void Slam::Load(const std::string& path) {
     const int64_t nk = r.Count(1000000000);
     for (int64_t i = 0; i < nk; ++i) retained_known.insert(r.Pod<int64_t>());
   }
-  // Before version 6 every live finished submap past the first three counts as kept for its area.
+  // Before version 6 every live finished submap trimming judged counts as kept for its area.
   int64_t kept_new_area = -1, kept_new_obstacles = 0;
   if (body_version >= 6) {
     kept_new_area = r.Count(1000000000);
@@ -389,7 +389,7 @@ void Slam::Load(const std::string& path) {
   stats_.nodes_trimmed = nodes_trimmed;
   if (kept_new_area < 0) {
     kept_new_area = 0;
-    for (size_t i = 3; i < submaps_.size(); ++i) {
+    for (size_t i = kOwnChain + 1; i < submaps_.size(); ++i) {
       kept_new_area += submaps_[i].finished && !submaps_[i].trimmed;
     }
   }
