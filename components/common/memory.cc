@@ -22,5 +22,7 @@ double HeapInUseMegabytes() {
   return Megabytes(info.uordblks + info.hblkhd);
 }
 
+bool ReleaseFreeMemory() { return malloc_trim(0) != 0; }
+
 }  // namespace common
 }  // namespace sarmap

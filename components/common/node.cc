@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "common/lcm_guard.h"
+#include "common/memory.h"
 #include "common/signal_handlers.h"
 
 namespace sarmap {
@@ -135,6 +136,8 @@ bool Node::SpinOnce(double timeout_s) {
 
 int Node::Run() {
   AddTimer(1.0, [this] { PublishStatus(); });
+  // A node that runs for hours holds what it uses, not the pages of its largest burst.
+  AddTimer(kReleaseFreeMemoryPeriod_s, [] { ReleaseFreeMemory(); });
   SARMAP_LOG(INFO) << "running (pid " << getpid() << ")";
   while (SpinOnce(0.5)) {
   }

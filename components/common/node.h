@@ -146,8 +146,9 @@ class Node {
   void SetClock(std::function<double()> now_s);
   double Now() const { return clock_ ? clock_() : SteadySeconds(); }
 
-  // Handles messages and timers until Stop(), SIGINT or SIGTERM. Returns 0, or 1 if LCM
-  // failed.
+  // Handles messages and timers until Stop(), SIGINT or SIGTERM: NODE_STATUS every second,
+  // and every kReleaseFreeMemoryPeriod_s the allocator's free pages given back to the system
+  // (common/memory.h). Returns 0, or 1 if LCM failed.
   int Run();
   // Handles what arrives within `timeout_s`; false once the node should stop.
   bool SpinOnce(double timeout_s);

@@ -628,6 +628,7 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
   const double step_s = 0.05;
   double next_progress = 10;
   double next_report = options.report_period_s;
+  double next_release_s = common::SteadySeconds() + common::kReleaseFreeMemoryPeriod_s;
   for (double t = step_s; t <= options.duration_s + 1e-9; t += step_s) {
     simulator.AdvanceTo(t, &loop);
     if (simulator.collisions() > static_cast<int>(result.contacts.size())) {
@@ -660,6 +661,12 @@ MissionResult RunMission(const MissionRunOptions& options, MissionObserver* obse
     if (progress && t >= next_progress) {
       progress(t);
       next_progress += 10;
+    }
+    // As every node does (common::Node::Run), so that the reported resident size is what the
+    // components hold.
+    if (common::SteadySeconds() >= next_release_s) {
+      common::ReleaseFreeMemory();
+      next_release_s = common::SteadySeconds() + common::kReleaseFreeMemoryPeriod_s;
     }
     if (options.report_period_s > 0 && t >= next_report - 0.5 * step_s) {
       next_report += options.report_period_s;
