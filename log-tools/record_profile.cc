@@ -74,9 +74,9 @@ void RecordThinner::Decide(Held* h) {
 void RecordThinner::Add(LogEvent event) {
   if (event.channel == options_.frames.people_channel) {
     people_detections_t msg;
-    if (common::DecodeMessage(event.data.data(), event.data.size(), &msg) &&
-        !msg.detections.empty()) {
-      people_utimes_.insert(msg.header.utime);
+    if (common::DecodeMessage(event.data.data(), event.data.size(), &msg)) {
+      processed_utimes_.insert(msg.header.utime);
+      if (!msg.detections.empty()) people_utimes_.insert(msg.header.utime);
     }
   }
   Held h;
@@ -91,7 +91,11 @@ bool RecordThinner::NearPeople(int64_t capture_utime) const {
   if (capture_utime < 0 || options_.frames.around_people_s <= 0) return false;
   const int64_t around_us = std::llround(options_.frames.around_people_s * 1e6);
   const auto it = people_utimes_.lower_bound(capture_utime - around_us);
-  return it != people_utimes_.end() && *it <= capture_utime + around_us;
+  if (it == people_utimes_.end() || *it > capture_utime + around_us) return false;
+  if (options_.frames.around_people_frames == "all") return true;
+  const int64_t tol_us = std::llround(options_.frames.pair_tolerance_s * 1e6);
+  const auto processed = processed_utimes_.lower_bound(capture_utime - tol_us);
+  return processed != processed_utimes_.end() && *processed <= capture_utime + tol_us;
 }
 
 void RecordThinner::Emit(Held&& h, bool keep, std::vector<LogEvent>* out) {
@@ -126,6 +130,7 @@ void RecordThinner::Release(int64_t now_utime, std::vector<LogEvent>* out) {
   // Forget capture times no held frame can still be near.
   const int64_t horizon = newest_capture - kMemoryUs;
   people_utimes_.erase(people_utimes_.begin(), people_utimes_.lower_bound(horizon));
+  processed_utimes_.erase(processed_utimes_.begin(), processed_utimes_.lower_bound(horizon));
   chosen_utimes_.erase(chosen_utimes_.begin(), chosen_utimes_.lower_bound(horizon));
   const int64_t horizon_bucket = static_cast<int64_t>(
       std::floor(static_cast<double>(horizon) * 1e-6 * options_.frames.rate_hz));

@@ -10,7 +10,10 @@
 //
 // Frames (`frames.channels`): a frame is kept when
 //   - its capture time (header.utime) is within `frames.around_people_s` of a detection's capture
-//     time on `frames.people_channel` (a message there with at least one detection), or
+//     time on `frames.people_channel` (a message there with at least one detection) and, with
+//     `frames.around_people_frames: processed`, within `frames.pair_tolerance_s` of a capture
+//     time a message there carries (a frame the detector looked at, whether it saw anyone: the
+//     detector takes 15 of the camera's 30 frames a second, and a replay of it needs those), or
 //   - it is the first frame, in arrival order, whose capture time falls in a `1 / frames.rate_hz`
 //     bucket (that capture time is chosen), or its capture time is within
 //     `frames.pair_tolerance_s` of a chosen one: a depth frame and the colour frame of the same
@@ -40,6 +43,7 @@ struct RecordFramesOptions {
   double pair_tolerance_s = 0.025;
   std::string people_channel = "PEOPLE_VISUAL";
   double around_people_s = 2.0;
+  std::string around_people_frames = "processed";
   template <class V>
   void Visit(V& v) {
     v("channels", channels, "camera channels kept at a low rate (regular expression, whole name)");
@@ -51,7 +55,11 @@ struct RecordFramesOptions {
     v("people_channel", people_channel,
       "people_detections_t channel: a message with a detection keeps every frame around it");
     v("around_people_s", around_people_s,
-      "frames captured within this of a detection are all kept (0: none)", NonNegative());
+      "frames captured within this of a detection are kept (0: none)", NonNegative());
+    v("around_people_frames", around_people_frames,
+      "which of them: processed (those the detector looked at: a people_channel message carries "
+      "their capture time, with or without a detection) or all",
+      OneOf({"processed", "all"}));
   }
   void Validate(common::Validator& check) const {
     check.That(pair_tolerance_s * rate_hz < 0.5, "pair_tolerance_s",
@@ -125,6 +133,7 @@ class RecordThinner {
     int64_t capture_utime = -1;  // frames with a readable header
   };
   Kind KindOf(const std::string& channel);
+  // Kept for being near a detection (frames.around_people_s, frames.around_people_frames).
   bool NearPeople(int64_t capture_utime) const;
   void Decide(Held* h);
   void Emit(Held&& h, bool keep, std::vector<LogEvent>* out);
@@ -137,6 +146,7 @@ class RecordThinner {
   std::set<int64_t> chosen_buckets_;                // frame buckets with a chosen capture time
   std::set<int64_t> chosen_utimes_;                 // the chosen capture times
   std::set<int64_t> people_utimes_;                 // capture times of detections
+  std::set<int64_t> processed_utimes_;              // capture times the detector reported on
   std::map<std::string, int64_t> last_grid_utime_;  // receive time of the last grid kept
   std::map<std::string, Held> passed_;              // per thinned channel, the last one dropped
   std::map<std::string, ThinCount> counts_;

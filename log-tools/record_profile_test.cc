@@ -80,8 +80,10 @@ constexpr int64_t kS = 1'000'000;
 
 // 30 Hz depth and colour of the same capture instants (colour received 5 ms after depth), ODOM
 // at 30 Hz, for `seconds`; `seen` adds a detection of the frame captured at that second,
-// received 0.4 s later (the detector's latency).
-Kept RunCamera(const RecordProfileOptions& options, double seconds, double seen_s = -1) {
+// received 0.4 s later (the detector's latency); `detector_every` > 0: the detector reports on
+// every this many frames (nobody seen) besides, 0.4 s later.
+Kept RunCamera(const RecordProfileOptions& options, double seconds, double seen_s = -1,
+               int detector_every = 0) {
   RecordThinner thinner(options);
   Kept kept;
   const int n = static_cast<int>(seconds * 30);
@@ -100,6 +102,9 @@ Kept RunCamera(const RecordProfileOptions& options, double seconds, double seen_
     thinner.Add(odom);
     if (seen_s >= 0 && i == static_cast<int>(seen_s * 30 + 0.5) + 12) {
       thinner.Add(Seen(recv + 7'000, t0 + static_cast<int64_t>(seen_s * kS), 1));
+    }
+    if (detector_every > 0 && i >= 12 && (i - 12) % detector_every == 0) {
+      thinner.Add(Seen(recv + 8'000, t0 + (i - 12) * kS / 30, 0));
     }
     thinner.Release(recv + 7'000, &kept.events);
   }
@@ -125,6 +130,7 @@ TEST(RecordThinnerTest, KeepsOneFramePairPerPeriodAndEveryOtherMessage) {
 
 TEST(RecordThinnerTest, KeepsEveryFrameAroundAPersonSeen) {
   RecordProfileOptions options;  // 2 s around a detection
+  options.frames.around_people_frames = "all";
   const Kept kept = RunCamera(options, 10.0, /*seen_s=*/5.0);
   const auto depth = kept.Captures("DEPTH");
   const int64_t t0 = 100 * kS;
@@ -137,6 +143,26 @@ TEST(RecordThinnerTest, KeepsEveryFrameAroundAPersonSeen) {
   EXPECT_EQ(kept.Captures("RGB"), depth);
   // Outside the window still one per second.
   EXPECT_LE(depth.size() - around, 8u);
+}
+
+// The detector looks at every other frame (15 of 30 a second) and sees someone at 5 s: around
+// it, the frames it looked at are kept and the others are not.
+TEST(RecordThinnerTest, AroundAPersonSeenKeepsTheFramesTheDetectorLookedAt) {
+  RecordProfileOptions options;  // around_people_frames: processed
+  const Kept kept = RunCamera(options, 10.0, /*seen_s=*/5.0, /*detector_every=*/2);
+  const auto depth = kept.Captures("DEPTH");
+  const int64_t t0 = 100 * kS;
+  int around = 0, passed_over = 0;
+  for (int64_t c : depth) {
+    if (c < t0 + 3 * kS || c > t0 + 7 * kS) continue;
+    ++around;
+    if (((c - t0) * 30 + kS / 2) / kS % 2 == 1) ++passed_over;
+  }
+  // The 4 s window holds 60 or 61 of the detector's frames (the 1 Hz frames are among them).
+  EXPECT_GE(around, 60);
+  EXPECT_LE(around, 61);
+  EXPECT_EQ(passed_over, 0);
+  EXPECT_EQ(kept.Captures("RGB"), depth);
 }
 
 TEST(RecordThinnerTest, ADetectionWithNobodyKeepsNothingMore) {
