@@ -2,6 +2,11 @@
 
 set(SARMAP_NETNS ${PROJECT_SOURCE_DIR}/tests/harness/sarmap-netns CACHE INTERNAL "")
 set(SARMAP_DATA_DIR ${PROJECT_SOURCE_DIR}/../shared/data CACHE PATH "Real test data (shared/data)")
+# The tests' scratch files (::testing::TempDir(): gtest reads TEST_TMPDIR) go below
+# build/test-tmp, which the fixture sarmap_test_tmp empties at the start of every ctest run that
+# runs a test needing it: a test run leaves nothing in /tmp, and a build never holds more than
+# one run's files.
+set(SARMAP_TEST_TMPDIR ${CMAKE_BINARY_DIR}/test-tmp CACHE INTERNAL "")
 
 # sarmap_add_gtest(NAME SOURCES a.cc b.cc LIBS x y [LABELS l])
 # One test binary; its cases are discovered at test time so CTest lists each one.
@@ -16,7 +21,25 @@ function(sarmap_add_gtest name)
   string(REPLACE ";" "\\;" labels "unit;${ARG_LABELS}")
   # Listing a binary that loads PCL and OpenCV can take seconds on a loaded machine.
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-    PROPERTIES LABELS "${labels}" TIMEOUT 300)
+    PROPERTIES LABELS "${labels}" TIMEOUT 300 ENVIRONMENT "TEST_TMPDIR=${SARMAP_TEST_TMPDIR}"
+               FIXTURES_REQUIRED sarmap_test_tmp)
+endfunction()
+
+# sarmap_use_test_tmpdir(TEST...): a test added with add_test writes its scratch files below
+# SARMAP_TEST_TMPDIR too (sarmap_add_gtest and sarmap_add_netns_test do it for theirs).
+function(sarmap_use_test_tmpdir)
+  foreach(test ${ARGN})
+    set_property(TEST ${test} APPEND PROPERTY ENVIRONMENT "TEST_TMPDIR=${SARMAP_TEST_TMPDIR}")
+    set_property(TEST ${test} APPEND PROPERTY FIXTURES_REQUIRED sarmap_test_tmp)
+  endforeach()
+endfunction()
+
+# The fixture: SARMAP_TEST_TMPDIR emptied before the tests that need it.
+function(sarmap_add_test_tmp_fixture)
+  add_test(NAME sarmap_test_tmp_reset
+    COMMAND sh -c "rm -rf \"$1\" && mkdir -p \"$1\"" sh ${SARMAP_TEST_TMPDIR})
+  set_tests_properties(sarmap_test_tmp_reset PROPERTIES FIXTURES_SETUP sarmap_test_tmp
+                       LABELS unit)
 endfunction()
 
 # sarmap_add_netns_test(NAME COMMAND cmd args... [TIMEOUT s])
@@ -29,7 +52,8 @@ function(sarmap_add_netns_test name)
   endif()
   add_test(NAME ${name} COMMAND ${SARMAP_NETNS} ${ARG_COMMAND})
   set_tests_properties(${name} PROPERTIES LABELS "multiprocess" TIMEOUT ${ARG_TIMEOUT}
-    ENVIRONMENT "SARMAP_BIN_DIR=${CMAKE_BINARY_DIR}/bin;SARMAP_SOURCE_DIR=${PROJECT_SOURCE_DIR};SARMAP_DATA_DIR=${SARMAP_DATA_DIR}")
+    ENVIRONMENT "SARMAP_BIN_DIR=${CMAKE_BINARY_DIR}/bin;SARMAP_SOURCE_DIR=${PROJECT_SOURCE_DIR};SARMAP_DATA_DIR=${SARMAP_DATA_DIR};TEST_TMPDIR=${SARMAP_TEST_TMPDIR}"
+    FIXTURES_REQUIRED sarmap_test_tmp)
 endfunction()
 
 # sarmap_add_bench(NAME SOURCES ... LIBS ... [GBENCH] [NETNS] [ARGS ...])

@@ -53,7 +53,7 @@ struct RecordFramesOptions {
       "a frame within this of a kept capture time is kept too (depth with its colour)",
       NonNegative());
     v("people_channel", people_channel,
-      "people_detections_t channel: a message with a detection keeps every frame around it");
+      "people_detections_t channel: a message with a detection keeps the frames around it");
     v("around_people_s", around_people_s,
       "frames captured within this of a detection are kept (0: none)", NonNegative());
     v("around_people_frames", around_people_frames,
