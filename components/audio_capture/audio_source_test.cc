@@ -11,7 +11,7 @@ namespace audio {
 namespace {
 
 std::string TempPath(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("sarmap_audio_test_" + name)).string();
+  return (std::filesystem::path(::testing::TempDir()) / ("sarmap_audio_test_" + name)).string();
 }
 
 // 4 channels, 0.5 s at 16 kHz: ch0 sine, ch1 clipped square, ch2 silent, ch3 quiet noise.
