@@ -23,6 +23,12 @@ std::regex Compile(const std::string& pattern, const std::string& key) {
 // Capture times further back than this behind the newest frame released are forgotten.
 constexpr int64_t kMemoryUs = 60'000'000;
 
+// Whether `times` holds one within `tolerance_us` of `utime`.
+bool AnyWithin(const std::set<int64_t>& times, int64_t utime, int64_t tolerance_us) {
+  const auto it = times.lower_bound(utime - tolerance_us);
+  return it != times.end() && *it <= utime + tolerance_us;
+}
+
 }  // namespace
 
 RecordThinner::RecordThinner(const RecordProfileOptions& options)
@@ -59,8 +65,7 @@ void RecordThinner::Decide(Held* h) {
   h->capture_utime = utime;
   // Paired with a chosen capture time (the other camera stream of the same instant).
   const int64_t tol_us = std::llround(options_.frames.pair_tolerance_s * 1e6);
-  const auto near = chosen_utimes_.lower_bound(utime - tol_us);
-  if (near != chosen_utimes_.end() && *near <= utime + tol_us) {
+  if (AnyWithin(chosen_utimes_, utime, tol_us)) {
     h->keep = true;
     return;
   }
@@ -90,12 +95,10 @@ void RecordThinner::Add(LogEvent event) {
 bool RecordThinner::NearPeople(int64_t capture_utime) const {
   if (capture_utime < 0 || options_.frames.around_people_s <= 0) return false;
   const int64_t around_us = std::llround(options_.frames.around_people_s * 1e6);
-  const auto it = people_utimes_.lower_bound(capture_utime - around_us);
-  if (it == people_utimes_.end() || *it > capture_utime + around_us) return false;
+  if (!AnyWithin(people_utimes_, capture_utime, around_us)) return false;
   if (options_.frames.around_people_frames == "all") return true;
   const int64_t tol_us = std::llround(options_.frames.pair_tolerance_s * 1e6);
-  const auto processed = processed_utimes_.lower_bound(capture_utime - tol_us);
-  return processed != processed_utimes_.end() && *processed <= capture_utime + tol_us;
+  return AnyWithin(processed_utimes_, capture_utime, tol_us);
 }
 
 void RecordThinner::Emit(Held&& h, bool keep, std::vector<LogEvent>* out) {
