@@ -726,17 +726,22 @@ void ExploreController::StartRecovery(double now_s, const Scan& scan, const std:
   recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
   blocked_since_s_.reset();
   // Shut in recovery after recovery: the map around the robot's pose has no way out, so the
-  // pose or the map is wrong. Turning and backing off on that map cannot help; driving on the
-  // scan alone moves the robot to views from which SLAM can find it again.
+  // pose or the map is wrong. Turning and backing off on that map cannot help; driving where the
+  // scan shows space (Escape) moves the robot to views from which SLAM can find it again.
   shut_in_recoveries_ = shut_in_ ? shut_in_recoveries_ + 1 : 0;
+  escape_until_s_.reset();
   if (options_.recovery.escape_after > 0 && shut_in_recoveries_ > options_.recovery.escape_after) {
     recovery_phase_ = 2;
+    escape_until_s_ = now_s + options_.recovery.escape_s;
+    RestartContactWindow(now_s);
     shut_in_recoveries_ = 0;
     ++escapes_;
     SARMAP_LOG(WARN) << "no plan out of the robot's place in the map after "
-                     << options_.recovery.escape_after
-                     << " recoveries: driving on the scan alone for " << options_.recovery.escape_s
-                     << " s (escape " << escapes_ << ")";
+                     << options_.recovery.escape_after << " recoveries: escaping on the scan"
+                     << (map_.Occupied(pose_->translation())
+                             ? " alone (the pose is inside an obstacle)"
+                             : " and the map")
+                     << " for " << options_.recovery.escape_s << " s (escape " << escapes_ << ")";
   }
 }
 
@@ -745,11 +750,7 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
   Velocity v;
   v.source = "recovery";
   if (recovery_phase_ == 2) {
-    if (now_s - recovery_phase_start_s_ < o.escape_s) {
-      v = reactive_.Step(scan);
-      v.source = "escape";
-      return v;
-    }
+    if (escape_until_s_ && now_s < *escape_until_s_) return Escape(now_s, scan);
     return EndRecovery(now_s);
   }
   if (recovery_phase_ == 0) {
@@ -779,7 +780,66 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
     v.angular_radps = recovery_turn_sign_ * o.turn_speed_radps;
     return v;
   }
+  if (escape_until_s_ && now_s < *escape_until_s_) {
+    // Backed off and turned after a contact while escaping: the escape goes on.
+    recovery_phase_ = 2;
+    RestartContactWindow(now_s);
+    return Escape(now_s, scan);
+  }
   return EndRecovery(now_s);
+}
+
+Velocity ExploreController::Escape(double now_s, const Scan& scan) {
+  // Something the scan does not show (low debris nearer than where the camera's view meets the
+  // floor, a body beside the base) stops the robot as it does when following a plan: marked,
+  // backed off from, turned away from; the escape then goes on.
+  if (ContactInWindow(now_s)) {
+    const bool marked = map_.AddContact(*pose_);
+    ++recoveries_;
+    SARMAP_LOG(INFO) << "contact while escaping at (" << pose_->translation().x() << ", "
+                     << pose_->translation().y() << ")" << (marked ? ", marked" : "");
+    recovery_phase_ = 0;
+    recovery_phase_start_s_ = now_s;
+    recovery_xy0_ = pose_->translation();
+    recovery_yaw0_ = pose_->yaw_rad();
+    const ScanMetrics m = AnalyseScan(scan, options_.reactive);
+    recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
+    return Recover(now_s, scan);
+  }
+  Velocity v = reactive_.Step(scan);
+  // A pose inside one of the map's obstacles is wrong, and so is the map around it: the scan
+  // alone drives. Otherwise the map keeps what the scan cannot see now (low debris close by,
+  // contacts, what is beside the base), and the robot moves only where both allow: where the
+  // map holds it, it turns on the spot (safe for a round base) until they agree.
+  if (map_.has_map() && !map_.Occupied(pose_->translation())) {
+    const Velocity safe = Safe(v, scan);
+    if (v.linear_mps > 0.02 && safe.linear_mps < 0.02) {
+      v.linear_mps = 0;
+      const double sign =
+          v.angular_radps != 0 ? (v.angular_radps > 0 ? 1.0 : -1.0) : recovery_turn_sign_;
+      v.angular_radps = sign * options_.recovery.turn_speed_radps;
+    } else {
+      v = safe;
+    }
+  }
+  v.source = "escape";
+  return v;
+}
+
+void ExploreController::RestartContactWindow(double now_s) {
+  contact_since_s_ = now_s;
+  contact_xy_ = pose_->translation();
+  commanded_m_ = 0;
+}
+
+bool ExploreController::ContactInWindow(double now_s) {
+  // Told to go forward for a while, hardly moved: glass, or something below the scan's band.
+  commanded_m_ += std::max(0.0, last_linear_mps_) * std::max(0.0, now_s - last_scan_s_);
+  if (now_s - contact_since_s_ < options_.recovery.contact_window_s) return false;
+  const double moved = (pose_->translation() - contact_xy_).norm();
+  const bool contact = commanded_m_ > 0.1 && moved < options_.recovery.contact_ratio * commanded_m_;
+  RestartContactWindow(now_s);
+  return contact;
 }
 
 Velocity ExploreController::EndRecovery(double now_s) {
@@ -787,9 +847,8 @@ Velocity ExploreController::EndRecovery(double now_s) {
   Velocity v;
   v.source = "recovery";
   state_ = resume_state_;
-  contact_since_s_ = now_s;
-  contact_xy_ = pose_->translation();
-  commanded_m_ = 0;
+  escape_until_s_.reset();
+  RestartContactWindow(now_s);
   progress_xy_ = pose_->translation();
   progress_yaw_ = pose_->yaw_rad();
   progress_s_ = now_s;
@@ -827,6 +886,7 @@ void ExploreController::ResumeAfterPoseWait(double now_s) {
   commanded_m_ = 0;
   if (blocked_since_s_) *blocked_since_s_ += waited_s;
   recovery_phase_start_s_ += waited_s;
+  if (escape_until_s_) *escape_until_s_ += waited_s;
   if (dwell_until_s_) *dwell_until_s_ += waited_s;
 }
 
@@ -916,22 +976,11 @@ Velocity ExploreController::Drive(double now_s, const Scan& scan) {
     Replan(now_s);
     if (!goal_ || path_.empty()) return stop;
   }
-  // Contact: told to go forward for a while, hardly moved (glass, or something below the
-  // scan's band). Mark it, and recover from there.
-  commanded_m_ += std::max(0.0, last_linear_mps_) * std::max(0.0, now_s - last_scan_s_);
-  if (now_s - contact_since_s_ >= options_.recovery.contact_window_s) {
-    const double moved = (robot - contact_xy_).norm();
-    const bool contact =
-        commanded_m_ > 0.1 && moved < options_.recovery.contact_ratio * commanded_m_;
-    contact_since_s_ = now_s;
-    contact_xy_ = robot;
-    commanded_m_ = 0;
-    if (contact) {
-      const bool marked = map_.AddContact(*pose_);
-      StartRecovery(now_s, scan,
-                    marked ? "contact, marked" : "contact with an obstacle the map has");
-      return Recover(now_s, scan);
-    }
+  // Contact: mark it, and recover from there.
+  if (ContactInWindow(now_s)) {
+    const bool marked = map_.AddContact(*pose_);
+    StartRecovery(now_s, scan, marked ? "contact, marked" : "contact with an obstacle the map has");
+    return Recover(now_s, scan);
   }
   Velocity desired = Follow(scan);
   // Space the base is about to sweep that the sensor has never seen (beside a doorway, inside

@@ -224,7 +224,7 @@ struct RecoveryOptions {
   double contact_window_s = 1.0;  // commanded forward this long...
   double contact_ratio = 0.3;     // ...but moved less than this share of it: an unseen obstacle
   int escape_after = 2;           // recoveries in a row with no plan out of where the robot is...
-  double escape_s = 20.0;         // ...then drive on the scan alone (reactive) this long
+  double escape_s = 20.0;         // ...then escape (reactive, held by the map) this long
   template <class V>
   void Visit(V& v) {
     v("contact_window_s", contact_window_s,
@@ -248,11 +248,10 @@ struct RecoveryOptions {
       AtLeast(1));
     v("escape_after", escape_after,
       "after this many recoveries in a row with no plan out of the robot's place in the map "
-      "(SLAM's "
-      "pose wrong, or the map closed around it), drive on the scan alone (0: never)",
+      "(SLAM's pose wrong, or the map closed around it), escape: drive on the reactive "
+      "behaviour, held by the map's obstacles unless the pose lies inside one (0: never)",
       AtLeast(0));
-    v("escape_s", escape_s, "how long that drive on the scan alone lasts before planning again",
-      Positive());
+    v("escape_s", escape_s, "how long that escape lasts before planning again", Positive());
   }
 };
 
@@ -448,6 +447,12 @@ class ExploreController {
   // Odometry at `stamp_s` (interpolated; the newest when the scan is newer), if any is recent.
   std::optional<common::Rigid2d> OdometryAt(double stamp_s) const;
   Velocity Recover(double now_s, const Scan& scan);
+  // Recovery's phase 2: the reactive behaviour, held by the map where the pose is plausible.
+  Velocity Escape(double now_s, const Scan& scan);
+  // Commanded forward distance against the distance moved over contact_window_s: true when
+  // the window has ended with the robot held by something (and a new window starts).
+  bool ContactInWindow(double now_s);
+  void RestartContactWindow(double now_s);
   Velocity EndRecovery(double now_s);
   void StartRecovery(double now_s, const Scan& scan, const std::string& why);
   void GiveUpGoal(double now_s);
@@ -516,6 +521,7 @@ class ExploreController {
   int shut_in_recoveries_ = 0;
   int escapes_ = 0;
   double recovery_phase_start_s_ = 0;
+  std::optional<double> escape_until_s_;  // an escape (phase 2) lasts until then
   double recovery_turn_sign_ = 1;
   double recovery_yaw0_ = 0;
   Eigen::Vector2d recovery_xy0_ = Eigen::Vector2d::Zero();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <set>
 
 #include "explore/explore_messages.h"
@@ -557,6 +558,17 @@ TEST(ExploreControllerTest, APoseThatLagsTheScanStopsTheRobotWithoutCountingAsSt
   EXPECT_TRUE(unchecked.map().Occupied(wall_m));
 }
 
+// The base's pose after `v` for `dt_s`, unless that puts it into `blocked` (an obstacle neither
+// the scan nor the map shows): then it stays.
+common::Rigid2d Drive(const common::Rigid2d& pose, const Velocity& v, double dt_s,
+                      const std::function<bool(const Eigen::Vector2d&)>& blocked) {
+  const common::Rigid2d next =
+      pose * common::Rigid2d(v.linear_mps * dt_s, 0.0, v.angular_radps * dt_s);
+  return blocked(next.translation())
+             ? common::Rigid2d(pose.translation().x(), pose.translation().y(), next.yaw_rad())
+             : next;
+}
+
 // SLAM's pose a metre off puts the robot inside what its map calls walls: no plan leads out,
 // and turning or backing off on that map cannot help. After escape_after recoveries so, the
 // robot drives on the scan alone for escape_s, then plans again.
@@ -570,11 +582,11 @@ TEST(ExploreControllerTest, ShutInRecoveryAfterRecoveryDrivesOnTheScanAlone) {
       for (int x = 5; x < 24; ++x) walled.cells[y * walled.width + x] = 100;
     }
     c.OnMap(walled);
-    const common::Rigid2d pose(1.5, 2.0, 0.0);
-    c.OnPose(pose, 0.0);
+    common::Rigid2d pose(1.5, 2.0, 0.0);
     int recoveries_before_escape = -1;
     double escape_start_s = -1, escape_end_s = -1;
     for (double t = 0; t < 90; t += 0.1) {
+      c.OnPose(pose, t);
       const Velocity v = c.OnScan(t, MakeScan(INFINITY, INFINITY));
       if (v.source == "escape") {
         if (escape_start_s < 0) {
@@ -582,8 +594,12 @@ TEST(ExploreControllerTest, ShutInRecoveryAfterRecoveryDrivesOnTheScanAlone) {
           recoveries_before_escape = c.status().recoveries - 1;
         }
         if (escape_end_s < 0 || t - escape_end_s < 0.15) escape_end_s = t;  // the first escape
-        EXPECT_GT(v.linear_mps, 0.0);  // open space ahead on the scan: it drives
+        // Open space ahead on the scan: it drives, while the map calls its place a wall.
+        if (c.map().Occupied(pose.translation())) {
+          EXPECT_GT(v.linear_mps, 0.0) << "t " << t;
+        }
       }
+      pose = Drive(pose, v, 0.1, [](const Eigen::Vector2d&) { return false; });
     }
     if (escape_after > 0) {
       ASSERT_GE(escape_start_s, 0.0);
@@ -593,6 +609,91 @@ TEST(ExploreControllerTest, ShutInRecoveryAfterRecoveryDrivesOnTheScanAlone) {
       EXPECT_LT(escape_start_s, 0.0);
     }
   }
+}
+
+// Where the pose is plausible (the robot stands on a free cell of its map), the escape keeps the
+// map's obstacles that the scan does not show (low debris close by): held by them, it turns on
+// the spot instead of driving on.
+TEST(ExploreControllerTest, AnEscapeFromAPlausiblePoseKeepsTheMapsObstaclesTheScanDoesNotShow) {
+  ExploreController c{NoLookAround()};
+  Grid pocket = PartlyKnownRoom();
+  const Eigen::Vector2d start_m(1.5, 2.0);
+  for (int y = 5; y < 35; ++y) {
+    for (int x = 5; x < 24; ++x) {
+      const Eigen::Vector2d centre((x + 0.5) * 0.1, (y + 0.5) * 0.1);
+      if ((centre - start_m).norm() > 0.25) pocket.cells[y * pocket.width + x] = 100;
+    }
+  }
+  c.OnMap(pocket);
+  // Distance from the base centre to the nearest obstacle of the map.
+  const auto clearance = [&](const Eigen::Vector2d& p) {
+    double d = INFINITY;
+    for (int y = 0; y < pocket.height; ++y) {
+      for (int x = 0; x < pocket.width; ++x) {
+        if (pocket.cells[y * pocket.width + x] < 65) continue;
+        d = std::min(d, (Eigen::Vector2d((x + 0.5) * 0.1, (y + 0.5) * 0.1) - p).norm());
+      }
+    }
+    return d;
+  };
+  const double start_clearance_m = clearance(start_m);
+  common::Rigid2d pose(start_m.x(), start_m.y(), 0.0);
+  int escape_scans = 0, turning_escape_scans = 0;
+  double yaw_turned_rad = 0;
+  for (double t = 0; t < 60; t += 0.1) {
+    c.OnPose(pose, t);
+    Scan scan = MakeScan(INFINITY, INFINITY);  // nothing the scan shows
+    scan.stamp_s = t;
+    const Velocity v = c.OnScan(t, scan);
+    if (v.source == "escape") {
+      ++escape_scans;
+      if (v.linear_mps < 0.02 && std::abs(v.angular_radps) > 0.1) ++turning_escape_scans;
+      yaw_turned_rad += std::abs(v.angular_radps) * 0.1;
+    }
+    pose = Drive(pose, v, 0.1, [](const Eigen::Vector2d&) { return false; });
+    // Never nearer the map's obstacles than where it started (a cell's rounding aside).
+    ASSERT_GE(clearance(pose.translation()), start_clearance_m - 0.06)
+        << "t " << t << " " << v.source;
+  }
+  EXPECT_GT(escape_scans, 50);
+  EXPECT_GT(turning_escape_scans, escape_scans / 2);
+  EXPECT_GT(yaw_turned_rad, M_PI);
+}
+
+// Something neither the scan nor the map shows stops the escaping robot: a contact, as when
+// following a plan. It backs off (here the map behind is a wall: it does not) and turns, and the
+// escape goes on until escape_s.
+TEST(ExploreControllerTest, AContactWhileEscapingBacksOffTurnsAndTheEscapeGoesOn) {
+  ExploreOptions o = NoLookAround();
+  ExploreController c{o};
+  Grid walled = PartlyKnownRoom();  // SLAM's pose inside what the map calls walls: the scan drives
+  for (int y = 5; y < 35; ++y) {
+    for (int x = 5; x < 24; ++x) walled.cells[y * walled.width + x] = 100;
+  }
+  c.OnMap(walled);
+  common::Rigid2d pose(1.5, 2.0, 0.0);
+  // Low debris all around, 0.6 m from where the robot stands: the base cannot enter it.
+  const auto debris = [](const Eigen::Vector2d& p) {
+    return (p - Eigen::Vector2d(1.5, 2.0)).norm() > 0.6 - 0.25;
+  };
+  double escape_start_s = -1, contact_s = -1, turn_s = -1, resumed_s = -1;
+  for (double t = 0; t < 90 && resumed_s < 0; t += 0.1) {
+    c.OnPose(pose, t);
+    Scan scan = MakeScan(INFINITY, INFINITY);
+    scan.stamp_s = t;
+    const Velocity v = c.OnScan(t, scan);
+    if (v.source == "escape" && escape_start_s < 0) escape_start_s = t;
+    if (escape_start_s >= 0 && contact_s < 0 && v.source != "escape") contact_s = t;
+    if (contact_s >= 0 && turn_s < 0 && v.source == "recovery" && v.angular_radps != 0) turn_s = t;
+    if (turn_s >= 0 && v.source == "escape") resumed_s = t;
+    pose = Drive(pose, v, 0.1, debris);
+  }
+  ASSERT_GE(escape_start_s, 0.0);
+  ASSERT_GE(contact_s, 0.0) << "the escape never stopped at the debris";
+  ASSERT_GE(turn_s, 0.0) << "no turn after the contact";
+  ASSERT_GE(resumed_s, 0.0) << "the escape did not go on";
+  EXPECT_LT(contact_s - escape_start_s, 6.0);  // reached at 0.25 m/s, then one contact window
+  EXPECT_LT(resumed_s, escape_start_s + o.recovery.escape_s);
 }
 
 TEST(ExploreControllerTest, NothingLeftToExploreGoesHomeAndStops) {
