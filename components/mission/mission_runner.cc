@@ -489,10 +489,15 @@ class Loop : public sim::SimSink {
 };
 
 // An 8-bit greyscale image as a binary PGM, rows top first.
-void WritePgm(const std::string& path, int width, int height, const std::vector<uint8_t>& image) {
+// A comment line after the magic number places the image in the map frame: the outer corner of
+// the bottom-left cell and the cell size.
+void WritePgm(const std::string& path, int width, int height, const std::vector<uint8_t>& image,
+              double origin_x_m, double origin_y_m, double resolution_m) {
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) throw std::runtime_error("cannot write " + path);
-  std::fprintf(f, "P5\n%d %d\n255\n", width, height);
+  std::fprintf(f,
+               "P5\n# map frame: origin_x_m %.3f origin_y_m %.3f resolution_m %.3f\n%d %d\n255\n",
+               origin_x_m, origin_y_m, resolution_m, width, height);
   std::fwrite(image.data(), 1, image.size(), f);
   std::fclose(f);
 }
@@ -520,7 +525,7 @@ void WriteExplorerMap(const explore::ExploreController& controller, const std::s
     if (g.Contains(c.x(), c.y()))
       image[static_cast<size_t>(g.height - 1 - c.y()) * g.width + c.x()] = 60;
   }
-  WritePgm(path, g.width, g.height, image);
+  WritePgm(path, g.width, g.height, image, g.origin_x_m, g.origin_y_m, g.resolution_m);
 }
 
 // SLAM's map as a PGM: unknown grey, occupancy 0..100 from white to black.
@@ -534,7 +539,7 @@ void WriteSlamMap(const slam::Slam& slam, const std::string& path) {
           v < 0 ? 128 : static_cast<uint8_t>(255 - (255 * std::min<int>(v, 100)) / 100);
     }
   }
-  WritePgm(path, map.width, map.height, image);
+  WritePgm(path, map.width, map.height, image, map.origin_x_m, map.origin_y_m, map.resolution_m);
 }
 
 }  // namespace

@@ -64,8 +64,8 @@ struct MissionRunOptions {
   std::vector<std::string> slam_overrides;
   std::vector<std::string> depth_overrides;
   double report_period_s = 0;    // > 0: a MissionReport every this many simulated seconds
-  std::string explorer_map_pgm;  // when set: the explorer's final picture is written here
-  std::string slam_map_pgm;      // when set: SLAM's final map is written here
+  std::string explorer_map_pgm;  // when set: the explorer's final grid (PGM with its map frame)
+  std::string slam_map_pgm;      // when set: SLAM's final map (PGM with its map frame)
 };
 
 // One sample of the mission, every `sample_period_s` of simulated time.

@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <optional>
 
 #include "log-tools/mission_metrics.h"
@@ -73,6 +77,43 @@ TEST(MissionRunnerTest, TheSameSeedGivesTheSameMission) {
   for (size_t i = 0; i < a.samples.size(); ++i) {
     EXPECT_EQ(a.samples[i].truth_pose, b.samples[i].truth_pose)
         << "at " << a.samples[i].t_s << " s";
+  }
+}
+
+// The final grids as PGMs that place themselves: a comment after the magic number gives the
+// map frame's origin and cell size, and the pixels follow the header whole.
+TEST(MissionRunnerTest, TheFinalGridsArePgmsWithTheirMapFrame) {
+  MissionRunOptions o = Lab("frontier");
+  o.duration_s = 5;
+  o.explorer_map_pgm = ::testing::TempDir() + "/mission_explorer.pgm";
+  o.slam_map_pgm = ::testing::TempDir() + "/mission_slam.pgm";
+  RunMission(o);
+  for (const std::string& path : {o.explorer_map_pgm, o.slam_map_pgm}) {
+    std::ifstream in(path, std::ios::binary);
+    ASSERT_TRUE(in) << path;
+    std::string magic, comment;
+    std::getline(in, magic);
+    std::getline(in, comment);
+    EXPECT_EQ(magic, "P5");
+    double origin_x_m = NAN, origin_y_m = NAN, resolution_m = NAN;
+    ASSERT_EQ(
+        std::sscanf(comment.c_str(), "# map frame: origin_x_m %lf origin_y_m %lf resolution_m %lf",
+                    &origin_x_m, &origin_y_m, &resolution_m),
+        3)
+        << comment;
+    EXPECT_NEAR(resolution_m, 0.05, 1e-9) << path;  // config/slam_kinect_robot.yaml
+    // The robot starts at the map frame's origin, inside the grid.
+    int width = 0, height = 0, max_value = 0;
+    in >> width >> height >> max_value;
+    in.get();
+    EXPECT_LT(origin_x_m, 0.0);
+    EXPECT_LT(origin_y_m, 0.0);
+    EXPECT_GT(origin_x_m + width * resolution_m, 0.0);
+    EXPECT_GT(origin_y_m + height * resolution_m, 0.0);
+    EXPECT_EQ(max_value, 255);
+    const std::string pixels((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+    EXPECT_EQ(pixels.size(), static_cast<size_t>(width) * height) << path;
   }
 }
 
