@@ -718,12 +718,7 @@ void ExploreController::StartRecovery(double now_s, const Scan& scan, const std:
   if (goal_ && goal_recoveries_ > options_.recovery.attempts_per_goal) GiveUpGoal(now_s);
   resume_state_ = state_ == State::kRecovering ? resume_state_ : state_;
   state_ = State::kRecovering;
-  recovery_phase_ = 0;
-  recovery_phase_start_s_ = now_s;
-  recovery_xy0_ = pose_->translation();
-  recovery_yaw0_ = pose_->yaw_rad();
-  const ScanMetrics m = AnalyseScan(scan, options_.reactive);
-  recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
+  BeginBackOff(now_s, scan);
   blocked_since_s_.reset();
   // Shut in recovery after recovery: the map around the robot's pose has no way out, so the
   // pose or the map is wrong. Turning and backing off on that map cannot help; driving where the
@@ -789,6 +784,15 @@ Velocity ExploreController::Recover(double now_s, const Scan& scan) {
   return EndRecovery(now_s);
 }
 
+void ExploreController::BeginBackOff(double now_s, const Scan& scan) {
+  recovery_phase_ = 0;
+  recovery_phase_start_s_ = now_s;
+  recovery_xy0_ = pose_->translation();
+  recovery_yaw0_ = pose_->yaw_rad();
+  const ScanMetrics m = AnalyseScan(scan, options_.reactive);
+  recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
+}
+
 Velocity ExploreController::Escape(double now_s, const Scan& scan) {
   // Something the scan does not show (low debris nearer than where the camera's view meets the
   // floor, a body beside the base) stops the robot as it does when following a plan: marked,
@@ -798,12 +802,7 @@ Velocity ExploreController::Escape(double now_s, const Scan& scan) {
     ++recoveries_;
     SARMAP_LOG(INFO) << "contact while escaping at (" << pose_->translation().x() << ", "
                      << pose_->translation().y() << ")" << (marked ? ", marked" : "");
-    recovery_phase_ = 0;
-    recovery_phase_start_s_ = now_s;
-    recovery_xy0_ = pose_->translation();
-    recovery_yaw0_ = pose_->yaw_rad();
-    const ScanMetrics m = AnalyseScan(scan, options_.reactive);
-    recovery_turn_sign_ = m.mean_left_m >= m.mean_right_m ? 1.0 : -1.0;
+    BeginBackOff(now_s, scan);
     return Recover(now_s, scan);
   }
   Velocity v = reactive_.Step(scan);

@@ -447,6 +447,8 @@ class ExploreController {
   // Odometry at `stamp_s` (interpolated; the newest when the scan is newer), if any is recent.
   std::optional<common::Rigid2d> OdometryAt(double stamp_s) const;
   Velocity Recover(double now_s, const Scan& scan);
+  // Recovery's phase 0 from here: back off, then turn towards the side the scan shows more open.
+  void BeginBackOff(double now_s, const Scan& scan);
   // Recovery's phase 2: the reactive behaviour, held by the map where the pose is plausible.
   Velocity Escape(double now_s, const Scan& scan);
   // Commanded forward distance against the distance moved over contact_window_s: true when
