@@ -880,9 +880,7 @@ void ExploreController::ResumeAfterPoseWait(double now_s) {
                      << " waits so far)";
   }
   progress_s_ += waited_s;
-  contact_since_s_ = now_s;
-  contact_xy_ = pose_->translation();
-  commanded_m_ = 0;
+  RestartContactWindow(now_s);
   if (blocked_since_s_) *blocked_since_s_ += waited_s;
   recovery_phase_start_s_ += waited_s;
   if (escape_until_s_) *escape_until_s_ += waited_s;
