@@ -165,6 +165,22 @@ Rigid2d CorrelativeMatch(const ProbabilityGrid& grid, const PointCloud& points,
   return best_pose;
 }
 
+PointCloud MatchablePoints(const ProbabilityGrid& grid, const PointCloud& points,
+                           const Rigid2d& pose) {
+  const auto known = [&grid](const Eigen::Array2i& cell) { return grid.Raw(cell) != 0.f; };
+  // Half of the 8-neighbourhood: each offset stands for itself and its opposite.
+  static const Eigen::Array2i kPairs[4] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+  PointCloud kept;
+  kept.reserve(points.size());
+  for (const Eigen::Vector2f& p : points) {
+    const Eigen::Array2i cell = grid.CellIndex((pose * p.cast<double>()).cast<float>());
+    bool keep = known(cell);
+    for (int i = 0; keep && i < 4; ++i) keep = known(cell + kPairs[i]) || known(cell - kPairs[i]);
+    if (keep) kept.push_back(p);
+  }
+  return kept;
+}
+
 namespace {
 
 // The grid as a function sampled at cell centres, for ceres::BiCubicInterpolator: the value is

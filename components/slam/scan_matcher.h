@@ -26,6 +26,16 @@ PointCloud AdaptiveVoxelFilter(const PointCloud& points, float max_length_m, int
 double AngularSearchStep(const PointCloud& points, double resolution_m,
                          double max_range_cap_m = 1e9);
 
+// The points that land, at `pose`, where the grid knows the space around them: the point's
+// cell is observed, and so is at least one cell of each pair of opposite neighbours (left and
+// right, below and above, both diagonals). Left out are the points beyond what the grid has
+// seen and those on its newest edge, a sliver with unknown cells on both sides. Matched, they
+// would pull towards the known map, as unknown cells cost what free ones do: a robot driving
+// into new space would be held back at every scan, and a corridor seen by a narrow scan would
+// come out several per cent short.
+PointCloud MatchablePoints(const ProbabilityGrid& grid, const PointCloud& points,
+                           const Rigid2d& pose);
+
 // Mean matched probability of the points at `pose` (probabilities at cell centres).
 double ScoreAt(const ProbabilityGrid& grid, const PointCloud& points, const Rigid2d& pose);
 

@@ -116,9 +116,13 @@ void Slam::ScanToRangeData(const LaserScan& scan, RangeData* data) const {
   }
 }
 
-Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
+Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& scan_points,
                          const Rigid2d& predicted, double* score) const {
   const auto& l = options_.local;
+  PointCloud known_points;
+  if (l.match_known_space_only) known_points = MatchablePoints(grid, scan_points, predicted);
+  // With nothing of the scan in known space (a fresh submap), every point is matched.
+  const PointCloud& points = known_points.empty() ? scan_points : known_points;
   Rigid2d initial = predicted;
   if (l.use_correlative_search) {
     CorrelativeOptions c;
@@ -168,7 +172,7 @@ Rigid2d Slam::MatchLocal(const ProbabilityGrid& grid, const PointCloud& points,
                           ? predicted.yaw_rad()
                           : initial.yaw_rad());
   const Rigid2d result = CeresMatch(grid, points, prior, initial, m);
-  if (score) *score = ScoreAt(grid, points, result);
+  if (score) *score = ScoreAt(grid, scan_points, result);  // comparable between predictions
   return result;
 }
 

@@ -44,6 +44,10 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
   EXPECT_EQ(base.slam.local.ceres_rotation_weight_informative, 0);
   EXPECT_GT(robot.slam.local.ceres_rotation_weight_informative, 0);
 
+  // A narrow depth scan matches only where the submap knows the space; a laser matches all.
+  EXPECT_FALSE(base.slam.local.match_known_space_only);
+  EXPECT_TRUE(robot.slam.local.match_known_space_only);
+
   // A live driver repeats odometry while the robot stands; CARMEN logs freeze it while moving.
   EXPECT_FALSE(base.slam.local.unchanged_odometry_means_stopped);
   EXPECT_TRUE(robot.slam.local.unchanged_odometry_means_stopped);
@@ -90,6 +94,7 @@ TEST(SlamConfigTest, KinectRobotFileChangesOnlyWhatItStates) {
                                             "local_slam_sigma_deg",
                                             "unchanged_odometry_means_stopped",
                                             "odometry_extrapolation_s",
+                                            "match_known_space_only",
                                             "linear_window_m",
                                             "consistency_gate",
                                             "reject_window_edge",

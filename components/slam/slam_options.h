@@ -91,6 +91,10 @@ struct LocalOptions {
   // (0: always hold, as for CARMEN logs).
   double odometry_extrapolation_s = 0;
   double odometry_extrapolation_min_turn_radps = 0.1;
+  // Local matching uses only the scan's points where the matching submap knows the space
+  // around them (MatchablePoints): what the scan sees first lands on cells that cost as much as
+  // free space and pulls the match back towards the known map.
+  bool match_known_space_only = false;
   double wide_search_below_score = 0.5;
   double wide_linear_window_m = 0.3;
   double wide_angular_window_deg = 45.0;
@@ -137,6 +141,11 @@ struct LocalOptions {
     v("odometry_extrapolation_min_turn_radps", odometry_extrapolation_min_turn_radps,
       "Odometry extrapolation only while the odometry turns at least this fast (rad/s)",
       NonNegative());
+    v("match_known_space_only", match_known_space_only,
+      "Local matching leaves out the scan's points on cells the matching submap has not observed, "
+      "or observed only as a sliver (no known cell on either side along some direction): the part "
+      "of a scan seen for the first time otherwise pulls the match back towards the known map, "
+      "and a narrow scan shrinks a corridor by several per cent");
     v("wide_search_below_score", wide_search_below_score, "Search the wide window when the match scores below this");
     v("wide_linear_window_m", wide_linear_window_m, "Wide correlative search half-window (m), when the match hits the window edge or scores low");
     v("wide_angular_window_deg", wide_angular_window_deg, "Wide correlative search half-window (deg)");
