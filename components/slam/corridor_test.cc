@@ -69,17 +69,17 @@ double CorridorLengthError(const SlamOptions& options) {
       slam.AddOdometry(next_odometry_s, Rigid2d(speed_mps * next_odometry_s, 0, 0));
     }
     LaserScan scan;
-    scan.time_s = t;
     scan.angle_min_rad = -fov_rad / 2;
     scan.angle_increment_rad = fov_rad / (beams - 1);
-    scan.range_min_m = 0.45f;
-    scan.range_max_m = 4.5f;
     for (int i = 0; i < beams; ++i) {
       const double a = scan.angle_min_rad + i * scan.angle_increment_rad;
       const double r = CastRay(walls, Eigen::Vector2d(x_m, 0), a);
       const bool returns = r <= 4.5 && r * std::cos(a) <= 4.6;
       scan.ranges_m.push_back(returns ? static_cast<float>(r) : 0.f);
     }
+    scan.time_s = t;
+    scan.range_min_m = 0.45f;
+    scan.range_max_m = 4.5f;
     EXPECT_TRUE(slam.AddScan(scan).accepted) << "scan " << k;
   }
   return slam.Trajectory().back().x_m - x_m;
