@@ -303,21 +303,6 @@ TEST(ExploreMapTest, ContactsInLineAreOneGlassPaneExtendedToThePierAndKnownObsta
   EXPECT_FALSE(m.ClearLoneContacts());
 }
 
-TEST(ExploreMapTest, TouchingAKnownObstacleAgainWhereItWasTouchedIsMarked) {
-  // The map has the pier where the robot meets it on the first touch: no mark. A second touch
-  // at the same place (the robot's pose, and so the map's pier, a few decimetres off what the
-  // robot runs into) is marked; a touch of the pier's far side is a first touch there.
-  ExploreMap m{PlannerOptions()};
-  m.SetMap(FreeSpaceWithPier());
-  const double touching = m.options().robot_radius_m;
-  EXPECT_FALSE(m.AddContact(common::Rigid2d(5.1, 3.0 - touching, M_PI / 2)));
-  EXPECT_EQ(m.contacts(), 0);
-  EXPECT_FALSE(m.AddContact(common::Rigid2d(5.1, 3.2 + touching, -M_PI / 2)));
-  EXPECT_EQ(m.contacts(), 0);
-  EXPECT_TRUE(m.AddContact(common::Rigid2d(5.2, 3.0 - touching, M_PI / 2 - 0.3)));
-  EXPECT_EQ(m.contacts(), 1);
-}
-
 TEST(SafetyLayerTest, NoReturnIsFreeBlindCorridorIsBlockedAndOnlyForwardSpeedIsLimited) {
   SafetyOptions o;
   // +inf readings (nothing within range) are free space, not unknowns that stop the robot.

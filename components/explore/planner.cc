@@ -105,13 +105,8 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
   const Eigen::Vector2d heading(std::cos(map_from_base.yaw_rad()),
                                 std::sin(map_from_base.yaw_rad()));
   // Something the map already has at the robot's front (a door jamb brushed in passing) needs
-  // no mark; a mark beside it would narrow the doorway. Unless the robot has touched this place
-  // before without a mark: then the map's obstacle is not where the robot meets it.
-  const bool touched_before = std::any_of(
-      unmarked_contacts_m_.begin(), unmarked_contacts_m_.end(), [&](const Eigen::Vector2d& p) {
-        return (p - map_from_base.translation()).norm() <= options_.robot_radius_m;
-      });
-  if (has_map() && !touched_before) {
+  // no mark; a mark beside it would narrow the doorway.
+  if (has_map()) {
     const double reach = options_.robot_radius_m + 0.1;
     const int r = static_cast<int>(std::ceil(reach / grid_.resolution_m));
     const Eigen::Vector2i c = grid_.CellOf(map_from_base.translation());
@@ -122,10 +117,7 @@ bool ExploreMap::AddContact(const common::Rigid2d& map_from_base) {
             map_from_base.inverse() * grid_.CentreOf(c.x() + dx, c.y() + dy);
         if (local.x() <= 0 || local.norm() > reach) continue;
         const int i = grid_.Index(c.x() + dx, c.y() + dy);
-        if (grid_.cells[i] >= options_.occupied_threshold && !hit_[i]) {
-          unmarked_contacts_m_.push_back(map_from_base.translation());
-          return false;
-        }
+        if (grid_.cells[i] >= options_.occupied_threshold && !hit_[i]) return false;
       }
     }
   }

@@ -133,10 +133,7 @@ class ExploreMap {
   // across the robot's front, kept as occupied through every later MAP. Two contacts in line
   // make an invisible surface (a glass pane) that spans between them and beyond (GlassLine).
   // Returns false (no mark) when the map already has an obstacle at the robot's front: what
-  // it touched is known. A contact made with the base within its radius of where it was at one
-  // left unmarked is marked: touching from the same place again says the map's obstacle is not
-  // where the robot meets it (a pose a few decimetres off), and a plan that keeps its
-  // clearance from the map's would run into it again and again.
+  // it touched is known.
   bool AddContact(const common::Rigid2d& map_from_base);
   int contacts() const { return static_cast<int>(contacts_.size()); }
   int glass_lines() const { return static_cast<int>(lines_.size()); }
@@ -199,7 +196,6 @@ class ExploreMap {
   std::vector<float> distance_m_;  // to the nearest obstacle
   std::vector<Eigen::Vector2d> trail_;
   std::vector<common::Rigid2d> contacts_;
-  std::vector<Eigen::Vector2d> unmarked_contacts_m_;  // where the base was, contacts left unmarked
   std::vector<bool> in_line_;  // per contact: one end of a GlassLine
   // An invisible surface inferred from contacts in line, from a_m to b_m (map frame).
   struct GlassLine {
