@@ -631,13 +631,25 @@ Velocity ExploreController::Follow(const Scan& scan) {
       nearest = i;
     }
   }
-  Eigen::Vector2d target = path_.back();
+  size_t target_index = path_.size() - 1;
   for (size_t i = nearest; i < path_.size(); ++i) {
     if ((path_[i] - robot).norm() >= options_.follower.lookahead_m) {
-      target = path_[i];
+      target_index = i;
       break;
     }
   }
+  // The robot drives nearly straight at the target, so a target beyond a corner of the path
+  // would have it cut the corner: the target comes back along the path until the straight line
+  // to it keeps the clearance the path keeps (the planner's radius, or the clearance the robot
+  // has now where that is less).
+  if (map_.has_map()) {
+    const Eigen::Vector2i here = map_.grid().CellOf(robot);
+    const double needed =
+        std::min(options_.planner.robot_radius_m, map_.Clearance(here.x(), here.y())) - 1e-6;
+    while (target_index > nearest + 1 && map_.SegmentClearance(robot, path_[target_index]) < needed)
+      --target_index;
+  }
+  const Eigen::Vector2d target = path_[target_index];
   const FollowerOptions& o = options_.follower;
   const Eigen::Vector2d local = pose_->inverse() * target;
   const double error = std::atan2(local.y(), local.x());
@@ -724,15 +736,28 @@ void ExploreController::StartRecovery(double now_s, const Scan& scan, const std:
   // pose or the map is wrong. Turning and backing off on that map cannot help; driving where the
   // scan shows space (Escape) moves the robot to views from which SLAM can find it again.
   shut_in_recoveries_ = shut_in_ ? shut_in_recoveries_ + 1 : 0;
+  // Recoveries repeating in one place (contacts and holds, each replan leading back into the
+  // same spot) say the same: the map there is not where the robot is.
+  const RecoveryOptions& o = options_.recovery;
+  recent_recoveries_.emplace_back(now_s, pose_->translation());
+  while (!recent_recoveries_.empty() &&
+         now_s - recent_recoveries_.front().first > o.escape_window_s)
+    recent_recoveries_.pop_front();
+  const auto here = std::count_if(
+      recent_recoveries_.begin(), recent_recoveries_.end(),
+      [&](const auto& r) { return (r.second - pose_->translation()).norm() <= o.escape_radius_m; });
+  const bool in_one_place = o.escape_window_s > 0 && here > o.escape_after;
   escape_until_s_.reset();
-  if (options_.recovery.escape_after > 0 && shut_in_recoveries_ > options_.recovery.escape_after) {
+  if (o.escape_after > 0 && (shut_in_recoveries_ > o.escape_after || in_one_place)) {
     recovery_phase_ = 2;
-    escape_until_s_ = now_s + options_.recovery.escape_s;
+    escape_until_s_ = now_s + o.escape_s;
     RestartContactWindow(now_s);
     shut_in_recoveries_ = 0;
+    recent_recoveries_.clear();
     ++escapes_;
-    SARMAP_LOG(WARN) << "no plan out of the robot's place in the map after "
-                     << options_.recovery.escape_after << " recoveries: escaping on the scan"
+    SARMAP_LOG(WARN) << (in_one_place ? "recoveries repeating in one place"
+                                      : "no plan out of the robot's place in the map")
+                     << " after " << o.escape_after << " recoveries: escaping on the scan"
                      << (map_.Occupied(pose_->translation())
                              ? " alone (the pose is inside an obstacle)"
                              : " and the map")

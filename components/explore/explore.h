@@ -225,6 +225,8 @@ struct RecoveryOptions {
   double contact_ratio = 0.3;     // ...but moved less than this share of it: an unseen obstacle
   int escape_after = 2;           // recoveries in a row with no plan out of where the robot is...
   double escape_s = 20.0;         // ...then escape (reactive, held by the map) this long
+  double escape_radius_m = 1.0;   // or more than escape_after recoveries this close together...
+  double escape_window_s = 60.0;  // ...within this long (0: only the rule above)
   template <class V>
   void Visit(V& v) {
     v("contact_window_s", contact_window_s,
@@ -252,6 +254,14 @@ struct RecoveryOptions {
       "behaviour, held by the map's obstacles unless the pose lies inside one (0: never)",
       AtLeast(0));
     v("escape_s", escape_s, "how long that escape lasts before planning again", Positive());
+    v("escape_radius_m", escape_radius_m,
+      "also escape after more than escape_after recoveries within this distance of each other "
+      "within escape_window_s (contacts and holds repeating in one place: the map there is not "
+      "where the robot is)",
+      Positive());
+    v("escape_window_s", escape_window_s,
+      "the time over which recoveries in one place are counted (0: never escape for them)",
+      NonNegative());
   }
 };
 
@@ -522,6 +532,7 @@ class ExploreController {
   bool shut_in_ = false;
   int shut_in_recoveries_ = 0;
   int escapes_ = 0;
+  std::deque<std::pair<double, Eigen::Vector2d>> recent_recoveries_;  // (time, map position)
   double recovery_phase_start_s_ = 0;
   std::optional<double> escape_until_s_;  // an escape (phase 2) lasts until then
   double recovery_turn_sign_ = 1;

@@ -423,6 +423,17 @@ bool ExploreMap::LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b)
   return true;
 }
 
+double ExploreMap::SegmentClearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  const double length = (b - a).norm();
+  const int steps = static_cast<int>(length / (0.5 * grid_.resolution_m)) + 1;
+  double least = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= steps; ++k) {
+    const Eigen::Vector2i c = grid_.CellOf(a + (b - a) * (static_cast<double>(k) / steps));
+    least = std::min(least, Clearance(c.x(), c.y()));
+  }
+  return least;
+}
+
 double ExploreMap::StepCost(int index) const {
   const double free_room = distance_m_[index] - options_.robot_radius_m;
   const double tight =

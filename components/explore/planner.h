@@ -158,6 +158,8 @@ class ExploreMap {
   bool Known(const Eigen::Vector2d& p) const;
   // No obstacle cell on the segment (unknown cells do not block).
   bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  // The least Clearance of the cells along the segment (sampled every half cell).
+  double SegmentClearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 
   // Dijkstra from `from`. When `from` is not traversable (the robot brushed a wall, or stands
   // in a cell the map calls occupied), the search starts from the nearest traversable cell
