@@ -24,10 +24,12 @@
 // (path cost minus a size bonus, kept until reached, gone or clearly beaten) or, in
 // sound_guided mode, people heard but not yet seen, and with sound.voices the voices on SOUND_MAP
 // nobody on PEOPLE_MAP explains (a cell in view of them, or in range when they are behind
-// cover). Paths come from ExploreMap's planner and are followed by pure pursuit.
+// cover). Paths come from ExploreMap's planner and are followed by pure pursuit, its target
+// kept where the straight line to it keeps the path's clearance (no corner cut).
 // Stuck recovery: back off (when the map behind is free), turn towards the open side, replan; a
 // goal that needs two recoveries is blacklisted for blacklist_expiry_s. A forward command that
 // does not move the robot marks an obstacle the sensors miss (glass) in the explorer's map.
+// Recoveries with no plan out, or repeating in one place, escape on the scan for a while.
 
 #include <Eigen/Core>
 #include <cstdint>
