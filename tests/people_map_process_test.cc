@@ -47,10 +47,12 @@ class PeopleMapProcessTest : public ::testing::Test {
     ++maps_;
   }
 
-  std::unique_ptr<Process> StartNode(const std::string& state_file) {
+  std::unique_ptr<Process> StartNode(const std::string& state_file,
+                                     const std::vector<std::string>& sets = {}) {
     std::vector<std::string> args = {"sarmap-people-map", "--set", "reorder_delay_s=0.2", "--set",
                                      "save_period_s=0.2", "--set", "publish_period_s=0.3"};
     if (!state_file.empty()) args.insert(args.end(), {"--set", "state_file=" + state_file});
+    for (const std::string& set : sets) args.insert(args.end(), {"--set", set});
     auto p = std::make_unique<Process>(args, dir_ + "/node-" + std::to_string(++starts_) + ".log");
     // Up when its NODE_STATUS... simplest: when it answers a pose with a PEOPLE_MAP republish.
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -258,7 +260,8 @@ TEST_F(PeopleMapProcessTest, ADetectionInATurnWaitsForThePoseOfItsTime) {
 // One person seen once, then nobody in view while POSE goes on: POSE moves the node's clock, so
 // the detection is applied and published without waiting for another detection (or the stop).
 TEST_F(PeopleMapProcessTest, PoseAloneReleasesADetectionWhenNobodyElseIsSeen) {
-  auto node = StartNode("");
+  // One detection, reported as soon as it is placed.
+  auto node = StartNode("", {"map.min_seen_detections=1"});
   const common::Rigid3d base_from_camera = common::RobotOptions().base_from_camera.ToRigid3d();
   for (int k = 0; k < 40; ++k) {
     const int64_t utime = 1'000'000'000 + k * 50'000;

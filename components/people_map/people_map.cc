@@ -100,6 +100,15 @@ double PeopleMap::DecayedConfidence(const Person& p, Utime utime) const {
 }
 
 bool PeopleMap::Reported(const Person& p, Utime utime) const {
+  if (!p.has_heard) {
+    // num_detections of a person never heard counts the frames they were seen in.
+    const bool enough_frames = p.num_detections >= options_.min_seen_detections;
+    const bool seen_again =
+        options_.min_seen_span_s > 0 &&
+        common::UtimeToSeconds(p.last_detected_utime - p.first_detected_utime) >=
+            options_.min_seen_span_s;
+    if (!enough_frames && !seen_again) return false;
+  }
   return p.confirmed || DecayedConfidence(p, utime) >= options_.min_report_confidence;
 }
 

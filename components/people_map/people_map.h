@@ -23,7 +23,10 @@
 // Confidence: each detection of confidence c_d gives c <- 1 - (1 - c)(1 - gain c_d); without
 // evidence it halves every confidence_half_life_s. A person is reported while c is at least
 // min_report_confidence, and for good once c has reached keep_confidence: a victim found stays
-// on the map however long the robot is elsewhere.
+// on the map however long the robot is elsewhere. A person only seen is reported only once
+// detected in min_seen_detections frames, or again min_seen_span_s after the first detection:
+// consecutive frames share their errors, so the confidence, which takes each detection as
+// independent, is sure of a flicker too soon.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -50,6 +53,12 @@ struct PeopleMapOptions {
   double confidence_half_life_s = 300.0;
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
   double keep_confidence = 0.75;        // ... unless it once reached this
+  // A person only seen (not heard) is reported once seen in this many frames, or seen again at
+  // least min_seen_span_s after the first time: the frames of one viewing are not independent
+  // evidence, and a piece of furniture that passes the detector's k-of-n confirmation from one
+  // viewpoint does so for a moment.
+  int min_seen_detections = 1;
+  double min_seen_span_s = 0;
   double heard_person_window_s =
       30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
@@ -94,6 +103,16 @@ struct PeopleMapOptions {
       "a person whose confidence once reached this is reported for good, its confidence decaying "
       "(0.75: two full-confidence detections); above 1: never",
       Positive());
+    v("min_seen_detections", min_seen_detections,
+      "a person seen but not heard is reported only once detected in this many frames, or again "
+      "min_seen_span_s after the first detection (the frames of one viewing are not independent "
+      "evidence: furniture passing the detector's k-of-n for a moment is no person); 1: from the "
+      "first detection",
+      AtLeast(1));
+    v("min_seen_span_s", min_seen_span_s,
+      "... or once detected again this long after the first detection (a person seen in brief "
+      "glimpses from different moments); 0: the frame count alone",
+      NonNegative());
     v("heard_person_window_s", heard_person_window_s,
       "a sound source stays a person this long after being heard calling; min_heard_calls are "
       "counted within it, and a call towards a source that converges within it still places "

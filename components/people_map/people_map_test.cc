@@ -607,6 +607,58 @@ TEST(PeopleMapTest, ConfidenceGrowsWithEvidenceAndDecaysWithout) {
   EXPECT_TRUE(forgetting.Report(102'000'000).empty());
 }
 
+// A person only seen is reported once seen in min_seen_detections frames, or seen again
+// min_seen_span_s after the first time: a flicker that passed the detector's confirmation for a
+// few frames is sure by the confidence (which takes every frame as independent evidence) but not
+// on the map; a person heard too is not held back.
+TEST(PeopleMapTest, APersonOnlySeenIsReportedOnceSeenInEnoughFrames) {
+  PeopleMapOptions options;
+  options.min_seen_detections = 10;
+  options.min_heard_calls = 1;
+  PeopleMap map(options);
+  const Rigid2d pose(0, 0, 0);
+  const auto see = [&](common::Utime utime, double x, double y) {
+    map.AddSeen(utime, {PersonAhead(x, y)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+                pose.translation());
+  };
+  common::Utime t = 1'000'000;
+  for (int i = 0; i < 9; ++i, t += 66'000) see(t, 2.0, 0.0);
+  ASSERT_EQ(map.people().size(), 1u);
+  const Person& flicker = map.people().begin()->second;
+  EXPECT_TRUE(flicker.confirmed);      // nine frames make the confidence sure...
+  EXPECT_TRUE(map.Report(t).empty());  // ...but not a person on the map
+  see(t, 2.0, 0.0);
+  ASSERT_EQ(map.Report(t).size(), 1u);  // the tenth frame does
+  EXPECT_EQ(map.Report(t)[0].id, flicker.id);
+
+  // Seen once and heard calling: reported at once.
+  const SoundSource voice = SourceAt(5, {3.0, 3.0, 0.5}, {0.02, 0.02, 0.1}, true);
+  map.UpdateSoundSources(t, {voice});
+  see(t + 100'000, 3.0, -3.0);  // at (3, 3): 3 m ahead, 3 m to the left
+  EXPECT_EQ(map.Report(t + 100'000).size(), 1u);
+  EXPECT_EQ(map.AddHeard(t + 200'000, {HelpCallTowards(3.0, 3.0)}, Rigid3d()), 1);
+  const auto report = map.Report(t + 200'000);
+  ASSERT_EQ(report.size(), 2u);
+  const Person& caller = report[0].id == flicker.id ? report[1] : report[0];
+  EXPECT_EQ(caller.cues & kHeard, kHeard);
+  EXPECT_EQ(caller.num_detections, 2);  // seen once, heard once
+
+  // Glimpses (min_seen_span_s 5): three frames, three more 3 s later, then one 6 s after the
+  // first: seen again, reported.
+  options.min_seen_span_s = 5;
+  PeopleMap glimpses(options);
+  const auto glimpse = [&](common::Utime utime) {
+    glimpses.AddSeen(utime, {PersonAhead(2.0, 0.0)}, MapFromCamera(pose), Eigen::Matrix3d::Zero(),
+                     pose.translation());
+  };
+  for (int i = 0; i < 3; ++i) glimpse(1'000'000 + i * 66'000);
+  EXPECT_TRUE(glimpses.Report(2'000'000).empty());
+  for (int i = 0; i < 3; ++i) glimpse(4'000'000 + i * 66'000);
+  EXPECT_TRUE(glimpses.Report(5'000'000).empty());  // 3.1 s after the first: one viewing
+  glimpse(7'000'000);
+  EXPECT_EQ(glimpses.Report(7'000'000).size(), 1u);
+}
+
 // kill -9 of the people map between a hidden caller's two heard calls: the restarted map must
 // still count the first, else it needs two more calls, and a caller whose sound source lies 0.16 m
 // from her can stay unfound for the rest of a mission killed once.
