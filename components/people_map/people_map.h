@@ -53,12 +53,8 @@ struct PeopleMapOptions {
   double confidence_half_life_s = 300.0;
   double min_report_confidence = 0.25;  // below this a person is kept but not reported
   double keep_confidence = 0.75;        // ... unless it once reached this
-  // A person only seen (not heard) is reported once seen in this many frames, or seen again at
-  // least min_seen_span_s after the first time: the frames of one viewing are not independent
-  // evidence, and a piece of furniture that passes the detector's k-of-n confirmation from one
-  // viewpoint does so for a moment.
-  int min_seen_detections = 1;
-  double min_seen_span_s = 0;
+  int min_seen_detections = 1;  // a person only seen is reported after this many frames...
+  double min_seen_span_s = 0;   // ... or when seen again this long after the first time
   double heard_person_window_s =
       30.0;  // a source counts as a person this long after a heard detection
   bool heard_needs_converged_source = true;  // an initialising source's position is still a guess
